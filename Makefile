@@ -1,0 +1,28 @@
+# Two set-up commands on a fresh machine (see README):
+#   make demo   -- install into .venv and run the main job end to end (SQLite, bundled fixtures)
+#   make test   -- install into .venv (with test extras) and run the whole test suite
+PYTHON ?= python3
+VENV ?= .venv
+BIN := $(VENV)/bin
+OUT ?= jointdb-demo-output
+
+.PHONY: demo test install clean bench
+
+$(BIN)/python:
+	$(PYTHON) -m venv $(VENV)
+	$(BIN)/python -m pip install --quiet --upgrade pip
+
+install: $(BIN)/python
+	$(BIN)/python -m pip install --quiet ".[test]"
+
+demo: install
+	cd /tmp && $(abspath $(BIN))/jointdb demo --out $(abspath $(OUT))
+
+test: install
+	$(BIN)/python -m pytest -q -p no:cacheprovider tests
+
+bench: install
+	for f in bench/bench_*.py; do echo "== $$f"; $(BIN)/python $$f || exit 1; done
+
+clean:
+	rm -rf $(VENV) build *.egg-info $(OUT)

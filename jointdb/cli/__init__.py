@@ -1,0 +1,65 @@
+"""The ``jointdb`` command line: a thin shell over the library.
+
+Each command group lives in its own module (``_models``, ``_coupling``,
+``_store``, ``_stability``, ``_predict``, ``_diagnose``, ``_demo``) and
+registers itself on the one Typer app here; this keeps every file readable in
+one sitting (design.md puts the CLI in one ``cli.py``; we split it along the
+command groups for that reason). Output goes through :mod:`jointdb._output`.
+
+User errors (:class:`jointdb.errors.JointdbError`) become one line on stderr
+and the error class's exit code, with no traceback.
+"""
+
+from __future__ import annotations
+
+import sys
+
+import typer
+
+from jointdb.errors import JointdbError
+
+app = typer.Typer(
+    name="jointdb",
+    help="Identify, catalogue and reuse machine-tool joint dynamics.",
+    no_args_is_help=True,
+    add_completion=False,
+    pretty_exceptions_enable=False,
+)
+
+
+@app.callback()
+def _root() -> None:
+    """jointdb: joint identification (IRC), a versioned joint database, tool-tip
+    prediction (RC), chatter stability lobes and model/measurement diagnosis."""
+
+
+def _register_all() -> None:
+    from jointdb.cli import _coupling, _demo, _diagnose, _models, _predict, _stability, _store
+
+    for module in (_models, _coupling, _store, _predict, _stability, _diagnose, _demo):
+        module.register(app)
+
+
+_register_all()
+
+
+def main() -> None:
+    """Console-script entry point: run the app, mapping jointdb errors to exit codes."""
+    try:
+        app(standalone_mode=False)
+    except JointdbError as exc:
+        sys.stderr.write(f"error: {exc}\n")
+        sys.exit(exc.exit_code)
+    except (typer.Exit, SystemExit) as exc:
+        code = getattr(exc, "exit_code", getattr(exc, "code", 0))
+        sys.exit(code or 0)
+    except typer.Abort:
+        sys.stderr.write("aborted\n")
+        sys.exit(130)
+    except Exception as exc:  # click usage errors arrive here in non-standalone mode
+        import click
+
+        if isinstance(exc, click.ClickException):
+            exc.show(file=sys.stderr)
+            sys.exit(exc.exit_code)
+        raise

@@ -1,0 +1,422 @@
+"""FRF container, DOF labels and exact quantity conversions.
+
+Contract (design.md, "FRF container"): frequencies in Hz, float64, strictly
+increasing; values complex128 of shape ``(n_freq, n_out, n_in)``; outputs and
+inputs labelled by :class:`Dof` ``(node, direction)`` with the UFF58 direction
+codes ``x y z rx ry rz`` (1..6); the quantity (receptance, mobility,
+accelerance) is explicit and converted exactly.
+
+Harmonic convention ``x(t) = X exp(+iωt)`` (theory.md §0), so mobility
+``Y = iω H`` and accelerance ``A = −ω² H``.
+"""
+
+from __future__ import annotations
+
+import enum
+import re
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from jointdb.errors import InputError
+
+__all__ = ["DIRECTIONS", "Dof", "Quantity", "FRF", "dofs"]
+
+#: Direction names in UFF58 order: code 1..6.
+DIRECTIONS: tuple[str, ...] = ("x", "y", "z", "rx", "ry", "rz")
+
+_DOF_RE = re.compile(r"^\s*(\d+)\s*[:.\s]?\s*([+-]?)\s*(x|y|z|rx|ry|rz)\s*$", re.IGNORECASE)
+
+
+@dataclass(frozen=True, order=True)
+class Dof:
+    """A degree of freedom: a node number and a direction (``x y z rx ry rz``).
+
+    ``str(Dof(12, "rx")) == "12rx"``; :meth:`parse` reads ``"12rx"``, ``"12:rx"``
+    or ``"12 RX"``.
+    """
+
+    node: int
+    direction: str
+
+    def __post_init__(self) -> None:
+        if isinstance(self.node, bool) or not isinstance(self.node, (int, np.integer)):
+            raise InputError(f"DOF node must be an integer, got {self.node!r}")
+        if self.node < 0:
+            raise InputError(f"DOF node must be >= 0, got {self.node}")
+        direction = str(self.direction).lower()
+        if direction not in DIRECTIONS:
+            raise InputError(
+                f"unknown DOF direction {self.direction!r}; expected one of {', '.join(DIRECTIONS)}"
+            )
+        object.__setattr__(self, "node", int(self.node))
+        object.__setattr__(self, "direction", direction)
+
+    def __str__(self) -> str:
+        return f"{self.node}{self.direction}"
+
+    @property
+    def uff_code(self) -> int:
+        """UFF58 direction code 1..6."""
+        return DIRECTIONS.index(self.direction) + 1
+
+    @property
+    def is_rotation(self) -> bool:
+        return self.direction.startswith("r")
+
+    @classmethod
+    def parse(cls, text: "str | Dof | tuple[int, str]") -> "Dof":
+        """Read a DOF from ``"12x"``, ``"12:rx"``, ``(12, "rx")`` or a Dof.
+
+        Raises
+        ------
+        InputError
+            If the text names no valid DOF, or carries a sign (signs belong to
+            UFF import, see :meth:`from_uff`).
+        """
+        if isinstance(text, Dof):
+            return text
+        if isinstance(text, tuple) and len(text) == 2:
+            return cls(int(text[0]), str(text[1]))
+        m = _DOF_RE.match(str(text))
+        if not m:
+            raise InputError(f"cannot read a DOF from {text!r}; write it like '12x' or '3:ry'")
+        if m.group(2) == "-":
+            raise InputError(f"DOF {text!r} has a negative sign; labels are always positive directions")
+        return cls(int(m.group(1)), m.group(3).lower())
+
+    @classmethod
+    def from_uff(cls, node: int, code: int) -> tuple["Dof", int]:
+        """DOF and sign (+1/−1) from a UFF58 node and signed direction code (±1..±6).
+
+        Raises
+        ------
+        InputError
+            For code 0 (scalar) or ``|code| > 6``.
+        """
+        code = int(code)
+        if code == 0 or abs(code) > 6:
+            raise InputError(f"UFF direction code {code} is not a translation or rotation (expected ±1..±6)")
+        return cls(int(node), DIRECTIONS[abs(code) - 1]), (1 if code > 0 else -1)
+
+
+def dofs(labels: Iterable["str | Dof | tuple[int, str]"]) -> tuple[Dof, ...]:
+    """Parse an iterable of DOF labels into a tuple of :class:`Dof`."""
+    if isinstance(labels, (str, Dof)):
+        labels = [labels]
+    return tuple(Dof.parse(label) for label in labels)
+
+
+class Quantity(str, enum.Enum):
+    """What an FRF relates to force: displacement, velocity or acceleration."""
+
+    RECEPTANCE = "receptance"
+    MOBILITY = "mobility"
+    ACCELERANCE = "accelerance"
+
+    @property
+    def power(self) -> int:
+        """Power p of (iω) with ``FRF = (iω)^p · receptance``."""
+        return {"receptance": 0, "mobility": 1, "accelerance": 2}[self.value]
+
+    @classmethod
+    def parse(cls, value: "str | Quantity") -> "Quantity":
+        try:
+            return cls(str(getattr(value, "value", value)).lower())
+        except ValueError:
+            raise InputError(
+                f"unknown FRF quantity {value!r}; expected receptance, mobility or accelerance"
+            ) from None
+
+
+def _readonly(a: np.ndarray) -> np.ndarray:
+    a.setflags(write=False)
+    return a
+
+
+@dataclass(frozen=True, eq=False)
+class FRF:
+    """A set of frequency response functions on labelled DOFs.
+
+    Parameters
+    ----------
+    freq
+        Frequencies in Hz, shape ``(n_freq,)``, finite, >= 0, strictly increasing.
+    values
+        Complex FRF values, shape ``(n_freq, n_out, n_in)``. A 1-D array of length
+        ``n_freq`` is accepted for a single output/input pair.
+    outputs, inputs
+        DOF labels of the rows (responses) and columns (excitations); no duplicates.
+    quantity
+        Receptance (m/N, rad/N, m/(N·m), rad/(N·m)), mobility or accelerance.
+
+    Raises
+    ------
+    InputError
+        On wrong shapes, NaN/inf, non-increasing or negative frequencies,
+        duplicate or unknown DOFs, or an unknown quantity.
+    """
+
+    freq: np.ndarray
+    values: np.ndarray
+    outputs: tuple[Dof, ...]
+    inputs: tuple[Dof, ...]
+    quantity: Quantity = Quantity.RECEPTANCE
+    _index: dict = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        freq = np.array(self.freq, dtype=np.float64, copy=True)
+        if freq.ndim != 1 or freq.size == 0:
+            raise InputError(f"frequencies must be a non-empty 1-D array, got shape {freq.shape}")
+        if not np.all(np.isfinite(freq)):
+            raise InputError("frequencies contain NaN or inf")
+        if freq[0] < 0:
+            raise InputError(f"frequencies must be >= 0 Hz, first is {freq[0]:g}")
+        if freq.size > 1 and not np.all(np.diff(freq) > 0):
+            bad = int(np.argmax(~(np.diff(freq) > 0)))
+            raise InputError(
+                f"frequencies must be strictly increasing; line {bad + 1} ({freq[bad + 1]:g} Hz) "
+                f"does not exceed line {bad} ({freq[bad]:g} Hz)"
+            )
+        outputs = dofs(self.outputs)
+        inputs = dofs(self.inputs)
+        for name, labels in (("output", outputs), ("input", inputs)):
+            if not labels:
+                raise InputError(f"at least one {name} DOF is needed")
+            if len(set(labels)) != len(labels):
+                seen: set[Dof] = set()
+                dup = next(d for d in labels if d in seen or seen.add(d))  # type: ignore[func-returns-value]
+                raise InputError(f"duplicate {name} DOF {dup}")
+        values = np.array(self.values, dtype=np.complex128, copy=True)
+        if values.ndim == 1 and len(outputs) == 1 and len(inputs) == 1:
+            values = values.reshape(-1, 1, 1)
+        expected = (freq.size, len(outputs), len(inputs))
+        if values.shape != expected:
+            raise InputError(
+                f"FRF values have shape {values.shape}, expected (n_freq, n_out, n_in) = {expected}"
+            )
+        if not np.all(np.isfinite(values)):
+            n_bad = int(np.count_nonzero(~np.isfinite(values)))
+            raise InputError(f"FRF values contain {n_bad} NaN or inf entries")
+        object.__setattr__(self, "freq", _readonly(freq))
+        object.__setattr__(self, "values", _readonly(values))
+        object.__setattr__(self, "outputs", outputs)
+        object.__setattr__(self, "inputs", inputs)
+        object.__setattr__(self, "quantity", Quantity.parse(self.quantity))
+        object.__setattr__(
+            self,
+            "_index",
+            {"out": {d: i for i, d in enumerate(outputs)}, "in": {d: i for i, d in enumerate(inputs)}},
+        )
+
+    # ----------------------------------------------------------------- basics
+    @property
+    def omega(self) -> np.ndarray:
+        """Angular frequencies 2πf in rad/s, shape ``(n_freq,)``."""
+        return 2.0 * np.pi * self.freq
+
+    @property
+    def n_freq(self) -> int:
+        return self.freq.size
+
+    @property
+    def shape(self) -> tuple[int, int, int]:
+        return self.values.shape  # type: ignore[return-value]
+
+    def __repr__(self) -> str:
+        return (
+            f"FRF({self.quantity.value}, {self.n_freq} lines {self.freq[0]:g}–{self.freq[-1]:g} Hz, "
+            f"outputs=[{' '.join(map(str, self.outputs))}], inputs=[{' '.join(map(str, self.inputs))}])"
+        )
+
+    def replace(self, **changes) -> "FRF":
+        """A new FRF with some fields replaced (validated again)."""
+        kwargs = dict(
+            freq=self.freq, values=self.values, outputs=self.outputs, inputs=self.inputs, quantity=self.quantity
+        )
+        kwargs.update(changes)
+        return FRF(**kwargs)
+
+    def allclose(self, other: "FRF", rtol: float = 1e-10, atol: float = 0.0) -> bool:
+        """Same labels, quantity and grid, and values equal within tolerances."""
+        return (
+            self.outputs == other.outputs
+            and self.inputs == other.inputs
+            and self.quantity == other.quantity
+            and self.freq.shape == other.freq.shape
+            and np.allclose(self.freq, other.freq, rtol=1e-12, atol=0)
+            and np.allclose(self.values, other.values, rtol=rtol, atol=atol)
+        )
+
+    # ---------------------------------------------------------------- indexing
+    def _positions(self, which: str, labels: Iterable) -> list[int]:
+        index = self._index[which]
+        out = []
+        for label in dofs(labels):
+            if label not in index:
+                have = " ".join(str(d) for d in index)
+                kind = "output" if which == "out" else "input"
+                raise InputError(f"{kind} DOF {label} is not in this FRF (it has: {have})")
+            out.append(index[label])
+        return out
+
+    def select(self, outputs: Iterable | None = None, inputs: Iterable | None = None) -> "FRF":
+        """Sub-FRF on the given output and input DOFs (in the order given).
+
+        Raises
+        ------
+        InputError
+            If a requested DOF is not present.
+        """
+        oi = self._positions("out", outputs) if outputs is not None else list(range(len(self.outputs)))
+        ii = self._positions("in", inputs) if inputs is not None else list(range(len(self.inputs)))
+        return FRF(
+            self.freq,
+            self.values[:, oi][:, :, ii],
+            tuple(self.outputs[i] for i in oi),
+            tuple(self.inputs[i] for i in ii),
+            self.quantity,
+        )
+
+    def block(self, outputs: Iterable, inputs: Iterable) -> np.ndarray:
+        """Values on the given DOFs as an array ``(n_freq, len(outputs), len(inputs))``."""
+        oi = self._positions("out", outputs)
+        ii = self._positions("in", inputs)
+        return self.values[:, oi][:, :, ii]
+
+    def entry(self, output, input) -> np.ndarray:  # noqa: A002 - field's own word
+        """One FRF ``H[output, input]`` as an array ``(n_freq,)``."""
+        return self.block([output], [input])[:, 0, 0]
+
+    # ------------------------------------------------------------- conversion
+    def to(self, quantity: "str | Quantity") -> "FRF":
+        """Convert exactly to another quantity: ``(iω)^p`` factors.
+
+        Converting *from* mobility or accelerance to receptance divides by
+        ``(iω)^p``, undefined at 0 Hz: a 0 Hz line is refused in that case.
+
+        Raises
+        ------
+        InputError
+            When a division at 0 Hz would be needed.
+        """
+        target = Quantity.parse(quantity)
+        dp = target.power - self.quantity.power
+        if dp == 0:
+            return self
+        iw = 1j * self.omega
+        if dp < 0 and self.freq[0] == 0.0:
+            raise InputError(
+                f"cannot convert {self.quantity.value} to {target.value} at 0 Hz "
+                "(division by iω); drop the 0 Hz line first, e.g. frf.band(fmin=...)"
+            )
+        factor = iw**dp
+        return self.replace(values=self.values * factor[:, None, None], quantity=target)
+
+    def band(self, fmin: float | None = None, fmax: float | None = None) -> "FRF":
+        """The lines with ``fmin <= f <= fmax`` (``fmin`` exclusive of 0 when given as 0+)."""
+        mask = np.ones(self.n_freq, dtype=bool)
+        if fmin is not None:
+            mask &= self.freq >= fmin
+        if fmax is not None:
+            mask &= self.freq <= fmax
+        if not mask.any():
+            raise InputError(f"no frequency lines in [{fmin}, {fmax}] Hz")
+        return self.replace(freq=self.freq[mask], values=self.values[mask])
+
+    def resample(self, freq: Sequence[float] | np.ndarray) -> "FRF":
+        """Linear interpolation (real and imaginary parts) onto another grid.
+
+        Raises
+        ------
+        InputError
+            If the new grid reaches outside ``[freq[0], freq[-1]]`` (no
+            extrapolation).
+        """
+        new = np.asarray(freq, dtype=np.float64)
+        if new.ndim != 1 or new.size == 0:
+            raise InputError("the new frequency grid must be a non-empty 1-D array")
+        lo, hi = self.freq[0], self.freq[-1]
+        tol = 1e-9 * max(abs(hi), 1.0)
+        if new.min() < lo - tol or new.max() > hi + tol:
+            raise InputError(
+                f"resampling to {new.min():g}–{new.max():g} Hz would extrapolate beyond the "
+                f"measured {lo:g}–{hi:g} Hz"
+            )
+        new = np.clip(new, lo, hi)
+        flat = self.values.reshape(self.n_freq, -1)
+        out = np.empty((new.size, flat.shape[1]), dtype=np.complex128)
+        for k in range(flat.shape[1]):  # loop over FRF entries, not frequency lines
+            out[:, k] = np.interp(new, self.freq, flat[:, k].real) + 1j * np.interp(new, self.freq, flat[:, k].imag)
+        return self.replace(freq=new, values=out.reshape(new.size, *self.values.shape[1:]))
+
+    def complete_reciprocal(self) -> "FRF":
+        """Square FRF over the union of output and input DOFs, filled by reciprocity.
+
+        Every missing entry ``H[i, j]`` is taken from ``H[j, i]``. Where both are
+        present they are kept as measured.
+
+        Raises
+        ------
+        InputError
+            If some entry is known neither directly nor by reciprocity.
+        """
+        union: list[Dof] = list(self.outputs) + [d for d in self.inputs if d not in self._index["out"]]
+        n = len(union)
+        vals = np.zeros((self.n_freq, n, n), dtype=np.complex128)
+        known = np.zeros((n, n), dtype=bool)
+        pos = {d: i for i, d in enumerate(union)}
+        oi = [pos[d] for d in self.outputs]
+        ii = [pos[d] for d in self.inputs]
+        vals[:, np.ix_(oi, ii)[0], np.ix_(oi, ii)[1]] = self.values
+        known[np.ix_(oi, ii)] = True
+        missing = ~known & known.T
+        vals[:, missing] = np.swapaxes(vals, 1, 2)[:, missing]
+        known |= missing
+        if not known.all():
+            i, j = np.argwhere(~known)[0]
+            raise InputError(
+                f"H[{union[i]}, {union[j]}] is known neither directly nor by reciprocity; "
+                "measure a row or column that covers it"
+            )
+        return FRF(self.freq, vals, tuple(union), tuple(union), self.quantity)
+
+    def reciprocity_error(self) -> float:
+        """Largest relative asymmetry ``|H_ij − H_ji| / max|H|`` over common DOFs."""
+        common = [d for d in self.outputs if d in self._index["in"]]
+        if len(common) < 2:
+            return 0.0
+        h = self.block(common, common)
+        scale = np.max(np.abs(h)) or 1.0
+        return float(np.max(np.abs(h - np.swapaxes(h, 1, 2))) / scale)
+
+    @staticmethod
+    def concat_outputs(parts: Sequence["FRF"]) -> "FRF":
+        """Stack FRFs with the same grid, inputs and quantity along outputs."""
+        first = parts[0]
+        for p in parts[1:]:
+            if p.inputs != first.inputs or p.quantity != first.quantity or not np.array_equal(p.freq, first.freq):
+                raise InputError("FRFs to stack must share frequencies, inputs and quantity")
+        return FRF(
+            first.freq,
+            np.concatenate([p.values for p in parts], axis=1),
+            tuple(d for p in parts for d in p.outputs),
+            first.inputs,
+            first.quantity,
+        )
+
+    @staticmethod
+    def concat_inputs(parts: Sequence["FRF"]) -> "FRF":
+        """Stack FRFs with the same grid, outputs and quantity along inputs."""
+        first = parts[0]
+        for p in parts[1:]:
+            if p.outputs != first.outputs or p.quantity != first.quantity or not np.array_equal(p.freq, first.freq):
+                raise InputError("FRFs to stack must share frequencies, outputs and quantity")
+        return FRF(
+            first.freq,
+            np.concatenate([p.values for p in parts], axis=2),
+            first.outputs,
+            tuple(d for p in parts for d in p.inputs),
+            first.quantity,
+        )
