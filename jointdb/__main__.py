@@ -1,0 +1,5 @@
+"""``python -m jointdb`` runs the CLI."""
+
+from jointdb.cli import main
+
+main()
