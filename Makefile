@@ -19,7 +19,7 @@ demo: install
 	cd /tmp && $(abspath $(BIN))/jointdb demo --out $(abspath $(OUT))
 
 test: install
-	$(BIN)/python -m pytest -q -p no:cacheprovider tests
+	$(BIN)/pytest -q -p no:cacheprovider tests
 
 bench: install
 	for f in bench/bench_*.py; do echo "== $$f"; $(BIN)/python $$f || exit 1; done
