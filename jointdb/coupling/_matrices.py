@@ -1,0 +1,84 @@
+"""Receptances of small discrete models from (K, M, C) matrices.
+
+Used for monolithic reference models, synthetic campaigns and benchmarks:
+``H(ω) = (K + iωC − ω²M)⁻¹`` (theory.md §0), batched over frequency.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from jointdb.errors import InputError
+from jointdb.frf import FRF, Dof, Quantity, dofs
+
+__all__ = ["receptance_from_matrices", "add_spring"]
+
+
+def receptance_from_matrices(
+    freq_hz: "Sequence[float] | np.ndarray",
+    K: np.ndarray,
+    M: np.ndarray,
+    labels: "Sequence[Dof | str]",
+    C: np.ndarray | None = None,
+    outputs: "Sequence[Dof | str] | None" = None,
+    inputs: "Sequence[Dof | str] | None" = None,
+) -> FRF:
+    """Receptance FRF ``(K + iωC − ω²M)⁻¹`` restricted to outputs × inputs.
+
+    Parameters
+    ----------
+    freq_hz
+        Lines in Hz, ``(n_freq,)``.
+    K, M, C
+        Real or complex ``(n, n)`` stiffness (may carry hysteretic loss as an
+        imaginary part), mass and viscous damping matrices.
+    labels
+        DOF label of each of the ``n`` matrix rows.
+    outputs, inputs
+        Subsets of ``labels`` (default: all).
+
+    Returns
+    -------
+    FRF
+        Receptance, shape ``(n_freq, n_out, n_in)``. Solved for the requested
+        input columns only.
+    """
+    labels = dofs(labels)
+    K = np.asarray(K)
+    M = np.asarray(M)
+    n = len(labels)
+    if K.shape != (n, n) or M.shape != (n, n):
+        raise InputError(f"K {K.shape} and M {M.shape} must both be ({n}, {n}) to match the labels")
+    C = np.zeros((n, n)) if C is None else np.asarray(C)
+    index = {d: i for i, d in enumerate(labels)}
+    out = dofs(outputs) if outputs is not None else labels
+    inp = dofs(inputs) if inputs is not None else labels
+    try:
+        oi = [index[d] for d in out]
+        ii = [index[d] for d in inp]
+    except KeyError as exc:
+        raise InputError(f"DOF {exc.args[0]} is not among the model labels") from None
+    f = np.asarray(freq_hz, dtype=float)
+    w = 2 * np.pi * f
+    z = K[None] + 1j * w[:, None, None] * C[None] - (w**2)[:, None, None] * M[None]
+    rhs = np.zeros((n, len(ii)), dtype=complex)
+    rhs[ii, np.arange(len(ii))] = 1.0
+    x = np.linalg.solve(z, np.broadcast_to(rhs, (f.size, n, len(ii))))
+    return FRF(f, x[:, oi, :], out, inp, Quantity.RECEPTANCE)
+
+
+def add_spring(
+    K: np.ndarray, C: np.ndarray, i: int, j: int | None, k: "float | complex", c: float = 0.0
+) -> None:
+    """Add a spring–damper between matrix rows ``i`` and ``j`` (``None``: ground), in place."""
+    K[i, i] += k
+    C[i, i] += c
+    if j is not None:
+        K[j, j] += k
+        K[i, j] -= k
+        K[j, i] -= k
+        C[j, j] += c
+        C[i, j] -= c
+        C[j, i] -= c
