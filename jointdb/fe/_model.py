@@ -1,0 +1,451 @@
+"""Stepped-shaft beam models: segments, named points, mesh and assembly."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from jointdb.errors import InputError
+from jointdb.fe._elements import bar_matrices, bending_matrices, section_properties, shear_coefficient
+from jointdb.fe._ingredients import FieldError, Ingredient, _number
+from jointdb.fe._materials import Material, get_material
+from jointdb.frf import DIRECTIONS, FRF, Dof
+
+__all__ = ["Segment", "NamedPoint", "Mesh", "FEMatrices", "Modes", "BeamModel", "THEORIES", "KINDS"]
+
+THEORIES = ("timoshenko", "euler-bernoulli")
+KINDS = ("planar", "frame3d")
+PLANAR_DIRECTIONS = ("x", "ry")
+
+
+@dataclass(frozen=True)
+class Segment:
+    """A uniform (hollow) circular shaft segment.
+
+    Parameters
+    ----------
+    length, outer_diameter, inner_diameter
+        Metres; ``length > 0``, ``outer_diameter > 0``, ``0 <= inner_diameter < outer_diameter``.
+    material
+        A material name from :data:`MATERIALS` or a :class:`Material`.
+
+    Raises
+    ------
+    InputError
+        Naming the field that is wrong.
+    """
+
+    length: float
+    outer_diameter: float
+    inner_diameter: float = 0.0
+    material: "str | Material" = "steel"
+
+    def __post_init__(self) -> None:
+        _number(self, "length", minimum=0.0, strict=True)
+        _number(self, "outer_diameter", minimum=0.0, strict=True)
+        _number(self, "inner_diameter", minimum=0.0)
+        if self.inner_diameter >= self.outer_diameter:
+            raise FieldError(
+                "inner_diameter",
+                f"must be < outer_diameter ({self.outer_diameter:g} m), got {self.inner_diameter:g}",
+            )
+        try:
+            get_material(self.material)
+        except InputError as exc:
+            raise FieldError("material", str(exc)) from None
+        if isinstance(self.material, str):
+            object.__setattr__(self, "material", self.material.strip().lower())
+
+    @property
+    def mat(self) -> Material:
+        return get_material(self.material)
+
+
+@dataclass(frozen=True)
+class NamedPoint:
+    """A named position on the model, mapped to a measurement node number.
+
+    Parameters
+    ----------
+    name
+        e.g. ``"tip"``; unique within a model.
+    position
+        Metres from the model's start (z = 0).
+    node
+        Node label used in FRF DOFs (``Dof(node, direction)``).
+    """
+
+    name: str
+    position: float
+    node: int
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.name, str) or not self.name.strip() or "," in self.name:
+            raise FieldError("name", f"must be a non-empty text without commas, got {self.name!r}")
+        _number(self, "position", minimum=0.0)
+        if isinstance(self.node, bool) or not isinstance(self.node, (int, np.integer)) or self.node < 0:
+            raise FieldError("node", f"must be an integer >= 0, got {self.node!r}")
+        object.__setattr__(self, "node", int(self.node))
+
+
+@dataclass(frozen=True, eq=False)
+class Mesh:
+    """Nodes of a model and its DOF numbering (``n_dir`` DOFs per node, node-major)."""
+
+    node_positions: np.ndarray
+    element_segment: np.ndarray
+    kind: str
+
+    @property
+    def directions(self) -> tuple[str, ...]:
+        return PLANAR_DIRECTIONS if self.kind == "planar" else DIRECTIONS
+
+    @property
+    def n_nodes(self) -> int:
+        return self.node_positions.size
+
+    @property
+    def n_dof(self) -> int:
+        return self.n_nodes * len(self.directions)
+
+    def node_at(self, position: float, what: str = "position") -> int:
+        """Index of the node at ``position`` (mesh nodes include every declared position)."""
+        i = int(np.argmin(np.abs(self.node_positions - position)))
+        if abs(self.node_positions[i] - position) > _merge_tol(self.node_positions[-1]):
+            raise InputError(f"{what} at {position:g} m is not a mesh node (model length {self.node_positions[-1]:g} m)")
+        return i
+
+    def dof(self, node: int, direction: str) -> int:
+        """Global DOF index of a node's direction."""
+        try:
+            return node * len(self.directions) + self.directions.index(direction)
+        except ValueError:
+            raise InputError(
+                f"direction {direction!r} does not exist in a {self.kind} model ({', '.join(self.directions)})"
+            ) from None
+
+    def dof_labels(self) -> tuple[Dof, ...]:
+        return tuple(Dof(n, d) for n in range(self.n_nodes) for d in self.directions)
+
+
+@dataclass(frozen=True, eq=False)
+class FEMatrices:
+    """Assembled matrices over all mesh DOFs (SI).
+
+    ``K`` stiffness, ``M`` mass, ``C`` viscous damping, ``K_loss`` the
+    hysteretic part (dynamic stiffness ``K + i K_loss + iωC − ω²M``), all
+    ``(n_dof, n_dof)``; ``fixed`` marks constrained DOFs; ``dof_labels`` are
+    ``Dof(mesh node index, direction)``; ``node_positions`` in metres.
+    """
+
+    K: np.ndarray
+    M: np.ndarray
+    C: np.ndarray
+    K_loss: np.ndarray
+    dof_labels: tuple[Dof, ...]
+    node_positions: np.ndarray
+    fixed: np.ndarray
+
+    @property
+    def free(self) -> np.ndarray:
+        return ~self.fixed
+
+
+@dataclass(frozen=True, eq=False)
+class Modes:
+    """Undamped natural frequencies [Hz] ``(n,)`` and mass-normalised shapes ``(n_dof, n)``.
+
+    Rigid-body modes have frequency 0 exactly; shapes are zero on fixed DOFs.
+    """
+
+    freq_hz: np.ndarray
+    shapes: np.ndarray
+    dof_labels: tuple[Dof, ...]
+    n_rigid: int = 0
+
+
+def _merge_tol(length: float) -> float:
+    return 1e-9 * max(abs(length), 1e-3)
+
+
+def _as_tuple(value, what: str) -> tuple:
+    if value is None:
+        return ()
+    if isinstance(value, (list, tuple)):
+        return tuple(value)
+    raise InputError(f"{what} must be a sequence, got {type(value).__name__}")
+
+
+@dataclass(frozen=True, eq=False)
+class BeamModel:
+    """A beam / stepped shaft along z with named points and ingredients.
+
+    Parameters
+    ----------
+    segments
+        :class:`Segment` s from z = 0 onwards.
+    points
+        :class:`NamedPoint` s (FRF outputs/inputs are labelled by their ``node``).
+    ingredients
+        :class:`Clamp`, :class:`Support`, :class:`PointMass`, :class:`ModalDamping`,
+        :class:`RayleighDamping`, :class:`HystereticDamping` (any number, any order).
+    theory
+        ``"timoshenko"`` (shear deformation + rotary inertia) or ``"euler-bernoulli"``.
+    kind
+        ``"planar"`` (DOFs x, ry per node) or ``"frame3d"`` (x y z rx ry rz).
+    max_element_length
+        Largest element length [m]; nodes are also put at every segment end,
+        point and ingredient position.
+    name
+        Free text.
+    """
+
+    segments: tuple[Segment, ...]
+    points: tuple[NamedPoint, ...] = ()
+    ingredients: tuple[Ingredient, ...] = ()
+    theory: str = "timoshenko"
+    kind: str = "planar"
+    max_element_length: float = 0.005
+    name: str = ""
+
+    def __post_init__(self) -> None:
+        segs = _as_tuple(self.segments, "segments")
+        if not segs:
+            raise FieldError("segments", "needs at least one segment")
+        for i, s in enumerate(segs):
+            if not isinstance(s, Segment):
+                raise FieldError(f"segments[{i}]", f"must be a Segment, got {type(s).__name__}")
+        pts = _as_tuple(self.points, "points")
+        ings = _as_tuple(self.ingredients, "ingredients")
+        object.__setattr__(self, "segments", segs)
+        object.__setattr__(self, "points", pts)
+        object.__setattr__(self, "ingredients", ings)
+        theory = str(self.theory).lower().replace("_", "-")
+        if theory in ("eb", "euler"):
+            theory = "euler-bernoulli"
+        if theory not in THEORIES:
+            raise FieldError("theory", f"must be one of {', '.join(THEORIES)}, got {self.theory!r}")
+        object.__setattr__(self, "theory", theory)
+        kind = str(self.kind).lower()
+        if kind not in KINDS:
+            raise FieldError("kind", f"must be one of {', '.join(KINDS)}, got {self.kind!r}")
+        object.__setattr__(self, "kind", kind)
+        _number(self, "max_element_length", minimum=0.0, strict=True)
+        length = self.length
+        tol = _merge_tol(length)
+        names = set()
+        for i, p in enumerate(pts):
+            if not isinstance(p, NamedPoint):
+                raise FieldError(f"points[{i}]", f"must be a NamedPoint, got {type(p).__name__}")
+            if p.name in names:
+                raise FieldError(f"points[{i}].name", f"duplicate point name {p.name!r}")
+            names.add(p.name)
+            if p.position > length + tol:
+                raise FieldError(f"points[{i}].position", f"{p.position:g} m is beyond the model's length {length:g} m")
+        for i, ing in enumerate(ings):
+            if not isinstance(ing, Ingredient):
+                raise FieldError(f"ingredients[{i}]", f"is not a model ingredient: {ing!r}")
+            for pos in ing.positions():
+                if pos > length + tol:
+                    raise FieldError(
+                        f"ingredients[{i}].position",
+                        f"{pos:g} m is beyond the model's length {length:g} m ({type(ing).__name__})",
+                    )
+
+    # ------------------------------------------------------------ building
+    @property
+    def length(self) -> float:
+        """Total length [m]."""
+        return float(math.fsum(s.length for s in self.segments))
+
+    def replace(self, **changes) -> "BeamModel":
+        """A new model with some fields replaced (validated again)."""
+        return dataclasses.replace(self, **changes)
+
+    def with_ingredient(self, *ingredients: Ingredient) -> "BeamModel":
+        """A new model with the ingredient(s) added."""
+        return self.replace(ingredients=self.ingredients + tuple(ingredients))
+
+    def without(self, kind_or_predicate: "type | str | Callable[[Ingredient], bool]") -> "BeamModel":
+        """A new model without the ingredients of a class (or class name), or matching a predicate."""
+        if isinstance(kind_or_predicate, type):
+            drop = lambda ing: isinstance(ing, kind_or_predicate)  # noqa: E731
+        elif isinstance(kind_or_predicate, str):
+            key = kind_or_predicate.replace("-", "").replace("_", "").lower()
+            drop = lambda ing: type(ing).__name__.lower() == key  # noqa: E731
+        elif callable(kind_or_predicate):
+            drop = kind_or_predicate
+        else:
+            raise InputError(f"without() needs an ingredient class, name or predicate, got {kind_or_predicate!r}")
+        return self.replace(ingredients=tuple(i for i in self.ingredients if not drop(i)))
+
+    def point(self, name: str) -> NamedPoint:
+        """The named point ``name``."""
+        for p in self.points:
+            if p.name == name:
+                return p
+        have = ", ".join(p.name for p in self.points) or "none"
+        raise InputError(f"unknown point {name!r}; this model has: {have}")
+
+    def mesh(self) -> Mesh:
+        """Nodes at segment ends, point and ingredient positions, refined to ``max_element_length``."""
+        ends = np.concatenate([[0.0], np.cumsum([s.length for s in self.segments])])
+        length = float(ends[-1])
+        marks = list(ends) + [p.position for p in self.points]
+        for ing in self.ingredients:
+            marks.extend(ing.positions())
+        marks = np.sort(np.asarray(marks, dtype=float))
+        tol = _merge_tol(length)
+        keep = np.concatenate([[True], np.diff(marks) > tol])
+        marks = marks[keep]
+        marks[-1] = length if abs(marks[-1] - length) <= tol else marks[-1]
+        pieces = []
+        for a, b in zip(marks[:-1], marks[1:]):
+            n = max(1, int(math.ceil((b - a) / self.max_element_length - 1e-9)))
+            pieces.append(np.linspace(a, b, n + 1)[:-1])
+        nodes = np.concatenate(pieces + [marks[-1:]])
+        mids = 0.5 * (nodes[:-1] + nodes[1:])
+        seg = np.clip(np.searchsorted(ends, mids, side="right") - 1, 0, len(self.segments) - 1)
+        return Mesh(node_positions=nodes, element_segment=seg, kind=self.kind)
+
+    def _bare(self, mesh: Mesh) -> tuple[np.ndarray, np.ndarray]:
+        segs = self.segments
+        seg = mesh.element_segment
+        mats = [s.mat for s in segs]
+        E = np.array([m.E for m in mats])[seg]
+        G = np.array([m.G for m in mats])[seg]
+        rho = np.array([m.rho for m in mats])[seg]
+        nu = np.array([m.nu for m in mats])[seg]
+        do = np.array([s.outer_diameter for s in segs])[seg]
+        di = np.array([s.inner_diameter for s in segs])[seg]
+        A, I, J = section_properties(do, di)
+        kappa = shear_coefficient(nu, do, di)
+        L = np.diff(mesh.node_positions)
+        timo = self.theory == "timoshenko"
+        kb, mb = bending_matrices(E, G, rho, A, I, kappa, L, shear=timo, rotary_inertia=timo)
+        n = mesh.n_dof
+        K = np.zeros((n, n))
+        M = np.zeros((n, n))
+        nd = len(mesh.directions)
+        e = np.arange(L.size)[:, None]
+
+        def scatter(local_dofs, ke, me, sign=None):
+            idx = np.concatenate([e * nd + d for d in local_dofs], axis=1)
+            if sign is not None:
+                ke = ke * np.outer(sign, sign)
+                me = me * np.outer(sign, sign)
+            ii, jj = idx[:, :, None], idx[:, None, :]
+            np.add.at(K, (ii, jj), ke)
+            np.add.at(M, (ii, jj), me)
+
+        if self.kind == "planar":
+            scatter([0, 1, nd + 0, nd + 1], kb, mb)
+        else:
+            # x-z plane: (x, ry) with ry = +dx/dz; y-z plane: (y, rx) with rx = -dy/dz
+            scatter([0, 4, nd + 0, nd + 4], kb, mb)
+            scatter([1, 3, nd + 1, nd + 3], kb, mb, sign=np.array([1.0, -1.0, 1.0, -1.0]))
+            ka, ma = bar_matrices(E * A, rho * A, L)
+            scatter([2, nd + 2], ka, ma)
+            kt, mt = bar_matrices(G * J, rho * J, L)
+            scatter([5, nd + 5], kt, mt)
+        return K, M
+
+    def assemble(self) -> FEMatrices:
+        """Assemble the bare beam, then apply every ingredient in stage order.
+
+        Returns
+        -------
+        FEMatrices
+            Matrices over all mesh DOFs, with constrained DOFs marked in ``fixed``.
+        """
+        mesh = self.mesh()
+        K, M = self._bare(mesh)
+        n = mesh.n_dof
+        mats = FEMatrices(
+            K=K, M=M, C=np.zeros((n, n)), K_loss=np.zeros((n, n)),
+            dof_labels=mesh.dof_labels(), node_positions=mesh.node_positions, fixed=np.zeros(n, dtype=bool),
+        )
+        for ing in sorted(self.ingredients, key=lambda i: i.stage):
+            mats = ing.apply(mats, mesh)
+        return mats
+
+    # ----------------------------------------------------------- analysis
+    def modes(self, n: int | None = None) -> Modes:
+        """Natural frequencies and mass-normalised mode shapes (undamped).
+
+        Parameters
+        ----------
+        n
+            Number of lowest modes (default: all).
+
+        Returns
+        -------
+        Modes
+            ``freq_hz (n,)``, ``shapes (n_dof, n)`` over all mesh DOFs.
+        """
+        from jointdb.fe._synthesis import natural_modes
+
+        return natural_modes(self.assemble(), n)
+
+    def frf(
+        self,
+        freq_hz,
+        points: Sequence[str] | None = None,
+        directions: Sequence[str] | None = None,
+        method: str = "direct",
+        n_modes: int | None = None,
+    ) -> FRF:
+        """Receptance matrix between named points (square: outputs == inputs).
+
+        Parameters
+        ----------
+        freq_hz
+            Frequencies [Hz], strictly increasing, shape ``(n_freq,)``.
+        points
+            Names of points (default: all named points).
+        directions
+            Directions per point (default ``("x", "ry")`` planar, all six for frame3d).
+        method
+            ``"direct"``: batched solve of ``(K + iK_loss + iωC − ω²M) X = F``;
+            ``"modal"``: modal superposition with static residual (theory of
+            :func:`jointdb.fe.frf_modal`).
+        n_modes
+            Modes kept in modal superposition (default: those below 2 × f_max).
+
+        Returns
+        -------
+        FRF
+            Receptance, DOFs ``Dof(point.node, direction)``.
+
+        Raises
+        ------
+        InputError
+            Unknown point/direction/method; 0 Hz on a model with rigid-body modes.
+        """
+        from jointdb.fe._synthesis import frf_direct, frf_modal
+
+        mesh = self.mesh()
+        names = [p.name for p in self.points] if points is None else list(points)
+        if not names:
+            raise InputError("this model has no named points; add points to it to get FRFs")
+        dirs = mesh.directions if directions is None else tuple(str(d).lower() for d in directions)
+        idx, labels = [], []
+        for name in names:
+            p = self.point(name)
+            node = mesh.node_at(p.position, f"point {name!r}")
+            for d in dirs:
+                idx.append(mesh.dof(node, d))
+                labels.append(Dof(p.node, d))
+        freq = np.asarray(freq_hz, dtype=float)
+        mats = self.assemble()
+        if method == "direct":
+            values = frf_direct(mats, freq, idx)
+        elif method == "modal":
+            values = frf_modal(mats, freq, idx, n_modes=n_modes)
+        else:
+            raise InputError(f"method must be 'direct' or 'modal', got {method!r}")
+        return FRF(freq, values, tuple(labels), tuple(labels), "receptance")

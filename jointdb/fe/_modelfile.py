@@ -1,0 +1,287 @@
+"""The JSON model description file: reading, validating and writing.
+
+Format (SI units; every field except ``segments`` optional)::
+
+    {
+      "format": "jointdb-beam-model/1",
+      "name": "carbide end mill, 12 mm",
+      "kind": "planar",                      # or "frame3d"
+      "theory": "timoshenko",                # or "euler-bernoulli"
+      "max_element_length": 0.004,           # m
+      "materials": {"my-wc": {"E": 580e9, "nu": 0.22, "rho": 14500}},
+      "segments": [
+        {"length": 0.035, "outer_diameter": 0.0108, "material": "carbide"},
+        {"length": 0.055, "outer_diameter": 0.012, "inner_diameter": 0.0, "material": "my-wc"}
+      ],
+      "points": [{"name": "tip", "position": 0.0, "node": 1}],
+      "clamps": [{"position": 0.09}],        # optional "directions": ["x"]
+      "supports": [{"position": 0.05, "stiffness": {"x": 1e7}, "damping": {"x": 50}}],
+      "point_masses": [{"position": 0.0, "mass": 0.002, "rotary_inertia": 1e-8}],
+      "damping": [{"type": "modal", "zeta": 0.01},
+                  {"type": "rayleigh", "alpha": 0.0, "beta": 1e-7},
+                  {"type": "hysteretic", "eta": 0.002}]
+    }
+
+Segment materials are a library name (:data:`MATERIALS`), a name defined in
+``materials``, or an inline ``{"E": ..., "nu": ..., "rho": ...}``. Positions
+are metres from z = 0 (the start of the first segment). Errors name the exact
+field, e.g. ``segments[1].outer_diameter: must be > 0, got -0.01``.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+from typing import Any
+
+from jointdb.errors import InputError, NotFoundError
+from jointdb.fe._ingredients import (
+    Clamp,
+    FieldError,
+    HystereticDamping,
+    ModalDamping,
+    PointMass,
+    RayleighDamping,
+    Support,
+)
+from jointdb.fe._materials import MATERIALS, Material
+from jointdb.fe._model import BeamModel, NamedPoint, Segment
+
+__all__ = ["load_model", "model_from_dict", "model_to_dict", "FORMAT"]
+
+FORMAT = "jointdb-beam-model/1"
+
+_TOP = {
+    "format", "name", "description", "kind", "theory", "max_element_length", "materials", "segments",
+    "points", "clamps", "supports", "point_masses", "damping", "source",
+}
+_DAMPING = {
+    "modal": (ModalDamping, {"zeta"}),
+    "rayleigh": (RayleighDamping, {"alpha", "beta"}),
+    "hysteretic": (HystereticDamping, {"eta"}),
+}
+
+
+def _fail(path: str, reason: str) -> InputError:
+    return InputError(f"{path}: {reason}")
+
+
+def _obj(value: Any, path: str) -> dict:
+    if not isinstance(value, dict):
+        raise _fail(path, f"must be an object, got {type(value).__name__}")
+    return value
+
+
+def _list(value: Any, path: str) -> list:
+    if not isinstance(value, list):
+        raise _fail(path, f"must be a list, got {type(value).__name__}")
+    return value
+
+
+def _keys(d: dict, path: str, allowed: set, required: set = frozenset()) -> None:
+    for key in d:
+        if key not in allowed:
+            raise _fail(f"{path}.{key}" if path else key, f"unknown field (expected one of: {', '.join(sorted(allowed))})")
+    for key in sorted(required):
+        if key not in d:
+            raise _fail(f"{path}.{key}" if path else key, "is required")
+
+
+def _build(cls, path: str, **kwargs):
+    try:
+        return cls(**kwargs)
+    except FieldError as exc:
+        raise _fail(f"{path}.{exc.field}", exc.reason) from None
+    except InputError as exc:
+        raise _fail(path, str(exc)) from None
+
+
+def _material(value: Any, path: str, named: dict[str, Material]):
+    if isinstance(value, str):
+        key = value.strip().lower()
+        if key in named:
+            return named[key]
+        if key in MATERIALS:
+            return key
+        known = ", ".join(sorted(set(MATERIALS) | set(named)))
+        raise _fail(path, f"unknown material {value!r} (known: {known}; or give {{E, nu, rho}})")
+    if isinstance(value, dict):
+        _keys(value, path, {"name", "E", "nu", "rho"}, {"E", "nu", "rho"})
+        for key in ("E", "nu", "rho"):
+            v = value[key]
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+                raise _fail(f"{path}.{key}", f"must be a finite number, got {v!r}")
+        try:
+            return Material(str(value.get("name", "custom")), value["E"], value["nu"], value["rho"])
+        except InputError as exc:
+            raise _fail(path, str(exc).split(": ", 1)[-1]) from None
+    raise _fail(path, f"must be a material name or an object with E, nu, rho, got {value!r}")
+
+
+def model_from_dict(data: Any) -> BeamModel:
+    """Build a :class:`BeamModel` from a parsed model description (see module docstring).
+
+    Raises
+    ------
+    InputError
+        Naming the exact field that is wrong, e.g. ``segments[1].outer_diameter: must be > 0, got 0``.
+    """
+    d = _obj(data, "model")
+    _keys(d, "", _TOP, {"segments"})
+    fmt = d.get("format", FORMAT)
+    if fmt != FORMAT:
+        raise _fail("format", f"unsupported format {fmt!r} (this jointdb reads {FORMAT!r})")
+    named: dict[str, Material] = {}
+    for key, spec in _obj(d.get("materials", {}), "materials").items():
+        mat = _material(spec if isinstance(spec, dict) else spec, f"materials.{key}", {})
+        named[str(key).strip().lower()] = mat if isinstance(mat, Material) else MATERIALS[mat]
+        if isinstance(mat, Material) and mat.name == "custom":
+            named[str(key).strip().lower()] = Material(str(key), mat.E, mat.nu, mat.rho)
+
+    segments = []
+    for i, s in enumerate(_list(d["segments"], "segments")):
+        p = f"segments[{i}]"
+        s = _obj(s, p)
+        _keys(s, p, {"length", "outer_diameter", "inner_diameter", "material", "label"}, {"length", "outer_diameter"})
+        mat = _material(s.get("material", "steel"), f"{p}.material", named)
+        segments.append(
+            _build(Segment, p, length=s["length"], outer_diameter=s["outer_diameter"],
+                   inner_diameter=s.get("inner_diameter", 0.0), material=mat)
+        )
+    if not segments:
+        raise _fail("segments", "needs at least one segment")
+
+    points = []
+    for i, pt in enumerate(_list(d.get("points", []), "points")):
+        p = f"points[{i}]"
+        pt = _obj(pt, p)
+        _keys(pt, p, {"name", "position", "node"}, {"name", "position", "node"})
+        points.append(_build(NamedPoint, p, name=pt["name"], position=pt["position"], node=pt["node"]))
+
+    ingredients: list = []
+    paths: list[str] = []
+    for i, c in enumerate(_list(d.get("clamps", []), "clamps")):
+        p = f"clamps[{i}]"
+        c = _obj(c, p)
+        _keys(c, p, {"position", "directions"}, {"position"})
+        dirs = c.get("directions")
+        if dirs is not None:
+            dirs = tuple(_list(dirs, f"{p}.directions"))
+        ingredients.append(_build(Clamp, p, position=c["position"], directions=dirs))
+        paths.append(p)
+    for i, s in enumerate(_list(d.get("supports", []), "supports")):
+        p = f"supports[{i}]"
+        s = _obj(s, p)
+        _keys(s, p, {"position", "stiffness", "damping"}, {"position"})
+        ingredients.append(_build(Support, p, position=s["position"], stiffness=s.get("stiffness", {}),
+                                  damping=s.get("damping", {})))
+        paths.append(p)
+    for i, m in enumerate(_list(d.get("point_masses", []), "point_masses")):
+        p = f"point_masses[{i}]"
+        m = _obj(m, p)
+        _keys(m, p, {"position", "mass", "rotary_inertia", "polar_inertia", "label"}, {"position", "mass"})
+        ingredients.append(_build(PointMass, p, position=m["position"], mass=m["mass"],
+                                  rotary_inertia=m.get("rotary_inertia", 0.0),
+                                  polar_inertia=m.get("polar_inertia", 0.0)))
+        paths.append(p)
+    damping = d.get("damping", [])
+    if isinstance(damping, dict):
+        damping = [damping]
+    for i, dm in enumerate(_list(damping, "damping")):
+        p = f"damping[{i}]"
+        dm = _obj(dm, p)
+        kind = dm.get("type")
+        if kind not in _DAMPING:
+            raise _fail(f"{p}.type", f"must be one of {', '.join(_DAMPING)}, got {kind!r}")
+        cls, fields = _DAMPING[kind]
+        _keys(dm, p, fields | {"type"}, fields - {"alpha", "beta"})
+        kwargs = {k: dm[k] for k in fields if k in dm}
+        if "zeta" in kwargs and isinstance(kwargs["zeta"], list):
+            kwargs["zeta"] = tuple(kwargs["zeta"])
+        ingredients.append(_build(cls, p, **kwargs))
+        paths.append(p)
+
+    try:
+        return BeamModel(
+            segments=tuple(segments),
+            points=tuple(points),
+            ingredients=tuple(ingredients),
+            theory=d.get("theory", "timoshenko"),
+            kind=d.get("kind", "planar"),
+            max_element_length=d.get("max_element_length", 0.005),
+            name=str(d.get("name", "")),
+        )
+    except FieldError as exc:
+        field = exc.field
+        if field.startswith("ingredients["):
+            idx = int(field[len("ingredients["): field.index("]")])
+            field = paths[idx] + field[field.index("]") + 1:]
+        raise _fail(field, exc.reason) from None
+
+
+def load_model(path: "str | Path") -> BeamModel:
+    """Read a JSON model description file.
+
+    Raises
+    ------
+    NotFoundError
+        If the file does not exist.
+    InputError
+        On invalid JSON (with line and column) or an invalid field (with its path).
+    """
+    p = Path(path)
+    if not p.is_file():
+        raise NotFoundError(f"model file {str(p)!r} does not exist")
+    try:
+        data = json.loads(p.read_text(encoding="utf-8"))
+    except json.JSONDecodeError as exc:
+        raise InputError(f"{p}: not valid JSON (line {exc.lineno}, column {exc.colno}: {exc.msg})") from None
+    except UnicodeDecodeError:
+        raise InputError(f"{p}: not a UTF-8 text file") from None
+    try:
+        return model_from_dict(data)
+    except InputError as exc:
+        raise InputError(f"{p.name}: {exc}") from None
+
+
+def model_to_dict(model: BeamModel) -> dict:
+    """The model as a JSON-ready dict that :func:`model_from_dict` reads back to an equal model."""
+    out: dict[str, Any] = {"format": FORMAT}
+    if model.name:
+        out["name"] = model.name
+    out.update(kind=model.kind, theory=model.theory, max_element_length=model.max_element_length)
+    segs = []
+    for s in model.segments:
+        mat = s.material
+        if isinstance(mat, Material):
+            mat = {"name": mat.name, "E": mat.E, "nu": mat.nu, "rho": mat.rho}
+        segs.append({"length": s.length, "outer_diameter": s.outer_diameter,
+                     "inner_diameter": s.inner_diameter, "material": mat})
+    out["segments"] = segs
+    out["points"] = [{"name": p.name, "position": p.position, "node": p.node} for p in model.points]
+    clamps, supports, masses, damping = [], [], [], []
+    for ing in model.ingredients:
+        if isinstance(ing, Clamp):
+            c = {"position": ing.position}
+            if ing.directions is not None:
+                c["directions"] = list(ing.directions)
+            clamps.append(c)
+        elif isinstance(ing, Support):
+            supports.append({"position": ing.position, "stiffness": dict(ing.stiffness), "damping": dict(ing.damping)})
+        elif isinstance(ing, PointMass):
+            masses.append({"position": ing.position, "mass": ing.mass, "rotary_inertia": ing.rotary_inertia,
+                           "polar_inertia": ing.polar_inertia})
+        elif isinstance(ing, ModalDamping):
+            z = ing.zeta
+            damping.append({"type": "modal", "zeta": list(z) if isinstance(z, tuple) else z})
+        elif isinstance(ing, RayleighDamping):
+            damping.append({"type": "rayleigh", "alpha": ing.alpha, "beta": ing.beta})
+        elif isinstance(ing, HystereticDamping):
+            damping.append({"type": "hysteretic", "eta": ing.eta})
+        else:  # pragma: no cover - a new ingredient class must be added here
+            raise InputError(f"cannot write ingredient {type(ing).__name__} to a model file")
+    for key, value in (("clamps", clamps), ("supports", supports), ("point_masses", masses), ("damping", damping)):
+        if value:
+            out[key] = value
+    return out

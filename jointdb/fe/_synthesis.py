@@ -1,0 +1,283 @@
+"""Natural modes and FRF synthesis (direct, batched over frequency; modal superposition).
+
+Harmonic convention ``x = X e^{iωt}`` (theory.md §0): the dynamic stiffness is
+``D(ω) = K + i K_loss + iω C − ω² M`` and the receptance ``H = D⁻¹``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.linalg
+
+from jointdb.errors import InputError, NumericalError
+
+__all__ = ["eigen_free", "rigid_body_count", "natural_modes", "frf_direct", "frf_modal"]
+
+#: Memory budget [bytes] for one chunk of stacked dynamic-stiffness matrices.
+CHUNK_BYTES = 64 * 2**20
+
+
+def _rigid_vectors(matrices) -> np.ndarray:
+    """Rigid-body motions of the whole mesh, shape ``(n_dof, r)``."""
+    labels = matrices.dof_labels
+    z = matrices.node_positions[[d.node for d in labels]]
+    dirs = np.array([d.direction for d in labels])
+    cols = []
+    if set(dirs) <= {"x", "ry"}:
+        cols.append(np.where(dirs == "x", 1.0, 0.0))
+        cols.append(np.where(dirs == "x", z, np.where(dirs == "ry", 1.0, 0.0)))
+    else:
+        for t in ("x", "y", "z", "rz"):
+            cols.append(np.where(dirs == t, 1.0, 0.0))
+        cols.append(np.where(dirs == "x", z, np.where(dirs == "ry", 1.0, 0.0)))  # about y: ry = +dx/dz
+        cols.append(np.where(dirs == "y", -z, np.where(dirs == "rx", 1.0, 0.0)))  # about x: rx = -dy/dz
+    return np.stack(cols, axis=1)
+
+
+def rigid_body_count(matrices) -> int:
+    """Number of rigid-body modes left after constraints and supports.
+
+    A rigid motion ``R a`` is a mode at 0 Hz when it strains nothing
+    (``K R a = 0``) and moves no fixed DOF; counted by an SVD of
+    ``[K R; R_fixed]`` (small: at most 6 columns).
+    """
+    R = _rigid_vectors(matrices)
+    scale = np.abs(R).max(axis=0)
+    R = R / np.where(scale > 0, scale, 1.0)
+    kscale = float(np.abs(matrices.K).max()) or 1.0
+    A = np.vstack([matrices.K @ R / kscale, R[matrices.fixed]])
+    s = np.linalg.svd(A, compute_uv=False)
+    return int(np.sum(s <= 1e-9 * max(1.0, s.max(initial=0.0)))) + max(0, R.shape[1] - A.shape[0])
+
+
+def eigen_free(matrices, n: int | None, max_value: float | None = None):
+    """Eigen-solution of the constrained (free-DOF) problem ``K φ = λ M φ``.
+
+    Returns
+    -------
+    lam : ndarray ``(m,)``
+        Eigenvalues ω² [rad²/s²], ascending; the rigid-body ones set to 0.
+    phi : ndarray ``(n_free, m)``
+        Mass-normalised shapes on the free DOFs.
+    n_rb : int
+        Number of rigid-body modes (the first ``n_rb`` columns).
+    """
+    free = ~matrices.fixed
+    Kf = matrices.K[np.ix_(free, free)]
+    Mf = matrices.M[np.ix_(free, free)]
+    nf = Kf.shape[0]
+    if nf == 0:
+        raise InputError("every DOF of the model is fixed; nothing can move")
+    n_rb = rigid_body_count(matrices)
+    kwargs = {}
+    if max_value is not None:
+        kwargs["subset_by_value"] = (-np.inf, max_value)
+    elif n is not None and n < nf:
+        kwargs["subset_by_index"] = (0, max(n, n_rb, 1) - 1)
+    try:
+        lam, phi = scipy.linalg.eigh(Kf, Mf, **kwargs)
+    except np.linalg.LinAlgError as exc:
+        raise NumericalError(f"eigenvalue problem failed ({exc}); is the mass matrix positive definite?") from None
+    if lam.size < n_rb and max_value is not None:  # make sure all rigid-body modes are there
+        lam, phi = scipy.linalg.eigh(Kf, Mf, subset_by_index=(0, n_rb - 1))
+    lam = lam.copy()
+    lam[: min(n_rb, lam.size)] = 0.0
+    lam = np.clip(lam, 0.0, None)
+    return lam, phi, n_rb
+
+
+def natural_modes(matrices, n: int | None = None):
+    """Natural frequencies [Hz] and mass-normalised mode shapes over all DOFs.
+
+    Parameters
+    ----------
+    matrices
+        :class:`FEMatrices` of an assembled model.
+    n
+        Number of lowest modes (default: all).
+
+    Returns
+    -------
+    Modes
+    """
+    from jointdb.fe._model import Modes
+
+    if n is not None and (isinstance(n, bool) or int(n) < 1):
+        raise InputError(f"number of modes must be >= 1, got {n!r}")
+    lam, phi, n_rb = eigen_free(matrices, None if n is None else int(n))
+    if n is not None:
+        lam, phi = lam[: int(n)], phi[:, : int(n)]
+    shapes = np.zeros((matrices.K.shape[0], lam.size))
+    shapes[~matrices.fixed] = phi
+    return Modes(
+        freq_hz=np.sqrt(lam) / (2.0 * np.pi),
+        shapes=shapes,
+        dof_labels=matrices.dof_labels,
+        n_rigid=min(n_rb, lam.size),
+    )
+
+
+def _check_freq(freq) -> np.ndarray:
+    f = np.asarray(freq, dtype=float)
+    if f.ndim != 1 or f.size == 0 or not np.all(np.isfinite(f)) or f.min() < 0:
+        raise InputError("frequencies must be a non-empty 1-D array of finite values >= 0 Hz")
+    return f
+
+
+def _free_positions(matrices, dof_index):
+    """Positions of the requested DOFs within the free set (−1 where fixed)."""
+    free = ~matrices.fixed
+    pos = np.cumsum(free) - 1
+    dof_index = np.asarray(dof_index, dtype=int)
+    return np.where(free[dof_index], pos[dof_index], -1)
+
+
+def frf_direct(matrices, freq_hz, dof_index, chunk_bytes: int = CHUNK_BYTES) -> np.ndarray:
+    """Receptances by direct solution, batched over frequency.
+
+    Solves ``(K + iK_loss + iωC − ω²M) X = F`` for unit loads at the requested
+    DOFs on stacks of ``(n_chunk, n, n)`` matrices with one ``np.linalg.solve``
+    per chunk (chunks bound the memory to ``chunk_bytes``; no loop over lines).
+
+    Parameters
+    ----------
+    matrices
+        :class:`FEMatrices`.
+    freq_hz
+        Frequencies [Hz], ``(n_freq,)``.
+    dof_index
+        Global DOF indices of outputs = inputs, ``(m,)``.
+
+    Returns
+    -------
+    ndarray, complex, ``(n_freq, m, m)``; zero rows/columns for fixed DOFs.
+
+    Raises
+    ------
+    InputError
+        At 0 Hz when the model has rigid-body modes (the receptance is infinite).
+    NumericalError
+        If the dynamic stiffness is singular at some line.
+    """
+    f = _check_freq(freq_hz)
+    free = ~matrices.fixed
+    Kc = (matrices.K + 1j * matrices.K_loss)[np.ix_(free, free)]
+    Mf = matrices.M[np.ix_(free, free)]
+    Cf = matrices.C[np.ix_(free, free)]
+    nf = Kc.shape[0]
+    if f.min() == 0.0 and rigid_body_count(matrices) > 0:
+        raise InputError(
+            "the model has rigid-body modes (it is not fully supported), so its receptance at 0 Hz is "
+            "infinite; start the frequency range above 0 Hz"
+        )
+    pos = _free_positions(matrices, dof_index)
+    ok = pos >= 0
+    m = pos.size
+    rhs = np.zeros((nf, int(ok.sum())), dtype=complex)
+    rhs[pos[ok], np.arange(rhs.shape[1])] = 1.0
+    out = np.zeros((f.size, m, m), dtype=complex)
+    w = 2.0 * np.pi * f
+    chunk = max(1, int(chunk_bytes // (3 * 16 * nf * nf)))
+    sel = np.ix_(ok, ok)
+    for start in range(0, f.size, chunk):  # loop over memory chunks, not over lines
+        wc = w[start : start + chunk, None, None]
+        D = Kc[None] + 1j * wc * Cf[None] - wc**2 * Mf[None]
+        try:
+            X = np.linalg.solve(D, np.broadcast_to(rhs, (D.shape[0],) + rhs.shape))
+        except np.linalg.LinAlgError:
+            raise NumericalError(
+                f"dynamic stiffness is singular between {f[start]:g} and {f[min(start + chunk, f.size) - 1]:g} Hz "
+                "(an undamped resonance exactly on a line?)"
+            ) from None
+        block = out[start : start + chunk]
+        block[:, sel[0], sel[1]] = X[:, pos[ok], :]
+    return out
+
+
+def frf_modal(matrices, freq_hz, dof_index, n_modes: int | None = None, residual: bool = True) -> np.ndarray:
+    """Receptances by modal superposition with static residual compensation.
+
+    ``H(ω) = Σ_r φ_r φ_rᵀ / (ω_r² + i κ_r + iω c_r − ω²) + R`` over the kept
+    modes r, with modal damping ``c_r = φ_rᵀ C φ_r`` and loss ``κ_r = φ_rᵀ K_loss φ_r``
+    (when the projected damping is not diagonal, the projected system is solved
+    instead, batched over frequency). ``R`` is the static flexibility of the
+    truncated modes: ``(K + iK_loss)⁻¹ − Σ_kept φφᵀ/(ω_r² + iκ_r)``; for a model
+    with rigid-body modes the singular ``K`` is shifted by ``M Φ_rb Φ_rbᵀ M``
+    (which only moves the rigid-body modes to ω² = 1), so ``R`` is the exact
+    elastic flexibility of the truncated modes. Rigid-body modes enter as
+    ``φφᵀ/(−ω²)``.
+
+    Parameters
+    ----------
+    n_modes
+        Number of lowest modes kept (default: all modes below 2 × max(freq)).
+    residual
+        Add the static residual (default True).
+
+    Returns
+    -------
+    ndarray, complex, ``(n_freq, m, m)``.
+    """
+    f = _check_freq(freq_hz)
+    free = ~matrices.fixed
+    if n_modes is None:
+        lam, phi, n_rb = eigen_free(matrices, None, max_value=(2.0 * np.pi * 2.0 * f.max()) ** 2)
+    else:
+        if isinstance(n_modes, bool) or int(n_modes) < 1:
+            raise InputError(f"n_modes must be >= 1, got {n_modes!r}")
+        lam, phi, n_rb = eigen_free(matrices, int(n_modes))
+        lam, phi = lam[: max(int(n_modes), n_rb)], phi[:, : max(int(n_modes), n_rb)]
+    if n_rb and f.min() == 0.0:
+        raise InputError(
+            "the model has rigid-body modes, so its receptance at 0 Hz is infinite; "
+            "start the frequency range above 0 Hz"
+        )
+    pos = _free_positions(matrices, dof_index)
+    ok = pos >= 0
+    m = pos.size
+    Cf = matrices.C[np.ix_(free, free)]
+    Lf = matrices.K_loss[np.ix_(free, free)]
+    Cm = phi.T @ Cf @ phi
+    Lm = phi.T @ Lf @ phi
+    phi_io = np.zeros((m, lam.size))
+    phi_io[ok] = phi[pos[ok]]
+    w = 2.0 * np.pi * f
+    off = np.abs(Cm - np.diag(np.diag(Cm))).max(initial=0.0) + np.abs(Lm - np.diag(np.diag(Lm))).max(initial=0.0)
+    diag_scale = np.abs(np.diag(Cm)).max(initial=0.0) + np.abs(np.diag(Lm)).max(initial=0.0)
+    if off <= 1e-8 * max(diag_scale, 1e-300) or off == 0.0:
+        den = lam[None, :] + 1j * np.diag(Lm)[None, :] + 1j * w[:, None] * np.diag(Cm)[None, :] - w[:, None] ** 2
+        out = np.einsum("ir,fr,jr->fij", phi_io, 1.0 / den, phi_io)
+    else:
+        out = np.empty((f.size, m, m), dtype=complex)
+        chunk = max(1, int(CHUNK_BYTES // (3 * 16 * max(1, lam.size) ** 2)))
+        base = np.diag(lam) + 1j * Lm
+        for start in range(0, f.size, chunk):  # memory chunks, not lines
+            wc = w[start : start + chunk, None, None]
+            D = base[None] + 1j * wc * Cm[None] - wc**2 * np.eye(lam.size)[None]
+            q = np.linalg.solve(D, np.broadcast_to(phi_io.T, (D.shape[0],) + phi_io.T.shape))
+            out[start : start + chunk] = phi_io[None] @ q
+    if residual:
+        out += _static_residual(matrices, lam, phi, n_rb, Lm, pos, ok)[None]
+    return out
+
+
+def _static_residual(matrices, lam, phi, n_rb, Lm, pos, ok) -> np.ndarray:
+    free = ~matrices.fixed
+    Kc = (matrices.K + 1j * matrices.K_loss)[np.ix_(free, free)]
+    Mf = matrices.M[np.ix_(free, free)]
+    if n_rb:
+        mp = Mf @ phi[:, :n_rb]
+        Kc = Kc + mp @ mp.T
+    rhs = np.zeros((Kc.shape[0], int(ok.sum())))
+    rhs[pos[ok], np.arange(rhs.shape[1])] = 1.0
+    try:
+        G = np.linalg.solve(Kc, rhs)[pos[ok]]
+    except np.linalg.LinAlgError:
+        raise NumericalError("static stiffness is singular; cannot form the residual flexibility") from None
+    sub = phi[pos[ok]]
+    kept = sub[:, n_rb:] / (lam[n_rb:] + 1j * np.diag(Lm)[n_rb:])[None, :]
+    G = G - kept @ sub[:, n_rb:].T - sub[:, :n_rb] @ sub[:, :n_rb].T
+    m = pos.size
+    out = np.zeros((m, m), dtype=complex)
+    out[np.ix_(ok, ok)] = 0.5 * (G + G.T)
+    return out
