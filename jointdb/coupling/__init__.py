@@ -14,6 +14,17 @@ given as an FRF is matched to the interface by its labels when they equal the
 ``a_dofs`` or ``b_dofs``; otherwise it is taken in ``a_dofs`` order.
 """
 
+from jointdb.coupling._common import IdentificationResult
+from jointdb.coupling._linalg import Regularisation
+from jointdb.coupling.irc import identify_planar_joint
 from jointdb.coupling.rc import Interface, JointSubstructure, couple, spring_damper_joint
 
-__all__ = ["Interface", "JointSubstructure", "couple", "spring_damper_joint"]
+__all__ = [
+    "Interface",
+    "JointSubstructure",
+    "couple",
+    "spring_damper_joint",
+    "IdentificationResult",
+    "Regularisation",
+    "identify_planar_joint",
+]

@@ -1,0 +1,144 @@
+"""Shared pieces of the identification functions: result type, block access, checks."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from jointdb.errors import InputError
+from jointdb.frf import FRF, Dof, Quantity
+
+__all__ = ["IdentificationResult", "fetch", "as_receptance", "same_grid", "fill_bad_lines"]
+
+
+@dataclass(frozen=True, eq=False)
+class IdentificationResult:
+    """A joint identified by inverse receptance coupling, with its diagnostics.
+
+    Attributes
+    ----------
+    joint
+        The identified joint receptance (FRF). For the planar and n-point
+        models it is the massless-joint ``H_J`` labelled with the A-side
+        contact DOFs (pass it as ``Interface(..., joint=result.joint)``); for
+        the full-matrix model it is the free receptance ``H^J`` of the joint
+        body over ``a_dofs + b_dofs`` (use :meth:`joint_substructure`).
+    model
+        ``"planar"``, ``"n-point"`` or ``"matrix"``.
+    residual
+        ``(n_freq,)`` relative residual ``‖G_rec − G_meas‖ / ‖G_meas‖`` of the
+        measured assembly FRFs re-coupled with the identified joint model.
+    condition
+        ``(n_freq,)`` condition number of the system solved at each line.
+    unreliable
+        ``(n_freq,)`` bool: lines flagged (ambiguous root, ill-conditioned,
+        non-passive, or filled by interpolation).
+    flags
+        Named boolean arrays ``(n_freq,)`` explaining ``unreliable``.
+    extra
+        Model-specific arrays (e.g. ``"off_diagonal"`` residue for the
+        n-point model, ``"full_joint"`` values before diagonalisation).
+    settings
+        The method's parameters (smoothing window, regularisation, ...).
+    """
+
+    joint: FRF
+    model: str
+    residual: np.ndarray
+    condition: np.ndarray
+    unreliable: np.ndarray
+    flags: Mapping[str, np.ndarray] = field(default_factory=dict)
+    extra: Mapping[str, object] = field(default_factory=dict)
+    settings: Mapping[str, object] = field(default_factory=dict)
+
+    @property
+    def freq(self) -> np.ndarray:
+        return self.joint.freq
+
+    def joint_substructure(self):
+        """The identified joint body as a :class:`~jointdb.coupling.JointSubstructure` (matrix model)."""
+        from jointdb.coupling.rc import JointSubstructure
+
+        if self.model != "matrix":
+            raise InputError(f"a {self.model} joint is massless; pass result.joint to Interface(joint=...)")
+        n = len(self.joint.inputs) // 2
+        return JointSubstructure(self.joint, self.joint.inputs[:n], self.joint.inputs[n:])
+
+    def summary(self) -> dict:
+        """Scalar reliability report: residual and condition statistics, flagged line counts."""
+        out: dict[str, object] = {
+            "model": self.model,
+            "n_lines": int(self.joint.n_freq),
+            "band_hz": [float(self.freq[0]), float(self.freq[-1])],
+            "residual_median": float(np.median(self.residual)),
+            "residual_max": float(np.max(self.residual)),
+            "condition_median": float(np.median(self.condition)),
+            "condition_max": float(np.max(self.condition)),
+            "unreliable_lines": int(np.count_nonzero(self.unreliable)),
+        }
+        for name, mask in self.flags.items():
+            out[f"lines_{name}"] = int(np.count_nonzero(mask))
+        if "off_diagonal" in self.extra:
+            out["off_diagonal_median"] = float(np.median(np.asarray(self.extra["off_diagonal"])))
+        return out
+
+
+def as_receptance(name: str, frf: FRF) -> FRF:
+    if not isinstance(frf, FRF):
+        raise InputError(f"{name} must be an FRF container, got {type(frf).__name__}")
+    try:
+        return frf.to(Quantity.RECEPTANCE)
+    except InputError as exc:
+        raise InputError(f"{name}: {exc}") from None
+
+
+def same_grid(named: Mapping[str, FRF]) -> np.ndarray:
+    items = list(named.items())
+    ref_name, ref = items[0]
+    for name, frf in items[1:]:
+        if frf.freq.shape != ref.freq.shape or not np.allclose(frf.freq, ref.freq, rtol=1e-9, atol=1e-12):
+            raise InputError(
+                f"{name} has {frf.n_freq} lines {frf.freq[0]:g}–{frf.freq[-1]:g} Hz but {ref_name} has "
+                f"{ref.n_freq} lines {ref.freq[0]:g}–{ref.freq[-1]:g} Hz; resample onto one grid first"
+            )
+    return ref.freq
+
+
+def fetch(name: str, frf: FRF, outs: Sequence[Dof], ins: Sequence[Dof], need: str = "") -> np.ndarray:
+    """Block of ``frf`` on outs × ins, using reciprocity entry by entry where needed."""
+    oidx, iidx = frf._index["out"], frf._index["in"]
+    res = np.empty((frf.n_freq, len(outs), len(ins)), dtype=complex)
+    for r, o in enumerate(outs):
+        for c, i in enumerate(ins):
+            if o in oidx and i in iidx:
+                res[:, r, c] = frf.values[:, oidx[o], iidx[i]]
+            elif i in oidx and o in iidx:
+                res[:, r, c] = frf.values[:, oidx[i], iidx[o]]
+            else:
+                hint = f" ({need})" if need else ""
+                raise InputError(
+                    f"{name} has no FRF between {o} and {i}{hint}; it has outputs "
+                    f"{' '.join(map(str, frf.outputs))} and inputs {' '.join(map(str, frf.inputs))}"
+                )
+    return res
+
+
+def fill_bad_lines(values: np.ndarray, bad: np.ndarray, freq: np.ndarray, what: str) -> np.ndarray:
+    """Replace lines where ``bad`` (or values non-finite) by interpolation over good lines."""
+    from jointdb.errors import NumericalError
+
+    flat = values.reshape(values.shape[0], -1)
+    bad = bad | ~np.all(np.isfinite(flat), axis=1)
+    if not bad.any():
+        return values
+    good = ~bad
+    if not good.any():
+        raise NumericalError(f"{what}: no frequency line gave a finite, reliable result")
+    out = flat.copy()
+    for k in range(flat.shape[1]):  # loop over matrix entries, not frequency lines
+        out[bad, k] = np.interp(freq[bad], freq[good], flat[good, k].real) + 1j * np.interp(
+            freq[bad], freq[good], flat[good, k].imag
+        )
+    return out.reshape(values.shape)
