@@ -1,0 +1,132 @@
+"""CSV export and import of an FRF set.
+
+Layout: one header row, then one row per frequency line, comma-separated,
+numbers with 17 significant digits (exact float64 round trip)::
+
+    freq [Hz],Re 1x/2x accelerance [m/s^2/N],Im 1x/2x accelerance [m/s^2/N],...
+    0,0,0,...
+    1,-0.17515115491800001,-0.120423720701,...
+
+Columns after the frequency come in (Re, Im) pairs, one pair per entry
+``H[output, input]``, outputs outer and inputs inner. The header names the
+response DOF, the excitation DOF, the quantity and the SI unit; the harmonic
+convention is ``x(t) = Re{X exp(+iωt)}``.
+"""
+
+from __future__ import annotations
+
+import csv
+import os
+import re
+from pathlib import Path
+
+import numpy as np
+
+from jointdb.errors import InputError, NotFoundError
+from jointdb.frf import FRF, Dof, Quantity
+from jointdb.io._atomic import atomic_path
+from jointdb.io._units import unit_label
+
+_COL = re.compile(r"^\s*(Re|Im)\s+(\S+)/(\S+)\s+(receptance|mobility|accelerance)\s*(?:\[(.*)\])?\s*$", re.I)
+
+
+def write_frf_csv(path: str | os.PathLike, frf: FRF) -> None:
+    """Write an FRF as CSV (layout in the module docstring), atomically.
+
+    Raises
+    ------
+    InputError
+        If ``frf`` is not an FRF or the target directory does not exist.
+    """
+    if not isinstance(frf, FRF):
+        raise InputError(f"write_frf_csv needs an FRF, got {type(frf).__name__}")
+    q = frf.quantity.value
+    header = ["freq [Hz]"]
+    for o in frf.outputs:
+        for i in frf.inputs:
+            u = unit_label(frf.quantity, o, i)
+            header += [f"Re {o}/{i} {q} [{u}]", f"Im {o}/{i} {q} [{u}]"]
+    n = frf.n_freq
+    flat = frf.values.reshape(n, -1)
+    table = np.empty((n, 1 + 2 * flat.shape[1]))
+    table[:, 0] = frf.freq
+    table[:, 1::2] = flat.real
+    table[:, 2::2] = flat.imag
+    with atomic_path(path) as tmp:
+        with open(tmp, "w", newline="", encoding="utf-8") as fh:
+            w = csv.writer(fh, lineterminator="\n")
+            w.writerow(header)
+            w.writerows([[repr(float(x)) for x in row] for row in table])
+
+
+def read_frf_csv(path: str | os.PathLike) -> FRF:
+    """Read a CSV written by :func:`write_frf_csv`.
+
+    Raises
+    ------
+    NotFoundError
+        If the file does not exist.
+    InputError
+        Bad header (column named), unequal row lengths, non-numbers (line
+        named), mixed quantities, an incomplete outputs × inputs set, or
+        anything :class:`~jointdb.frf.FRF` refuses.
+    """
+    p = Path(path)
+    if not p.is_file():
+        raise NotFoundError(f"CSV file {p} does not exist")
+    with open(p, newline="", encoding="utf-8") as fh:
+        rows = list(csv.reader(fh))
+    if not rows:
+        raise InputError(f"{p}: empty CSV file")
+    header = rows[0]
+    if not header or not header[0].strip().lower().startswith("freq"):
+        raise InputError(f"{p}: the first column must be the frequency ('freq [Hz]'), got {header[:1]!r}")
+    if len(header) < 3 or len(header) % 2 == 0:
+        raise InputError(f"{p}: expected a frequency column and (Re, Im) column pairs, got {len(header)} columns")
+    pairs: list[tuple[Dof, Dof]] = []
+    quantities = set()
+    for k in range(1, len(header), 2):
+        cols = []
+        for part, col in (("Re", header[k]), ("Im", header[k + 1])):
+            m = _COL.match(col)
+            if not m or m.group(1).lower() != part.lower():
+                raise InputError(
+                    f"{p}: column {k + (part == 'Im') + 1} header {col!r} is not '{part} <out>/<in> <quantity> [unit]'"
+                )
+            try:
+                cols.append((Dof.parse(m.group(2)), Dof.parse(m.group(3)), m.group(4).lower()))
+            except InputError as exc:
+                raise InputError(f"{p}: column header {col!r}: {exc}") from None
+        if cols[0] != cols[1]:
+            raise InputError(f"{p}: columns {header[k]!r} and {header[k + 1]!r} do not name the same entry")
+        pairs.append((cols[0][0], cols[0][1]))
+        quantities.add(cols[0][2])
+    if len(quantities) > 1:
+        raise InputError(f"{p}: columns mix quantities {sorted(quantities)}")
+    outputs = list(dict.fromkeys(o for o, _ in pairs))
+    inputs = list(dict.fromkeys(i for _, i in pairs))
+    expected = [(o, i) for o in outputs for i in inputs]
+    if len(set(pairs)) != len(pairs):
+        dup = next(x for k, x in enumerate(pairs) if x in pairs[:k])
+        raise InputError(f"{p}: entry {dup[0]}/{dup[1]} appears twice")
+    if pairs != expected:
+        missing = [f"{o}/{i}" for o, i in expected if (o, i) not in pairs]
+        raise InputError(
+            f"{p}: entries must form a full outputs x inputs set, outputs outer and inputs inner"
+            + (f"; missing {', '.join(missing[:8])}" if missing else "; the order differs")
+        )
+    data = np.empty((len(rows) - 1, len(header)))
+    for ln, row in enumerate(rows[1:], start=2):
+        if len(row) != len(header):
+            raise InputError(f"{p}: line {ln} has {len(row)} fields, the header has {len(header)}")
+        try:
+            data[ln - 2] = [float(x) for x in row]
+        except ValueError:
+            raise InputError(f"{p}: line {ln} holds a field that is not a number") from None
+    if data.shape[0] == 0:
+        raise InputError(f"{p}: no data rows")
+    values = (data[:, 1::2] + 1j * data[:, 2::2]).reshape(-1, len(outputs), len(inputs))
+    try:
+        return FRF(data[:, 0], values, tuple(outputs), tuple(inputs), Quantity.parse(quantities.pop()))
+    except InputError as exc:
+        raise InputError(f"{p}: {exc}") from None

@@ -1,0 +1,224 @@
+"""Grouping dataset-58 FRF records into one FRF matrix (outputs x inputs on one grid)."""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from jointdb.errors import InputError
+from jointdb.frf import FRF, Dof, Quantity
+from jointdb.io._uff58_read import UffRecord, read_uff58
+
+_GRID_RTOL = 1e-9
+
+
+@dataclass(frozen=True, eq=False)
+class UffImport:
+    """An FRF matrix read from UFF58 records, with what was done to get it.
+
+    Attributes
+    ----------
+    frf
+        The FRF (SI, positive directions, requested quantity).
+    records
+        The records placed in the matrix, in file order.
+    skipped
+        One note per dataset-58 record that is not an FRF (coherence, spectra, ...).
+    conversions
+        Every change made on import: sign flips, unit scaling, quantity
+        conversion, entries filled by reciprocity.
+    """
+
+    frf: FRF
+    records: tuple[UffRecord, ...]
+    skipped: tuple[str, ...]
+    conversions: tuple[str, ...]
+
+
+def _pairs(items: Sequence[tuple[Dof, Dof]]) -> str:
+    shown = ", ".join(f"{o}/{i}" for o, i in items[:8])
+    return shown + (f" and {len(items) - 8} more" if len(items) > 8 else "")
+
+
+def frf_from_records(
+    records: Sequence[UffRecord],
+    quantity: Quantity | str | None = None,
+    *,
+    file_quantity: Quantity | str | None = None,
+    fill: str = "error",
+    source: str = "UFF58 records",
+) -> UffImport:
+    """Group FRF records into one rectangular FRF (outputs × inputs, common grid).
+
+    Outputs and inputs are ordered by first appearance in ``records``.
+
+    Parameters
+    ----------
+    records
+        Records from :func:`read_uff58`; records that are not FRFs (function
+        type other than 4) are skipped and listed in ``skipped``.
+    quantity
+        Quantity to return; the data are converted exactly (``(iω)^p``) when the
+        file holds another one. ``None`` keeps the file's quantity.
+    file_quantity
+        Quantity of records whose data-type codes do not say (numerator code 0
+        or 1). An error if it contradicts a record's codes.
+    fill
+        ``"error"`` (default): every (output, input) pair must be present.
+        ``"reciprocity"``: a missing ``H[o, i]`` is taken from a measured
+        ``H[i, o]`` (noted in ``conversions``).
+    source
+        Name used in error messages (the file name).
+
+    Raises
+    ------
+    InputError
+        No FRF record; scalar DOFs; unknown or mixed quantities; inconsistent
+        frequency grids; duplicate pairs; missing pairs (named); 0 Hz when a
+        conversion to receptance would divide by zero.
+    """
+    if fill not in ("error", "reciprocity"):
+        raise InputError(f"fill must be 'error' or 'reciprocity', got {fill!r}")
+    fq = Quantity.parse(file_quantity) if file_quantity is not None else None
+    used: list[UffRecord] = []
+    skipped: list[str] = []
+    for r in records:
+        if r.function_type == 4 or (r.function_type == 0 and (r.quantity is not None or fq is not None)):
+            used.append(r)
+        else:
+            skipped.append(f"dataset #{r.index} ({r.label}): {r.function_name} (function type "
+                           f"{r.function_type}) is not an FRF; skipped")
+    if not used:
+        kinds = sorted({f"{r.function_name} ({r.function_type})" for r in records}) or ["none"]
+        raise InputError(f"{source}: no FRF records (function type 4) among the dataset-58 records; "
+                         f"found: {', '.join(kinds)}")
+    notes: list[str] = []
+    quantities: list[Quantity] = []
+    for r in used:
+        where = f"{source}: dataset #{r.index} ({r.label})"
+        if r.response is None or r.reference is None:
+            raise InputError(f"{where}: a scalar DOF (direction code 0) cannot be placed in an FRF matrix")
+        q = r.quantity
+        if q is None:
+            if fq is None:
+                raise InputError(
+                    f"{where}: the data-type codes (numerator {r.data_types[1]}, denominator "
+                    f"{r.data_types[2]}) do not say receptance, mobility or accelerance; pass file_quantity="
+                )
+            q = fq
+            notes.append(f"dataset #{r.index} ({r.label}): quantity {fq.value} taken from file_quantity")
+        elif fq is not None and q is not fq:
+            raise InputError(f"{where}: the file says {q.value} but file_quantity={fq.value}")
+        quantities.append(q)
+        notes.extend(f"dataset #{r.index} ({r.label}): {c}" for c in r.conversions)
+    # one grid
+    ref = used[0]
+    grid = ref.freq
+    for r in used[1:]:
+        same = r.freq.shape == grid.shape and np.allclose(
+            r.freq, grid, rtol=0.0, atol=_GRID_RTOL * max(abs(grid[-1]), 1.0)
+        )
+        if not same:
+            raise InputError(
+                f"{source}: inconsistent frequency grids: dataset #{r.index} ({r.label}) has {r.freq.size} lines "
+                f"{r.freq[0]:g}–{r.freq[-1]:g} Hz, dataset #{ref.index} ({ref.label}) has {grid.size} lines "
+                f"{grid[0]:g}–{grid[-1]:g} Hz; resample them onto one grid first"
+            )
+    # one quantity per matrix
+    file_q = quantities[0]
+    if any(q is not file_q for q in quantities):
+        if quantity is None:
+            mixed = sorted({q.value for q in quantities})
+            raise InputError(f"{source}: the FRF records mix quantities ({', '.join(mixed)}); "
+                             "pass quantity= to convert them to one")
+    outputs: list[Dof] = []
+    inputs: list[Dof] = []
+    where_pair: dict[tuple[Dof, Dof], UffRecord] = {}
+    for r in used:
+        key = (r.response, r.reference)
+        if key in where_pair:
+            raise InputError(f"{source}: the pair {r.label} appears twice (datasets #{where_pair[key].index} "
+                             f"and #{r.index}); remove one")
+        where_pair[key] = r  # type: ignore[index]
+        if r.response not in outputs:
+            outputs.append(r.response)  # type: ignore[arg-type]
+        if r.reference not in inputs:
+            inputs.append(r.reference)  # type: ignore[arg-type]
+    target = Quantity.parse(quantity) if quantity is not None else file_q
+    values = np.zeros((grid.size, len(outputs), len(inputs)), dtype=np.complex128)
+    oi = {d: k for k, d in enumerate(outputs)}
+    ii = {d: k for k, d in enumerate(inputs)}
+    iw = 2j * np.pi * grid
+    for r, q in zip(used, quantities):
+        v = r.values
+        dp = target.power - q.power
+        if dp != 0:
+            if dp < 0 and grid[0] == 0.0:
+                raise InputError(
+                    f"{source}: cannot convert {q.value} to {target.value} at 0 Hz (division by iω); "
+                    "read it as it is and drop the 0 Hz line with frf.band(fmin=...) before converting"
+                )
+            v = v * iw**dp
+            notes.append(f"dataset #{r.index} ({r.label}): converted {q.value} -> {target.value} (x(iω)^{dp})")
+        values[:, oi[r.response], ii[r.reference]] = v  # type: ignore[index]
+    missing = [(o, i) for o in outputs for i in inputs if (o, i) not in where_pair]
+    if missing and fill == "reciprocity":
+        still = []
+        for o, i in missing:
+            if (i, o) in where_pair:
+                values[:, oi[o], ii[i]] = values[:, oi[i], ii[o]]
+                notes.append(f"H[{o}, {i}] filled by reciprocity from H[{i}, {o}] (dataset #{where_pair[(i, o)].index})")
+            else:
+                still.append((o, i))
+        missing = still
+    if missing:
+        raise InputError(
+            f"{source}: the FRF matrix {len(outputs)} outputs x {len(inputs)} inputs is incomplete; "
+            f"missing {len(missing)} pair(s) response/reference: {_pairs(missing)}"
+            + ("" if fill == "reciprocity" else " (fill='reciprocity' may complete it)")
+        )
+    frf = FRF(grid, values, tuple(outputs), tuple(inputs), target)
+    return UffImport(frf, tuple(used), tuple(skipped), tuple(notes))
+
+
+def import_uff58(
+    path: str | os.PathLike,
+    quantity: Quantity | str | None = None,
+    *,
+    file_quantity: Quantity | str | None = None,
+    fill: str = "error",
+    assume_si: bool = False,
+) -> UffImport:
+    """Read a UFF58 file into one FRF matrix, with the import notes.
+
+    See :func:`read_uff58` (reading, units, signs) and :func:`frf_from_records`
+    (grouping, ``quantity``, ``file_quantity``, ``fill``).
+    """
+    records = read_uff58(path, assume_si=assume_si)
+    return frf_from_records(records, quantity, file_quantity=file_quantity, fill=fill, source=str(path))
+
+
+def read_frf_uff58(
+    path: str | os.PathLike,
+    quantity: Quantity | str | None = None,
+    *,
+    file_quantity: Quantity | str | None = None,
+    fill: str = "error",
+    assume_si: bool = False,
+) -> FRF:
+    """Read a UFF58 file (ASCII or 58b) into one :class:`~jointdb.frf.FRF`.
+
+    Directions are normalised (a −X record is negated and labelled +X), units
+    are SI, and all FRF records must form a full outputs × inputs matrix on one
+    frequency grid. Use :func:`import_uff58` to also get the notes of what was
+    converted, or :func:`read_uff58` for the individual records.
+
+    Raises
+    ------
+    NotFoundError, InputError
+        See :func:`read_uff58` and :func:`frf_from_records`.
+    """
+    return import_uff58(path, quantity, file_quantity=file_quantity, fill=fill, assume_si=assume_si).frf
