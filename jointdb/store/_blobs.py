@@ -1,0 +1,281 @@
+"""Content-addressed, durable, verified HDF5 blob store for FRFs.
+
+Canonical form (what the SHA-256 is computed over, format version 1), the
+concatenation of:
+
+1. the ASCII bytes ``b"jointdb-frf-v1\\n"``;
+2. ``quantity`` (``receptance``/``mobility``/``accelerance``) in UTF-8, then ``b"\\n"``;
+3. the output DOF labels as text (``"3x,3ry"``) in UTF-8, then ``b"\\n"``;
+4. the input DOF labels likewise, then ``b"\\n"``;
+5. ``n_freq, n_out, n_in`` as three little-endian uint64;
+6. the frequencies as little-endian float64 (``<f8``), ``n_freq`` values;
+7. the values as little-endian complex128 (``<c16``: real then imaginary part
+   of each entry), C order of the ``(n_freq, n_out, n_in)`` array.
+
+So two FRFs hash equal exactly when labels, quantity and every bit of the
+numbers are equal. The blob file is ``<root>/<h[:2]>/<h>.h5``.
+
+HDF5 layout: dataset ``freq`` (float64, Hz) and dataset ``values`` (float64,
+shape ``(n_freq, n_out, n_in, 2)``, last axis = (real, imaginary)), both chunked
+along frequency with shuffle + gzip + fletcher32. Root attributes:
+``format = "jointdb-frf-blob"``, ``format_version = 1``, ``sha256``,
+``quantity``, ``outputs``, ``inputs``, ``complex_convention`` and
+``harmonic_convention = "x(t) = X exp(+i omega t)"``.
+
+Writes go to a temporary file in the same directory, are fsynced, atomically
+renamed, the directory fsynced, then read back and verified. Reads always
+verify the hash (and HDF5 checks the fletcher32 checksums of every chunk).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import time
+import uuid
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from jointdb.errors import IntegrityError, NotFoundError
+from jointdb.frf import FRF
+
+__all__ = ["BlobStore", "frf_sha256", "file_sha256", "FORMAT_VERSION", "write_frf_file", "read_frf_file"]
+
+FORMAT = "jointdb-frf-blob"
+FORMAT_VERSION = 1
+COMPLEX_CONVENTION = "values[..., 0] = real part, values[..., 1] = imaginary part"
+HARMONIC_CONVENTION = "x(t) = X exp(+i omega t)"
+_TMP_PREFIX = ".tmp-"
+
+
+def frf_sha256(frf: FRF) -> str:
+    """SHA-256 (hex) of the canonical form of an FRF (module docstring)."""
+    h = hashlib.sha256()
+    h.update(b"jointdb-frf-v1\n")
+    h.update(frf.quantity.value.encode() + b"\n")
+    h.update(",".join(map(str, frf.outputs)).encode() + b"\n")
+    h.update(",".join(map(str, frf.inputs)).encode() + b"\n")
+    h.update(np.asarray(frf.values.shape, dtype="<u8").tobytes())
+    h.update(np.ascontiguousarray(frf.freq, dtype="<f8").tobytes())
+    h.update(np.ascontiguousarray(frf.values, dtype="<c16").tobytes())
+    return h.hexdigest()
+
+
+def file_sha256(path: str | os.PathLike) -> str:
+    """SHA-256 (hex) of a file's bytes (for provenance ``input_files``)."""
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for chunk in iter(lambda: f.read(1 << 20), b""):
+            h.update(chunk)
+    return h.hexdigest()
+
+
+def _chunk_rows(n_freq: int, n_entries: int) -> int:
+    # about 64 KiB per chunk, along frequency
+    return max(1, min(n_freq, (1 << 16) // max(1, 16 * n_entries)))
+
+
+def write_frf_group(group, frf: FRF, digest: str) -> None:
+    """Write an FRF into an open h5py group/file in the blob layout."""
+    n_freq, n_out, n_in = frf.values.shape
+    rows = _chunk_rows(n_freq, n_out * n_in)
+    opts = dict(shuffle=True, compression="gzip", compression_opts=4, fletcher32=True)
+    group.create_dataset("freq", data=np.asarray(frf.freq, dtype="<f8"), chunks=(rows,), **opts)
+    packed = np.stack([frf.values.real, frf.values.imag], axis=-1).astype("<f8")
+    group.create_dataset("values", data=packed, chunks=(rows, n_out, n_in, 2), **opts)
+    a = group.attrs
+    a["format"] = FORMAT
+    a["format_version"] = FORMAT_VERSION
+    a["sha256"] = digest
+    a["quantity"] = frf.quantity.value
+    a["outputs"] = ",".join(map(str, frf.outputs))
+    a["inputs"] = ",".join(map(str, frf.inputs))
+    a["complex_convention"] = COMPLEX_CONVENTION
+    a["harmonic_convention"] = HARMONIC_CONVENTION
+
+
+def read_frf_group(group, where: str) -> tuple[FRF, str]:
+    """Read an FRF from a group in the blob layout; returns ``(frf, stored_sha256)``."""
+    a = group.attrs
+    if str(a.get("format", "")) != FORMAT:
+        raise IntegrityError(f"{where}: not a jointdb FRF blob (format attribute {a.get('format')!r})")
+    version = int(a.get("format_version", 0))
+    if version > FORMAT_VERSION:
+        raise IntegrityError(f"{where}: blob format version {version} is newer than this jointdb ({FORMAT_VERSION})")
+    freq = np.asarray(group["freq"][...], dtype=np.float64)
+    packed = np.asarray(group["values"][...], dtype=np.float64)
+    values = packed[..., 0] + 1j * packed[..., 1]
+    outputs = [s for s in str(a["outputs"]).split(",") if s]
+    inputs = [s for s in str(a["inputs"]).split(",") if s]
+    frf = FRF(freq, values, outputs, inputs, str(a["quantity"]))
+    return frf, str(a.get("sha256", ""))
+
+
+def write_frf_file(path: str | os.PathLike, frf: FRF) -> str:
+    """Write one FRF to an HDF5 file in the blob layout (no atomicity); returns its hash."""
+    import h5py
+
+    digest = frf_sha256(frf)
+    with h5py.File(path, "w") as f:
+        write_frf_group(f, frf, digest)
+    return digest
+
+
+def read_frf_file(path: str | os.PathLike, verify: bool = True) -> FRF:
+    """Read a file written by :func:`write_frf_file` (hash verified)."""
+    import h5py
+
+    where = str(path)
+    try:
+        with h5py.File(path, "r", locking=False) as f:
+            frf, stored = read_frf_group(f, where)
+    except (OSError, KeyError, ValueError) as exc:
+        raise IntegrityError(f"{where}: cannot read FRF blob ({exc})") from None
+    if verify and frf_sha256(frf) != stored:
+        raise IntegrityError(f"{where}: content hash does not match the stored sha256 attribute")
+    return frf
+
+
+def _fsync_dir(path: Path) -> None:
+    try:
+        fd = os.open(path, os.O_RDONLY)
+    except OSError:
+        return
+    try:
+        os.fsync(fd)
+    except OSError:
+        pass
+    finally:
+        os.close(fd)
+
+
+@dataclass(frozen=True)
+class BlobInfo:
+    sha256: str
+    path: Path
+    size: int
+    mtime: float
+
+
+class BlobStore:
+    """Content-addressed FRF blobs in a directory (module docstring for the format).
+
+    Parameters
+    ----------
+    root
+        Directory holding the blobs (created on first write).
+    """
+
+    def __init__(self, root: str | os.PathLike):
+        self.root = Path(root)
+
+    def __repr__(self) -> str:
+        return f"BlobStore({str(self.root)!r})"
+
+    def path(self, digest: str) -> Path:
+        return self.root / digest[:2] / f"{digest}.h5"
+
+    def exists(self, digest: str) -> bool:
+        return self.path(digest).is_file()
+
+    # ------------------------------------------------------------------ write
+    def put(self, frf: FRF) -> str:
+        """Store an FRF durably; return its SHA-256. Idempotent (existing verified blob kept).
+
+        Raises
+        ------
+        IntegrityError
+            If the read-back does not verify.
+        """
+        import h5py
+
+        digest = frf_sha256(frf)
+        final = self.path(digest)
+        if final.is_file():
+            try:
+                self.get(digest)
+                return digest
+            except IntegrityError:
+                pass  # corrupt copy: rewrite it atomically below
+        final.parent.mkdir(parents=True, exist_ok=True)
+        tmp = final.parent / f"{_TMP_PREFIX}{uuid.uuid4().hex}.h5"
+        try:
+            with h5py.File(tmp, "w", locking=False) as f:
+                write_frf_group(f, frf, digest)
+            fd = os.open(tmp, os.O_RDONLY)
+            try:
+                os.fsync(fd)
+            finally:
+                os.close(fd)
+            os.replace(tmp, final)
+        finally:
+            if tmp.exists():
+                tmp.unlink()
+        _fsync_dir(final.parent)
+        _fsync_dir(self.root)
+        self.get(digest)  # read back and verify
+        return digest
+
+    # ------------------------------------------------------------------- read
+    def get(self, digest: str) -> FRF:
+        """Read and verify a blob.
+
+        Raises
+        ------
+        NotFoundError
+            If the blob file is missing.
+        IntegrityError
+            If it cannot be read, a chunk checksum fails, or the hash differs.
+        """
+        path = self.path(digest)
+        if not path.is_file():
+            raise NotFoundError(f"blob {digest} is missing (expected at {path})")
+        frf = read_frf_file(path, verify=False)
+        actual = frf_sha256(frf)
+        if actual != digest:
+            raise IntegrityError(f"blob {digest} is corrupt: its content hashes to {actual} ({path})")
+        return frf
+
+    def verify(self, digest: str) -> str | None:
+        """None when the blob is present and intact, else a one-line problem description."""
+        try:
+            self.get(digest)
+        except (NotFoundError, IntegrityError) as exc:
+            return str(exc)
+        return None
+
+    # ------------------------------------------------------------------ walk
+    def walk(self) -> Iterator[BlobInfo]:
+        """All finished blobs in the store."""
+        if not self.root.is_dir():
+            return
+        for sub in sorted(self.root.iterdir()):
+            if not sub.is_dir() or len(sub.name) != 2:
+                continue
+            for p in sorted(sub.glob("*.h5")):
+                if p.name.startswith(_TMP_PREFIX):
+                    continue
+                st = p.stat()
+                yield BlobInfo(p.stem, p, st.st_size, st.st_mtime)
+
+    def temporaries(self) -> list[Path]:
+        """Left-over temporary files of interrupted writes."""
+        if not self.root.is_dir():
+            return []
+        return sorted(self.root.glob(f"*/{_TMP_PREFIX}*"))
+
+    def remove(self, digest: str) -> None:
+        """Delete one blob file (garbage collection only)."""
+        path = self.path(digest)
+        path.unlink(missing_ok=True)
+        _fsync_dir(path.parent)
+
+    @staticmethod
+    def age_seconds(path: Path) -> float:
+        try:
+            return time.time() - path.stat().st_mtime
+        except OSError:
+            return 0.0

@@ -1,0 +1,242 @@
+"""Portable HDF5 bundles: export joints with all versions, import them elsewhere.
+
+Bundle layout (``format = "jointdb-bundle"``, ``format_version = 1``)::
+
+    /                      attrs: format, format_version, exported_at, software_version
+    /joints/jNNNN          attrs: name, joint_type, created_at, created_by,
+                                  labels (JSON {label: version}), states (JSON list)
+    /joints/jNNNN/vNNNN    attrs: record (JSON, the full version record incl.
+                                  provenance), record_sha256
+        frf/               the joint FRF in the blob layout (jointdb.store._blobs)
+        raw/<key>/         raw measurement FRFs, same layout
+
+Import verifies every record hash and FRF hash, validates the content as a new
+catalogue entry would, then compares with the target database:
+a version that exists there with the same uuid and record hash is a no-op; a
+version number that exists with different content, a joint name with another
+joint type, or a gap in the numbering raises :class:`ConflictError` and nothing
+is written. Labels are imported only where the target has no such label yet.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from collections.abc import Iterable
+from datetime import datetime
+from typing import TYPE_CHECKING, Any
+
+from sqlalchemy import select
+
+from jointdb.errors import ConflictError, InputError, IntegrityError
+from jointdb.frf import FRF
+from jointdb.store._blobs import frf_sha256, read_frf_group, write_frf_group
+from jointdb.store._models import AuditRow, JointRow, LabelRow, StateRow, VersionRow, utcnow
+from jointdb.store._records import current_actor, record_dict, record_sha256, row_from_record
+from jointdb.store._types import Conditions, check_joint_type, check_model_kind, check_name
+
+if TYPE_CHECKING:  # pragma: no cover
+    from jointdb.store._repository import Repository
+
+FORMAT = "jointdb-bundle"
+FORMAT_VERSION = 1
+
+
+def export_bundle(repo: "Repository", names: Iterable[str] | None, path: str | os.PathLike) -> dict[str, int]:
+    """Write the named joints (all when ``names`` is None) to ``path``; returns counts."""
+    import h5py
+
+    from jointdb import __version__
+
+    with repo._read() as s:
+        if names is None:
+            joints = list(s.scalars(select(JointRow).order_by(JointRow.name)))
+        else:
+            joints = [repo._joint(s, n) for n in dict.fromkeys(names)]
+        if not joints:
+            raise InputError("nothing to export: no joints selected")
+        plan = []
+        for j in joints:
+            rows = list(s.scalars(select(VersionRow).where(VersionRow.joint_id == j.id).order_by(VersionRow.version)))
+            labels = {lab.label: lab.version for lab in s.scalars(select(LabelRow).where(LabelRow.joint_id == j.id))}
+            states = [
+                {"version": st.version, "state": st.state, "reason": st.reason, "author": st.author,
+                 "at": st.at.isoformat(timespec="microseconds")}
+                for st in s.scalars(select(StateRow).where(StateRow.joint_id == j.id).order_by(StateRow.id))
+            ]
+            plan.append((j, [(record_dict(j.name, j.joint_type, r), r.record_sha256) for r in rows], labels, states))
+    tmp = f"{os.fspath(path)}.partial"
+    n_versions = 0
+    with h5py.File(tmp, "w") as f:
+        f.attrs["format"] = FORMAT
+        f.attrs["format_version"] = FORMAT_VERSION
+        f.attrs["exported_at"] = utcnow().isoformat()
+        f.attrs["software_version"] = __version__
+        root = f.create_group("joints")
+        for i, (j, records, labels, states) in enumerate(plan):
+            g = root.create_group(f"j{i:04d}")
+            g.attrs["name"] = j.name
+            g.attrs["joint_type"] = j.joint_type
+            g.attrs["created_at"] = j.created_at.isoformat(timespec="microseconds")
+            g.attrs["created_by"] = j.created_by
+            g.attrs["labels"] = json.dumps(labels, sort_keys=True)
+            g.attrs["states"] = json.dumps(states)
+            for record, digest in records:
+                if record_sha256(record) != digest:
+                    raise IntegrityError(f"{j.name} v{record['version']}: record hash mismatch; run `jointdb db check`")
+                vg = g.create_group(f"v{record['version']:04d}")
+                vg.attrs["record"] = json.dumps(record, sort_keys=True)
+                vg.attrs["record_sha256"] = digest
+                write_frf_group(vg.create_group("frf"), repo.blobs.get(record["blob_sha256"]), record["blob_sha256"])
+                for key, raw_digest in record["raw_blobs"].items():
+                    rg = vg.require_group("raw").create_group(key)
+                    write_frf_group(rg, repo.blobs.get(raw_digest), raw_digest)
+                n_versions += 1
+    os.replace(tmp, path)
+    return {"joints": len(plan), "versions": n_versions}
+
+
+def _read_bundle(path: str | os.PathLike) -> list[dict[str, Any]]:
+    """Read and verify a bundle completely (no database access)."""
+    import h5py
+
+    where = os.fspath(path)
+    try:
+        f = h5py.File(path, "r", locking=False)
+    except OSError as exc:
+        raise InputError(f"{where}: cannot open bundle ({exc})") from None
+    joints = []
+    with f:
+        if str(f.attrs.get("format", "")) != FORMAT:
+            raise InputError(f"{where}: not a jointdb bundle (format attribute {f.attrs.get('format')!r})")
+        if int(f.attrs.get("format_version", 0)) > FORMAT_VERSION:
+            raise InputError(f"{where}: bundle format {f.attrs['format_version']} is newer than this jointdb")
+        for gname in sorted(f.get("joints", {})):
+            g = f["joints"][gname]
+            name = check_name(str(g.attrs["name"]))
+            jt = check_joint_type(str(g.attrs["joint_type"]))
+            versions = []
+            for vname in sorted(k for k in g if k.startswith("v")):
+                vg = g[vname]
+                record = json.loads(str(vg.attrs["record"]))
+                digest = str(vg.attrs["record_sha256"])
+                label = f"{where}: {name} {vname}"
+                if record_sha256(record) != digest:
+                    raise IntegrityError(f"{label}: record hash mismatch (bundle altered or damaged)")
+                if record["name"] != name or record["joint_type"] != jt:
+                    raise IntegrityError(f"{label}: record names another joint")
+                try:
+                    frf, _ = read_frf_group(vg["frf"], label)
+                except (OSError, KeyError) as exc:
+                    raise IntegrityError(f"{label}: cannot read FRF ({exc})") from None
+                if frf_sha256(frf) != record["blob_sha256"]:
+                    raise IntegrityError(f"{label}: FRF content does not match its hash")
+                raw: dict[str, FRF] = {}
+                for key, raw_digest in record["raw_blobs"].items():
+                    raw_frf, _ = read_frf_group(vg["raw"][key], f"{label} raw {key}")
+                    if frf_sha256(raw_frf) != raw_digest:
+                        raise IntegrityError(f"{label}: raw measurement {key!r} does not match its hash")
+                    raw[key] = raw_frf
+                # validate as a catalogue entry would
+                Conditions.from_dict(record["conditions"])
+                check_model_kind(record["model_kind"], frf)
+                versions.append({"record": record, "digest": digest, "frf": frf, "raw": raw})
+            numbers = [v["record"]["version"] for v in versions]
+            if numbers != list(range(1, len(numbers) + 1)):
+                raise InputError(f"{where}: joint {name!r} versions {numbers} are not numbered 1..n")
+            joints.append({
+                "name": name, "joint_type": jt, "created_at": str(g.attrs["created_at"]),
+                "created_by": str(g.attrs["created_by"]), "labels": json.loads(str(g.attrs["labels"])),
+                "states": json.loads(str(g.attrs["states"])), "versions": versions,
+            })
+    return joints
+
+
+def _plan(session, joints: list[dict[str, Any]]) -> list[tuple[dict, list[dict]]]:
+    """Which versions are new; ConflictError on any contradiction with the database."""
+    plan = []
+    for j in joints:
+        row = session.scalar(select(JointRow).where(JointRow.name == j["name"]))
+        existing: dict[int, VersionRow] = {}
+        if row is not None:
+            if row.joint_type != j["joint_type"]:
+                raise ConflictError(
+                    f"joint {j['name']!r} is a {row.joint_type} joint here but {j['joint_type']} in the bundle"
+                )
+            existing = {v.version: v for v in session.scalars(select(VersionRow).where(VersionRow.joint_id == row.id))}
+        new = []
+        for v in j["versions"]:
+            rec = v["record"]
+            have = existing.get(rec["version"])
+            if have is not None:
+                if have.uuid != rec["uuid"] or have.record_sha256 != v["digest"]:
+                    raise ConflictError(
+                        f"joint {j['name']!r} version {rec['version']} already exists here with different content "
+                        f"(uuid {have.uuid} here, {rec['uuid']} in the bundle); nothing imported"
+                    )
+                continue
+            other = session.scalar(select(VersionRow).where(VersionRow.uuid == rec["uuid"]))
+            if other is not None:
+                raise ConflictError(f"version uuid {rec['uuid']} already exists here under another joint or number")
+            new.append(v)
+        if new and new[0]["record"]["version"] != len(existing) + 1:
+            raise ConflictError(
+                f"joint {j['name']!r}: the bundle continues at version {new[0]['record']['version']} but this "
+                f"database has versions 1..{len(existing)} with other content"
+            )
+        plan.append((j, new))
+    return plan
+
+
+def import_bundle(repo: "Repository", path: str | os.PathLike, author: str | None = None) -> dict[str, Any]:
+    """Import a bundle (module docstring); returns counts of new and unchanged versions."""
+    joints = _read_bundle(path)
+    with repo._read() as s:
+        plan = _plan(s, joints)  # refuse conflicts before touching anything
+    for _, new in plan:
+        for v in new:
+            repo.blobs.put(v["frf"])
+            for raw in v["raw"].values():
+                repo.blobs.put(raw)
+    actor = current_actor(author)
+    summary: dict[str, Any] = {"joints": len(joints), "new_versions": 0, "unchanged_versions": 0, "labels_skipped": []}
+
+    def write(s) -> None:
+        summary["new_versions"] = summary["unchanged_versions"] = 0
+        summary["labels_skipped"] = []
+        now = utcnow()
+        for j, new in _plan(s, joints):
+            row = s.scalar(select(JointRow).where(JointRow.name == j["name"]))
+            if row is None:
+                row = JointRow(name=j["name"], joint_type=j["joint_type"],
+                               created_at=datetime.fromisoformat(j["created_at"]), created_by=j["created_by"])
+                s.add(row)
+                s.flush()
+            for v in new:
+                s.add(row_from_record(v["record"], row.id))
+            s.flush()
+            summary["new_versions"] += len(new)
+            summary["unchanged_versions"] += len(j["versions"]) - len(new)
+            have_labels = {lab.label: lab.version for lab in s.scalars(select(LabelRow).where(LabelRow.joint_id == row.id))}
+            for label, version in j["labels"].items():
+                if label in have_labels:
+                    if have_labels[label] != int(version):
+                        summary["labels_skipped"].append(f"{j['name']}:{label}")
+                    continue
+                s.add(LabelRow(joint_id=row.id, label=label, version=int(version), updated_at=now, updated_by=actor))
+            have_states = {
+                (st.version, st.state, st.at.isoformat(timespec="microseconds"))
+                for st in s.scalars(select(StateRow).where(StateRow.joint_id == row.id))
+            }
+            for st in j["states"]:
+                key = (st["version"], st["state"], datetime.fromisoformat(st["at"]).isoformat(timespec="microseconds"))
+                if key not in have_states:
+                    s.add(StateRow(joint_id=row.id, version=st["version"], state=st["state"], reason=st["reason"],
+                                   author=st["author"], at=datetime.fromisoformat(st["at"])))
+            if new:
+                s.add(AuditRow(at=now, actor=actor, action="import", joint_name=j["name"], version=None,
+                               details={"bundle": os.fspath(path),
+                                        "versions": [v["record"]["version"] for v in new]}))
+
+    repo._retrying(write)
+    return summary

@@ -1,0 +1,188 @@
+"""Integrity check, garbage collection and version diffs."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from sqlalchemy import select
+
+from jointdb.errors import IntegrityError, NotFoundError
+from jointdb.frf import FRF
+from jointdb.store._models import AuditRow, JointRow, VersionRow, utcnow
+from jointdb.store._records import current_actor, record_dict, record_sha256
+from jointdb.store._types import JointVersion
+
+if TYPE_CHECKING:  # pragma: no cover
+    from jointdb.store._repository import CheckReport, Repository, VersionDiff
+
+
+def _referenced(repo: "Repository") -> dict[str, list[str]]:
+    """blob sha -> list of "name vN" rows referencing it."""
+    refs: dict[str, list[str]] = {}
+    with repo._read() as s:
+        q = select(JointRow.name, VersionRow.version, VersionRow.blob_sha256, VersionRow.raw_blobs).join(
+            JointRow, JointRow.id == VersionRow.joint_id
+        )
+        for name, version, blob, raw in s.execute(q):
+            refs.setdefault(blob, []).append(f"{name} v{version}")
+            for key, digest in (raw or {}).items():
+                refs.setdefault(digest, []).append(f"{name} v{version} raw {key}")
+    return refs
+
+
+def check(repo: "Repository", verify_blobs: bool = True) -> "CheckReport":
+    """Walk every version row and every blob (see :meth:`Repository.check`).
+
+    Problems reported: a row whose blob is missing or corrupt, a row whose
+    record hash does not match its content, gaps or duplicates in a joint's
+    version numbers. Orphan blobs and left-over temporary files are listed but
+    are not problems (``jointdb db gc`` removes them).
+    """
+    from jointdb.store._repository import CheckReport
+
+    problems: list[str] = []
+    n_rows = 0
+    with repo._read() as s:
+        joints = {j.id: j for j in s.scalars(select(JointRow))}
+        numbers: dict[int, list[int]] = {}
+        for row in s.scalars(select(VersionRow).order_by(VersionRow.joint_id, VersionRow.version)):
+            n_rows += 1
+            joint = joints[row.joint_id]
+            numbers.setdefault(row.joint_id, []).append(row.version)
+            if record_sha256(record_dict(joint.name, joint.joint_type, row)) != row.record_sha256:
+                problems.append(f"{joint.name} v{row.version}: record hash mismatch (row content was altered)")
+    for joint_id, nums in numbers.items():
+        if nums != list(range(1, len(nums) + 1)):
+            problems.append(f"{joints[joint_id].name}: version numbers {nums} are not 1..{len(nums)}")
+    refs = _referenced(repo)
+    n_blobs = 0
+    for digest, users in sorted(refs.items()):
+        n_blobs += 1
+        if verify_blobs:
+            problem = repo.blobs.verify(digest)
+        else:
+            problem = None if repo.blobs.exists(digest) else f"blob {digest} is missing"
+        if problem:
+            problems.append(f"{', '.join(users)}: {problem}")
+    orphans = tuple(b.sha256 for b in repo.blobs.walk() if b.sha256 not in refs)
+    temps = tuple(str(p) for p in repo.blobs.temporaries())
+    return CheckReport(n_rows, n_blobs, tuple(problems), orphans, temps)
+
+
+def gc(repo: "Repository", min_age_s: float = 3600.0, dry_run: bool = False) -> list[str]:
+    """Delete blobs that no row references, and stale temporary files.
+
+    Only files older than ``min_age_s`` are touched: a blob that a running
+    ``catalogue`` has just written (its row not yet committed) is younger.
+    """
+    refs = _referenced(repo)
+    removed: list[str] = []
+    for blob in list(repo.blobs.walk()):
+        if blob.sha256 in refs or repo.blobs.age_seconds(blob.path) < min_age_s:
+            continue
+        # re-check against the database right before deleting
+        if blob.sha256 in _referenced(repo):
+            continue
+        removed.append(blob.sha256)
+        if not dry_run:
+            repo.blobs.remove(blob.sha256)
+    for tmp in repo.blobs.temporaries():
+        if repo.blobs.age_seconds(tmp) >= min_age_s:
+            removed.append(str(tmp))
+            if not dry_run:
+                tmp.unlink(missing_ok=True)
+    if removed and not dry_run:
+        now = utcnow()
+
+        def write(s):
+            s.add(AuditRow(at=now, actor=current_actor(), action="gc", joint_name=None, version=None,
+                           details={"removed": len(removed)}))
+
+        repo._retrying(write)
+    return removed
+
+
+def _conditions_flat(v: JointVersion) -> dict[str, Any]:
+    c = v.conditions
+    out: dict[str, Any] = {
+        "materials": "+".join(c.materials),
+        "preload_n": c.preload_n,
+        "torque_nm": c.torque_nm,
+    }
+    out.update({f"geometry.{k}": x for k, x in c.geometry.items()})
+    out.update({f"extra.{k}": x for k, x in c.extra.items()})
+    return out
+
+
+def frf_difference(a: FRF, b: FRF) -> tuple[list[dict[str, Any]], list[str]]:
+    """Per common entry, ``max_f |H_b − H_a| / max_f |H_a|`` on a's grid within the overlap."""
+    notes: list[str] = []
+    lo = max(a.freq[0], b.freq[0])
+    hi = min(a.freq[-1], b.freq[-1])
+    if lo > hi:
+        return [], ["frequency ranges do not overlap; no FRF comparison"]
+    a_band = a.band(lo, hi)
+    if a.n_freq != b.n_freq or not np.array_equal(a.freq, b.freq):
+        notes.append(f"grids differ; b interpolated onto a's lines in {lo:g}-{hi:g} Hz")
+        b = b.resample(a_band.freq)
+    a = a_band
+    outs = [d for d in a.outputs if d in set(b.outputs)]
+    ins = [d for d in a.inputs if d in set(b.inputs)]
+    missing = sorted(set(map(str, a.outputs)) ^ set(map(str, b.outputs)))
+    if missing:
+        notes.append(f"DOFs in only one version: {' '.join(missing)}")
+    if not outs or not ins:
+        return [], notes + ["no common DOFs"]
+    ha = a.block(outs, ins)
+    hb = b.block(outs, ins)
+    peak = np.max(np.abs(ha), axis=0)
+    delta = np.max(np.abs(hb - ha), axis=0)
+    rel = np.where(peak > 0, delta / np.where(peak > 0, peak, 1.0), np.where(delta > 0, np.inf, 0.0))
+    rows = [
+        {"output": str(o), "input": str(i), "max_rel_diff": float(rel[p, q])}
+        for p, o in enumerate(outs)
+        for q, i in enumerate(ins)
+    ]
+    return rows, notes
+
+
+def diff_versions(repo: "Repository", a: JointVersion, b: JointVersion) -> "VersionDiff":
+    from jointdb.store._repository import VersionDiff
+
+    ca, cb = _conditions_flat(a), _conditions_flat(b)
+    conditions = {k: (ca.get(k), cb.get(k)) for k in sorted(set(ca) | set(cb)) if ca.get(k) != cb.get(k)}
+    fields = {}
+    for attr in ("joint_type", "model_kind", "dofs", "n_freq", "freq_min_hz", "freq_max_hz", "state"):
+        va, vb = getattr(a, attr), getattr(b, attr)
+        if va != vb:
+            fields[attr] = (va, vb)
+    pa, pb = a.provenance, b.provenance
+    for attr in ("method", "parameters", "input_files", "software_version", "author"):
+        va, vb = getattr(pa, attr), getattr(pb, attr)
+        if va != vb:
+            fields[f"provenance.{attr}"] = (va, vb)
+    if dict(a.quality) != dict(b.quality):
+        fields["quality"] = (dict(a.quality), dict(b.quality))
+    same = a.blob_sha256 == b.blob_sha256
+    if same:
+        rows: list[dict[str, Any]] = [
+            {"output": o, "input": i, "max_rel_diff": 0.0} for o in a.dofs for i in a.dofs
+        ]
+        notes: list[str] = ["identical FRF blob"]
+    else:
+        try:
+            rows, notes = frf_difference(repo.load_frf(a), repo.load_frf(b))
+        except (IntegrityError, NotFoundError):
+            raise
+    worst = max((r["max_rel_diff"] for r in rows), default=None)
+    return VersionDiff(
+        a=f"{a.name} v{a.version}",
+        b=f"{b.name} v{b.version}",
+        conditions=conditions,
+        fields=fields,
+        frf_entries=tuple(rows),
+        max_relative_difference=worst,
+        same_blob=same,
+        notes=tuple(notes),
+    )

@@ -1,0 +1,200 @@
+"""SQLAlchemy 2 models of the joint database (schema changes only via Alembic).
+
+Tables
+------
+``joints``          identity: name (unique) and joint type. Immutable.
+``joint_versions``  one immutable row per ``(joint, version)``: conditions, model
+                    kind, DOF labels, frequency range, blob hash, provenance,
+                    quality. ``UNIQUE(joint_id, version)`` backs the numbering.
+``joint_states``    append-only state changes (``deprecated`` / ``active``) of a
+                    joint or one of its versions; the latest row wins.
+``labels``          mutable named pointers (``released``, ``default``) to versions.
+``audit_log``       append-only: who did what, when.
+
+Immutability is enforced twice: here (a ``before_flush`` hook refuses updates
+and deletes of immutable rows) and in the database (triggers created by the
+migration ``0002`` refuse UPDATE and DELETE).
+"""
+
+from __future__ import annotations
+
+from datetime import datetime, timezone
+from typing import Any
+
+from sqlalchemy import (
+    JSON,
+    CheckConstraint,
+    DateTime,
+    Float,
+    ForeignKey,
+    ForeignKeyConstraint,
+    Index,
+    Integer,
+    MetaData,
+    String,
+    Text,
+    UniqueConstraint,
+    event,
+)
+from sqlalchemy.orm import DeclarativeBase, Mapped, Session, mapped_column
+from sqlalchemy.types import TypeDecorator
+
+from jointdb.errors import ConflictError
+
+NAMING_CONVENTION = {
+    "ix": "ix_%(column_0_label)s",
+    "uq": "uq_%(table_name)s_%(column_0_N_name)s",
+    "ck": "ck_%(table_name)s_%(constraint_name)s",
+    "fk": "fk_%(table_name)s_%(column_0_N_name)s_%(referred_table_name)s",
+    "pk": "pk_%(table_name)s",
+}
+
+
+class UTCDateTime(TypeDecorator):
+    """Timezone-aware UTC datetimes on every backend (naive UTC text on SQLite)."""
+
+    impl = DateTime(timezone=True)
+    cache_ok = True
+
+    def process_bind_param(self, value: datetime | None, dialect) -> datetime | None:
+        if value is None:
+            return None
+        if value.tzinfo is None:
+            raise ValueError("naive datetime given to the database; use timezone-aware UTC")
+        value = value.astimezone(timezone.utc)
+        if dialect.name == "sqlite":
+            return value.replace(tzinfo=None)
+        return value
+
+    def process_result_value(self, value: datetime | None, dialect) -> datetime | None:
+        if value is None:
+            return None
+        if value.tzinfo is None:
+            return value.replace(tzinfo=timezone.utc)
+        return value.astimezone(timezone.utc)
+
+
+def utcnow() -> datetime:
+    return datetime.now(timezone.utc)
+
+
+class Base(DeclarativeBase):
+    metadata = MetaData(naming_convention=NAMING_CONVENTION)
+
+
+class JointRow(Base):
+    __tablename__ = "joints"
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    name: Mapped[str] = mapped_column(String(200), unique=True)
+    joint_type: Mapped[str] = mapped_column(String(100), index=True)
+    created_at: Mapped[datetime] = mapped_column(UTCDateTime())
+    created_by: Mapped[str] = mapped_column(String(200))
+
+
+class VersionRow(Base):
+    __tablename__ = "joint_versions"
+    __table_args__ = (
+        UniqueConstraint("joint_id", "version"),
+        CheckConstraint("version >= 1", name="version_positive"),
+        CheckConstraint("parent_version IS NULL OR parent_version < version", name="parent_before"),
+        CheckConstraint("preload_n IS NULL OR preload_n >= 0", name="preload_nonneg"),
+        CheckConstraint("torque_nm IS NULL OR torque_nm >= 0", name="torque_nonneg"),
+        CheckConstraint("n_freq >= 1", name="n_freq_positive"),
+        Index("ix_joint_versions_joint_id_created_at", "joint_id", "created_at"),
+    )
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    joint_id: Mapped[int] = mapped_column(ForeignKey("joints.id", ondelete="RESTRICT"))
+    version: Mapped[int] = mapped_column(Integer)
+    uuid: Mapped[str] = mapped_column(String(36), unique=True)
+    created_at: Mapped[datetime] = mapped_column(UTCDateTime())
+    author: Mapped[str] = mapped_column(String(200))
+    # conditions
+    materials: Mapped[list] = mapped_column(JSON)
+    preload_n: Mapped[float | None] = mapped_column(Float)
+    torque_nm: Mapped[float | None] = mapped_column(Float)
+    geometry: Mapped[dict] = mapped_column(JSON)
+    extra: Mapped[dict] = mapped_column(JSON)
+    # model and FRF
+    model_kind: Mapped[str] = mapped_column(String(50))
+    dofs: Mapped[list] = mapped_column(JSON)
+    quantity: Mapped[str] = mapped_column(String(20))
+    n_freq: Mapped[int] = mapped_column(Integer)
+    freq_min_hz: Mapped[float] = mapped_column(Float)
+    freq_max_hz: Mapped[float] = mapped_column(Float)
+    blob_sha256: Mapped[str] = mapped_column(String(64), index=True)
+    raw_blobs: Mapped[dict] = mapped_column(JSON)
+    # provenance
+    input_files: Mapped[dict] = mapped_column(JSON)
+    method: Mapped[str] = mapped_column(String(200))
+    method_params: Mapped[dict] = mapped_column(JSON)
+    software_version: Mapped[str] = mapped_column(String(50))
+    parent_version: Mapped[int | None] = mapped_column(Integer)
+    # quality and integrity
+    quality: Mapped[dict] = mapped_column(JSON)
+    record_sha256: Mapped[str] = mapped_column(String(64))
+
+
+class StateRow(Base):
+    __tablename__ = "joint_states"
+    __table_args__ = (
+        CheckConstraint("state IN ('active', 'deprecated')", name="state_known"),
+        Index("ix_joint_states_joint_id_at", "joint_id", "at"),
+    )
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    joint_id: Mapped[int] = mapped_column(ForeignKey("joints.id", ondelete="RESTRICT"))
+    version: Mapped[int | None] = mapped_column(Integer)  # None: the whole joint
+    state: Mapped[str] = mapped_column(String(20))
+    reason: Mapped[str] = mapped_column(Text)
+    author: Mapped[str] = mapped_column(String(200))
+    at: Mapped[datetime] = mapped_column(UTCDateTime())
+
+
+class LabelRow(Base):
+    __tablename__ = "labels"
+    __table_args__ = (
+        UniqueConstraint("joint_id", "label"),
+        ForeignKeyConstraint(
+            ["joint_id", "version"], ["joint_versions.joint_id", "joint_versions.version"], ondelete="RESTRICT"
+        ),
+    )
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    joint_id: Mapped[int] = mapped_column(ForeignKey("joints.id", ondelete="RESTRICT"))
+    label: Mapped[str] = mapped_column(String(100))
+    version: Mapped[int] = mapped_column(Integer)
+    updated_at: Mapped[datetime] = mapped_column(UTCDateTime())
+    updated_by: Mapped[str] = mapped_column(String(200))
+
+
+class AuditRow(Base):
+    __tablename__ = "audit_log"
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    at: Mapped[datetime] = mapped_column(UTCDateTime(), index=True)
+    actor: Mapped[str] = mapped_column(String(200))
+    action: Mapped[str] = mapped_column(String(50))
+    joint_name: Mapped[str | None] = mapped_column(String(200))
+    version: Mapped[int | None] = mapped_column(Integer)
+    details: Mapped[dict[str, Any]] = mapped_column(JSON)
+
+
+IMMUTABLE = (JointRow, VersionRow, StateRow, AuditRow)
+#: Tables the database itself protects with UPDATE/DELETE triggers (migration 0002).
+IMMUTABLE_TABLES = ("joints", "joint_versions", "joint_states", "audit_log")
+
+
+@event.listens_for(Session, "before_flush")
+def _refuse_changes_to_immutable_rows(session: Session, flush_context, instances) -> None:
+    for obj in session.deleted:
+        if isinstance(obj, IMMUTABLE):
+            raise ConflictError(
+                f"{obj.__tablename__} rows are never deleted; deprecate instead (jointdb joints deprecate)"
+            )
+    for obj in session.dirty:
+        if isinstance(obj, IMMUTABLE) and session.is_modified(obj, include_collections=False):
+            raise ConflictError(
+                f"{obj.__tablename__} rows are immutable; catalogue a new version instead of editing one"
+            )

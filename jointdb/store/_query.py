@@ -1,0 +1,289 @@
+"""Nearest-joint query and interpolation between neighbours.
+
+Candidates
+----------
+Only joints of the requested joint type (types are never mixed), and of each
+joint only its *current* version: the latest version not deprecated (as of
+``at``, default now); deprecated joints are skipped. Ranking reads condition
+columns only; FRF blobs are never loaded to rank.
+
+Distance
+--------
+``distance = sqrt(sum of squared per-condition terms)`` over the conditions the
+request specifies (a condition the request leaves out contributes nothing):
+
+- ``torque_nm``, ``preload_n``: ``|ln((c+δ)/(r+δ))| / s`` where ``s`` is the spread
+  ``max ln(x+δ) − min ln(x+δ)`` of that quantity over the candidates, floored at
+  ``ln 2`` (so without spread a factor 2 costs 1.0); ``δ = 1e-9·max(1, max x)``
+  only guards zero values. A candidate without the value costs 1.0.
+- ``materials``: Jaccard distance of the two material multisets
+  (``1 − |A∩B| / |A∪B|``): 0 for the same materials, 1 for none in common.
+- ``geometry.<key>``: relative difference ``|c − r| / max(|c|, |r|)`` (in [0, 1]);
+  a candidate without the key costs 1.0.
+
+A request value outside the catalogued ``[min, max]`` of a numeric condition,
+or a material no candidate has, is reported in ``Match.outside_range``
+(``extrapolating=True``) and warned about with :class:`OutsideCatalogueWarning`.
+
+Interpolation
+-------------
+Weights ``w_i ∝ 1/d_i`` (exact matches, ``d = 0``, share all the weight); the
+neighbours' receptances are inverted to dynamic stiffness ``Z_i = H_i⁻¹`` (per
+line, batched), averaged ``Z = Σ w_i Z_i`` and inverted back. For spring–damper
+joints ``Z = k + iωc``, so this interpolates stiffness and damping linearly
+(theory.md §1a), which interpolating receptances would not.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from collections import Counter
+from collections.abc import Mapping, Sequence
+from datetime import datetime
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from sqlalchemy import and_, func, select
+
+from jointdb.errors import InputError, NotFoundError, NumericalError
+from jointdb.frf import FRF
+from jointdb.store._models import JointRow, LabelRow, StateRow, VersionRow
+from jointdb.store._records import state_of, to_version
+from jointdb.store._types import Conditions, InterpolatedJoint, Match, as_conditions, check_joint_type
+
+if TYPE_CHECKING:  # pragma: no cover
+    from jointdb.store._repository import Repository
+
+MISSING_PENALTY = 1.0
+MIN_LOG_SPREAD = math.log(2.0)
+
+
+class OutsideCatalogueWarning(UserWarning):
+    """A nearest-joint request lies outside the catalogued range of some condition."""
+
+
+def _candidates(repo: "Repository", joint_type: str, at: datetime | None) -> list[tuple]:
+    """(version_id, joint_id, version, materials, preload, torque, geometry) of current versions."""
+    cols = (
+        VersionRow.id,
+        VersionRow.joint_id,
+        VersionRow.version,
+        VersionRow.materials,
+        VersionRow.preload_n,
+        VersionRow.torque_nm,
+        VersionRow.geometry,
+    )
+    with repo._read() as s:
+        inner = (
+            select(VersionRow.joint_id, func.max(VersionRow.version).label("mv"))
+            .join(JointRow, JointRow.id == VersionRow.joint_id)
+            .where(JointRow.joint_type == joint_type)
+        )
+        if at is not None:
+            inner = inner.where(VersionRow.created_at <= at)
+        inner = inner.group_by(VersionRow.joint_id).subquery()
+        rows = {
+            r[1]: tuple(r)
+            for r in s.execute(
+                select(*cols).join(inner, and_(VersionRow.joint_id == inner.c.joint_id, VersionRow.version == inner.c.mv))
+            )
+        }
+        sq = select(StateRow).join(JointRow, JointRow.id == StateRow.joint_id).where(JointRow.joint_type == joint_type)
+        if at is not None:
+            sq = sq.where(StateRow.at <= at)
+        states: dict[int, list[StateRow]] = {}
+        for st in s.scalars(sq):
+            states.setdefault(st.joint_id, []).append(st)
+        for joint_id, sts in states.items():
+            rows.pop(joint_id, None)
+            q = select(*cols).where(VersionRow.joint_id == joint_id)
+            if at is not None:
+                q = q.where(VersionRow.created_at <= at)
+            for r in s.execute(q.order_by(VersionRow.version.desc())):
+                if state_of(r[2], sts) == "active":
+                    rows[joint_id] = tuple(r)
+                    break
+    return list(rows.values())
+
+
+def _jaccard(a: tuple[str, ...], b: tuple[str, ...]) -> float:
+    ca, cb = Counter(a), Counter(b)
+    union = sum((ca | cb).values())
+    return 0.0 if union == 0 else 1.0 - sum((ca & cb).values()) / union
+
+
+def _log_term(values: np.ndarray, request: float, name: str, terms: dict, outside: list) -> None:
+    have = np.isfinite(values)
+    if not have.any():
+        terms[name] = np.full(values.shape, MISSING_PENALTY)
+        outside.append(name)
+        return
+    delta = 1e-9 * max(1.0, float(np.nanmax(values)))
+    logs = np.log(values[have] + delta)
+    spread = max(float(logs.max() - logs.min()), MIN_LOG_SPREAD)
+    term = np.full(values.shape, MISSING_PENALTY)
+    term[have] = np.abs(logs - math.log(request + delta)) / spread
+    terms[name] = term
+    lo, hi = float(np.nanmin(values)), float(np.nanmax(values))
+    if request < lo or request > hi:
+        outside.append(name)
+
+
+def nearest(
+    repo: "Repository",
+    joint_type: str,
+    conditions: Conditions | Mapping[str, Any],
+    k: int = 3,
+    at: datetime | None = None,
+) -> list[Match]:
+    """The ``k`` current versions of ``joint_type`` closest to ``conditions`` (module docstring).
+
+    Raises
+    ------
+    InputError
+        ``k < 1`` or bad conditions.
+    NotFoundError
+        No catalogued joint of that type.
+    """
+    joint_type = check_joint_type(joint_type)
+    req = as_conditions(conditions)
+    if isinstance(k, bool) or int(k) < 1:
+        raise InputError(f"k must be >= 1, got {k!r}")
+    rows = _candidates(repo, joint_type, at)
+    if not rows:
+        with repo._read() as s:
+            types = sorted(set(s.scalars(select(JointRow.joint_type))))
+        raise NotFoundError(
+            f"no current catalogued joint of type {joint_type!r}; types in the catalogue: {', '.join(types) or 'none'}"
+            " (joint types are never mixed)"
+        )
+    n = len(rows)
+    terms: dict[str, np.ndarray] = {}
+    outside: list[str] = []
+    if req.torque_nm is not None:
+        vals = np.array([np.nan if r[5] is None else r[5] for r in rows], dtype=float)
+        _log_term(vals, req.torque_nm, "torque_nm", terms, outside)
+    if req.preload_n is not None:
+        vals = np.array([np.nan if r[4] is None else r[4] for r in rows], dtype=float)
+        _log_term(vals, req.preload_n, "preload_n", terms, outside)
+    if req.materials:
+        want = tuple(sorted(req.materials))
+        cache: dict[tuple[str, ...], float] = {}
+        term = np.empty(n)
+        for i, r in enumerate(rows):
+            mats = tuple(sorted(r[3] or ()))
+            if mats not in cache:
+                cache[mats] = _jaccard(want, mats) if mats else MISSING_PENALTY
+            term[i] = cache[mats]
+        terms["materials"] = term
+        if not any(term_value == 0.0 for term_value in cache.values()):
+            outside.append("materials")
+    for key, r_val in req.geometry.items():
+        vals = np.array([(r[6] or {}).get(key, np.nan) for r in rows], dtype=float)
+        have = np.isfinite(vals)
+        denom = np.maximum(np.abs(vals), abs(r_val))
+        rel = np.where(denom > 0, np.abs(vals - r_val) / np.where(denom > 0, denom, 1.0), 0.0)
+        terms[f"geometry.{key}"] = np.where(have, rel, MISSING_PENALTY)
+        if not have.any() or r_val < np.nanmin(vals) or r_val > np.nanmax(vals):
+            outside.append(f"geometry.{key}")
+    total = np.sqrt(sum((t**2 for t in terms.values()), np.zeros(n)))
+    # deterministic order: distance, then joint id, then version
+    order = sorted(range(n), key=lambda i: (round(float(total[i]), 12), rows[i][1], rows[i][2]))[: int(k)]
+    if outside:
+        warnings.warn(
+            f"request lies outside the catalogued range of {joint_type} joints for: {', '.join(outside)}; "
+            "the nearest joints are extrapolations",
+            OutsideCatalogueWarning,
+            stacklevel=3,
+        )
+    out: list[Match] = []
+    with repo._read() as s:
+        for i in order:
+            vrow = s.get(VersionRow, rows[i][0])
+            joint = s.get(JointRow, vrow.joint_id)
+            labels = s.scalars(
+                select(LabelRow.label).where(LabelRow.joint_id == joint.id, LabelRow.version == vrow.version)
+            )
+            version = to_version(joint, vrow, "active", list(labels))
+            out.append(
+                Match(
+                    version=version,
+                    distance=float(total[i]),
+                    per_condition={name: float(t[i]) for name, t in terms.items()},
+                    extrapolating=bool(outside),
+                    outside_range=tuple(outside),
+                )
+            )
+    return out
+
+
+def _weights(distances: Sequence[float]) -> np.ndarray:
+    d = np.asarray(distances, dtype=float)
+    exact = d <= 1e-12
+    if exact.any():
+        w = exact.astype(float)
+    else:
+        w = 1.0 / d
+    return w / w.sum()
+
+
+def interpolate(
+    repo: "Repository",
+    matches: Sequence[Match],
+    conditions: Conditions | Mapping[str, Any] | None = None,
+) -> InterpolatedJoint:
+    """Interpolated joint FRF between neighbours, in dynamic stiffness (module docstring).
+
+    Raises
+    ------
+    InputError
+        No matches, or neighbours of different type, model kind or DOFs, or
+        without a common frequency band.
+    NumericalError
+        A neighbour's receptance is singular on some line.
+    """
+    matches = list(matches)
+    if not matches:
+        raise InputError("no neighbours to interpolate between")
+    first = matches[0].version
+    for m in matches[1:]:
+        v = m.version
+        if v.joint_type != first.joint_type:
+            raise InputError(f"cannot interpolate between {first.joint_type} and {v.joint_type} joints")
+        if v.model_kind != first.model_kind or tuple(v.dofs) != tuple(first.dofs):
+            raise InputError(
+                f"cannot interpolate {first.name} v{first.version} ({first.model_kind}, {' '.join(first.dofs)}) "
+                f"with {v.name} v{v.version} ({v.model_kind}, {' '.join(v.dofs)}): model kind and DOFs must match"
+            )
+    w = _weights([m.distance for m in matches])
+    frfs = [repo.load_frf(m.version) for m in matches]
+    lo = max(f.freq[0] for f in frfs)
+    hi = min(f.freq[-1] for f in frfs)
+    if lo > hi:
+        raise InputError("the neighbours' frequency ranges do not overlap; cannot interpolate")
+    grid = frfs[0].band(lo, hi).freq
+    z = np.zeros((grid.size, len(first.dofs), len(first.dofs)), dtype=np.complex128)
+    for weight, frf, m in zip(w, frfs, matches):
+        if weight == 0.0:
+            continue
+        h = frf if (frf.n_freq == grid.size and np.array_equal(frf.freq, grid)) else frf.resample(grid)
+        try:
+            z += weight * np.linalg.inv(h.values)
+        except np.linalg.LinAlgError:
+            raise NumericalError(
+                f"{m.version.name} v{m.version.version}: receptance is singular on some line; "
+                "cannot form its dynamic stiffness"
+            ) from None
+    try:
+        h_int = np.linalg.inv(z)
+    except np.linalg.LinAlgError:
+        raise NumericalError("interpolated dynamic stiffness is singular on some line") from None
+    frf_out = FRF(grid, h_int, first.dofs, first.dofs, "receptance")
+    neighbours = tuple((m.version.name, m.version.version, float(wi)) for m, wi in zip(matches, w))
+    return InterpolatedJoint(
+        frf=frf_out,
+        joint_type=first.joint_type,
+        conditions=as_conditions(conditions) if conditions is not None else Conditions(),
+        neighbours=neighbours,
+    )

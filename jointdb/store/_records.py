@@ -1,0 +1,150 @@
+"""Conversions between database rows and the public value types, record hashes."""
+
+from __future__ import annotations
+
+import getpass
+import hashlib
+import json
+import os
+from collections.abc import Iterable, Mapping
+from datetime import datetime
+from typing import Any
+
+from jointdb.store._models import JointRow, StateRow, VersionRow
+from jointdb.store._types import Conditions, JointVersion, Provenance
+
+
+def current_actor(author: str | None = None) -> str:
+    """Who is acting: the given author, ``JOINTDB_AUTHOR``, or the login name."""
+    if author:
+        return str(author)[:200]
+    env = os.environ.get("JOINTDB_AUTHOR")
+    if env:
+        return env[:200]
+    try:
+        return getpass.getuser()[:200]
+    except (KeyError, OSError):  # no passwd entry in some containers
+        return "unknown"
+
+
+def record_dict(joint_name: str, joint_type: str, row: VersionRow) -> dict[str, Any]:
+    """Everything that identifies a version's content (hashed into ``record_sha256``)."""
+    return {
+        "name": joint_name,
+        "joint_type": joint_type,
+        "version": row.version,
+        "uuid": row.uuid,
+        "created_at": row.created_at.isoformat(timespec="microseconds"),
+        "author": row.author,
+        "conditions": {
+            "materials": list(row.materials),
+            "preload_n": row.preload_n,
+            "torque_nm": row.torque_nm,
+            "geometry": dict(row.geometry),
+            "extra": dict(row.extra),
+        },
+        "model_kind": row.model_kind,
+        "dofs": list(row.dofs),
+        "quantity": row.quantity,
+        "n_freq": row.n_freq,
+        "freq_min_hz": row.freq_min_hz,
+        "freq_max_hz": row.freq_max_hz,
+        "blob_sha256": row.blob_sha256,
+        "raw_blobs": dict(row.raw_blobs),
+        "provenance": {
+            "input_files": dict(row.input_files),
+            "method": row.method,
+            "parameters": dict(row.method_params),
+            "software_version": row.software_version,
+        },
+        "parent_version": row.parent_version,
+        "quality": dict(row.quality),
+    }
+
+
+def record_sha256(record: Mapping[str, Any]) -> str:
+    text = json.dumps(record, sort_keys=True, separators=(",", ":"), allow_nan=False, ensure_ascii=True)
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def row_from_record(record: Mapping[str, Any], joint_id: int) -> VersionRow:
+    """A new VersionRow from a record dict (bundle import)."""
+    c = record["conditions"]
+    p = record["provenance"]
+    return VersionRow(
+        joint_id=joint_id,
+        version=int(record["version"]),
+        uuid=str(record["uuid"]),
+        created_at=datetime.fromisoformat(record["created_at"]),
+        author=str(record["author"]),
+        materials=list(c["materials"]),
+        preload_n=c["preload_n"],
+        torque_nm=c["torque_nm"],
+        geometry=dict(c["geometry"]),
+        extra=dict(c["extra"]),
+        model_kind=str(record["model_kind"]),
+        dofs=list(record["dofs"]),
+        quantity=str(record["quantity"]),
+        n_freq=int(record["n_freq"]),
+        freq_min_hz=float(record["freq_min_hz"]),
+        freq_max_hz=float(record["freq_max_hz"]),
+        blob_sha256=str(record["blob_sha256"]),
+        raw_blobs=dict(record["raw_blobs"]),
+        input_files=dict(p["input_files"]),
+        method=str(p["method"]),
+        method_params=dict(p["parameters"]),
+        software_version=str(p["software_version"]),
+        parent_version=record["parent_version"],
+        quality=dict(record["quality"]),
+        record_sha256=record_sha256(record),
+    )
+
+
+def state_of(version: int, states: Iterable[StateRow]) -> str:
+    """State of one version given the joint's state rows (already filtered by time)."""
+    best: tuple[datetime, int] | None = None
+    state = "active"
+    for s in states:
+        if s.version is not None and s.version != version:
+            continue
+        key = (s.at, s.id)
+        if best is None or key > best:
+            best, state = key, s.state
+    return state
+
+
+def to_version(joint: JointRow, row: VersionRow, state: str = "active", labels: Iterable[str] = ()) -> JointVersion:
+    conditions = Conditions.__new__(Conditions)  # stored data was validated on the way in
+    object.__setattr__(conditions, "materials", tuple(row.materials))
+    object.__setattr__(conditions, "preload_n", row.preload_n)
+    object.__setattr__(conditions, "torque_nm", row.torque_nm)
+    object.__setattr__(conditions, "geometry", dict(row.geometry))
+    object.__setattr__(conditions, "extra", dict(row.extra))
+    provenance = Provenance.__new__(Provenance)
+    object.__setattr__(provenance, "method", row.method)
+    object.__setattr__(provenance, "parameters", dict(row.method_params))
+    object.__setattr__(provenance, "input_files", dict(row.input_files))
+    object.__setattr__(provenance, "software_version", row.software_version)
+    object.__setattr__(provenance, "author", row.author)
+    return JointVersion(
+        name=joint.name,
+        joint_type=joint.joint_type,
+        version=row.version,
+        uuid=row.uuid,
+        created_at=row.created_at,
+        conditions=conditions,
+        model_kind=row.model_kind,
+        dofs=tuple(row.dofs),
+        quantity=row.quantity,
+        n_freq=row.n_freq,
+        freq_min_hz=row.freq_min_hz,
+        freq_max_hz=row.freq_max_hz,
+        blob_sha256=row.blob_sha256,
+        provenance=provenance,
+        parent_version=row.parent_version,
+        quality=dict(row.quality),
+        raw_blobs=dict(row.raw_blobs),
+        record_sha256=row.record_sha256,
+        state=state,
+        labels=tuple(sorted(labels)),
+    )

@@ -1,0 +1,496 @@
+"""The versioned joint repository (design.md, "Versioned records")."""
+
+from __future__ import annotations
+
+import os
+import random
+import re
+import time
+import uuid as uuidlib
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass, field
+from datetime import datetime, timezone
+from typing import Any
+
+from sqlalchemy import func, select
+from sqlalchemy.exc import IntegrityError as DBIntegrityError
+from sqlalchemy.exc import OperationalError
+from sqlalchemy.orm import Session
+
+from jointdb.errors import ConflictError, InputError, NotFoundError
+from jointdb.frf import FRF
+from jointdb.store import _db
+from jointdb.store._blobs import BlobStore
+from jointdb.store._models import AuditRow, JointRow, LabelRow, StateRow, VersionRow, utcnow
+from jointdb.store._records import current_actor, record_dict, record_sha256, state_of, to_version
+from jointdb.store._types import (
+    Conditions,
+    JointVersion,
+    Provenance,
+    as_conditions,
+    as_provenance,
+    as_quality,
+    check_joint_type,
+    check_model_kind,
+    check_name,
+    dof_strings,
+)
+
+MAX_WRITE_ATTEMPTS = 60
+
+
+def _software_version() -> str:
+    from jointdb import __version__
+
+    return __version__
+
+
+def _as_utc(at: datetime | str | None) -> datetime | None:
+    if at is None:
+        return None
+    if isinstance(at, str):
+        try:
+            at = datetime.fromisoformat(at)
+        except ValueError:
+            raise InputError(f"cannot read time {at!r}; use ISO 8601, e.g. 2026-01-31T12:00:00Z") from None
+    if at.tzinfo is None:
+        at = at.replace(tzinfo=timezone.utc)
+    return at.astimezone(timezone.utc)
+
+
+@dataclass(frozen=True)
+class CheckReport:
+    """Result of :meth:`Repository.check`; ``ok`` when nothing is missing or corrupt."""
+
+    versions_checked: int
+    blobs_checked: int
+    problems: tuple[str, ...]
+    orphan_blobs: tuple[str, ...] = ()
+    temporaries: tuple[str, ...] = ()
+
+    @property
+    def ok(self) -> bool:
+        return not self.problems
+
+
+@dataclass(frozen=True)
+class VersionDiff:
+    """Differences between two versions (:meth:`Repository.diff`).
+
+    ``frf_entries`` rows: ``output``, ``input``, ``max_rel_diff`` = max over the
+    common frequency lines of ``|H_b − H_a|`` divided by the peak ``|H_a|`` of
+    that entry.
+    """
+
+    a: str
+    b: str
+    conditions: Mapping[str, tuple[Any, Any]]
+    fields: Mapping[str, tuple[Any, Any]]
+    frf_entries: tuple[Mapping[str, Any], ...]
+    max_relative_difference: float | None
+    same_blob: bool
+    notes: tuple[str, ...] = field(default_factory=tuple)
+
+
+class Repository:
+    """A joint database: SQL rows (SQLite or PostgreSQL) plus an HDF5 blob store.
+
+    Parameters
+    ----------
+    url
+        Database URL or SQLite path; default ``JOINTDB_URL`` or the per-user
+        SQLite file (see :mod:`jointdb.store._db`).
+    blobs
+        Blob directory; default ``JOINTDB_BLOBS`` or ``<sqlite file>.blobs``.
+    auto_create
+        Create the schema (Alembic ``upgrade head``) when the database is new
+        and empty. Default: True for SQLite, False for PostgreSQL (run
+        ``jointdb db upgrade`` on a shared server).
+    """
+
+    def __init__(
+        self,
+        url: str | os.PathLike | None = None,
+        *,
+        blobs: str | os.PathLike | None = None,
+        auto_create: bool | None = None,
+        check_schema: bool = True,
+    ):
+        self.url = _db.resolve_url(url)
+        self.read_engine, self.write_engine = _db.make_engines(self.url)
+        self.blobs = BlobStore(_db.blob_dir(self.url, blobs))
+        self.is_sqlite = _db.is_sqlite(self.url)
+        if check_schema:
+            auto = self.is_sqlite if auto_create is None else auto_create
+            _db.ensure_schema(self.read_engine, self.write_engine, auto)
+
+    # ----------------------------------------------------------------- admin
+    def close(self) -> None:
+        self.read_engine.dispose()
+
+    def __enter__(self) -> "Repository":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def __repr__(self) -> str:
+        return f"Repository({self.url!r}, blobs={str(self.blobs.root)!r})"
+
+    def _read(self) -> Session:
+        return Session(self.read_engine, expire_on_commit=False)
+
+    def _write(self) -> Session:
+        return Session(self.write_engine, expire_on_commit=False)
+
+    def _retrying(self, fn):
+        """Run ``fn(session)`` in a write transaction; retry after rollback on conflicts."""
+        delay = 0.005
+        for attempt in range(MAX_WRITE_ATTEMPTS):
+            try:
+                with self._write() as session, session.begin():
+                    return fn(session)
+            except (DBIntegrityError, OperationalError) as exc:
+                if isinstance(exc, OperationalError) and not _is_transient(exc):
+                    raise
+                if isinstance(exc, DBIntegrityError) and not _is_unique_violation(exc):
+                    raise
+                if attempt == MAX_WRITE_ATTEMPTS - 1:
+                    raise ConflictError(f"write kept conflicting with other writers: {exc.orig}") from None
+                time.sleep(delay * (1 + random.random()))
+                delay = min(delay * 2, 0.5)
+        raise AssertionError("unreachable")  # pragma: no cover
+
+    # ------------------------------------------------------------- catalogue
+    def catalogue(
+        self,
+        name: str,
+        joint_type: str,
+        frf: FRF,
+        conditions: Conditions | Mapping[str, Any] | None,
+        model_kind: str,
+        provenance: Provenance | Mapping[str, Any] | None = None,
+        quality: Mapping[str, float] | None = None,
+        parent: int | None = None,
+        *,
+        raw_frfs: Mapping[str, FRF] | None = None,
+        author: str | None = None,
+    ) -> JointVersion:
+        """Store a joint FRF as a new joint (version 1) or a new version of one.
+
+        The blob is written durably first; the row is committed afterwards in one
+        write transaction in which the next version number is taken (behind
+        ``UNIQUE(joint_id, version)``; retried after rollback on a conflict).
+
+        Raises
+        ------
+        InputError
+            Bad name, type, conditions, model kind / DOF structure, provenance or
+            quality; nothing is written.
+        ConflictError
+            The name exists with another joint type; or ``parent`` does not exist.
+        """
+        name = check_name(name)
+        joint_type = check_joint_type(joint_type)
+        if not isinstance(frf, FRF):
+            raise InputError(f"frf must be a jointdb.frf.FRF, got {type(frf).__name__}")
+        kind = check_model_kind(model_kind, frf)
+        cond = as_conditions(conditions)
+        prov = as_provenance(provenance)
+        qual = as_quality(quality)
+        raw = dict(raw_frfs or {})
+        for key, value in raw.items():
+            if not isinstance(value, FRF):
+                raise InputError(f"raw measurement {key!r} must be an FRF")
+        if parent is not None and (isinstance(parent, bool) or int(parent) < 1):
+            raise InputError(f"parent version must be a version number >= 1, got {parent!r}")
+        actor = current_actor(author or prov.author or None)
+
+        blob = self.blobs.put(frf)  # durable before the row exists
+        raw_blobs = {str(k): self.blobs.put(v) for k, v in sorted(raw.items())}
+
+        def write(session: Session) -> JointVersion:
+            joint = session.scalar(select(JointRow).where(JointRow.name == name))
+            now = utcnow()
+            if joint is None:
+                joint = JointRow(name=name, joint_type=joint_type, created_at=now, created_by=actor)
+                session.add(joint)
+                session.flush()
+            elif joint.joint_type != joint_type:
+                raise ConflictError(
+                    f"joint {name!r} is a {joint.joint_type} joint, not {joint_type}; use another name"
+                )
+            latest = session.scalar(select(func.max(VersionRow.version)).where(VersionRow.joint_id == joint.id))
+            number = (latest or 0) + 1
+            if parent is not None and (latest is None or parent > latest):
+                raise ConflictError(
+                    f"parent version {parent} of joint {name!r} does not exist (latest is {latest or 'none'})"
+                )
+            row = VersionRow(
+                joint_id=joint.id,
+                version=number,
+                uuid=str(uuidlib.uuid4()),
+                created_at=now,
+                author=actor,
+                materials=list(cond.materials),
+                preload_n=cond.preload_n,
+                torque_nm=cond.torque_nm,
+                geometry=dict(cond.geometry),
+                extra=dict(cond.extra),
+                model_kind=kind,
+                dofs=list(dof_strings(frf.outputs)),
+                quantity=frf.quantity.value,
+                n_freq=frf.n_freq,
+                freq_min_hz=float(frf.freq[0]),
+                freq_max_hz=float(frf.freq[-1]),
+                blob_sha256=blob,
+                raw_blobs=raw_blobs,
+                input_files=dict(prov.input_files),
+                method=prov.method,
+                method_params=dict(prov.parameters),
+                software_version=prov.software_version or _software_version(),
+                parent_version=parent if parent is not None else latest,
+                quality=qual,
+            )
+            row.record_sha256 = record_sha256(record_dict(name, joint_type, row))
+            session.add(row)
+            session.add(
+                AuditRow(
+                    at=now,
+                    actor=actor,
+                    action="catalogue",
+                    joint_name=name,
+                    version=number,
+                    details={"blob_sha256": blob, "method": prov.method},
+                )
+            )
+            session.flush()
+            return to_version(joint, row)
+
+        return self._retrying(write)
+
+    # ------------------------------------------------------------------ reads
+    def _joint(self, session: Session, name: str) -> JointRow:
+        joint = session.scalar(select(JointRow).where(JointRow.name == name))
+        if joint is None:
+            raise NotFoundError(f"no joint named {name!r} (see `jointdb joints list`)")
+        return joint
+
+    def _states(self, session: Session, joint_id: int, at: datetime | None) -> list[StateRow]:
+        q = select(StateRow).where(StateRow.joint_id == joint_id)
+        if at is not None:
+            q = q.where(StateRow.at <= at)
+        return list(session.scalars(q))
+
+    def _labels(self, session: Session, joint_id: int) -> dict[int, list[str]]:
+        out: dict[int, list[str]] = {}
+        for lab in session.scalars(select(LabelRow).where(LabelRow.joint_id == joint_id)):
+            out.setdefault(lab.version, []).append(lab.label)
+        return out
+
+    def get(
+        self,
+        name: str,
+        version: int | None = None,
+        at: datetime | str | None = None,
+        label: str | None = None,
+    ) -> JointVersion:
+        """One version of a joint: pinned (``version``), by ``label``, current at
+        time ``at``, or (default) the latest version that is not deprecated
+        (the latest one if all are).
+
+        Raises
+        ------
+        NotFoundError
+            Unknown joint, version or label, or no version existed at ``at``.
+        InputError
+            ``label`` combined with ``version`` or ``at`` (labels are current pointers).
+        """
+        at = _as_utc(at)
+        if label is not None and (version is not None or at is not None):
+            raise InputError("a label names one version now; do not combine it with --version or --at")
+        with self._read() as s:
+            joint = self._joint(s, name)
+            labels = self._labels(s, joint.id)
+            if label is not None:
+                lab = s.scalar(select(LabelRow).where(LabelRow.joint_id == joint.id, LabelRow.label == label))
+                if lab is None:
+                    have = sorted({x for v in labels.values() for x in v})
+                    raise NotFoundError(f"joint {name!r} has no label {label!r} (labels: {', '.join(have) or 'none'})")
+                version = lab.version
+            q = select(VersionRow).where(VersionRow.joint_id == joint.id)
+            if version is not None:
+                row = s.scalar(q.where(VersionRow.version == int(version)))
+                if row is None:
+                    n = s.scalar(select(func.max(VersionRow.version)).where(VersionRow.joint_id == joint.id))
+                    raise NotFoundError(f"joint {name!r} has no version {version} (versions 1..{n or 0})")
+                states = self._states(s, joint.id, at)
+                return to_version(joint, row, state_of(row.version, states), labels.get(row.version, ()))
+            if at is not None:
+                q = q.where(VersionRow.created_at <= at)
+            rows = list(s.scalars(q.order_by(VersionRow.version.desc())))
+            if not rows:
+                raise NotFoundError(f"joint {name!r} had no version at {at.isoformat() if at else 'all'}")
+            states = self._states(s, joint.id, at)
+            for row in rows:
+                if state_of(row.version, states) == "active":
+                    return to_version(joint, row, "active", labels.get(row.version, ()))
+            row = rows[0]
+            return to_version(joint, row, "deprecated", labels.get(row.version, ()))
+
+    def history(self, name: str) -> list[JointVersion]:
+        """All versions of a joint, oldest first, with their current state and labels."""
+        with self._read() as s:
+            joint = self._joint(s, name)
+            labels = self._labels(s, joint.id)
+            states = self._states(s, joint.id, None)
+            rows = s.scalars(select(VersionRow).where(VersionRow.joint_id == joint.id).order_by(VersionRow.version))
+            return [to_version(joint, r, state_of(r.version, states), labels.get(r.version, ())) for r in rows]
+
+    def list_joints(self, joint_type: str | None = None, include_deprecated: bool = True) -> list[JointVersion]:
+        """The current version (as :meth:`get`) of every joint, by name."""
+        with self._read() as s:
+            q = select(JointRow.name).order_by(JointRow.name)
+            if joint_type:
+                q = q.where(JointRow.joint_type == check_joint_type(joint_type))
+            names = list(s.scalars(q))
+        out = [self.get(n) for n in names]
+        return [v for v in out if include_deprecated or v.state == "active"]
+
+    def load_frf(self, version: JointVersion | str, number: int | None = None) -> FRF:
+        """The joint FRF of a version, read from its blob and verified against its hash.
+
+        ``load_frf(jv)`` or ``load_frf("name", 3)``.
+
+        Raises
+        ------
+        IntegrityError
+            The blob is corrupt; NotFoundError when it is missing.
+        """
+        jv = version if isinstance(version, JointVersion) else self.get(version, number)
+        return self.blobs.get(jv.blob_sha256)
+
+    def load_raw(self, version: JointVersion, key: str) -> FRF:
+        """One raw measurement FRF stored with a version."""
+        if key not in version.raw_blobs:
+            raise NotFoundError(f"{version.name} v{version.version} has no raw measurement {key!r}")
+        return self.blobs.get(version.raw_blobs[key])
+
+    # ---------------------------------------------------------- label / state
+    def label(self, name: str, version: int, label: str, author: str | None = None) -> JointVersion:
+        """Point ``label`` of a joint at ``version`` (created or moved)."""
+        label = str(label).strip()
+        if not re.fullmatch(r"[A-Za-z0-9][A-Za-z0-9_.-]{0,99}", label):
+            raise InputError(f"label {label!r} must be letters, digits, '.', '_' or '-' (max 100)")
+        actor = current_actor(author)
+        self.get(name, version)  # NotFoundError for an unknown joint or version
+
+        def write(s: Session) -> None:
+            joint = self._joint(s, name)
+            row = s.scalar(select(LabelRow).where(LabelRow.joint_id == joint.id, LabelRow.label == label))
+            now = utcnow()
+            old = None
+            if row is None:
+                s.add(LabelRow(joint_id=joint.id, label=label, version=int(version), updated_at=now, updated_by=actor))
+            else:
+                old = row.version
+                row.version, row.updated_at, row.updated_by = int(version), now, actor
+            s.add(AuditRow(at=now, actor=actor, action="label", joint_name=name, version=int(version),
+                           details={"label": label, "previous_version": old}))
+
+        self._retrying(write)
+        return self.get(name, version)
+
+    def deprecate(
+        self, name: str, version: int | None = None, reason: str = "", author: str | None = None, undo: bool = False
+    ) -> list[JointVersion]:
+        """Mark a version (or, with ``version=None``, the whole joint) deprecated.
+
+        Nothing is deleted: a new state row is appended (``undo=True`` appends
+        ``active`` again). Returns the joint's history afterwards.
+        """
+        actor = current_actor(author)
+        if version is not None:
+            self.get(name, version)
+        state = "active" if undo else "deprecated"
+
+        def write(s: Session) -> None:
+            joint = self._joint(s, name)
+            now = utcnow()
+            s.add(StateRow(joint_id=joint.id, version=version, state=state, reason=str(reason), author=actor, at=now))
+            s.add(AuditRow(at=now, actor=actor, action="undeprecate" if undo else "deprecate", joint_name=name,
+                           version=version, details={"reason": str(reason)}))
+
+        self._retrying(write)
+        return self.history(name)
+
+    def audit(self, name: str | None = None, limit: int = 100) -> list[dict[str, Any]]:
+        """The newest audit-log entries (optionally for one joint)."""
+        with self._read() as s:
+            q = select(AuditRow).order_by(AuditRow.id.desc()).limit(limit)
+            if name:
+                q = q.where(AuditRow.joint_name == name)
+            return [
+                {"at": r.at.isoformat(timespec="seconds"), "actor": r.actor, "action": r.action,
+                 "joint": r.joint_name, "version": r.version, "details": r.details}
+                for r in s.scalars(q)
+            ]
+
+    # -------------------------------------------------------------- diff, etc.
+    def diff(self, name: str, version_a: int, version_b: int | None = None, other: str | None = None) -> VersionDiff:
+        """Compare two versions (of one joint, or of ``name`` and ``other``)."""
+        from jointdb.store._maintenance import diff_versions
+
+        a = self.get(name, version_a)
+        b = self.get(other or name, version_b) if (version_b is not None or other) else self.get(name)
+        return diff_versions(self, a, b)
+
+    def check(self, verify_blobs: bool = True) -> CheckReport:
+        """Walk every row and blob; report missing or corrupt data (``jointdb db check``)."""
+        from jointdb.store._maintenance import check
+
+        return check(self, verify_blobs)
+
+    def gc(self, min_age_s: float = 3600.0, dry_run: bool = False) -> list[str]:
+        """Remove blobs no row references (and stale temporaries) older than ``min_age_s``."""
+        from jointdb.store._maintenance import gc
+
+        return gc(self, min_age_s, dry_run)
+
+    def nearest(self, joint_type: str, conditions: Conditions | Mapping[str, Any], k: int = 3,
+                at: datetime | str | None = None):
+        """The ``k`` closest current versions of ``joint_type``; see :mod:`jointdb.store._query`."""
+        from jointdb.store._query import nearest
+
+        return nearest(self, joint_type, conditions, k, _as_utc(at))
+
+    def interpolate(self, matches, conditions: Conditions | Mapping[str, Any] | None = None):
+        """An interpolated joint between matches (dynamic stiffness); see :mod:`jointdb.store._query`."""
+        from jointdb.store._query import interpolate
+
+        return interpolate(self, matches, conditions)
+
+    def export(self, names: Iterable[str] | None, path: str | os.PathLike) -> dict[str, int]:
+        """Write joints (all versions, provenance, labels, states) to one HDF5 bundle."""
+        from jointdb.store._bundle import export_bundle
+
+        return export_bundle(self, names, path)
+
+    def import_(self, path: str | os.PathLike, author: str | None = None) -> dict[str, Any]:
+        """Import a bundle; identical versions are no-ops, conflicting ones raise ConflictError."""
+        from jointdb.store._bundle import import_bundle
+
+        return import_bundle(self, path, author)
+
+
+def _is_unique_violation(exc: DBIntegrityError) -> bool:
+    text = str(exc.orig).lower()
+    sqlstate = getattr(exc.orig, "sqlstate", None)
+    return sqlstate == "23505" or "unique" in text or "duplicate key" in text
+
+
+def _is_transient(exc: OperationalError) -> bool:
+    text = str(exc.orig).lower()
+    sqlstate = getattr(exc.orig, "sqlstate", None)
+    return "locked" in text or "busy" in text or sqlstate in ("40001", "40P01")
+

@@ -1,0 +1,423 @@
+"""Value types of the joint database: conditions, provenance, versions, matches.
+
+Everything here is a small frozen dataclass validated on construction; the
+validation is what guarantees that bad input never reaches the database
+(design.md, "Errors": bad input never writes anything).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import re
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from datetime import datetime
+from typing import Any
+
+from jointdb.errors import InputError
+from jointdb.frf import FRF, Dof, Quantity
+
+__all__ = [
+    "KNOWN_MATERIALS",
+    "MATERIAL_ALIASES",
+    "MODEL_KINDS",
+    "Conditions",
+    "Provenance",
+    "JointVersion",
+    "Match",
+    "InterpolatedJoint",
+    "known_materials",
+    "register_material",
+    "normalise_material",
+    "check_model_kind",
+    "check_joint_type",
+    "check_name",
+]
+
+# --------------------------------------------------------------------------- materials
+#: Interface materials the catalogue accepts. Extend with :func:`register_material`
+#: (for the running process) or the ``JOINTDB_MATERIALS`` environment variable
+#: (comma-separated names, e.g. ``JOINTDB_MATERIALS=inconel,cfrp``).
+KNOWN_MATERIALS: set[str] = {
+    "steel",
+    "hardened-steel",
+    "stainless-steel",
+    "tungsten-carbide",
+    "cast-iron",
+    "aluminium",
+    "titanium",
+    "brass",
+    "bronze",
+    "ceramic",
+    "polymer-concrete",
+}
+#: Spellings that mean the same material.
+MATERIAL_ALIASES: dict[str, str] = {
+    "carbide": "tungsten-carbide",
+    "wc": "tungsten-carbide",
+    "aluminum": "aluminium",
+    "al": "aluminium",
+    "iron": "cast-iron",
+    "ti": "titanium",
+}
+
+
+def known_materials() -> set[str]:
+    """The accepted material names: built-in list plus ``JOINTDB_MATERIALS``."""
+    extra = {m.strip().lower() for m in os.environ.get("JOINTDB_MATERIALS", "").split(",") if m.strip()}
+    return KNOWN_MATERIALS | extra
+
+
+def register_material(name: str) -> None:
+    """Accept a new interface material name for the rest of this process."""
+    slug = str(name).strip().lower().replace(" ", "-").replace("_", "-")
+    if not re.fullmatch(r"[a-z0-9][a-z0-9-]*", slug):
+        raise InputError(f"material name {name!r} must be letters, digits and '-'")
+    KNOWN_MATERIALS.add(slug)
+
+
+def normalise_material(name: str) -> str:
+    """Canonical material name; :class:`InputError` for an unknown one."""
+    slug = str(name).strip().lower().replace(" ", "-").replace("_", "-")
+    slug = MATERIAL_ALIASES.get(slug, slug)
+    known = known_materials()
+    if slug not in known:
+        raise InputError(
+            f"unknown material {name!r}; known: {', '.join(sorted(known))}. "
+            "Add one with JOINTDB_MATERIALS=name1,name2 or jointdb.store.register_material()"
+        )
+    return slug
+
+
+_SLUG = re.compile(r"[a-z0-9][a-z0-9-]*")
+
+
+def check_joint_type(joint_type: str) -> str:
+    """Joint type as a lower-case slug such as ``tool-holder`` or ``bolted-flange``."""
+    jt = str(joint_type or "").strip().lower().replace(" ", "-").replace("_", "-").replace("–", "-")
+    if not _SLUG.fullmatch(jt) or len(jt) > 100:
+        raise InputError(
+            f"joint type {joint_type!r} must be a short name of letters, digits and '-' "
+            "(e.g. tool-holder, holder-spindle, bolted-flange, modular-thread)"
+        )
+    return jt
+
+
+def check_name(name: str) -> str:
+    """Joint name: 1-200 printable characters, no leading/trailing spaces, no '/'."""
+    text = str(name or "")
+    if not text or text != text.strip() or len(text) > 200 or "/" in text or not text.isprintable():
+        raise InputError(
+            f"joint name {name!r} must be 1-200 printable characters without '/' or surrounding spaces"
+        )
+    return text
+
+
+def _finite_nonneg(value: Any, what: str) -> float | None:
+    if value is None:
+        return None
+    try:
+        x = float(value)
+    except (TypeError, ValueError):
+        raise InputError(f"{what} must be a number, got {value!r}") from None
+    if not math.isfinite(x):
+        raise InputError(f"{what} must be finite, got {value!r}")
+    if x < 0:
+        raise InputError(f"{what} must be >= 0, got {x:g}")
+    return x
+
+
+@dataclass(frozen=True)
+class Conditions:
+    """The conditions a joint was identified under (design.md, "Joint record").
+
+    Parameters
+    ----------
+    materials
+        Interface materials, e.g. ``("tungsten-carbide", "steel")``; names from
+        :func:`known_materials` (aliases such as ``carbide`` are normalised).
+    preload_n
+        Axial preload in N (>= 0), or None when not applicable / unknown.
+    torque_nm
+        Tightening torque in N·m (>= 0), or None.
+    geometry
+        Geometry numbers in SI units, e.g. ``{"diameter_m": 0.02, "insertion_m": 0.045}``.
+    extra
+        Free-form JSON-serialisable details (not used for ranking).
+
+    Raises
+    ------
+    InputError
+        For unknown materials, negative or non-finite numbers, non-numeric geometry.
+    """
+
+    materials: tuple[str, ...] = ()
+    preload_n: float | None = None
+    torque_nm: float | None = None
+    geometry: Mapping[str, float] = field(default_factory=dict)
+    extra: Mapping[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        mats = self.materials
+        if isinstance(mats, str):
+            mats = tuple(m for m in re.split(r"[,+/]", mats) if m.strip())
+        object.__setattr__(self, "materials", tuple(normalise_material(m) for m in mats))
+        object.__setattr__(self, "preload_n", _finite_nonneg(self.preload_n, "preload_n [N]"))
+        object.__setattr__(self, "torque_nm", _finite_nonneg(self.torque_nm, "torque_nm [N·m]"))
+        geometry: dict[str, float] = {}
+        for key, value in dict(self.geometry or {}).items():
+            k = str(key).strip()
+            if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_.-]*", k):
+                raise InputError(f"geometry key {key!r} must be a simple name like 'diameter_m'")
+            x = _finite_nonneg(value, f"geometry[{k!r}]")
+            geometry[k] = x  # type: ignore[assignment]
+        object.__setattr__(self, "geometry", dict(sorted(geometry.items())))
+        extra = dict(self.extra or {})
+        try:
+            import json
+
+            json.dumps(extra, allow_nan=False, sort_keys=True)
+        except (TypeError, ValueError) as exc:
+            raise InputError(f"extra conditions must be JSON-serialisable and finite: {exc}") from None
+        object.__setattr__(self, "extra", extra)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "materials": list(self.materials),
+            "preload_n": self.preload_n,
+            "torque_nm": self.torque_nm,
+            "geometry": dict(self.geometry),
+            "extra": dict(self.extra),
+        }
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> "Conditions":
+        return cls(
+            materials=tuple(data.get("materials") or ()),
+            preload_n=data.get("preload_n"),
+            torque_nm=data.get("torque_nm"),
+            geometry=dict(data.get("geometry") or {}),
+            extra=dict(data.get("extra") or {}),
+        )
+
+
+@dataclass(frozen=True)
+class Provenance:
+    """Where a joint version came from.
+
+    ``input_files`` maps a file name to the SHA-256 (hex) of its bytes (see
+    :func:`jointdb.store.file_sha256`); ``parameters`` is JSON-serialisable;
+    ``parent_version`` is the version this one corrects (default: the latest
+    version at the time of writing).
+    """
+
+    method: str = "unspecified"
+    parameters: Mapping[str, Any] = field(default_factory=dict)
+    input_files: Mapping[str, str] = field(default_factory=dict)
+    software_version: str = ""
+    author: str = ""
+
+    def __post_init__(self) -> None:
+        import json
+
+        if not str(self.method).strip():
+            raise InputError("provenance method must not be empty")
+        try:
+            json.dumps(dict(self.parameters), allow_nan=False, sort_keys=True)
+        except (TypeError, ValueError) as exc:
+            raise InputError(f"provenance parameters must be JSON-serialisable and finite: {exc}") from None
+        files = {}
+        for key, digest in dict(self.input_files).items():
+            d = str(digest).lower()
+            if not re.fullmatch(r"[0-9a-f]{64}", d):
+                raise InputError(f"input file hash for {key!r} must be a SHA-256 hex digest, got {digest!r}")
+            files[str(key)] = d
+        object.__setattr__(self, "input_files", dict(sorted(files.items())))
+        object.__setattr__(self, "parameters", dict(self.parameters))
+        object.__setattr__(self, "method", str(self.method).strip())
+
+
+# --------------------------------------------------------------------------- model kinds
+#: Joint model kinds (design.md "Joint record"; theory.md §1a, §2a-2c) and the
+#: DOF structure each requires of the joint FRF (always a square receptance with
+#: outputs == inputs):
+#:
+#: - ``spring-damper-planar``: DOFs with directions ``x`` and ``ry`` only (theory §2a);
+#: - ``n-point-translational``: translational DOFs only (theory §2b, one spring per point);
+#: - ``full-matrix``: exactly two nodes with the same direction set each (theory §2c).
+MODEL_KINDS: tuple[str, ...] = ("spring-damper-planar", "n-point-translational", "full-matrix")
+
+
+def check_model_kind(model_kind: str, frf: FRF) -> str:
+    """Check that the joint FRF has the DOF structure its model kind requires.
+
+    Raises
+    ------
+    InputError
+        Unknown kind, non-receptance, non-square FRF or DOFs that the kind does not allow.
+    """
+    kind = str(model_kind or "").strip().lower().replace("_", "-")
+    if kind not in MODEL_KINDS:
+        raise InputError(f"unknown model kind {model_kind!r}; expected one of {', '.join(MODEL_KINDS)}")
+    if frf.quantity is not Quantity.RECEPTANCE:
+        raise InputError(
+            f"joint FRFs are stored as receptance, got {frf.quantity.value}; convert with frf.to('receptance')"
+        )
+    if frf.outputs != frf.inputs:
+        raise InputError(
+            "a joint FRF must be square on the same DOFs (outputs == inputs); got outputs "
+            f"[{' '.join(map(str, frf.outputs))}] and inputs [{' '.join(map(str, frf.inputs))}]"
+        )
+    dof_list: tuple[Dof, ...] = frf.outputs
+    if kind == "spring-damper-planar":
+        bad = [d for d in dof_list if d.direction not in ("x", "ry")]
+        if bad:
+            raise InputError(
+                f"model kind spring-damper-planar allows directions x and ry only; DOF {bad[0]} does not fit "
+                "(use full-matrix for 3-D joints)"
+            )
+    elif kind == "n-point-translational":
+        bad = [d for d in dof_list if d.is_rotation]
+        if bad:
+            raise InputError(
+                f"model kind n-point-translational allows translational DOFs only; DOF {bad[0]} is a rotation"
+            )
+    else:
+        nodes: dict[int, set[str]] = {}
+        for d in dof_list:
+            nodes.setdefault(d.node, set()).add(d.direction)
+        if len(nodes) != 2:
+            raise InputError(
+                f"model kind full-matrix needs DOFs on exactly two joint nodes, got nodes {sorted(nodes)}"
+            )
+        a, b = nodes.values()
+        if a != b:
+            raise InputError(
+                "model kind full-matrix needs the same directions on both joint nodes, got "
+                f"{sorted(a)} and {sorted(b)}"
+            )
+    return kind
+
+
+# --------------------------------------------------------------------------- records
+@dataclass(frozen=True)
+class JointVersion:
+    """One immutable catalogued version of a joint (a database row, detached).
+
+    ``state`` is ``"active"`` or ``"deprecated"`` as of the time of the query
+    that returned it; every other field never changes.
+    """
+
+    name: str
+    joint_type: str
+    version: int
+    uuid: str
+    created_at: datetime
+    conditions: Conditions
+    model_kind: str
+    dofs: tuple[str, ...]
+    quantity: str
+    n_freq: int
+    freq_min_hz: float
+    freq_max_hz: float
+    blob_sha256: str
+    provenance: Provenance
+    parent_version: int | None
+    quality: Mapping[str, float]
+    raw_blobs: Mapping[str, str]
+    record_sha256: str
+    state: str = "active"
+    labels: tuple[str, ...] = ()
+
+    def summary(self) -> dict[str, Any]:
+        """A flat row for tables."""
+        c = self.conditions
+        return {
+            "name": self.name,
+            "type": self.joint_type,
+            "version": self.version,
+            "state": self.state,
+            "labels": ",".join(self.labels) or None,
+            "materials": "+".join(c.materials) or None,
+            "preload_n": c.preload_n,
+            "torque_nm": c.torque_nm,
+            "model_kind": self.model_kind,
+            "f_hz": f"{self.freq_min_hz:g}-{self.freq_max_hz:g}",
+            "created_at": self.created_at.isoformat(timespec="seconds"),
+            "author": self.provenance.author,
+        }
+
+
+@dataclass(frozen=True)
+class Match:
+    """One answer of :meth:`Repository.nearest`.
+
+    ``distance`` is the Euclidean norm of ``per_condition`` (see
+    :mod:`jointdb.store._query` for the definition of each term);
+    ``extrapolating`` is True when the request lies outside the catalogued range
+    of some condition, listed in ``outside_range``.
+    """
+
+    version: JointVersion
+    distance: float
+    per_condition: Mapping[str, float]
+    extrapolating: bool = False
+    outside_range: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class InterpolatedJoint:
+    """A joint FRF interpolated between catalogued neighbours (NOT a catalogued joint).
+
+    ``frf`` is a receptance obtained by inverse-distance weighting of the
+    neighbours' dynamic stiffness ``Z = H⁻¹`` on their common frequency band;
+    ``neighbours`` lists ``(name, version, weight)``.
+    """
+
+    frf: FRF
+    joint_type: str
+    conditions: Conditions
+    neighbours: tuple[tuple[str, int, float], ...]
+    label: str = "interpolated"
+
+    def describe(self) -> str:
+        parts = ", ".join(f"{n} v{v} (w={w:.3f})" for n, v, w in self.neighbours)
+        return f"INTERPOLATED {self.joint_type} joint from {parts}"
+
+
+def as_conditions(value: "Conditions | Mapping[str, Any] | None") -> Conditions:
+    if value is None:
+        return Conditions()
+    if isinstance(value, Conditions):
+        return value
+    if isinstance(value, Mapping):
+        return Conditions.from_dict(value)
+    raise InputError(f"conditions must be a Conditions or a mapping, got {type(value).__name__}")
+
+
+def as_provenance(value: "Provenance | Mapping[str, Any] | None") -> Provenance:
+    if value is None:
+        return Provenance()
+    if isinstance(value, Provenance):
+        return value
+    if isinstance(value, Mapping):
+        return Provenance(**dict(value))
+    raise InputError(f"provenance must be a Provenance or a mapping, got {type(value).__name__}")
+
+
+def as_quality(value: Mapping[str, Any] | None) -> dict[str, float]:
+    out: dict[str, float] = {}
+    for key, v in dict(value or {}).items():
+        try:
+            x = float(v)
+        except (TypeError, ValueError):
+            raise InputError(f"quality metric {key!r} must be a number, got {v!r}") from None
+        if not math.isfinite(x):
+            raise InputError(f"quality metric {key!r} must be finite, got {v!r}")
+        out[str(key)] = x
+    return dict(sorted(out.items()))
+
+
+def dof_strings(labels: Sequence[Dof]) -> tuple[str, ...]:
+    return tuple(str(d) for d in labels)
