@@ -1,0 +1,551 @@
+"""The stack description: tool, holder, spindle side, gauge length, interfaces.
+
+A stack is read from a JSON document (``stack_from_dict``); every problem is
+reported as an :class:`~jointdb.errors.InputError` naming the exact field, e.g.
+``tool.segments[1].length: must be > 0 m (got -0.01)``. Nothing here reads
+files: a measured spindle FRF is referenced by path and attached later by the
+application layer (:func:`jointdb.app.load_stack`).
+
+Geometry conventions (SI, metres). The tool is described from its tip towards
+its shank end; the holder from its nose (the face the tool sticks out of)
+towards the spindle. ``gauge_length`` is the tool's stick-out from the holder
+face; the rest of the tool (its total length minus the gauge length) is the
+insertion length, clamped inside the holder bore. A fluted section is replaced
+by a solid cylinder of ``fluted_ratio`` × cutter diameter (0.656 after Kops and
+Vo 1990; thesis §4.4).
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+from jointdb.errors import InputError
+from jointdb.frf import FRF
+
+__all__ = [
+    "FORMAT",
+    "INTERFACE_NAMES",
+    "KOPS_VO_RATIO",
+    "ToolSegment",
+    "Tool",
+    "HolderSegment",
+    "Holder",
+    "MeasuredSpindle",
+    "ModelledSpindle",
+    "JointChoice",
+    "FrequencyGrid",
+    "StackSpec",
+    "stack_from_dict",
+    "stack_to_dict",
+]
+
+#: Format tag written to / accepted in stack files.
+FORMAT = "jointdb-stack/1"
+#: Equivalent diameter of a fluted section as a fraction of the cutter diameter (Kops & Vo 1990).
+KOPS_VO_RATIO = 0.656
+#: The two interfaces of a stack, from the tool towards the spindle.
+INTERFACE_NAMES: tuple[str, str] = ("tool-holder", "holder-spindle")
+
+_REF_RE = re.compile(r"^\s*([^@\s]+)\s*@\s*([^@\s]+)\s*$")
+
+
+# ------------------------------------------------------------------ helpers
+def _fail(path: str, text: str) -> InputError:
+    return InputError(f"{path}: {text}")
+
+
+def _mapping(value: Any, path: str) -> Mapping[str, Any]:
+    if not isinstance(value, Mapping):
+        raise _fail(path, f"must be an object, got {type(value).__name__}")
+    return value
+
+
+def _known(obj: Mapping[str, Any], path: str, allowed: Sequence[str]) -> None:
+    for key in obj:
+        if key not in allowed:
+            where = f"{path}.{key}" if path else str(key)
+            raise _fail(where, f"unknown field; expected one of {', '.join(allowed)}")
+
+
+def _number(obj: Mapping[str, Any], key: str, path: str, *, default: Any = ..., positive: bool = False,
+            nonneg: bool = False, upper: float | None = None) -> float:
+    where = f"{path}.{key}" if path else key
+    if key not in obj:
+        if default is ...:
+            raise _fail(where, "required field is missing")
+        return default
+    value = obj[key]
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise _fail(where, f"must be a finite number, got {value!r}")
+    value = float(value)
+    if positive and value <= 0:
+        raise _fail(where, f"must be > 0 (got {value:g})")
+    if nonneg and value < 0:
+        raise _fail(where, f"must be >= 0 (got {value:g})")
+    if upper is not None and value > upper:
+        raise _fail(where, f"must be <= {upper:g} (got {value:g})")
+    return value
+
+
+def _string(obj: Mapping[str, Any], key: str, path: str, default: Any = ...) -> str:
+    where = f"{path}.{key}" if path else key
+    if key not in obj:
+        if default is ...:
+            raise _fail(where, "required field is missing")
+        return default
+    value = obj[key]
+    if not isinstance(value, str) or not value.strip():
+        raise _fail(where, f"must be a non-empty string, got {value!r}")
+    return value.strip()
+
+
+def _list(obj: Mapping[str, Any], key: str, path: str) -> list:
+    where = f"{path}.{key}"
+    if key not in obj:
+        raise _fail(where, "required field is missing")
+    value = obj[key]
+    if not isinstance(value, (list, tuple)) or not value:
+        raise _fail(where, "must be a non-empty list")
+    return list(value)
+
+
+# ------------------------------------------------------------------ parts
+@dataclass(frozen=True)
+class ToolSegment:
+    """One tool section: ``length`` and (cutter or shank) ``diameter`` in m.
+
+    ``fluted=True`` marks the cutting section; it is modelled as a solid
+    cylinder of ``Tool.fluted_ratio × diameter``.
+    """
+
+    length: float
+    diameter: float
+    fluted: bool = False
+
+
+@dataclass(frozen=True)
+class Tool:
+    """The tool, from its tip towards its shank end.
+
+    Parameters
+    ----------
+    segments
+        Tool sections from the tip; the fluted ones come first.
+    material
+        A name known to :func:`jointdb.fe.get_material` (e.g. ``"carbide"``).
+    fluted_ratio
+        Equivalent diameter of a fluted section / cutter diameter (Kops & Vo: 0.656).
+    loss_factor
+        Structural (hysteretic) loss factor η of the tool's beam model, ``K(1 + iη)``.
+    """
+
+    segments: tuple[ToolSegment, ...]
+    material: str = "carbide"
+    fluted_ratio: float = KOPS_VO_RATIO
+    loss_factor: float = 0.0
+
+    @property
+    def length(self) -> float:
+        return float(sum(s.length for s in self.segments))
+
+
+@dataclass(frozen=True)
+class HolderSegment:
+    """One holder section (m): outer diameter and bore (0 for solid)."""
+
+    length: float
+    outer_diameter: float
+    inner_diameter: float = 0.0
+
+
+@dataclass(frozen=True)
+class Holder:
+    """The tool holder, from its nose (tool side) towards the spindle."""
+
+    segments: tuple[HolderSegment, ...]
+    material: str = "steel"
+    loss_factor: float = 0.0
+
+    @property
+    def length(self) -> float:
+        return float(sum(s.length for s in self.segments))
+
+
+@dataclass(frozen=True)
+class MeasuredSpindle:
+    """Spindle side given as a measured receptance at the holder connection point.
+
+    Parameters
+    ----------
+    file
+        UFF58 / HDF5 / CSV file (path as written in the stack file, resolved
+        relative to it by the application layer).
+    node
+        Node number of the connection point in that file. The x plane needs
+        ``node x`` and ``node ry`` (e.g. from the extension method, theory §3);
+        if ``node y`` and ``node rx`` are there too, the y plane is predicted
+        from them, otherwise it is taken equal to the x plane (axisymmetric).
+    frf
+        The loaded FRF (set by :func:`jointdb.app.load_stack`; ``None`` until then).
+    """
+
+    file: str
+    node: int
+    frf: FRF | None = field(default=None, compare=False)
+
+
+@dataclass(frozen=True)
+class ModelledSpindle:
+    """Spindle side as a beam model with bearing supports (``jointdb.fe`` model dict).
+
+    ``model`` is the model description (a dict for :func:`jointdb.fe.model_from_dict`,
+    or a path to such a JSON file, loaded by the application layer into a dict);
+    ``point`` names the model point the holder is attached to.
+    """
+
+    model: Any
+    point: str
+
+
+@dataclass(frozen=True)
+class JointChoice:
+    """What one interface is made of.
+
+    ``kind`` is one of
+
+    - ``"rigid"``: no joint flexibility;
+    - ``"explicit"``: constant ``k = (k_x [N/m], k_θ [N·m/rad])`` and
+      ``c = (c_x [N·s/m], c_θ [N·m·s/rad])``;
+    - ``"catalogued"``: a database joint pinned as ``name@version`` (or
+      ``name@label``), in ``name`` / ``version``;
+    - ``"query"``: the nearest catalogued joint of ``joint_type`` to
+      ``conditions`` (keys ``materials``, ``torque_nm``, ``preload_n``,
+      ``geometry``, ``extra``), optionally interpolating the ``k`` nearest.
+    """
+
+    kind: str
+    k: tuple[float, float] | None = None
+    c: tuple[float, float] | None = None
+    name: str | None = None
+    version: int | str | None = None
+    joint_type: str | None = None
+    conditions: Mapping[str, Any] | None = None
+    neighbours: int = 3
+    interpolate: bool = False
+
+    @property
+    def reference(self) -> str:
+        """``name@version`` for a catalogued joint, a short description otherwise."""
+        if self.kind == "catalogued":
+            return f"{self.name}@{self.version}"
+        if self.kind == "explicit":
+            k, c = self.k or (0.0, 0.0), self.c or (0.0, 0.0)
+            return f"k={k[0]:.4g} N/m, {k[1]:.4g} N·m/rad; c={c[0]:.4g} N·s/m, {c[1]:.4g} N·m·s/rad"
+        if self.kind == "query":
+            return f"nearest {self.joint_type} to {dict(self.conditions or {})}"
+        return "rigid"
+
+
+@dataclass(frozen=True)
+class FrequencyGrid:
+    """Prediction frequency lines ``fmin, fmin+step, ..., <= fmax`` in Hz (fmin > 0)."""
+
+    fmin: float = 10.0
+    fmax: float = 5000.0
+    step: float = 5.0
+
+    def lines(self):
+        import numpy as np
+
+        n = int(math.floor((self.fmax - self.fmin) / self.step + 1e-9)) + 1
+        return self.fmin + self.step * np.arange(n)
+
+
+@dataclass(frozen=True)
+class StackSpec:
+    """A tool / holder / spindle stack (see the module docstring for conventions).
+
+    ``interfaces`` maps each of :data:`INTERFACE_NAMES` to a :class:`JointChoice`.
+    ``frequency`` is the default prediction grid (a measured spindle FRF's
+    own grid is used when ``frequency`` is not given in the file).
+    """
+
+    name: str
+    tool: Tool
+    holder: Holder
+    spindle: MeasuredSpindle | ModelledSpindle
+    gauge_length: float
+    interfaces: Mapping[str, JointChoice]
+    frequency: FrequencyGrid | None = None
+
+    @property
+    def insertion_length(self) -> float:
+        """Tool length clamped in the holder [m]."""
+        return self.tool.length - self.gauge_length
+
+    def replace(self, **changes) -> "StackSpec":
+        return replace(self, **changes)
+
+
+# ------------------------------------------------------------------ parsing
+def _tool(obj: Any, path: str) -> Tool:
+    obj = _mapping(obj, path)
+    _known(obj, path, ("material", "segments", "fluted_ratio", "loss_factor"))
+    segs = []
+    for i, raw in enumerate(_list(obj, "segments", path)):
+        p = f"{path}.segments[{i}]"
+        raw = _mapping(raw, p)
+        _known(raw, p, ("length", "diameter", "fluted"))
+        fluted = raw.get("fluted", False)
+        if not isinstance(fluted, bool):
+            raise _fail(f"{p}.fluted", f"must be true or false, got {fluted!r}")
+        segs.append(ToolSegment(_number(raw, "length", p, positive=True), _number(raw, "diameter", p, positive=True),
+                                fluted))
+    seen_shank = False
+    for i, s in enumerate(segs):
+        if s.fluted and seen_shank:
+            raise _fail(f"{path}.segments[{i}].fluted",
+                        "fluted sections must come first (the tool is described from its tip)")
+        seen_shank |= not s.fluted
+    return Tool(
+        tuple(segs),
+        material=_string(obj, "material", path, "carbide"),
+        fluted_ratio=_number(obj, "fluted_ratio", path, default=KOPS_VO_RATIO, positive=True, upper=1.0),
+        loss_factor=_number(obj, "loss_factor", path, default=0.0, nonneg=True),
+    )
+
+
+def _holder(obj: Any, path: str) -> Holder:
+    obj = _mapping(obj, path)
+    _known(obj, path, ("material", "segments", "loss_factor"))
+    segs = []
+    for i, raw in enumerate(_list(obj, "segments", path)):
+        p = f"{path}.segments[{i}]"
+        raw = _mapping(raw, p)
+        _known(raw, p, ("length", "outer_diameter", "inner_diameter"))
+        seg = HolderSegment(
+            _number(raw, "length", p, positive=True),
+            _number(raw, "outer_diameter", p, positive=True),
+            _number(raw, "inner_diameter", p, default=0.0, nonneg=True),
+        )
+        if seg.inner_diameter >= seg.outer_diameter:
+            raise _fail(f"{p}.inner_diameter",
+                        f"must be smaller than outer_diameter ({seg.inner_diameter:g} >= {seg.outer_diameter:g})")
+        segs.append(seg)
+    return Holder(tuple(segs), material=_string(obj, "material", path, "steel"),
+                  loss_factor=_number(obj, "loss_factor", path, default=0.0, nonneg=True))
+
+
+def _spindle(obj: Any, path: str) -> MeasuredSpindle | ModelledSpindle:
+    obj = _mapping(obj, path)
+    if "file" in obj and "model" in obj:
+        raise _fail(path, "give either 'file' (measured FRF) or 'model' (beam model), not both")
+    if "file" in obj:
+        _known(obj, path, ("file", "node"))
+        node = obj.get("node")
+        if isinstance(node, bool) or not isinstance(node, int) or node < 0:
+            raise _fail(f"{path}.node", f"must be a non-negative integer node number, got {node!r}")
+        return MeasuredSpindle(_string(obj, "file", path), node)
+    if "model" in obj:
+        _known(obj, path, ("model", "point"))
+        model = obj["model"]
+        if not isinstance(model, (Mapping, str)):
+            raise _fail(f"{path}.model", "must be a beam model object or the path of a model JSON file")
+        return ModelledSpindle(model, _string(obj, "point", path))
+    raise _fail(path, "needs 'file' + 'node' (measured FRF with rotations) or 'model' + 'point' (beam model)")
+
+
+def _pair(obj: Mapping[str, Any], key: str, path: str, *, positive: bool) -> tuple[float, float]:
+    where = f"{path}.{key}"
+    if key not in obj:
+        raise _fail(where, "required field is missing")
+    value = obj[key]
+    if not isinstance(value, (list, tuple)) or len(value) != 2:
+        raise _fail(where, "must be a list of two numbers [translational, rotational]")
+    out = []
+    for i, v in enumerate(value):
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+            raise _fail(f"{where}[{i}]", f"must be a finite number, got {v!r}")
+        if (positive and v <= 0) or v < 0:
+            raise _fail(f"{where}[{i}]", f"must be {'> 0' if positive else '>= 0'} (got {v:g})")
+        out.append(float(v))
+    return out[0], out[1]
+
+
+def _joint(obj: Any, path: str) -> JointChoice:
+    if obj == "rigid" or obj is None:
+        return JointChoice("rigid")
+    if isinstance(obj, str):
+        m = _REF_RE.match(obj)
+        if not m:
+            raise _fail(path, f"{obj!r} is neither 'rigid' nor a pinned joint 'name@version'")
+        version: int | str = int(m.group(2)) if m.group(2).isdigit() else m.group(2)
+        return JointChoice("catalogued", name=m.group(1), version=version)
+    obj = _mapping(obj, path)
+    kinds = [k for k in ("rigid", "joint", "query", "k") if k in obj]
+    if len(kinds) != 1:
+        raise _fail(path, "give exactly one of 'rigid': true, 'joint': 'name@version', 'query': {...} or 'k'+'c'")
+    if kinds[0] == "rigid":
+        _known(obj, path, ("rigid",))
+        if obj["rigid"] is not True:
+            raise _fail(f"{path}.rigid", "must be true (omit it for a flexible joint)")
+        return JointChoice("rigid")
+    if kinds[0] == "joint":
+        _known(obj, path, ("joint",))
+        return _joint(_string(obj, "joint", path), f"{path}.joint")
+    if kinds[0] == "k":
+        _known(obj, path, ("k", "c"))
+        return JointChoice("explicit", k=_pair(obj, "k", path, positive=True),
+                           c=_pair(obj, "c", path, positive=False) if "c" in obj else (0.0, 0.0))
+    _known(obj, path, ("query",))
+    q = _mapping(obj["query"], f"{path}.query")
+    qp = f"{path}.query"
+    _known(q, qp, ("joint_type", "materials", "torque_nm", "preload_n", "geometry", "extra", "neighbours",
+                   "interpolate"))
+    conditions: dict[str, Any] = {}
+    if "materials" in q:
+        mats = q["materials"]
+        if isinstance(mats, str):
+            mats = [mats]
+        if not isinstance(mats, (list, tuple)) or not all(isinstance(m, str) and m for m in mats):
+            raise _fail(f"{qp}.materials", f"must be a list of material names, got {q['materials']!r}")
+        conditions["materials"] = tuple(mats)
+    for key in ("torque_nm", "preload_n"):
+        if key in q:
+            conditions[key] = _number(q, key, qp, nonneg=True)
+    for key in ("geometry", "extra"):
+        if key in q:
+            conditions[key] = dict(_mapping(q[key], f"{qp}.{key}"))
+    for key, value in conditions.get("geometry", {}).items():
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+            raise _fail(f"{qp}.geometry.{key}", f"must be a finite number, got {value!r}")
+    neighbours = q.get("neighbours", 3)
+    if isinstance(neighbours, bool) or not isinstance(neighbours, int) or neighbours < 1:
+        raise _fail(f"{qp}.neighbours", f"must be a positive integer, got {neighbours!r}")
+    interpolate = q.get("interpolate", False)
+    if not isinstance(interpolate, bool):
+        raise _fail(f"{qp}.interpolate", f"must be true or false, got {interpolate!r}")
+    return JointChoice("query", joint_type=_string(q, "joint_type", qp), conditions=conditions,
+                       neighbours=neighbours, interpolate=interpolate)
+
+
+def _frequency(obj: Any, path: str) -> FrequencyGrid:
+    obj = _mapping(obj, path)
+    _known(obj, path, ("min", "max", "step"))
+    grid = FrequencyGrid(_number(obj, "min", path, positive=True), _number(obj, "max", path, positive=True),
+                         _number(obj, "step", path, positive=True))
+    if grid.fmax <= grid.fmin:
+        raise _fail(f"{path}.max", f"must exceed frequency.min ({grid.fmax:g} <= {grid.fmin:g})")
+    if (grid.fmax - grid.fmin) / grid.step > 200_000:
+        raise _fail(f"{path}.step", "gives more than 200000 lines; use a coarser step")
+    return grid
+
+
+def stack_from_dict(doc: Any) -> StackSpec:
+    """Validate a stack document (parsed JSON) and build a :class:`StackSpec`.
+
+    Raises
+    ------
+    InputError
+        Naming the exact field, e.g. ``gauge_length: must be < the tool length
+        0.08 m``, ``interfaces.tool-holder: 'th' is neither 'rigid' nor ...``.
+    """
+    doc = _mapping(doc, "stack")
+    _known(doc, "", ("format", "name", "tool", "holder", "spindle", "gauge_length", "interfaces", "frequency"))
+    fmt = doc.get("format", FORMAT)
+    if fmt != FORMAT:
+        raise _fail("format", f"unsupported stack format {fmt!r}; this jointdb reads {FORMAT!r}")
+    for key in ("tool", "holder", "spindle", "gauge_length", "interfaces"):
+        if key not in doc:
+            raise _fail(key, "required field is missing")
+    tool = _tool(doc["tool"], "tool")
+    holder = _holder(doc["holder"], "holder")
+    spindle = _spindle(doc["spindle"], "spindle")
+    gauge = _number(doc, "gauge_length", "", positive=True)
+    if gauge > tool.length + 1e-12:
+        raise _fail("gauge_length", f"must not exceed the tool length {tool.length:g} m (got {gauge:g})")
+    insertion = tool.length - gauge
+    if insertion > holder.length + 1e-12:
+        raise _fail("gauge_length", f"leaves {insertion:g} m of tool inside the holder, longer than the holder "
+                                    f"({holder.length:g} m)")
+    # Inside the holder, the tool must be a shank that fits the bore.
+    pos = 0.0
+    for i, seg in enumerate(tool.segments):
+        start, end = pos, pos + seg.length
+        pos = end
+        if end <= gauge + 1e-12:
+            continue
+        if seg.fluted:
+            raise _fail(f"tool.segments[{i}].fluted", "a fluted section reaches inside the holder; "
+                                                      "increase gauge_length")
+        depth_from, depth_to = max(start, gauge) - gauge, end - gauge
+        hpos = 0.0
+        for j, hseg in enumerate(holder.segments):
+            h0, h1 = hpos, hpos + hseg.length
+            hpos = h1
+            if h1 <= depth_from + 1e-12 or h0 >= depth_to - 1e-12:
+                continue
+            if hseg.inner_diameter + 1e-12 < seg.diameter:
+                raise _fail(f"holder.segments[{j}].inner_diameter",
+                            f"bore {hseg.inner_diameter * 1e3:g} mm is smaller than the inserted tool shank "
+                            f"(tool.segments[{i}].diameter {seg.diameter * 1e3:g} mm)")
+    interfaces_raw = _mapping(doc["interfaces"], "interfaces")
+    _known(interfaces_raw, "interfaces", INTERFACE_NAMES)
+    interfaces = {name: _joint(interfaces_raw.get(name, "rigid"), f"interfaces.{name}") for name in INTERFACE_NAMES}
+    frequency = _frequency(doc["frequency"], "frequency") if "frequency" in doc else None
+    name = _string(doc, "name", "", "stack")
+    return StackSpec(name, tool, holder, spindle, gauge, interfaces, frequency)
+
+
+def _joint_to_obj(j: JointChoice) -> Any:
+    if j.kind == "rigid":
+        return "rigid"
+    if j.kind == "catalogued":
+        return f"{j.name}@{j.version}"
+    if j.kind == "explicit":
+        return {"k": list(j.k or ()), "c": list(j.c or ())}
+    q: dict[str, Any] = {"joint_type": j.joint_type}
+    for key, value in (j.conditions or {}).items():
+        q[key] = list(value) if isinstance(value, tuple) else value
+    q["neighbours"] = j.neighbours
+    q["interpolate"] = j.interpolate
+    return {"query": q}
+
+
+def stack_to_dict(spec: StackSpec) -> dict[str, Any]:
+    """The JSON document of a stack (inverse of :func:`stack_from_dict`)."""
+    doc: dict[str, Any] = {
+        "format": FORMAT,
+        "name": spec.name,
+        "tool": {
+            "material": spec.tool.material,
+            "fluted_ratio": spec.tool.fluted_ratio,
+            "loss_factor": spec.tool.loss_factor,
+            "segments": [
+                {"length": s.length, "diameter": s.diameter, **({"fluted": True} if s.fluted else {})}
+                for s in spec.tool.segments
+            ],
+        },
+        "gauge_length": spec.gauge_length,
+        "holder": {
+            "material": spec.holder.material,
+            "loss_factor": spec.holder.loss_factor,
+            "segments": [
+                {"length": s.length, "outer_diameter": s.outer_diameter, "inner_diameter": s.inner_diameter}
+                for s in spec.holder.segments
+            ],
+        },
+        "spindle": (
+            {"file": spec.spindle.file, "node": spec.spindle.node}
+            if isinstance(spec.spindle, MeasuredSpindle)
+            else {"model": spec.spindle.model, "point": spec.spindle.point}
+        ),
+        "interfaces": {name: _joint_to_obj(j) for name, j in spec.interfaces.items()},
+    }
+    if spec.frequency is not None:
+        doc["frequency"] = {"min": spec.frequency.fmin, "max": spec.frequency.fmax, "step": spec.frequency.step}
+    return doc
