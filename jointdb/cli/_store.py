@@ -1,9 +1,416 @@
-"""CLI command group (placeholder until its issue lands)."""
+"""CLI for the joint database: ``catalogue``, ``joints ...``, ``query``, ``db ...``.
+
+Thin: parse options, call :mod:`jointdb.store`, render with :func:`jointdb._output.emit`.
+Every command takes ``--db URL`` (or a SQLite path; default ``JOINTDB_URL`` or
+the per-user database) and ``--json``.
+"""
 
 from __future__ import annotations
 
+import json
+import warnings
+from pathlib import Path
+from typing import Annotated, Any, Optional
+
 import typer
+
+from jointdb._output import emit, message
+from jointdb.errors import InputError, IntegrityError
+
+DbOpt = Annotated[
+    Optional[str],
+    typer.Option("--db", help="Database URL or SQLite file (default: $JOINTDB_URL or the per-user database)."),
+]
+JsonOpt = Annotated[bool, typer.Option("--json", help="Write JSON to stdout instead of a table.")]
+BlobsOpt = Annotated[
+    Optional[Path], typer.Option("--blobs", help="Blob directory (default: $JOINTDB_BLOBS or beside the SQLite file).")
+]
+
+
+def _repo(db: str | None, blobs: Path | None = None):
+    from jointdb.store import Repository
+
+    return Repository(db, blobs=blobs)
+
+
+def _pairs(items: list[str] | None, what: str, numeric: bool = True) -> dict[str, Any]:
+    out: dict[str, Any] = {}
+    for item in items or []:
+        if "=" not in item:
+            raise InputError(f"{what} {item!r} must look like key=value")
+        key, value = item.split("=", 1)
+        key = key.strip()
+        if numeric:
+            try:
+                out[key] = float(value)
+            except ValueError:
+                raise InputError(f"{what} {key}: {value!r} is not a number (SI units)") from None
+        else:
+            try:
+                out[key] = json.loads(value)
+            except json.JSONDecodeError:
+                out[key] = value
+    return out
+
+
+def _conditions(materials, preload, torque, geometry, extra=None):
+    from jointdb.store import Conditions
+
+    mats: list[str] = []
+    for m in materials or []:
+        mats.extend(x for x in m.replace("+", ",").split(",") if x.strip())
+    return Conditions(
+        materials=tuple(mats),
+        preload_n=preload,
+        torque_nm=torque,
+        geometry=_pairs(geometry, "--geometry"),
+        extra=_pairs(extra, "--extra", numeric=False),
+    )
+
+
+def _read_joint_file(path: Path):
+    """FRF and metadata attributes from an identified-joint HDF5 file."""
+    import h5py
+
+    from jointdb.store import read_frf_file
+
+    if not path.is_file():
+        raise InputError(f"{path}: no such file")
+    try:
+        with h5py.File(path, "r", locking=False) as f:
+            attrs = {k: (v.decode() if isinstance(v, bytes) else v) for k, v in f.attrs.items()}
+    except OSError as exc:
+        raise InputError(f"{path}: not an HDF5 file ({exc})") from None
+    if attrs.get("format") == "jointdb-frf-blob":
+        frf = read_frf_file(path)
+    else:
+        try:
+            from jointdb.io import read_frf_hdf5  # the exchange file of `jointdb identify`
+        except ImportError:
+            raise InputError(f"{path}: not a jointdb FRF file and no HDF5 exchange reader is available") from None
+        frf = read_frf_hdf5(path)
+    meta: dict[str, Any] = {}
+    for key, value in attrs.items():
+        if isinstance(value, str) and value[:1] in "{[":
+            try:
+                value = json.loads(value)
+            except json.JSONDecodeError:
+                pass
+        meta[key] = value
+    return frf, meta
+
+
+def _version_row(v) -> dict[str, Any]:
+    return v.summary()
+
+
+def _version_detail(v) -> dict[str, Any]:
+    c, p = v.conditions, v.provenance
+    return {
+        "name": v.name,
+        "joint_type": v.joint_type,
+        "version": v.version,
+        "state": v.state,
+        "labels": ", ".join(v.labels) or None,
+        "uuid": v.uuid,
+        "created_at": v.created_at.isoformat(),
+        "materials": " + ".join(c.materials) or None,
+        "preload_n": c.preload_n,
+        "torque_nm": c.torque_nm,
+        "geometry": json.dumps(c.geometry) if c.geometry else None,
+        "extra": json.dumps(c.extra) if c.extra else None,
+        "model_kind": v.model_kind,
+        "dofs": " ".join(v.dofs),
+        "frequency_hz": f"{v.freq_min_hz:g} - {v.freq_max_hz:g} ({v.n_freq} lines)",
+        "blob_sha256": v.blob_sha256,
+        "method": p.method,
+        "parameters": json.dumps(p.parameters) if p.parameters else None,
+        "input_files": json.dumps(p.input_files) if p.input_files else None,
+        "software_version": p.software_version,
+        "author": p.author,
+        "parent_version": v.parent_version,
+        "quality": json.dumps(dict(v.quality)) if v.quality else None,
+    }
 
 
 def register(app: typer.Typer) -> None:
-    """Add this group's commands to the app."""
+    """Add ``catalogue``, ``query``, ``joints ...`` and ``db ...`` to the app."""
+    joints = typer.Typer(help="List, inspect, label, deprecate, diff, export and import catalogued joints.",
+                         no_args_is_help=True)
+    db_app = typer.Typer(help="Database administration: migrations, integrity check, garbage collection.",
+                         no_args_is_help=True)
+    app.add_typer(joints, name="joints")
+    app.add_typer(db_app, name="db")
+
+    @app.command("catalogue")
+    def catalogue(
+        joint_file: Annotated[Path, typer.Argument(help="Identified joint FRF (HDF5 file from `jointdb identify`).")],
+        name: Annotated[str, typer.Option("--name", help="Joint name (new joint, or new version of it).")],
+        joint_type: Annotated[str, typer.Option("--type", help="Joint type, e.g. tool-holder, holder-spindle.")],
+        material: Annotated[Optional[list[str]], typer.Option("--material", help="Interface material (repeat, or a+b).")] = None,
+        preload: Annotated[Optional[float], typer.Option("--preload", help="Preload [N].")] = None,
+        torque: Annotated[Optional[float], typer.Option("--torque", help="Tightening torque [N·m].")] = None,
+        geometry: Annotated[Optional[list[str]], typer.Option("--geometry", help="Geometry number key=value in SI, e.g. diameter_m=0.02 (repeat).")] = None,
+        extra: Annotated[Optional[list[str]], typer.Option("--extra", help="Free-form condition key=value (repeat).")] = None,
+        model_kind: Annotated[Optional[str], typer.Option("--model-kind", help="spring-damper-planar | n-point-translational | full-matrix (default: from the file).")] = None,
+        method: Annotated[Optional[str], typer.Option("--method", help="Identification method (default: from the file).")] = None,
+        quality: Annotated[Optional[list[str]], typer.Option("--quality", help="Quality metric key=value (repeat).")] = None,
+        parent: Annotated[Optional[int], typer.Option("--parent", help="Version this one corrects (default: latest).")] = None,
+        author: Annotated[Optional[str], typer.Option("--author", help="Author (default: $JOINTDB_AUTHOR or login).")] = None,
+        label: Annotated[Optional[str], typer.Option("--label", help="Also point this label at the new version.")] = None,
+        db: DbOpt = None,
+        blobs: BlobsOpt = None,
+        as_json: JsonOpt = False,
+    ) -> None:
+        """Catalogue an identified joint FRF as a new immutable version.
+
+        Example: jointdb catalogue joint.h5 --name T1-HSK63 --type tool-holder
+        --material carbide --material steel --torque 40 --geometry diameter_m=0.02
+        """
+        from jointdb.store import Provenance, file_sha256
+
+        frf, meta = _read_joint_file(joint_file)
+        kind = model_kind or meta.get("model_kind") or meta.get("joint_model_kind")
+        if not kind:
+            raise InputError(f"{joint_file}: the file does not say its model kind; give --model-kind")
+        q = dict(meta.get("quality") or {}) if isinstance(meta.get("quality"), dict) else {}
+        q.update(_pairs(quality, "--quality"))
+        inputs = dict(meta.get("input_files") or {}) if isinstance(meta.get("input_files"), dict) else {}
+        inputs[joint_file.name] = file_sha256(joint_file)
+        params = meta.get("parameters") if isinstance(meta.get("parameters"), dict) else {}
+        prov = Provenance(
+            method=method or str(meta.get("method") or "imported-file"),
+            parameters=params,
+            input_files=inputs,
+            author=author or "",
+        )
+        conditions = _conditions(material, preload, torque, geometry, extra)
+        repo = _repo(db, blobs)
+        jv = repo.catalogue(name, joint_type, frf, conditions, kind, prov, q, parent, author=author)
+        if label:
+            jv = repo.label(jv.name, jv.version, label, author=author)
+        message(f"catalogued {jv.name} v{jv.version} ({jv.blob_sha256[:12]})")
+        emit(_version_detail(jv), as_json=as_json, title=f"{jv.name} v{jv.version}")
+
+    @app.command("query")
+    def query(
+        joint_type: Annotated[str, typer.Option("--type", help="Joint type to search (types are never mixed).")],
+        material: Annotated[Optional[list[str]], typer.Option("--material", help="Interface material (repeat, or a+b).")] = None,
+        preload: Annotated[Optional[float], typer.Option("--preload", help="Preload [N].")] = None,
+        torque: Annotated[Optional[float], typer.Option("--torque", help="Tightening torque [N·m].")] = None,
+        geometry: Annotated[Optional[list[str]], typer.Option("--geometry", help="Geometry key=value in SI (repeat).")] = None,
+        k: Annotated[int, typer.Option("-k", help="Number of nearest versions.")] = 3,
+        at: Annotated[Optional[str], typer.Option("--at", help="Query the catalogue as it was at this ISO time.")] = None,
+        interpolate: Annotated[Optional[Path], typer.Option("--interpolate", help="Also write the interpolated joint FRF (dynamic stiffness) to this HDF5 file.")] = None,
+        db: DbOpt = None,
+        blobs: BlobsOpt = None,
+        as_json: JsonOpt = False,
+    ) -> None:
+        """Find the k catalogued joints closest to given conditions (distance per condition).
+
+        Example: jointdb query --type tool-holder --material carbide+steel --torque 35 -k 3
+        """
+        repo = _repo(db, blobs)
+        req = _conditions(material, preload, torque, geometry)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            matches = repo.nearest(joint_type, req, k=k, at=at)
+        for w in caught:
+            message(f"warning: {w.message}")
+        rows = []
+        for m in matches:
+            row = {"name": m.version.name, "version": m.version.version, "distance": m.distance}
+            row.update({f"d_{key}": val for key, val in m.per_condition.items()})
+            c = m.version.conditions
+            row.update({"materials": "+".join(c.materials) or None, "torque_nm": c.torque_nm,
+                        "preload_n": c.preload_n, "extrapolating": m.extrapolating})
+            rows.append(row)
+        result: Any = rows
+        if interpolate is not None:
+            from jointdb.store import write_frf_file
+
+            ij = repo.interpolate(matches, req)
+            write_frf_file(interpolate, ij.frf)
+            message(f"{ij.describe()} -> {interpolate}")
+            if as_json:
+                result = {"matches": rows, "interpolated": {"file": str(interpolate), "label": ij.label,
+                          "neighbours": [{"name": n, "version": v, "weight": w} for n, v, w in ij.neighbours]}}
+        emit(result, as_json=as_json, title=f"nearest {joint_type} joints")
+
+    # ------------------------------------------------------------- joints ...
+    @joints.command("list")
+    def list_(
+        joint_type: Annotated[Optional[str], typer.Option("--type", help="Only this joint type.")] = None,
+        db: DbOpt = None, blobs: BlobsOpt = None, as_json: JsonOpt = False,
+    ) -> None:
+        """List joints with their current version. Example: jointdb joints list --type tool-holder"""
+        emit([_version_row(v) for v in _repo(db, blobs).list_joints(joint_type)], as_json=as_json, title="joints")
+
+    @joints.command("show")
+    def show(
+        name: Annotated[str, typer.Argument(help="Joint name.")],
+        version: Annotated[Optional[int], typer.Option("--version", help="Pinned version number.")] = None,
+        at: Annotated[Optional[str], typer.Option("--at", help="Version current at this ISO time.")] = None,
+        label: Annotated[Optional[str], typer.Option("--label", help="Version a label points at.")] = None,
+        frf_out: Annotated[Optional[Path], typer.Option("--frf-out", help="Write the joint FRF (verified) to this HDF5 file.")] = None,
+        db: DbOpt = None, blobs: BlobsOpt = None, as_json: JsonOpt = False,
+    ) -> None:
+        """Show one version (latest, pinned, at a time, or by label). Example: jointdb joints show T1 --version 2"""
+        repo = _repo(db, blobs)
+        jv = repo.get(name, version=version, at=at, label=label)
+        if frf_out is not None:
+            from jointdb.store import write_frf_file
+
+            write_frf_file(frf_out, repo.load_frf(jv))
+            message(f"wrote {jv.name} v{jv.version} FRF to {frf_out}")
+        emit(_version_detail(jv), as_json=as_json, title=f"{jv.name} v{jv.version}")
+
+    @joints.command("history")
+    def history(name: Annotated[str, typer.Argument(help="Joint name.")],
+                db: DbOpt = None, blobs: BlobsOpt = None, as_json: JsonOpt = False) -> None:
+        """All versions of a joint, oldest first. Example: jointdb joints history T1"""
+        emit([_version_row(v) for v in _repo(db, blobs).history(name)], as_json=as_json, title=f"history of {name}")
+
+    @joints.command("diff")
+    def diff(
+        name: Annotated[str, typer.Argument(help="Joint name.")],
+        version_a: Annotated[int, typer.Argument(help="First version.")],
+        version_b: Annotated[Optional[int], typer.Argument(help="Second version (default: current).")] = None,
+        other: Annotated[Optional[str], typer.Option("--other", help="Compare with a version of another joint.")] = None,
+        db: DbOpt = None, blobs: BlobsOpt = None, as_json: JsonOpt = False,
+    ) -> None:
+        """Differences of conditions, metadata and FRF (max relative difference per entry).
+
+        Example: jointdb joints diff T1 1 2
+        """
+        d = _repo(db, blobs).diff(name, version_a, version_b, other)
+        if as_json:
+            emit(d, as_json=True)
+            return
+        rows = [{"what": k, "a": a, "b": b} for k, (a, b) in {**d.conditions, **d.fields}.items()]
+        emit(rows or "no differences in conditions or metadata", title=f"{d.a} vs {d.b}")
+        emit(list(d.frf_entries), columns=["output", "input", "max_rel_diff"], title="FRF: max |Hb-Ha| / peak |Ha|")
+        for note in d.notes:
+            message(note)
+
+    @joints.command("label")
+    def label_(
+        name: Annotated[str, typer.Argument(help="Joint name.")],
+        version: Annotated[int, typer.Argument(help="Version the label should point at.")],
+        label: Annotated[str, typer.Argument(help="Label, e.g. released.")],
+        author: Annotated[Optional[str], typer.Option("--author")] = None,
+        db: DbOpt = None, blobs: BlobsOpt = None, as_json: JsonOpt = False,
+    ) -> None:
+        """Point a label at a version (create or move it). Example: jointdb joints label T1 2 released"""
+        jv = _repo(db, blobs).label(name, version, label, author=author)
+        emit(_version_row(jv), as_json=as_json)
+
+    @joints.command("deprecate")
+    def deprecate(
+        name: Annotated[str, typer.Argument(help="Joint name.")],
+        version: Annotated[Optional[int], typer.Option("--version", help="Only this version (default: the whole joint).")] = None,
+        reason: Annotated[str, typer.Option("--reason", help="Why (kept in the record).")] = "",
+        undo: Annotated[bool, typer.Option("--undo", help="Mark active again.")] = False,
+        author: Annotated[Optional[str], typer.Option("--author")] = None,
+        db: DbOpt = None, blobs: BlobsOpt = None, as_json: JsonOpt = False,
+    ) -> None:
+        """Deprecate a joint or version (nothing is deleted). Example: jointdb joints deprecate T1 --version 1 --reason 'loose bolt'"""
+        hist = _repo(db, blobs).deprecate(name, version, reason=reason, author=author, undo=undo)
+        emit([_version_row(v) for v in hist], as_json=as_json, title=f"history of {name}")
+
+    @joints.command("export")
+    def export(
+        bundle: Annotated[Path, typer.Argument(help="Bundle file to write (HDF5).")],
+        names: Annotated[Optional[list[str]], typer.Argument(help="Joint names (default: all).")] = None,
+        db: DbOpt = None, blobs: BlobsOpt = None, as_json: JsonOpt = False,
+    ) -> None:
+        """Export joints with all versions and provenance to one portable HDF5 bundle.
+
+        Example: jointdb joints export lab.h5 T1 T2
+        """
+        counts = _repo(db, blobs).export(names or None, bundle)
+        emit({"bundle": str(bundle), **counts}, as_json=as_json)
+
+    @joints.command("import")
+    def import_(
+        bundle: Annotated[Path, typer.Argument(help="Bundle file written by `jointdb joints export`.")],
+        author: Annotated[Optional[str], typer.Option("--author")] = None,
+        db: DbOpt = None, blobs: BlobsOpt = None, as_json: JsonOpt = False,
+    ) -> None:
+        """Import a bundle: identical versions are no-ops, conflicting ones are refused.
+
+        Example: jointdb joints import lab.h5 --db postgresql+psycopg://host/jointdb
+        """
+        summary = _repo(db, blobs).import_(bundle, author=author)
+        summary["labels_skipped"] = ", ".join(summary["labels_skipped"]) or None
+        emit(summary, as_json=as_json)
+
+    # ----------------------------------------------------------------- db ...
+    @db_app.command("upgrade")
+    def db_upgrade(
+        to: Annotated[str, typer.Option("--to", help="Target revision.")] = "head",
+        db: DbOpt = None, as_json: JsonOpt = False,
+    ) -> None:
+        """Create or migrate the schema (Alembic). Example: jointdb db upgrade --db postgresql+psycopg://host/jointdb"""
+        from jointdb.store import upgrade
+        from jointdb.store._db import resolve_url
+
+        rev = upgrade(db, to)
+        emit({"database": resolve_url(db), "revision": rev}, as_json=as_json)
+
+    @db_app.command("downgrade")
+    def db_downgrade(
+        to: Annotated[str, typer.Option("--to", help="Target revision: -1 (one step) or base (drops all tables).")] = "-1",
+        yes: Annotated[bool, typer.Option("--yes", help="Confirm a downgrade to base (deletes all data).")] = False,
+        db: DbOpt = None, as_json: JsonOpt = False,
+    ) -> None:
+        """Revert schema migrations. Example: jointdb db downgrade --to -1"""
+        from jointdb.store import downgrade
+        from jointdb.store._db import resolve_url
+
+        if to == "base" and not yes:
+            raise InputError("downgrading to base drops every table and all data; add --yes if you mean it")
+        rev = downgrade(db, to)
+        emit({"database": resolve_url(db), "revision": rev}, as_json=as_json)
+
+    @db_app.command("check")
+    def db_check(
+        quick: Annotated[bool, typer.Option("--quick", help="Only check blobs exist (do not read and hash them).")] = False,
+        db: DbOpt = None, blobs: BlobsOpt = None, as_json: JsonOpt = False,
+    ) -> None:
+        """Walk every row and blob; report missing or corrupt data (exit code 5 on problems).
+
+        Example: jointdb db check
+        """
+        report = _repo(db, blobs).check(verify_blobs=not quick)
+        data = {"ok": report.ok, "versions_checked": report.versions_checked, "blobs_checked": report.blobs_checked,
+                "problems": list(report.problems), "orphan_blobs": len(report.orphan_blobs),
+                "temporaries": len(report.temporaries)}
+        if as_json:
+            emit(data, as_json=True)
+        else:
+            emit({k: v for k, v in data.items() if k != "problems"}, title="db check")
+            for p in report.problems:
+                message(f"problem: {p}")
+        if not report.ok:
+            raise IntegrityError(f"db check found {len(report.problems)} problem(s)")
+
+    @db_app.command("gc")
+    def db_gc(
+        min_age: Annotated[float, typer.Option("--min-age", help="Only remove files older than this many seconds.")] = 3600.0,
+        dry_run: Annotated[bool, typer.Option("--dry-run", help="List what would be removed.")] = False,
+        db: DbOpt = None, blobs: BlobsOpt = None, as_json: JsonOpt = False,
+    ) -> None:
+        """Remove blobs no row references (and stale temporary files). Example: jointdb db gc --dry-run"""
+        removed = _repo(db, blobs).gc(min_age_s=min_age, dry_run=dry_run)
+        emit([{"removed" if not dry_run else "would_remove": r} for r in removed] if removed else
+             "nothing to remove", as_json=as_json)
+
+    @db_app.command("info")
+    def db_info(db: DbOpt = None, blobs: BlobsOpt = None, as_json: JsonOpt = False) -> None:
+        """Where the database and blobs are, and the schema revision. Example: jointdb db info"""
+        from jointdb.store import current_revision, head_revision
+
+        repo = _repo(db, blobs)
+        emit({"database": repo.url, "blobs": str(repo.blobs.root), "revision": current_revision(repo.url),
+              "head": head_revision()}, as_json=as_json)
