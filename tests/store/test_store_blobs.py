@@ -1,0 +1,129 @@
+"""Blob store: canonical hash, HDF5 layout, corruption detection, check and gc."""
+
+from __future__ import annotations
+
+import hashlib
+import os
+
+import h5py
+import numpy as np
+import pytest
+from store_helpers import planar_conditions, spring_joint
+
+from jointdb.errors import IntegrityError, NotFoundError
+from jointdb.frf import FRF
+from jointdb.store import BlobStore, frf_sha256
+
+
+def test_hash_is_the_documented_canonical_form():
+    frf = spring_joint(n=5)
+    expected = hashlib.sha256(
+        b"jointdb-frf-v1\n"
+        + b"receptance\n"
+        + b"3x,3ry\n"
+        + b"3x,3ry\n"
+        + np.array([5, 2, 2], "<u8").tobytes()
+        + frf.freq.astype("<f8").tobytes()
+        + frf.values.astype("<c16").tobytes()
+    ).hexdigest()
+    assert frf_sha256(frf) == expected
+
+
+def test_hash_sees_every_bit_and_label():
+    frf = spring_joint(n=8)
+    base = frf_sha256(frf)
+    v = frf.values.copy()
+    v[3, 0, 0] = np.nextafter(v[3, 0, 0].real, 1) + 1j * v[3, 0, 0].imag
+    assert frf_sha256(frf.replace(values=v)) != base
+    assert frf_sha256(frf.replace(outputs=["4x", "3ry"], inputs=["4x", "3ry"])) != base
+    assert frf_sha256(FRF(frf.freq, frf.values, frf.outputs, frf.inputs, "receptance")) == base
+
+
+def test_blob_layout_and_attributes(tmp_path):
+    store = BlobStore(tmp_path / "b")
+    frf = spring_joint(n=3000)
+    digest = store.put(frf)
+    path = store.path(digest)
+    assert path == tmp_path / "b" / digest[:2] / f"{digest}.h5"
+    with h5py.File(path, "r") as f:
+        assert f.attrs["format"] == "jointdb-frf-blob" and f.attrs["format_version"] == 1
+        assert f.attrs["sha256"] == digest
+        assert "real" in f.attrs["complex_convention"]
+        assert "exp(+i omega t)" in f.attrs["harmonic_convention"]
+        ds = f["values"]
+        assert ds.shuffle and ds.fletcher32 and ds.compression == "gzip"
+        assert ds.chunks[0] < 3000 and ds.chunks[1:] == (2, 2, 2)  # chunked along frequency
+    assert store.get(digest).allclose(frf, rtol=0)
+    assert store.put(frf) == digest  # idempotent
+    assert not store.temporaries()
+
+
+def _flip_byte(path, where):
+    data = bytearray(path.read_bytes())
+    pos = int(len(data) * where)
+    data[pos] ^= 0xFF
+    path.write_bytes(bytes(data))
+
+
+@pytest.mark.parametrize("where", [0.35, 0.6, 0.9])
+def test_flipped_byte_is_detected_on_read_and_by_check(repo, where):
+    jv = repo.catalogue("T1", "tool-holder", spring_joint(n=2000), planar_conditions(), "spring-damper-planar")
+    repo.catalogue("T2", "tool-holder", spring_joint(k=(3e6, 9e4)), planar_conditions(), "spring-damper-planar")
+    _flip_byte(repo.blobs.path(jv.blob_sha256), where)
+    with pytest.raises(IntegrityError, match=jv.blob_sha256):
+        repo.load_frf(jv)
+    report = repo.check()
+    assert not report.ok
+    assert len(report.problems) == 1 and "T1 v1" in report.problems[0]
+
+
+def test_value_rewritten_with_valid_checksums_is_caught_by_the_hash(tmp_path):
+    """A value changed through HDF5 (checksums recomputed) is still caught by the content hash."""
+    store = BlobStore(tmp_path)
+    frf = spring_joint(n=50)
+    digest = store.put(frf)
+    path = store.path(digest)
+    os.chmod(path, 0o644)
+    with h5py.File(path, "r+") as f:  # rewrite one value in place, HDF5 recomputes checksums
+        v = f["values"][...]
+        v[10, 0, 0, 0] *= 1.0000001
+        f["values"][...] = v
+    with pytest.raises(IntegrityError, match="hashes to"):
+        store.get(digest)
+
+
+def test_missing_blob_is_reported(repo):
+    jv = repo.catalogue("T1", "tool-holder", spring_joint(), planar_conditions(), "spring-damper-planar")
+    repo.blobs.path(jv.blob_sha256).unlink()
+    with pytest.raises(NotFoundError, match="missing"):
+        repo.load_frf(jv)
+    report = repo.check()
+    assert not report.ok and "missing" in report.problems[0]
+
+
+def test_gc_removes_only_unreferenced_blobs(repo):
+    jv = repo.catalogue("T1", "tool-holder", spring_joint(), planar_conditions(), "spring-damper-planar")
+    orphan = repo.blobs.put(spring_joint(k=(9e6, 9e4)))
+    tmp = repo.blobs.root / "ab" / ".tmp-deadbeef.h5"
+    tmp.parent.mkdir(parents=True, exist_ok=True)
+    tmp.write_bytes(b"half")
+    report = repo.check()
+    assert report.ok and report.orphan_blobs == (orphan,) and len(report.temporaries) == 1
+    assert repo.gc(min_age_s=3600) == []  # too young: a catalogue may be about to commit its row
+    assert set(repo.gc(min_age_s=0, dry_run=True)) == {orphan, str(tmp)}
+    assert repo.blobs.exists(orphan)
+    removed = repo.gc(min_age_s=0)
+    assert set(removed) == {orphan, str(tmp)}
+    assert not repo.blobs.exists(orphan) and not tmp.exists()
+    assert repo.load_frf(jv).allclose(spring_joint(), rtol=0)
+    assert repo.check().ok and not repo.check().orphan_blobs
+
+
+def test_raw_measurements_are_stored_as_blobs(repo):
+    raw = spring_joint(k=(1e7, 1e5), dofs=("1x", "1ry"))
+    jv = repo.catalogue("T1", "tool-holder", spring_joint(), planar_conditions(), "spring-damper-planar",
+                        raw_frfs={"tip": raw})
+    assert set(jv.raw_blobs) == {"tip"}
+    assert repo.load_raw(jv, "tip").allclose(raw, rtol=0)
+    assert repo.check().blobs_checked == 2
+    assert repo.gc(min_age_s=0) == []
