@@ -113,6 +113,9 @@ def frf_from_records(
         elif fq is not None and q is not fq:
             raise InputError(f"{where}: the file says {q.value} but file_quantity={fq.value}")
         quantities.append(q)
+        if r.function_type == 0:
+            notes.append(f"dataset #{r.index} ({r.label}): function type 0 (general) read as an FRF "
+                         "(response over force by its data-type codes)")
         notes.extend(f"dataset #{r.index} ({r.label}): {c}" for c in r.conversions)
     # one grid
     ref = used[0]

@@ -403,6 +403,17 @@ def test_missing_pairs_are_named_and_reciprocity_can_fill(tmp_path):
     one_line_error(e, "missing 2 pair", "1x/3x", "2x/1x")
 
 
+def test_scalar_dof_and_general_function_type(tmp_path):
+    path = write_raw(tmp_path / "sc.uff", [raw58(1, 0, 1, 1)])
+    with pytest.raises(InputError) as e:
+        read_frf_uff58(path)
+    one_line_error(e, "scalar DOF", "dataset #1")
+    path = write_raw(tmp_path / "gen.uff", [raw58(1, 1, 1, 1, func_type=0)])
+    imp = import_uff58(path)
+    assert imp.frf.quantity is Quantity.ACCELERANCE
+    assert any("function type 0" in c for c in imp.conversions)
+
+
 def test_duplicate_pairs_are_refused(tmp_path):
     path = write_raw(tmp_path / "dup.uff", [raw58(1, 1, 1, 1), raw58(1, 1, 1, 1)])
     with pytest.raises(InputError) as e:
