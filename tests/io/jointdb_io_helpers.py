@@ -1,8 +1,12 @@
-"""Helpers for the io tests: raw UFF58 datasets written with pyuff directly (independent of jointdb's writer)."""
+"""Helpers for the io tests: raw UFF58 datasets written with pyuff directly (independent of
+jointdb's writer), test FRFs and comparison helpers."""
 
+import re
 from pathlib import Path
 
 import numpy as np
+
+from jointdb.frf import FRF
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 REAL_UFF = DATA / "measured-accelerance-3refs.uff"
@@ -34,3 +38,36 @@ def write_raw(path, datasets):
     uff = pyuff.UFF(str(path))
     uff.write_sets(list(datasets), mode="add")  # pyuff: binary + "overwrite" truncates the header
     return path
+
+
+# ASCII UFF58 keeps 12 significant digits of double values (E20.12): the
+# largest relative change of an arbitrary float64 is half a unit in the 12th digit.
+ASCII_VALUE_RTOL = 5e-12
+
+
+def round12(a):
+    """Values with at most 12 significant digits (exactly representable in ASCII UFF58)."""
+    f = np.vectorize(lambda v: float("%.11e" % v))
+    return f(a.real) + 1j * f(a.imag)
+
+
+def make_frf(freq, outputs=("1x", "2y"), inputs=("1x", "3z", "4rx"), quantity="accelerance", seed=0, digits12=False):
+    rng = np.random.default_rng(seed)
+    shape = (len(freq), len(outputs), len(inputs))
+    v = rng.normal(size=shape) * 10.0 ** rng.integers(-6, 3, size=shape) + 1j * rng.normal(size=shape)
+    if digits12:
+        v = round12(v)
+    return FRF(freq, v, outputs, inputs, quantity)
+
+
+def assert_identical(a: FRF, b: FRF):
+    assert a.outputs == b.outputs and a.inputs == b.inputs and a.quantity == b.quantity
+    assert np.array_equal(a.freq, b.freq), np.max(np.abs(a.freq - b.freq))
+    assert np.array_equal(a.values, b.values), np.max(np.abs(a.values - b.values))
+
+
+def one_line_error(excinfo, *fragments):
+    msg = str(excinfo.value)
+    assert "\n" not in msg, msg
+    for frag in fragments:
+        assert re.search(frag, msg, re.I), f"{frag!r} not in {msg!r}"
