@@ -1,6 +1,5 @@
 """UFF58 import: quantity and units, grouping into a matrix, bad files, atomic writes."""
 
-import re
 import subprocess
 import sys
 
@@ -8,7 +7,7 @@ import numpy as np
 import pytest
 
 from jointdb.errors import InputError, NotFoundError
-from jointdb.frf import FRF, Dof, Quantity
+from jointdb.frf import Dof, Quantity
 from jointdb.io import (
     frf_from_records,
     import_uff58,
@@ -17,9 +16,7 @@ from jointdb.io import (
     write_uff58,
 )
 from jointdb_io_helpers import (
-    ASCII_VALUE_RTOL,
     REAL_UFF,
-    assert_identical,
     make_frf,
     one_line_error,
     raw58,
