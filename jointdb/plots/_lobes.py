@@ -1,0 +1,124 @@
+"""Figures for stability lobes and modal fits (matplotlib, Agg backend, imported lazily)."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["plot_lobes", "plot_stabilisation", "plot_modal_fit"]
+
+
+def _plt():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+_UNIT = {"m": 1.0, "mm": 1e3, "um": 1e6}
+
+
+def plot_lobes(
+    results, path, *, title: str | None = None, depth_unit: str = "mm", labels: Sequence[str] | None = None,
+    show_lobes: bool = True, depth_max: float | None = None,
+) -> Path:
+    """Stability lobe diagram: limiting depth against spindle speed.
+
+    ``results`` is one :class:`~jointdb.stability.LobeResult` or a sequence (overlaid,
+    e.g. ZOA and SD). Flip-type limits are marked. Individual lobes (turning/ZOA)
+    are drawn thin behind the envelope when ``show_lobes``. Returns the path.
+    """
+    plt = _plt()
+    if not isinstance(results, (list, tuple)):
+        results = [results]
+    scale = _UNIT[depth_unit]
+    fig, ax = plt.subplots(figsize=(8, 4.8))
+    colours = ["C0", "C3", "C2", "C1", "C4"]
+    top = 0.0
+    for i, res in enumerate(results):
+        c = colours[i % len(colours)]
+        label = labels[i] if labels else res.method
+        if show_lobes and res.lobes:
+            for lobe in res.lobes:
+                ax.plot(lobe.spindle_speed_rpm, lobe.depth_m * scale, color=c, lw=0.4, alpha=0.35)
+        d = np.where(np.isfinite(res.depth_m), res.depth_m, np.nan)
+        ax.plot(res.spindle_speed_rpm, d * scale, color=c, lw=1.6, label=label)
+        flip = res.kind == "flip"
+        if np.any(flip):
+            ax.plot(res.spindle_speed_rpm[flip], d[flip] * scale, "v", color=c, ms=3.5, label=f"{label}: flip")
+        if np.any(np.isfinite(d)):
+            top = max(top, float(np.nanmax(d)) * scale)
+    ax.set_xlim(min(float(r.spindle_speed_rpm.min()) for r in results), max(float(r.spindle_speed_rpm.max()) for r in results))
+    ax.set_ylim(0, depth_max * scale if depth_max else top * 1.1 if top > 0 else 1)
+    ax.set_xlabel("spindle speed [rpm]")
+    ax.set_ylabel(f"limiting depth of cut [{depth_unit}]")
+    ax.set_title(title or "Stability lobes")
+    ax.grid(True, alpha=0.3)
+    ax.legend(loc="upper left", fontsize=8)
+    path = Path(path)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
+
+
+def plot_stabilisation(fit, path, *, frf=None, title: str | None = None) -> Path:
+    """Stabilisation diagram (poles per model order, by status) over the FRF magnitude sum."""
+    plt = _plt()
+    d = fit.diagram
+    fig, ax = plt.subplots(figsize=(8, 5))
+    styles = {"o": ("x", "0.6", "new"), "f": ("_", "C1", "stable freq."), "d": ("d", "C2", "stable freq.+damping"),
+              "s": ("o", "C0", "stable (all)")}
+    for code, (marker, colour, name) in styles.items():
+        sel = d.status == code
+        if np.any(sel):
+            ax.plot(d.freq_hz[sel], d.order[sel], marker, color=colour, ms=4, ls="none", label=name, mfc="none")
+    for f in fit.model.freq_hz:
+        ax.axvline(f, color="k", lw=0.6, ls=":")
+    ax.set_xlabel("frequency [Hz]")
+    ax.set_ylabel("model order")
+    ax.set_xlim(*d.band)
+    if frf is not None:
+        ax2 = ax.twinx()
+        part = frf.band(*d.band)
+        ax2.semilogy(part.freq, np.sum(np.abs(part.values), axis=(1, 2)), color="0.3", lw=0.8)
+        ax2.set_ylabel(f"Σ|H| ({part.quantity.value})")
+    ax.set_title(title or "Stabilisation diagram (pLSCF)")
+    ax.legend(loc="upper left", fontsize=8)
+    fig.tight_layout()
+    path = Path(path)
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
+
+
+def plot_modal_fit(frf, fit, path, *, title: str | None = None, max_entries: int = 6) -> Path:
+    """Measured FRF entries against the re-synthesised modal model (magnitude and phase)."""
+    plt = _plt()
+    part = frf.band(*fit.band)
+    syn = fit.model.synthesize(part.freq, part.quantity)
+    n_o, n_i = part.values.shape[1:]
+    pairs = [(i, j) for i in range(n_o) for j in range(n_i)][:max_entries]
+    fig, axes = plt.subplots(2, 1, figsize=(8, 6), sharex=True, gridspec_kw={"height_ratios": [3, 1]})
+    for k, (i, j) in enumerate(pairs):
+        c = f"C{k}"
+        lab = f"{part.outputs[i]}/{part.inputs[j]}"
+        axes[0].semilogy(part.freq, np.abs(part.values[:, i, j]), color=c, lw=1.0, label=f"{lab} measured")
+        axes[0].semilogy(part.freq, np.abs(syn.values[:, i, j]), color=c, lw=1.0, ls="--",
+                         label=f"{lab} fit (FRAC {fit.quality.frac[i, j]:.3f})")
+        axes[1].plot(part.freq, np.degrees(np.angle(part.values[:, i, j])), color=c, lw=0.8)
+        axes[1].plot(part.freq, np.degrees(np.angle(syn.values[:, i, j])), color=c, lw=0.8, ls="--")
+    axes[0].set_ylabel(f"|H| ({part.quantity.value}, SI)")
+    axes[1].set_ylabel("phase [deg]")
+    axes[1].set_xlabel("frequency [Hz]")
+    axes[0].legend(fontsize=7, ncol=2)
+    axes[0].set_title(title or f"Modal fit: {fit.model.n_modes} modes, NMSE {fit.quality.nmse_total:.2e}")
+    fig.tight_layout()
+    path = Path(path)
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
