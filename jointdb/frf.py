@@ -78,7 +78,11 @@ class Dof:
         if isinstance(text, Dof):
             return text
         if isinstance(text, tuple) and len(text) == 2:
-            return cls(int(text[0]), str(text[1]))
+            try:
+                node = int(text[0])
+            except (TypeError, ValueError):
+                raise InputError(f"cannot read a DOF from {text!r}: node must be an integer") from None
+            return cls(node, str(text[1]))
         m = _DOF_RE.match(str(text))
         if not m:
             raise InputError(f"cannot read a DOF from {text!r}; write it like '12x' or '3:ry'")
@@ -351,36 +355,40 @@ class FRF:
             out[:, k] = np.interp(new, self.freq, flat[:, k].real) + 1j * np.interp(new, self.freq, flat[:, k].imag)
         return self.replace(freq=new, values=out.reshape(new.size, *self.values.shape[1:]))
 
-    def complete_reciprocal(self) -> "FRF":
-        """Square FRF over the union of output and input DOFs, filled by reciprocity.
+    def complete_reciprocal(self, outputs: Iterable | None = None, inputs: Iterable | None = None) -> "FRF":
+        """FRF on the requested DOFs, filling missing entries by reciprocity ``H_ij = H_ji``.
 
-        Every missing entry ``H[i, j]`` is taken from ``H[j, i]``. Where both are
-        present they are kept as measured.
+        Parameters
+        ----------
+        outputs, inputs
+            Target DOFs. By default the square set over the union of this
+            FRF's output and input DOFs. A measured row (one output, many
+            inputs) becomes a column with ``outputs=row.inputs, inputs=row.outputs``.
+
+        Where an entry is present directly it is kept as measured.
 
         Raises
         ------
         InputError
-            If some entry is known neither directly nor by reciprocity.
+            If some requested entry is known neither directly nor by reciprocity.
         """
         union: list[Dof] = list(self.outputs) + [d for d in self.inputs if d not in self._index["out"]]
-        n = len(union)
-        vals = np.zeros((self.n_freq, n, n), dtype=np.complex128)
-        known = np.zeros((n, n), dtype=bool)
-        pos = {d: i for i, d in enumerate(union)}
-        oi = [pos[d] for d in self.outputs]
-        ii = [pos[d] for d in self.inputs]
-        vals[:, np.ix_(oi, ii)[0], np.ix_(oi, ii)[1]] = self.values
-        known[np.ix_(oi, ii)] = True
-        missing = ~known & known.T
-        vals[:, missing] = np.swapaxes(vals, 1, 2)[:, missing]
-        known |= missing
-        if not known.all():
-            i, j = np.argwhere(~known)[0]
-            raise InputError(
-                f"H[{union[i]}, {union[j]}] is known neither directly nor by reciprocity; "
-                "measure a row or column that covers it"
-            )
-        return FRF(self.freq, vals, tuple(union), tuple(union), self.quantity)
+        target_out = dofs(outputs) if outputs is not None else tuple(union)
+        target_in = dofs(inputs) if inputs is not None else tuple(union)
+        o_idx, i_idx = self._index["out"], self._index["in"]
+        vals = np.empty((self.n_freq, len(target_out), len(target_in)), dtype=np.complex128)
+        for a, row in enumerate(target_out):  # loops over DOF pairs, not frequency lines
+            for b, col in enumerate(target_in):
+                if row in o_idx and col in i_idx:
+                    vals[:, a, b] = self.values[:, o_idx[row], i_idx[col]]
+                elif col in o_idx and row in i_idx:
+                    vals[:, a, b] = self.values[:, o_idx[col], i_idx[row]]
+                else:
+                    raise InputError(
+                        f"H[{row}, {col}] is known neither directly nor by reciprocity; "
+                        "measure a row or column that covers it"
+                    )
+        return FRF(self.freq, vals, target_out, target_in, self.quantity)
 
     def reciprocity_error(self) -> float:
         """Largest relative asymmetry ``|H_ij − H_ji| / max|H|`` over common DOFs."""
@@ -394,6 +402,8 @@ class FRF:
     @staticmethod
     def concat_outputs(parts: Sequence["FRF"]) -> "FRF":
         """Stack FRFs with the same grid, inputs and quantity along outputs."""
+        if not parts:
+            raise InputError("nothing to stack: give at least one FRF")
         first = parts[0]
         for p in parts[1:]:
             if p.inputs != first.inputs or p.quantity != first.quantity or not np.array_equal(p.freq, first.freq):
@@ -409,6 +419,8 @@ class FRF:
     @staticmethod
     def concat_inputs(parts: Sequence["FRF"]) -> "FRF":
         """Stack FRFs with the same grid, outputs and quantity along inputs."""
+        if not parts:
+            raise InputError("nothing to stack: give at least one FRF")
         first = parts[0]
         for p in parts[1:]:
             if p.outputs != first.outputs or p.quantity != first.quantity or not np.array_equal(p.freq, first.freq):
