@@ -200,6 +200,7 @@ class BlobStore:
                 return digest
             except IntegrityError:
                 pass  # corrupt copy: rewrite it atomically below
+        new_dir = not final.parent.is_dir()
         final.parent.mkdir(parents=True, exist_ok=True)
         tmp = final.parent / f"{_TMP_PREFIX}{uuid.uuid4().hex}.h5"
         try:
@@ -214,8 +215,9 @@ class BlobStore:
         finally:
             if tmp.exists():
                 tmp.unlink()
-        _fsync_dir(final.parent)
-        _fsync_dir(self.root)
+        _fsync_dir(final.parent)  # the rename is durable
+        if new_dir:
+            _fsync_dir(self.root)  # and so is the new shard directory
         self.get(digest)  # read back and verify
         return digest
 

@@ -210,7 +210,9 @@ class Repository:
         raw_blobs = {str(k): self.blobs.put(v) for k, v in sorted(raw.items())}
 
         def write(session: Session) -> JointVersion:
-            joint = session.scalar(select(JointRow).where(JointRow.name == name))
+            # FOR UPDATE serialises writers of one joint on PostgreSQL (SQLite: BEGIN IMMEDIATE
+            # already did); the unique constraint stays the safety net behind it.
+            joint = session.scalar(select(JointRow).where(JointRow.name == name).with_for_update())
             now = utcnow()
             if joint is None:
                 joint = JointRow(name=name, joint_type=joint_type, created_at=now, created_by=actor)
