@@ -7,6 +7,15 @@ Forward coupling (theory.md §1):
 - :class:`Interface`, :class:`JointSubstructure` — interface descriptions.
 - :func:`spring_damper_joint` — diagonal receptance ``1/(k + iωc)``.
 
+Identification (IRC, theory.md §2), each returning an :class:`IdentificationResult`
+(joint FRF + residual, condition number per line, flags):
+
+- :func:`identify_planar_joint` — planar spring–damper from two translational FRFs (§2a).
+- :func:`identify_n_point_joints` — n translational joints between two bodies (§2b).
+- :func:`identify_joint_matrix` — full joint matrix with inertia (§2c).
+- :class:`Regularisation` — truncated-SVD / Tikhonov pseudo-inverses.
+- :func:`equivalent_stiffness_damping`, :func:`fit_constant_kc` — k(ω), c(ω), constant (k, c).
+
 Notes on the contract (api-contracts.md): outputs/inputs are
 ``(substructure name, Dof)`` pairs and the result FRF is labelled with the bare
 Dofs, so requested DOF labels must be distinct across substructures. A joint
@@ -14,9 +23,16 @@ given as an FRF is matched to the interface by its labels when they equal the
 ``a_dofs`` or ``b_dofs``; otherwise it is taken in ``a_dofs`` order.
 """
 
-from jointdb.coupling._common import IdentificationResult
-from jointdb.coupling._linalg import Regularisation
-from jointdb.coupling.irc import identify_planar_joint
+from jointdb.coupling.irc import (
+    IdentificationResult,
+    KCFit,
+    Regularisation,
+    equivalent_stiffness_damping,
+    fit_constant_kc,
+    identify_joint_matrix,
+    identify_n_point_joints,
+    identify_planar_joint,
+)
 from jointdb.coupling.rc import Interface, JointSubstructure, couple, spring_damper_joint
 
 __all__ = [
@@ -27,4 +43,9 @@ __all__ = [
     "IdentificationResult",
     "Regularisation",
     "identify_planar_joint",
+    "identify_n_point_joints",
+    "identify_joint_matrix",
+    "equivalent_stiffness_damping",
+    "fit_constant_kc",
+    "KCFit",
 ]

@@ -1,0 +1,94 @@
+"""Equivalent stiffness and damping of an identified joint, constant (k, c) band fit."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from jointdb.errors import InputError
+from jointdb.frf import FRF, Dof, Quantity
+
+__all__ = ["equivalent_stiffness_damping", "fit_constant_kc", "KCFit"]
+
+
+def equivalent_stiffness_damping(joint_frf: FRF, full: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """Frequency-dependent ``k(ω)`` and ``c(ω)`` with ``k + iωc = 1/h`` (theory.md §2a).
+
+    Parameters
+    ----------
+    joint_frf
+        Joint receptance (square; converted to receptance).
+    full
+        False: per diagonal term, ``1/h_ii`` → arrays ``(n_freq, n)``.
+        True: the dynamic stiffness matrix ``Z = H⁻¹`` → ``(n_freq, n, n)``.
+
+    Returns
+    -------
+    k, c
+        Stiffness (N/m, N·m/rad) and damping (N·s/m, N·m·s/rad). ``c`` is NaN
+        at 0 Hz.
+    """
+    h = joint_frf.to(Quantity.RECEPTANCE)
+    if h.outputs != h.inputs:
+        raise InputError("equivalent_stiffness_damping needs a square joint FRF (outputs == inputs)")
+    w = h.omega
+    if full:
+        z = np.linalg.inv(h.values)
+        wv = w[:, None, None]
+    else:
+        diag = np.diagonal(h.values, axis1=1, axis2=2)
+        if np.any(diag == 0):
+            raise InputError("a diagonal joint term is zero (rigid); no equivalent stiffness")
+        z = 1.0 / diag
+        wv = w[:, None]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        c = np.where(wv > 0, z.imag / np.where(wv > 0, wv, 1.0), np.nan)
+    return z.real, c
+
+
+@dataclass(frozen=True, eq=False)
+class KCFit:
+    """Constant spring–damper fitted to a joint FRF over a band.
+
+    ``k``, ``c`` and ``error`` have one entry per diagonal DOF; ``error`` is the
+    relative RMS misfit ``‖h − 1/(k + iωc)‖ / ‖h‖`` of the receptance over the band.
+    """
+
+    dofs: tuple[Dof, ...]
+    k: np.ndarray
+    c: np.ndarray
+    error: np.ndarray
+    band_hz: tuple[float, float]
+
+    def __iter__(self):  # allows ``k, c, err = fit_constant_kc(...)``
+        return iter((self.k, self.c, self.error))
+
+
+def fit_constant_kc(joint_frf: FRF, band: tuple[float, float] | None = None) -> KCFit:
+    """Least-squares constant ``(k, c)`` per diagonal joint term over a band.
+
+    Fits ``Z(ω) = 1/h(ω) ≈ k + iωc``: ``k`` = mean of ``Re Z``, ``c`` =
+    ``Σ ω Im Z / Σ ω²`` (linear least squares), then reports the relative
+    misfit of the receptance.
+
+    Raises
+    ------
+    InputError
+        Empty band, non-square FRF.
+    """
+    h = joint_frf if band is None else joint_frf.band(*band)
+    h = h.to(Quantity.RECEPTANCE)
+    if h.outputs != h.inputs:
+        raise InputError("fit_constant_kc needs a square joint FRF (outputs == inputs)")
+    diag = np.diagonal(h.values, axis1=1, axis2=2)
+    if np.any(diag == 0):
+        raise InputError("a diagonal joint term is zero (rigid); nothing to fit")
+    z = 1.0 / diag
+    w = h.omega[:, None]
+    k = z.real.mean(axis=0)
+    denom = np.sum(w**2, axis=0)
+    c = np.sum(w * z.imag, axis=0) / np.where(denom > 0, denom, 1.0)
+    model = 1.0 / (k[None, :] + 1j * w * c[None, :])
+    err = np.linalg.norm(diag - model, axis=0) / np.linalg.norm(diag, axis=0)
+    return KCFit(h.outputs, k, c, err, (float(h.freq[0]), float(h.freq[-1])))
