@@ -13,7 +13,7 @@ import numpy as np
 from jointdb.errors import InputError
 from jointdb.frf import FRF, Dof, Quantity, dofs
 
-__all__ = ["receptance_from_matrices", "add_spring"]
+__all__ = ["receptance_from_matrices", "add_spring", "model_matrices", "merge_matrices"]
 
 
 def receptance_from_matrices(
@@ -82,3 +82,40 @@ def add_spring(
         C[j, j] += c
         C[i, j] -= c
         C[j, i] -= c
+
+
+def model_matrices(model, node_offset: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, tuple[Dof, ...]]:
+    """Free-DOF matrices of a :class:`jointdb.fe.BeamModel` with measurement labels.
+
+    Returns ``(K + i·K_loss, M, C, labels)`` over the unconstrained DOFs. Mesh
+    nodes at a named point are labelled with the point's node number; the
+    others ``node_offset + mesh index`` (so that two models can be merged
+    without label clashes). Used to build monolithic reference models.
+    """
+    fm = model.assemble()
+    free = ~np.asarray(fm.fixed, dtype=bool)
+    named = {}
+    for p in model.points:
+        named[int(np.argmin(np.abs(fm.node_positions - p.position)))] = p.node
+    labels = tuple(Dof(named.get(d.node, node_offset + d.node), d.direction) for d in fm.dof_labels)
+    K = fm.K + 1j * fm.K_loss
+    ix = np.ix_(free, free)
+    return K[ix], fm.M[ix], fm.C[ix], tuple(lab for lab, f in zip(labels, free) if f)
+
+
+def merge_matrices(*parts):
+    """Block-diagonal merge of ``(K, M, C, labels)`` tuples."""
+    n = sum(p[0].shape[0] for p in parts)
+    K = np.zeros((n, n), dtype=complex)
+    M = np.zeros((n, n))
+    C = np.zeros((n, n))
+    labels: list[Dof] = []
+    o = 0
+    for k, m, c, lab in parts:
+        s = slice(o, o + k.shape[0])
+        K[s, s], M[s, s], C[s, s] = k, m, c
+        labels += list(lab)
+        o += k.shape[0]
+    if len(set(labels)) != len(labels):
+        raise InputError("merged models have clashing DOF labels; use different node offsets / point nodes")
+    return K, M, C, tuple(labels)
