@@ -1,4 +1,4 @@
-"""Writing an FRF matrix as UFF dataset-58 records (ASCII 58 or binary 58b) with pyuff.
+"""Writing an FRF matrix as UFF dataset-58 records: ASCII 58 with pyuff, binary 58b directly.
 
 Precision of the format (this decides what "exact" means):
 
@@ -19,7 +19,6 @@ Precision of the format (this decides what "exact" means):
 from __future__ import annotations
 
 import os
-from pathlib import Path
 
 import numpy as np
 
@@ -101,18 +100,41 @@ def _dataset(frf: FRF, o: int, i: int, even: bool, binary: bool, description: st
     }
 
 
-def _fix_binary_byte_count(path: Path, start: int, n_doubles: int) -> None:
-    """pyuff writes num_pts*8 as the 58b byte count; the data hold n_doubles*8 bytes."""
-    with open(path, "rb+") as fh:
-        fh.seek(start)
-        head = fh.read(200)
-        pos = head.find(b"58b")
-        eol = head.find(b"\n", pos)
-        if pos < 0 or eol < 0:
-            raise RuntimeError("58b header not found where pyuff wrote it")
-        field = pos - 4 + 6 + 1 + 6 + 6 + 12  # '    58' 'b' %6i %6i %12i, then %12i n_bytes
-        fh.seek(start + field)
-        fh.write(b"%12i" % (8 * n_doubles))
+def _write_58b(fh, ds: dict) -> None:
+    """One binary 58b record, in the layout pyuff reads and writes, little-endian IEEE float64.
+
+    Written here rather than by pyuff because pyuff's 58b writer states half the
+    byte count for complex data, truncates the file in "overwrite" mode and
+    leaves a file handle open.
+    """
+    even = bool(ds["abscissa_spacing"])
+    y = np.asarray(ds["data"], dtype=np.complex128)
+    x = np.asarray(ds["x"], dtype=np.float64)
+    n = y.size
+    if even:
+        block = np.empty((n, 2))
+        block[:, 0], block[:, 1] = y.real, y.imag
+    else:
+        block = np.empty((n, 3))
+        block[:, 0], block[:, 1], block[:, 2] = x[:n], y.real, y.imag
+    payload = block.astype("<f8").tobytes()
+    lines = [
+        "%6i\n%6i" % (-1, 58),
+        "b%6i%6i%12i%12i%6i%6i%12i%12i\n" % (1, 2, 11, len(payload), 0, 0, 0, 0),
+        *("%-80s\n" % ds[f"id{k}"] for k in range(1, 6)),
+        "%5i%10i%5i%10i %10s%10i%4i %10s%10i%4i\n" % (
+            ds["func_type"], ds["func_id"], ds["ver_num"], ds["load_case_id"], ds["rsp_ent_name"],
+            ds["rsp_node"], ds["rsp_dir"], ds["ref_ent_name"], ds["ref_node"], ds["ref_dir"]),
+        "%10i%10i%10i%13.5e%13.5e%13.5e\n" % (
+            ds["ord_data_type"], n, int(even), x[0] if even else 0.0, (x[1] - x[0]) if even else 0.0, 0.0),
+    ]
+    for axis in ("abscissa", "ordinate", "orddenom", "z_axis"):
+        lines.append("%10i%5i%5i%5i %-20s %-20s\n" % (
+            ds[f"{axis}_spec_data_type"], 0, 0, 0, ds.get(f"{axis}_axis_lab", "NONE"),
+            ds.get(f"{axis}_axis_units_lab", "NONE")))
+    fh.write("".join(lines).encode("ascii", errors="replace"))
+    fh.write(payload)
+    fh.write(b"%6i\n" % -1)
 
 
 def write_uff58(
@@ -172,8 +194,9 @@ def write_uff58(
                            mode="overwrite")
         else:
             tmp.write_bytes(b"")
-        for ds in sets:
-            start = tmp.stat().st_size
-            uff.write_sets(ds, mode="add")
-            if binary:
-                _fix_binary_byte_count(tmp, start, (2 if even else 3) * ds["data"].size)
+        if binary:
+            with open(tmp, "ab") as fh:
+                for ds in sets:
+                    _write_58b(fh, ds)
+        else:
+            uff.write_sets(sets, mode="add")

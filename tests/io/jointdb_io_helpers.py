@@ -2,6 +2,7 @@
 jointdb's writer), test FRFs and comparison helpers."""
 
 import re
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -36,7 +37,10 @@ def write_raw(path, datasets):
     if path.exists():
         path.unlink()
     uff = pyuff.UFF(str(path))
-    uff.write_sets(list(datasets), mode="add")  # pyuff: binary + "overwrite" truncates the header
+    with warnings.catch_warnings():
+        # pyuff's 58b writer leaves a file handle to the garbage collector
+        warnings.simplefilter("ignore", ResourceWarning)
+        uff.write_sets(list(datasets), mode="add")  # pyuff: binary + "overwrite" truncates the header
     return path
 
 

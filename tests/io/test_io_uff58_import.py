@@ -286,7 +286,7 @@ def test_failed_uff_write_leaves_nothing_behind(tmp_path, monkeypatch):
 
     def failing(self, *a, **k):
         calls["n"] += 1
-        if calls["n"] == 3:
+        if calls["n"] == 2:  # 1: the units dataset 164, 2: the FRF records
             raise OSError("disk full (simulated)")
         return real(self, *a, **k)
 
@@ -336,3 +336,24 @@ def test_single_precision_and_real_records_from_other_writers(tmp_path):
     assert np.allclose(imp.frf.entry("1x", "1x"), d, rtol=5e-6, atol=0)  # E13.5: 6 significant digits
     assert np.allclose(imp.frf.entry("1x", "2x"), d.real, rtol=5e-6, atol=0)
     assert any("real-valued ordinate" in c for c in imp.conversions)
+
+
+def test_failed_binary_uff_write_leaves_nothing_behind(tmp_path, monkeypatch):
+    import jointdb.io._uff58_write as W
+
+    real = W._write_58b
+    calls = {"n": 0}
+
+    def failing(fh, ds):
+        calls["n"] += 1
+        if calls["n"] == 4:
+            raise OSError("disk full (simulated)")
+        real(fh, ds)
+
+    target = tmp_path / "b.uff"
+    write_uff58(target, make_frf(np.arange(1.0, 11.0)), binary=True)
+    before = target.read_bytes()
+    monkeypatch.setattr(W, "_write_58b", failing)
+    with pytest.raises(OSError):
+        write_uff58(target, make_frf(np.arange(1.0, 11.0), seed=4), binary=True)
+    assert target.read_bytes() == before and [p.name for p in tmp_path.iterdir()] == ["b.uff"]
