@@ -108,10 +108,12 @@ def _poles_for_order(r, s, t, p, n_i, dt):
     if p > 1:
         comp[: (p - 1) * n_i, n_i:] = np.eye((p - 1) * n_i)
     comp[(p - 1) * n_i :, :] = -_blocks_row(alpha, p, n_i)
-    z, v = np.linalg.eig(comp)
+    # left eigenvectors u (uᵀ C = z uᵀ): their last block w satisfies wᵀ α(z) = 0, i.e. the
+    # modal participation vector L of the residue ψ Lᵀ (data-determined, unlike the right one)
+    z, u = np.linalg.eig(comp.T)
     with np.errstate(divide="ignore", invalid="ignore"):
         lam = np.log(z.astype(complex)) / dt
-    part = v[(p - 1) * n_i :, :].T  # z^{p-1} v block = participation (up to scale)
+    part = u[(p - 1) * n_i :, :].T
     return lam, part
 
 

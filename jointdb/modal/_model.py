@@ -81,7 +81,7 @@ class ModalModel:
         z = np.atleast_1d(np.array(self.zeta, dtype=float))
         outputs, inputs = dofs(self.outputs), dofs(self.inputs)
         r = np.array(self.residues, dtype=complex)
-        if r.ndim == 1:
+        if r.ndim <= 1 and len(outputs) == 1 and len(inputs) == 1:
             r = r.reshape(-1, 1, 1)
         shape = (f.size, len(outputs), len(inputs))
         if f.ndim != 1 or z.shape != f.shape or r.shape != shape:
