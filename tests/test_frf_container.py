@@ -1,7 +1,6 @@
 """Tests of jointdb.frf: DOF labels, validation, exact quantity conversion, selection,
 reciprocity completion, resampling, stacking; plus the import-layering check."""
 
-import inspect
 import subprocess
 import sys
 
@@ -12,25 +11,6 @@ from hypothesis import strategies as st
 
 from jointdb.errors import InputError
 from jointdb.frf import DIRECTIONS, FRF, Dof, Quantity, dofs
-
-
-# Known defects of frf.py (fixes requested from its owner). Each xfail below applies only
-# while the defect is present, so the tests run normally once frf.py is fixed.
-def _raises(fn, exc):
-    try:
-        fn()
-    except exc:
-        return True
-    except Exception:  # noqa: BLE001 - any other outcome means "not this defect"
-        return False
-    return False
-
-
-RECIPROCAL_HAS_NO_TARGETS = "outputs" not in inspect.signature(FRF.complete_reciprocal).parameters
-CONCAT_EMPTY_INDEXERROR = _raises(lambda: FRF.concat_outputs([]), IndexError)
-PARSE_TUPLE_BARE_VALUEERROR = _raises(lambda: Dof.parse(("a", "x")), ValueError) and not _raises(
-    lambda: Dof.parse(("a", "x")), InputError
-)
 
 
 def sdof(freq, k=1e6, m=1.0, c=20.0):
@@ -262,8 +242,6 @@ def test_complete_reciprocal_names_an_entry_it_cannot_know(outs, ins, missing):
         full.select(outs, ins).complete_reciprocal()
 
 
-@pytest.mark.xfail(RECIPROCAL_HAS_NO_TARGETS, strict=True, reason="frf.py: complete_reciprocal() has no target DOFs; on a rectangular "
-                   "outputs x inputs set the union square always misses a driving point (fix requested)")
 def test_complete_reciprocal_turns_a_measured_row_into_a_column():
     full = symmetric_frf(3, seed=6)
     row = full.select(["1x"], ["1x", "2x", "3x"])
@@ -351,15 +329,11 @@ def test_concat_outputs_and_inputs():
         FRF.concat_outputs([a, a])
 
 
-@pytest.mark.xfail(CONCAT_EMPTY_INDEXERROR, strict=True, raises=IndexError, reason="frf.py: concat_outputs([]) raises IndexError, "
-                   "not InputError (fix requested)")
 def test_concat_of_nothing_is_an_input_error():
     with pytest.raises(InputError):
         FRF.concat_outputs([])
 
 
-@pytest.mark.xfail(PARSE_TUPLE_BARE_VALUEERROR, strict=True, raises=ValueError, reason="frf.py: Dof.parse((\"a\", \"x\")) raises a bare "
-                   "ValueError from int() instead of InputError (fix requested)")
 def test_dof_parse_of_a_bad_tuple_is_an_input_error():
     with pytest.raises(InputError):
         Dof.parse(("a", "x"))
@@ -379,3 +353,12 @@ def test_import_jointdb_frf_pulls_in_no_io_or_ui_library():
     code = f"import sys, jointdb.frf; print(','.join(m for m in {heavy!r} if m in sys.modules))"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == ""
+
+
+def test_complete_reciprocal_to_targets_names_what_cannot_be_known():
+    full = symmetric_frf(3, seed=7)
+    row = full.select(["1x"], ["1x", "2x", "3x"])
+    with pytest.raises(InputError, match=r"H\[2x, 3x\]"):
+        row.complete_reciprocal(outputs=["1x", "2x"], inputs=["3x"])
+    both = row.complete_reciprocal(outputs=["2x", "1x"], inputs=["1x"])
+    assert np.array_equal(both.values[:, :, 0], np.stack([full.entry("1x", "2x"), full.entry("1x", "1x")], 1))
