@@ -202,9 +202,9 @@ def frf_modal(matrices, freq_hz, dof_index, n_modes: int | None = None, residual
     (when the projected damping is not diagonal, the projected system is solved
     instead, batched over frequency). ``R`` is the static flexibility of the
     truncated modes: ``(K + iK_loss)⁻¹ − Σ_kept φφᵀ/(ω_r² + iκ_r)``; for a model
-    with rigid-body modes the singular ``K`` is shifted by ``M Φ_rb Φ_rbᵀ M``
-    (which only moves the rigid-body modes to ω² = 1), so ``R`` is the exact
-    elastic flexibility of the truncated modes. Rigid-body modes enter as
+    with rigid-body modes the singular ``K`` is shifted by ``s M Φ_rb Φ_rbᵀ M``
+    (which only moves the rigid-body modes to ω² = s, s = the lowest elastic
+    eigenvalue), so ``R`` is the exact elastic flexibility of the truncated modes. Rigid-body modes enter as
     ``φφᵀ/(−ω²)``.
 
     Parameters
@@ -265,9 +265,16 @@ def _static_residual(matrices, lam, phi, n_rb, Lm, pos, ok) -> np.ndarray:
     free = ~matrices.fixed
     Kc = (matrices.K + 1j * matrices.K_loss)[np.ix_(free, free)]
     Mf = matrices.M[np.ix_(free, free)]
+    shift = 1.0
     if n_rb:
+        # move the rigid-body modes to ω² = shift, of the order of the elastic ones (conditioning)
+        if lam.size > n_rb:
+            shift = float(lam[n_rb])
+        else:
+            d = np.diag(Mf)
+            shift = float(np.median(np.diag(Kc).real[d > 0] / d[d > 0]))
         mp = Mf @ phi[:, :n_rb]
-        Kc = Kc + mp @ mp.T
+        Kc = Kc + shift * (mp @ mp.T)
     rhs = np.zeros((Kc.shape[0], int(ok.sum())))
     rhs[pos[ok], np.arange(rhs.shape[1])] = 1.0
     try:
@@ -276,7 +283,7 @@ def _static_residual(matrices, lam, phi, n_rb, Lm, pos, ok) -> np.ndarray:
         raise NumericalError("static stiffness is singular; cannot form the residual flexibility") from None
     sub = phi[pos[ok]]
     kept = sub[:, n_rb:] / (lam[n_rb:] + 1j * np.diag(Lm)[n_rb:])[None, :]
-    G = G - kept @ sub[:, n_rb:].T - sub[:, :n_rb] @ sub[:, :n_rb].T
+    G = G - kept @ sub[:, n_rb:].T - sub[:, :n_rb] @ sub[:, :n_rb].T / shift
     m = pos.size
     out = np.zeros((m, m), dtype=complex)
     out[np.ix_(ok, ok)] = 0.5 * (G + G.T)
