@@ -1,9 +1,212 @@
-"""CLI command group (placeholder until its issue lands)."""
+"""CLI: ``jointdb modal-fit`` and ``jointdb lobes`` (thin: read file, call library, render)."""
 
 from __future__ import annotations
 
+from pathlib import Path
+from typing import Optional
+
+import numpy as np
 import typer
+
+from jointdb._output import emit, message
+from jointdb.errors import InputError
+
+_UFF_SUFFIXES = {".uff", ".unv", ".uff58", ".58"}
+_HDF_SUFFIXES = {".h5", ".hdf5", ".hdf"}
+
+
+def read_frf_file(path: Path):
+    """Read a tool-tip FRF from UFF58 or the HDF5 exchange file (by suffix)."""
+    from jointdb import io
+
+    suffix = path.suffix.lower()
+    if suffix in _UFF_SUFFIXES:
+        return io.read_frf_uff58(path)
+    if suffix in _HDF_SUFFIXES:
+        return io.read_frf_hdf5(path)
+    raise InputError(f"{path}: unknown FRF file type {suffix!r}; use a UFF58 (.uff/.unv) or HDF5 (.h5) file")
+
+
+def _node_select(frf, node: Optional[int]):
+    if node is None:
+        return frf
+    outs = [d for d in frf.outputs if d.node == node]
+    ins = [d for d in frf.inputs if d.node == node]
+    if not outs or not ins:
+        raise InputError(f"--node {node}: the file has no output and input DOFs at node {node}")
+    return frf.select(outs, ins)
+
+
+def _floats(text: Optional[str], name: str):
+    if text is None:
+        return None
+    try:
+        return [float(v) for v in text.replace(";", ",").split(",") if v.strip()]
+    except ValueError:
+        raise InputError(f"{name}: expected comma-separated numbers, got {text!r}") from None
+
+
+def _fit_tip_model(frf, frf_y, n_modes, band, max_order):
+    """Fit a modal model to each x/y driving point of the tool tip, combined block-diagonally."""
+    from jointdb.modal import ModalModel, fit_modes
+
+    models, fits = [], []
+    for source in (frf, frf_y):
+        if source is None:
+            continue
+        for d in source.outputs:
+            if d.direction in ("x", "y") and d in source.inputs and not any(d.direction == m.outputs[0].direction for m in models):
+                fit = fit_modes(source.select([d], [d]), n_modes=n_modes, band=band, max_order=max_order)
+                message(
+                    f"modal fit {d}: {fit.model.n_modes} modes at "
+                    + ", ".join(f"{f:.1f} Hz (ζ {z:.4f})" for f, z in zip(fit.freq_hz, fit.zeta))
+                    + f"; NMSE {fit.quality.nmse_total:.2e}"
+                )
+                models.append(fit.model)
+                fits.append(fit)
+    if not models:
+        raise InputError("no x or y driving-point FRF found to fit a tool-tip modal model")
+    return ModalModel.block_diagonal(models), fits
 
 
 def register(app: typer.Typer) -> None:
-    """Add this group's commands to the app."""
+    """Add ``modal-fit`` and ``lobes`` to the app."""
+
+    @app.command("modal-fit")
+    def modal_fit(
+        frf_file: Path = typer.Argument(..., exists=False, help="FRF file: UFF58 (.uff/.unv) or HDF5 exchange file (.h5)."),
+        band: Optional[tuple[float, float]] = typer.Option(None, "--band", help="Frequency band FMIN FMAX in Hz."),
+        modes: Optional[int] = typer.Option(None, "--modes", help="Number of modes (default: all well-stabilised poles)."),
+        max_order: int = typer.Option(30, "--max-order", help="Highest pLSCF model order of the stabilisation diagram."),
+        no_residuals: bool = typer.Option(False, "--no-residuals", help="Do not fit upper/lower residual terms."),
+        plot: Optional[Path] = typer.Option(None, "--plot", help="Folder for the stabilisation diagram and the fit overlay (PNG)."),
+        as_json: bool = typer.Option(False, "--json", help="Machine-readable output."),
+    ) -> None:
+        """Fit modes to an FRF (pLSCF poles + LSFD residues) and report the fit quality.
+
+        Example: jointdb modal-fit tip.uff --band 5 1000 --modes 6 --plot out/
+        """
+        from jointdb.modal import fit_modes
+
+        frf = read_frf_file(frf_file)
+        fit = fit_modes(frf, n_modes=modes, band=band, max_order=max_order, residuals=not no_residuals)
+        rows = []
+        for k in range(fit.model.n_modes):
+            row = {"mode": k + 1, "freq_hz": float(fit.freq_hz[k]), "zeta": float(fit.zeta[k])}
+            for i, o in enumerate(fit.model.outputs):
+                for j, inp in enumerate(fit.model.inputs):
+                    r = fit.residues[k, i, j]
+                    row[f"R {o}/{inp}"] = f"{r.real:.3g}{r.imag:+.3g}j"
+            rows.append(row)
+        quality = {
+            "band_hz": list(fit.band),
+            "quantity": fit.quantity.value,
+            "nmse_total": fit.quality.nmse_total,
+            "frac_min": fit.quality.frac_min,
+            "per_entry": [
+                {"output": str(o), "input": str(inp), "nmse": float(fit.quality.nmse[i, j]), "frac": float(fit.quality.frac[i, j])}
+                for i, o in enumerate(fit.model.outputs)
+                for j, inp in enumerate(fit.model.inputs)
+            ],
+        }
+        if plot is not None:
+            from jointdb.plots._lobes import plot_modal_fit, plot_stabilisation
+
+            plot.mkdir(parents=True, exist_ok=True)
+            p1 = plot_stabilisation(fit, plot / "modal-fit-stabilisation.png", frf=frf)
+            p2 = plot_modal_fit(frf, fit, plot / "modal-fit-overlay.png")
+            message(f"wrote {p1} and {p2}")
+        if as_json:
+            modes_json = [
+                {"mode": k + 1, "freq_hz": float(fit.freq_hz[k]), "zeta": float(fit.zeta[k]), "residues": fit.residues[k]}
+                for k in range(fit.model.n_modes)
+            ]
+            emit(
+                {
+                    "modes": modes_json,
+                    "outputs": [str(d) for d in fit.model.outputs],
+                    "inputs": [str(d) for d in fit.model.inputs],
+                    "upper": fit.model.upper,
+                    "lower": fit.model.lower,
+                    "quality": quality,
+                },
+                as_json=True,
+            )
+            return
+        emit(rows, title=f"Modes of {frf_file.name} ({fit.band[0]:g}–{fit.band[1]:g} Hz, receptance residues)")
+        emit([{"entry": f"{q['output']}/{q['input']}", "nmse": q["nmse"], "frac": q["frac"]} for q in quality["per_entry"]],
+             title=f"Fit quality ({fit.quantity.value}): NMSE total {fit.quality.nmse_total:.3g}, FRAC min {fit.quality.frac_min:.4f}")
+
+    @app.command("lobes")
+    def lobes(
+        frf_file: Path = typer.Argument(..., help="Tool-tip FRF: UFF58 (.uff/.unv) or HDF5 exchange file (.h5)."),
+        op: str = typer.Option("milling", "--op", help="turning or milling."),
+        method: str = typer.Option("zoa", "--method", help="Milling method: zoa (zero-order) or sd (semi-discretization)."),
+        kf: Optional[float] = typer.Option(None, "--kf", help="Turning: cutting coefficient K_f in N/m²."),
+        orientation: Optional[str] = typer.Option(None, "--orientation", help="Turning: directional factors per driving point, e.g. '0.75,0.5'."),
+        teeth: int = typer.Option(2, "--teeth", help="Milling: number of teeth."),
+        kt: Optional[float] = typer.Option(None, "--kt", help="Milling: tangential coefficient K_t in N/m²."),
+        kr: Optional[float] = typer.Option(None, "--kr", help="Milling: radial (normal) coefficient K_r in N/m²."),
+        immersion: float = typer.Option(1.0, "--immersion", help="Milling: radial immersion a_e/D in (0, 1]."),
+        up: bool = typer.Option(False, "--up", help="Up-milling (default: down-milling)."),
+        rpm_min: float = typer.Option(2000.0, "--rpm-min", help="Lowest spindle speed [rpm]."),
+        rpm_max: float = typer.Option(20000.0, "--rpm-max", help="Highest spindle speed [rpm]."),
+        n_speeds: int = typer.Option(300, "--n-speeds", help="Number of spindle speeds."),
+        intervals: int = typer.Option(40, "--intervals", help="SD: intervals per tooth period."),
+        modes: Optional[int] = typer.Option(None, "--modes", help="SD: modes to fit per direction."),
+        band: Optional[tuple[float, float]] = typer.Option(None, "--band", help="SD: band FMIN FMAX (Hz) of the modal fit."),
+        max_order: int = typer.Option(30, "--max-order", help="SD: highest pLSCF order."),
+        frf_y: Optional[Path] = typer.Option(None, "--frf-y", help="Separate file with the y-direction tool-tip FRF."),
+        node: Optional[int] = typer.Option(None, "--node", help="Use only the DOFs of this node (tool tip)."),
+        cross_terms: bool = typer.Option(False, "--cross-terms", help="ZOA: use the measured cross FRFs xy/yx."),
+        plot: Optional[Path] = typer.Option(None, "--plot", help="Write the lobe diagram to this PNG file."),
+        as_json: bool = typer.Option(False, "--json", help="Machine-readable output."),
+    ) -> None:
+        """Stability lobes from a tool-tip FRF (turning: Tlusty; milling: ZOA or SD).
+
+        Example: jointdb lobes tip.h5 --op milling --method sd --teeth 2 --kt 6e8 --kr 2e8 --immersion 0.1
+        """
+        from jointdb import stability
+
+        op_l, method_l = op.lower(), method.lower()
+        if op_l not in ("turning", "milling"):
+            raise InputError(f"--op must be turning or milling, got {op!r}")
+        if method_l not in ("zoa", "sd"):
+            raise InputError(f"--method must be zoa or sd, got {method!r}")
+        if not (0 < rpm_min < rpm_max) or n_speeds < 2:
+            raise InputError("need 0 < --rpm-min < --rpm-max and --n-speeds >= 2")
+        speeds = np.linspace(rpm_min, rpm_max, n_speeds)
+        frf = _node_select(read_frf_file(frf_file), node)
+        frf2 = _node_select(read_frf_file(frf_y), node) if frf_y is not None else None
+        if op_l == "turning":
+            if kf is None:
+                raise InputError("turning needs --kf (cutting coefficient in N/m²)")
+            res = stability.turning_lobes(frf, kf, _floats(orientation, "--orientation"), spindle_speed_rpm=speeds)
+            title = f"Turning lobes, K_f = {kf:g} N/m²"
+        else:
+            if kt is None or kr is None:
+                raise InputError("milling needs --kt and --kr (cutting coefficients in N/m²)")
+            cut = stability.MillingCut(teeth, kt, kr, immersion, not up)
+            mode_txt = "up" if up else "down"
+            if method_l == "zoa":
+                res = stability.milling_lobes_zoa(frf, cut, frf2, cross_terms=cross_terms, spindle_speed_rpm=speeds)
+            else:
+                model, _ = _fit_tip_model(frf, frf2, modes, band, max_order)
+                res = stability.milling_lobes_sd(model, cut, speeds, n_intervals=intervals)
+            title = f"Milling lobes ({method_l.upper()}), {teeth} teeth, a/D = {immersion:g}, {mode_txt}-milling"
+        if plot is not None:
+            from jointdb.plots._lobes import plot_lobes
+
+            plot.parent.mkdir(parents=True, exist_ok=True)
+            message(f"wrote {plot_lobes(res, plot, title=title)}")
+        finite = np.isfinite(res.depth_m)
+        if finite.any():
+            i = int(np.nanargmin(np.where(finite, res.depth_m, np.nan)))
+            message(
+                f"{title}: smallest limiting depth {res.depth_m[i] * 1e3:.4g} mm at {res.spindle_speed_rpm[i]:.0f} rpm "
+                f"({res.chatter_freq_hz[i]:.1f} Hz, {res.kind[i]})"
+            )
+        if as_json:
+            emit({"method": res.method, "info": res.info, "rows": res.table()}, as_json=True)
+            return
+        emit(res.table(), columns=["spindle_speed_rpm", "depth_m", "chatter_freq_hz", "lobe", "kind"], title=title)

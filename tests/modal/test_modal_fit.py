@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from jointdb.errors import InputError, NumericalError
-from jointdb.frf import FRF, Dof
+from jointdb.frf import FRF
 from jointdb.modal import ModalModel, fit_modes, single_dof_residue
 
 FREQ_TOL_NOISE_FREE = 1e-3  # 0.1 %
@@ -100,17 +100,9 @@ def test_single_dof_residue_is_the_sdof_receptance():
 
 
 def read_real_file() -> FRF:
-    try:
-        from jointdb.io import read_frf_uff58  # the IO helper's reader, once it lands
-    except ImportError:
-        read_frf_uff58 = None
-    if read_frf_uff58 is not None:
-        return read_frf_uff58(REAL_FILE)
-    import pyuff
+    from jointdb.io import read_frf_uff58
 
-    sets = pyuff.UFF(str(REAL_FILE)).read_sets()
-    values = np.stack([s["data"] for s in sets], axis=1)[:, None, :]
-    return FRF(sets[0]["x"], values, (Dof(1, "x"),), tuple(Dof(int(s["ref_node"]), "x") for s in sets), "accelerance")
+    return read_frf_uff58(REAL_FILE)
 
 
 @pytest.mark.skipif(not REAL_FILE.exists(), reason="shared real data file not present")
