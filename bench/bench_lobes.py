@@ -20,7 +20,14 @@ import time  # noqa: E402
 import numpy as np  # noqa: E402
 
 from jointdb.modal import ModalModel  # noqa: E402
-from jointdb.stability import MillingCut, milling_lobes_sd, milling_lobes_sd_grid, milling_lobes_zoa  # noqa: E402
+from jointdb.stability import (  # noqa: E402
+    MillingCut,
+    critical_depth,
+    milling_lobes_sd,
+    milling_lobes_sd_grid,
+    milling_lobes_zoa,
+    sd_system,
+)
 
 M, FN, ZETA = 0.03993, 922.0, 0.011
 K = M * (2 * np.pi * FN) ** 2
@@ -60,6 +67,16 @@ def main() -> None:
         print(f"  SD dense grid ({GRID_DEPTHS.size} depths, {GRID_SUBSET.size} speeds): {per_grid * 1e3:8.3f} ms per speed; "
               f"resolution {(GRID_DEPTHS[1] - GRID_DEPTHS[0]) * 1e6:.0f} µm, max |grid − direct| {np.nanmax(dev) * 1e6:.1f} µm")
         print(f"  cost ratio dense-grid / direct SD = {per_grid / per_sd:.1f}x ; SD / ZOA = {per_sd / per_zoa:.1f}x")
+
+    print("\nSD convergence with intervals m (a/D = 0.1): critical depth [mm], kind; error vs m = 320")
+    sysm = sd_system(MODEL, MillingCut(2, 6e8, 2e8, 0.1, True))
+    for speed in (8000.0, 17000.0):
+        ref = critical_depth(sysm, speed, 320, rtol=1e-8)[0]
+        cells = []
+        for m in (10, 20, 40, 80, 160):
+            a, _, kind, _, _ = critical_depth(sysm, speed, m, rtol=1e-8)
+            cells.append(f"m={m}: {a * 1e3:.4f} ({kind}, {abs(a - ref) / ref:.1e})")
+        print(f"  {speed:.0f} rpm: " + "; ".join(cells))
 
 
 if __name__ == "__main__":
