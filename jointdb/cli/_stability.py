@@ -47,26 +47,17 @@ def _floats(text: Optional[str], name: str):
 
 
 def _fit_tip_model(frf, frf_y, n_modes, band, max_order):
-    """Fit a modal model to each x/y driving point of the tool tip, combined block-diagonally."""
-    from jointdb.modal import ModalModel, fit_modes
+    """Fit the tool-tip x/y driving points (library call) and report each fit on stderr."""
+    from jointdb.modal import fit_tool_tip
 
-    models, fits = [], []
-    for source in (frf, frf_y):
-        if source is None:
-            continue
-        for d in source.outputs:
-            if d.direction in ("x", "y") and d in source.inputs and not any(d.direction == m.outputs[0].direction for m in models):
-                fit = fit_modes(source.select([d], [d]), n_modes=n_modes, band=band, max_order=max_order)
-                message(
-                    f"modal fit {d}: {fit.model.n_modes} modes at "
-                    + ", ".join(f"{f:.1f} Hz (ζ {z:.4f})" for f, z in zip(fit.freq_hz, fit.zeta))
-                    + f"; NMSE {fit.quality.nmse_total:.2e}"
-                )
-                models.append(fit.model)
-                fits.append(fit)
-    if not models:
-        raise InputError("no x or y driving-point FRF found to fit a tool-tip modal model")
-    return ModalModel.block_diagonal(models), fits
+    model, fits = fit_tool_tip(frf, frf_y, n_modes, band, max_order=max_order)
+    for fit in fits:
+        message(
+            f"modal fit {fit.model.outputs[0]}: {fit.model.n_modes} modes at "
+            + ", ".join(f"{f:.1f} Hz (ζ {z:.4f})" for f, z in zip(fit.freq_hz, fit.zeta))
+            + f"; NMSE {fit.quality.nmse_total:.2e}, FRAC {fit.quality.frac_min:.4f}"
+        )
+    return model, fits
 
 
 def register(app: typer.Typer) -> None:

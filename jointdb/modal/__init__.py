@@ -11,6 +11,9 @@ criteria=StabilisationCriteria(), min_count=3) -> ModalFit``
     ``.synthesize(freq, quantity)`` -> FRF, ``.poles``, ``.state_space()``,
     ``.modal_mass_stiffness(dof)``, ``.select()``, ``ModalModel.from_modal_parameters``,
     ``ModalModel.block_diagonal([mx, my])``.
+``fit_tool_tip(frf, frf_y=None, n_modes=None, band=None, *, max_order=30) -> (ModalModel, fits)``
+    x/y driving points fitted separately, combined block-diagonally (input to
+    ``jointdb.stability.milling_lobes_sd``).
 ``stabilisation_diagram``, ``select_poles``, ``fit_residues``, ``fit_quality``,
 ``StabilisationCriteria``, ``StabilisationDiagram``, ``FitQuality``, ``ModalFit``,
 ``single_dof_residue``.
@@ -28,6 +31,7 @@ from jointdb.modal._lscf import (
 )
 from jointdb.modal._lsfd import FitQuality, ModalFit, fit_modes, fit_quality, fit_residues
 from jointdb.modal._model import ModalModel, single_dof_residue
+from jointdb.modal._tooltip import fit_tool_tip
 
 __all__ = [
     "FitQuality",
@@ -38,6 +42,7 @@ __all__ = [
     "fit_modes",
     "fit_quality",
     "fit_residues",
+    "fit_tool_tip",
     "lscf_poles",
     "select_poles",
     "single_dof_residue",

@@ -128,3 +128,18 @@ def test_errors_are_actionable():
         fit_modes(frf, n_modes=1, band=(300, 100))
     with pytest.raises(InputError, match="too few"):
         fit_modes(frf.band(100, 110), n_modes=1, max_order=40)
+
+
+def test_fit_tool_tip_combines_x_and_y_driving_points():
+    from jointdb.modal import fit_tool_tip
+
+    x = ModalModel.from_modal_parameters([450, 1400], [0.03, 0.02], [8e6, 3e7], "1x")
+    y = ModalModel.from_modal_parameters([520], [0.025], [1e7], "1y")
+    f = np.linspace(200, 2000, 1801)
+    model, fits = fit_tool_tip(x.synthesize(f), y.synthesize(f), n_modes=None)
+    assert [str(d) for d in model.outputs] == ["1x", "1y"] and len(fits) == 2
+    np.testing.assert_allclose(model.freq_hz, [450, 1400, 520], rtol=FREQ_TOL_NOISE_FREE)
+    np.testing.assert_allclose(model.synthesize(f).values[:, 1, 1], y.synthesize(f).values[:, 0, 0], rtol=1e-5)
+    assert np.all(model.synthesize(f).values[:, 0, 1] == 0)
+    with pytest.raises(InputError, match="driving-point"):
+        fit_tool_tip(x.synthesize(f).replace(outputs=("2z",), inputs=("2z",)))
