@@ -1,9 +1,161 @@
-"""CLI command group (placeholder until its issue lands)."""
+"""CLI: ``jointdb identify`` (IRC) and ``jointdb couple`` (RC), driven by a campaign file.
+
+Thin: the campaign is read and checked by :mod:`jointdb.cli._coupling_campaign`,
+run by :mod:`jointdb.cli._coupling_run`; files are written only after every
+computation succeeded.
+"""
 
 from __future__ import annotations
 
+import json
+from pathlib import Path
+from typing import Annotated, Optional
+
 import typer
+
+from jointdb.errors import InputError
+
+
+def _check_out(path: Path | None, suffixes: tuple[str, ...], option: str) -> None:
+    if path is None:
+        return
+    if path.suffix.lower() not in suffixes:
+        raise InputError(f"{option} {path}: use one of {', '.join(suffixes)}")
+    if not path.parent.exists():
+        raise InputError(f"{option} {path}: directory {path.parent} does not exist")
 
 
 def register(app: typer.Typer) -> None:
-    """Add this group's commands to the app."""
+    """Add ``identify`` and ``couple`` to the app."""
+
+    @app.command("identify")
+    def identify_cmd(
+        campaign: Annotated[Path, typer.Argument(help="Campaign file (JSON, format jointdb-campaign/1).")],
+        out: Annotated[Path, typer.Option("--out", help="Joint FRF HDF5 exchange file to write (.h5).")],
+        report: Annotated[Optional[Path], typer.Option("--report", help="Also write the report as JSON.")] = None,
+        plots: Annotated[
+            Optional[Path], typer.Option("--plots", help="Directory for PNGs: k(ω), c(ω) and measured vs reconstructed.")
+        ] = None,
+        as_json: Annotated[bool, typer.Option("--json", help="Machine-readable report on stdout.")] = False,
+    ) -> None:
+        """Identify a joint (IRC) from a campaign's measured assembly FRFs and substructure models.
+
+        Example: jointdb identify fixtures/campaigns/th-steel-30nm/campaign.json --out joint.h5 --plots figs
+        """
+        from jointdb._output import emit, message
+        from jointdb.cli._coupling_campaign import load_campaign
+        from jointdb.cli._coupling_run import identify_campaign, joint_attrs
+
+        _check_out(out, (".h5", ".hdf5"), "--out")
+        _check_out(report, (".json",), "--report")
+        if plots is not None and plots.exists() and not plots.is_dir():
+            raise InputError(f"--plots {plots}: exists and is not a directory")
+        c = load_campaign(campaign)
+        result = identify_campaign(c)
+        rep = result.report()
+        # everything computed: now write
+        from jointdb.io import write_frf_hdf5
+
+        write_frf_hdf5(out, result.result.joint, joint_attrs(result))
+        written = [str(out)]
+        if report is not None:
+            from jointdb._output import to_jsonable
+
+            report.write_text(json.dumps(to_jsonable(rep), indent=2) + "\n", encoding="utf-8")
+            written.append(str(report))
+        if plots is not None:
+            written += _identify_plots(plots, result)
+        message(f"wrote {', '.join(written)}")
+        if as_json:
+            emit(rep, as_json=True)
+        else:
+            flat = {k: v for k, v in rep.items() if not isinstance(v, (dict, list))}
+            for row in rep.get("constant_fit", []):
+                flat[f"k {row['dof']}"] = row["k"]
+                flat[f"c {row['dof']}"] = row["c"]
+                flat[f"fit error {row['dof']}"] = row["error"]
+            for k, v in rep.get("validation", {}).items():
+                flat[f"validation {k}"] = v
+            emit(flat, title=f"joint identified from {c.name}")
+
+    @app.command("couple")
+    def couple_cmd(
+        campaign: Annotated[Path, typer.Argument(help="Campaign file (JSON, format jointdb-campaign/1).")],
+        joint: Annotated[
+            Optional[Path], typer.Option("--joint", help="Joint HDF5 file from 'jointdb identify' (default: the campaign's couple.joint, else rigid).")
+        ] = None,
+        out: Annotated[Optional[Path], typer.Option("--out", help="Write the assembly FRF (.h5 or .uff).")] = None,
+        plot: Annotated[Optional[Path], typer.Option("--plot", help="PNG of the coupled (and measured) FRF.")] = None,
+        as_json: Annotated[bool, typer.Option("--json", help="Machine-readable summary on stdout.")] = False,
+    ) -> None:
+        """Couple a campaign's substructures through a joint (RC) and compare with its measurements.
+
+        Example: jointdb couple fixtures/campaigns/th-steel-30nm/campaign.json --joint joint.h5 --plot couple.png
+        """
+        from jointdb._output import emit, message
+        from jointdb.cli._coupling_campaign import load_campaign
+        from jointdb.cli._coupling_run import couple_campaign
+
+        _check_out(out, (".h5", ".hdf5", ".uff", ".unv"), "--out")
+        _check_out(plot, (".png",), "--plot")
+        if joint is not None and not joint.is_file():
+            raise InputError(f"--joint {joint}: file not found")
+        c = load_campaign(campaign)
+        res = couple_campaign(c, joint)
+        g = res["assembly"]
+        written = []
+        if out is not None:
+            if out.suffix.lower() in (".h5", ".hdf5"):
+                from jointdb.io import write_frf_hdf5
+
+                write_frf_hdf5(out, g, {"kind": "assembly", "campaign": c.name, "joint": res["joint"]})
+            else:
+                from jointdb.io import write_uff58
+
+                write_uff58(out, g)
+            written.append(str(out))
+        if plot is not None:
+            from jointdb.plots._coupling import save_comparison_plot
+
+            curves = [(f"coupled ({res['joint']})", g)]
+            if res["measured"] is not None:
+                curves.insert(0, ("measured", res["measured"].select(g.outputs, g.inputs)))
+            save_comparison_plot(plot, curves, title=f"{c.name}: coupled assembly")
+            written.append(str(plot))
+        if written:
+            message(f"wrote {', '.join(written)}")
+        summary = {
+            "campaign": c.name, "joint": res["joint"], "lines": g.n_freq,
+            "band_hz": f"{g.freq[0]:g}–{g.freq[-1]:g}",
+            "outputs": " ".join(map(str, g.outputs)), "inputs": " ".join(map(str, g.inputs)),
+        }
+        if "error_mean" in res:
+            summary["mean_relative_deviation_from_measurement"] = res["error_mean"]
+        emit(summary, as_json=as_json, title="coupled assembly")
+
+
+def _identify_plots(directory: Path, result) -> list[str]:
+    from jointdb.plots._coupling import save_comparison_plot, save_kc_plot
+
+    directory.mkdir(parents=True, exist_ok=True)
+    written = []
+    if result.result.model != "matrix":
+        p = save_kc_plot(directory / "joint_kc.png", result.result.joint, result.kc,
+                         title=f"{result.campaign.name}: identified joint", flagged=result.result.unreliable)
+        written.append(str(p))
+    p = save_comparison_plot(
+        directory / "assembly_fit.png",
+        [("measured", result.measured), ("reconstructed (identified joint)", result.reconstructed),
+         ("rigid joint", result.rigid)],
+        title=f"{result.campaign.name}: measured vs reconstructed vs rigid-joint assembly",
+    )
+    written.append(str(p))
+    if result.validation is not None:
+        v = result.validation
+        p = save_comparison_plot(
+            directory / "validation.png",
+            [("measured", v["measured"]), ("predicted (identified joint)", v["predicted"]), ("rigid joint", v["rigid"])],
+            title=f"{result.campaign.name}: validation assembly",
+        )
+        written.append(str(p))
+    return written

@@ -65,20 +65,43 @@ class KCFit:
         return iter((self.k, self.c, self.error))
 
 
-def fit_constant_kc(joint_frf: FRF, band: tuple[float, float] | None = None) -> KCFit:
-    """Least-squares constant ``(k, c)`` per diagonal joint term over a band.
+def fit_constant_kc(
+    joint_frf: FRF,
+    band: tuple[float, float] | None = None,
+    *,
+    method: str = "median",
+    mask: np.ndarray | None = None,
+) -> KCFit:
+    """Constant ``(k, c)`` per diagonal joint term over a band.
 
-    Fits ``Z(ω) = 1/h(ω) ≈ k + iωc``: ``k`` = mean of ``Re Z``, ``c`` =
-    ``Σ ω Im Z / Σ ω²`` (linear least squares), then reports the relative
-    misfit of the receptance.
+    Fits ``Z(ω) = 1/h(ω) ≈ k + iωc``. ``method="lsq"``: ``k`` = mean of
+    ``Re Z``, ``c = Σ ω Im Z / Σ ω²`` (linear least squares);
+    ``method="median"`` (default): ``k`` = median of ``Re Z``, ``c`` = median
+    of ``Im Z / ω`` — robust against the spikes that noise produces at a few
+    lines. Reports the relative misfit of the receptance over the band.
+
+    Parameters
+    ----------
+    mask
+        Optional boolean ``(n_freq,)`` over the full grid: lines to use (e.g.
+        ``~result.unreliable``); ignored if it leaves fewer than 3 lines.
 
     Raises
     ------
     InputError
-        Empty band, non-square FRF.
+        Empty band, non-square FRF, unknown method.
     """
-    h = joint_frf if band is None else joint_frf.band(*band)
-    h = h.to(Quantity.RECEPTANCE)
+    if method not in ("median", "lsq"):
+        raise InputError(f"fit_constant_kc method {method!r}: expected median or lsq")
+    h = joint_frf.to(Quantity.RECEPTANCE)
+    use = np.ones(h.n_freq, dtype=bool)
+    if band is not None:
+        use &= (h.freq >= band[0]) & (h.freq <= band[1])
+        if not use.any():
+            raise InputError(f"no frequency lines in [{band[0]}, {band[1]}] Hz")
+    if mask is not None and np.count_nonzero(use & np.asarray(mask, bool)) >= 3:
+        use &= np.asarray(mask, bool)
+    h = h.replace(freq=h.freq[use], values=h.values[use])
     if h.outputs != h.inputs:
         raise InputError("fit_constant_kc needs a square joint FRF (outputs == inputs)")
     diag = np.diagonal(h.values, axis1=1, axis2=2)
@@ -86,9 +109,14 @@ def fit_constant_kc(joint_frf: FRF, band: tuple[float, float] | None = None) -> 
         raise InputError("a diagonal joint term is zero (rigid); nothing to fit")
     z = 1.0 / diag
     w = h.omega[:, None]
-    k = z.real.mean(axis=0)
-    denom = np.sum(w**2, axis=0)
-    c = np.sum(w * z.imag, axis=0) / np.where(denom > 0, denom, 1.0)
+    if method == "lsq":
+        k = z.real.mean(axis=0)
+        denom = np.sum(w**2, axis=0)
+        c = np.sum(w * z.imag, axis=0) / np.where(denom > 0, denom, 1.0)
+    else:
+        k = np.median(z.real, axis=0)
+        pos = w[:, 0] > 0
+        c = np.median(z.imag[pos] / w[pos], axis=0) if pos.any() else np.zeros(z.shape[1])
     model = 1.0 / (k[None, :] + 1j * w * c[None, :])
     err = np.linalg.norm(diag - model, axis=0) / np.linalg.norm(diag, axis=0)
     return KCFit(h.outputs, k, c, err, (float(h.freq[0]), float(h.freq[-1])))

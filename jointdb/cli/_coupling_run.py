@@ -1,0 +1,249 @@
+"""Run a campaign: identify the joint, or couple with a joint (application layer of the CLI)."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from jointdb.cli._coupling_campaign import (
+    Campaign,
+    _err,
+    grid_for_couple,
+    load_substructure,
+    merge_measurements,
+)
+from jointdb.coupling import (
+    IdentificationResult,
+    Interface,
+    couple,
+    fit_constant_kc,
+    identify_joint_matrix,
+    identify_n_point_joints,
+    identify_planar_joint,
+    spring_damper_joint,
+)
+from jointdb.coupling._kc import KCFit
+from jointdb.errors import InputError, NumericalError
+from jointdb.frf import FRF, Dof
+
+
+@dataclass(frozen=True, eq=False)
+class IdentifyOutcome:
+    campaign: Campaign
+    result: IdentificationResult
+    measured: FRF
+    reconstructed: FRF
+    rigid: FRF
+    kc: KCFit | None
+    validation: Mapping[str, Any] | None
+
+    def report(self) -> dict:
+        c = self.campaign
+        rep: dict[str, Any] = {
+            "campaign": c.name,
+            "joint_type": c.joint_type,
+            "conditions": dict(c.conditions),
+            "joint_model": c.joint_model,
+            "joint_dofs": [str(d) for d in self.result.joint.inputs],
+            **self.result.summary(),
+            "reconstruction_error_mean": _mean_rel(self.reconstructed, self.measured),
+            "rigid_joint_error_mean": _mean_rel(self.rigid, self.measured),
+        }
+        if self.kc is not None:
+            rep["fit_band_hz"] = list(self.kc.band_hz)
+            rep["constant_fit"] = [
+                {"dof": str(d), "k": float(k), "c": float(cc), "error": float(e)}
+                for d, k, cc, e in zip(self.kc.dofs, self.kc.k, self.kc.c, self.kc.error)
+            ]
+        if self.validation is not None:
+            rep["validation"] = {k: v for k, v in self.validation.items() if not isinstance(v, FRF)}
+        rep["settings"] = {k: (v if not isinstance(v, tuple) else list(v)) for k, v in self.result.settings.items()}
+        return rep
+
+
+def _mean_rel(a: FRF, b: FRF) -> float:
+    """Mean over lines and entries of |a − b| / |b| (the thesis's 'mean relative deviation')."""
+    vb = b.block(a.outputs, a.inputs)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        r = np.abs(a.values - vb) / np.abs(vb)
+    return float(np.mean(r[np.isfinite(r)]))
+
+
+def _pairs(c: Campaign, frf: FRF, subs: Mapping[str, FRF]) -> list[tuple[str, Dof]]:
+    """(substructure, DOF) for each measured output/input label, looked up among the substructures."""
+    out = []
+    for d in dict.fromkeys(list(frf.outputs) + list(frf.inputs)):
+        owners = [n for n, s in subs.items() if d in set(s.outputs) | set(s.inputs)]
+        if not owners:
+            raise _err(c.path, "measurements", f"measured DOF {d} belongs to no substructure")
+        out.append((owners[0], d))
+    return out
+
+
+def _interfaces(c: Campaign, joint) -> list[Interface]:
+    i = c.interface
+    return [Interface(i["a"], i["a_dofs"], i["b"], i["b_dofs"], joint)]
+
+
+def _couple_like(c: Campaign, subs, joint, like: FRF) -> FRF:
+    owner = {d: n for n, d in _pairs(c, like, subs)}
+    return couple(subs, _interfaces(c, joint), [(owner[d], d) for d in like.outputs],
+                  [(owner[d], d) for d in like.inputs])
+
+
+def _joint_for_couple(result: IdentificationResult):
+    return result.joint_substructure() if result.model == "matrix" else result.joint
+
+
+def identify_campaign(c: Campaign) -> IdentifyOutcome:
+    """Load everything, identify the joint, re-couple, fit constant (k, c), validate if asked.
+
+    Raises
+    ------
+    InputError
+        With the campaign file and field named, for bad files, DOFs or grids.
+    NumericalError
+        If the identification is singular.
+    """
+    measured = merge_measurements(c.path, "measurements", c.measurements, c.band)
+    freq = measured.freq
+    subs = {n: load_substructure(c.path, f"substructures.{n}", s, freq) for n, s in c.substructures.items()}
+    i, o = c.interface, c.options
+    common = dict(smoothing=o.get("smoothing"), smoothing_order=int(o.get("smoothing_order", 4)))
+    try:
+        if c.joint_model == "planar":
+            res = identify_planar_joint(measured, subs[i["a"]], i["a_dofs"][0].node, subs[i["b"]],
+                                        i["b_dofs"][0].node, int(c.model_options["b_tip"]),
+                                        translation=i["a_dofs"][0].direction, rotation=i["a_dofs"][1].direction,
+                                        **common)
+        elif c.joint_model == "n-point":
+            res = identify_n_point_joints(measured, subs[i["a"]], c.model_options["internal"], i["a_dofs"],
+                                          subs[i["b"]], i["b_dofs"], regularisation=o.get("regularisation"),
+                                          diagonal=bool(o.get("diagonal", True)),
+                                          symmetrize=bool(o.get("symmetrize", True)), **common)
+        else:
+            res = identify_joint_matrix(measured, subs, c.model_options["measured"], i["a"], i["a_dofs"],
+                                        i["b"], i["b_dofs"], regularisation=o.get("regularisation"),
+                                        symmetrize=bool(o.get("symmetrize", True)), **common)
+    except InputError as exc:
+        raise InputError(f"campaign {c.path.name}: {exc}") from None
+    joint = _joint_for_couple(res)
+    reconstructed = _couple_like(c, subs, joint, measured)
+    rigid = _couple_like(c, subs, None, measured)
+    kc = None
+    if c.joint_model != "matrix":
+        band = o.get("fit_band")
+        band = (float(band[0]), float(band[1])) if band else None
+        kc = fit_constant_kc(res.joint, band, mask=~res.unreliable)
+    validation = None
+    if c.validation is not None:
+        vmeas = merge_measurements(c.path, "validation.measurements", c.validation["measurements"], c.band)
+        if vmeas.freq.shape != freq.shape or not np.allclose(vmeas.freq, freq, rtol=1e-9, atol=1e-9):
+            raise _err(c.path, "validation.measurements", "must share the identification measurements' grid")
+        vsubs = dict(subs)
+        for n, s in c.validation["substructures"].items():
+            vsubs[n] = load_substructure(c.path, f"validation.substructures.{n}", s, freq)
+        pred = _couple_like(c, vsubs, joint, vmeas)
+        vrig = _couple_like(c, vsubs, None, vmeas)
+        validation = {
+            "identified_joint_error_mean": _mean_rel(pred, vmeas),
+            "rigid_joint_error_mean": _mean_rel(vrig, vmeas),
+            "measured": vmeas, "predicted": pred, "rigid": vrig,
+        }
+    return IdentifyOutcome(c, res, measured, reconstructed, rigid, kc, validation)
+
+
+def joint_attrs(out: IdentifyOutcome) -> dict:
+    """Metadata stored with the joint FRF in the HDF5 exchange file."""
+    rep = out.report()
+    return {
+        "kind": "joint",
+        "joint_model": out.result.model,
+        "campaign": out.campaign.name,
+        "joint_type": out.campaign.joint_type,
+        "conditions": dict(out.campaign.conditions),
+        "interface": {
+            "a": out.campaign.interface["a"], "a_dofs": [str(d) for d in out.campaign.interface["a_dofs"]],
+            "b": out.campaign.interface["b"], "b_dofs": [str(d) for d in out.campaign.interface["b_dofs"]],
+        },
+        "quality": {k: v for k, v in rep.items() if k not in ("settings", "conditions", "campaign")},
+        "settings": rep["settings"],
+    }
+
+
+def load_joint_file(path: Path) -> tuple[FRF, str]:
+    """A joint FRF written by ``jointdb identify`` and its model kind (``planar``/``n-point``/``matrix``)."""
+    from jointdb.io import read_frf_hdf5_full
+
+    frf, meta = read_frf_hdf5_full(path)
+    model = meta.get("joint_model")
+    if model not in ("planar", "n-point", "matrix"):
+        raise InputError(f"{path}: not a joint file written by 'jointdb identify' (no joint_model in its metadata)")
+    return frf, str(model)
+
+
+def couple_campaign(c: Campaign, joint_override: Path | None = None) -> dict:
+    """Couple the campaign's substructures with a joint; compare with measurements if there are any.
+
+    The joint is ``--joint FILE`` if given, else ``couple.joint`` of the campaign:
+    ``"rigid"``, a joint HDF5 file, or ``{"k": [...], "c": [...]}`` (spring–dampers on a_dofs).
+    """
+    freq = grid_for_couple(c)
+    subs = {n: load_substructure(c.path, f"substructures.{n}", s, freq) for n, s in c.substructures.items()}
+    spec = str(joint_override) if joint_override is not None else c.couple.get("joint", "rigid")
+    a_dofs = c.interface["a_dofs"]
+    if spec == "rigid":
+        joint, label = None, "rigid"
+    elif isinstance(spec, dict):
+        try:
+            joint = spring_damper_joint(freq, spec["k"], spec["c"], a_dofs)
+        except KeyError:
+            raise _err(c.path, "couple.joint", "a spring–damper joint needs \"k\" and \"c\" lists") from None
+        label = "spring-damper"
+    else:
+        p = Path(spec) if joint_override is not None else (c.path.parent / spec)
+        if not p.is_file():
+            raise _err(c.path, "couple.joint", f"joint file '{spec}' not found")
+        frf, model = load_joint_file(p)
+        if frf.freq.shape != freq.shape or not np.allclose(frf.freq, freq, rtol=1e-9, atol=1e-9):
+            raise _err(c.path, "couple.joint", f"{p.name} has {frf.n_freq} lines {frf.freq[0]:g}–{frf.freq[-1]:g} Hz, "
+                       f"the coupling grid {freq.size} lines {freq[0]:g}–{freq[-1]:g} Hz")
+        if model == "matrix":
+            from jointdb.coupling import JointSubstructure
+
+            n = len(frf.inputs) // 2
+            joint = JointSubstructure(frf, frf.inputs[:n], frf.inputs[n:])
+        else:
+            joint = frf
+        label = p.name
+    outs_raw = c.couple.get("outputs")
+    measured = merge_measurements(c.path, "measurements", c.measurements, c.band) if c.measurements else None
+    if outs_raw:
+        try:
+            outs = [(str(n), Dof.parse(d)) for n, d in outs_raw]
+            ins = [(str(n), Dof.parse(d)) for n, d in c.couple.get("inputs", outs_raw)]
+        except (TypeError, ValueError):
+            raise _err(c.path, "couple.outputs", "must be a list of [substructure, DOF] pairs") from None
+        try:
+            g = couple(subs, _interfaces(c, joint), outs, ins)
+        except InputError as exc:
+            raise InputError(f"campaign {c.path.name}: {exc}") from None
+    elif measured is not None:
+        g = _couple_like(c, subs, joint, measured)
+    else:
+        raise _err(c.path, "couple.outputs", "name the outputs to compute (no measurements to copy them from)")
+    res: dict[str, Any] = {"assembly": g, "joint": label, "measured": None}
+    if measured is not None and all(d in measured.outputs for d in g.outputs) and all(
+        d in measured.inputs for d in g.inputs
+    ) and np.array_equal(measured.freq, g.freq):
+        res["measured"] = measured
+        res["error_mean"] = _mean_rel(g, measured)
+    return res
+
+
+__all__ = ["IdentifyOutcome", "identify_campaign", "couple_campaign", "joint_attrs", "load_joint_file",
+           "NumericalError"]

@@ -1,0 +1,86 @@
+"""Coupling figures: identified k(ω), c(ω); measured vs reconstructed vs rigid-joint FRF (PNG, Agg).
+
+Imported lazily by the CLI and the validation script; the numerical core never imports matplotlib.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+from jointdb.frf import FRF
+
+__all__ = ["save_kc_plot", "save_comparison_plot"]
+
+
+def _pyplot():
+    import matplotlib
+
+    matplotlib.use("Agg", force=True)
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def save_kc_plot(path: "str | Path", joint: FRF, kc_fit=None, title: str | None = None,
+                 flagged: np.ndarray | None = None) -> Path:
+    """Equivalent stiffness and damping of each diagonal joint term vs frequency (one row per DOF)."""
+    from jointdb.coupling import equivalent_stiffness_damping
+
+    plt = _pyplot()
+    k, c = equivalent_stiffness_damping(joint)
+    n = k.shape[1]
+    fig, axes = plt.subplots(n, 2, figsize=(10, 2.6 * n + 0.6), squeeze=False, sharex=True)
+    for i, dof in enumerate(joint.inputs):
+        unit_k = "N·m/rad" if dof.is_rotation else "N/m"
+        unit_c = "N·m·s/rad" if dof.is_rotation else "N·s/m"
+        for ax, y, lab in ((axes[i, 0], k[:, i], f"k {dof} [{unit_k}]"), (axes[i, 1], c[:, i], f"c {dof} [{unit_c}]")):
+            ax.plot(joint.freq, y, lw=1.2, label="identified")
+            if flagged is not None and flagged.any():
+                ax.plot(joint.freq[flagged], y[flagged], "x", ms=3, color="tab:red", label="flagged line")
+            ax.set_ylabel(lab)
+            ax.grid(True, alpha=0.3)
+        if kc_fit is not None:
+            axes[i, 0].axhline(kc_fit.k[i], color="k", ls="--", lw=1, label=f"constant fit {kc_fit.k[i]:.4g}")
+            axes[i, 1].axhline(kc_fit.c[i], color="k", ls="--", lw=1, label=f"constant fit {kc_fit.c[i]:.4g}")
+        axes[i, 0].legend(fontsize=7)
+        axes[i, 1].legend(fontsize=7)
+    for ax in axes[-1]:
+        ax.set_xlabel("frequency [Hz]")
+    fig.suptitle(title or "identified joint: equivalent stiffness and damping")
+    fig.tight_layout()
+    path = Path(path)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
+def save_comparison_plot(path: "str | Path", curves: Sequence[tuple[str, FRF]], pairs=None,
+                         title: str | None = None) -> Path:
+    """Magnitude (log) and phase of several FRFs of the same entries (e.g. measured / reconstructed / rigid)."""
+    plt = _pyplot()
+    ref = curves[0][1]
+    if pairs is None:
+        pairs = [(o, i) for o in ref.outputs for i in ref.inputs][:4]
+    fig, axes = plt.subplots(2, len(pairs), figsize=(5 * len(pairs), 6), squeeze=False, sharex=True)
+    styles = ["-", "--", ":", "-."]
+    for j, (o, i) in enumerate(pairs):
+        for k, (label, frf) in enumerate(curves):
+            h = frf.entry(o, i)
+            axes[0, j].semilogy(frf.freq, np.abs(h), styles[k % 4], lw=1.3, label=label)
+            axes[1, j].plot(frf.freq, np.degrees(np.angle(h)), styles[k % 4], lw=1.1)
+        axes[0, j].set_title(f"H({o}, {i})")
+        axes[0, j].grid(True, which="both", alpha=0.3)
+        axes[1, j].grid(True, alpha=0.3)
+        axes[1, j].set_xlabel("frequency [Hz]")
+    axes[0, 0].set_ylabel("|H| [m/N]")
+    axes[1, 0].set_ylabel("phase [deg]")
+    axes[0, 0].legend(fontsize=8)
+    fig.suptitle(title or "assembly FRF")
+    fig.tight_layout()
+    path = Path(path)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
