@@ -19,10 +19,10 @@ demo: install
 	cd /tmp && $(abspath $(BIN))/jointdb demo --out $(abspath $(OUT))
 
 test: install
-	$(BIN)/pytest -q -p no:cacheprovider tests
+	OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 $(BIN)/pytest -q -p no:cacheprovider tests
 
 bench: install
-	for f in bench/bench_*.py; do echo "== $$f"; $(BIN)/python $$f || exit 1; done
+	for f in bench/bench_*.py; do echo "== $$f"; OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 $(BIN)/python $$f || exit 1; done
 
 clean:
 	rm -rf $(VENV) build *.egg-info $(OUT)
