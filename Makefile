@@ -16,7 +16,7 @@ install: $(BIN)/python
 	$(BIN)/python -m pip install --quiet ".[test]"
 
 demo: install
-	cd /tmp && $(abspath $(BIN))/jointdb demo --out $(abspath $(OUT))
+	cd /tmp && OPENBLAS_NUM_THREADS=1 $(abspath $(BIN))/jointdb demo --out $(abspath $(OUT))
 
 test: install
 	OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 $(BIN)/pytest -q -p no:cacheprovider tests
