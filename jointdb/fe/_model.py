@@ -99,6 +99,7 @@ class Mesh:
     node_positions: np.ndarray
     element_segment: np.ndarray
     kind: str
+    tol: float = 0.0
 
     @property
     def directions(self) -> tuple[str, ...]:
@@ -115,7 +116,7 @@ class Mesh:
     def node_at(self, position: float, what: str = "position") -> int:
         """Index of the node at ``position`` (mesh nodes include every declared position)."""
         i = int(np.argmin(np.abs(self.node_positions - position)))
-        if abs(self.node_positions[i] - position) > _merge_tol(self.node_positions[-1]):
+        if abs(self.node_positions[i] - position) > max(self.tol, _merge_tol(self.node_positions[-1])):
             raise InputError(f"{what} at {position:g} m is not a mesh node (model length {self.node_positions[-1]:g} m)")
         return i
 
@@ -168,8 +169,9 @@ class Modes:
     n_rigid: int = 0
 
 
-def _merge_tol(length: float) -> float:
-    return 1e-9 * max(abs(length), 1e-3)
+def _merge_tol(length: float, max_element_length: float = 0.0) -> float:
+    """Positions closer than this share a node (avoids ill-conditioned sliver elements)."""
+    return max(1e-9 * max(abs(length), 1e-3), 1e-3 * max_element_length)
 
 
 def _as_tuple(value, what: str) -> tuple:
@@ -295,14 +297,16 @@ class BeamModel:
         """Nodes at segment ends, point and ingredient positions, refined to ``max_element_length``."""
         ends = np.concatenate([[0.0], np.cumsum([s.length for s in self.segments])])
         length = float(ends[-1])
-        marks = list(ends) + [p.position for p in self.points]
+        tol = _merge_tol(length, self.max_element_length)
+        # segment ends are always nodes; other positions join the nearest node within tol
+        marks = list(ends)
+        extra = [p.position for p in self.points]
         for ing in self.ingredients:
-            marks.extend(ing.positions())
+            extra.extend(ing.positions())
+        for pos in sorted(extra):
+            if min(abs(m - pos) for m in marks) > tol:
+                marks.append(min(pos, length))
         marks = np.sort(np.asarray(marks, dtype=float))
-        tol = _merge_tol(length)
-        keep = np.concatenate([[True], np.diff(marks) > tol])
-        marks = marks[keep]
-        marks[-1] = length if abs(marks[-1] - length) <= tol else marks[-1]
         pieces = []
         for a, b in zip(marks[:-1], marks[1:]):
             n = max(1, int(math.ceil((b - a) / self.max_element_length - 1e-9)))
@@ -310,7 +314,7 @@ class BeamModel:
         nodes = np.concatenate(pieces + [marks[-1:]])
         mids = 0.5 * (nodes[:-1] + nodes[1:])
         seg = np.clip(np.searchsorted(ends, mids, side="right") - 1, 0, len(self.segments) - 1)
-        return Mesh(node_positions=nodes, element_segment=seg, kind=self.kind)
+        return Mesh(node_positions=nodes, element_segment=seg, kind=self.kind, tol=tol)
 
     def _bare(self, mesh: Mesh) -> tuple[np.ndarray, np.ndarray]:
         segs = self.segments

@@ -82,7 +82,11 @@ def eigen_free(matrices, n: int | None, max_value: float | None = None):
         lam, phi = scipy.linalg.eigh(Kf, Mf, subset_by_index=(0, n_rb - 1))
     lam = lam.copy()
     lam[: min(n_rb, lam.size)] = 0.0
-    lam = np.clip(lam, 0.0, None)
+    if np.any(lam[n_rb:] <= 0.0):
+        raise NumericalError(
+            "the model has more zero-frequency modes than rigid-body motions explain "
+            "(a mechanism, or a badly conditioned mesh: check supports and very short elements)"
+        )
     return lam, phi, n_rb
 
 

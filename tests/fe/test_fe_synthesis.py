@@ -1,5 +1,7 @@
 """FRF synthesis: direct vs modal, reciprocity, passivity, damping models, rigid-body modes."""
 
+import os
+
 import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
@@ -192,7 +194,7 @@ def random_models(draw):
     return model
 
 
-@settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=int(os.environ.get("JOINTDB_FE_EXAMPLES", "30")), deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(
     model=random_models(),
     freq=st.lists(st.floats(10.0, 2e4), min_size=1, max_size=6, unique=True),
