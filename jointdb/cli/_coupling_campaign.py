@@ -250,6 +250,10 @@ def merge_measurements(cpath: Path, where: str, files: tuple[Path, ...], band) -
             if v is None:
                 raise _err(cpath, where, f"no measurement of H({o}, {n}) in any file, nor of its reciprocal")
             vals[:, i, j] = v
+    dead = [(o, n) for i, o in enumerate(outs) for j, n in enumerate(ins) if not np.any(vals[:, i, j])]
+    if dead:
+        o, n = dead[0]
+        raise _err(cpath, where, f"measured H({o}, {n}) is zero at every line (a dead or missing channel?)")
     return FRF(ref.freq, vals, outs, ins, Quantity.RECEPTANCE)
 
 

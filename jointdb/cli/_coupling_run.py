@@ -159,7 +159,9 @@ def identify_campaign(c: Campaign) -> IdentifyOutcome:
 
 def joint_attrs(out: IdentifyOutcome) -> dict:
     """Metadata stored with the joint FRF in the HDF5 exchange file."""
-    rep = out.report()
+    from jointdb._output import to_jsonable
+
+    rep = to_jsonable(out.report())
     return {
         "kind": "joint",
         "joint_model": out.result.model,

@@ -9,7 +9,7 @@ import numpy as np
 
 from jointdb.coupling._common import IdentificationResult, as_receptance, fetch, same_grid
 from jointdb.coupling._linalg import Regularisation, condition, pinv, savgol_smooth
-from jointdb.errors import InputError
+from jointdb.errors import InputError, NumericalError
 from jointdb.frf import FRF, Dof, Quantity, dofs
 
 __all__ = ["identify_n_point_joints", "identify_joint_matrix"]
@@ -140,6 +140,11 @@ def identify_n_point_joints(
     hj = diag_part if diagonal else hj_full
     rec = h_ii - h_ia @ np.linalg.solve(h_aa + h_bb + hj, h_ai)
     cond = _scaled_condition(h_ia, 1)
+    if np.all(cond > condition_limit):
+        raise NumericalError(
+            f"H_Ia (measured internal DOFs × connection DOFs) is singular at every line (condition > "
+            f"{condition_limit:g}); the measured points do not determine the {n} joints — measure other points"
+        )
     passive = np.all(hj[:, diag_idx, diag_idx].imag <= 1e-6 * np.abs(hj[:, diag_idx, diag_idx]), axis=1)
     ill = cond > condition_limit
     return IdentificationResult(
@@ -270,6 +275,11 @@ def identify_joint_matrix(
         hj = 0.5 * (hj + np.swapaxes(hj, 1, 2))
     rec = h_ii - h_ic @ np.linalg.solve(h_cc + hj, h_ci)
     cond = _scaled_condition(h_ic, 1) * _scaled_condition(h_ci, 2)
+    if np.all(cond > condition_limit):
+        raise NumericalError(
+            f"H_IC (measured DOFs × contact DOFs) is singular at every line (condition > {condition_limit:g}); "
+            f"the {L} measured DOFs do not determine the {nc}×{nc} joint — measure other DOFs"
+        )
     ill = cond > condition_limit
     return IdentificationResult(
         joint=FRF(freq, hj, ad + bd, ad + bd, Quantity.RECEPTANCE),

@@ -12,7 +12,7 @@ from jointdb.coupling import (
     identify_joint_matrix,
     identify_n_point_joints,
 )
-from jointdb.errors import InputError
+from jointdb.errors import InputError, NumericalError
 from jointdb.frf import Dof
 
 FREQ_P = np.linspace(20.0, 2000.0, 100)
@@ -61,6 +61,9 @@ def test_single_z_spring_model_breaks_down_for_beam_bolts():
 
 def test_n_point_needs_enough_measurements(plate_case):
     case, fa, fb, g = plate_case
+    with pytest.raises(NumericalError, match="singular at every line"):
+        pts = case["internal"][:3] + case["internal"][:1]  # a point measured twice: rank 3 < 4
+        identify_n_point_joints(g, fa, z(pts), z(case["a_bolts"]), fb, z(case["b_bolts"]))
     with pytest.raises(InputError, match="measure at least 4"):
         identify_n_point_joints(g, fa, z(case["internal"][:3]), z(case["a_bolts"]), fb, z(case["b_bolts"]))
 
