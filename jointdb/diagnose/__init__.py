@@ -1,1 +1,41 @@
-"""(module under construction)."""
+"""Diagnose: when a simulated FRF and a recording disagree, locate the mismatch,
+name the physics the model left out, add it, refit, and show the fit improve.
+
+Pipeline (see ``docs/validation/diagnose-bench.md`` for the proof on concealed
+effects):
+
+1. :func:`prepare` maps recorded DOFs to model points, checks the common band
+   and the coherence, and thins the lines (all lines near peaks, a log-spaced
+   background).
+2. :func:`signature` compares: overall / per-band mismatch, magnitude [dB]
+   and phase [deg] errors, FRAC, peak picking and mode pairing, the shift
+   pattern across modes, damping and height ratios, a constant offset, a
+   phase drift ∝ frequency, extra/missing peaks, level dependence.
+3. Every candidate of the physics library (:mod:`jointdb.diagnose.physics`)
+   and pairs of the best ones are fitted (``scipy.optimize.least_squares`` on
+   the weighted complex log-FRF residual) and ranked by BIC
+   (``n ln(RSS/n) + p ln n``). An explanation is accepted only if it lowers the
+   BIC by ``BIC_MARGIN`` *and* cuts the mismatch by ``MIN_IMPROVEMENT`` ×
+   (the false-alarm threshold); otherwise the verdict says nothing is added.
+
+Mismatch = weighted RMS of ``|log(H_model/H_recorded)|`` (≈ relative error;
+weights from coherence with a 2 % model floor).
+
+>>> from jointdb.diagnose import diagnose, Measurement
+>>> result = diagnose(model, [Measurement(frf)])          # doctest: +SKIP
+>>> result.verdict, result.best.values, result.augmented[0]  # doctest: +SKIP
+"""
+
+from jointdb.diagnose._compare import ModePair, Peak, Signature, find_peaks, pair_modes, signature
+from jointdb.diagnose._data import Measurement, Observation, prepare
+from jointdb.diagnose._diagnose import BIC_MARGIN, MIN_IMPROVEMENT, Diagnosis, diagnose
+from jointdb.diagnose._fit import Fit, ModelEvaluator, fit_candidate
+from jointdb.diagnose.physics import Candidate, Context, Param, candidates_for, register
+
+__all__ = [
+    "diagnose", "Diagnosis", "Measurement", "Observation", "prepare",
+    "signature", "Signature", "ModePair", "Peak", "find_peaks", "pair_modes",
+    "Fit", "ModelEvaluator", "fit_candidate",
+    "Candidate", "Param", "Context", "register", "candidates_for",
+    "BIC_MARGIN", "MIN_IMPROVEMENT",
+]

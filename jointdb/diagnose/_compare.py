@@ -1,0 +1,193 @@
+"""Compare and locate: where do model and recording disagree, and how.
+
+- overall and per-band mismatch (weighted RMS of ``|log(H_m/H_r)|``), RMS
+  magnitude error [dB] and phase error [deg], FRAC per FRF
+  (``|H_mᴴH_r|² / (H_mᴴH_m · H_rᴴH_r)``, Heylen's frequency response assurance
+  criterion);
+- peaks of a CMIF-like indicator, with frequency (log-parabolic
+  interpolation), damping (half-power width) and height, in model and
+  recording; modes paired by nearest log-frequency;
+- a signature: per-mode frequency shift pattern, damping / peak height
+  ratios, a constant magnitude offset, a phase drift ∝ frequency (delay),
+  extra / missing peaks, and level dependence across recordings.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from jointdb.diagnose._data import indicator, peak_indices
+
+__all__ = ["Peak", "ModePair", "Signature", "find_peaks", "pair_modes", "signature"]
+
+
+@dataclass(frozen=True)
+class Peak:
+    freq_hz: float
+    zeta: float
+    height: float           # indicator height (relative)
+    index: int
+
+
+@dataclass(frozen=True)
+class ModePair:
+    mode: int                # 1-based order in the model
+    model: Peak
+    recorded: Peak
+    shift: float             # (f_rec − f_model)/f_model
+    damping_ratio: float     # ζ_rec / ζ_model
+    height_db: float         # recorded − model peak height at the recorded DOFs [dB]
+    mismatch: float          # band mismatch (weighted RMS |log ratio|)
+    dofs: tuple[str, ...]    # recorded DOFs that show the mismatch most
+
+
+@dataclass
+class Signature:
+    overall: float
+    magnitude_db: float
+    phase_deg: float
+    frac: dict
+    pairs: list
+    extra_peaks: list        # recorded peaks without a model partner [Hz]
+    missing_peaks: list      # model peaks without a recorded partner [Hz]
+    gain_db: float           # median magnitude offset recorded/model
+    delay_s: float           # phase-drift slope as a delay (positive = recording lags)
+    delay_r2: float
+    level_shifts: list = field(default_factory=list)   # per mode: relative shift from first to last level
+    affected_mode: int | None = None
+    bands: list = field(default_factory=list)
+
+
+
+
+def find_peaks(freq, values, weight) -> list[Peak]:
+    """Resonance peaks of a FRF set ``(n_freq, n_out, n_in)``."""
+    ind = np.maximum(indicator(values, weight), 1e-300)
+    out = []
+    for i in peak_indices(freq, values, weight):
+        f0 = freq[i]
+        if 0 < i < freq.size - 1:
+            y = np.log(ind[i - 1 : i + 2])
+            den = y[0] - 2 * y[1] + y[2]
+            off = 0.5 * (y[0] - y[2]) / den if den < 0 else 0.0
+            f0 = freq[i] + np.clip(off, -1, 1) * 0.5 * (freq[i + 1] - freq[i - 1])
+        half = ind[i] / np.sqrt(2)
+        lo = i
+        while lo > 0 and ind[lo] > half:
+            lo -= 1
+        hi = i
+        while hi < freq.size - 1 and ind[hi] > half:
+            hi += 1
+        fl = np.interp(half, [ind[lo], ind[lo + 1]], [freq[lo], freq[lo + 1]]) if lo < i else freq[lo]
+        fh = np.interp(half, [ind[hi], ind[hi - 1]], [freq[hi], freq[hi - 1]]) if hi > i else freq[hi]
+        out.append(Peak(float(f0), float(max(fh - fl, 1e-9) / (2 * f0)), float(ind[i]), int(i)))
+    return out
+
+
+def pair_modes(model_peaks, rec_peaks, max_ratio=1.35):
+    """Greedy pairing by log-frequency distance; returns (pairs, extra, missing)."""
+    cand = sorted(((abs(np.log(r.freq_hz / m.freq_hz)), a, b) for a, m in enumerate(model_peaks)
+                   for b, r in enumerate(rec_peaks)), key=lambda t: t[0])
+    used_m, used_r, pairs = set(), set(), []
+    for d, a, b in cand:
+        if d > np.log(max_ratio) or a in used_m or b in used_r:
+            continue
+        used_m.add(a)
+        used_r.add(b)
+        pairs.append((a, b))
+    pairs.sort()
+    extra = [r.freq_hz for b, r in enumerate(rec_peaks) if b not in used_r]
+    missing = [m.freq_hz for a, m in enumerate(model_peaks) if a not in used_m]
+    return pairs, extra, missing
+
+
+def _wrms(x, w):
+    w2 = w**2
+    s = w2.sum()
+    return float(np.sqrt((w2 * np.abs(x) ** 2).sum() / s)) if s > 0 else float("nan")
+
+
+def signature(ev, H_model: np.ndarray) -> Signature:
+    """Locate and characterise the mismatch of ``H_model`` against the recordings.
+
+    Parameters
+    ----------
+    ev
+        A full-line :class:`jointdb.diagnose._fit.ModelEvaluator`.
+    H_model
+        ``(n_level, n_freq, n_out, n_in)`` model receptances at those lines.
+    """
+    obs = ev.obs
+    freq, rec, w = ev.freq, ev.rec, ev.w
+    lr = ev.log_ratio(H_model)
+    overall = ev.mismatch(H_model)
+    mag_db = _wrms(20 / np.log(10) * lr.real, w)
+    ph_deg = _wrms(np.degrees(lr.imag), w)
+    names = [f"{o}:{od}/{i}:{idir}" for o, od in zip(obs.out_points, obs.out_dirs)
+             for i, idir in zip(obs.in_points, obs.in_dirs)]
+    frac = {}
+    for k, name in enumerate(names):
+        a, b = divmod(k, len(obs.in_points))
+        hm, hr, ww = H_model[0, :, a, b], rec[0, :, a, b], w[0, :, a, b] > 0
+        hm, hr = hm[ww], hr[ww]
+        frac[name] = float(np.abs(np.vdot(hm, hr)) ** 2 / (np.vdot(hm, hm).real * np.vdot(hr, hr).real))
+
+    mpk = find_peaks(freq, H_model[0], np.ones_like(w[0]))
+    rpk = find_peaks(freq, rec[0], w[0])
+    idx, extra, missing = pair_modes(mpk, rpk)
+    pairs = []
+    for order, (a, b) in enumerate(idx):
+        m, r = mpk[a], rpk[b]
+        lo, hi = min(m.freq_hz, r.freq_hz) * 0.94, max(m.freq_hz, r.freq_hz) * 1.06
+        band = (freq >= lo) & (freq <= hi)
+        per_dof = np.array([_wrms(lr[:, band, i, j], w[:, band, i, j])
+                            for i in range(lr.shape[2]) for j in range(lr.shape[3])])
+        top = np.argsort(-np.nan_to_num(per_dof))[: max(1, len(names) // 2)]
+        pairs.append(ModePair(
+            mode=a + 1, model=m, recorded=r, shift=r.freq_hz / m.freq_hz - 1,
+            damping_ratio=r.zeta / m.zeta if m.zeta > 0 else float("nan"),
+            height_db=float(20 * np.log10(r.height / m.height)),
+            mismatch=_wrms(lr[:, band], w[:, band]), dofs=tuple(names[t] for t in top)))
+
+    # magnitude offset and phase drift, away from the paired peaks
+    away = np.ones(freq.size, dtype=bool)
+    for p in pairs:
+        for f0 in (p.model.freq_hz, p.recorded.freq_hz):
+            away &= np.abs(freq / f0 - 1) > 0.08
+    wa = w[:, away]
+    la = lr[:, away]
+    gain_db = float(-20 / np.log(10) * np.median(la.real[wa > 0])) if np.any(wa > 0) else 0.0
+    ph = -la.imag  # recorded phase minus model phase
+    fa = np.broadcast_to(freq[away][None, :, None, None], ph.shape)
+    ww = wa.ravel() ** 2
+    x, y = fa.ravel(), ph.ravel()
+    if ww.sum() > 0 and np.ptp(x[ww > 0]) > 0:
+        A = np.stack([np.ones_like(x), x], 1) * np.sqrt(ww)[:, None]
+        coef, *_ = np.linalg.lstsq(A, y * np.sqrt(ww), rcond=None)
+        fit = A @ coef
+        ss = float(((y * np.sqrt(ww)) ** 2).sum())
+        r2 = 1 - float(((y * np.sqrt(ww) - fit) ** 2).sum()) / ss if ss > 0 else 0.0
+        delay = float(-coef[1] / (2 * np.pi))
+    else:
+        delay, r2 = 0.0, 0.0
+
+    sig = Signature(overall, mag_db, ph_deg, frac, pairs, extra, missing, gain_db, delay, r2)
+    sig.bands = [{"band_hz": (round(p.recorded.freq_hz * 0.94), round(p.recorded.freq_hz * 1.06)),
+                  "mode": p.mode, "mismatch": p.mismatch} for p in pairs]
+    if rec.shape[0] > 1:
+        first = find_peaks(freq, rec[0], w[0])
+        last = find_peaks(freq, rec[-1], w[-1])
+        lidx, _, _ = pair_modes(first, last, max_ratio=1.2)
+        shifts = []
+        for a, b in lidx:
+            mode = next((p.mode for p in pairs if p.recorded.index == first[a].index), a + 1)
+            shifts.append({"mode": mode, "f_first_hz": first[a].freq_hz, "f_last_hz": last[b].freq_hz,
+                           "shift": last[b].freq_hz / first[a].freq_hz - 1,
+                           "damping_ratio": last[b].zeta / first[a].zeta})
+        sig.level_shifts = shifts
+        if shifts:
+            worst = max(shifts, key=lambda s: abs(s["shift"]) + 0.1 * abs(np.log(s["damping_ratio"])))
+            sig.affected_mode = worst["mode"]
+    return sig

@@ -1,0 +1,252 @@
+"""Fitting candidate physics to recordings and scoring them (BIC).
+
+Residual (per recorded line, output, input and level): the complex log ratio
+``log(H_model / H_recorded)`` — its real part is the log-magnitude error, its
+imaginary part the phase error in radians — weighted by ``1/σ`` with σ from
+the coherence and a 2 % model floor (``_data.MODEL_FLOOR``). Real and
+imaginary parts are stacked, so ``n`` (the number of residuals) is twice the
+number of usable complex entries.
+
+Selection criterion: the Bayesian information criterion of the weighted
+residual, ``BIC = n ln(RSS/n) + p ln n`` (Schwarz 1978), p = number of fitted
+parameters. Fits use ``scipy.optimize.least_squares`` (trust-region
+reflective, bounded, parameters in log space where physical) from the
+candidate's start and its extra starts; the uncertainty is the usual
+linearised one, ``cov = s² (JᵀJ)⁻¹`` with ``s² = RSS/(n − p)``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.optimize
+
+from jointdb.errors import InputError, NumericalError
+
+__all__ = ["Fit", "ModelEvaluator", "fit_candidate"]
+
+
+class ModelEvaluator:
+    """Model FRFs at the observation's lines and DOFs, with residuals."""
+
+    def __init__(self, obs, full: bool = False, method: str = "modal", n_modes: int = 12):
+        self.obs = obs
+        self.full = full
+        self.method = method
+        self.n_modes = n_modes
+        self.freq = obs.full_freq if full else obs.freq
+        self.rec = obs.full_values if full else obs.values
+        self.w = obs.full_weight if full else obs.weight
+        self.points = obs.model_points
+        used = set(obs.out_dirs) | set(obs.in_dirs)
+        self.dirs = [d for d in ("x", "y", "z", "rx", "ry", "rz") if d in used]
+        labels = [(p, d) for p in self.points for d in self.dirs]
+        self.oi = [labels.index((p, d)) for p, d in zip(obs.out_points, obs.out_dirs)]
+        self.ii = [labels.index((p, d)) for p, d in zip(obs.in_points, obs.in_dirs)]
+        self.n = int(2 * np.count_nonzero(self.w))
+
+    def frf(self, model) -> np.ndarray:
+        """Receptance ``(n_freq, n_out, n_in)`` of ``model`` at the recorded DOFs."""
+        if self.method == "modal":
+            n = min(self.n_modes, max(1, model.mesh().n_dof - 4))
+            H = model.frf(self.freq, points=self.points, directions=self.dirs, method="modal", n_modes=n).values
+        else:
+            H = model.frf(self.freq, points=self.points, directions=self.dirs).values
+        return H[:, self.oi][:, :, self.ii]
+
+    def predict(self, nominal, cand=None, values=None) -> np.ndarray:
+        """``(n_level, n_freq, n_out, n_in)`` predictions of nominal (+ candidate)."""
+        n_lv = self.rec.shape[0]
+        if cand is None:
+            return np.broadcast_to(self.frf(nominal), self.rec.shape)
+        out = []
+        base = None
+        for lv in range(n_lv):
+            if cand.per_level or base is None:
+                base = self.frf(cand.apply(nominal, values, lv))
+            H = base
+            factor = cand.chain(self.freq, values, lv)
+            if factor is not None:
+                H = H * factor[:, None, None]
+            out.append(H)
+        return np.stack(out)
+
+    def log_ratio(self, H: np.ndarray) -> np.ndarray:
+        with np.errstate(divide="ignore", invalid="ignore"):
+            lr = np.log(H / self.rec)
+        return np.where(self.w > 0, np.nan_to_num(lr, nan=0.0, posinf=0.0, neginf=0.0), 0.0)
+
+    def residual(self, H: np.ndarray) -> np.ndarray:
+        r = self.w * self.log_ratio(H)
+        return np.concatenate([r.real.ravel(), r.imag.ravel()])
+
+    def mismatch(self, H: np.ndarray, per_level: bool = False):
+        """Weighted RMS of ``|log(H_model/H_rec)|`` (≈ relative FRF error; 0.05 = 5 %)."""
+        lr = np.abs(self.log_ratio(H)) ** 2
+        w2 = self.w**2
+        if per_level:
+            return np.sqrt((w2 * lr).sum(axis=(1, 2, 3)) / w2.sum(axis=(1, 2, 3)))
+        return float(np.sqrt((w2 * lr).sum() / w2.sum()))
+
+
+@dataclass
+class Fit:
+    """A fitted candidate (or the nominal model when ``candidate is None``)."""
+
+    candidate: object
+    values: dict
+    sigmas: dict
+    rss: float
+    n: int
+    p: int
+    bic: float
+    mismatch: float
+    mismatch_levels: np.ndarray
+    nfev: int = 0
+    at_bound: list = field(default_factory=list)
+
+    @property
+    def name(self) -> str:
+        return "nominal" if self.candidate is None else self.candidate.name
+
+    @property
+    def family(self) -> str:
+        return "none" if self.candidate is None else self.candidate.family
+
+    def describe(self) -> str:
+        if self.candidate is None:
+            return "the nominal model as it is"
+        return self.candidate.describe(self.values, self.sigmas)
+
+
+def _bic(rss: float, n: int, p: int) -> float:
+    return float(n * np.log(max(rss, 1e-300) / n) + p * np.log(n))
+
+
+def nominal_fit(ev: ModelEvaluator, nominal) -> Fit:
+    H = ev.predict(nominal)
+    r = ev.residual(H)
+    rss = float(r @ r)
+    return Fit(None, {}, {}, rss, ev.n, 0, _bic(rss, ev.n, 0), ev.mismatch(H), ev.mismatch(H, True))
+
+
+def _changes_model(cand) -> bool:
+    from jointdb.diagnose.physics import Candidate
+
+    return type(cand).apply is not Candidate.apply
+
+
+def _prefit_frequencies(nominal, cand, params, u0, lo, hi, target):
+    """Stage 1: match the natural frequencies to the recorded peaks (smooth, cheap)."""
+    n = len(target)
+
+    def fun(u):
+        vals = {q.name: q.from_u(x) for q, x in zip(params, u)}
+        try:
+            f = cand.apply(nominal, vals, 0).modes(n).freq_hz
+        except (NumericalError, np.linalg.LinAlgError, InputError):
+            return np.full(n, 10.0)
+        if f.size < n:
+            return np.full(n, 10.0)
+        return np.log(f[:n] / target)
+
+    res = scipy.optimize.least_squares(fun, u0, bounds=(lo, hi), method="trf", diff_step=1e-4, max_nfev=20 * (len(u0) + 1))
+    return res.x, float(2 * res.cost)
+
+
+def fit_candidate(ev: ModelEvaluator, nominal, cand, start: dict | None = None, max_nfev: int | None = None,
+                  target_freqs: np.ndarray | None = None) -> Fit:
+    """Fit one candidate's parameters (bounded least squares) and score it.
+
+    Parameters
+    ----------
+    ev
+        :class:`ModelEvaluator` over the observation.
+    nominal
+        The nominal :class:`jointdb.fe.BeamModel`.
+    cand
+        A :class:`jointdb.diagnose.physics.Candidate`.
+    start
+        Optional starting values (SI) overriding the candidate's.
+
+    target_freqs
+        Recorded resonance frequencies [Hz] (ascending, the model's first
+        modes); if given, each start is first moved to match them (stage 1)
+        before the FRF residual is minimised (stage 2).
+
+    Returns
+    -------
+    Fit
+    """
+    params = cand.params
+    p = len(params)
+
+    def values_of(u):
+        return {q.name: q.from_u(x) for q, x in zip(params, u)}
+
+    def fun(u):
+        try:
+            return ev.residual(ev.predict(nominal, cand, values_of(u)))
+        except (NumericalError, np.linalg.LinAlgError):
+            return np.full(ev.n if ev.n else 1, 1e3)
+
+    if p == 0:
+        H = ev.predict(nominal, cand, {})
+        r = ev.residual(H)
+        rss = float(r @ r)
+        return Fit(cand, {}, {}, rss, ev.n, 0, _bic(rss, ev.n, 0), ev.mismatch(H), ev.mismatch(H, True), 1)
+
+    lo = np.array([q.u_bounds[0] for q in params])
+    hi = np.array([q.u_bounds[1] for q in params])
+    starts = []
+    u0 = np.array([q.to_u(start[q.name]) if start and q.name in start else 0.0 for q in params])
+    starts.append(np.clip(u0, lo + 1e-9, hi - 1e-9))
+    if not start:
+        for k in range(max(len(q.starts) for q in params)):
+            alt = np.array([q.to_u(q.starts[k]) if k < len(q.starts) else 0.0 for q in params])
+            starts.append(np.clip(alt, lo + 1e-9, hi - 1e-9))
+    if target_freqs is not None and len(target_freqs) and not cand.per_level and \
+            _changes_model(cand):
+        moved = []
+        for u_start in starts:
+            u1, c1 = _prefit_frequencies(nominal, cand, params, u_start, lo, hi, np.asarray(target_freqs))
+            moved.append((c1, np.clip(u1, lo + 1e-9, hi - 1e-9)))
+        moved.sort(key=lambda t: t[0])
+        starts = [u for _, u in moved[:2]]
+    best = None
+    nfev = 0
+    for u_start in starts:
+        # a cheap look at each start first; only the best one is refined fully
+        r0 = fun(u_start)
+        cost0 = float(r0 @ r0)
+        if best is not None and cost0 > 4 * best[1]:
+            nfev += 1
+            continue
+        try:
+            res = scipy.optimize.least_squares(fun, u_start, bounds=(lo, hi), method="trf", diff_step=1e-4,
+                                               x_scale=1.0, max_nfev=max_nfev or 30 * (p + 1), xtol=1e-6,
+                                               ftol=1e-6)
+        except ValueError as exc:  # pragma: no cover - defensive
+            raise InputError(f"cannot fit candidate {cand.name}: {exc}") from None
+        nfev += res.nfev
+        rss = float(2 * res.cost)
+        if best is None or rss < best[1]:
+            best = (res, rss)
+    res, rss = best
+    values = values_of(res.x)
+    sigmas = {}
+    J = res.jac
+    dof = max(ev.n - p, 1)
+    try:
+        cov = np.linalg.pinv(J.T @ J) * (rss / dof)
+        su = np.sqrt(np.clip(np.diag(cov), 0, None))
+    except np.linalg.LinAlgError:  # pragma: no cover
+        su = np.full(p, np.nan)
+    for q, x, s in zip(params, res.x, su):
+        v = q.from_u(x)
+        sigmas[q.name] = float(abs(v) * s) if q.log else float(q.scale * s)
+    at_bound = [q.name for q, x, a, b in zip(params, res.x, lo, hi) if min(x - a, b - x) < 1e-3]
+    H = ev.predict(nominal, cand, values)
+    return Fit(cand, values, sigmas, rss, ev.n, p, _bic(rss, ev.n, p), ev.mismatch(H), ev.mismatch(H, True),
+               nfev, at_bound)

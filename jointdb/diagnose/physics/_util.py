@@ -1,0 +1,31 @@
+"""Small helpers shared by the physics modules (model geometry, clamps)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from jointdb.fe import Clamp, get_material
+
+
+def full_clamps(model) -> list:
+    """Clamps that fix every DOF of their node."""
+    return [i for i in model.ingredients if isinstance(i, Clamp) and i.directions is None]
+
+
+def bending_stiffness_at(model, position: float) -> float:
+    """E·I [N·m²] of the segment at ``position``."""
+    z = 0.0
+    for s in model.segments:
+        if position <= z + s.length + 1e-12:
+            break
+        z += s.length
+    mat = get_material(s.material)
+    return mat.E * np.pi * (s.outer_diameter**4 - s.inner_diameter**4) / 64.0
+
+
+def point_position(model, name: str) -> float:
+    return model.point(name).position
+
+
+def without_ingredient(model, ingredient):
+    return model.without(lambda i: i is ingredient)

@@ -1,0 +1,252 @@
+"""Seeded benchmark cases: a "recording" from the richer truth beam, plus the
+nominal model a user would have written, with one effect (or none) hidden.
+
+The nominal model is a cantilevered end-mill-like tool (shank + fluted
+section, rigid clamp at z = 0, Rayleigh damping fitted to ~1 % in the first
+two modes). The truth adds the hidden effect with its own physics
+(:mod:`jointdb.diagnose_bench._truth_fe`), and a measurement chain with
+finite frequency resolution (bin-averaged lines), seeded complex noise
+(proportional + floor) and a coherence estimate consistent with that noise.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.signal
+
+from jointdb.diagnose_bench._truth_fe import TruthBeam
+from jointdb.frf import FRF, Dof
+
+__all__ = ["EFFECTS", "BenchCase", "Recording", "generate_case", "generate_suite"]
+
+#: Effects the generator can hide ("none" = null case, nothing hidden).
+EFFECTS: tuple[str, ...] = (
+    "none",
+    "joint_compliance",
+    "joint_damping",
+    "sensor_mass",
+    "shear_rotary",
+    "fluted_diameter",
+    "hysteretic_damping",
+    "gain",
+    "delay",
+    "softening_joint",
+)
+
+STEEL = dict(E=210e9, nu=0.3, rho=7800.0)
+POINT_NAMES = ("tip", "flute", "shank")
+
+
+@dataclass(frozen=True)
+class Recording:
+    """One recorded FRF set (outputs x at the points, inputs x at tip and flute)."""
+
+    frf: FRF
+    coherence: np.ndarray          # (n_freq, n_out, n_in), 0..1
+    level_n: float | None = None   # excitation force amplitude [N], if known
+
+
+@dataclass(frozen=True)
+class BenchCase:
+    """A seeded case: the nominal model (jointdb.fe JSON dict) and its recordings."""
+
+    name: str
+    effects: tuple[str, ...]
+    seed: int
+    truth: dict                    # the hidden parameters, for scoring only
+    model: dict                    # jointdb.fe model description (what is diagnosed)
+    recordings: tuple[Recording, ...]
+    point_map: dict = field(default_factory=dict)   # node -> point name
+
+
+def _geometry(rng):
+    length = float(rng.uniform(0.12, 0.16))
+    d = float(rng.uniform(0.014, 0.018))
+    flute = float(rng.uniform(0.35, 0.45)) * length
+    flute_ratio = 0.8          # modeller's effective flute diameter / shank diameter
+    return dict(length=round(length, 4), d=round(d, 4), flute_start=round(length - flute, 4),
+                d_flute=round(d * flute_ratio, 5))
+
+
+def _points(g):
+    return {"tip": (1, g["length"]), "flute": (2, g["flute_start"]), "shank": (3, round(0.3 * g["length"], 4))}
+
+
+def _nominal(g, theory="timoshenko", damping=None):
+    from jointdb.fe import BeamModel, Clamp, NamedPoint, RayleighDamping, Segment, model_to_dict
+
+    pts = _points(g)
+    model = BeamModel(
+        segments=(Segment(g["flute_start"], g["d"], material="steel"),
+                  Segment(g["length"] - g["flute_start"], g["d_flute"], material="steel")),
+        points=tuple(NamedPoint(n, z, node=node) for n, (node, z) in pts.items()),
+        ingredients=(Clamp(0.0), RayleighDamping(*damping)),
+        theory=theory,
+        max_element_length=0.005,
+        name="end mill in holder (nominal, rigid clamp)",
+    )
+    return model_to_dict(model)
+
+
+def _truth_beam(g, insertion=0.0, h=0.002):
+    pts = _points(g)
+    breaks = sorted({0.0, g["flute_start"], *(z for _, z in pts.values())})
+    b = TruthBeam.cylinder(-insertion, g["length"], g["d"], STEEL["E"], STEEL["nu"], STEEL["rho"],
+                           h=h, breaks=breaks)
+    df = g["d_flute"]
+    b.set_section(g["flute_start"], g["length"], np.pi * df**2 / 4, np.pi * df**4 / 64)
+    if insertion == 0.0:
+        b.clamped_nodes = [b.node_at(0.0)]
+    return b
+
+
+def _rayleigh_for(beam, zeta=0.01):
+    """α, β giving ``zeta`` in the first two modes of the (rigidly clamped) truth."""
+    w2, _, _ = beam._modes()
+    w = np.sqrt(w2[:2])
+    A = np.array([[1 / (2 * w[0]), w[0] / 2], [1 / (2 * w[1]), w[1] / 2]])
+    a, b = np.linalg.solve(A, [zeta, zeta])
+    return float(a), float(b), w / (2 * np.pi)
+
+
+def _measure(rng, beam, g, f_max, df, level=None, law=None, chain=None):
+    """Bin-averaged receptances at the recorded lines, plus noise and coherence."""
+    pts = _points(g)
+    nodes_out = [beam.node_at(pts[n][1]) for n in POINT_NAMES]
+    outs = [2 * n for n in nodes_out]
+    ins = outs[:2]
+    freq = np.arange(1, int(f_max / df) + 1) * df
+    sub = np.array([-0.25, 0.25]) * df          # 2-point bin average (finite resolution)
+    fine = (freq[:, None] + sub[None, :]).ravel()
+    if law is None:
+        H = beam.receptance(fine, outs, ins)
+    else:
+        cols = [beam.receptance_amplitude_dependent(fine, outs, [i], level, law) for i in ins]
+        H = np.concatenate(cols, axis=2)
+    H = H.reshape(freq.size, 2, len(outs), len(ins)).mean(axis=1)
+    if chain is not None:
+        H = H * chain(freq)[:, None, None]
+    rel = float(rng.uniform(0.01, 0.02))
+    # noise floor of an accelerometer channel: flat in accelerance, so ∝ 1/ω² in receptance
+    w2 = (2 * np.pi * freq[:, None, None]) ** 2
+    floor = 1e-4 * np.abs(H * w2).max(axis=0, keepdims=True) / w2
+    sigma = rel * np.abs(H) + floor
+    noise = (rng.standard_normal(H.shape) + 1j * rng.standard_normal(H.shape)) * sigma / np.sqrt(2)
+    coh = np.abs(H) ** 2 / (np.abs(H) ** 2 + sigma**2 * (1 + 0.2 * rng.random(H.shape)))
+    labels = tuple(Dof(pts[n][0], "x") for n in POINT_NAMES)
+    frf = FRF(freq, H + noise, labels, labels[:2], "receptance")
+    return Recording(frf=frf, coherence=coh, level_n=level), rel
+
+
+def generate_case(effect: str, seed: int) -> BenchCase:
+    """One seeded case with ``effect`` hidden (``"none"``: nothing hidden).
+
+    Raises
+    ------
+    ValueError
+        For an unknown effect name.
+    """
+    if effect not in EFFECTS:
+        raise ValueError(f"unknown effect {effect!r}; expected one of {', '.join(EFFECTS)}")
+    rng = np.random.default_rng([seed, EFFECTS.index(effect)])
+    g = _geometry(rng)
+    clamped = _truth_beam(g)
+    alpha, beta, f12 = _rayleigh_for(clamped)
+    theory = "timoshenko"
+    truth: dict = {"effect": effect}
+    beam = clamped
+    chain = None
+    levels = [None]
+    law = None
+    df = float(rng.choice([2.5, 5.0]))
+    f3 = float(np.sqrt(clamped._modes()[0][2]) / (2 * np.pi))
+    f_max = 1.25 * f3
+    sign = lambda: float(rng.choice([-1.0, 1.0]))  # noqa: E731
+
+    if effect in ("joint_compliance", "joint_damping", "softening_joint"):
+        ins = float(rng.uniform(0.03, 0.05))
+        beam = _truth_beam(g, insertion=ins)
+        if effect == "joint_damping":
+            kprime = float(np.exp(rng.uniform(np.log(1e12), np.log(3e12))))
+            beam.bed_loss = float(rng.uniform(0.3, 0.6))
+        else:
+            kprime = float(np.exp(rng.uniform(np.log(2e11), np.log(2e12))))
+        slope = float(rng.uniform(0.0, 1.5))     # contact pressure rising towards the mouth
+        beam.add_winkler_bed(-ins, 0.0, kprime,
+                             profile=lambda z: (1 + slope * (z + ins) / ins) / (1 + slope / 2))
+        truth.update(insertion_m=ins, bed_stiffness_n_per_m2=kprime, bed_loss=beam.bed_loss,
+                     pressure_slope=slope)
+        if effect == "softening_joint":
+            levels = [2.0, 10.0, 50.0]
+            f_max = 1.25 * float(np.sqrt(clamped._modes()[0][1]) / (2 * np.pi))
+    elif effect == "sensor_mass":
+        where = str(rng.choice(["tip", "flute"]))
+        mass = float(rng.uniform(0.003, 0.010))
+        size = 0.006
+        z = _points(g)[where][1]
+        a, b = (z - size, z) if where == "tip" else (z - size / 2, z + size / 2)
+        e = g["d"] / 2 + 0.003
+        rot = mass * (size**2 / 12 + 0.006**2 / 12 + e**2)
+        beam.add_distributed_mass(a, b, mass, rot)
+        truth.update(where=where, mass_kg=mass, rotary_inertia_kgm2=rot, size_m=size)
+    elif effect == "shear_rotary":
+        theory = "euler-bernoulli"
+        truth.update(nominal_theory=theory)
+    elif effect == "fluted_diameter":
+        delta = sign() * float(rng.uniform(0.05, 0.12))
+        d_i = g["d_flute"] * (1 + delta)
+        d_a = g["d_flute"] * (1 + 0.6 * delta)
+        beam.set_section(g["flute_start"], g["length"], np.pi * d_a**2 / 4, np.pi * d_i**4 / 64)
+        truth.update(relative_error=delta, inertia_diameter_m=d_i, area_diameter_m=d_a)
+    elif effect == "hysteretic_damping":
+        eta = float(rng.uniform(0.01, 0.03))
+        truth.update(eta=eta)
+    elif effect == "gain":
+        gain = 1.0 + sign() * float(rng.uniform(0.08, 0.25))
+        chain = lambda f: np.full(f.shape, gain)  # noqa: E731
+        truth.update(gain=gain)
+    elif effect == "delay":
+        tau = float(rng.uniform(20e-6, 80e-6))
+        b_, a_ = scipy.signal.bessel(8, 1.0 / tau, analog=True, norm="delay")
+        chain = lambda f: scipy.signal.freqs(b_, a_, 2 * np.pi * f)[1]  # noqa: E731
+        truth.update(delay_s=tau, filter="8th-order Bessel anti-alias filter")
+
+    if effect == "hysteretic_damping":
+        beam.rayleigh = (0.0, 0.0)
+        beam.structural_loss = truth["eta"]
+    else:
+        beam.rayleigh = (alpha, beta)
+    if effect == "softening_joint":
+        r_mouth = beam.node_at(0.0)
+        ref = beam.receptance(np.linspace(0.7, 1.0, 200) * f12[0], [2 * r_mouth], [2 * beam.node_at(g["length"])])
+        a_ref = float(np.abs(ref).max()) * levels[1]
+        a_c = a_ref / float(rng.uniform(0.5, 2.0))
+        s_max = float(rng.uniform(0.4, 0.7))
+        eta_max = float(rng.uniform(0.2, 0.4))
+
+        def law(a, a_c=a_c, s_max=s_max, eta_max=eta_max, eta0=beam.bed_loss):
+            r = a / a_c
+            return 1.0 - s_max * r / (1.0 + r), eta0 + eta_max * r / (1.0 + r)
+
+        truth.update(slip_amplitude_m=a_c, max_softening=s_max, max_loss=eta_max, levels_n=levels)
+
+    recs = []
+    noise = []
+    for level in levels:
+        rec, rel = _measure(rng, beam, g, f_max, df, level=level, law=law, chain=chain)
+        recs.append(rec)
+        noise.append(rel)
+    truth.update(noise_rel=noise, resolution_hz=df, geometry=g)
+    model = _nominal(g, theory=theory, damping=(alpha, beta))
+    pmap = {node: name for name, (node, _) in _points(g).items()}
+    return BenchCase(name=f"{effect}-{seed}", effects=(effect,), seed=seed, truth=truth,
+                     model=model, recordings=tuple(recs), point_map=pmap)
+
+
+def generate_suite(n_per_effect: int, seed: int = 0, effects=EFFECTS):
+    """``n_per_effect`` cases per effect, seeds ``seed .. seed+n-1`` (a generator)."""
+    for effect in effects:
+        for k in range(n_per_effect):
+            yield generate_case(effect, seed + k)
