@@ -164,8 +164,8 @@ def test_ingredients_are_independent_and_composable():
     dm = m1.M - m0.M
     assert np.count_nonzero(np.abs(dm) > 1e-12 * np.abs(m0.M).max()) == 1 and dm.max() == pytest.approx(0.2)
     # a very stiff support is a clamp
-    stiff = bare.with_ingredient(Support(0.0, {"x": 1e16, "ry": 1e14}))
-    np.testing.assert_allclose(stiff.modes(3).freq_hz, clamped.modes(3).freq_hz, rtol=1e-5)
+    stiff = bare.with_ingredient(Support(0.0, {"x": 1e14, "ry": 1e8}))
+    np.testing.assert_allclose(stiff.modes(3).freq_hz, clamped.modes(3).freq_hz, rtol=1e-4)
     # a pinned end (x only): one rigid-body rotation remains
     assert bare.with_ingredient(Clamp(0.0, ("x",))).modes(2).n_rigid == 1
 
