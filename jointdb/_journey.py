@@ -1,0 +1,219 @@
+"""The main job: catalogue → query → predict → stability lobes, on the bundled fixtures.
+
+:func:`run_main_job` is what ``jointdb demo`` runs. It
+
+1. identifies the tool–holder joint of every bundled measurement campaign
+   (IRC, theory §2a; six campaigns: clamping torque 40 / 80 / 120 N·m × carbide
+   or steel tool in a steel holder) and catalogues each as a joint version;
+2. reads the bundled new stack (a fluted carbide end mill at 100 N·m) and asks
+   the database for the nearest tool–holder joint, reporting the chosen
+   version, its distance, the other candidates and any extrapolation;
+3. predicts the tool-tip FRF (three-component RC, theory §4) with that joint
+   and with rigid joints, writes it (UFF58, CSV) and a comparison plot;
+4. computes milling stability lobes (zero-order approximation, theory §5)
+   from both predictions and plots them;
+
+printing what it does through ``say`` and writing everything into ``out_dir``.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable
+from contextlib import ExitStack
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from jointdb.errors import InputError
+
+__all__ = ["JourneyResult", "run_main_job", "bundled_catalogue", "DEMO_CUT"]
+
+#: Milling conditions of the demo: 4-flute end mill, aluminium 7075 (Altintas, Manufacturing
+#: Automation: K_t = 796 MPa, K_r/K_t = 0.212), half immersion, down-milling.
+DEMO_CUT = {"n_teeth": 4, "kt": 7.96e8, "kr": 0.212 * 7.96e8, "radial_immersion": 0.5, "down_milling": True}
+
+
+@dataclass
+class JourneyResult:
+    """What the main job produced."""
+
+    out_dir: Path
+    db_url: str
+    catalogued: list[dict[str, Any]] = field(default_factory=list)
+    joints: list[dict[str, Any]] = field(default_factory=list)
+    prediction: list[dict[str, Any]] = field(default_factory=list)
+    lobes: dict[str, Any] = field(default_factory=dict)
+    files: list[Path] = field(default_factory=list)
+
+
+def bundled_catalogue(stack: ExitStack) -> Path:
+    """Directory of the bundled campaigns (``jointdb/data/catalogue``), as a real path while ``stack`` is open."""
+    ref = resources.files("jointdb").joinpath("data", "catalogue")
+    if not ref.is_dir():
+        raise InputError("the bundled catalogue jointdb/data/catalogue is missing from the installed package")
+    return Path(stack.enter_context(resources.as_file(ref)))
+
+
+def _write_json(path: Path, data: Any) -> Path:
+    from jointdb._output import to_jsonable
+
+    path.write_text(json.dumps(to_jsonable(data), indent=2) + "\n", encoding="utf-8")
+    return path
+
+
+def _write_csv(path: Path, rows: list[dict[str, Any]]) -> Path:
+    import csv
+
+    with path.open("w", newline="", encoding="utf-8") as fh:
+        writer = csv.DictWriter(fh, fieldnames=list(rows[0].keys()) if rows else ["empty"])
+        writer.writeheader()
+        writer.writerows(rows)
+    return path
+
+
+def run_main_job(
+    out_dir: Path,
+    db_url: str | None = None,
+    say: Callable[[str], None] = print,
+    *,
+    every: int = 1,
+    n_speeds: int = 400,
+    speed_range_rpm: tuple[float, float] = (3000.0, 30000.0),
+) -> JourneyResult:
+    """Run the whole journey on the bundled fixtures and write its outputs into ``out_dir``.
+
+    Parameters
+    ----------
+    out_dir
+        Output folder (created). Files: ``catalogue.csv``, ``joint-choice.json``,
+        ``joint-choice.png``, ``stack.json``, ``tip.uff``, ``tip.csv``, ``tip-vs-rigid.png``,
+        ``lobes.csv``, ``lobes.png``, ``summary.json`` (and the SQLite database when
+        ``db_url`` is None).
+    db_url
+        Joint database (SQLAlchemy URL or SQLite path). ``None``: a fresh SQLite
+        file ``out_dir/joints.sqlite``. Running twice on the same database reuses
+        identical versions instead of adding new ones.
+    say
+        Called with one line of text per step (the CLI passes a stderr writer).
+    every
+        Identify on every n-th measured line (1 = all; larger is faster).
+    n_speeds
+        Spindle speeds of the lobe diagram.
+    speed_range_rpm
+        Spindle-speed range of the lobe diagram.
+
+    Returns
+    -------
+    JourneyResult
+    """
+    from jointdb import app, io
+    from jointdb.plots._lobes import plot_lobes
+    from jointdb.plots._stack import save_joint_distances, save_tip_comparison
+    from jointdb.stability import MillingCut, milling_lobes_zoa
+    from jointdb.stack import stack_to_dict
+    from jointdb.store import Repository
+
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    url = db_url if db_url is not None else f"sqlite:///{(out / 'joints.sqlite').resolve()}"
+    result = JourneyResult(out, url)
+    with ExitStack() as stack:
+        cat = bundled_catalogue(stack)
+        repo = stack.enter_context(Repository(url))
+        say(f"jointdb main job → {out}  (database: {url})")
+
+        # 1. catalogue ---------------------------------------------------------------
+        campaigns = sorted((cat / "campaigns").glob("*.json"))
+        say(f"[1/4] identify and catalogue {len(campaigns)} tool–holder campaigns (IRC, theory §2a)")
+        for path in campaigns:
+            outcome = app.catalogue_campaign(repo, path, every=every)
+            row = outcome.row()
+            ref = outcome.campaign.reference or {}
+            if ref.get("k"):
+                row["k_x_error"] = float(outcome.k[0] / ref["k"][0] - 1.0)
+                row["k_theta_error"] = float(outcome.k[1] / ref["k"][1] - 1.0)
+            result.catalogued.append(row)
+            say(f"      {row['joint']:<28} {row['materials']:<23} {row['torque_nm']:>5g} N·m  "
+                f"k_x={row['k_x_n_per_m']:.3e} N/m  k_θ={row['k_theta_nm_per_rad']:.3e} N·m/rad  "
+                f"c_x={row['c_x_ns_per_m']:.0f} N·s/m  {'new version' if row['new'] else 'already catalogued'}")
+        result.files.append(_write_csv(out / "catalogue.csv", result.catalogued))
+
+        # 2. query ---------------------------------------------------------------------
+        spec = app.load_stack(cat / "demo-stack.json")
+        result.files.append(_write_json(out / "stack.json", stack_to_dict(spec)))
+        say(f"[2/4] new stack: {spec.name}")
+        say(f"      tool {spec.tool.length * 1e3:.0f} mm ({spec.gauge_length * 1e3:.0f} mm gauge, "
+            f"{spec.insertion_length * 1e3:.0f} mm inserted), holder {spec.holder.length * 1e3:.0f} mm")
+        resolutions = app.resolve_joints(spec, repo)
+        for res in resolutions.values():
+            row = res.row()
+            result.joints.append({**row, "candidates": [list(c) for c in res.candidates]})
+            if res.candidates:
+                say(f"      {res.interface}: chose {res.name}@{res.version} at distance {res.distance:.3f} "
+                    f"({row['per_condition']}){'  EXTRAPOLATING: ' + ', '.join(res.outside_range) if res.extrapolating else ''}")
+                for name, version, dist in res.candidates[1:]:
+                    say(f"          next: {name}@{version} at {dist:.3f}")
+            else:
+                say(f"      {res.interface}: {row['joint']}")
+            for w in res.warnings:
+                say(f"      warning: {w}")
+        result.files.append(_write_json(out / "joint-choice.json", result.joints))
+        result.files.append(save_joint_distances(out / "joint-choice.png", resolutions))
+
+        # 3. predict -------------------------------------------------------------------
+        say("[3/4] predict the tool-tip FRF (three-component receptance coupling, theory §4)")
+        from jointdb.stack import predict_tool_tip, prediction_grid
+
+        grid = prediction_grid(spec)
+        pred = predict_tool_tip(spec, {n: r.frf for n, r in resolutions.items() if r.frf is not None}, grid)
+        result.prediction = pred.summary()
+        for row in result.prediction:
+            say(f"      {row['direction']}: peak {row['peak_m_per_n']:.3e} m/N at {row['peak_hz']:.0f} Hz "
+                f"(rigid joints: {row['rigid_peak_m_per_n']:.3e} m/N at {row['rigid_peak_hz']:.0f} Hz); "
+                f"most negative real part {row['min_real_m_per_n']:.3e} m/N")
+        for note in pred.notes:
+            say(f"      note: {note}")
+        io.write_uff58(out / "tip.uff", pred.tip, round_freq=True)
+        io.write_frf_csv(out / "tip.csv", pred.tip)
+        result.files += [out / "tip.uff", out / "tip.csv"]
+        result.files.append(save_tip_comparison(out / "tip-vs-rigid.png", pred, title=spec.name))
+
+        # 4. lobes ---------------------------------------------------------------------
+        cut = MillingCut(**DEMO_CUT)
+        speeds = np.linspace(*speed_range_rpm, n_speeds)
+        say(f"[4/4] milling stability lobes (zero-order approximation, theory §5): {cut.n_teeth} teeth, "
+            f"K_t={cut.kt:.3g} N/m², K_r={cut.kr:.3g} N/m², a_e/D={cut.radial_immersion:g}, "
+            f"{'down' if cut.down_milling else 'up'}-milling, {n_speeds} speeds")
+        lobes = milling_lobes_zoa(pred.tip, cut, spindle_speed_rpm=speeds)
+        lobes_rigid = milling_lobes_zoa(pred.rigid, cut, spindle_speed_rpm=speeds)
+        best = int(np.nanargmax(np.where(np.isfinite(lobes.depth_m), lobes.depth_m, -np.inf)))
+        result.lobes = {
+            "method": lobes.method,
+            "min_depth_m": lobes.min_depth_m,
+            "min_depth_rigid_m": lobes_rigid.min_depth_m,
+            "best_speed_rpm": float(lobes.spindle_speed_rpm[best]),
+            "best_depth_m": float(lobes.depth_m[best]),
+            "cut": DEMO_CUT,
+        }
+        say(f"      unconditionally stable below {lobes.min_depth_m * 1e3:.3f} mm "
+            f"(with rigid joints: {lobes_rigid.min_depth_m * 1e3:.3f} mm); "
+            f"best pocket {lobes.depth_m[best] * 1e3:.2f} mm at {lobes.spindle_speed_rpm[best]:.0f} rpm")
+        result.files.append(_write_csv(out / "lobes.csv", lobes.table()))
+        result.files.append(plot_lobes([lobes, lobes_rigid], out / "lobes.png",
+                                       labels=["with catalogued joints", "rigid joints"],
+                                       title=f"Stability lobes: {spec.name}"))
+        summary = {
+            "database": url,
+            "catalogued": result.catalogued,
+            "joints": result.joints,
+            "prediction": result.prediction,
+            "notes": list(pred.notes),
+            "lobes": result.lobes,
+        }
+        result.files.append(_write_json(out / "summary.json", summary))
+    say(f"done: {len(result.files)} files in {out}")
+    return result

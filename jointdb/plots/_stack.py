@@ -1,0 +1,94 @@
+"""Figures of a stack prediction: tool-tip FRF with the database joints against rigid joints.
+
+matplotlib (Agg), imported lazily by the CLI and the main job only.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["save_tip_comparison", "save_joint_distances"]
+
+
+def _pyplot():
+    import matplotlib
+
+    matplotlib.use("Agg", force=True)
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def save_tip_comparison(path, prediction, *, title: str | None = None,
+                        extra: Sequence[tuple[str, object]] = ()) -> Path:
+    """Tool-tip receptance magnitude, real and imaginary parts: with joints vs rigid joints.
+
+    Parameters
+    ----------
+    path
+        PNG file to write.
+    prediction
+        :class:`jointdb.stack.Prediction`.
+    extra
+        Further ``(label, FRF)`` curves on the same tip DOFs (e.g. a measurement).
+
+    Returns
+    -------
+    Path
+    """
+    plt = _pyplot()
+    tip, rigid = prediction.tip, prediction.rigid
+    directions = ["x"]
+    if not np.allclose(tip.entry("1y", "1y"), tip.entry("1x", "1x")):
+        directions.append("y")
+    fig, axes = plt.subplots(2, len(directions), figsize=(7.5 * len(directions), 6.5), sharex=True, squeeze=False)
+    for col, d in enumerate(directions):
+        dof = f"1{d}"
+        curves = [("with catalogued joints", tip, "C0", "-"), ("rigid joints", rigid, "C3", "--")]
+        curves += [(label, frf, f"C{2 + i}", ":") for i, (label, frf) in enumerate(extra)]
+        ax_m, ax_c = axes[0, col], axes[1, col]
+        for label, frf, colour, style in curves:
+            h = frf.entry(dof, dof)
+            ax_m.semilogy(frf.freq, np.abs(h), style, color=colour, lw=1.3, label=label)
+            ax_c.plot(frf.freq, h.real * 1e6, style, color=colour, lw=1.0, label=f"Re, {label}")
+            ax_c.plot(frf.freq, h.imag * 1e6, style, color=colour, lw=1.0, alpha=0.5)
+        ax_m.set_ylabel(f"|H_{d}{d}| [m/N]")
+        ax_m.set_title(f"tool tip, {d} direction")
+        ax_m.grid(True, which="both", alpha=0.3)
+        ax_m.legend(fontsize=8)
+        ax_c.set_ylabel("Re (dark), Im (light) [µm/N]")
+        ax_c.set_xlabel("frequency [Hz]")
+        ax_c.grid(True, alpha=0.3)
+    fig.suptitle(title or "Predicted tool-tip FRF")
+    fig.tight_layout()
+    path = Path(path)
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
+
+
+def save_joint_distances(path, resolutions, *, title: str | None = None) -> Path:
+    """Bar chart of the candidate joints' distances for each queried interface (chosen one highlighted)."""
+    plt = _pyplot()
+    queried = [r for r in resolutions.values() if r.candidates]
+    fig, axes = plt.subplots(1, max(1, len(queried)), figsize=(6.5 * max(1, len(queried)), 3.6), squeeze=False)
+    for ax, res in zip(axes[0], queried):
+        names = [f"{n}@{v}" for n, v, _ in res.candidates]
+        dist = [d for _, _, d in res.candidates]
+        colours = ["C0" if (n, v) == (res.name, res.version) else "0.7" for n, v, _ in res.candidates]
+        ax.barh(names[::-1], dist[::-1], color=colours[::-1])
+        ax.set_xlabel("condition distance [-]")
+        ax.set_title(f"{res.interface}: nearest catalogued joints")
+        ax.grid(True, axis="x", alpha=0.3)
+    if not queried:
+        axes[0, 0].text(0.5, 0.5, "no interface was queried", ha="center", va="center")
+        axes[0, 0].set_axis_off()
+    fig.suptitle(title or "Joint choice")
+    fig.tight_layout()
+    path = Path(path)
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
