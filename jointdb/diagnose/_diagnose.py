@@ -24,6 +24,10 @@ BIC_MARGIN = 10.0
 MIN_IMPROVEMENT = 1.5
 #: A combination must beat the best single explanation by this factor as well.
 MIN_PAIR_IMPROVEMENT = 1.25
+#: Parsimony: an explanation with fewer parameters whose mismatch is within
+#: this factor of the BIC-best one is preferred (BIC alone under-penalises,
+#: because residuals on neighbouring lines are correlated).
+OCCAM_TOLERANCE = 1.15
 
 
 @dataclass
@@ -93,7 +97,8 @@ class Diagnosis:
             "explained": self.explained,
             "verdict": self.verdict,
             "criterion": f"BIC = n ln(RSS/n) + p ln n; accept if ΔBIC <= -{BIC_MARGIN:g} and "
-                         f"mismatch falls >= {MIN_IMPROVEMENT:g}x",
+                         f"mismatch falls >= {MIN_IMPROVEMENT:g}x; prefer fewer parameters within "
+                         f"{OCCAM_TOLERANCE:g}x of the best mismatch",
             "mismatch_before": self.mismatch_before,
             "mismatch_after": self.mismatch_after,
             "best": None if b is None else {
@@ -254,6 +259,10 @@ def diagnose(model, measurements: Sequence[Measurement], mapping: Mapping[int, s
         fits = sorted(fits + pair_fits, key=lambda f: f.bic)
 
     best = fits[0] if fits and passes(fits[0], nominal) else None
+    if best is not None:
+        near = [f for f in fits if passes(f, nominal) and f.mismatch <= OCCAM_TOLERANCE * best.mismatch]
+        best = min(near, key=lambda f: (f.p, f.bic))
+        fits = [best] + [f for f in fits if f is not best]
     augmented: tuple = ()
     chain: dict = {}
     level_table: list = []

@@ -62,6 +62,12 @@ class ModelEvaluator:
             return np.broadcast_to(self.frf(nominal), self.rec.shape)
         out = []
         base = None
+        if not _changes_model(cand):
+            key = id(nominal)
+            if getattr(self, "_cache_key", None) != key:
+                self._cache = self.frf(nominal)
+                self._cache_key = key
+            base = self._cache
         for lv in range(n_lv):
             if cand.per_level or base is None:
                 base = self.frf(cand.apply(nominal, values, lv))

@@ -13,6 +13,9 @@ with the nominal jointdb.fe model that is diagnosed. It shares no code with
 >>> case.model["segments"][0]["length"], case.recordings[0].frf.shape  # doctest: +SKIP
 """
 
+from jointdb.diagnose_bench._blas import single_blas_thread
 from jointdb.diagnose_bench._cases import EFFECTS, BenchCase, Recording, generate_case, generate_suite
+from jointdb.diagnose_bench._run import BenchResult, CaseResult, run_benchmark, run_case
 
-__all__ = ["EFFECTS", "BenchCase", "Recording", "generate_case", "generate_suite"]
+__all__ = ["EFFECTS", "BenchCase", "Recording", "generate_case", "generate_suite",
+           "BenchResult", "CaseResult", "run_benchmark", "run_case", "single_blas_thread"]

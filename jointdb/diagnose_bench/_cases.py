@@ -208,10 +208,15 @@ def generate_case(effect: str, seed: int) -> BenchCase:
         chain = lambda f: np.full(f.shape, gain)  # noqa: E731
         truth.update(gain=gain)
     elif effect == "delay":
-        tau = float(rng.uniform(20e-6, 80e-6))
-        b_, a_ = scipy.signal.bessel(8, 1.0 / tau, analog=True, norm="delay")
-        chain = lambda f: scipy.signal.freqs(b_, a_, 2 * np.pi * f)[1]  # noqa: E731
-        truth.update(delay_s=tau, filter="8th-order Bessel anti-alias filter")
+        # channel skew (a pure delay) behind an 8th-order Bessel anti-alias filter
+        # with its −3 dB point at 2.5 × the top of the band (group delay adds to the skew)
+        skew = float(rng.uniform(15e-6, 60e-6))
+        b_, a_ = scipy.signal.bessel(8, 2 * np.pi * 2.5 * f_max, analog=True, norm="mag")
+        chain = lambda f: scipy.signal.freqs(b_, a_, 2 * np.pi * f)[1] * np.exp(-2j * np.pi * f * skew)  # noqa: E731
+        w_, h_ = scipy.signal.freqs(b_, a_, [2 * np.pi * 1.0, 2 * np.pi * 2.0])
+        tau_filter = float(-(np.angle(h_[1]) - np.angle(h_[0])) / (w_[1] - w_[0]))
+        truth.update(delay_s=skew + tau_filter, skew_s=skew, filter_group_delay_s=tau_filter,
+                     filter="8th-order Bessel anti-alias filter, -3 dB at 2.5 f_max")
 
     if effect == "hysteretic_damping":
         beam.rayleigh = (0.0, 0.0)

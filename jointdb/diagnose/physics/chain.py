@@ -29,7 +29,8 @@ class Delay(Candidate):
     family = "delay"
     slot = "delay"
     explanation = "a time delay between the force and response channels"
-    params = (Param("delay", "s", -5e-4, 5e-4, 0.0, log=False, show=1e6, show_unit="µs"),)
+    params = (Param("delay", "s", -5e-4, 5e-4, 0.0, log=False, show=1e6, show_unit="µs",
+                    starts=(2e-5, 5e-5, 1e-4, 2e-4, -3e-5, -1e-4)),)
 
     def chain(self, freq, values, level=0):
         return np.exp(-2j * np.pi * freq * values["delay"])

@@ -1,8 +1,11 @@
 """Effective-diameter error of a section (e.g. the fluted part of a tool).
 
-A fluted section is not a circle: its bending stiffness and mass follow an
-*effective* diameter that is usually guessed (0.75–0.85 × the nominal). One
-candidate per segment scales that segment's outer diameter.
+A fluted section is not a circle: its bending stiffness and its mass follow
+*effective* diameters that are usually guessed (0.75–0.85 × the nominal), and
+the two are not the same (the second moment of a fluted section falls faster
+than its area). One candidate per segment fits the bending-effective diameter
+(the segment's outer diameter) and the mass-effective one (realised as a
+density scaled by ``(d_mass/d_bend)²`` on that segment).
 """
 
 from __future__ import annotations
@@ -10,6 +13,7 @@ from __future__ import annotations
 import dataclasses
 
 from jointdb.diagnose.physics import Candidate, Param, register
+from jointdb.fe import Material, get_material
 
 
 class EffectiveDiameter(Candidate):
@@ -22,11 +26,18 @@ class EffectiveDiameter(Candidate):
         self.d0 = segment.outer_diameter
         self.explanation = (f"a wrong effective diameter of segment {index} "
                             f"(nominal {segment.outer_diameter * 1e3:.3g} mm, e.g. a fluted section)")
-        self.params = (Param("diameter", "m", 0.6 * self.d0, 1.4 * self.d0, self.d0, show=1e3, show_unit="mm"),)
+        self.params = (Param("diameter", "m", 0.6 * self.d0, 1.4 * self.d0, self.d0, show=1e3, show_unit="mm"),
+                       Param("mass_diameter", "m", 0.6 * self.d0, 1.4 * self.d0, self.d0, show=1e3,
+                             show_unit="mm"))
 
     def apply(self, model, values, level=0):
         segs = list(model.segments)
-        segs[self.index] = dataclasses.replace(segs[self.index], outer_diameter=values["diameter"])
+        seg = segs[self.index]
+        mat = get_material(seg.material)
+        d, dm = values["diameter"], values["mass_diameter"]
+        ratio = (dm**2 - seg.inner_diameter**2) / (d**2 - seg.inner_diameter**2)
+        new_mat = Material(f"{mat.name} (mass-effective)", mat.E, mat.nu, mat.rho * ratio)
+        segs[self.index] = dataclasses.replace(seg, outer_diameter=d, material=new_mat)
         return model.replace(segments=tuple(segs))
 
 
