@@ -16,6 +16,9 @@ Identification (IRC, theory.md §2), each returning an :class:`IdentificationRes
 - :class:`Regularisation` — truncated-SVD / Tikhonov pseudo-inverses.
 - :func:`equivalent_stiffness_damping`, :func:`fit_constant_kc` — k(ω), c(ω), constant (k, c).
 
+Rotational receptances at a contact point (theory.md §3):
+:func:`rotations_by_extension`, :func:`rotations_by_finite_difference`.
+
 Notes on the contract (api-contracts.md): outputs/inputs are
 ``(substructure name, Dof)`` pairs and the result FRF is labelled with the bare
 Dofs, so requested DOF labels must be distinct across substructures. A joint
@@ -34,6 +37,7 @@ from jointdb.coupling.irc import (
     identify_planar_joint,
 )
 from jointdb.coupling.rc import Interface, JointSubstructure, couple, spring_damper_joint
+from jointdb.coupling.rotational import rotations_by_extension, rotations_by_finite_difference
 
 __all__ = [
     "Interface",
@@ -48,4 +52,6 @@ __all__ = [
     "equivalent_stiffness_damping",
     "fit_constant_kc",
     "KCFit",
+    "rotations_by_extension",
+    "rotations_by_finite_difference",
 ]
