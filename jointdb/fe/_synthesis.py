@@ -11,7 +11,7 @@ import scipy.linalg
 
 from jointdb.errors import InputError, NumericalError
 
-__all__ = ["eigen_free", "rigid_body_count", "natural_modes", "frf_direct", "frf_modal"]
+__all__ = ["eigen_free", "rigid_body_count", "rigid_body_modes", "natural_modes", "frf_direct", "frf_modal"]
 
 #: Memory budget [bytes] for one chunk of stacked dynamic-stiffness matrices.
 CHUNK_BYTES = 64 * 2**20
@@ -34,6 +34,19 @@ def _rigid_vectors(matrices) -> np.ndarray:
     return np.stack(cols, axis=1)
 
 
+def _rigid_null_space(matrices) -> np.ndarray:
+    """Combinations of rigid motions that strain nothing and move no fixed DOF, ``(n_dof, n_rb)``."""
+    R = _rigid_vectors(matrices)
+    scale = np.abs(R).max(axis=0)
+    R = R / np.where(scale > 0, scale, 1.0)
+    kscale = float(np.abs(matrices.K).max()) or 1.0
+    A = np.vstack([matrices.K @ R / kscale, R[matrices.fixed]])
+    _, s, vt = np.linalg.svd(A, full_matrices=True)
+    s = np.concatenate([s, np.zeros(R.shape[1] - s.size)])
+    null = vt[s <= 1e-9 * max(1.0, s.max(initial=0.0))]
+    return R @ null.T
+
+
 def rigid_body_count(matrices) -> int:
     """Number of rigid-body modes left after constraints and supports.
 
@@ -41,13 +54,17 @@ def rigid_body_count(matrices) -> int:
     (``K R a = 0``) and moves no fixed DOF; counted by an SVD of
     ``[K R; R_fixed]`` (small: at most 6 columns).
     """
-    R = _rigid_vectors(matrices)
-    scale = np.abs(R).max(axis=0)
-    R = R / np.where(scale > 0, scale, 1.0)
-    kscale = float(np.abs(matrices.K).max()) or 1.0
-    A = np.vstack([matrices.K @ R / kscale, R[matrices.fixed]])
-    s = np.linalg.svd(A, compute_uv=False)
-    return int(np.sum(s <= 1e-9 * max(1.0, s.max(initial=0.0)))) + max(0, R.shape[1] - A.shape[0])
+    return int(_rigid_null_space(matrices).shape[1])
+
+
+def rigid_body_modes(matrices) -> np.ndarray:
+    """Mass-normalised rigid-body modes on the free DOFs, ``(n_free, n_rb)``, exact from geometry."""
+    phi = _rigid_null_space(matrices)[~matrices.fixed]
+    if phi.shape[1] == 0:
+        return phi
+    Mf = matrices.M[np.ix_(~matrices.fixed, ~matrices.fixed)]
+    chol = np.linalg.cholesky(phi.T @ Mf @ phi)
+    return np.linalg.solve(chol, phi.T).T
 
 
 def eigen_free(matrices, n: int | None, max_value: float | None = None):
@@ -181,6 +198,16 @@ def frf_direct(matrices, freq_hz, dof_index, chunk_bytes: int = CHUNK_BYTES) -> 
     rhs[pos[ok], np.arange(rhs.shape[1])] = 1.0
     out = np.zeros((f.size, m, m), dtype=complex)
     w = 2.0 * np.pi * f
+    Lf = matrices.K_loss[np.ix_(free, free)]
+    deflation = _rigid_deflation(Kc.real, Mf, Cf, Lf, rigid_body_modes(matrices))
+    rigid_rhs = None
+    if deflation is not None:
+        # split off the rigid-body motion exactly (see _rigid_deflation): far better
+        # conditioned than K − ω²M near 0 Hz for free-free parts
+        phi_r, shift_matrix, Cr, Lr = deflation
+        rigid_rhs = phi_r.T @ rhs
+        rhs = rhs - Mf @ phi_r @ rigid_rhs
+        Kc = Kc + shift_matrix
     chunk = max(1, int(chunk_bytes // (3 * 16 * nf * nf)))
     sel = np.ix_(ok, ok)
     for start in range(0, f.size, chunk):  # loop over memory chunks, not over lines
@@ -188,6 +215,9 @@ def frf_direct(matrices, freq_hz, dof_index, chunk_bytes: int = CHUNK_BYTES) -> 
         D = Kc[None] + 1j * wc * Cf[None] - wc**2 * Mf[None]
         try:
             X = np.linalg.solve(D, np.broadcast_to(rhs, (D.shape[0],) + rhs.shape))
+            if rigid_rhs is not None:
+                Dr = 1j * Lr[None] + 1j * wc * Cr[None] - wc**2 * np.eye(Cr.shape[0])[None]
+                X = X + phi_r[None] @ np.linalg.solve(Dr, np.broadcast_to(rigid_rhs, (D.shape[0],) + rigid_rhs.shape))
         except np.linalg.LinAlgError:
             raise NumericalError(
                 f"dynamic stiffness is singular between {f[start]:g} and {f[min(start + chunk, f.size) - 1]:g} Hz "
@@ -196,6 +226,35 @@ def frf_direct(matrices, freq_hz, dof_index, chunk_bytes: int = CHUNK_BYTES) -> 
         block = out[start : start + chunk]
         block[:, sel[0], sel[1]] = X[:, pos[ok], :]
     return out
+
+
+def _rigid_deflation(K, M, C, L, phi_r):
+    """Data to split the rigid-body motion off a direct solve, or None.
+
+    When damping maps rigid-body modes ``Φ_r`` into ``M Φ_r`` (modal, hysteretic,
+    mass- or stiffness-proportional damping; not a damper between ground and a
+    free part), ``D(ω) Φ_r = M Φ_r (iL_r + iωC_r − ω²)``, and the response to
+    ``F`` is exactly ``Φ_r a + u_e`` with ``(iL_r + iωC_r − ω²) a = Φ_rᵀ F`` and
+    ``(D + s M Φ_r Φ_rᵀ M) u_e = (I − M Φ_r Φ_rᵀ) F`` for any shift ``s ≠ ω²``
+    (here the median of diag K / diag M, far above the band of interest).
+    """
+    if phi_r.shape[1] == 0:
+        return None
+    mp = M @ phi_r
+    Cr = phi_r.T @ C @ phi_r
+    # rigid-body motion strains nothing, so it has no hysteretic loss (K_loss Φ_r = 0 up to
+    # round-off, which must not leak into the rigid-body response as a spurious loss)
+    Lr = np.zeros_like(Cr)
+    for A, Ar in ((C, Cr), (L, Lr)):
+        scale = float(np.abs(A).max(initial=0.0))
+        if scale and np.abs(A @ phi_r - mp @ Ar).max() > 1e-9 * scale * np.abs(phi_r).max():
+            return None
+    # damping of the rigid-body motion (e.g. α M) is positive semi-definite: clip round-off
+    ev, vec = np.linalg.eigh(0.5 * (Cr + Cr.T))
+    Cr = (vec * np.clip(ev, 0.0, None)) @ vec.T
+    d = np.diag(M)
+    shift = float(np.median(np.diag(K)[d > 0] / d[d > 0]))
+    return phi_r, shift * (mp @ mp.T), Cr, Lr
 
 
 def frf_modal(matrices, freq_hz, dof_index, n_modes: int | None = None, residual: bool = True) -> np.ndarray:
@@ -243,6 +302,12 @@ def frf_modal(matrices, freq_hz, dof_index, n_modes: int | None = None, residual
     Lf = matrices.K_loss[np.ix_(free, free)]
     Cm = phi.T @ Cf @ phi
     Lm = phi.T @ Lf @ phi
+    # rigid-body modes strain nothing: no hysteretic loss (drop round-off), and no
+    # negative modal damping from round-off either
+    Lm[:n_rb, :] = 0.0
+    Lm[:, :n_rb] = 0.0
+    Cm[np.diag_indices_from(Cm)] = np.clip(np.diag(Cm), 0.0, None)
+    Lm[np.diag_indices_from(Lm)] = np.clip(np.diag(Lm), 0.0, None)
     phi_io = np.zeros((m, lam.size))
     phi_io[ok] = phi[pos[ok]]
     w = 2.0 * np.pi * f

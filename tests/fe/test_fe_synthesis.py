@@ -4,7 +4,7 @@ import os
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
 from jointdb.errors import InputError
@@ -181,13 +181,15 @@ def random_models(draw):
         )
     if draw(st.booleans()):
         ingredients.append(PointMass(draw(positions), draw(st.floats(0.0, 0.05)), draw(st.floats(0.0, 1e-5))))
-    damping = draw(st.sampled_from(["modal", "rayleigh", "hysteretic", "none"]))
+    # always some damping: an undamped FRF is infinite at its resonances, and the
+    # solve is arbitrarily ill-conditioned next to them
+    damping = draw(st.sampled_from(["modal", "rayleigh", "hysteretic"]))
     if damping == "modal":
         ingredients.append(ModalDamping(draw(st.floats(0.001, 0.1))))
     elif damping == "rayleigh":
-        ingredients.append(RayleighDamping(draw(st.floats(0.0, 100.0)), draw(st.floats(0.0, 1e-6))))
-    elif damping == "hysteretic":
-        ingredients.append(HystereticDamping(draw(st.floats(0.0, 0.05))))
+        ingredients.append(RayleighDamping(draw(st.floats(0.0, 100.0)), draw(st.floats(1e-8, 1e-6))))
+    else:
+        ingredients.append(HystereticDamping(draw(st.floats(0.002, 0.05))))
     points = (NamedPoint("a", draw(positions), 1), NamedPoint("b", draw(positions), 2))
     model = BeamModel(tuple(segs), points, tuple(ingredients), theory=draw(st.sampled_from(["timoshenko", "euler-bernoulli"])),
                       kind=draw(st.sampled_from(["planar", "planar", "frame3d"])), max_element_length=length / 6)
@@ -204,15 +206,21 @@ def test_receptances_are_reciprocal_and_passive(model, freq, method):
     freq = np.sort(np.asarray(freq))
     if model.points[0].position == model.points[1].position:
         model = model.replace(points=(model.points[0],))
+    # Skip lines where the (deflated) solve is too ill-conditioned for the tolerances below:
+    # its condition number is about λ_max / min_r |λ_r − ω²| over the elastic modes.
+    modes = model.modes()
+    lam = (2 * np.pi * modes.freq_hz[modes.n_rigid :]) ** 2
+    w2 = (2 * np.pi * freq) ** 2
+    cond = lam.max() / np.min(np.abs(lam[None, :] - w2[:, None]))
+    assume(cond < 1e8)
     frf = model.frf(freq, method=method)
     h = frf.values
     scale = np.abs(h).max(axis=(1, 2), keepdims=True)
     scale = np.where(scale > 0, scale, 1.0)
-    # reciprocity: H = Hᵀ (to the round-off of a solve whose condition number reaches
-    # (ω_1/ω)² ~ 1e9 for stubby free-free shafts at 10 Hz)
+    # reciprocity: H = Hᵀ (to the round-off of a solve with condition number < 1e8)
     assert np.max(np.abs(h - np.swapaxes(h, 1, 2)) / scale) < 1e-6
     # passivity: the dissipative part −Im H is positive semi-definite; driving points have Im H ≤ 0
     diag_imag = np.diagonal(h, axis1=1, axis2=2).imag
-    assert np.all(diag_imag <= 1e-9 * scale[:, :, 0])
+    assert np.all(diag_imag <= 1e-8 * scale[:, :, 0])
     eig = np.linalg.eigvalsh(0.5 * (h.imag + np.swapaxes(h.imag, 1, 2)))
-    assert np.all(eig <= 1e-9 * scale[:, 0])
+    assert np.all(eig <= 1e-8 * scale[:, 0])
