@@ -68,36 +68,71 @@ def _conditions(materials, preload, torque, geometry, extra=None):
     )
 
 
-def _read_joint_file(path: Path):
-    """FRF and metadata attributes from an identified-joint HDF5 file."""
+#: ``joint_model`` of `jointdb identify` files -> model kind of the catalogue
+_JOINT_MODEL_KINDS = {"planar": "spring-damper-planar", "n-point": "n-point-translational", "matrix": "full-matrix"}
+
+
+def _numeric_metrics(data: Any, prefix: str = "") -> dict[str, float]:
+    """Finite numeric scalars of a (nested) mapping, keys joined with '.'."""
+    import math
+
+    out: dict[str, float] = {}
+    if not isinstance(data, dict):
+        return out
+    for key, value in data.items():
+        name = f"{prefix}{key}"
+        if isinstance(value, bool):
+            continue
+        if isinstance(value, (int, float)) and math.isfinite(float(value)):
+            out[name] = float(value)
+        elif isinstance(value, dict):
+            out.update(_numeric_metrics(value, name + "."))
+    return out
+
+
+def _read_joint_file(path: Path) -> tuple[Any, dict[str, Any], dict[str, str]]:
+    """FRF, metadata and input-file hashes from an identified-joint file or a campaign file.
+
+    Accepts the HDF5 exchange file of ``jointdb identify`` (``format = jointdb-frf``,
+    metadata ``joint_model``, ``joint_type``, ``conditions``, ``quality``,
+    ``settings``), a jointdb FRF blob file, or a campaign JSON file (identified
+    here first, as ``jointdb identify`` would).
+    """
     import h5py
 
-    from jointdb.store import read_frf_file
+    from jointdb.store import file_sha256, read_frf_file
 
     if not path.is_file():
         raise InputError(f"{path}: no such file")
+    hashes = {path.name: file_sha256(path)}
+    if path.suffix.lower() == ".json":
+        try:
+            from jointdb.cli._coupling_campaign import load_campaign
+            from jointdb.cli._coupling_run import identify_campaign, joint_attrs
+        except ImportError:
+            raise InputError(f"{path}: cataloguing straight from a campaign needs `jointdb identify`") from None
+        outcome = identify_campaign(load_campaign(path))
+        text = path.read_text(encoding="utf-8")
+        for sibling in sorted(path.parent.iterdir()):
+            if sibling.is_file() and sibling != path and f'"{sibling.name}"' in text:
+                hashes[sibling.name] = file_sha256(sibling)
+        return outcome.result.joint, joint_attrs(outcome), hashes
     try:
         with h5py.File(path, "r", locking=False) as f:
-            attrs = {k: (v.decode() if isinstance(v, bytes) else v) for k, v in f.attrs.items()}
+            fmt = f.attrs.get("format")
+            fmt = fmt.decode() if isinstance(fmt, bytes) else str(fmt)
     except OSError as exc:
         raise InputError(f"{path}: not an HDF5 file ({exc})") from None
-    if attrs.get("format") == "jointdb-frf-blob":
-        frf = read_frf_file(path)
-    else:
-        try:
-            from jointdb.io import read_frf_hdf5  # the exchange file of `jointdb identify`
-        except ImportError:
-            raise InputError(f"{path}: not a jointdb FRF file and no HDF5 exchange reader is available") from None
-        frf = read_frf_hdf5(path)
-    meta: dict[str, Any] = {}
-    for key, value in attrs.items():
-        if isinstance(value, str) and value[:1] in "{[":
-            try:
-                value = json.loads(value)
-            except json.JSONDecodeError:
-                pass
-        meta[key] = value
-    return frf, meta
+    if fmt == "jointdb-frf-blob":
+        return read_frf_file(path), {}, hashes
+    from jointdb.io import read_frf_hdf5_full
+
+    frf, meta = read_frf_hdf5_full(path)
+    return frf, dict(meta or {}), hashes
+
+
+#: columns of version tables for people (``--json`` has every field)
+_TABLE = ["name", "version", "state", "labels", "materials", "torque_nm", "preload_n"]
 
 
 def _version_row(v) -> dict[str, Any]:
@@ -144,9 +179,9 @@ def register(app: typer.Typer) -> None:
 
     @app.command("catalogue")
     def catalogue(
-        joint_file: Annotated[Path, typer.Argument(help="Identified joint FRF (HDF5 file from `jointdb identify`).")],
+        joint_file: Annotated[Path, typer.Argument(help="Identified joint (HDF5 file from `jointdb identify`) or a campaign JSON file.")],
         name: Annotated[str, typer.Option("--name", help="Joint name (new joint, or new version of it).")],
-        joint_type: Annotated[str, typer.Option("--type", help="Joint type, e.g. tool-holder, holder-spindle.")],
+        joint_type: Annotated[Optional[str], typer.Option("--type", help="Joint type, e.g. tool-holder (default: from the file).")] = None,
         material: Annotated[Optional[list[str]], typer.Option("--material", help="Interface material (repeat, or a+b).")] = None,
         preload: Annotated[Optional[float], typer.Option("--preload", help="Preload [N].")] = None,
         torque: Annotated[Optional[float], typer.Option("--torque", help="Tightening torque [N·m].")] = None,
@@ -164,29 +199,42 @@ def register(app: typer.Typer) -> None:
     ) -> None:
         """Catalogue an identified joint FRF as a new immutable version.
 
+        Conditions given as options override those recorded in the file.
         Example: jointdb catalogue joint.h5 --name T1-HSK63 --type tool-holder
         --material carbide --material steel --torque 40 --geometry diameter_m=0.02
         """
-        from jointdb.store import Provenance, file_sha256
+        from jointdb.store import Provenance
 
-        frf, meta = _read_joint_file(joint_file)
-        kind = model_kind or meta.get("model_kind") or meta.get("joint_model_kind")
+        frf, meta, hashes = _read_joint_file(joint_file)
+        kind = model_kind or meta.get("model_kind") or _JOINT_MODEL_KINDS.get(str(meta.get("joint_model")))
         if not kind:
-            raise InputError(f"{joint_file}: the file does not say its model kind; give --model-kind")
-        q = dict(meta.get("quality") or {}) if isinstance(meta.get("quality"), dict) else {}
+            raise InputError(f"{joint_file}: the file does not say its joint model; give --model-kind")
+        jtype = joint_type or meta.get("joint_type")
+        if not jtype:
+            raise InputError(f"{joint_file}: the file does not say its joint type; give --type")
+        q = _numeric_metrics(meta.get("quality"))
         q.update(_pairs(quality, "--quality"))
-        inputs = dict(meta.get("input_files") or {}) if isinstance(meta.get("input_files"), dict) else {}
-        inputs[joint_file.name] = file_sha256(joint_file)
-        params = meta.get("parameters") if isinstance(meta.get("parameters"), dict) else {}
+        params = {k: meta[k] for k in ("settings", "interface", "campaign") if k in meta}
+        file_method = meta.get("method") or (f"irc-{meta['joint_model']}" if meta.get("joint_model") else None)
         prov = Provenance(
-            method=method or str(meta.get("method") or "imported-file"),
-            parameters=params,
-            input_files=inputs,
+            method=method or str(file_method or "imported-file"),
+            parameters=json.loads(json.dumps(params, default=str)),
+            input_files=hashes,
             author=author or "",
         )
-        conditions = _conditions(material, preload, torque, geometry, extra)
+        base = dict(meta.get("conditions") or {}) if isinstance(meta.get("conditions"), dict) else {}
+        given = _conditions(material, preload, torque, geometry, extra)
+        from jointdb.store import Conditions
+
+        conditions = Conditions(
+            materials=given.materials or tuple(base.get("materials") or ()),
+            preload_n=given.preload_n if given.preload_n is not None else base.get("preload_n"),
+            torque_nm=given.torque_nm if given.torque_nm is not None else base.get("torque_nm"),
+            geometry={**dict(base.get("geometry") or {}), **dict(given.geometry)},
+            extra={**dict(base.get("extra") or {}), **dict(given.extra)},
+        )
         repo = _repo(db, blobs)
-        jv = repo.catalogue(name, joint_type, frf, conditions, kind, prov, q, parent, author=author)
+        jv = repo.catalogue(name, jtype, frf, conditions, kind, prov, q, parent, author=author)
         if label:
             jv = repo.label(jv.name, jv.version, label, author=author)
         message(f"catalogued {jv.name} v{jv.version} ({jv.blob_sha256[:12]})")
@@ -235,7 +283,9 @@ def register(app: typer.Typer) -> None:
             if as_json:
                 result = {"matches": rows, "interpolated": {"file": str(interpolate), "label": ij.label,
                           "neighbours": [{"name": n, "version": v, "weight": w} for n, v, w in ij.neighbours]}}
-        emit(result, as_json=as_json, title=f"nearest {joint_type} joints")
+        d_cols = [c for c in (rows[0] if rows else {}) if c.startswith("d_")]
+        emit(result, as_json=as_json, title=f"nearest {joint_type} joints (distance = sqrt(sum d_i^2))",
+             columns=["name", "version", "distance", *d_cols, "torque_nm"])
 
     # ------------------------------------------------------------- joints ...
     @joints.command("list")
@@ -244,7 +294,8 @@ def register(app: typer.Typer) -> None:
         db: DbOpt = None, blobs: BlobsOpt = None, as_json: JsonOpt = False,
     ) -> None:
         """List joints with their current version. Example: jointdb joints list --type tool-holder"""
-        emit([_version_row(v) for v in _repo(db, blobs).list_joints(joint_type)], as_json=as_json, title="joints")
+        emit([_version_row(v) for v in _repo(db, blobs).list_joints(joint_type)], as_json=as_json, title="joints",
+             columns=["name", "type", "version", "state", "materials", "torque_nm"])
 
     @joints.command("show")
     def show(
@@ -269,7 +320,8 @@ def register(app: typer.Typer) -> None:
     def history(name: Annotated[str, typer.Argument(help="Joint name.")],
                 db: DbOpt = None, blobs: BlobsOpt = None, as_json: JsonOpt = False) -> None:
         """All versions of a joint, oldest first. Example: jointdb joints history T1"""
-        emit([_version_row(v) for v in _repo(db, blobs).history(name)], as_json=as_json, title=f"history of {name}")
+        emit([_version_row(v) for v in _repo(db, blobs).history(name)], as_json=as_json, title=f"history of {name}",
+             columns=_TABLE + ["created_at"])
 
     @joints.command("diff")
     def diff(
@@ -303,7 +355,7 @@ def register(app: typer.Typer) -> None:
     ) -> None:
         """Point a label at a version (create or move it). Example: jointdb joints label T1 2 released"""
         jv = _repo(db, blobs).label(name, version, label, author=author)
-        emit(_version_row(jv), as_json=as_json)
+        emit({k: v for k, v in _version_row(jv).items() if k in _TABLE}, as_json=as_json)
 
     @joints.command("deprecate")
     def deprecate(
@@ -316,7 +368,7 @@ def register(app: typer.Typer) -> None:
     ) -> None:
         """Deprecate a joint or version (nothing is deleted). Example: jointdb joints deprecate T1 --version 1 --reason 'loose bolt'"""
         hist = _repo(db, blobs).deprecate(name, version, reason=reason, author=author, undo=undo)
-        emit([_version_row(v) for v in hist], as_json=as_json, title=f"history of {name}")
+        emit([_version_row(v) for v in hist], as_json=as_json, title=f"history of {name}", columns=_TABLE)
 
     @joints.command("export")
     def export(

@@ -22,9 +22,16 @@ along frequency with shuffle + gzip + fletcher32. Root attributes:
 ``quantity``, ``outputs``, ``inputs``, ``complex_convention`` and
 ``harmonic_convention = "x(t) = X exp(+i omega t)"``.
 
+Whole-file checksum: the file starts with a 512-byte HDF5 *user block*
+(ignored by HDF5 readers) holding ``b"jointdb-blob-file-sha256:" + <64 hex> +
+b"\n"`` followed by zero bytes; the digest is the SHA-256 of every byte after
+the user block. So every single byte of a blob file is covered: the user block
+must match exactly, the rest must hash to the recorded digest, the HDF5 chunks
+carry fletcher32 and the decoded FRF must hash to the blob's name.
+
 Writes go to a temporary file in the same directory, are fsynced, atomically
 renamed, the directory fsynced, then read back and verified. Reads always
-verify the hash (and HDF5 checks the fletcher32 checksums of every chunk).
+verify all of the above.
 """
 
 from __future__ import annotations
@@ -39,7 +46,7 @@ from pathlib import Path
 
 import numpy as np
 
-from jointdb.errors import IntegrityError, NotFoundError
+from jointdb.errors import InputError, IntegrityError, NotFoundError
 from jointdb.frf import FRF
 
 __all__ = ["BlobStore", "frf_sha256", "file_sha256", "FORMAT_VERSION", "write_frf_file", "read_frf_file"]
@@ -49,6 +56,8 @@ FORMAT_VERSION = 1
 COMPLEX_CONVENTION = "values[..., 0] = real part, values[..., 1] = imaginary part"
 HARMONIC_CONVENTION = "x(t) = X exp(+i omega t)"
 _TMP_PREFIX = ".tmp-"
+USERBLOCK = 512
+_FILE_MAGIC = b"jointdb-blob-file-sha256:"
 
 
 def frf_sha256(frf: FRF) -> str:
@@ -114,25 +123,65 @@ def read_frf_group(group, where: str) -> tuple[FRF, str]:
     return frf, str(a.get("sha256", ""))
 
 
+def _userblock(file_digest: str) -> bytes:
+    head = _FILE_MAGIC + file_digest.encode() + b"\n"
+    return head + b"\0" * (USERBLOCK - len(head))
+
+
 def write_frf_file(path: str | os.PathLike, frf: FRF) -> str:
-    """Write one FRF to an HDF5 file in the blob layout (no atomicity); returns its hash."""
+    """Write one FRF to an HDF5 file in the blob layout (no atomicity); returns its content hash."""
     import h5py
 
     digest = frf_sha256(frf)
-    with h5py.File(path, "w") as f:
+    with h5py.File(path, "w", userblock_size=USERBLOCK, locking=False) as f:
         write_frf_group(f, frf, digest)
+    with open(path, "r+b") as raw:
+        raw.seek(USERBLOCK)
+        h = hashlib.sha256()
+        for chunk in iter(lambda: raw.read(1 << 20), b""):
+            h.update(chunk)
+        raw.seek(0)
+        raw.write(_userblock(h.hexdigest()))
     return digest
 
 
+def check_file_checksum(path: str | os.PathLike) -> None:
+    """Verify the whole-file checksum in the user block (module docstring).
+
+    Raises
+    ------
+    IntegrityError
+        If the user block is damaged or any later byte changed.
+    """
+    with open(path, "rb") as raw:
+        block = raw.read(USERBLOCK)
+        h = hashlib.sha256()
+        for chunk in iter(lambda: raw.read(1 << 20), b""):
+            h.update(chunk)
+    if len(block) != USERBLOCK or not block.startswith(_FILE_MAGIC):
+        raise IntegrityError(f"{path}: file checksum header is damaged or missing")
+    recorded = block[len(_FILE_MAGIC):len(_FILE_MAGIC) + 64].decode("ascii", "replace")
+    if block != _userblock(recorded):
+        raise IntegrityError(f"{path}: file checksum header is damaged")
+    if h.hexdigest() != recorded:
+        raise IntegrityError(f"{path}: file bytes do not match their recorded SHA-256 (corrupt file)")
+
+
 def read_frf_file(path: str | os.PathLike, verify: bool = True) -> FRF:
-    """Read a file written by :func:`write_frf_file` (hash verified)."""
+    """Read a file written by :func:`write_frf_file` (file checksum and content hash verified)."""
     import h5py
 
     where = str(path)
+    if verify:
+        check_file_checksum(path)
     try:
         with h5py.File(path, "r", locking=False) as f:
-            frf, stored = read_frf_group(f, where)
-    except (OSError, KeyError, ValueError) as exc:
+            frf, stored = read_frf_group(f, where)  # InputError (e.g. NaN values) propagates
+    except (OSError, KeyError) as exc:
+        raise IntegrityError(f"{where}: cannot read FRF blob ({exc})") from None
+    except ValueError as exc:
+        if isinstance(exc, InputError):
+            raise InputError(f"{where}: {exc}") from None
         raise IntegrityError(f"{where}: cannot read FRF blob ({exc})") from None
     if verify and frf_sha256(frf) != stored:
         raise IntegrityError(f"{where}: content hash does not match the stored sha256 attribute")
@@ -190,8 +239,6 @@ class BlobStore:
         IntegrityError
             If the read-back does not verify.
         """
-        import h5py
-
         digest = frf_sha256(frf)
         final = self.path(digest)
         if final.is_file():
@@ -204,8 +251,7 @@ class BlobStore:
         final.parent.mkdir(parents=True, exist_ok=True)
         tmp = final.parent / f"{_TMP_PREFIX}{uuid.uuid4().hex}.h5"
         try:
-            with h5py.File(tmp, "w", locking=False) as f:
-                write_frf_group(f, frf, digest)
+            write_frf_file(tmp, frf)
             fd = os.open(tmp, os.O_RDONLY)
             try:
                 os.fsync(fd)
@@ -235,7 +281,11 @@ class BlobStore:
         path = self.path(digest)
         if not path.is_file():
             raise NotFoundError(f"blob {digest} is missing (expected at {path})")
-        frf = read_frf_file(path, verify=False)
+        try:
+            check_file_checksum(path)
+            frf = read_frf_file(path, verify=False)
+        except InputError as exc:  # a stored blob that no longer validates is corrupt
+            raise IntegrityError(f"blob {digest} is corrupt: {exc}") from None
         actual = frf_sha256(frf)
         if actual != digest:
             raise IntegrityError(f"blob {digest} is corrupt: its content hashes to {actual} ({path})")

@@ -344,7 +344,7 @@ class JointVersion:
             "torque_nm": c.torque_nm,
             "model_kind": self.model_kind,
             "f_hz": f"{self.freq_min_hz:g}-{self.freq_max_hz:g}",
-            "created_at": self.created_at.isoformat(timespec="seconds"),
+            "created_at": self.created_at.strftime("%Y-%m-%d %H:%M:%S"),
             "author": self.provenance.author,
         }
 

@@ -38,3 +38,14 @@ def count_rows(backend_or_repo) -> dict[str, int]:
 
 def blob_files(repo) -> list[str]:
     return sorted(p.name for p in Path(repo.blobs.root).glob("*/*")) if Path(repo.blobs.root).exists() else []
+
+
+def reseal(path) -> None:
+    """Recompute a blob file's whole-file checksum after a deliberate edit (simulates a
+    file that is internally consistent but carries bad content)."""
+    import hashlib
+
+    from jointdb.store._blobs import USERBLOCK, _userblock
+
+    data = Path(path).read_bytes()
+    Path(path).write_bytes(_userblock(hashlib.sha256(data[USERBLOCK:]).hexdigest()) + data[USERBLOCK:])

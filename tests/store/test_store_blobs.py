@@ -8,7 +8,7 @@ import os
 import h5py
 import numpy as np
 import pytest
-from store_helpers import planar_conditions, spring_joint
+from store_helpers import planar_conditions, reseal, spring_joint
 
 from jointdb.errors import IntegrityError, NotFoundError
 from jointdb.frf import FRF
@@ -78,7 +78,7 @@ def test_flipped_byte_is_detected_on_read_and_by_check(repo, where):
 
 
 def test_value_rewritten_with_valid_checksums_is_caught_by_the_hash(tmp_path):
-    """A value changed through HDF5 (checksums recomputed) is still caught by the content hash."""
+    """A value changed through HDF5 (chunk checksums recomputed) is caught by the file and content hashes."""
     store = BlobStore(tmp_path)
     frf = spring_joint(n=50)
     digest = store.put(frf)
@@ -88,6 +88,10 @@ def test_value_rewritten_with_valid_checksums_is_caught_by_the_hash(tmp_path):
         v = f["values"][...]
         v[10, 0, 0, 0] *= 1.0000001
         f["values"][...] = v
+    with pytest.raises(IntegrityError, match="file bytes do not match"):
+        store.get(digest)
+    # even with the whole-file checksum forged as well, the content hash catches it
+    reseal(path)
     with pytest.raises(IntegrityError, match="hashes to"):
         store.get(digest)
 
@@ -127,3 +131,21 @@ def test_raw_measurements_are_stored_as_blobs(repo):
     assert repo.load_raw(jv, "tip").allclose(raw, rtol=0)
     assert repo.check().blobs_checked == 2
     assert repo.gc(min_age_s=0) == []
+
+
+def test_every_byte_of_a_blob_file_is_covered(tmp_path):
+    """Flip one bit at every 37th byte of a blob file: each flip is detected (user-block checksum)."""
+    store = BlobStore(tmp_path)
+    digest = store.put(spring_joint(n=16))
+    path = store.path(digest)
+    data = path.read_bytes()
+    missed = []
+    for pos in range(0, len(data), 37):
+        flipped = bytearray(data)
+        flipped[pos] ^= 0x01
+        path.write_bytes(bytes(flipped))
+        if store.verify(digest) is None:
+            missed.append(pos)
+    path.write_bytes(data)
+    assert store.verify(digest) is None
+    assert missed == []
