@@ -373,7 +373,7 @@ def load_campaign(path: Path | str) -> Campaign:
 def identify_campaign(campaign: Campaign, every: int = 1):
     """IRC identification of a campaign's planar joint (theory §2a).
 
-    ``every`` keeps every n-th measured line (a coarser grid, for quick runs).
+    ``every`` keeps every n-th measured line and the last (a coarser grid, for quick runs).
 
     Returns
     -------
@@ -385,8 +385,9 @@ def identify_campaign(campaign: Campaign, every: int = 1):
     if isinstance(every, bool) or not isinstance(every, int) or every < 1:
         raise InputError(f"every must be a positive whole number of lines, got {every!r}")
     meas = campaign.measured.band(fmin=np.nextafter(0.0, 1.0)).to("receptance")
-    if every > 1:
-        meas = meas.replace(freq=meas.freq[::every], values=meas.values[::every])
+    if every > 1:  # keep both band edges so the joint covers the same band
+        keep = np.unique(np.append(np.arange(0, meas.n_freq, every), meas.n_freq - 1))
+        meas = meas.replace(freq=meas.freq[keep], values=meas.values[keep])
     f = meas.freq
     a = campaign.a_model.frf(f, [campaign.a_point])
     b = campaign.b_model.frf(f, [campaign.b_tip, campaign.b_contact])

@@ -1,9 +1,96 @@
-"""CLI command group (placeholder until its issue lands)."""
+"""CLI: ``jointdb predict STACK.json`` — tool-tip FRF of a new stack with joints from the database.
+
+Thin: :func:`jointdb.app.load_stack` / :func:`jointdb.app.predict_stack` do the
+work; this module parses options, writes the requested files and renders.
+"""
 
 from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated, Optional
 
 import typer
 
 
 def register(app: typer.Typer) -> None:
-    """Add this group's commands to the app."""
+    """Add ``predict`` to the app."""
+
+    @app.command("predict")
+    def predict(
+        stack_file: Annotated[Path, typer.Argument(help="Stack description (JSON, format jointdb-stack/1).",
+                                                   metavar="STACK.json")],
+        db: Annotated[Optional[str], typer.Option("--db", help="Joint database URL or SQLite path "
+                                                  "(default: $JOINTDB_URL or the per-user database).")] = None,
+        out: Annotated[Optional[Path], typer.Option("--out", help="Write the tool-tip FRF (x, y): "
+                                                    ".uff (UFF58), .h5 (HDF5) or .csv.")] = None,
+        plot: Annotated[Optional[Path], typer.Option("--plot", help="PNG comparing the prediction with "
+                                                     "rigid joints.")] = None,
+        fmin: Annotated[Optional[float], typer.Option(help="Lowest line [Hz] (overrides the stack file).")] = None,
+        fmax: Annotated[Optional[float], typer.Option(help="Highest line [Hz].")] = None,
+        df: Annotated[Optional[float], typer.Option(help="Line spacing [Hz].")] = None,
+        as_json: Annotated[bool, typer.Option("--json", help="Machine-readable output.")] = False,
+    ) -> None:
+        """Predict the tool-tip FRF of a tool / holder / spindle stack (three-component RC).
+
+        Each interface's joint is taken from the stack file: rigid, explicit (k, c),
+        a pinned catalogued joint name@version, or the nearest catalogued joint to
+        the given conditions. The chosen versions, their distances and any
+        extrapolation are reported.
+
+        Example: jointdb predict fixtures/stacks/endmill-modelled-spindle.json --out tip.uff --plot tip.png
+        """
+        from jointdb import app as application
+        from jointdb._output import emit, message
+        from jointdb.errors import InputError
+        from jointdb.stack import FrequencyGrid, prediction_grid
+
+        for label, path in (("--out", out), ("--plot", plot)):
+            if path is not None and not path.parent.exists():
+                raise InputError(f"{label} {str(path)!r}: directory {str(path.parent)!r} does not exist")
+        if out is not None and out.suffix.lower() not in (".uff", ".unv", ".h5", ".hdf5", ".csv"):
+            raise InputError(f"--out {str(out)!r}: unknown file type; use .uff, .h5 or .csv")
+        spec = application.load_stack(stack_file)
+        freq = None
+        if fmin is not None or fmax is not None or df is not None:
+            base = spec.frequency or FrequencyGrid()
+            grid = FrequencyGrid(fmin if fmin is not None else base.fmin, fmax if fmax is not None else base.fmax,
+                                 df if df is not None else base.step)
+            if grid.fmin <= 0 or grid.fmax <= grid.fmin or grid.step <= 0:
+                raise InputError(f"--fmin/--fmax/--df: need 0 < fmin < fmax and df > 0, got "
+                                 f"{grid.fmin:g}, {grid.fmax:g}, {grid.step:g}")
+            freq = prediction_grid(spec, grid.lines())
+        result = application.predict_stack(spec, db, freq)
+        pred = result.prediction
+        for res in result.joints.values():
+            if res.candidates:
+                message(f"{res.interface}: chose {res.name}@{res.version} (distance {res.distance:.3f}; "
+                        + ", ".join(f"{n}@{v} {d:.3f}" for n, v, d in res.candidates[1:]) + " next)"
+                        if len(res.candidates) > 1 else
+                        f"{res.interface}: chose {res.name}@{res.version} (distance {res.distance:.3f})")
+            if res.extrapolating:
+                message(f"warning: {res.interface}: the request lies outside the catalogued range of "
+                        f"{', '.join(res.outside_range)}; the joint is extrapolated")
+            for w in res.warnings:
+                message(f"warning: {res.interface}: {w}")
+        for note in pred.notes:
+            message(f"note: {note}")
+        files = {}
+        if out is not None:
+            application.write_frf_file(out, pred.tip)
+            files["tip_frf"] = str(out)
+            message(f"wrote {out}")
+        if plot is not None:
+            from jointdb.plots._stack import save_tip_comparison
+
+            save_tip_comparison(plot, pred, title=spec.name)
+            files["plot"] = str(plot)
+            message(f"wrote {plot}")
+        joints = [r.row() for r in result.joints.values()]
+        if as_json:
+            emit({"stack": spec.name, "joints": joints, "prediction": pred.summary(), "notes": list(pred.notes),
+                  "frequency_hz": [float(pred.tip.freq[0]), float(pred.tip.freq[-1]), int(pred.tip.n_freq)],
+                  "files": files}, as_json=True)
+            return
+        emit(joints, columns=["interface", "kind", "joint", "distance", "per_condition", "extrapolating"],
+             title=f"joints of {spec.name}")
+        emit(pred.summary(), title="tool-tip receptance")
