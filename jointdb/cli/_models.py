@@ -55,8 +55,11 @@ def frequency_grid(fmin: float | None, fmax: float, df: float | None, n_lines: i
     return grid
 
 
-def write_frf_file(path: Path, frf) -> str:
-    """Write an FRF by the file's suffix (.uff/.unv, .h5/.hdf5, .csv); returns the format name."""
+def write_frf_file(path: Path, frf, *, binary: bool = False) -> str:
+    """Write an FRF by the file's suffix (.uff/.unv, .h5/.hdf5, .csv); returns the format name.
+
+    ``binary`` selects binary UFF58 (58b, exact) instead of ASCII.
+    """
     fmt = FRF_SUFFIXES.get(path.suffix.lower())
     if fmt is None:
         raise InputError(f"--out {str(path)!r}: unknown file type; use one of {', '.join(sorted(FRF_SUFFIXES))}")
@@ -65,7 +68,7 @@ def write_frf_file(path: Path, frf) -> str:
     if fmt == "uff58":
         from jointdb.io import write_uff58
 
-        write_uff58(path, frf)
+        write_uff58(path, frf, binary=binary)
     elif fmt == "hdf5":
         from jointdb.io import write_frf_hdf5
 
@@ -159,6 +162,9 @@ def register(app: typer.Typer) -> None:
         n_modes: Annotated[Optional[int], typer.Option("--n-modes", help="Modes kept by --method modal.")] = None,
         quantity: Annotated[str, typer.Option("--quantity", help="receptance | mobility | accelerance.")] = "receptance",
         out: Annotated[Optional[Path], typer.Option("--out", help="Write the FRFs: .uff (UFF58), .h5 (HDF5) or .csv.")] = None,
+        binary: Annotated[
+            bool, typer.Option("--binary", help="UFF58 output as binary 58b (exact; ASCII keeps 6 digits of frequency).")
+        ] = False,
         plot: Annotated[Optional[Path], typer.Option("--plot", help="Write a Bode plot of the driving points (.png).")] = None,
         as_json: Annotated[bool, typer.Option("--json", help="Machine-readable summary.")] = False,
     ) -> None:
@@ -196,7 +202,7 @@ def register(app: typer.Typer) -> None:
             k = int(np.argmax(h))
             summary[f"peak |H[{d},{d}]|"] = f"{h[k]:.4g} at {frf.freq[k]:.6g} Hz"
         if out is not None:
-            fmt = write_frf_file(out, frf)
+            fmt = write_frf_file(out, frf, binary=binary)
             message(f"wrote {frf.n_freq} lines x {len(frf.outputs)}x{len(frf.inputs)} FRFs to {out} ({fmt})")
             summary["out"] = str(out)
         if plot is not None:
