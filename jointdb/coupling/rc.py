@@ -391,7 +391,8 @@ def couple(
             "the interface matrix B H_CC Bᵀ + H_J is singular at some frequency line; "
             "check for redundant interfaces or rigid couplings between rigid-body DOFs"
         ) from None
-    g = h_oi - (h_oc @ bmat.T) @ lam
+    h_oi -= (h_oc @ bmat.T) @ lam
+    g = h_oi
     if not np.all(np.isfinite(g)):
         raise NumericalError("coupling produced NaN/inf: the interface matrix is singular at some line")
     return FRF(freq, g, tuple(d for _, d in outs), tuple(d for _, d in ins), Quantity.RECEPTANCE)
