@@ -36,6 +36,7 @@ joints ``Z = k + iωc``, so this interpolates stiffness and damping linearly
 
 from __future__ import annotations
 
+import json
 import math
 import warnings
 from collections import Counter
@@ -44,7 +45,7 @@ from datetime import datetime
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from sqlalchemy import and_, func, select
+from sqlalchemy import Text, and_, cast, func, select
 
 from jointdb.errors import InputError, NotFoundError, NumericalError
 from jointdb.frf import FRF
@@ -63,18 +64,24 @@ class OutsideCatalogueWarning(UserWarning):
     """A nearest-joint request lies outside the catalogued range of some condition."""
 
 
-def _candidates(repo: "Repository", joint_type: str, at: datetime | None) -> list[tuple]:
-    """(version_id, joint_id, version, materials, preload, torque, geometry) of current versions."""
-    cols = (
+def _candidates(repo: "Repository", joint_type: str, at: datetime | None, geometry_keys: Sequence[str]) -> list[tuple]:
+    """Current versions of a type: ``(version_id, joint_id, version, materials_json_text,
+    preload, torque, *geometry values)``.
+
+    Plain SQL columns only: materials come back as JSON text (decoded once per
+    distinct value by the caller) and geometry numbers are extracted by the
+    database (``json_extract`` / ``->>``), so ranking stays cheap at 10^5 rows.
+    """
+    cols = [
         VersionRow.id,
         VersionRow.joint_id,
         VersionRow.version,
-        VersionRow.materials,
+        cast(VersionRow.materials, Text),
         VersionRow.preload_n,
         VersionRow.torque_nm,
-        VersionRow.geometry,
-    )
-    with repo._read() as s:
+        *[VersionRow.geometry[key].as_float() for key in geometry_keys],
+    ]
+    with repo.read_engine.connect() as conn:
         inner = (
             select(VersionRow.joint_id, func.max(VersionRow.version).label("mv"))
             .join(JointRow, JointRow.id == VersionRow.joint_id)
@@ -85,22 +92,22 @@ def _candidates(repo: "Repository", joint_type: str, at: datetime | None) -> lis
         inner = inner.group_by(VersionRow.joint_id).subquery()
         rows = {
             r[1]: tuple(r)
-            for r in s.execute(
+            for r in conn.execute(
                 select(*cols).join(inner, and_(VersionRow.joint_id == inner.c.joint_id, VersionRow.version == inner.c.mv))
             )
         }
         sq = select(StateRow).join(JointRow, JointRow.id == StateRow.joint_id).where(JointRow.joint_type == joint_type)
         if at is not None:
             sq = sq.where(StateRow.at <= at)
-        states: dict[int, list[StateRow]] = {}
-        for st in s.scalars(sq):
+        states: dict[int, list] = {}
+        for st in conn.execute(sq):
             states.setdefault(st.joint_id, []).append(st)
         for joint_id, sts in states.items():
             rows.pop(joint_id, None)
             q = select(*cols).where(VersionRow.joint_id == joint_id)
             if at is not None:
                 q = q.where(VersionRow.created_at <= at)
-            for r in s.execute(q.order_by(VersionRow.version.desc())):
+            for r in conn.execute(q.order_by(VersionRow.version.desc())):
                 if state_of(r[2], sts) == "active":
                     rows[joint_id] = tuple(r)
                     break
@@ -150,7 +157,8 @@ def nearest(
     req = as_conditions(conditions)
     if isinstance(k, bool) or int(k) < 1:
         raise InputError(f"k must be >= 1, got {k!r}")
-    rows = _candidates(repo, joint_type, at)
+    geometry_keys = list(req.geometry)
+    rows = _candidates(repo, joint_type, at, geometry_keys)
     if not rows:
         with repo._read() as s:
             types = sorted(set(s.scalars(select(JointRow.joint_type))))
@@ -159,37 +167,40 @@ def nearest(
             " (joint types are never mixed)"
         )
     n = len(rows)
+    columns = list(zip(*rows))
     terms: dict[str, np.ndarray] = {}
     outside: list[str] = []
+
+    def numeric(col: int) -> np.ndarray:
+        return np.array([np.nan if x is None else x for x in columns[col]], dtype=float)
+
     if req.torque_nm is not None:
-        vals = np.array([np.nan if r[5] is None else r[5] for r in rows], dtype=float)
-        _log_term(vals, req.torque_nm, "torque_nm", terms, outside)
+        _log_term(numeric(5), req.torque_nm, "torque_nm", terms, outside)
     if req.preload_n is not None:
-        vals = np.array([np.nan if r[4] is None else r[4] for r in rows], dtype=float)
-        _log_term(vals, req.preload_n, "preload_n", terms, outside)
+        _log_term(numeric(4), req.preload_n, "preload_n", terms, outside)
     if req.materials:
         want = tuple(sorted(req.materials))
-        cache: dict[tuple[str, ...], float] = {}
-        term = np.empty(n)
-        for i, r in enumerate(rows):
-            mats = tuple(sorted(r[3] or ()))
-            if mats not in cache:
-                cache[mats] = _jaccard(want, mats) if mats else MISSING_PENALTY
-            term[i] = cache[mats]
-        terms["materials"] = term
-        if not any(term_value == 0.0 for term_value in cache.values()):
+        cache: dict[str, float] = {}
+        for text in set(columns[3]):
+            mats = tuple(sorted(json.loads(text) if text else ()))
+            cache[text] = _jaccard(want, mats) if mats else MISSING_PENALTY
+        terms["materials"] = np.array([cache[text] for text in columns[3]])
+        if not any(value == 0.0 for value in cache.values()):
             outside.append("materials")
-    for key, r_val in req.geometry.items():
-        vals = np.array([(r[6] or {}).get(key, np.nan) for r in rows], dtype=float)
+    for g, (key, r_val) in enumerate(req.geometry.items()):
+        vals = numeric(6 + g)
         have = np.isfinite(vals)
         denom = np.maximum(np.abs(vals), abs(r_val))
-        rel = np.where(denom > 0, np.abs(vals - r_val) / np.where(denom > 0, denom, 1.0), 0.0)
+        with np.errstate(invalid="ignore"):
+            rel = np.where(denom > 0, np.abs(vals - r_val) / np.where(denom > 0, denom, 1.0), 0.0)
         terms[f"geometry.{key}"] = np.where(have, rel, MISSING_PENALTY)
         if not have.any() or r_val < np.nanmin(vals) or r_val > np.nanmax(vals):
             outside.append(f"geometry.{key}")
     total = np.sqrt(sum((t**2 for t in terms.values()), np.zeros(n)))
-    # deterministic order: distance, then joint id, then version
-    order = sorted(range(n), key=lambda i: (round(float(total[i]), 12), rows[i][1], rows[i][2]))[: int(k)]
+    # deterministic order: distance (to 1e-12), then joint id, then version
+    joint_ids = np.array(columns[1])
+    numbers = np.array(columns[2])
+    order = np.lexsort((numbers, joint_ids, np.round(total, 12)))[: int(k)]
     if outside:
         warnings.warn(
             f"request lies outside the catalogued range of {joint_type} joints for: {', '.join(outside)}; "
