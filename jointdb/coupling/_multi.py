@@ -248,7 +248,6 @@ def identify_joint_matrix(
     g = _measured(G, labels, smoothing, smoothing_order, symmetrize)
     ia = [i for i, (n, _) in enumerate(pairs) if n == a]
     ib = [i for i, (n, _) in enumerate(pairs) if n == b]
-    la, lb = [labels[i] for i in ia], [labels[i] for i in ib]
     nf = freq.size
     h_ii = np.zeros((nf, L, L), dtype=complex)
     h_ic = np.zeros((nf, L, nc), dtype=complex)
@@ -265,7 +264,6 @@ def identify_joint_matrix(
         h_ci[:, cidx[:, None], r[None, :]] = fetch(f"substructure {name!r}", sub, side, lab)
     h_cc[:, ca[:, None], ca[None, :]] = fetch(f"substructure {a!r}", A, ad, ad, "contact DOFs incl. rotations")
     h_cc[:, cb[:, None], cb[None, :]] = fetch(f"substructure {b!r}", B, bd, bd, "contact DOFs incl. rotations")
-    del la, lb
     d = h_ii - g
     p = _scaled_ls(h_ic, d, h_ci, reg)
     if symmetrize:

@@ -7,7 +7,6 @@ from coupling_beams import beam, clamp_first, labels_for
 from jointdb.coupling import Interface, couple, identify_planar_joint, spring_damper_joint
 from jointdb.coupling._matrices import receptance_from_matrices
 from jointdb.errors import InputError
-from jointdb.frf import FRF
 
 FREQ = np.linspace(5.0, 3000.0, 600)
 KX, CX, KR, CR = 2e6, 100.0, 8e4, 80.0  # thesis Table 4.1

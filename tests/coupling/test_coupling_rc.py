@@ -8,7 +8,7 @@ from hypothesis import strategies as st
 from jointdb.coupling import Interface, JointSubstructure, couple, spring_damper_joint
 from jointdb.coupling._matrices import add_spring, receptance_from_matrices
 from jointdb.errors import InputError, NumericalError
-from jointdb.frf import FRF, Dof
+from jointdb.frf import FRF
 
 FREQ = np.linspace(1.0, 400.0, 157)
 
@@ -79,7 +79,6 @@ def test_rigid_joint_equals_merged_model(two_bodies):
 
 def test_three_bodies_two_joints_full_joint_matrix():
     # three 2-DOF bodies, each DOF pair coupled by a full 2x2 joint stiffness
-    rng = np.random.default_rng(3)
     bodies = []
     for s in range(3):
         K, M, C = chain([1.0 + s, 0.7], [3e5 + 1e5 * s], [8.0], ground=(2e5, 5.0) if s == 0 else None)
@@ -121,7 +120,6 @@ def test_three_bodies_two_joints_full_joint_matrix():
     want = ref.select(["1x", "6x", "4x"], ["1x", "6x", "4x"])
     assert np.max(np.abs(g.values - want.values)) <= 1e-10 * np.max(np.abs(want.values))
     assert g.reciprocity_error() < 1e-10
-    del rng
 
 
 def test_joint_body_with_inertia_equals_monolithic(two_bodies):
