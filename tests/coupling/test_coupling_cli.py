@@ -140,3 +140,63 @@ def test_fixture_generator_is_byte_reproducible(tmp_path):
     differs = not filecmp.cmp(tmp_path / "other" / "assembly.uff", tmp_path / "th-steel-30nm" / "assembly.uff",
                               shallow=False)
     assert same and differs
+
+
+def _write_campaign(d, data):
+    (d / "campaign.json").write_text(json.dumps(data))
+    return d / "campaign.json"
+
+
+def test_n_point_campaign_through_the_cli(monkeypatch, capsys, tmp_path):
+    from coupling_cases import TABLE_5_1_K, plate_frfs, plates
+
+    freq = np.arange(20.0, 2000.0, 20.0)
+    case = plates(freq)
+    fa, fb, g = plate_frfs(freq, case)
+    write_uff58(tmp_path / "a.uff", fa, binary=True)
+    write_uff58(tmp_path / "b.uff", fb, binary=True)
+    write_uff58(tmp_path / "g.uff", g, binary=True)
+    path = _write_campaign(tmp_path, {
+        "format": "jointdb-campaign/1", "name": "plates", "joint_model": "n-point",
+        "substructures": {"A": {"uff58": "a.uff"}, "B": {"uff58": "b.uff"}},
+        "interface": {"a": "A", "a_dofs": [f"{n}z" for n in case["a_bolts"]],
+                      "b": "B", "b_dofs": [f"{n}z" for n in case["b_bolts"]]},
+        "measurements": ["g.uff"], "n_point": {"internal": [f"{n}z" for n in case["internal"]]},
+    })
+    code, stdout, err = run(monkeypatch, capsys, "identify", path, "--out", tmp_path / "j.h5", "--json")
+    assert code == 0, err
+    rep = json.loads(stdout)
+    assert np.allclose([row["k"] for row in rep["constant_fit"]], TABLE_5_1_K, rtol=1e-6)
+    code, stdout, err = run(monkeypatch, capsys, "couple", path, "--joint", tmp_path / "j.h5", "--json")
+    assert code == 0, err
+    assert json.loads(stdout)["mean_relative_deviation_from_measurement"] < 1e-6
+
+
+def test_matrix_campaign_through_the_cli(monkeypatch, capsys, tmp_path):
+    from coupling_cases import blocks
+
+    freq = np.arange(150.0, 3000.0, 30.0)
+    b = blocks(freq)
+    write_uff58(tmp_path / "a.uff", b["subs"]["A"], binary=True)
+    write_uff58(tmp_path / "b.uff", b["subs"]["B"], binary=True)
+    labels = [d for _, d in b["m15"]]
+    write_uff58(tmp_path / "g.uff", b["G"].select(labels, labels), binary=True)
+    path = _write_campaign(tmp_path, {
+        "format": "jointdb-campaign/1", "name": "blocks", "joint_model": "matrix",
+        "substructures": {"A": {"uff58": "a.uff"}, "B": {"uff58": "b.uff"}},
+        "interface": {"a": "A", "a_dofs": [str(d) for d in b["a_dofs"]], "b": "B",
+                      "b_dofs": [str(d) for d in b["b_dofs"]]},
+        "measurements": ["g.uff"], "matrix": {"measured": [[n, str(d)] for n, d in b["m15"]]},
+    })
+    code, stdout, err = run(monkeypatch, capsys, "identify", path, "--out", tmp_path / "j.h5", "--json",
+                            "--plots", tmp_path / "figs")
+    assert code == 0, err
+    rep = json.loads(stdout)
+    assert rep["joint_model"] == "matrix" and rep["residual_median"] < 1e-8
+    joint = read_frf_hdf5(tmp_path / "j.h5")
+    zt = np.linalg.inv(b["joint_true"].values)
+    zi = np.linalg.inv(joint.values)
+    assert np.median(np.linalg.norm(zi - zt, axis=(1, 2)) / np.linalg.norm(zt, axis=(1, 2))) < 1e-8
+    code, stdout, err = run(monkeypatch, capsys, "couple", path, "--joint", tmp_path / "j.h5", "--json")
+    assert code == 0, err
+    assert json.loads(stdout)["mean_relative_deviation_from_measurement"] < 1e-6

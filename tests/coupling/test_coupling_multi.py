@@ -51,12 +51,22 @@ def test_table_5_1_springs_recovered_exactly(plate_case):
 
 def test_single_z_spring_model_breaks_down_for_beam_bolts():
     """With 6-DOF beam bolts, the z-spring model leaves an off-diagonal residue and cannot
-    reproduce the measurement near modes with lateral/rocking bolt deformation."""
+    reproduce the measurement near modes with lateral/rocking bolt deformation; still, the
+    joints identified on plate A1 predict the assembly with plate A2 better than rigid joints."""
     case = plates(FREQ_P, joint="beams")
     fa, fb, g = plate_frfs(FREQ_P, case)
     res = identify_n_point_joints(g, fa, z(case["internal"]), z(case["a_bolts"]), fb, z(case["b_bolts"]))
     assert np.median(res.extra["off_diagonal"]) > 1e-3
     assert res.residual.max() > 1e-2
+    case2 = plates(FREQ_P, "A2", joint="beams")
+    fa2, fb2, g2 = plate_frfs(FREQ_P, case2)
+    outs = [("A", d) for d in z(case2["internal"])]
+
+    def dev(joint):
+        p = couple({"A": fa2, "B": fb2}, [Interface("A", z(case2["a_bolts"]), "B", z(case2["b_bolts"]), joint)], outs)
+        return np.mean(np.abs(p.values - g2.values) / np.abs(g2.values))
+
+    assert dev(res.joint) < 0.7 * dev(None)
 
 
 def test_n_point_needs_enough_measurements(plate_case):
