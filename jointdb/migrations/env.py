@@ -4,8 +4,6 @@
 from __future__ import annotations
 
 from alembic import context
-from sqlalchemy import create_engine
-
 from jointdb.store._models import Base
 
 config = context.config
@@ -36,8 +34,8 @@ def run_migrations_online() -> None:
         return
     from jointdb.store._db import make_engines, resolve_url
 
-    url = config.get_main_option("sqlalchemy.url") or resolve_url(None)
-    _, write_engine = make_engines(url) if url else (None, create_engine(url))
+    url = resolve_url(config.get_main_option("sqlalchemy.url") or None)
+    _, write_engine = make_engines(url)
     with write_engine.begin() as conn:
         _configure(connection=conn)
         with context.begin_transaction():

@@ -209,23 +209,28 @@ def nearest(
             stacklevel=3,
         )
     out: list[Match] = []
+    ids = [rows[i][0] for i in order]
     with repo._read() as s:
-        for i in order:
-            vrow = s.get(VersionRow, rows[i][0])
-            joint = s.get(JointRow, vrow.joint_id)
-            labels = s.scalars(
-                select(LabelRow.label).where(LabelRow.joint_id == joint.id, LabelRow.version == vrow.version)
+        found = {
+            v.id: (v, j)
+            for v, j in s.execute(
+                select(VersionRow, JointRow).join(JointRow, JointRow.id == VersionRow.joint_id).where(VersionRow.id.in_(ids))
             )
-            version = to_version(joint, vrow, "active", list(labels))
-            out.append(
-                Match(
-                    version=version,
-                    distance=float(total[i]),
-                    per_condition={name: float(t[i]) for name, t in terms.items()},
-                    extrapolating=bool(outside),
-                    outside_range=tuple(outside),
-                )
+        }
+        labels: dict[tuple[int, int], list[str]] = {}
+        for lab in s.scalars(select(LabelRow).where(LabelRow.joint_id.in_({j.id for _, j in found.values()}))):
+            labels.setdefault((lab.joint_id, lab.version), []).append(lab.label)
+    for i in order:
+        vrow, joint = found[rows[i][0]]
+        out.append(
+            Match(
+                version=to_version(joint, vrow, "active", labels.get((joint.id, vrow.version), ())),
+                distance=float(total[i]),
+                per_condition={name: float(t[i]) for name, t in terms.items()},
+                extrapolating=bool(outside),
+                outside_range=tuple(outside),
             )
+        )
     return out
 
 

@@ -231,3 +231,36 @@ def test_diff_reports_conditions_and_frf(repo):
     assert d.max_relative_difference == entries[("3x", "3x")]
     same = repo.diff("T1", 1, 1)
     assert same.same_blob and same.max_relative_difference == 0.0 and not same.conditions
+
+
+def test_duplicate_version_number_is_refused_by_the_database(repo):
+    _cat(repo)
+    with pytest.raises(sa.exc.IntegrityError):
+        with repo.write_engine.begin() as conn:
+            conn.exec_driver_sql(
+                "INSERT INTO joint_versions (joint_id, version, uuid, created_at, author, materials, geometry, extra,"
+                " model_kind, dofs, quantity, n_freq, freq_min_hz, freq_max_hz, blob_sha256, raw_blobs, input_files,"
+                " method, method_params, software_version, quality, record_sha256)"
+                " SELECT joint_id, version, 'other-uuid', created_at, author, materials, geometry, extra, model_kind,"
+                " dofs, quantity, n_freq, freq_min_hz, freq_max_hz, blob_sha256, raw_blobs, input_files, method,"
+                " method_params, software_version, quality, record_sha256 FROM joint_versions"
+            )
+
+
+def test_write_is_retried_after_a_unique_conflict(repo):
+    """A version-number race (unique violation) rolls back and retries with the next number."""
+    calls = []
+
+    def write(session):
+        calls.append(1)
+        if len(calls) < 3:
+            raise sa.exc.IntegrityError("INSERT ...", {}, Exception("UNIQUE constraint failed: joint_versions"))
+        return "done"
+
+    assert repo._retrying(write) == "done" and len(calls) == 3
+
+    def check_violation(session):
+        raise sa.exc.IntegrityError("INSERT ...", {}, Exception("CHECK constraint failed: version_positive"))
+
+    with pytest.raises(sa.exc.IntegrityError):  # other integrity errors are not retried
+        repo._retrying(check_violation)
