@@ -60,6 +60,19 @@ class Substructure:
     dofs: tuple[Dof, ...] | None = None
 
 
+def file_hashes(c: "Campaign") -> dict[str, str]:
+    """SHA-256 of the campaign file and of every file it references (provenance)."""
+    import hashlib
+
+    paths = [c.path] + [s.path for s in c.substructures.values()] + list(c.measurements)
+    if c.validation is not None:
+        paths += [s.path for s in c.validation["substructures"].values()] + list(c.validation["measurements"])
+    out = {}
+    for p in dict.fromkeys(Path(x).resolve() for x in paths):
+        out[p.name if p.parent == c.path.resolve().parent else str(p)] = hashlib.sha256(p.read_bytes()).hexdigest()
+    return out
+
+
 @dataclass(frozen=True)
 class Campaign:
     """A parsed, checked campaign file (no FRFs loaded yet)."""

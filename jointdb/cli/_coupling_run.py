@@ -12,6 +12,7 @@ import numpy as np
 from jointdb.cli._coupling_campaign import (
     Campaign,
     _err,
+    file_hashes,
     grid_for_couple,
     load_substructure,
     merge_measurements,
@@ -174,6 +175,7 @@ def joint_attrs(out: IdentifyOutcome) -> dict:
         },
         "quality": {k: v for k, v in rep.items() if k not in ("settings", "conditions", "campaign")},
         "settings": rep["settings"],
+        "provenance": {"method": f"IRC {out.result.model} (jointdb.coupling)", "input_sha256": file_hashes(out.campaign)},
     }
 
 
