@@ -1,9 +1,230 @@
-"""CLI command group (placeholder until its issue lands)."""
+"""CLI: ``jointdb diagnose`` (model vs recordings) and ``jointdb diagnose-bench``.
+
+Thin: files are read here, the numerics live in :mod:`jointdb.diagnose`, the
+benchmark in :mod:`jointdb.diagnose_bench`; output goes through
+:mod:`jointdb._output`. Nothing is written unless the diagnosis succeeded.
+"""
 
 from __future__ import annotations
 
+import json
+from pathlib import Path
+from typing import Annotated, Optional
+
+import numpy as np
 import typer
+
+from jointdb.errors import InputError
+
+
+def _parse_map(text: str | None) -> dict[int, str]:
+    if not text:
+        return {}
+    out = {}
+    for item in text.split(","):
+        if not item.strip():
+            continue
+        if "=" not in item:
+            raise InputError(f"--map {text!r}: write node=point pairs like 1=tip,2=flute")
+        node, name = item.split("=", 1)
+        try:
+            out[int(node.strip())] = name.strip()
+        except ValueError:
+            raise InputError(f"--map: {node.strip()!r} is not a node number") from None
+    return out
+
+
+def _parse_floats(text: str | None, option: str) -> list[float]:
+    if not text:
+        return []
+    try:
+        return [float(v) for v in text.replace(":", ",").split(",") if v.strip()]
+    except ValueError:
+        raise InputError(f"{option} {text!r}: expected comma-separated numbers") from None
+
+
+def _read_recording(path: Path):
+    """FRF and (if the file has coherence records, UFF58 function type 6) the coherence."""
+    from jointdb.diagnose import Measurement
+    from jointdb.io import read_frf_uff58, read_uff58
+
+    if not path.exists():
+        raise InputError(f"recording {path}: no such file")
+    frf = read_frf_uff58(path)
+    coh = None
+    records = [r for r in read_uff58(path) if r.function_type == 6]
+    if records:
+        coh = np.full(frf.values.shape, np.nan)
+        for r in records:
+            if r.response in frf.outputs and r.reference in frf.inputs:
+                i, j = frf.outputs.index(r.response), frf.inputs.index(r.reference)
+                coh[:, i, j] = np.interp(frf.freq, r.freq, np.abs(r.values))
+        if np.isnan(coh).any():
+            missing = [f"{o}/{i}" for a, o in enumerate(frf.outputs) for b, i in enumerate(frf.inputs)
+                       if np.isnan(coh[0, a, b])]
+            raise InputError(f"recording {path}: coherence records missing for {', '.join(missing)}")
+    return Measurement(frf=frf, coherence=coh, label=path.name)
 
 
 def register(app: typer.Typer) -> None:
-    """Add this group's commands to the app."""
+    """Add ``diagnose`` and ``diagnose-bench`` to the app."""
+
+    @app.command("diagnose")
+    def diagnose_cmd(
+        model: Annotated[Path, typer.Argument(help="Nominal model file (jointdb beam model JSON).")],
+        recordings: Annotated[list[Path], typer.Argument(help="Recorded FRFs (UFF58); several = several excitation levels.")],
+        mapping: Annotated[Optional[str], typer.Option("--map", help="Recording node to model point, e.g. 1=tip,2=flute.")] = None,
+        levels: Annotated[Optional[str], typer.Option("--levels", help="Excitation level of each recording, e.g. 2,10,50 (N).")] = None,
+        band: Annotated[Optional[str], typer.Option("--band", help="Frequency band FMIN:FMAX in Hz.")] = None,
+        out: Annotated[Optional[Path], typer.Option("--out", help="Write the augmented model (JSON).")] = None,
+        plots: Annotated[Optional[Path], typer.Option("--plots", help="Directory for before/after PNGs.")] = None,
+        no_combinations: Annotated[bool, typer.Option("--no-combinations", help="Fit single explanations only.")] = False,
+        as_json: Annotated[bool, typer.Option("--json", help="Machine-readable result on stdout.")] = False,
+    ) -> None:
+        """Locate where a model and recordings disagree, name the missing physics, refit.
+
+        Example: jointdb diagnose tool.json tap-tip.uff --map 1=tip,2=flute,3=shank --plots figs --out tool-fixed.json
+        """
+        from jointdb._output import emit, message
+        from jointdb.diagnose import diagnose
+        from jointdb.diagnose_bench import single_blas_thread
+        from jointdb.fe import load_model, model_to_dict
+
+        if out is not None and out.suffix.lower() != ".json":
+            raise InputError(f"--out {out}: the augmented model is written as JSON; use a .json name")
+        if out is not None and not out.parent.exists():
+            raise InputError(f"--out {out}: directory {out.parent} does not exist")
+        if plots is not None and plots.exists() and not plots.is_dir():
+            raise InputError(f"--plots {plots}: exists and is not a directory")
+        nominal = load_model(model)
+        ms = [_read_recording(p) for p in recordings]
+        lv = _parse_floats(levels, "--levels")
+        if lv and len(lv) != len(ms):
+            raise InputError(f"--levels gives {len(lv)} values for {len(ms)} recordings")
+        if len(ms) > 1 and not lv:
+            message("several recordings and no --levels: taking them as levels 1, 2, … in the order given")
+            lv = [float(i + 1) for i in range(len(ms))]
+        if lv:
+            import dataclasses
+
+            ms = [dataclasses.replace(m, level=v) for m, v in zip(ms, lv)]
+        b = _parse_floats(band, "--band")
+        if band and len(b) != 2:
+            raise InputError(f"--band {band!r}: write FMIN:FMAX, e.g. 100:5000")
+        with single_blas_thread():
+            result = diagnose(nominal, ms, mapping=_parse_map(mapping), band=tuple(b) if b else (None, None),
+                              combinations=not no_combinations)
+        written = []
+        if out is not None:
+            if result.explained and result.augmented and any(a is not nominal for a in result.augmented):
+                if len(result.augmented) == 1:
+                    out.write_text(json.dumps(model_to_dict(result.augmented[0]), indent=2) + "\n", encoding="utf-8")
+                    written.append(str(out))
+                else:
+                    for i, a in enumerate(result.augmented):
+                        p = out.with_name(f"{out.stem}-level{i + 1}{out.suffix}")
+                        p.write_text(json.dumps(model_to_dict(a), indent=2) + "\n", encoding="utf-8")
+                        written.append(str(p))
+            elif result.explained:
+                message("the explanation is in the measurement chain; the model needs no change: --out not written")
+            else:
+                message("nothing to add to the model: --out not written")
+        if plots is not None:
+            from jointdb.plots._diagnose import plot_diagnosis
+
+            plots.mkdir(parents=True, exist_ok=True)
+            written += plot_diagnosis(result, plots)
+        if written:
+            message(f"wrote {', '.join(written)}")
+        if as_json:
+            emit(result.to_dict(), as_json=True)
+            return
+        emit(result.verdict)
+        emit(result.table()[:8], title="ranked explanations (BIC; ΔBIC vs the nominal model)")
+        modes = [{"mode": p.mode, "model Hz": round(p.model.freq_hz, 1), "recorded Hz": round(p.recorded.freq_hz, 1),
+                  "shift %": round(100 * p.shift, 2), "damping ×": round(p.damping_ratio, 2),
+                  "height dB": round(p.height_db, 1), "band mismatch %": round(100 * p.mismatch, 1),
+                  "DOFs showing it": ", ".join(p.dofs)} for p in result.before.pairs]
+        if modes:
+            emit(modes, title="modes: model vs recording (before)")
+        if result.level_table:
+            emit(result.level_table, title="amplitude-dependent joint per level")
+
+    @app.command("diagnose-bench")
+    def diagnose_bench_cmd(
+        cases: Annotated[int, typer.Option("--cases", help="Seeded cases per effect.")] = 20,
+        seed: Annotated[int, typer.Option("--seed", help="First seed.")] = 0,
+        effects: Annotated[Optional[str], typer.Option("--effects", help="Comma-separated subset of effects.")] = None,
+        write_case: Annotated[Optional[Path], typer.Option("--write-case", help="Only write one case (model JSON + UFF58 recordings) of each effect to this directory.")] = None,
+        as_json: Annotated[bool, typer.Option("--json", help="Machine-readable result on stdout.")] = False,
+    ) -> None:
+        """Run the concealed-effect benchmark: generate, diagnose, score per effect.
+
+        Example: jointdb diagnose-bench --cases 20 --seed 1000
+        """
+        from jointdb._output import emit, message, progress
+        from jointdb.diagnose_bench import EFFECTS, generate_case, run_case, single_blas_thread
+
+        chosen = EFFECTS if not effects else tuple(e.strip() for e in effects.split(",") if e.strip())
+        bad = [e for e in chosen if e not in EFFECTS]
+        if bad:
+            raise InputError(f"--effects: unknown {', '.join(bad)}; known: {', '.join(EFFECTS)}")
+        if cases < 1:
+            raise InputError("--cases must be >= 1")
+        if write_case is not None:
+            _write_cases(write_case, chosen, seed)
+            return
+        import time
+
+        from jointdb.diagnose_bench import BenchResult
+
+        t0 = time.perf_counter()
+        jobs = [(e, seed + k) for e in chosen for k in range(cases)]
+        results = []
+        with single_blas_thread():
+            for e, s in progress(jobs, total=len(jobs), description="diagnosing"):
+                results.append(run_case(generate_case(e, s)))
+        bench = BenchResult(results, time.perf_counter() - t0)
+        rows, cols, m = bench.confusion()
+        per = bench.per_effect()
+        if as_json:
+            emit({"per_effect": per, "confusion": {"rows": rows, "columns": cols, "counts": m},
+                  "total_seconds": bench.seconds,
+                  "cases": [{"case": c.case, "effect": c.effect, "named": c.named, "explanation": list(c.names),
+                             "top3": list(c.top3), "improvement": c.improvement, "seconds": c.seconds}
+                            for c in bench.cases]}, as_json=True)
+            return
+        cols_show = ["effect", "cases", "named_first_pct", "top3_pct", "median_improvement",
+                     "improved_3x_when_named_pct", "median_mismatch_before_pct", "median_mismatch_after_pct",
+                     "median_seconds"]
+        emit(per, columns=cols_show, title="diagnosis of concealed effects, per hidden effect")
+        emit([{"hidden \\ named first": r, **{c: int(v) for c, v in zip(cols, row)}} for r, row in zip(rows, m)],
+             title="confusion matrix (rows: hidden effect; columns: family named first)")
+        extra = {}
+        for row in per:
+            if "false_alarm_pct" in row:
+                extra["false-alarm rate on null cases %"] = row["false_alarm_pct"]
+            if "improves_every_level_pct" in row:
+                extra["softening joint: fit improves at every level %"] = row["improves_every_level_pct"]
+                extra["softening joint: mode 1 located as affected %"] = row["affected_mode_1_pct"]
+        extra["total time s"] = round(bench.seconds, 1)
+        emit(extra, title="summary")
+        message(f"{len(results)} cases in {bench.seconds:.1f} s")
+
+
+def _write_cases(directory: Path, effects, seed: int) -> None:
+    from jointdb._output import message
+    from jointdb.diagnose_bench import generate_case
+    from jointdb.io import write_uff58
+
+    directory.mkdir(parents=True, exist_ok=True)
+    for e in effects:
+        case = generate_case(e, seed)
+        base = directory / case.name
+        (base.with_suffix(".json")).write_text(json.dumps(case.model, indent=2) + "\n", encoding="utf-8")
+        for i, r in enumerate(case.recordings):
+            suffix = f"-level{i + 1}" if len(case.recordings) > 1 else ""
+            write_uff58(directory / f"{case.name}{suffix}.uff", r.frf)
+        (directory / f"{case.name}.truth.json").write_text(json.dumps(case.truth, indent=2, default=float) + "\n",
+                                                          encoding="utf-8")
+        message(f"wrote {case.name}: model, {len(case.recordings)} recording(s), truth")

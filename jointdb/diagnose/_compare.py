@@ -98,8 +98,12 @@ def pair_modes(model_peaks, rec_peaks, max_ratio=1.35):
         used_r.add(b)
         pairs.append((a, b))
     pairs.sort()
-    extra = [r.freq_hz for b, r in enumerate(rec_peaks) if b not in used_r]
-    missing = [m.freq_hz for a, m in enumerate(model_peaks) if a not in used_m]
+    # unpaired peaks count only if they are strong (10 % of the strongest): weak
+    # local maxima near antiresonances are noise
+    top_r = max((r.height for r in rec_peaks), default=0.0)
+    top_m = max((m.height for m in model_peaks), default=0.0)
+    extra = [r.freq_hz for b, r in enumerate(rec_peaks) if b not in used_r and r.height >= 0.1 * top_r]
+    missing = [m.freq_hz for a, m in enumerate(model_peaks) if a not in used_m and m.height >= 0.1 * top_m]
     return pairs, extra, missing
 
 

@@ -90,6 +90,25 @@ def _point_for(dof: Dof, model, mapping: Mapping[int, str], what: str, label: st
     )
 
 
+def roughness_sigma(values: np.ndarray, half_window: int = 10) -> np.ndarray:
+    """σ of log H estimated from the data alone (no coherence available).
+
+    The second difference of ``log H`` along frequency, ``r_k = log H_k −
+    (log H_{k−1} + log H_{k+1})/2``, has variance 1.5 σ² for independent noise
+    of σ per line; a running median of ``|r|`` over ±``half_window`` lines
+    (robust against the curvature of the few lines at a resonance) gives σ.
+    """
+    import scipy.ndimage
+
+    lv = np.log(np.where(np.abs(values) > 0, values, 1e-300))
+    r = np.zeros(values.shape)
+    r[1:-1] = np.abs(lv[1:-1] - 0.5 * (lv[:-2] + lv[2:]))
+    r[0], r[-1] = r[1], r[-2]
+    med = scipy.ndimage.median_filter(r, size=(2 * half_window + 1,) + (1,) * (values.ndim - 1), mode="nearest")
+    # median of |N(0, 1.5σ²)| (complex: both parts) ≈ 1.1774 · sqrt(1.5/2) σ
+    return med / (1.1774 * np.sqrt(0.75))
+
+
 def _sigma_from_coherence(coh: np.ndarray) -> np.ndarray:
     """σ of log H from ordinary coherence: ``σ² = (1 − γ²)/γ²`` (noise on the response)."""
     g = np.clip(coh, 1e-6, 1.0)
@@ -189,10 +208,8 @@ def prepare(model, measurements: Sequence[Measurement], mapping: Mapping[int, st
                     f"{lo:g} and {hi:g} Hz have coherence >= {MIN_COHERENCE}; no usable data to diagnose"
                 )
         else:
-            # no coherence: trust lines above a noise floor of 1e-3 of each FRF's peak
-            peak = np.abs(v).max(axis=0, keepdims=True)
-            usable = np.abs(v) > 1e-3 * peak
-            sigma = np.full(v.shape, 0.02)
+            sigma = roughness_sigma(v)
+            usable = sigma < 1.0
         w = np.where(usable & np.isfinite(v) & (np.abs(v) > 0), 1.0 / np.sqrt(sigma**2 + MODEL_FLOOR**2), 0.0)
         vals.append(np.where(w > 0, v, 1.0))
         wts.append(w)

@@ -82,12 +82,12 @@ class Diagnosis:
         rows = []
         for rank, f in enumerate(self.ranking, 1):
             rows.append({
-                "rank": rank, "explanation": f.name, "family": f.family,
-                "parameters": "; ".join(q.fmt(f.values[q.name], f.sigmas.get(q.name)).join(
-                    (f"{q.name}=", "")) for q in f.candidate.params) if f.candidate else "",
-                "delta_bic": round(f.bic - self.nominal.bic, 1),
-                "mismatch_pct": round(100 * f.mismatch, 2),
-                "improvement": round(self.nominal.mismatch / f.mismatch, 2) if f.mismatch > 0 else None,
+                "rank": rank, "explanation": f.name,
+                "parameters": "; ".join(f"{q.name}={q.fmt(f.values[q.name], f.sigmas.get(q.name))}"
+                                        for q in f.candidate.params) if f.candidate else "",
+                "dBIC": round(f.bic - self.nominal.bic, 1),
+                "mismatch %": round(100 * f.mismatch, 2),
+                "gain x": round(self.nominal.mismatch / f.mismatch, 2) if f.mismatch > 0 else None,
             })
         return rows
 
@@ -104,7 +104,10 @@ class Diagnosis:
             "best": None if b is None else {
                 "name": b.name, "family": b.family, "description": b.describe(),
                 "values": b.values, "sigmas": b.sigmas, "parameters_at_bound": b.at_bound},
-            "ranking": self.table(),
+            "ranking": [{"rank": r["rank"], "explanation": r["explanation"], "family": f.family,
+                         "values": f.values, "sigmas": f.sigmas, "delta_bic": r["dBIC"],
+                         "mismatch": f.mismatch, "improvement": r["gain x"]}
+                        for r, f in zip(self.table(), self.ranking)],
             "modes": [{"mode": p.mode, "f_model_hz": p.model.freq_hz, "f_recorded_hz": p.recorded.freq_hz,
                        "shift_pct": 100 * p.shift, "damping_ratio": p.damping_ratio,
                        "height_db": p.height_db, "band_mismatch_pct": 100 * p.mismatch, "dofs": list(p.dofs)}
@@ -235,9 +238,15 @@ def diagnose(model, measurements: Sequence[Measurement], mapping: Mapping[int, s
     def passes(f, ref):
         return f.bic <= ref.bic - BIC_MARGIN and f.mismatch * MIN_IMPROVEMENT <= ref.mismatch
 
+    def simplest(f):
+        """The member of f's slot with fewest parameters that is practically as good."""
+        near = [g for g in fits if g.candidate.slot == f.candidate.slot and passes(g, nominal)
+                and g.mismatch <= OCCAM_TOLERANCE * f.mismatch]
+        return min(near, key=lambda g: (g.p, g.bic)) if near else f
+
     if combinations and fits:
         tops = []
-        for f in fits:
+        for f in (simplest(f) for f in fits):
             if passes(f, nominal) and all(f.candidate.slot != t.candidate.slot and
                                           f.family != t.family for t in tops):
                 tops.append(f)

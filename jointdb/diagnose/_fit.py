@@ -137,6 +137,24 @@ def nominal_fit(ev: ModelEvaluator, nominal) -> Fit:
     return Fit(None, {}, {}, rss, ev.n, 0, _bic(rss, ev.n, 0), ev.mismatch(H), ev.mismatch(H, True))
 
 
+def _correlation_inflation(r: np.ndarray, ev: ModelEvaluator) -> float:
+    """Variance inflation ``(1 + ρ)/(1 − ρ)`` for residuals correlated along frequency.
+
+    ρ is the lag-one autocorrelation of the residual along the fit lines (per
+    FRF, real and imaginary parts). Model error makes neighbouring residuals
+    alike, so the textbook covariance (independent residuals) would be too
+    optimistic by about this factor.
+    """
+    shape = (2,) + ev.rec.shape
+    x = r.reshape(shape)
+    x = np.moveaxis(x, 2, -1).reshape(-1, shape[2])        # series along frequency
+    a, b = x[:, :-1], x[:, 1:]
+    den = float((x * x).sum())
+    rho = float((a * b).sum()) / den if den > 0 else 0.0
+    rho = min(max(rho, 0.0), 0.99)
+    return (1 + rho) / (1 - rho)
+
+
 def _changes_model(cand) -> bool:
     from jointdb.diagnose.physics import Candidate
 
@@ -244,8 +262,9 @@ def fit_candidate(ev: ModelEvaluator, nominal, cand, start: dict | None = None, 
     sigmas = {}
     J = res.jac
     dof = max(ev.n - p, 1)
+    inflate = _correlation_inflation(res.fun, ev)
     try:
-        cov = np.linalg.pinv(J.T @ J) * (rss / dof)
+        cov = np.linalg.pinv(J.T @ J) * (rss / dof) * inflate
         su = np.sqrt(np.clip(np.diag(cov), 0, None))
     except np.linalg.LinAlgError:  # pragma: no cover
         su = np.full(p, np.nan)
