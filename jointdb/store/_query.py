@@ -114,6 +114,46 @@ def _candidates(repo: "Repository", joint_type: str, at: datetime | None, geomet
     return list(rows.values())
 
 
+def _catalogue_stamp(repo: "Repository") -> tuple[int, int]:
+    """Row counts of the two append-only tables that decide the candidates.
+
+    Rows are never updated or deleted (migration 0002), so any committed
+    catalogue, import or state change increases one of the counts.
+    """
+    with repo.read_engine.connect() as conn:
+        n_versions = conn.execute(select(func.count()).select_from(VersionRow)).scalar_one()
+        n_states = conn.execute(select(func.count()).select_from(StateRow)).scalar_one()
+    return int(n_versions), int(n_states)
+
+
+def _cached_candidates(repo: "Repository", joint_type: str, at: datetime | None, geometry_keys: Sequence[str]):
+    """Candidates as rows, columns and a float-column accessor, cached per repository.
+
+    The cache entry is reused only while :func:`_catalogue_stamp` is unchanged;
+    point-in-time queries (``at``) are not cached.
+    """
+    key = (joint_type, tuple(geometry_keys))
+    cache = repo.__dict__.setdefault("_nearest_cache", {})
+    stamp = _catalogue_stamp(repo) if at is None else None
+    if stamp is not None and key in cache and cache[key][0] == stamp:
+        return cache[key][1]
+    rows = _candidates(repo, joint_type, at, geometry_keys)
+    columns = list(zip(*rows)) if rows else []
+    floats: dict[int, np.ndarray] = {}
+
+    def numeric(col: int) -> np.ndarray:
+        if col not in floats:
+            floats[col] = np.array([np.nan if x is None else x for x in columns[col]], dtype=float)
+        return floats[col]
+
+    value = (rows, columns, numeric)
+    if stamp is not None:
+        if len(cache) > 16:
+            cache.clear()
+        cache[key] = (stamp, value)
+    return value
+
+
 def _jaccard(a: tuple[str, ...], b: tuple[str, ...]) -> float:
     ca, cb = Counter(a), Counter(b)
     union = sum((ca | cb).values())
@@ -158,7 +198,7 @@ def nearest(
     if isinstance(k, bool) or int(k) < 1:
         raise InputError(f"k must be >= 1, got {k!r}")
     geometry_keys = list(req.geometry)
-    rows = _candidates(repo, joint_type, at, geometry_keys)
+    rows, columns, numeric = _cached_candidates(repo, joint_type, at, geometry_keys)
     if not rows:
         with repo._read() as s:
             types = sorted(set(s.scalars(select(JointRow.joint_type))))
@@ -167,13 +207,8 @@ def nearest(
             " (joint types are never mixed)"
         )
     n = len(rows)
-    columns = list(zip(*rows))
     terms: dict[str, np.ndarray] = {}
     outside: list[str] = []
-
-    def numeric(col: int) -> np.ndarray:
-        return np.array([np.nan if x is None else x for x in columns[col]], dtype=float)
-
     if req.torque_nm is not None:
         _log_term(numeric(5), req.torque_nm, "torque_nm", terms, outside)
     if req.preload_n is not None:

@@ -131,3 +131,16 @@ def test_interpolation_refuses_mismatched_neighbours(catalogue):
         catalogue.interpolate(m)
     with pytest.raises(InputError, match="no neighbours"):
         catalogue.interpolate([])
+
+
+def test_cached_candidates_see_writes_from_other_processes(catalogue, backend):
+    first = catalogue.nearest("tool-holder", Conditions(torque_nm=33.0), k=1)
+    assert first[0].version.name == "TH-40"
+    other = backend.repo()  # another connection pool, as another process would have
+    other.catalogue("TH-33", "tool-holder", spring_joint(k=(_k(33), 8e4)), Conditions(torque_nm=33.0),
+                    "spring-damper-planar")
+    again = catalogue.nearest("tool-holder", Conditions(torque_nm=33.0), k=1)
+    assert again[0].version.name == "TH-33" and again[0].distance == 0.0
+    other.deprecate("TH-33")
+    assert catalogue.nearest("tool-holder", Conditions(torque_nm=33.0), k=1)[0].version.name == "TH-40"
+    other.close()
