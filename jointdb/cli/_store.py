@@ -135,6 +135,16 @@ def _read_joint_file(path: Path) -> tuple[Any, dict[str, Any], dict[str, str]]:
 _TABLE = ["name", "version", "state", "labels", "materials", "torque_nm", "preload_n"]
 
 
+def _write_joint_file(path: Path, frf, meta: dict[str, Any]) -> None:
+    """Write a joint FRF as the HDF5 exchange file of ``jointdb identify`` (readable by
+    ``jointdb couple --joint`` and ``jointdb catalogue``), with ``meta`` as its metadata."""
+    from jointdb.io import write_frf_hdf5
+
+    kinds = {v: k for k, v in _JOINT_MODEL_KINDS.items()}
+    meta = {"kind": "joint", "joint_model": kinds.get(meta.pop("model_kind", ""), ""), **meta}
+    write_frf_hdf5(path, frf, json.loads(json.dumps(meta, default=str)))
+
+
 def _version_row(v) -> dict[str, Any]:
     return v.summary()
 
@@ -275,10 +285,11 @@ def register(app: typer.Typer) -> None:
             rows.append(row)
         result: Any = rows
         if interpolate is not None:
-            from jointdb.store import write_frf_file
-
             ij = repo.interpolate(matches, req)
-            write_frf_file(interpolate, ij.frf)
+            _write_joint_file(interpolate, ij.frf, {
+                "model_kind": matches[0].version.model_kind, "joint_type": ij.joint_type,
+                "conditions": req.to_dict(), "interpolated": True, "method": "interpolated-dynamic-stiffness",
+                "neighbours": [{"name": n, "version": v, "weight": w} for n, v, w in ij.neighbours]})
             message(f"{ij.describe()} -> {interpolate}")
             if as_json:
                 result = {"matches": rows, "interpolated": {"file": str(interpolate), "label": ij.label,
@@ -310,9 +321,10 @@ def register(app: typer.Typer) -> None:
         repo = _repo(db, blobs)
         jv = repo.get(name, version=version, at=at, label=label)
         if frf_out is not None:
-            from jointdb.store import write_frf_file
-
-            write_frf_file(frf_out, repo.load_frf(jv))
+            _write_joint_file(frf_out, repo.load_frf(jv), {
+                "model_kind": jv.model_kind, "joint_type": jv.joint_type, "conditions": jv.conditions.to_dict(),
+                "catalogue": {"name": jv.name, "version": jv.version, "uuid": jv.uuid, "blob_sha256": jv.blob_sha256},
+                "quality": dict(jv.quality)})
             message(f"wrote {jv.name} v{jv.version} FRF to {frf_out}")
         emit(_version_detail(jv), as_json=as_json, title=f"{jv.name} v{jv.version}")
 

@@ -62,7 +62,12 @@ def test_catalogue_query_and_joints_commands(db, files, tmp_path):
     hist = run_json("joints", "history", "TH-20", "--db", db)
     assert [r["version"] for r in hist] == [1, 2]
     shown = run_json("joints", "show", "TH-20", "--version", "1", "--frf-out", tmp_path / "v1.h5", "--db", db)
-    assert shown["torque_nm"] == 20 and (tmp_path / "v1.h5").is_file()
+    assert shown["torque_nm"] == 20
+    from jointdb.io import read_frf_hdf5_full
+
+    frf, meta = read_frf_hdf5_full(tmp_path / "v1.h5")  # the exchange file `jointdb couple --joint` reads
+    assert frf.allclose(spring_joint(k=(2e6, 8e4)), rtol=0) and meta["joint_model"] == "planar"
+    assert meta["catalogue"]["name"] == "TH-20" and meta["catalogue"]["version"] == 1
     assert run_json("joints", "show", "TH-20", "--label", "released", "--db", db)["version"] == 2
     d = run_json("joints", "diff", "TH-20", "1", "2", "--db", db)
     assert d["conditions"]["torque_nm"] == [20.0, 25.0] and d["max_relative_difference"] > 0.1
@@ -76,6 +81,8 @@ def test_catalogue_query_and_joints_commands(db, files, tmp_path):
     assert [m["name"] for m in q["matches"]] == ["TH-40", "TH-20"]  # TH-80 is deprecated
     assert q["matches"][0]["d_torque_nm"] > 0 and q["interpolated"]["label"] == "interpolated"
     assert {n["name"] for n in q["interpolated"]["neighbours"]} == {"TH-40", "TH-20"}
+    _, meta = read_frf_hdf5_full(tmp_path / "interp.h5")
+    assert meta["interpolated"] is True and len(meta["neighbours"]) == 2 and meta["joint_model"] == "planar"
     table = run("query", "--type", "tool-holder", "--torque", 500, "--db", db)
     assert "outside the catalogued range" in table.stderr and "d_torque_nm" in table.stdout
 
