@@ -13,25 +13,38 @@ Library first; the ``jointdb catalogue / joints / query / db`` commands call it.
 >>> repo.get("T1-HSK63", version=1); repo.load_frf(jv)            # doctest: +SKIP
 >>> repo.nearest("tool-holder", Conditions(torque_nm=35.0), k=3)  # doctest: +SKIP
 
-API (contract in /work/api-contracts.md, deviations documented here):
+API (contract in /work/api-contracts.md; additions are keyword arguments or new methods):
 
-- ``Repository(url=None, *, blobs=None, auto_create=None)``
+- ``Repository(url=None, *, blobs=None, auto_create=None)`` - ``url``: SQLAlchemy URL
+  or SQLite path (default ``$JOINTDB_URL``, else ``$XDG_DATA_HOME/jointdb/jointdb.sqlite``);
+  ``blobs``: blob directory (default ``$JOINTDB_BLOBS``, else ``<sqlite file>.blobs``;
+  required for PostgreSQL). A new SQLite database is migrated on first use;
+  PostgreSQL needs ``jointdb db upgrade`` first.
 - ``.catalogue(name, joint_type, frf, conditions, model_kind, provenance=None,
   quality=None, parent=None, *, raw_frfs=None, author=None) -> JointVersion``
-- ``.get(name, version=None, at=None, label=None) -> JointVersion``;
-  ``.load_frf(version_or_name, number=None) -> FRF``; ``.load_raw(jv, key)``
-- ``.history(name)``, ``.list_joints(joint_type=None)``, ``.label(name, version, label)``,
-  ``.deprecate(name, version=None, reason="", undo=False)``, ``.audit(name=None)``
+- ``.get(name, version=None, at=None, label=None) -> JointVersion`` (default: latest
+  non-deprecated); ``.load_frf(jv)`` or ``.load_frf(name, number) -> FRF`` (verified);
+  ``.load_raw(jv, key) -> FRF``
+- ``.history(name)``, ``.list_joints(joint_type=None, include_deprecated=True)``,
+  ``.label(name, version, label)``, ``.deprecate(name, version=None, reason="", undo=False)``,
+  ``.audit(name=None, limit=100)``
 - ``.diff(name, version_a, version_b=None, other=None) -> VersionDiff``
-- ``.export(names_or_None, path)``, ``.import_(path)``
-- ``.nearest(joint_type, conditions, k=3, at=None) -> list[Match]``;
-  ``.interpolate(matches, conditions=None) -> InterpolatedJoint``
-- ``.check() -> CheckReport``, ``.gc(min_age_s=3600, dry_run=False)``
-- ``upgrade(url, revision="head")``, ``downgrade(url, revision="-1")``, ``current_revision(url)``
+- ``.export(names_or_None, path) -> counts``, ``.import_(path) -> summary`` (ConflictError
+  on a conflicting version; identical content is a no-op)
+- ``.nearest(joint_type, conditions, k=3, at=None) -> list[Match]`` (distance defined in
+  :mod:`jointdb.store._query`; warns :class:`OutsideCatalogueWarning`);
+  ``.interpolate(matches, conditions=None) -> InterpolatedJoint`` (``.frf``, ``.neighbours``)
+- ``.check(verify_blobs=True) -> CheckReport`` (``.ok``, ``.problems``), ``.gc(min_age_s=3600, dry_run=False)``
+- ``upgrade(url=None, revision="head")``, ``downgrade(url=None, revision="-1")``,
+  ``current_revision(url=None)``, ``head_revision()``
 
-Deviation from the contract: ``Conditions`` has a field order of
-``(materials, preload_n, torque_nm, geometry, extra)`` as planned, and
-``Match`` adds ``outside_range`` (which conditions extrapolate).
+Value types: ``Conditions(materials, preload_n, torque_nm, geometry, extra)`` (materials from
+:func:`known_materials`; extend with ``JOINTDB_MATERIALS=a,b`` or :func:`register_material`),
+``Provenance(method, parameters, input_files, software_version, author)``, ``JointVersion``,
+``Match(version, distance, per_condition, extrapolating, outside_range)``, ``MODEL_KINDS``
+(``spring-damper-planar``, ``n-point-translational``, ``full-matrix``).
+Blob format and canonical hash: :mod:`jointdb.store._blobs`; bundle format:
+:mod:`jointdb.store._bundle`; schema: :mod:`jointdb.store._models`.
 """
 
 from __future__ import annotations
