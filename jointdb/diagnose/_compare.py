@@ -163,17 +163,29 @@ def signature(ev, H_model: np.ndarray) -> Signature:
     wa = w[:, away]
     la = lr[:, away]
     gain_db = float(-20 / np.log(10) * np.median(la.real[wa > 0])) if np.any(wa > 0) else 0.0
-    ph = -la.imag  # recorded phase minus model phase
-    fa = np.broadcast_to(freq[away][None, :, None, None], ph.shape)
-    ww = wa.ravel() ** 2
-    x, y = fa.ravel(), ph.ravel()
-    if ww.sum() > 0 and np.ptp(x[ww > 0]) > 0:
-        A = np.stack([np.ones_like(x), x], 1) * np.sqrt(ww)[:, None]
-        coef, *_ = np.linalg.lstsq(A, y * np.sqrt(ww), rcond=None)
-        fit = A @ coef
-        ss = float(((y * np.sqrt(ww)) ** 2).sum())
-        r2 = 1 - float(((y * np.sqrt(ww) - fit) ** 2).sum()) / ss if ss > 0 else 0.0
-        delay = float(-coef[1] / (2 * np.pi))
+    # phase drift: per FRF, the recorded-minus-model phase on trusted lines away
+    # from the peaks, unwrapped along frequency; one pooled slope (own intercepts)
+    num = den = ss = 0.0
+    fa = freq[away]
+    for lv in range(lr.shape[0]):
+        for i in range(lr.shape[2]):
+            for j in range(lr.shape[3]):
+                wv = wa[lv, :, i, j]
+                good = wv > 0.3 * wv.max() if wv.max() > 0 else wv > 0
+                if good.sum() < 5:
+                    continue
+                x = fa[good]
+                y = np.unwrap(-la[lv, good, i, j].imag)
+                ww = wv[good] ** 2
+                xm, ym = np.average(x, weights=ww), np.average(y, weights=ww)
+                num += float((ww * (x - xm) * (y - ym)).sum())
+                den += float((ww * (x - xm) ** 2).sum())
+                ss += float((ww * (y - ym) ** 2).sum())
+    if den > 0:
+        slope = num / den
+        resid = ss - slope * num
+        r2 = 1 - resid / ss if ss > 0 else 0.0
+        delay = float(-slope / (2 * np.pi))
     else:
         delay, r2 = 0.0, 0.0
 
