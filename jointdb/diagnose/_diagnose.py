@@ -216,15 +216,14 @@ def diagnose(model, measurements: Sequence[Measurement], mapping: Mapping[int, s
     cands = candidates_for(ctx)
     if families is not None:
         cands = [c for c in cands if c.family in set(families)]
-    # recorded resonances for the stage-1 frequency pre-fit: the strongest
-    # recorded peaks, as many as the model has modes in the band
+    # recorded resonances for the stage-1 frequency pre-fit: the strong recorded
+    # peaks (10 % of the strongest), each pulling its nearest model mode
     from jointdb.diagnose._compare import find_peaks
 
     rpk = find_peaks(full.freq, full.rec[0], full.w[0])
-    n_t = min(len(in_band), len(rpk))
-    target = np.sort([p.freq_hz for p in sorted(rpk, key=lambda p: -p.height)[:n_t]]) if n_t else None
-    if target is not None and len(in_band) > n_t:
-        target = None                      # a mode has no recorded peak: do not force a pairing
+    top = max((p.height for p in rpk), default=0.0)
+    strong = sorted(p.freq_hz for p in rpk if p.height >= 0.1 * top)
+    target = np.asarray(strong) if strong else None
     singles = [c for c in cands if not c.per_level]
     fits = [fit_candidate(ev, model, c, target_freqs=target) for c in singles]
     for c in cands:

@@ -162,18 +162,21 @@ def _changes_model(cand) -> bool:
 
 
 def _prefit_frequencies(nominal, cand, params, u0, lo, hi, target):
-    """Stage 1: match the natural frequencies to the recorded peaks (smooth, cheap)."""
+    """Stage 1: move each recorded peak's nearest natural frequency onto it (smooth, cheap)."""
     n = len(target)
+    n_modes = n + 4
 
     def fun(u):
         vals = {q.name: q.from_u(x) for q, x in zip(params, u)}
         try:
-            f = cand.apply(nominal, vals, 0).modes(n).freq_hz
+            f = cand.apply(nominal, vals, 0).modes(n_modes).freq_hz
         except (NumericalError, np.linalg.LinAlgError, InputError):
             return np.full(n, 10.0)
-        if f.size < n:
+        f = f[f > 1e-6 * target.max()]
+        if f.size == 0:
             return np.full(n, 10.0)
-        return np.log(f[:n] / target)
+        lr = np.log(f[None, :] / target[:, None])
+        return lr[np.arange(n), np.argmin(np.abs(lr), axis=1)]
 
     res = scipy.optimize.least_squares(fun, u0, bounds=(lo, hi), method="trf", diff_step=1e-4, max_nfev=20 * (len(u0) + 1))
     return res.x, float(2 * res.cost)
