@@ -80,7 +80,6 @@ def run_main_job(
     db_url: str | None = None,
     say: Callable[[str], None] = print,
     *,
-    every: int = 1,
     n_speeds: int = 400,
     speed_range_rpm: tuple[float, float] = (3000.0, 30000.0),
 ) -> JourneyResult:
@@ -99,8 +98,6 @@ def run_main_job(
         identical versions instead of adding new ones.
     say
         Called with one line of text per step (the CLI passes a stderr writer).
-    every
-        Identify on every n-th measured line (1 = all; larger is faster).
     n_speeds
         Spindle speeds of the lobe diagram.
     speed_range_rpm
@@ -127,19 +124,23 @@ def run_main_job(
         say(f"jointdb main job → {out}  (database: {url})")
 
         # 1. catalogue ---------------------------------------------------------------
-        campaigns = sorted((cat / "campaigns").glob("*.json"))
+        campaigns = sorted((cat / "campaigns").glob("*/campaign.json"))
         say(f"[1/4] identify and catalogue {len(campaigns)} tool–holder campaigns (IRC, theory §2a)")
         for path in campaigns:
-            outcome = app.catalogue_campaign(repo, path, every=every)
+            outcome = app.catalogue_campaign(repo, path)
             row = outcome.row()
-            ref = outcome.campaign.reference or {}
-            if ref.get("k"):
-                row["k_x_error"] = float(outcome.k[0] / ref["k"][0] - 1.0)
-                row["k_theta_error"] = float(outcome.k[1] / ref["k"][1] - 1.0)
+            truth_file = path.parent / "truth.json"
+            if truth_file.is_file() and "k_x_n_per_m" in row:  # synthetic campaign: compare with the true joint
+                truth = json.loads(truth_file.read_text(encoding="utf-8"))
+                row["k_x_error"] = row["k_x_n_per_m"] / truth["k"][0] - 1.0
+                row["k_theta_error"] = row["k_theta_nm_per_rad"] / truth["k"][1] - 1.0
             result.catalogued.append(row)
-            say(f"      {row['joint']:<28} {row['materials']:<23} {row['torque_nm']:>5g} N·m  "
+            vs_truth = (f"  (true k: {row['k_x_error']:+.2%}, {row['k_theta_error']:+.2%})"
+                        if "k_x_error" in row else "")
+            say(f"      {row['joint']:<26} {row['materials']:<23} {row['torque_nm']:>4g} N·m  "
                 f"k_x={row['k_x_n_per_m']:.3e} N/m  k_θ={row['k_theta_nm_per_rad']:.3e} N·m/rad  "
-                f"c_x={row['c_x_ns_per_m']:.0f} N·s/m  {'new version' if row['new'] else 'already catalogued'}")
+                f"c_x={row['c_x_ns_per_m']:.0f} N·s/m{vs_truth}  "
+                f"{'new version' if row['new'] else 'already catalogued'}")
         result.files.append(_write_csv(out / "catalogue.csv", result.catalogued))
 
         # 2. query ---------------------------------------------------------------------

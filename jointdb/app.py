@@ -5,29 +5,16 @@
   (pinned ``name@version`` or the nearest to the requested conditions),
   reporting the chosen version, its distance and extrapolation warnings.
 - :func:`predict_stack` — resolve, then :func:`jointdb.stack.predict_tool_tip`.
-- :func:`load_campaign`, :func:`identify_campaign`, :func:`catalogue_campaign` —
-  identify a joint from a measurement campaign (IRC, theory §2a) and catalogue it.
+- :func:`catalogue_campaign` — identify a joint from a measurement campaign
+  (IRC, theory §2; the project's ``jointdb-campaign/1`` file, read by
+  :mod:`jointdb.cli._coupling_campaign`) and catalogue it.
 
-Campaign file (JSON, paths relative to the file)::
-
-    {
-      "format": "jointdb-campaign/1",
-      "name": "th-er32-carbide-080nm",           # joint name in the catalogue
-      "joint_type": "tool-holder",
-      "model_kind": "spring-damper-planar",
-      "conditions": {"materials": ["tungsten-carbide", "steel"], "torque_nm": 80,
-                     "geometry": {"shank_diameter_m": 0.012}},
-      "measured": {"file": "x.uff", "tip_node": 1, "contact_node": 2},   # G_11, G_12 (UFF58/HDF5/CSV)
-      "substructure_a": {"model": "a.json", "point": "nose"},            # machine + holder, with rotations
-      "substructure_b": {"model": "b.json", "tip": "tip", "contact": "base"},   # the tool
-      "identification": {"method": "irc-planar", "smoothing": 9},       # Savitzky–Golay window or null
-      "reference": {"k": [...], "c": [...]}                             # optional: known answer
-    }
 """
 
 from __future__ import annotations
 
 import json
+import os
 import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -52,19 +39,14 @@ from jointdb.stack import (
 __all__ = [
     "JointResolution",
     "StackPrediction",
-    "Campaign",
     "CatalogueOutcome",
     "read_frf_file",
+    "write_frf_file",
     "load_stack",
     "resolve_joints",
     "predict_stack",
-    "load_campaign",
-    "identify_campaign",
     "catalogue_campaign",
 ]
-
-CAMPAIGN_FORMAT = "jointdb-campaign/1"
-
 
 # ------------------------------------------------------------------ files
 def _read_json(path: Path, what: str) -> Any:
@@ -284,191 +266,108 @@ def predict_stack(spec: StackSpec | Path | str, repo=None, freq=None) -> StackPr
 
 # ------------------------------------------------------------------ campaigns
 @dataclass(frozen=True, eq=False)
-class Campaign:
-    """A loaded measurement campaign (see the module docstring for the file)."""
+class CatalogueOutcome:
+    """What cataloguing a campaign did.
 
-    path: Path
-    name: str
-    joint_type: str
-    model_kind: str
-    conditions: Mapping[str, Any]
-    measured: FRF
-    measured_file: Path
-    tip_node: int
-    contact_node: int
-    a_model: Any
-    a_point: str
-    a_file: Path
-    b_model: Any
-    b_tip: str
-    b_contact: str
-    b_file: Path
-    smoothing: int | None
-    reference: Mapping[str, Any] | None
-    description: str = ""
+    ``identified`` is the :class:`jointdb.cli._coupling_run.IdentifyOutcome`
+    (campaign, IRC result, re-coupled and rigid assemblies, constant (k, c) fit);
+    ``version`` the stored :class:`jointdb.store.JointVersion`; ``reused`` is
+    True when the latest version already held this exact joint FRF.
+    """
+
+    identified: Any
+    version: Any
+    reused: bool
+
+    @property
+    def campaign(self):
+        return self.identified.campaign
+
+    def row(self) -> dict[str, Any]:
+        """A flat row: joint, conditions, constant (k, c), residuals."""
+        cond = self.campaign.conditions
+        kc = self.identified.kc
+        res = self.identified.result
+        row: dict[str, Any] = {
+            "joint": f"{self.version.name}@{self.version.version}",
+            "materials": "+".join(cond.get("materials", [])),
+            "torque_nm": cond.get("torque_nm"),
+        }
+        if kc is not None and len(kc.k) == 2:
+            row.update({"k_x_n_per_m": float(kc.k[0]), "k_theta_nm_per_rad": float(kc.k[1]),
+                        "c_x_ns_per_m": float(kc.c[0]), "c_theta_nms_per_rad": float(kc.c[1])})
+        row["residual_median"] = float(np.median(res.residual))
+        row["unreliable_fraction"] = float(np.mean(res.unreliable))
+        row["new"] = not self.reused
+        return row
 
 
-def _need(obj: Mapping[str, Any], key: str, where: str) -> Any:
-    if not isinstance(obj, Mapping):
-        raise InputError(f"{where}: must be an object")
-    if key not in obj:
-        raise InputError(f"{where}.{key}: required field is missing")
-    return obj[key]
+def _campaign_files(camp) -> dict[str, str]:
+    """SHA-256 of the campaign file and every file it references (provenance)."""
+    from jointdb.store import file_sha256
+
+    paths = [camp.path, *camp.measurements, *(s.path for s in camp.substructures.values())]
+    if camp.validation:
+        paths += [*camp.validation["measurements"], *(s.path for s in camp.validation["substructures"].values())]
+    base = camp.path.resolve().parent
+    return {Path(os.path.relpath(Path(p).resolve(), base)).as_posix(): file_sha256(p) for p in paths}
 
 
-def load_campaign(path: Path | str) -> Campaign:
-    """Read a campaign file with its measured FRFs and substructure models.
+def catalogue_campaign(repo, path: Path | str, author: str | None = None) -> CatalogueOutcome:
+    """Identify a campaign's joint (as ``jointdb identify`` does) and store it as a new version.
+
+    The campaign file is the project's ``jointdb-campaign/1`` format (see
+    :mod:`jointdb.cli._coupling_campaign`). The stored FRF is the identified
+    joint receptance; the joint name is the campaign's ``name``; provenance
+    records the SHA-256 of the campaign and every file it references and the
+    method's settings; quality the re-coupling and constant-(k, c) errors. If
+    the latest version of that joint already holds the same FRF (same blob
+    hash) nothing is written and that version is returned.
 
     Raises
     ------
     InputError
-        Naming the file and field; NotFoundError for missing files.
-    """
-    from jointdb.fe import load_model
-
-    p = Path(path)
-    doc = _read_json(p, "campaign file")
-    w = p.name
-    if not isinstance(doc, Mapping):
-        raise InputError(f"{w}: must be a JSON object")
-    if doc.get("format", CAMPAIGN_FORMAT) != CAMPAIGN_FORMAT:
-        raise InputError(f"{w}: format: unsupported {doc.get('format')!r}; this jointdb reads {CAMPAIGN_FORMAT!r}")
-    meas = _need(doc, "measured", w)
-    sa, sb = _need(doc, "substructure_a", w), _need(doc, "substructure_b", w)
-    mfile = p.parent / str(_need(meas, "file", f"{w}: measured"))
-    afile = p.parent / str(_need(sa, "model", f"{w}: substructure_a"))
-    bfile = p.parent / str(_need(sb, "model", f"{w}: substructure_b"))
-    ident = doc.get("identification", {}) or {}
-    smoothing = ident.get("smoothing")
-    if smoothing is not None and (isinstance(smoothing, bool) or not isinstance(smoothing, int) or smoothing < 5
-                                  or smoothing % 2 == 0):
-        raise InputError(f"{w}: identification.smoothing: must be an odd window >= 5 lines or null, got {smoothing!r}")
-    for key in ("tip_node", "contact_node"):
-        v = _need(meas, key, f"{w}: measured")
-        if isinstance(v, bool) or not isinstance(v, int) or v < 0:
-            raise InputError(f"{w}: measured.{key}: must be a node number, got {v!r}")
-    return Campaign(
-        path=p,
-        name=str(_need(doc, "name", w)),
-        joint_type=str(_need(doc, "joint_type", w)),
-        model_kind=str(doc.get("model_kind", "spring-damper-planar")),
-        conditions=dict(_need(doc, "conditions", w)),
-        measured=read_frf_file(mfile),
-        measured_file=mfile,
-        tip_node=meas["tip_node"],
-        contact_node=meas["contact_node"],
-        a_model=load_model(afile),
-        a_point=str(_need(sa, "point", f"{w}: substructure_a")),
-        a_file=afile,
-        b_model=load_model(bfile),
-        b_tip=str(_need(sb, "tip", f"{w}: substructure_b")),
-        b_contact=str(_need(sb, "contact", f"{w}: substructure_b")),
-        b_file=bfile,
-        smoothing=smoothing,
-        reference=doc.get("reference"),
-        description=str(doc.get("description", "")),
-    )
-
-
-def identify_campaign(campaign: Campaign, every: int = 1):
-    """IRC identification of a campaign's planar joint (theory §2a).
-
-    ``every`` keeps every n-th measured line and the last (a coarser grid, for quick runs).
-
-    Returns
-    -------
-    (IdentificationResult, KCFit)
-        The identified joint FRF with diagnostics, and constant (k, c) fitted over the band.
-    """
-    from jointdb.coupling import fit_constant_kc, identify_planar_joint
-
-    if isinstance(every, bool) or not isinstance(every, int) or every < 1:
-        raise InputError(f"every must be a positive whole number of lines, got {every!r}")
-    meas = campaign.measured.band(fmin=np.nextafter(0.0, 1.0)).to("receptance")
-    if every > 1:  # keep both band edges so the joint covers the same band
-        keep = np.unique(np.append(np.arange(0, meas.n_freq, every), meas.n_freq - 1))
-        meas = meas.replace(freq=meas.freq[keep], values=meas.values[keep])
-    f = meas.freq
-    a = campaign.a_model.frf(f, [campaign.a_point])
-    b = campaign.b_model.frf(f, [campaign.b_tip, campaign.b_contact])
-    a_node = campaign.a_model.point(campaign.a_point).node
-    result = identify_planar_joint(
-        meas, a, a_node, b, campaign.b_model.point(campaign.b_contact).node,
-        campaign.b_model.point(campaign.b_tip).node, smoothing=campaign.smoothing,
-    )
-    return result, fit_constant_kc(result.joint)
-
-
-@dataclass(frozen=True, eq=False)
-class CatalogueOutcome:
-    """What cataloguing a campaign did."""
-
-    campaign: Campaign
-    version: Any  # jointdb.store.JointVersion
-    k: np.ndarray
-    c: np.ndarray
-    kc_error: np.ndarray
-    residual_median: float
-    unreliable_fraction: float
-    reused: bool
-
-    def row(self) -> dict[str, Any]:
-        cond = self.campaign.conditions
-        return {
-            "joint": f"{self.version.name}@{self.version.version}",
-            "materials": "+".join(cond.get("materials", [])),
-            "torque_nm": cond.get("torque_nm"),
-            "k_x_n_per_m": float(self.k[0]),
-            "k_theta_nm_per_rad": float(self.k[1]),
-            "c_x_ns_per_m": float(self.c[0]),
-            "c_theta_nms_per_rad": float(self.c[1]),
-            "residual": self.residual_median,
-            "new": not self.reused,
-        }
-
-
-def catalogue_campaign(repo, path: Path | str, author: str | None = None, every: int = 1) -> CatalogueOutcome:
-    """Identify a campaign's joint and store it as a new version (or reuse an identical latest version).
-
-    The stored FRF is the identified joint receptance; provenance records the
-    SHA-256 of every input file and the method's settings; quality the median
-    re-coupling residual, the fraction of flagged lines and the constant-(k, c)
-    misfit.
+        Bad campaign files (naming the field), bad data.
     """
     from jointdb import __version__ as software_version
-    from jointdb.store import Conditions, Provenance, file_sha256, frf_sha256
+    from jointdb._output import to_jsonable
+    from jointdb.cli._coupling_campaign import load_campaign
+    from jointdb.cli._coupling_run import identify_campaign, joint_attrs
+    from jointdb.store import Conditions, Provenance, frf_sha256
 
     camp = load_campaign(path)
-    result, kc = identify_campaign(camp, every)
+    outcome = identify_campaign(camp)
+    joint = outcome.result.joint
+    kinds = {"planar": "spring-damper-planar", "n-point": "n-point-translational", "matrix": "full-matrix"}
     handle, owned = _open_repo(repo)
     try:
-        joint = result.joint
         try:
             latest = handle.get(camp.name)
         except NotFoundError:
             latest = None
         if latest is not None and latest.blob_sha256 == frf_sha256(joint):
-            version, reused = latest, True
-        else:
-            files = {f.name: file_sha256(f) for f in (camp.path, camp.measured_file, camp.a_file, camp.b_file)}
-            prov = Provenance(
-                method="irc-planar",
-                parameters={"smoothing": camp.smoothing, "campaign": camp.path.name, "every": every,
-                            "kc_fit": {"k": kc.k.tolist(), "c": kc.c.tolist()}},
-                input_files=files,
-                software_version=str(software_version),
-            )
-            quality = {
-                "identification_residual": float(np.median(result.residual)),
-                "unreliable_fraction": float(np.mean(result.unreliable)),
-                "kc_misfit_translation": float(kc.error[0]),
-                "kc_misfit_rotation": float(kc.error[1]),
-            }
-            version = handle.catalogue(camp.name, camp.joint_type, joint, Conditions.from_dict(camp.conditions),
-                                       camp.model_kind, prov, quality, author=author)
-            reused = False
+            return CatalogueOutcome(outcome, latest, True)
+        attrs = to_jsonable(joint_attrs(outcome))
+        quality = {
+            "identification_residual": float(np.median(outcome.result.residual)),
+            "unreliable_fraction": float(np.mean(outcome.result.unreliable)),
+            "reconstruction_error_mean": float(attrs["quality"].get("reconstruction_error_mean", float("nan"))),
+        }
+        if outcome.kc is not None:
+            for d, e in zip(outcome.kc.dofs, outcome.kc.error):
+                quality[f"kc_misfit_{d.direction}"] = float(e)
+        if outcome.validation is not None:
+            quality["validation_error"] = float(outcome.validation["identified_joint_error_mean"])
+        prov = Provenance(
+            method=f"irc-{camp.joint_model}",
+            parameters={k: attrs[k] for k in ("settings", "interface", "campaign")},
+            input_files=_campaign_files(camp),
+            software_version=str(software_version),
+        )
+        version = handle.catalogue(camp.name, camp.joint_type, joint, Conditions.from_dict(camp.conditions),
+                                   kinds[camp.joint_model], prov,
+                                   {k: v for k, v in quality.items() if np.isfinite(v)}, author=author)
+        return CatalogueOutcome(outcome, version, False)
     finally:
         if owned:
             handle.close()
-    return CatalogueOutcome(camp, version, kc.k, kc.c, kc.error, float(np.median(result.residual)),
-                            float(np.mean(result.unreliable)), reused)

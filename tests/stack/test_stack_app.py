@@ -125,16 +125,18 @@ def test_measured_spindle_file_is_loaded_relative_to_the_stack(tmp_path):
 
 
 def test_campaign_identification_recovers_the_true_joint_and_catalogues_once(tmp_path):
-    path = CATALOGUE / "campaigns" / "th-er32-carbide-080nm.json"
-    camp = app.load_campaign(path)
-    ref = camp.reference
+    path = CATALOGUE / "campaigns" / "th-er32-carbide-080nm" / "campaign.json"
+    truth = json.loads((path.parent / "truth.json").read_text())
     with Repository(f"sqlite:///{tmp_path / 'c.sqlite'}") as repo:
-        first = app.catalogue_campaign(repo, path, every=8)
-        # 0.2 % noise, finer-mesh "measurement", coarse models: named tolerances
-        assert first.k[0] == pytest.approx(ref["k"][0], rel=0.01)
-        assert first.k[1] == pytest.approx(ref["k"][1], rel=0.03)
-        assert first.c[0] == pytest.approx(ref["c"][0], rel=0.05)
+        first = app.catalogue_campaign(repo, path)
+        row = first.row()
+        # 0.2 % noise, finer-mesh "measurement", coarser models: named tolerances
+        assert row["k_x_n_per_m"] == pytest.approx(truth["k"][0], rel=0.01)
+        assert row["k_theta_nm_per_rad"] == pytest.approx(truth["k"][1], rel=0.03)
+        assert row["c_x_ns_per_m"] == pytest.approx(truth["c"][0], rel=0.05)
         assert first.version.version == 1 and not first.reused
-        assert first.version.provenance.input_files.keys() >= {path.name, camp.measured_file.name}
-        again = app.catalogue_campaign(repo, path, every=8)
+        assert first.version.model_kind == "spring-damper-planar"
+        files = first.version.provenance.input_files
+        assert {"campaign.json", "assembly.uff", "../../models/test-tool-carbide.json"} <= set(files)
+        again = app.catalogue_campaign(repo, path)
         assert again.reused and again.version.version == 1

@@ -1,0 +1,54 @@
+"""The bundled catalogue is exactly what fixtures/make_catalogue.py writes, and its campaigns are valid."""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+import sys
+from pathlib import Path
+
+import pytest
+
+from jointdb.cli._coupling_campaign import load_campaign
+from jointdb.stack import stack_from_dict
+
+ROOT = Path(__file__).resolve().parents[2]
+BUNDLED = ROOT / "jointdb" / "data" / "catalogue"
+
+
+def _generator():
+    spec = importlib.util.spec_from_file_location("make_catalogue", ROOT / "fixtures" / "make_catalogue.py")
+    module = importlib.util.module_from_spec(spec)
+    sys.modules["make_catalogue"] = module
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_bundled_campaigns_cover_three_torques_and_two_materials():
+    seen = set()
+    for path in sorted(BUNDLED.glob("campaigns/*/campaign.json")):
+        camp = load_campaign(path)
+        assert camp.joint_type == "tool-holder" and camp.joint_model == "planar"
+        seen.add((tuple(camp.conditions["materials"]), camp.conditions["torque_nm"]))
+    assert len(seen) == 6
+    assert {t for _, t in seen} == {40.0, 80.0, 120.0}
+    assert len({m for m, _ in seen}) == 2
+    demo = stack_from_dict(json.loads((BUNDLED / "demo-stack.json").read_text()))
+    assert demo.interfaces["tool-holder"].kind == "query"
+
+
+def test_true_joints_follow_the_documented_trend():
+    mc = _generator()
+    k40, _ = mc.true_joint(40.0, "carbide")
+    k120, c120 = mc.true_joint(120.0, "carbide")
+    ks, cs = mc.true_joint(120.0, "steel")
+    assert k120[0] > k40[0] and k120[0] > ks[0] and cs[0] > c120[0]
+
+
+@pytest.mark.slow
+def test_make_catalogue_regenerates_the_bundled_files_byte_for_byte(tmp_path):
+    written = _generator().write_catalogue(tmp_path)
+    bundled = sorted(p.relative_to(BUNDLED) for p in BUNDLED.rglob("*") if p.is_file())
+    assert sorted(p.relative_to(tmp_path) for p in written) == bundled
+    for rel in bundled:
+        assert (tmp_path / rel).read_bytes() == (BUNDLED / rel).read_bytes(), rel
