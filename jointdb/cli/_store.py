@@ -90,8 +90,8 @@ def _numeric_metrics(data: Any, prefix: str = "") -> dict[str, float]:
     return out
 
 
-def _read_joint_file(path: Path) -> tuple[Any, dict[str, Any], dict[str, str]]:
-    """FRF, metadata and input-file hashes from an identified-joint file or a campaign file.
+def _read_joint_file(path: Path) -> tuple[Any, dict[str, Any], dict[str, str], dict[str, Any]]:
+    """FRF, metadata, input-file hashes and raw measurement FRFs from a joint or campaign file.
 
     Accepts the HDF5 exchange file of ``jointdb identify`` (``format = jointdb-frf``,
     metadata ``joint_model``, ``joint_type``, ``conditions``, ``quality``,
@@ -116,7 +116,8 @@ def _read_joint_file(path: Path) -> tuple[Any, dict[str, Any], dict[str, str]]:
         for sibling in sorted(path.parent.iterdir()):
             if sibling.is_file() and sibling != path and f'"{sibling.name}"' in text:
                 hashes[sibling.name] = file_sha256(sibling)
-        return outcome.result.joint, joint_attrs(outcome), hashes
+        raw = {"measured": outcome.measured} if outcome.measured is not None else {}
+        return outcome.result.joint, joint_attrs(outcome), hashes, raw
     try:
         with h5py.File(path, "r", locking=False) as f:
             fmt = f.attrs.get("format")
@@ -124,11 +125,11 @@ def _read_joint_file(path: Path) -> tuple[Any, dict[str, Any], dict[str, str]]:
     except OSError as exc:
         raise InputError(f"{path}: not an HDF5 file ({exc})") from None
     if fmt == "jointdb-frf-blob":
-        return read_frf_file(path), {}, hashes
+        return read_frf_file(path), {}, hashes, {}
     from jointdb.io import read_frf_hdf5_full
 
     frf, meta = read_frf_hdf5_full(path)
-    return frf, dict(meta or {}), hashes
+    return frf, dict(meta or {}), hashes, {}
 
 
 #: columns of version tables for people (``--json`` has every field)
@@ -215,7 +216,7 @@ def register(app: typer.Typer) -> None:
         """
         from jointdb.store import Provenance
 
-        frf, meta, hashes = _read_joint_file(joint_file)
+        frf, meta, hashes, raw = _read_joint_file(joint_file)
         kind = model_kind or meta.get("model_kind") or _JOINT_MODEL_KINDS.get(str(meta.get("joint_model")))
         if not kind:
             raise InputError(f"{joint_file}: the file does not say its joint model; give --model-kind")
@@ -244,7 +245,7 @@ def register(app: typer.Typer) -> None:
             extra={**dict(base.get("extra") or {}), **dict(given.extra)},
         )
         repo = _repo(db, blobs)
-        jv = repo.catalogue(name, jtype, frf, conditions, kind, prov, q, parent, author=author)
+        jv = repo.catalogue(name, jtype, frf, conditions, kind, prov, q, parent, raw_frfs=raw, author=author)
         if label:
             jv = repo.label(jv.name, jv.version, label, author=author)
         message(f"catalogued {jv.name} v{jv.version} ({jv.blob_sha256[:12]})")

@@ -177,3 +177,24 @@ def test_exit_codes_and_one_line_errors(tmp_path):
     blob.write_bytes(bytes(data))
     out = subprocess.run(jointdb + ["db", "check", "--db", db], capture_output=True, text=True)
     assert out.returncode == 5 and "problem: A v1" in out.stderr and "Traceback" not in out.stderr
+
+
+def test_catalogue_straight_from_a_campaign(tmp_path):
+    """`jointdb catalogue campaign.json`: identify, then store with input hashes and raw measurements."""
+    from pathlib import Path
+
+    campaign = Path(__file__).resolve().parents[2] / "fixtures" / "campaigns" / "th-steel-30nm" / "campaign.json"
+    if not campaign.is_file():
+        pytest.skip(f"campaign fixture {campaign} is not present")
+    db = tmp_path / "c.sqlite"
+    out = run_json("catalogue", campaign, "--name", "th-camp", "--db", db)
+    assert out["joint_type"] == "tool-holder" and out["model_kind"] == "spring-damper-planar"
+    files = json.loads(out["input_files"])
+    assert "campaign.json" in files and any(name.endswith(".uff") for name in files)
+    assert "validation.identified_joint_error_mean" in json.loads(out["quality"])
+    from jointdb.store import Repository
+
+    repo = Repository(db)
+    jv = repo.get("th-camp")
+    assert set(jv.raw_blobs) == {"measured"} and repo.load_raw(jv, "measured").n_freq > 0
+    assert repo.check().ok
