@@ -471,6 +471,18 @@ def register(app: typer.Typer) -> None:
         emit([{"removed" if not dry_run else "would_remove": r} for r in removed] if removed else
              "nothing to remove", as_json=as_json)
 
+    @db_app.command("audit")
+    def db_audit(
+        joint: Annotated[Optional[str], typer.Option("--joint", help="Only entries of this joint.")] = None,
+        limit: Annotated[int, typer.Option("--limit", help="Newest N entries.")] = 50,
+        db: DbOpt = None, blobs: BlobsOpt = None, as_json: JsonOpt = False,
+    ) -> None:
+        """The append-only audit log: who catalogued, labelled, deprecated, imported what. Example: jointdb db audit --joint T1"""
+        rows = _repo(db, blobs).audit(joint, limit)
+        if not as_json:
+            rows = [{**r, "details": json.dumps(r["details"], default=str)} for r in rows]
+        emit(rows, as_json=as_json, title="audit log", columns=["at", "actor", "action", "joint", "version", "details"])
+
     @db_app.command("info")
     def db_info(db: DbOpt = None, blobs: BlobsOpt = None, as_json: JsonOpt = False) -> None:
         """Where the database and blobs are, and the schema revision. Example: jointdb db info"""

@@ -409,7 +409,9 @@ class Repository:
         """Mark a version (or, with ``version=None``, the whole joint) deprecated.
 
         Nothing is deleted: a new state row is appended (``undo=True`` appends
-        ``active`` again). Returns the joint's history afterwards.
+        ``active`` again); the latest applicable row wins. A joint deprecated as
+        a whole stays deprecated, including versions catalogued later, until it
+        is undone. Returns the joint's history afterwards.
         """
         actor = current_actor(author)
         if version is not None:

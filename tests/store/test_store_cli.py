@@ -95,6 +95,9 @@ def test_catalogue_query_and_joints_commands(db, files, tmp_path):
     check = run_json("db", "check", "--db", db)
     assert check["ok"] and check["versions_checked"] == 4
     assert run_json("db", "gc", "--dry-run", "--min-age", 0, "--db", db) == "nothing to remove"
+    audit = run_json("db", "audit", "--joint", "TH-20", "--db", db)
+    assert [a["action"] for a in audit] == ["label", "label", "catalogue", "catalogue"]
+    assert {a["actor"] for a in audit} == {"tester"}
 
 
 def test_user_errors_are_refused_without_writing(db, files, tmp_path):
