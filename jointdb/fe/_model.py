@@ -402,6 +402,7 @@ class BeamModel:
         directions: Sequence[str] | None = None,
         method: str = "direct",
         n_modes: int | None = None,
+        algorithm: str = "auto",
     ) -> FRF:
         """Receptance matrix between named points (square: outputs == inputs).
 
@@ -419,6 +420,10 @@ class BeamModel:
             :func:`jointdb.fe.frf_modal`).
         n_modes
             Modes kept in modal superposition (default: those below 2 × f_max).
+        algorithm
+            For ``method="direct"``: ``"lu"`` (batched LU solves), ``"spectral"``
+            (sum over all modes; classical damping only) or ``"auto"`` (spectral
+            when the damping is classical); see :func:`jointdb.fe.frf_direct`.
 
         Returns
         -------
@@ -447,7 +452,7 @@ class BeamModel:
         freq = np.asarray(freq_hz, dtype=float)
         mats = self.assemble()
         if method == "direct":
-            values = frf_direct(mats, freq, idx)
+            values = frf_direct(mats, freq, idx, algorithm=algorithm)
         elif method == "modal":
             values = frf_modal(mats, freq, idx, n_modes=n_modes)
         else:

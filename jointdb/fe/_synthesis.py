@@ -153,12 +153,23 @@ def _free_positions(matrices, dof_index):
     return np.where(free[dof_index], pos[dof_index], -1)
 
 
-def frf_direct(matrices, freq_hz, dof_index, chunk_bytes: int = CHUNK_BYTES) -> np.ndarray:
-    """Receptances by direct solution, batched over frequency.
+def frf_direct(
+    matrices, freq_hz, dof_index, chunk_bytes: int = CHUNK_BYTES, algorithm: str = "auto"
+) -> np.ndarray:
+    """Receptances by exact (untruncated) solution of the full equations, batched over frequency.
 
-    Solves ``(K + iK_loss + iωC − ω²M) X = F`` for unit loads at the requested
-    DOFs on stacks of ``(n_chunk, n, n)`` matrices with one ``np.linalg.solve``
-    per chunk (chunks bound the memory to ``chunk_bytes``; no loop over lines).
+    ``(K + iK_loss + iωC − ω²M) X = F`` for unit loads at the requested DOFs.
+    Two exact algorithms:
+
+    - ``"lu"``: stacks of ``(n_chunk, n, n)`` dynamic stiffness matrices, one
+      ``np.linalg.solve`` per chunk (chunks bound the memory to ``chunk_bytes``;
+      no loop over lines); rigid-body modes are split off exactly first.
+    - ``"spectral"``: when the damping is classical (the undamped modes
+      diagonalise C and K_loss: modal, Rayleigh, hysteretic damping; not
+      dampers in supports), the inverse is the sum over *all* modes,
+      ``Σ φφᵀ/(ω_r² + iκ_r + iωc_r − ω²)`` — one eigen-solution, then an
+      einsum over frequency: orders of magnitude faster than LU for many lines.
+    - ``"auto"`` (default): spectral when the damping is classical, else LU.
 
     Parameters
     ----------
@@ -194,6 +205,15 @@ def frf_direct(matrices, freq_hz, dof_index, chunk_bytes: int = CHUNK_BYTES) -> 
     pos = _free_positions(matrices, dof_index)
     ok = pos >= 0
     m = pos.size
+    if algorithm not in ("auto", "lu", "spectral"):
+        raise InputError(f"algorithm must be 'auto', 'lu' or 'spectral', got {algorithm!r}")
+    if algorithm != "lu":
+        lam, phi, n_rb = eigen_free(matrices, None)
+        out, _, classical = _modal_sum(matrices, f, lam, phi, n_rb, pos, ok, coupled="none")
+        if classical:
+            return out
+        if algorithm == "spectral":
+            raise InputError("the spectral algorithm needs classical damping (no dampers in supports); use 'lu'")
     rhs = np.zeros((nf, int(ok.sum())), dtype=complex)
     rhs[pos[ok], np.arange(rhs.shape[1])] = 1.0
     out = np.zeros((f.size, m, m), dtype=complex)
@@ -297,6 +317,20 @@ def frf_modal(matrices, freq_hz, dof_index, n_modes: int | None = None, residual
         )
     pos = _free_positions(matrices, dof_index)
     ok = pos >= 0
+    out, Lm, _ = _modal_sum(matrices, f, lam, phi, n_rb, pos, ok, coupled="solve")
+    if residual:
+        out += _static_residual(matrices, lam, phi, n_rb, Lm, pos, ok)[None]
+    return out
+
+
+def _modal_sum(matrices, f, lam, phi, n_rb, pos, ok, coupled: str = "solve"):
+    """Σ_r φ_r φ_rᵀ / (ω_r² + iκ_r + iωc_r − ω²) over the given modes, ``(n_freq, m, m)``.
+
+    Returns ``(values, Lm, classical)``. When the projected damping is not
+    diagonal (non-classical damping) the projected system is solved batched over
+    frequency (``coupled="solve"``), or ``None`` is returned (``coupled="none"``).
+    """
+    free = ~matrices.fixed
     m = pos.size
     Cf = matrices.C[np.ix_(free, free)]
     Lf = matrices.K_loss[np.ix_(free, free)]
@@ -313,9 +347,12 @@ def frf_modal(matrices, freq_hz, dof_index, n_modes: int | None = None, residual
     w = 2.0 * np.pi * f
     off = np.abs(Cm - np.diag(np.diag(Cm))).max(initial=0.0) + np.abs(Lm - np.diag(np.diag(Lm))).max(initial=0.0)
     diag_scale = np.abs(np.diag(Cm)).max(initial=0.0) + np.abs(np.diag(Lm)).max(initial=0.0)
-    if off <= 1e-8 * max(diag_scale, 1e-300) or off == 0.0:
+    classical = off == 0.0 or off <= 1e-8 * diag_scale
+    if classical:
         den = lam[None, :] + 1j * np.diag(Lm)[None, :] + 1j * w[:, None] * np.diag(Cm)[None, :] - w[:, None] ** 2
         out = np.einsum("ir,fr,jr->fij", phi_io, 1.0 / den, phi_io)
+    elif coupled == "none":
+        return None, Lm, False
     else:
         out = np.empty((f.size, m, m), dtype=complex)
         chunk = max(1, int(CHUNK_BYTES // (3 * 16 * max(1, lam.size) ** 2)))
@@ -325,9 +362,7 @@ def frf_modal(matrices, freq_hz, dof_index, n_modes: int | None = None, residual
             D = base[None] + 1j * wc * Cm[None] - wc**2 * np.eye(lam.size)[None]
             q = np.linalg.solve(D, np.broadcast_to(phi_io.T, (D.shape[0],) + phi_io.T.shape))
             out[start : start + chunk] = phi_io[None] @ q
-    if residual:
-        out += _static_residual(matrices, lam, phi, n_rb, Lm, pos, ok)[None]
-    return out
+    return out, Lm, classical
 
 
 def _static_residual(matrices, lam, phi, n_rb, Lm, pos, ok) -> np.ndarray:

@@ -51,12 +51,14 @@ def rel(a, b):
 def test_direct_and_modal_superposition_agree(ingredients):
     model = shaft(ingredients)
     freq = np.linspace(10.0, 12000.0, 300)
-    direct = model.frf(freq)
+    direct = model.frf(freq, algorithm="lu")  # batched LU: independent of the eigen-solution
     n_dof = model.assemble().K.shape[0]
     # all modes: modal superposition is exact (up to round-off)
     full = model.frf(freq, method="modal", n_modes=n_dof)
     assert rel(full.values, direct.values) < 1e-8
     assert full.outputs == direct.outputs
+    # the default direct algorithm (spectral for classical damping) is exact too
+    assert rel(model.frf(freq).values, direct.values) < 1e-8
     # truncated: the static residual makes up for most of the missing modes
     trunc = model.frf(freq, method="modal")
     mats = model.assemble()
@@ -71,14 +73,20 @@ def test_direct_and_modal_superposition_agree(ingredients):
         assert err_res < 0.2 * err_plain
 
 
-def test_direct_solution_is_the_same_in_any_chunk_size():
+def test_direct_solution_is_the_same_in_any_chunk_size_and_algorithm():
     model = shaft((Clamp(0.0), ModalDamping(0.02)))
     mats = model.assemble()
     freq = np.linspace(1.0, 8000.0, 97)
     idx = [0, 1, 10, 11]
-    whole = frf_direct(mats, freq, idx)
-    tiny = frf_direct(mats, freq, idx, chunk_bytes=1)  # one line per chunk
+    whole = frf_direct(mats, freq, idx, algorithm="lu")
+    tiny = frf_direct(mats, freq, idx, chunk_bytes=1, algorithm="lu")  # one line per chunk
     np.testing.assert_allclose(tiny, whole, rtol=1e-12, atol=0)
+    spectral = frf_direct(mats, freq, idx, algorithm="spectral")
+    np.testing.assert_allclose(spectral, whole, rtol=1e-9, atol=1e-9 * np.abs(whole).max())
+    damped_support = shaft((Clamp(0.0), Support(0.1, {"x": 1e6}, {"x": 100.0}))).assemble()
+    with pytest.raises(InputError, match="classical damping"):
+        frf_direct(damped_support, freq, idx, algorithm="spectral")
+    np.testing.assert_allclose(frf_direct(damped_support, freq, idx), frf_direct(damped_support, freq, idx, algorithm="lu"))
 
 
 def test_clamped_dofs_have_zero_receptance_and_zero_hz_is_static():
@@ -200,7 +208,7 @@ def random_models(draw):
 @given(
     model=random_models(),
     freq=st.lists(st.floats(10.0, 2e4), min_size=1, max_size=6, unique=True),
-    method=st.sampled_from(["direct", "modal"]),
+    method=st.sampled_from(["lu", "auto", "modal"]),
 )
 def test_receptances_are_reciprocal_and_passive(model, freq, method):
     freq = np.sort(np.asarray(freq))
@@ -213,7 +221,10 @@ def test_receptances_are_reciprocal_and_passive(model, freq, method):
     w2 = (2 * np.pi * freq) ** 2
     cond = lam.max() / np.min(np.abs(lam[None, :] - w2[:, None]))
     assume(cond < 1e8)
-    frf = model.frf(freq, method=method)
+    if method == "modal":
+        frf = model.frf(freq, method="modal")
+    else:
+        frf = model.frf(freq, method="direct", algorithm=method)
     h = frf.values
     scale = np.abs(h).max(axis=(1, 2), keepdims=True)
     scale = np.where(scale > 0, scale, 1.0)
