@@ -152,7 +152,7 @@ def signature(ev, H_model: np.ndarray) -> Signature:
         pairs.append(ModePair(
             mode=a + 1, model=m, recorded=r, shift=r.freq_hz / m.freq_hz - 1,
             damping_ratio=r.zeta / m.zeta if m.zeta > 0 else float("nan"),
-            height_db=float(20 * np.log10(r.height / m.height)),
+            height_db=float(20 * np.log10(np.abs(rec[0, r.index]).max() / np.abs(H_model[0, m.index]).max())),
             mismatch=_wrms(lr[:, band], w[:, band]), dofs=tuple(names[t] for t in top)))
 
     # magnitude offset and phase drift, away from the paired peaks
@@ -193,13 +193,19 @@ def signature(ev, H_model: np.ndarray) -> Signature:
     sig.bands = [{"band_hz": (round(p.recorded.freq_hz * 0.94), round(p.recorded.freq_hz * 1.06)),
                   "mode": p.mode, "mismatch": p.mismatch} for p in pairs]
     if rec.shape[0] > 1:
-        first = find_peaks(freq, rec[0], w[0])
-        last = find_peaks(freq, rec[-1], w[-1])
+        def strong(peaks):
+            top = max((p.height for p in peaks), default=0.0)
+            return [p for p in peaks if p.height >= 0.1 * top]
+
+        first = strong(find_peaks(freq, rec[0], w[0]))
+        last = strong(find_peaks(freq, rec[-1], w[-1]))
         lidx, _, _ = pair_modes(first, last, max_ratio=1.2)
         shifts = []
         for a, b in lidx:
-            mode = next((p.mode for p in pairs if p.recorded.index == first[a].index), a + 1)
-            shifts.append({"mode": mode, "f_first_hz": first[a].freq_hz, "f_last_hz": last[b].freq_hz,
+            near = [p for p in pairs if abs(p.recorded.freq_hz / first[a].freq_hz - 1) < 0.05]
+            if not near:
+                continue
+            shifts.append({"mode": near[0].mode, "f_first_hz": first[a].freq_hz, "f_last_hz": last[b].freq_hz,
                            "shift": last[b].freq_hz / first[a].freq_hz - 1,
                            "damping_ratio": last[b].zeta / first[a].zeta})
         sig.level_shifts = shifts

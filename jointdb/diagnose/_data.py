@@ -247,8 +247,9 @@ def indicator(values: np.ndarray, weight: np.ndarray | None = None) -> np.ndarra
         trust = np.ones(mag.shape)
     else:
         trust = np.clip(weight / (0.5 * weight.max(axis=0, keepdims=True) + 1e-300), 0.0, 1.0)
-    med = np.median(np.where(trust > 0.5, mag, np.nan), axis=0, keepdims=True)
-    med = np.where(np.isfinite(med) & (med > 0), med, np.nanmax(mag, axis=0, keepdims=True))
+    med = np.ma.median(np.ma.masked_where(trust <= 0.5, mag), axis=0)      # masked where no line is trusted
+    med = np.ma.filled(med.astype(float), 0.0)[None]
+    med = np.where(med > 0, med, mag.max(axis=0, keepdims=True) + 1e-300)
     return np.sum(trust * mag / med, axis=(1, 2))
 
 
