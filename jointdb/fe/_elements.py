@@ -29,9 +29,8 @@ def section_properties(outer_diameter, inner_diameter):
     Returns
     -------
     A, I, J : ndarray
-        ``A = π(D⁴... )``: ``A = π(D² − d²)/4`` [m²], ``I = π(D⁴ − d⁴)/64`` [m⁴]
-        (about either bending axis) and ``J = 2 I`` [m⁴] (torsion constant of a
-        circular section).
+        ``A = π(D² − d²)/4`` [m²], ``I = π(D⁴ − d⁴)/64`` [m⁴] (about either
+        bending axis) and ``J = 2 I`` [m⁴] (torsion constant of a circular section).
     """
     do = np.asarray(outer_diameter, dtype=float)
     di = np.asarray(inner_diameter, dtype=float)

@@ -97,7 +97,7 @@ def _build(cls, path: str, **kwargs):
         raise _fail(path, str(exc)) from None
 
 
-def _material(value: Any, path: str, named: dict[str, Material]):
+def _material(value: Any, path: str, named: dict[str, Material], default_name: str = "custom"):
     if isinstance(value, str):
         key = value.strip().lower()
         if key in named:
@@ -113,7 +113,7 @@ def _material(value: Any, path: str, named: dict[str, Material]):
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
                 raise _fail(f"{path}.{key}", f"must be a finite number, got {v!r}")
         try:
-            return Material(str(value.get("name", "custom")), value["E"], value["nu"], value["rho"])
+            return Material(str(value.get("name", default_name)), value["E"], value["nu"], value["rho"])
         except InputError as exc:
             raise _fail(path, str(exc).split(": ", 1)[-1]) from None
     raise _fail(path, f"must be a material name or an object with E, nu, rho, got {value!r}")
@@ -134,10 +134,9 @@ def model_from_dict(data: Any) -> BeamModel:
         raise _fail("format", f"unsupported format {fmt!r} (this jointdb reads {FORMAT!r})")
     named: dict[str, Material] = {}
     for key, spec in _obj(d.get("materials", {}), "materials").items():
-        mat = _material(spec if isinstance(spec, dict) else spec, f"materials.{key}", {})
+        # a new material {E, nu, rho} (named by its key), or an alias of a library material
+        mat = _material(spec, f"materials.{key}", {}, default_name=str(key))
         named[str(key).strip().lower()] = mat if isinstance(mat, Material) else MATERIALS[mat]
-        if isinstance(mat, Material) and mat.name == "custom":
-            named[str(key).strip().lower()] = Material(str(key), mat.E, mat.nu, mat.rho)
 
     segments = []
     for i, s in enumerate(_list(d["segments"], "segments")):

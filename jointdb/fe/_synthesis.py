@@ -302,7 +302,6 @@ def frf_modal(matrices, freq_hz, dof_index, n_modes: int | None = None, residual
     ndarray, complex, ``(n_freq, m, m)``.
     """
     f = _check_freq(freq_hz)
-    free = ~matrices.fixed
     if n_modes is None:
         lam, phi, n_rb = eigen_free(matrices, None, max_value=(2.0 * np.pi * 2.0 * f.max()) ** 2)
     else:
@@ -350,6 +349,9 @@ def _modal_sum(matrices, f, lam, phi, n_rb, pos, ok, coupled: str = "solve"):
     classical = off == 0.0 or off <= 1e-8 * diag_scale
     if classical:
         den = lam[None, :] + 1j * np.diag(Lm)[None, :] + 1j * w[:, None] * np.diag(Cm)[None, :] - w[:, None] ** 2
+        if np.any(den == 0):
+            k = int(np.argwhere(den == 0)[0, 0])
+            raise NumericalError(f"an undamped resonance lies exactly on the line {f[k]:g} Hz; add damping")
         out = np.einsum("ir,fr,jr->fij", phi_io, 1.0 / den, phi_io)
     elif coupled == "none":
         return None, Lm, False
