@@ -33,3 +33,10 @@ def test_cli_help_runs():
     out = subprocess.run([sys.executable, "-m", "jointdb", "--help"], capture_output=True, text=True)
     assert out.returncode == 0, out.stderr
     assert "Usage" in out.stdout
+
+
+def test_usage_error_exits_2_without_traceback():
+    out = subprocess.run([sys.executable, "-m", "jointdb", "modes", "--no-such-option"], capture_output=True, text=True)
+    assert out.returncode == 2
+    assert "Traceback" not in out.stderr
+    assert "No such option" in out.stderr

@@ -44,22 +44,14 @@ _register_all()
 
 
 def main() -> None:
-    """Console-script entry point: run the app, mapping jointdb errors to exit codes."""
+    """Console-script entry point: run the app, mapping jointdb errors to exit codes.
+
+    Usage errors (unknown option, missing argument) are reported by Typer/Click
+    itself with exit code 2; :class:`JointdbError` becomes one line on stderr
+    and the error class's exit code.
+    """
     try:
-        app(standalone_mode=False)
+        app()
     except JointdbError as exc:
         sys.stderr.write(f"error: {exc}\n")
         sys.exit(exc.exit_code)
-    except (typer.Exit, SystemExit) as exc:
-        code = getattr(exc, "exit_code", getattr(exc, "code", 0))
-        sys.exit(code or 0)
-    except typer.Abort:
-        sys.stderr.write("aborted\n")
-        sys.exit(130)
-    except Exception as exc:  # click usage errors arrive here in non-standalone mode
-        import click
-
-        if isinstance(exc, click.ClickException):
-            exc.show(file=sys.stderr)
-            sys.exit(exc.exit_code)
-        raise
