@@ -104,3 +104,21 @@ def test_demo_runs_end_to_end_outside_the_source_tree(tmp_path):
     # the tip FRF peaks at the first mode
     h = np.abs(frf.entry("1x", "1x"))
     assert abs(frf.freq[np.argmax(h)] - modes[0]["freq_hz"]) < 5.0
+
+
+def test_bode_and_nyquist_helpers_write_pngs(tmp_path):
+    from jointdb.errors import InputError
+    from jointdb.fe import load_model
+    from jointdb.plots._frf import save_bode, save_nyquist
+
+    model = load_model(MODEL)
+    freq = np.linspace(100, 5000, 200)
+    frf = model.frf(freq, points=["tip"])
+    modal = model.frf(freq, points=["tip"], method="modal", n_modes=2)
+    bode = save_bode(tmp_path / "b.png", frf, pairs=[("1x", "1x"), ("1ry", "1x")], labels=["direct", "2 modes"],
+                     others=[modal])
+    nyq = save_nyquist(tmp_path / "n.png", frf)
+    for path in (bode, nyq):
+        assert path.read_bytes()[:4] == b"\x89PNG"
+    with pytest.raises(InputError, match="must end in .png"):
+        save_bode(tmp_path / "b.pdf", frf)
