@@ -140,3 +140,13 @@ def test_campaign_identification_recovers_the_true_joint_and_catalogues_once(tmp
         assert {"campaign.json", "assembly.uff", "../../models/test-tool-carbide.json"} <= set(files)
         again = app.catalogue_campaign(repo, path)
         assert again.reused and again.version.version == 1
+
+
+def test_spindle_model_file_is_loaded_relative_to_the_stack():
+    path = ROOT / "fixtures" / "stacks" / "endmill-catalogued-joint.json"
+    spec = app.load_stack(path)
+    assert isinstance(spec.spindle.model, dict) and spec.spindle.model["segments"]
+    with pytest.raises(InputError, match="interfaces.tool-holder: nearest tool-holder .* must be resolved"):
+        predict_tool_tip(spec, freq=FREQ)
+    pred = predict_tool_tip(spec, {"tool-holder": _joint((2.5e7, 3.5e5), (250.0, 2.0))}, freq=FREQ)
+    assert pred.interfaces["tool-holder"] == "resolved joint FRF"

@@ -12,7 +12,7 @@ import scipy.linalg
 
 from jointdb.coupling import Interface, couple
 from jointdb.errors import InputError
-from jointdb.fe import BeamModel, HystereticDamping, NamedPoint, Segment, Support, model_from_dict
+from jointdb.fe import BeamModel, HystereticDamping, NamedPoint, Support, model_from_dict
 from jointdb.frf import FRF, Dof
 from jointdb.stack import (
     MeasuredSpindle,
