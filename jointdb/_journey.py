@@ -8,8 +8,9 @@
 2. reads the bundled new stack (a fluted carbide end mill at 100 N·m) and asks
    the database for the nearest tool–holder joint, reporting the chosen
    version, its distance, the other candidates and any extrapolation;
-3. predicts the tool-tip FRF (three-component RC, theory §4) with that joint
-   and with rigid joints, writes it (UFF58, CSV) and a comparison plot;
+3. predicts the tool-tip FRF (three-component RC, theory §4) with that joint,
+   with rigid joints and, as a cross-check, with a joint interpolated between
+   the nearest neighbours; writes it (UFF58, CSV) and a comparison plot;
 4. computes milling stability lobes (zero-order approximation, theory §5)
    from both predictions and plots them;
 
@@ -18,6 +19,7 @@ printing what it does through ``say`` and writing everything into ``out_dir``.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 from collections.abc import Callable
 from contextlib import ExitStack
@@ -46,6 +48,7 @@ class JourneyResult:
     catalogued: list[dict[str, Any]] = field(default_factory=list)
     joints: list[dict[str, Any]] = field(default_factory=list)
     prediction: list[dict[str, Any]] = field(default_factory=list)
+    interpolated: dict[str, Any] = field(default_factory=dict)
     lobes: dict[str, Any] = field(default_factory=dict)
     files: list[Path] = field(default_factory=list)
 
@@ -154,8 +157,9 @@ def run_main_job(
             row = res.row()
             result.joints.append({**row, "candidates": [list(c) for c in res.candidates]})
             if res.candidates:
+                extrapolating = f"  EXTRAPOLATING: {', '.join(res.outside_range)}" if res.extrapolating else ""
                 say(f"      {res.interface}: chose {res.name}@{res.version} at distance {res.distance:.3f} "
-                    f"({row['per_condition']}){'  EXTRAPOLATING: ' + ', '.join(res.outside_range) if res.extrapolating else ''}")
+                    f"({row['per_condition']}){extrapolating}")
                 for name, version, dist in res.candidates[1:]:
                     say(f"          next: {name}@{version} at {dist:.3f}")
             else:
@@ -172,16 +176,34 @@ def run_main_job(
         grid = prediction_grid(spec)
         pred = predict_tool_tip(spec, {n: r.frf for n, r in resolutions.items() if r.frf is not None}, grid)
         result.prediction = pred.summary()
-        for row in result.prediction:
-            say(f"      {row['direction']}: peak {row['peak_m_per_n']:.3e} m/N at {row['peak_hz']:.0f} Hz "
-                f"(rigid joints: {row['rigid_peak_m_per_n']:.3e} m/N at {row['rigid_peak_hz']:.0f} Hz); "
-                f"most negative real part {row['min_real_m_per_n']:.3e} m/N")
+        same_y = np.allclose(pred.tip.entry("1y", "1y"), pred.tip.entry("1x", "1x"))
+        for row in result.prediction[:1] if same_y else result.prediction:
+            say(f"      {row['direction']}{' (and y)' if same_y else ''}: peak {row['peak_m_per_n']:.3e} m/N at "
+                f"{row['peak_hz']:.0f} Hz (rigid joints: {row['rigid_peak_m_per_n']:.3e} m/N at "
+                f"{row['rigid_peak_hz']:.0f} Hz); most negative real part {row['min_real_m_per_n']:.3e} m/N")
         for note in pred.notes:
             say(f"      note: {note}")
+        extra = []
+        queried = {n for n, r in resolutions.items() if r.kind == "query" and len(r.candidates) > 1}
+        if queried:  # cross-check: the same stack with joints interpolated between the two nearest
+            ispec = spec.replace(interfaces={
+                n: dataclasses.replace(c, interpolate=True, neighbours=2) if n in queried else c
+                for n, c in spec.interfaces.items()
+            })
+            ires = app.resolve_joints(ispec, repo)
+            ipred = predict_tool_tip(ispec, {n: r.frf for n, r in ires.items() if r.frf is not None}, grid)
+            irow = ipred.summary()[0]
+            result.interpolated = {"joints": {n: ires[n].description for n in queried}, **irow}
+            for n in sorted(queried):
+                say(f"      cross-check, {ires[n].description}:")
+            say(f"          peak {irow['peak_m_per_n']:.3e} m/N at {irow['peak_hz']:.0f} Hz "
+                f"(nearest joint: {result.prediction[0]['peak_m_per_n']:.3e} m/N at "
+                f"{result.prediction[0]['peak_hz']:.0f} Hz)")
+            extra.append(("interpolated joint", ipred.tip))
         io.write_uff58(out / "tip.uff", pred.tip, round_freq=True)
         io.write_frf_csv(out / "tip.csv", pred.tip)
         result.files += [out / "tip.uff", out / "tip.csv"]
-        result.files.append(save_tip_comparison(out / "tip-vs-rigid.png", pred, title=spec.name))
+        result.files.append(save_tip_comparison(out / "tip-vs-rigid.png", pred, title=spec.name, extra=extra))
 
         # 4. lobes ---------------------------------------------------------------------
         cut = MillingCut(**DEMO_CUT)
@@ -212,6 +234,7 @@ def run_main_job(
             "catalogued": result.catalogued,
             "joints": result.joints,
             "prediction": result.prediction,
+            "interpolated_cross_check": result.interpolated,
             "notes": list(pred.notes),
             "lobes": result.lobes,
         }

@@ -52,4 +52,5 @@ def test_main_job_runs_end_to_end_and_writes_its_outputs(tmp_path):
     assert 0 < result.lobes["min_depth_m"] < result.lobes["best_depth_m"]
     summary = json.loads((out / "summary.json").read_text())
     assert summary["lobes"]["min_depth_m"] == pytest.approx(result.lobes["min_depth_m"])
+    assert "INTERPOLATED" in next(iter(summary["interpolated_cross_check"]["joints"].values()))
     assert [line[:5] for line in lines if line.startswith("[")] == ["[1/4]", "[2/4]", "[3/4]", "[4/4]"]

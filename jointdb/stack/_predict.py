@@ -121,7 +121,8 @@ def _on_grid(frf: FRF, freq: np.ndarray, what: str) -> FRF:
         return frf.resample(freq)
     except InputError:
         raise InputError(
-            f"{what} covers {frf.freq[0]:g}–{frf.freq[-1]:g} Hz but the prediction needs {freq[0]:g}–{freq[-1]:g} Hz; "
+            f"{what} covers {frf.freq[0]:g}–{frf.freq[-1]:g} Hz but the prediction needs "
+            f"{freq[0]:g}–{freq[-1]:g} Hz; "
             "narrow the stack's 'frequency' range"
         ) from None
 
