@@ -38,7 +38,7 @@ Stack file (JSON, SI units; fields other than these are refused)::
       "tool": {"material": "carbide", "loss_factor": 0.002,
                "segments": [{"length": 0.030, "diameter": 0.012, "fluted": true},
                             {"length": 0.050, "diameter": 0.012}]},
-      "gauge_length": 0.050,
+      "gauge_length": 0.050,                  # or "insertion_length": 0.030
       "holder": {"material": "steel", "loss_factor": 0.002,
                  "segments": [{"length": 0.040, "outer_diameter": 0.032, "inner_diameter": 0.012},
                               {"length": 0.030, "outer_diameter": 0.050}]},

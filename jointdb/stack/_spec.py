@@ -10,7 +10,8 @@ Geometry conventions (SI, metres). The tool is described from its tip towards
 its shank end; the holder from its nose (the face the tool sticks out of)
 towards the spindle. ``gauge_length`` is the tool's stick-out from the holder
 face; the rest of the tool (its total length minus the gauge length) is the
-insertion length, clamped inside the holder bore. A fluted section is replaced
+insertion length, clamped inside the holder bore (a file may give
+``insertion_length`` instead of, or consistently with, ``gauge_length``). A fluted section is replaced
 by a solid cylinder of ``fluted_ratio`` × cutter diameter (0.656 after Kops and
 Vo 1990; thesis §4.4).
 """
@@ -455,20 +456,33 @@ def stack_from_dict(doc: Any) -> StackSpec:
         0.08 m``, ``interfaces.tool-holder: 'th' is neither 'rigid' nor ...``.
     """
     doc = _mapping(doc, "stack")
-    _known(doc, "", ("format", "name", "tool", "holder", "spindle", "gauge_length", "interfaces", "frequency"))
+    _known(doc, "", ("format", "name", "tool", "holder", "spindle", "gauge_length", "insertion_length",
+                     "interfaces", "frequency"))
     fmt = doc.get("format", FORMAT)
     if fmt != FORMAT:
         raise _fail("format", f"unsupported stack format {fmt!r}; this jointdb reads {FORMAT!r}")
-    for key in ("tool", "holder", "spindle", "gauge_length", "interfaces"):
+    for key in ("tool", "holder", "spindle", "interfaces"):
         if key not in doc:
             raise _fail(key, "required field is missing")
+    if "gauge_length" not in doc and "insertion_length" not in doc:
+        raise _fail("gauge_length", "required field is missing (or give insertion_length)")
     tool = _tool(doc["tool"], "tool")
     holder = _holder(doc["holder"], "holder")
     spindle = _spindle(doc["spindle"], "spindle")
-    gauge = _number(doc, "gauge_length", "", positive=True)
+    given_insertion = _number(doc, "insertion_length", "", default=None, nonneg=True)
+    if "gauge_length" in doc:
+        gauge = _number(doc, "gauge_length", "", positive=True)
+    else:
+        gauge = tool.length - given_insertion
+        if gauge <= 0:
+            raise _fail("insertion_length", f"must be shorter than the tool ({tool.length:g} m), got "
+                                            f"{given_insertion:g}")
     if gauge > tool.length + 1e-12:
         raise _fail("gauge_length", f"must not exceed the tool length {tool.length:g} m (got {gauge:g})")
     insertion = tool.length - gauge
+    if given_insertion is not None and abs(given_insertion - insertion) > 1e-9:
+        raise _fail("insertion_length", f"{given_insertion:g} m disagrees with tool length {tool.length:g} m − "
+                                        f"gauge_length {gauge:g} m = {insertion:g} m; give one of them")
     if insertion > holder.length + 1e-12:
         raise _fail("gauge_length", f"leaves {insertion:g} m of tool inside the holder, longer than the holder "
                                     f"({holder.length:g} m)")

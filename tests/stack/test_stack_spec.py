@@ -67,7 +67,8 @@ BAD = [
     ("holder/segments/0/inner_diameter", 0.010, r"^holder\.segments\[0\]\.inner_diameter: bore 10 mm is smaller"),
     ("holder/segments/1/inner_diameter", 0.06, r"^holder\.segments\[1\]\.inner_diameter: must be smaller than"),
     ("gauge_length", 0.09, r"^gauge_length: must not exceed the tool length"),
-    ("gauge_length", KeyError, r"^gauge_length: required field is missing"),
+    ("gauge_length", KeyError, r"^gauge_length: required field is missing \(or give insertion_length\)"),
+    ("insertion_length", 0.02, r"^insertion_length: 0\.02 m disagrees with tool length 0\.08 m"),
     ("spindle/node", 3, r"^spindle: give either 'file'"),
     ("spindle/model", 12, r"^spindle\.model: must be a beam model object"),
     ("interfaces/tool-holder", "th", r"^interfaces\.tool-holder: 'th' is neither 'rigid' nor a pinned joint"),
@@ -99,3 +100,11 @@ def test_insertion_longer_than_the_holder_is_refused():
     doc["gauge_length"] = 0.005
     with pytest.raises(InputError, match=r"^gauge_length: leaves 0\.075 m of tool inside the holder"):
         stack_from_dict(doc)
+
+
+def test_insertion_length_can_replace_the_gauge_length():
+    doc = _doc()
+    del doc["gauge_length"]
+    doc["insertion_length"] = 0.03
+    spec = stack_from_dict(doc)
+    assert spec.gauge_length == pytest.approx(0.05) and spec == stack_from_dict(_doc())
