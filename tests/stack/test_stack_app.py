@@ -85,6 +85,9 @@ def test_pinned_version_is_used_even_when_newer_exists(repo):
                                rtol=1e-10)
     with pytest.raises(NotFoundError):
         app.predict_stack(stack_from_dict(_doc("th-80@7")), repo, FREQ)
+    repo.label("th-80", 1, "released")
+    res = app.resolve_joints(stack_from_dict(_doc("th-80@released")), repo)["tool-holder"]
+    assert (res.name, res.version) == ("th-80", 1)
 
 
 def test_interpolated_joint_is_labelled(repo):
