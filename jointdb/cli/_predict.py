@@ -91,6 +91,9 @@ def register(app: typer.Typer) -> None:
                   "frequency_hz": [float(pred.tip.freq[0]), float(pred.tip.freq[-1]), int(pred.tip.n_freq)],
                   "files": files}, as_json=True)
             return
-        emit(joints, columns=["interface", "kind", "joint", "distance", "per_condition", "extrapolating"],
+        emit([{"interface": j["interface"], "joint": j["joint"] if j["kind"] != "explicit" else "explicit k, c",
+               "distance": j["distance"], "extrapolating": j["extrapolating"]} for j in joints],
              title=f"joints of {spec.name}")
-        emit(pred.summary(), title="tool-tip receptance")
+        emit([{"dir": r["direction"], "peak (Hz)": r["peak_hz"], "peak (m/N)": r["peak_m_per_n"],
+               "rigid peak (Hz)": r["rigid_peak_hz"], "rigid peak (m/N)": r["rigid_peak_m_per_n"]}
+              for r in pred.summary()], title="tool-tip receptance (rigid: all joints rigid)")
