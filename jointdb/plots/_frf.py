@@ -5,6 +5,7 @@ Imported lazily by the CLI only; the numerical core never imports matplotlib.
 
 from __future__ import annotations
 
+import textwrap
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -96,7 +97,7 @@ def bode_figure(
     ax_p.grid(True, alpha=0.3)
     ax_m.legend(fontsize=8, loc="best")
     if title:
-        ax_m.set_title(title)
+        ax_m.set_title(textwrap.fill(title, 70), fontsize=10)
     fig.tight_layout()
     return fig
 
@@ -124,7 +125,7 @@ def nyquist_figure(frf: FRF, pairs: Sequence[tuple] | None = None, title: str | 
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=8)
     if title:
-        ax.set_title(title)
+        ax.set_title(textwrap.fill(title, 55), fontsize=10)
     fig.tight_layout()
     return fig
 
