@@ -200,7 +200,7 @@ def register(app: typer.Typer) -> None:
         for d in frf.outputs:
             h = np.abs(frf.entry(d, d))
             k = int(np.argmax(h))
-            summary[f"peak |H[{d},{d}]|"] = f"{h[k]:.4g} at {frf.freq[k]:.6g} Hz"
+            summary[f"max |H[{d},{d}]|"] = f"{h[k]:.4g} at {frf.freq[k]:.6g} Hz"
         if out is not None:
             fmt = write_frf_file(out, frf, binary=binary)
             message(f"wrote {frf.n_freq} lines x {len(frf.outputs)}x{len(frf.inputs)} FRFs to {out} ({fmt})")
