@@ -208,7 +208,7 @@ def random_models(draw):
 @given(
     model=random_models(),
     freq=st.lists(st.floats(10.0, 2e4), min_size=1, max_size=6, unique=True),
-    method=st.sampled_from(["lu", "auto", "modal"]),
+    method=st.sampled_from(["lu", "spectral", "modal"]),
 )
 def test_receptances_are_reciprocal_and_passive(model, freq, method):
     freq = np.sort(np.asarray(freq))
@@ -220,7 +220,9 @@ def test_receptances_are_reciprocal_and_passive(model, freq, method):
     lam = (2 * np.pi * modes.freq_hz[modes.n_rigid :]) ** 2
     w2 = (2 * np.pi * freq) ** 2
     cond = lam.max() / np.min(np.abs(lam[None, :] - w2[:, None]))
-    assume(cond < 1e8)
+    assume(cond < 1e7)
+    if method == "spectral" and any(isinstance(i, Support) and any(i.damping.values()) for i in model.ingredients):
+        method = "lu"  # the spectral sum needs classical damping
     if method == "modal":
         frf = model.frf(freq, method="modal")
     else:
@@ -228,7 +230,7 @@ def test_receptances_are_reciprocal_and_passive(model, freq, method):
     h = frf.values
     scale = np.abs(h).max(axis=(1, 2), keepdims=True)
     scale = np.where(scale > 0, scale, 1.0)
-    # reciprocity: H = Hᵀ (to the round-off of a solve with condition number < 1e8)
+    # reciprocity: H = Hᵀ (to the round-off of a solve with condition number < 1e7)
     assert np.max(np.abs(h - np.swapaxes(h, 1, 2)) / scale) < 1e-6
     # passivity: the dissipative part −Im H is positive semi-definite; driving points have Im H ≤ 0
     diag_imag = np.diagonal(h, axis1=1, axis2=2).imag
