@@ -48,7 +48,7 @@ def _recovery(cases):
 
 
 def _md_table(rows, cols=None):
-    cols = cols or list(rows[0])
+    cols = cols or list(dict.fromkeys(k for r in rows for k in r))
     out = ["| " + " | ".join(cols) + " |", "|" + "---|" * len(cols)]
     out += ["| " + " | ".join("" if r.get(c) is None else str(r.get(c)) for c in cols) + " |" for r in rows]
     return "\n".join(out)

@@ -28,6 +28,7 @@ class CaseResult:
     affected_mode: int | None = None
     fitted: dict = field(default_factory=dict)
     truth: dict = field(default_factory=dict)
+    top_improvement: float = 1.0   # nominal / best-ranked mismatch on the fit lines, accepted or not
 
     @property
     def first(self) -> bool:
@@ -60,9 +61,11 @@ class BenchResult:
                 "median_mismatch_before_pct": round(100 * float(np.median([c.mismatch_before for c in cs])), 2),
                 "median_mismatch_after_pct": round(100 * float(np.median([c.mismatch_after for c in cs])), 2),
                 "median_seconds": round(float(np.median([c.seconds for c in cs])), 2),
+                "second_effect_added_pct": round(100 * sum(any(" + " in n for n in c.names) for c in cs) / len(cs), 1),
             }
             if eff == "none":
                 row["false_alarm_pct"] = round(100 * sum(c.named != "none" for c in cs) / len(cs), 1)
+                row["max_rejected_improvement"] = round(max(c.top_improvement for c in cs), 3)
             if eff == "softening_joint":
                 row["improves_every_level_pct"] = round(100 * sum(
                     bool(c.level_improvements) and min(c.level_improvements) > 1.0 for c in cs) / len(cs), 1)
@@ -107,6 +110,7 @@ def run_case(case: BenchCase) -> CaseResult:
         mismatch_before=d.mismatch_before, mismatch_after=d.mismatch_after, seconds=dt,
         level_improvements=lv, affected_mode=d.before.affected_mode,
         fitted={} if best is None else dict(best.values), truth=case.truth,
+        top_improvement=(d.nominal.mismatch / d.ranking[0].mismatch) if d.ranking else 1.0,
     )
 
 
