@@ -1,10 +1,13 @@
 """CLI: ``jointdb demo`` — the main job end to end on the bundled data.
 
-First version (issue 2): build a tool model from the model file bundled in
+Part A (structural model): build a tool model from the model file bundled in
 ``jointdb/data/models/``, compute and print its modes, compute its tip FRF,
-write it (UFF58 + CSV) and a Bode plot into the output directory. Each step is
-one small function taking and returning a :class:`DemoState`, so later issues
-can add steps (catalogue → query → predict → lobes) to :data:`STEPS`.
+write it (UFF58 + CSV) and a Bode plot into ``OUT/tool-model/``. Each step is
+one small function taking and returning a :class:`DemoState` (:data:`STEPS`).
+
+Part B (the journey, :func:`jointdb._journey.run_main_job`): identify and
+catalogue the bundled campaigns, query the nearest joint for a new stack,
+predict its tool-tip FRF and draw its stability lobes, into ``OUT/``.
 """
 
 from __future__ import annotations
@@ -147,16 +150,25 @@ def step_plot(state: DemoState) -> DemoState:
 STEPS: list[Callable[[DemoState], DemoState]] = [step_model, step_modes, step_tip_frf, step_write, step_plot]
 
 
-def run_demo(out: Path, model_path: Path | None = None) -> DemoState:
-    """Run every step of :data:`STEPS` into directory ``out``."""
+def run_demo(out: Path, model_path: Path | None = None, db_url: str | None = None) -> tuple[DemoState, Any]:
+    """Run part A (:data:`STEPS`) into ``out/tool-model`` and part B (the journey) into ``out``.
+
+    Returns the structural-model state and the :class:`jointdb._journey.JourneyResult`.
+    """
+    from jointdb._journey import run_main_job
+
     out = Path(out)
     if out.exists() and not out.is_dir():
         raise InputError(f"--out {str(out)!r} exists and is not a directory")
-    out.mkdir(parents=True, exist_ok=True)
-    state = DemoState(out=out, model_path=model_path)
+    model_dir = out / "tool-model"
+    model_dir.mkdir(parents=True, exist_ok=True)
+    _say("== Part A: structural model of a tool in its holder (Timoshenko beam FE)")
+    state = DemoState(out=model_dir, model_path=model_path)
     for step in STEPS:
         state = step(state)
-    return state
+    _say("== Part B: catalogue joints -> query -> predict the tool tip -> stability lobes")
+    journey = run_main_job(out, db_url, say=_say)
+    return state, journey
 
 
 def register(app: typer.Typer) -> None:
@@ -168,14 +180,23 @@ def register(app: typer.Typer) -> None:
             "jointdb-demo-output"
         ),
         model: Annotated[
-            Optional[Path], typer.Option("--model", help="Use this model file instead of the bundled one.")
+            Optional[Path], typer.Option("--model", help="Use this model file for part A instead of the bundled one.")
+        ] = None,
+        db: Annotated[
+            Optional[str],
+            typer.Option("--db", help="Joint database URL or SQLite path (default: a fresh OUT/joints.sqlite)."),
         ] = None,
     ) -> None:
-        """Run the main job end to end on the bundled data: model, modes, tip FRF, files, plot.
+        """Run the main job end to end on the bundled data (SQLite, bundled fixtures).
+
+        Part A: tool model, modes, tip FRF, files, Bode plot. Part B: identify and
+        catalogue six tool-holder joints, query the nearest for a new stack, predict
+        its tool-tip FRF and draw milling stability lobes. Lists the files written.
 
         Example: jointdb demo --out demo-out
         """
-        state = run_demo(out, model)
-        _say(f"done: {len(state.files)} files in {state.out}")
-        for f in state.files:
+        state, journey = run_demo(out, model, db)
+        files = list(state.files) + list(journey.files)
+        _say(f"done: {len(files)} files in {Path(out)}")
+        for f in files:
             typer.echo(str(f))

@@ -94,13 +94,19 @@ def test_demo_runs_end_to_end_outside_the_source_tree(tmp_path):
     out_dir = tmp_path / "demo out"
     out = run("demo", "--out", out_dir, cwd=tmp_path)
     assert out.returncode == 0, out.stderr
+    model_dir = out_dir / "tool-model"
     for name in ("tip-frf.uff", "tip-frf.csv", "tip-frf-bode.png", "modes.json", "end-mill-in-holder.json"):
+        assert (model_dir / name).is_file(), name
+    for name in ("catalogue.csv", "tip.uff", "tip-vs-rigid.png", "lobes.csv", "lobes.png", "summary.json"):
         assert (out_dir / name).is_file(), name
     assert "[1] model" in out.stderr and "[5] wrote" in out.stderr
+    assert "[1/4]" in out.stderr and "[4/4]" in out.stderr
+    listed = out.stdout.strip().splitlines()
+    assert str(out_dir / "lobes.png") in listed and str(model_dir / "modes.json") in listed
     from jointdb.io import read_frf_uff58
 
-    frf = read_frf_uff58(out_dir / "tip-frf.uff")
-    modes = json.loads((out_dir / "modes.json").read_text())["modes"]
+    frf = read_frf_uff58(model_dir / "tip-frf.uff")
+    modes = json.loads((model_dir / "modes.json").read_text())["modes"]
     # the tip FRF peaks at the first mode
     h = np.abs(frf.entry("1x", "1x"))
     assert abs(frf.freq[np.argmax(h)] - modes[0]["freq_hz"]) < 5.0
