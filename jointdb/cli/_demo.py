@@ -197,6 +197,6 @@ def register(app: typer.Typer) -> None:
         """
         state, journey = run_demo(out, model, db)
         files = list(state.files) + list(journey.files)
-        _say(f"done: {len(files)} files in {Path(out)}")
+        _say(f"demo complete: {len(files)} files (listed on stdout)")
         for f in files:
             typer.echo(str(f))
