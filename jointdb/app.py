@@ -7,7 +7,7 @@
 - :func:`predict_stack` — resolve, then :func:`jointdb.stack.predict_tool_tip`.
 - :func:`catalogue_campaign` — identify a joint from a measurement campaign
   (IRC, theory §2; the project's ``jointdb-campaign/1`` file, read by
-  :mod:`jointdb.cli._coupling_campaign`) and catalogue it.
+  :mod:`jointdb.campaign._file`) and catalogue it.
 
 """
 
@@ -269,7 +269,7 @@ def predict_stack(spec: StackSpec | Path | str, repo=None, freq=None) -> StackPr
 class CatalogueOutcome:
     """What cataloguing a campaign did.
 
-    ``identified`` is the :class:`jointdb.cli._coupling_run.IdentifyOutcome`
+    ``identified`` is the :class:`jointdb.campaign._run.IdentifyOutcome`
     (campaign, IRC result, re-coupled and rigid assemblies, constant (k, c) fit);
     ``version`` the stored :class:`jointdb.store.JointVersion`; ``reused`` is
     True when the latest version already held this exact joint FRF.
@@ -317,7 +317,7 @@ def catalogue_campaign(repo, path: Path | str, author: str | None = None) -> Cat
     """Identify a campaign's joint (as ``jointdb identify`` does) and store it as a new version.
 
     The campaign file is the project's ``jointdb-campaign/1`` format (see
-    :mod:`jointdb.cli._coupling_campaign`). The stored FRF is the identified
+    :mod:`jointdb.campaign._file`). The stored FRF is the identified
     joint receptance; the joint name is the campaign's ``name``; provenance
     records the SHA-256 of the campaign and every file it references and the
     method's settings; quality the re-coupling and constant-(k, c) errors. If
@@ -331,8 +331,8 @@ def catalogue_campaign(repo, path: Path | str, author: str | None = None) -> Cat
     """
     from jointdb import __version__ as software_version
     from jointdb._output import to_jsonable
-    from jointdb.cli._coupling_campaign import load_campaign
-    from jointdb.cli._coupling_run import identify_campaign, joint_attrs
+    from jointdb.campaign import load_campaign
+    from jointdb.campaign import identify_campaign, joint_attrs
     from jointdb.store import Conditions, Provenance, frf_sha256
 
     camp = load_campaign(path)

@@ -437,8 +437,8 @@ def thesis_62(out: Path) -> None:
 
 # ---------------------------------------------------------------- 5. round trip and rotations
 def round_trip(out: Path, tmp: Path) -> None:
-    from jointdb.cli._coupling_campaign import load_campaign
-    from jointdb.cli._coupling_run import couple_campaign, identify_campaign, joint_attrs
+    from jointdb.campaign import load_campaign
+    from jointdb.campaign import couple_campaign, identify_campaign, joint_attrs
     from jointdb.io import read_frf_hdf5, write_frf_hdf5
     from jointdb.plots._coupling import save_comparison_plot, save_kc_plot
 

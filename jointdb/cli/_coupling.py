@@ -1,7 +1,7 @@
 """CLI: ``jointdb identify`` (IRC) and ``jointdb couple`` (RC), driven by a campaign file.
 
-Thin: the campaign is read and checked by :mod:`jointdb.cli._coupling_campaign`,
-run by :mod:`jointdb.cli._coupling_run`; files are written only after every
+Thin: the campaign is read and checked by :mod:`jointdb.campaign._file`,
+run by :mod:`jointdb.campaign._run`; files are written only after every
 computation succeeded.
 """
 
@@ -43,8 +43,8 @@ def register(app: typer.Typer) -> None:
         Example: jointdb identify fixtures/campaigns/th-steel-30nm/campaign.json --out joint.h5 --plots figs
         """
         from jointdb._output import emit, message
-        from jointdb.cli._coupling_campaign import load_campaign
-        from jointdb.cli._coupling_run import identify_campaign, joint_attrs
+        from jointdb.campaign import load_campaign
+        from jointdb.campaign import identify_campaign, joint_attrs
 
         _check_out(out, (".h5", ".hdf5"), "--out")
         _check_out(report, (".json",), "--report")
@@ -93,8 +93,8 @@ def register(app: typer.Typer) -> None:
         Example: jointdb couple fixtures/campaigns/th-steel-30nm/campaign.json --joint joint.h5 --plot couple.png
         """
         from jointdb._output import emit, message
-        from jointdb.cli._coupling_campaign import load_campaign
-        from jointdb.cli._coupling_run import couple_campaign
+        from jointdb.campaign import load_campaign
+        from jointdb.campaign import couple_campaign
 
         _check_out(out, (".h5", ".hdf5", ".uff", ".unv"), "--out")
         _check_out(plot, (".png",), "--plot")

@@ -107,8 +107,8 @@ def _read_joint_file(path: Path) -> tuple[Any, dict[str, Any], dict[str, str], d
     hashes = {path.name: file_sha256(path)}
     if path.suffix.lower() == ".json":
         try:
-            from jointdb.cli._coupling_campaign import load_campaign
-            from jointdb.cli._coupling_run import identify_campaign, joint_attrs
+            from jointdb.campaign import load_campaign
+            from jointdb.campaign import identify_campaign, joint_attrs
         except ImportError:
             raise InputError(f"{path}: cataloguing straight from a campaign needs `jointdb identify`") from None
         outcome = identify_campaign(load_campaign(path))

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from jointdb.cli._coupling_campaign import load_campaign
+from jointdb.campaign import load_campaign
 from jointdb.stack import stack_from_dict
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from jointdb.cli._coupling_campaign import (
+from jointdb.campaign._file import (
     Campaign,
     _err,
     file_hashes,
