@@ -17,8 +17,8 @@ from pathlib import Path
 from jointdb.errors import InputError
 
 
-def _fsync_dir(directory: Path) -> None:
-    # Make the rename itself durable. Not all platforms allow opening a directory.
+def fsync_dir(directory: Path) -> None:
+    """Make a rename in ``directory`` durable (a no-op where directories cannot be opened)."""
     try:
         fd = os.open(directory, os.O_RDONLY)
     except OSError:
@@ -72,4 +72,4 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
         with contextlib.suppress(FileNotFoundError):
             tmp.unlink()
         raise
-    _fsync_dir(directory)
+    fsync_dir(directory)

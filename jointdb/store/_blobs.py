@@ -47,6 +47,7 @@ from pathlib import Path
 import numpy as np
 
 from jointdb.errors import InputError, IntegrityError, NotFoundError
+from jointdb.io._atomic import fsync_dir as _fsync_dir
 from jointdb.frf import FRF
 
 __all__ = ["BlobStore", "frf_sha256", "file_sha256", "FORMAT_VERSION", "write_frf_file", "read_frf_file"]
@@ -186,19 +187,6 @@ def read_frf_file(path: str | os.PathLike, verify: bool = True) -> FRF:
     if verify and frf_sha256(frf) != stored:
         raise IntegrityError(f"{where}: content hash does not match the stored sha256 attribute")
     return frf
-
-
-def _fsync_dir(path: Path) -> None:
-    try:
-        fd = os.open(path, os.O_RDONLY)
-    except OSError:
-        return
-    try:
-        os.fsync(fd)
-    except OSError:
-        pass
-    finally:
-        os.close(fd)
 
 
 @dataclass(frozen=True)
