@@ -14,8 +14,11 @@ UFF58 (universal file dataset 58, ASCII and binary 58b)
     ``import_uff58(...) -> UffImport`` — the same plus the notes of what was
     converted and which non-FRF records were skipped.
     ``frf_from_records(records, ...)`` — the grouping step alone.
-    ``write_uff58(path, frf, binary=False, *, abscissa="auto", round_freq=False)``
-    — one record per entry; see :mod:`jointdb.io._uff58_write` for the
+    ``read_coherence_uff58(path, frf=None) -> ndarray | None`` — the
+    coherence records (function type 6) as ``(n_freq, n_out, n_in)``.
+    ``write_uff58(path, frf, binary=False, *, abscissa="auto", round_freq=False,
+    coherence=None)`` — one record per entry (and one coherence record per
+    entry when given); see :mod:`jointdb.io._uff58_write` for the
     precision of the format (binary is bit-exact; ASCII keeps 12 significant
     digits of values and 6 of frequencies, and refuses to round frequencies
     unless asked).
@@ -44,7 +47,14 @@ from jointdb.io._hdf5 import (
     read_frf_hdf5_full,
     write_frf_hdf5,
 )
-from jointdb.io._uff58_group import UffImport, frf_from_records, import_uff58, read_frf_uff58
+from jointdb.io._uff58_group import (
+    UffImport,
+    coherence_from_records,
+    frf_from_records,
+    import_uff58,
+    read_coherence_uff58,
+    read_frf_uff58,
+)
 from jointdb.io._uff58_read import FUNCTION_TYPES, UffFrfRecord, UffRecord, read_uff58
 from jointdb.io._uff58_write import write_uff58
 from jointdb.io._units import unit_label
@@ -65,6 +75,7 @@ __all__ = [
     "read_frf_hdf5",
     "read_frf_hdf5_attrs",
     "read_frf_hdf5_full",
+    "read_coherence_uff58",
     "read_frf_uff58",
     "read_uff58",
     "read_uff58_records",

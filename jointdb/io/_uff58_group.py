@@ -225,3 +225,60 @@ def read_frf_uff58(
         See :func:`read_uff58` and :func:`frf_from_records`.
     """
     return import_uff58(path, quantity, file_quantity=file_quantity, fill=fill, assume_si=assume_si).frf
+
+
+def coherence_from_records(records: Sequence[UffRecord], frf: FRF, *, source: str = "UFF58 records") -> np.ndarray | None:
+    """Ordinary coherence (function type 6 records) arranged like ``frf``.
+
+    Returns
+    -------
+    numpy.ndarray or None
+        Real array ``(n_freq, n_out, n_in)`` on ``frf``'s lines and DOFs, or
+        ``None`` when there is no coherence record. A record of a negative
+        direction is relabelled positive without changing its sign (coherence
+        is a squared magnitude).
+
+    Raises
+    ------
+    InputError
+        A coherence record on another frequency grid, a duplicate or missing
+        pair (named), or values outside 0..1.
+    """
+    recs = [r for r in records if r.function_type == 6]
+    if not recs:
+        return None
+    coh = np.full(frf.values.shape, np.nan)
+    oi = {d: k for k, d in enumerate(frf.outputs)}
+    ii = {d: k for k, d in enumerate(frf.inputs)}
+    atol = _GRID_RTOL * max(abs(float(frf.freq[-1])), 1.0)
+    for r in recs:
+        where = f"{source}: coherence dataset #{r.index} ({r.label})"
+        if r.response not in oi or r.reference not in ii:
+            continue  # a pair outside this FRF matrix
+        if r.freq.shape != frf.freq.shape or not np.allclose(r.freq, frf.freq, rtol=0.0, atol=atol):
+            raise InputError(f"{where}: its {r.freq.size} lines differ from the FRF's {frf.n_freq} lines")
+        o, i = oi[r.response], ii[r.reference]  # type: ignore[index]
+        if not np.isnan(coh[0, o, i]):
+            raise InputError(f"{where}: the pair {r.label} has two coherence records; remove one")
+        values = r.values * (r.response_sign * r.reference_sign)  # undo the sign normalisation
+        if np.any(values.imag != 0) or np.any(values.real < 0) or np.any(values.real > 1):
+            raise InputError(f"{where}: coherence must be real and within 0..1")
+        coh[:, o, i] = values.real
+    missing = [(o, i) for o in frf.outputs for i in frf.inputs if np.isnan(coh[0, oi[o], ii[i]])]
+    if missing:
+        raise InputError(f"{source}: coherence records missing for {len(missing)} pair(s) "
+                         f"response/reference: {_pairs(missing)}")
+    return coh
+
+
+def read_coherence_uff58(path: str | os.PathLike, frf: FRF | None = None, *, assume_si: bool = False) -> np.ndarray | None:
+    """Read the coherence records (UFF58 function type 6) of a file, arranged like its FRF.
+
+    ``frf`` defaults to the file's own FRF matrix (:func:`read_frf_uff58`);
+    see :func:`coherence_from_records` for the result and errors. Written by
+    ``write_uff58(..., coherence=...)``.
+    """
+    records = read_uff58(path, assume_si=assume_si)
+    if frf is None:
+        frf = frf_from_records(records, source=str(path)).frf
+    return coherence_from_records(records, frf, source=str(path))

@@ -100,6 +100,45 @@ def _dataset(frf: FRF, o: int, i: int, even: bool, binary: bool, description: st
     }
 
 
+def _coherence_dataset(frf: FRF, coh: np.ndarray, o: int, i: int, even: bool, binary: bool) -> dict:
+    """A function-type-6 record (ordinary coherence, real double, dimensionless) for entry (o, i)."""
+    ds = _dataset(frf, o, i, even, binary, f"jointdb coherence({frf.outputs[o]},{frf.inputs[i]})")
+    ds.update({
+        "func_type": 6, "ord_data_type": 4,
+        "ordinate_spec_data_type": 0, "ordinate_axis_lab": "Coherence", "ordinate_axis_units_lab": "NONE",
+        "orddenom_spec_data_type": 0, "orddenom_axis_lab": "NONE", "orddenom_axis_units_lab": "NONE",
+        "data": np.ascontiguousarray(coh[:, o, i], dtype=np.float64),
+    })
+    return ds
+
+
+def _as_coherence(coherence: "FRF | np.ndarray", frf: FRF) -> np.ndarray:
+    """Coherence as a real ``(n_freq, n_out, n_in)`` array on the FRF's grid and DOFs, checked to lie in 0..1."""
+    shape = frf.values.shape
+    if isinstance(coherence, FRF):
+        if (coherence.outputs != frf.outputs or coherence.inputs != frf.inputs
+                or coherence.freq.shape != frf.freq.shape or not np.array_equal(coherence.freq, frf.freq)):
+            raise InputError("coherence: its frequency lines and DOFs must be the FRF's "
+                             f"({frf.n_freq} lines, outputs {' '.join(map(str, frf.outputs))}, "
+                             f"inputs {' '.join(map(str, frf.inputs))})")
+        values = coherence.values
+        if np.any(values.imag != 0):
+            raise InputError("coherence: values must be real (ordinary coherence 0..1)")
+        coh = np.asarray(values.real, dtype=np.float64)
+    else:
+        coh = np.asarray(coherence)
+        if np.iscomplexobj(coh):
+            raise InputError("coherence: values must be real (ordinary coherence 0..1)")
+        coh = coh.astype(np.float64)
+        if coh.shape == (shape[0],):
+            coh = np.broadcast_to(coh[:, None, None], shape)
+        if coh.shape != shape:
+            raise InputError(f"coherence: shape {coh.shape} does not match the FRF's {shape} (or ({shape[0]},))")
+    if not np.all(np.isfinite(coh)) or np.any(coh < 0) or np.any(coh > 1):
+        raise InputError("coherence: values must be finite and within 0..1")
+    return coh
+
+
 def _write_58b(fh, ds: dict) -> None:
     """One binary 58b record, in the layout pyuff reads and writes, little-endian IEEE float64.
 
@@ -108,15 +147,17 @@ def _write_58b(fh, ds: dict) -> None:
     leaves a file handle open.
     """
     even = bool(ds["abscissa_spacing"])
-    y = np.asarray(ds["data"], dtype=np.complex128)
     x = np.asarray(ds["x"], dtype=np.float64)
+    if ds["ord_data_type"] == 6:  # complex double: (re, im) per line
+        y = np.asarray(ds["data"], dtype=np.complex128)
+        columns = [y.real, y.imag]
+    else:  # 4, real double (coherence)
+        y = np.asarray(ds["data"], dtype=np.float64)
+        columns = [y]
     n = y.size
-    if even:
-        block = np.empty((n, 2))
-        block[:, 0], block[:, 1] = y.real, y.imag
-    else:
-        block = np.empty((n, 3))
-        block[:, 0], block[:, 1], block[:, 2] = x[:n], y.real, y.imag
+    if not even:
+        columns = [x[:n], *columns]
+    block = np.stack(columns, axis=1)
     payload = block.astype("<f8").tobytes()
     lines = [
         "%6i\n%6i" % (-1, 58),
@@ -146,8 +187,13 @@ def write_uff58(
     round_freq: bool = False,
     description: str | None = None,
     units_dataset: bool = True,
+    coherence: "FRF | np.ndarray | None" = None,
 ) -> None:
     """Write every entry of an FRF as one dataset-58 record (function type 4).
+
+    With ``coherence``, one coherence record (function type 6, real double,
+    dimensionless, same abscissa and DOF pair) per entry follows the FRF
+    records; :func:`jointdb.io.read_coherence_uff58` reads them back.
 
     Records run over outputs (outer) and inputs (inner), directions positive,
     complex double precision, data-type codes 8/11/12 (receptance / mobility /
@@ -169,13 +215,18 @@ def write_uff58(
     round_freq
         Accept rounding of frequencies to 6 significant digits in ASCII.
     description
-        ID line 1 of every record (default names quantity and DOF pair).
+        ID line 1 of every FRF record (default names quantity and DOF pair).
+    coherence
+        Ordinary coherence 0..1 of each entry: a real ``(n_freq, n_out, n_in)``
+        array, a ``(n_freq,)`` array shared by all entries, or an
+        :class:`~jointdb.frf.FRF` with the same lines and DOFs and real values.
 
     Raises
     ------
     InputError
-        If the grid cannot be written as asked (see the module notes), or the
-        target directory does not exist.
+        If the grid cannot be written as asked (see the module notes), the
+        coherence does not match the FRF or leaves 0..1, or the target
+        directory does not exist.
     """
     import pyuff  # lazy
 
@@ -184,8 +235,11 @@ def write_uff58(
     if abscissa not in ("auto", "even", "uneven"):
         raise InputError(f"abscissa must be 'auto', 'even' or 'uneven', got {abscissa!r}")
     even = _choose_spacing(frf.freq, binary, abscissa, round_freq)
-    sets = [_dataset(frf, o, i, even, binary, description) for o in range(len(frf.outputs))
-            for i in range(len(frf.inputs))]
+    pairs = [(o, i) for o in range(len(frf.outputs)) for i in range(len(frf.inputs))]
+    sets = [_dataset(frf, o, i, even, binary, description) for o, i in pairs]
+    if coherence is not None:
+        coh = _as_coherence(coherence, frf)
+        sets += [_coherence_dataset(frf, coh, o, i, even, binary) for o, i in pairs]
     with atomic_path(path) as tmp:
         uff = pyuff.UFF(str(tmp))
         if units_dataset:
