@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from jointdb.coupling._common import as_receptance
 from jointdb.errors import InputError
 from jointdb.frf import FRF, Dof, Quantity
 
@@ -28,8 +29,13 @@ def equivalent_stiffness_damping(joint_frf: FRF, full: bool = False) -> tuple[np
     k, c
         Stiffness (N/m, N·m/rad) and damping (N·s/m, N·m·s/rad). ``c`` is NaN
         at 0 Hz.
+
+    Raises
+    ------
+    InputError
+        If ``joint_frf`` is not an FRF, not square, or a diagonal term is zero.
     """
-    h = joint_frf.to(Quantity.RECEPTANCE)
+    h = as_receptance("joint", joint_frf)
     if h.outputs != h.inputs:
         raise InputError("equivalent_stiffness_damping needs a square joint FRF (outputs == inputs)")
     w = h.omega
@@ -82,18 +88,32 @@ def fit_constant_kc(
 
     Parameters
     ----------
+    joint_frf
+        Joint receptance FRF, square ``(n_freq, n, n)`` (converted to receptance).
+    band
+        ``(f_min, f_max)`` in Hz; default: all lines.
+    method
+        ``"median"`` or ``"lsq"``.
     mask
         Optional boolean ``(n_freq,)`` over the full grid: lines to use (e.g.
         ``~result.unreliable``); ignored if it leaves fewer than 3 lines.
 
+    Returns
+    -------
+    KCFit
+        ``k`` (N/m, N·m/rad), ``c`` (N·s/m, N·m·s/rad) and relative misfit per
+        diagonal DOF, each ``(n,)``; unpacks as ``k, c, err``.
+
     Raises
     ------
     InputError
-        Empty band, non-square FRF, unknown method.
+        Empty band, non-square FRF, unknown method, mask not of shape ``(n_freq,)``.
     """
     if method not in ("median", "lsq"):
         raise InputError(f"fit_constant_kc method {method!r}: expected median or lsq")
-    h = joint_frf.to(Quantity.RECEPTANCE)
+    h = as_receptance("joint", joint_frf)
+    if mask is not None and np.shape(mask) != (h.n_freq,):
+        raise InputError(f"fit_constant_kc mask has shape {np.shape(mask)}; expected ({h.n_freq},), one per line")
     use = np.ones(h.n_freq, dtype=bool)
     if band is not None:
         use &= (h.freq >= band[0]) & (h.freq <= band[1])

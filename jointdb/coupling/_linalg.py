@@ -45,7 +45,13 @@ class Regularisation:
             return value
         if isinstance(value, str):
             name, _, rel = value.partition(":")
-            return cls(name.strip().lower(), float(rel) if rel else (0.0 if name == "none" else 1e-3))
+            try:
+                rel_value = float(rel) if rel else (0.0 if name.strip().lower() == "none" else 1e-3)
+            except ValueError:
+                raise InputError(
+                    f"regularisation {value!r}: {rel!r} is not a number; use e.g. 'tikhonov:1e-3' or 'tsvd:1e-4'"
+                ) from None
+            return cls(name.strip().lower(), rel_value)
         if isinstance(value, tuple) and len(value) == 2:
             return cls(str(value[0]), float(value[1]))
         raise InputError(f"cannot read a regularisation from {value!r}; use e.g. 'tikhonov:1e-3' or 'tsvd:1e-4'")

@@ -109,6 +109,8 @@ def identify_planar_joint(
     t, r = translation, rotation
     if Dof(0, t).is_rotation or not Dof(0, r).is_rotation:
         raise InputError(f"translation {t!r} must be a translation and rotation {r!r} a rotation direction")
+    if b_contact == b_tip:
+        raise InputError(f"b_contact and b_tip are both node {b_tip}; the tip must be another node of B")
     G = as_receptance("assembly", assembly)
     A = as_receptance("substructure A", substructure_a)
     B = as_receptance("substructure B", substructure_b)

@@ -96,6 +96,12 @@ class Interface:
             )
         if not self.a_dofs:
             raise InputError(f"interface {self.a}–{self.b} has no contact DOFs")
+        for name, side in ((self.a, self.a_dofs), (self.b, self.b_dofs)):
+            if len(set(side)) != len(side):
+                raise InputError(
+                    f"interface {self.a}–{self.b}: a contact DOF on {name} is listed twice "
+                    f"({' '.join(map(str, side))}); each DOF is paired once"
+                )
         if isinstance(self.joint, JointSubstructure) and len(self.joint.a_side) != len(self.a_dofs):
             raise InputError(
                 f"interface {self.a}–{self.b}: joint body has {len(self.joint.a_side)} DOFs on side a, "
@@ -147,6 +153,8 @@ def spring_damper_joint(
     if np.any(~np.isfinite(c_arr)) or np.any(c_arr < 0):
         raise InputError(f"spring_damper_joint: damping must be finite and >= 0, got {c_arr.tolist()}")
     f = np.asarray(freq_hz, dtype=float)
+    if f.ndim != 1:
+        raise InputError(f"spring_damper_joint: freq_hz must be a 1-D array of lines in Hz, got shape {f.shape}")
     omega = 2 * np.pi * f
     z = k_arr[None, :] + 1j * omega[:, None] * c_arr[None, :]
     values = np.zeros((f.size, n, n), dtype=complex)
@@ -280,6 +288,8 @@ def couple(
         If the interface matrix ``B H_CC Bᵀ + H_J`` is singular at some line
         (e.g. rigidly coupling two rigid-body DOFs with no flexibility).
     """
+    if not isinstance(substructures, Mapping):
+        raise InputError(f"couple: substructures must be a mapping name -> FRF, got {type(substructures).__name__}")
     if not substructures:
         raise InputError("couple: no substructures given")
     subs: dict[str, FRF] = {}

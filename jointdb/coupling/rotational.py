@@ -125,9 +125,18 @@ def rotations_by_finite_difference(
     -------
     FRF
         ``H_33`` labelled ``(point, translation), (point, rotation)``.
+
+    Raises
+    ------
+    InputError
+        Non-positive spacing, ``point == inner``, unknown method, missing FRFs.
+    NumericalError
+        First-order ``p`` where ``h_33`` is zero.
     """
     if not (np.isfinite(spacing) and spacing > 0):
         raise InputError(f"spacing must be > 0 m, got {spacing!r}")
+    if point == inner:
+        raise InputError(f"point and inner are both node {point}; the inner point must be another node")
     if method not in ("first-order", "second-order"):
         raise InputError(f"method {method!r}: expected first-order or second-order")
     H = as_receptance("substructure A", frf_a)
