@@ -51,6 +51,9 @@ def test_noisy_extension_beats_first_order_finite_difference(setup):
         ext_err.append(np.median(rel(h33.values[:, 1, 1], true[:, 1, 1])))
         fd_err.append(np.median(rel(fd.values[:, 1, 1], true[:, 1, 1])))
     assert np.mean(ext_err) < np.mean(fd_err)
+    # named tolerance for 1 % noise on the three extension FRFs (measured: 0.23-0.26 median on p)
+    EXT_P_TOL_1PCT = 0.3
+    assert max(ext_err) < EXT_P_TOL_1PCT
     # noise-free finite differences carry a truncation bias of their own
     fd0 = rotations_by_finite_difference(meas_a, 3, 4, 0.01)
     assert np.median(rel(fd0.values[:, 0, 1], true[:, 0, 1])) > 1e-3
@@ -59,8 +62,18 @@ def test_noisy_extension_beats_first_order_finite_difference(setup):
 def test_finite_difference_second_order_and_errors(setup):
     fa, _, _ = setup
     a = fa.select(["3x", "4x"], ["3x", "4x"])
+    fd1 = rotations_by_finite_difference(a, 3, 4, 0.01)
     fd2 = rotations_by_finite_difference(a, 3, 4, 0.01, method="second-order")
-    assert fd2.values.shape == (FREQ.size, 2, 2)
+    true = fa.select(["3x", "3ry"], ["3x", "3ry"]).values
+    # n is the same difference quotient in both; p: the second difference is the better estimate.
+    # Static cantilever check of the truncation: p ≈ 1 − O(s/L) of L/EI for the second difference,
+    # 3/4 of it for n²/h; here (s/L ≈ 0.08, stepped) the median errors are 0.15 and 0.35.
+    np.testing.assert_array_equal(fd2.values[:, 0, 1], fd1.values[:, 0, 1])
+    e1 = np.median(rel(fd1.values[:, 1, 1], true[:, 1, 1]))
+    e2 = np.median(rel(fd2.values[:, 1, 1], true[:, 1, 1]))
+    assert e2 < 0.2 < 0.3 < e1
+    assert np.median(rel(fd2.values[:, 0, 1], true[:, 0, 1])) < 0.1
+    np.testing.assert_array_equal(fd2.values[:, 0, 0], true[:, 0, 0])
     with pytest.raises(InputError, match="spacing"):
         rotations_by_finite_difference(a, 3, 4, 0.0)
     with pytest.raises(InputError, match="h_44"):
