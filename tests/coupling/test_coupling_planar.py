@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from coupling_beams import beam, clamp_first, labels_for
 
-from jointdb.coupling import Interface, couple, identify_planar_joint, spring_damper_joint
+from jointdb.coupling import Interface, couple, fit_constant_kc, identify_planar_joint, spring_damper_joint
 from jointdb.coupling._matrices import receptance_from_matrices
 from jointdb.errors import InputError
 
@@ -109,6 +109,14 @@ def test_noise_and_smoothing_reduce_error():
     e_smooth = np.median(np.abs(smooth.joint.entry("3x", "3x") - ht_true) / np.abs(ht_true))
     assert e_smooth < e_raw
     assert 0 < raw.summary()["residual_median"]
+    # Named tolerances, 1 % noise (seeds 7-9 measured: h_t median 3.0-3.3 % raw, 1.6-1.8 % smoothed;
+    # constant fit on the reliable smoothed lines: k_x 0.06 %, c_x 0.3 %, k_r 1 % off Table 4.1).
+    # The rotational term per line is far noisier (~46 % median smoothed): the thesis's observation.
+    H_T_TOL_RAW, H_T_TOL_SMOOTH, KX_TOL, CX_TOL, KR_TOL = 0.05, 0.025, 5e-3, 1e-2, 3e-2
+    assert e_raw < H_T_TOL_RAW and e_smooth < H_T_TOL_SMOOTH
+    fit = fit_constant_kc(smooth.joint, mask=~smooth.unreliable)
+    assert abs(fit.k[0] / KX - 1) < KX_TOL and abs(fit.c[0] / CX - 1) < CX_TOL
+    assert abs(fit.k[1] / KR - 1) < KR_TOL
 
 
 def test_missing_rotations_fail_clearly():
