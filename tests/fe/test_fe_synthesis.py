@@ -165,6 +165,24 @@ def test_hysteretic_damping_gives_frequency_independent_loss():
     assert abs(phase_v[-1] / phase_v[0] - 10) < 0.1  # viscous: phase grows with ω
 
 
+def test_modal_damping_gives_the_prescribed_ratio_per_mode():
+    # independent of the synthesis code: eigenvalues of the first-order system [[0, I], [-M⁻¹K, -M⁻¹C]]
+    # have |λ| = ω_r and -Re λ/|λ| = ζ_r; the last ratio applies to the higher modes
+    L, D = 0.4, 0.01
+    base = BeamModel((Segment(L, D, 0.0, STEEL),), (NamedPoint("tip", L, 1),), (Clamp(0.0),), max_element_length=L / 30)
+    f_modes = base.modes(4).freq_hz
+    mats = base.with_ingredient(ModalDamping((0.01, 0.02, 0.005))).assemble()
+    free = ~mats.fixed
+    K, M, C = (x[np.ix_(free, free)] for x in (mats.K, mats.M, mats.C))
+    n = K.shape[0]
+    a = np.block([[np.zeros((n, n)), np.eye(n)], [-np.linalg.solve(M, K), -np.linalg.solve(M, C)]])
+    lam = np.linalg.eigvals(a)
+    lam = lam[lam.imag > 0]
+    lam = lam[np.argsort(np.abs(lam))][:4]
+    np.testing.assert_allclose(np.abs(lam) / (2 * np.pi), f_modes, rtol=1e-8)
+    np.testing.assert_allclose(-lam.real / np.abs(lam), [0.01, 0.02, 0.005, 0.005], rtol=1e-6)
+
+
 # ---------------------------------------------------------------- properties
 _material = st.sampled_from([STEEL, "carbide", "aluminium"])
 
