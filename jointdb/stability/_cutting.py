@@ -58,6 +58,12 @@ class MillingCut:
     down_milling: bool = True
 
     def __post_init__(self) -> None:
+        for name in ("n_teeth", "kt", "kr", "radial_immersion"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+                raise InputError(f"{name} must be a number, got {value!r}")
+            if not np.isfinite(value):
+                raise InputError(f"{name} must be finite, got {value}")
         if int(self.n_teeth) != self.n_teeth or self.n_teeth < 1:
             raise InputError(f"n_teeth must be a whole number >= 1, got {self.n_teeth}")
         if not (self.kt > 0) or not np.isfinite(self.kt):

@@ -12,7 +12,7 @@ import numpy as np
 from jointdb.errors import InputError
 from jointdb.frf import FRF, Dof
 from jointdb.stability._cutting import MillingCut, mean_directional_matrix
-from jointdb.stability._results import LobeResult, envelope, lobes_from_transfer
+from jointdb.stability._results import LobeResult, check_max_lobes, envelope, lobes_from_transfer, spindle_speeds
 
 __all__ = ["oriented_frf", "tlusty_limit", "turning_lobes", "milling_lobes_zoa", "tool_tip_matrix"]
 
@@ -129,12 +129,23 @@ def turning_lobes(
         Speeds for the envelope; default: 400 speeds over the lobes' range.
     max_lobes
         Number of lobes k = 0..max_lobes−1.
+
+    Returns
+    -------
+    LobeResult
+        ``method="turning"``; depth [m], chatter frequency [Hz], lobe number per speed.
+
+    Raises
+    ------
+    InputError
+        ``kf <= 0``, ``Re G_o`` never negative, bad speeds or ``max_lobes`` < 1.
     """
+    max_lobes = check_max_lobes(max_lobes)
     lim, fc = tlusty_limit(frf, kf, orientation)
     rec = _receptance(frf)
     g = kf * oriented_frf(rec, orientation)
     lobes = lobes_from_transfer(rec.freq, g, 1, max_lobes)
-    speeds = _default_speeds(lobes, 1) if spindle_speed_rpm is None else np.sort(np.asarray(spindle_speed_rpm, float))
+    speeds = _default_speeds(lobes, 1) if spindle_speed_rpm is None else spindle_speeds(spindle_speed_rpm)
     depth, freq, num = envelope(lobes, speeds)
     kind = np.where(np.isfinite(depth), "hopf", "")
     return LobeResult(
@@ -250,7 +261,16 @@ def milling_lobes_zoa(
     -------
     LobeResult
         ``method="milling-zoa"``, kind ``"hopf"`` (ZOA cannot see flip lobes).
+
+    Raises
+    ------
+    InputError
+        No x/y driving point, no negative real eigenvalue part in the band, bad
+        speeds (non-finite or <= 0 rpm) or ``max_lobes`` < 1.
     """
+    if not isinstance(cut, MillingCut):
+        raise InputError(f"cut must be a MillingCut, got {type(cut).__name__}")
+    max_lobes = check_max_lobes(max_lobes)
     freq, phi, _ = tool_tip_matrix(frf, frf_y, cross_terms)
     hbar = mean_directional_matrix(cut)
     ev = _track_branches(np.linalg.eigvals(hbar[None] @ phi))  # (n_f, 2)
@@ -260,7 +280,7 @@ def milling_lobes_zoa(
     if not lobes:
         raise InputError("no eigenvalue of the oriented FRF has a negative real part: no chatter limit in this band")
     speeds = (
-        _default_speeds(lobes, cut.n_teeth) if spindle_speed_rpm is None else np.sort(np.asarray(spindle_speed_rpm, float))
+        _default_speeds(lobes, cut.n_teeth) if spindle_speed_rpm is None else spindle_speeds(spindle_speed_rpm)
     )
     depth, fc, num = envelope(tuple(lobes), speeds)
     kind = np.where(np.isfinite(depth), "hopf", "")

@@ -6,7 +6,35 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["Lobe", "LobeResult", "lobes_from_transfer", "envelope"]
+from jointdb.errors import InputError
+
+__all__ = ["Lobe", "LobeResult", "lobes_from_transfer", "envelope", "spindle_speeds", "check_max_lobes"]
+
+
+def spindle_speeds(values) -> np.ndarray:
+    """Validated spindle speeds [rpm], sorted, shape ``(n,)``.
+
+    Raises
+    ------
+    InputError
+        If empty, not 1-D, non-finite or not > 0.
+    """
+    try:
+        s = np.asarray(values, dtype=float)
+    except (TypeError, ValueError):
+        raise InputError(f"spindle speeds must be numbers in rpm, got {values!r}") from None
+    if s.ndim != 1 or s.size == 0:
+        raise InputError(f"spindle speeds must be a non-empty 1-D list in rpm, got shape {s.shape}")
+    if not np.all(np.isfinite(s)) or np.any(s <= 0):
+        raise InputError(f"spindle speeds must be finite and > 0 rpm, got {s[~(np.isfinite(s) & (s > 0))][:3].tolist()}")
+    return np.sort(s)
+
+
+def check_max_lobes(max_lobes) -> int:
+    """``max_lobes`` as a whole number >= 1 (InputError otherwise)."""
+    if int(max_lobes) != max_lobes or max_lobes < 1:
+        raise InputError(f"max_lobes must be a whole number >= 1, got {max_lobes}")
+    return int(max_lobes)
 
 
 def _ro(a, dtype=None) -> np.ndarray:

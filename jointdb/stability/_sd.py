@@ -41,7 +41,7 @@ import scipy.optimize
 from jointdb.errors import InputError, NumericalError
 from jointdb.modal._model import ModalModel
 from jointdb.stability._cutting import MillingCut, interval_directional_matrices, mean_directional_matrix
-from jointdb.stability._results import LobeResult
+from jointdb.stability._results import LobeResult, spindle_speeds
 
 __all__ = ["SDSystem", "sd_system", "monodromy", "spectral_radius", "critical_depth", "milling_lobes_sd", "milling_lobes_sd_grid"]
 
@@ -73,6 +73,12 @@ def sd_system(model: ModalModel, cut: MillingCut) -> SDSystem:
     InputError
         If the model has no x or y DOF that is both output and input.
     """
+    if not isinstance(model, ModalModel):
+        raise InputError(
+            f"semi-discretization needs a ModalModel (fit one with jointdb.modal.fit_modes), got {type(model).__name__}"
+        )
+    if not isinstance(cut, MillingCut):
+        raise InputError(f"cut must be a MillingCut, got {type(cut).__name__}")
     dirs, labels = [], []
     for k, name in enumerate(("x", "y")):
         for d in model.outputs:
@@ -294,9 +300,7 @@ def milling_lobes_sd(
         the number of monodromy matrices computed.
     """
     sys = sd_system(model, cut)
-    speeds = np.sort(np.asarray(spindle_speed_rpm, dtype=float))
-    if speeds.size == 0 or np.any(speeds <= 0):
-        raise InputError("spindle speeds must be > 0 rpm")
+    speeds = spindle_speeds(spindle_speed_rpm)
     start = 0.5 * _floor_estimate(sys)
     rows = [critical_depth(sys, s, n_intervals, start=start, rtol=rtol, depth_max=depth_max) for s in speeds]
     depth, fc, kind, lobe, calls = (list(col) for col in zip(*rows))
@@ -327,7 +331,7 @@ def milling_lobes_sd_grid(
     cost of :func:`milling_lobes_sd` against it. Depth resolution is the grid's.
     """
     sys = sd_system(model, cut)
-    speeds = np.sort(np.asarray(spindle_speed_rpm, dtype=float))
+    speeds = spindle_speeds(spindle_speed_rpm)
     depths = np.sort(np.asarray(depths_m, dtype=float))
     out = np.full(speeds.size, np.inf)
     for i, s in enumerate(speeds):

@@ -159,3 +159,19 @@ def test_bad_inputs_raise_input_error():
         milling_lobes_zoa(frf, MillingCut(2, 6e8, 2e8))
     with pytest.raises(InputError, match="orientation"):
         tlusty_limit(sdof(100, 0.01, 1e6).synthesize(np.arange(50, 150.0)), 1e9, [1, 2])
+
+
+def test_bad_speeds_lobe_counts_and_cut_values_raise_input_error():
+    frf = sdof(IS_FN, IS_ZETA, IS_K).synthesize(np.arange(800, 1100, 0.5))
+    cut = MillingCut(2, 6e8, 2e8, 0.5, True)
+    for speeds in ([-100.0, 1000.0], [np.nan, 1000.0], []):
+        with pytest.raises(InputError, match="spindle speeds"):
+            turning_lobes(frf, 1e9, spindle_speed_rpm=speeds)
+        with pytest.raises(InputError, match="spindle speeds"):
+            milling_lobes_zoa(frf, cut, spindle_speed_rpm=speeds)
+    with pytest.raises(InputError, match="max_lobes"):
+        turning_lobes(frf, 1e9, max_lobes=0)
+    with pytest.raises(InputError, match="kt must be a number"):
+        MillingCut(2, "6e8", 2e8)
+    with pytest.raises(InputError, match="n_teeth must be finite"):
+        MillingCut(float("nan"), 6e8, 2e8)

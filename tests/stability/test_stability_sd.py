@@ -146,3 +146,11 @@ def test_sd_rejects_models_without_tool_tip_directions():
         milling_lobes_sd(model, MillingCut(2, 6e8, 2e8), [10000])
     with pytest.raises(InputError, match="n_intervals"):
         spectral_radius(sd_system(BENCH, MillingCut(2, 6e8, 2e8)), 10000, 1e-4, 1)
+
+
+def test_sd_input_errors_are_actionable():
+    cut = MillingCut(2, 6e8, 2e8)
+    with pytest.raises(InputError, match="spindle speeds"):
+        milling_lobes_sd(BENCH, cut, [np.nan])
+    with pytest.raises(InputError, match="needs a ModalModel"):
+        milling_lobes_sd(BENCH.synthesize([900.0, 950.0]), cut, [10000])
