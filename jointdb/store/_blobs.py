@@ -57,6 +57,7 @@ FORMAT_VERSION = 1
 COMPLEX_CONVENTION = "values[..., 0] = real part, values[..., 1] = imaginary part"
 HARMONIC_CONVENTION = "x(t) = X exp(+i omega t)"
 _TMP_PREFIX = ".tmp-"
+_GC_PREFIX = _TMP_PREFIX + "gc-"  # a blob `gc` moved aside for its last check: ".tmp-gc-<sha>-<uuid>.h5"
 USERBLOCK = 512
 _FILE_MAGIC = b"jointdb-blob-file-sha256:"
 
@@ -229,12 +230,18 @@ class BlobStore:
         """
         digest = frf_sha256(frf)
         final = self.path(digest)
-        if final.is_file():
+        try:
+            # Refresh the age first: `gc` spares young blobs and re-checks the age after
+            # moving a blob aside, so a blob this writer is about to reference survives.
+            os.utime(final)
+        except FileNotFoundError:
+            pass  # not there (or just collected): write it below
+        else:
             try:
                 self.get(digest)
                 return digest
-            except IntegrityError:
-                pass  # corrupt copy: rewrite it atomically below
+            except (IntegrityError, NotFoundError):
+                pass  # corrupt or collected meanwhile: rewrite it atomically below
         new_dir = not final.parent.is_dir()
         final.parent.mkdir(parents=True, exist_ok=True)
         tmp = final.parent / f"{_TMP_PREFIX}{uuid.uuid4().hex}.h5"
@@ -308,10 +315,57 @@ class BlobStore:
         return sorted(self.root.glob(f"*/{_TMP_PREFIX}*"))
 
     def remove(self, digest: str) -> None:
-        """Delete one blob file (garbage collection only)."""
+        """Delete one blob file unconditionally (tests and repairs; ``gc`` uses :meth:`collect`)."""
         path = self.path(digest)
         path.unlink(missing_ok=True)
         _fsync_dir(path.parent)
+
+    def collect(self, digest: str, min_age_s: float, still_referenced) -> bool:
+        """Delete an unreferenced blob without racing a writer that is about to reference it.
+
+        The blob is first renamed aside (so a concurrent :meth:`put` no longer finds it
+        and writes a fresh copy), then ``still_referenced(digest)`` is asked again and
+        the age re-read (a :meth:`put` that found the blob just before refreshed it).
+        If either says keep, the blob is put back; otherwise it is deleted.
+        Returns True when deleted.
+        """
+        path = self.path(digest)
+        aside = path.parent / f"{_GC_PREFIX}{digest}-{uuid.uuid4().hex}.h5"
+        try:
+            os.replace(path, aside)
+        except FileNotFoundError:
+            return False
+        keep = True
+        try:
+            keep = self.age_seconds(aside) < min_age_s or bool(still_referenced(digest))
+        finally:
+            if keep:
+                self._restore(aside, digest)
+        if keep:
+            return False
+        aside.unlink(missing_ok=True)
+        _fsync_dir(path.parent)
+        return True
+
+    def _restore(self, aside: Path, digest: str) -> None:
+        path = self.path(digest)
+        if path.exists():  # a writer already wrote a fresh copy
+            aside.unlink(missing_ok=True)
+        else:
+            os.replace(aside, path)
+        _fsync_dir(path.parent)
+
+    def restore_set_aside(self, is_referenced) -> list[str]:
+        """Put back blobs an interrupted ``gc`` had set aside that a row references; returns their hashes."""
+        restored = []
+        for tmp in self.temporaries():
+            if not tmp.name.startswith(_GC_PREFIX):
+                continue
+            digest = tmp.name[len(_GC_PREFIX):].split("-", 1)[0]
+            if is_referenced(digest):
+                self._restore(tmp, digest)
+                restored.append(digest)
+        return restored
 
     @staticmethod
     def age_seconds(path: Path) -> float:

@@ -74,19 +74,24 @@ def gc(repo: "Repository", min_age_s: float = 3600.0, dry_run: bool = False) -> 
     """Delete blobs that no row references, and stale temporary files.
 
     Only files older than ``min_age_s`` are touched: a blob that a running
-    ``catalogue`` has just written (its row not yet committed) is younger.
+    ``catalogue`` has just written (its row not yet committed) is younger, and
+    one it found already stored was refreshed (``BlobStore.put`` touches it).
+    A candidate is renamed aside before the final database and age check, so a
+    writer can never reference a blob between that check and the deletion
+    (see ``BlobStore.collect``).
     """
     refs = _referenced(repo)
+    if not dry_run:  # blobs an interrupted gc had set aside and a row references go back first
+        repo.blobs.restore_set_aside(lambda d: d in refs)
     removed: list[str] = []
     for blob in list(repo.blobs.walk()):
         if blob.sha256 in refs or repo.blobs.age_seconds(blob.path) < min_age_s:
             continue
-        # re-check against the database right before deleting
-        if blob.sha256 in _referenced(repo):
-            continue
-        removed.append(blob.sha256)
-        if not dry_run:
-            repo.blobs.remove(blob.sha256)
+        if dry_run:
+            removed.append(blob.sha256)
+        elif repo.blobs.collect(blob.sha256, min_age_s, lambda d: d in _referenced(repo)):
+            # collect() moves the blob aside, then re-checks the database and the age
+            removed.append(blob.sha256)
     for tmp in repo.blobs.temporaries():
         if repo.blobs.age_seconds(tmp) >= min_age_s:
             removed.append(str(tmp))

@@ -149,3 +149,54 @@ def test_every_byte_of_a_blob_file_is_covered(tmp_path):
     path.write_bytes(data)
     assert store.verify(digest) is None
     assert missed == []
+
+
+def _age(path, seconds=7200):
+    import os
+    import time
+
+    t = time.time() - seconds
+    os.utime(path, (t, t))
+
+
+def test_put_of_an_old_orphan_refreshes_it_so_gc_spares_it(repo):
+    frf = spring_joint(k=(9e6, 9e4))
+    digest = repo.blobs.put(frf)
+    _age(repo.blobs.path(digest))
+    assert repo.gc(min_age_s=3600, dry_run=True) == [digest]
+    assert repo.blobs.put(frf) == digest  # a catalogue found it stored ... and is about to commit its row
+    assert repo.gc(min_age_s=3600) == []
+    assert repo.blobs.exists(digest)
+
+
+def test_gc_puts_a_blob_back_when_a_writer_references_it_meanwhile(repo):
+    frf = spring_joint(k=(9e6, 9e4))
+    digest = repo.blobs.put(frf)
+    _age(repo.blobs.path(digest))
+
+    def committed_meanwhile(d):  # the final check sees the writer's row
+        return True
+
+    assert repo.blobs.collect(digest, 3600, committed_meanwhile) is False
+    assert repo.blobs.get(digest).allclose(frf, rtol=0)
+
+    def writer_put_while_aside(d):  # the blob is set aside: put() must write a fresh copy
+        assert not repo.blobs.exists(d)
+        assert repo.blobs.put(frf) == d
+        return False  # its row is not committed yet
+
+    assert repo.blobs.collect(digest, 3600, writer_put_while_aside) is True  # the old copy is deleted ...
+    assert repo.blobs.get(digest).allclose(frf, rtol=0)  # ... the writer's fresh copy stays
+    assert not repo.blobs.temporaries()
+
+
+def test_gc_restores_a_referenced_blob_an_interrupted_gc_set_aside(repo):
+    jv = repo.catalogue("T1", "tool-holder", spring_joint(), planar_conditions(), "spring-damper-planar")
+    path = repo.blobs.path(jv.blob_sha256)
+    aside = path.parent / f".tmp-gc-{jv.blob_sha256}-0123.h5"
+    path.rename(aside)
+    _age(aside)
+    assert not repo.check().ok
+    repo.gc(min_age_s=0)
+    assert repo.check().ok and not aside.exists()
+    assert repo.load_frf(jv).allclose(spring_joint(), rtol=0)
