@@ -10,7 +10,7 @@ import numpy as np
 from jointdb.errors import InputError
 from jointdb.frf import FRF, Dof, Quantity
 
-__all__ = ["IdentificationResult", "fetch", "as_receptance", "same_grid", "fill_bad_lines"]
+__all__ = ["IdentificationResult", "fetch", "as_receptance", "check_grid", "same_grid", "fill_bad_lines"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -94,15 +94,21 @@ def as_receptance(name: str, frf: FRF) -> FRF:
         raise InputError(f"{name}: {exc}") from None
 
 
+def check_grid(ref_name: str, ref: np.ndarray, name: str, freq: np.ndarray) -> None:
+    """InputError unless ``freq`` equals the reference grid ``ref`` (Hz) to 1e-9 relative."""
+    if freq.shape != ref.shape or not np.allclose(freq, ref, rtol=1e-9, atol=1e-12):
+        raise InputError(
+            f"{name} has {freq.size} lines {freq[0]:g}–{freq[-1]:g} Hz but {ref_name} has "
+            f"{ref.size} lines {ref[0]:g}–{ref[-1]:g} Hz; resample onto one frequency grid first"
+        )
+
+
 def same_grid(named: Mapping[str, FRF]) -> np.ndarray:
+    """The common frequency grid of the named FRFs (InputError naming the first that differs)."""
     items = list(named.items())
     ref_name, ref = items[0]
     for name, frf in items[1:]:
-        if frf.freq.shape != ref.freq.shape or not np.allclose(frf.freq, ref.freq, rtol=1e-9, atol=1e-12):
-            raise InputError(
-                f"{name} has {frf.n_freq} lines {frf.freq[0]:g}–{frf.freq[-1]:g} Hz but {ref_name} has "
-                f"{ref.n_freq} lines {ref.freq[0]:g}–{ref.freq[-1]:g} Hz; resample onto one grid first"
-            )
+        check_grid(ref_name, ref.freq, name, frf.freq)
     return ref.freq
 
 

@@ -28,6 +28,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from jointdb.coupling._common import as_receptance as _receptance
+from jointdb.coupling._common import check_grid as _check_grid
 from jointdb.errors import InputError, NumericalError
 from jointdb.frf import FRF, Dof, Quantity, dofs
 
@@ -202,21 +204,6 @@ class _Blocks:
                     f"(it has: {' '.join(str(x) for x in self._full.outputs)})"
                 )
         return self._full.block(outs, ins)
-
-
-def _check_grid(ref_name: str, ref: np.ndarray, name: str, freq: np.ndarray) -> None:
-    if freq.shape != ref.shape or not np.allclose(freq, ref, rtol=1e-9, atol=1e-12):
-        raise InputError(
-            f"{name} has {freq.size} lines {freq[0]:g}–{freq[-1]:g} Hz but {ref_name} has "
-            f"{ref.size} lines {ref[0]:g}–{ref[-1]:g} Hz; resample onto one frequency grid first"
-        )
-
-
-def _receptance(name: str, frf: FRF) -> FRF:
-    try:
-        return frf.to(Quantity.RECEPTANCE)
-    except InputError as exc:
-        raise InputError(f"{name}: {exc}") from None
 
 
 def _joint_matrix(iface: Interface, freq: np.ndarray, label: str) -> np.ndarray | None:
