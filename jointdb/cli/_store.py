@@ -15,7 +15,7 @@ from typing import Annotated, Any, Optional
 import typer
 
 from jointdb._output import emit, message
-from jointdb.errors import InputError, IntegrityError
+from jointdb.errors import InputError, IntegrityError, NotFoundError
 
 DbOpt = Annotated[
     Optional[str],
@@ -406,6 +406,8 @@ def register(app: typer.Typer) -> None:
 
         Example: jointdb joints import lab.h5 --db postgresql+psycopg://host/jointdb
         """
+        if not bundle.is_file():  # before opening (and maybe creating) the database
+            raise NotFoundError(f"bundle {bundle} does not exist")
         summary = _repo(db, blobs).import_(bundle, author=author)
         summary["labels_skipped"] = ", ".join(summary["labels_skipped"]) or None
         emit(summary, as_json=as_json)

@@ -28,8 +28,9 @@ from typing import TYPE_CHECKING, Any
 
 from sqlalchemy import select
 
-from jointdb.errors import ConflictError, InputError, IntegrityError
+from jointdb.errors import ConflictError, InputError, IntegrityError, NotFoundError
 from jointdb.frf import FRF
+from jointdb.io._atomic import atomic_path
 from jointdb.store._blobs import frf_sha256, read_frf_group, write_frf_group
 from jointdb.store._models import AuditRow, JointRow, LabelRow, StateRow, VersionRow, utcnow
 from jointdb.store._records import current_actor, record_dict, record_sha256, row_from_record
@@ -65,9 +66,8 @@ def export_bundle(repo: "Repository", names: Iterable[str] | None, path: str | o
                 for st in s.scalars(select(StateRow).where(StateRow.joint_id == j.id).order_by(StateRow.id))
             ]
             plan.append((j, [(record_dict(j.name, j.joint_type, r), r.record_sha256) for r in rows], labels, states))
-    tmp = f"{os.fspath(path)}.partial"
     n_versions = 0
-    with h5py.File(tmp, "w") as f:
+    with atomic_path(path) as tmp, h5py.File(tmp, "w") as f:  # a failure leaves no partial file
         f.attrs["format"] = FORMAT
         f.attrs["format_version"] = FORMAT_VERSION
         f.attrs["exported_at"] = utcnow().isoformat()
@@ -92,7 +92,6 @@ def export_bundle(repo: "Repository", names: Iterable[str] | None, path: str | o
                     rg = vg.require_group("raw").create_group(key)
                     write_frf_group(rg, repo.blobs.get(raw_digest), raw_digest)
                 n_versions += 1
-    os.replace(tmp, path)
     return {"joints": len(plan), "versions": n_versions}
 
 
@@ -101,6 +100,8 @@ def _read_bundle(path: str | os.PathLike) -> list[dict[str, Any]]:
     import h5py
 
     where = os.fspath(path)
+    if not os.path.isfile(path):
+        raise NotFoundError(f"bundle {where} does not exist")
     try:
         f = h5py.File(path, "r", locking=False)
     except OSError as exc:

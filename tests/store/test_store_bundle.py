@@ -93,3 +93,21 @@ def test_tampered_bundle_is_refused(source, repo, tmp_path):
     with pytest.raises(IntegrityError, match="record hash mismatch"):
         repo.import_(bundle)
     assert count_rows(repo) == before
+
+
+def test_export_failure_leaves_no_partial_file_and_missing_bundle_is_not_found(source, repo, tmp_path):
+    from jointdb.errors import InputError
+
+    with pytest.raises(InputError, match="does not exist"):
+        source.export(None, tmp_path / "nodir" / "x.h5")
+    # a corrupt blob stops the export half-way: nothing is left behind
+    jv = source.get("H1")
+    path = source.blobs.path(jv.blob_sha256)
+    data = bytearray(path.read_bytes())
+    data[-100] ^= 0xFF
+    path.write_bytes(bytes(data))
+    with pytest.raises(IntegrityError):
+        source.export(None, tmp_path / "out.h5")
+    assert sorted(p.name for p in tmp_path.iterdir() if "out" in p.name) == []
+    with pytest.raises(NotFoundError, match="does not exist"):
+        repo.import_(tmp_path / "missing.h5")
