@@ -304,7 +304,8 @@ class Repository:
         Raises
         ------
         NotFoundError
-            Unknown joint, version or label, or no version existed at ``at``.
+            Unknown joint, version or label, or no version existed at ``at``
+            (also when the pinned ``version`` was catalogued after ``at``).
         InputError
             ``label`` combined with ``version`` or ``at`` (labels are current pointers).
         """
@@ -326,6 +327,9 @@ class Repository:
                 if row is None:
                     n = s.scalar(select(func.max(VersionRow.version)).where(VersionRow.joint_id == joint.id))
                     raise NotFoundError(f"joint {name!r} has no version {version} (versions 1..{n or 0})")
+                if at is not None and row.created_at > at:
+                    raise NotFoundError(f"joint {name!r} version {version} did not exist yet at {at.isoformat()} "
+                                        f"(catalogued {row.created_at.isoformat(timespec='seconds')})")
                 states = self._states(s, joint.id, at)
                 return to_version(joint, row, state_of(row.version, states), labels.get(row.version, ()))
             if at is not None:

@@ -118,6 +118,9 @@ def test_point_in_time_and_labels(repo):
     assert repo.get("T1", at=v1.created_at.isoformat()).version == 1
     with pytest.raises(NotFoundError, match="had no version"):
         repo.get("T1", at=v1.created_at - timedelta(seconds=1))
+    assert repo.get("T1", version=1, at=v2.created_at).version == 1
+    with pytest.raises(NotFoundError, match="did not exist yet"):  # pinned version and time disagree
+        repo.get("T1", version=2, at=v1.created_at)
     repo.label("T1", 1, "released")
     assert repo.get("T1", label="released").version == 1
     repo.label("T1", 2, "released")  # labels move
