@@ -36,7 +36,22 @@ def _readonly(a: np.ndarray) -> np.ndarray:
 def single_dof_residue(freq_hz, zeta, stiffness) -> np.ndarray:
     """Residue ``R = −i/(2 m ω_d)`` of a driving-point mode with stiffness ``k`` [N/m].
 
-    ``m = k / ω_n²``. Shapes broadcast; returns complex array (m/N · rad/s).
+    ``m = k / ω_n²`` (Ewins, *Modal Testing*, §2.3). Shapes broadcast.
+
+    Parameters
+    ----------
+    freq_hz
+        Undamped natural frequency f_n [Hz] (converted to ω_n = 2π f_n).
+    zeta
+        Viscous damping ratio ζ in [0, 1).
+    stiffness
+        Modal stiffness k [N/m].
+
+    Returns
+    -------
+    ndarray
+        Complex residue in m/N · rad/s (per rad/s, not per Hz), for
+        ``H = R/(iω − λ) + R*/(iω − λ*)`` with ω in rad/s.
     """
     wn = 2 * np.pi * np.asarray(freq_hz, dtype=float)
     zeta = np.asarray(zeta, dtype=float)

@@ -101,7 +101,21 @@ def directional_integral(phi, kt: float, kr: float) -> np.ndarray:
 
 
 def mean_directional_matrix(cut: MillingCut) -> np.ndarray:
-    """Tooth-period mean ``H̄ = (N/2π) ∫_{φst}^{φex} H dφ`` (N/m²), shape (2, 2)."""
+    """Tooth-period mean ``H̄ = (N/2π) ∫_{φst}^{φex} H dφ`` (N/m²), shape (2, 2).
+
+    Equals ``−(N K_t/4π)[α₀]`` of Altintas & Budak (1995); for slotting
+    ``H̄_xx = N K_r/4`` (theory.md §5).
+
+    Parameters
+    ----------
+    cut
+        :class:`MillingCut` (teeth, K_t, K_r, immersion, up/down).
+
+    Returns
+    -------
+    ndarray
+        ``(2, 2)`` in (x, y), N/m².
+    """
     a, b = cut.angles
     return cut.n_teeth / (2 * np.pi) * (directional_integral(b, cut.kt, cut.kr) - directional_integral(a, cut.kt, cut.kr))
 
@@ -111,6 +125,13 @@ def interval_directional_matrices(cut: MillingCut, n_intervals: int) -> np.ndarr
 
     Returns shape ``(m, 2, 2)`` (N/m²). The tooth angles advance by ``2π/(N m)``
     per interval; the cutting window is intersected exactly.
+
+    Parameters
+    ----------
+    cut
+        :class:`MillingCut`.
+    n_intervals
+        Number m of intervals per tooth period (>= 1).
     """
     m = int(n_intervals)
     st, ex = cut.angles

@@ -81,6 +81,15 @@ def tlusty_limit(frf: FRF, kf: float, orientation=None) -> tuple[float, float]:
     a parabola through the three lowest lines. For one mode this is
     ``2kζ(1+ζ)/K_f`` at ``f_n√(1+2ζ)`` (theory.md §5).
 
+    Parameters
+    ----------
+    frf
+        Tool-tip FRF (any quantity; converted to receptance, m/N).
+    kf
+        Cutting-force coefficient K_f [N/m²].
+    orientation
+        Directional factors (see :func:`oriented_frf`).
+
     Raises
     ------
     InputError

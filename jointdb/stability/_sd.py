@@ -68,10 +68,23 @@ def sd_system(model: ModalModel, cut: MillingCut) -> SDSystem:
     The model's outputs/inputs must include DOFs with direction ``x`` and/or ``y``
     (same node); residual terms are ignored (no dynamics).
 
+    Parameters
+    ----------
+    model
+        Tool-tip :class:`~jointdb.modal.ModalModel` (receptance residues, m/N·rad/s).
+    cut
+        :class:`MillingCut`.
+
+    Returns
+    -------
+    SDSystem
+        Real state space ``(A, B, C)`` of the x/y driving-point block and the cut.
+
     Raises
     ------
     InputError
-        If the model has no x or y DOF that is both output and input.
+        If ``model``/``cut`` have the wrong type, or the model has no x or y DOF
+        that is both output and input, or no mode with a non-zero residue there.
     """
     if not isinstance(model, ModalModel):
         raise InputError(
@@ -141,9 +154,29 @@ def _step_matrices(sys: SDSystem, depth: float, h: np.ndarray, dt: float):
 
 
 def monodromy(sys: SDSystem, spindle_speed_rpm: float, depth: float, n_intervals: int = 40) -> np.ndarray:
-    """Floquet transition matrix over one tooth period, shape (n + m·n_q,)*2.
+    """Floquet transition matrix over one tooth period (Insperger & Stépán 2004; theory.md §5).
 
-    State ordering ``(y_i, q_{i−1}, …, q_{i−m})``.
+    Parameters
+    ----------
+    sys
+        From :func:`sd_system`.
+    spindle_speed_rpm
+        Spindle speed [rpm]; the delay is the tooth period ``τ = 60/(N n)`` [s].
+    depth
+        Axial depth of cut a [m].
+    n_intervals
+        Intervals m per tooth period (first-order semi-discretization).
+
+    Returns
+    -------
+    ndarray
+        Shape ``(n + m·n_q, n + m·n_q)``, state ordering ``(y_i, q_{i−1}, …, q_{i−m})``
+        (n states of the modal model, n_q measured directions).
+
+    Raises
+    ------
+    InputError
+        If ``n_intervals < 2``.
     """
     m = int(n_intervals)
     if m < 2:
@@ -168,7 +201,18 @@ def monodromy(sys: SDSystem, spindle_speed_rpm: float, depth: float, n_intervals
 
 
 def spectral_radius(sys: SDSystem, spindle_speed_rpm: float, depth: float, n_intervals: int = 40) -> float:
-    """Largest |multiplier| of the monodromy matrix (stable < 1)."""
+    """Largest |Floquet multiplier| of :func:`monodromy` (same parameters); the cut is stable when < 1.
+
+    Returns
+    -------
+    float
+        Spectral radius ρ (dimensionless).
+
+    Raises
+    ------
+    InputError
+        If ``n_intervals < 2``.
+    """
     return float(np.max(np.abs(np.linalg.eigvals(monodromy(sys, spindle_speed_rpm, depth, n_intervals)))))
 
 
@@ -231,6 +275,28 @@ def critical_depth(
     (kind ``""``) when still stable at ``depth_max`` (default 1000× the start).
     A narrow unstable island between two bracket steps (factor ``growth``) can
     be missed; lower ``growth`` to be safer.
+
+    Parameters
+    ----------
+    sys
+        From :func:`sd_system`.
+    spindle_speed_rpm
+        Spindle speed [rpm].
+    n_intervals
+        Intervals per tooth period.
+    start
+        First trial depth [m] (default: half the ZOA-like floor of the model).
+    rtol
+        Relative tolerance of the depth.
+    growth
+        Bracketing factor (> 1).
+    depth_max
+        Search ceiling [m].
+
+    Raises
+    ------
+    NumericalError
+        If the system is unstable even at vanishing depth (unstable tool-tip model).
     """
     a0 = start if start is not None else 0.5 * _floor_estimate(sys)
     top = depth_max if depth_max is not None else 1000 * a0
@@ -298,6 +364,14 @@ def milling_lobes_sd(
         ``method="milling-sd"``; per speed the critical depth, chatter frequency,
         lobe number and kind (``"hopf"``/``"flip"``); ``info["evaluations"]`` is
         the number of monodromy matrices computed.
+
+    Raises
+    ------
+    InputError
+        ``model`` not a :class:`~jointdb.modal.ModalModel` or without x/y driving
+        DOFs, bad speeds (non-finite, <= 0 rpm), ``n_intervals < 2``.
+    NumericalError
+        If the model is unstable without cutting.
     """
     sys = sd_system(model, cut)
     speeds = spindle_speeds(spindle_speed_rpm)
@@ -329,6 +403,24 @@ def milling_lobes_sd_grid(
 
     The classical way of drawing SD lobes (contour of ρ = 1); used to measure the
     cost of :func:`milling_lobes_sd` against it. Depth resolution is the grid's.
+
+    Parameters
+    ----------
+    model, cut, spindle_speed_rpm, n_intervals
+        As in :func:`milling_lobes_sd`.
+    depths_m
+        Depth grid [m].
+
+    Returns
+    -------
+    LobeResult
+        ``method="milling-sd-grid"``; per speed the first grid depth with ρ >= 1
+        (``inf`` if none), chatter frequency NaN.
+
+    Raises
+    ------
+    InputError
+        As :func:`milling_lobes_sd`.
     """
     sys = sd_system(model, cut)
     speeds = spindle_speeds(spindle_speed_rpm)
