@@ -8,7 +8,7 @@ from typing import Optional
 import numpy as np
 import typer
 
-from jointdb._output import emit, message
+from jointdb._output import emit, message, progress
 from jointdb.errors import InputError
 
 _UFF_SUFFIXES = {".uff", ".unv", ".uff58", ".58"}
@@ -58,6 +58,23 @@ def _fit_tip_model(frf, frf_y, n_modes, band, max_order):
             + f"; NMSE {fit.quality.nmse_total:.2e}, FRAC {fit.quality.frac_min:.4f}"
         )
     return model, fits
+
+
+def _sd_lobes_with_progress(model, cut, speeds: np.ndarray, n_intervals: int, n_chunks: int = 25):
+    """``stability.milling_lobes_sd`` in chunks of speeds, with a progress bar on a terminal.
+
+    Each speed is solved independently (same start depth, which depends only on
+    the model and the cut), so the result equals one call over all speeds.
+    """
+    from jointdb.stability import LobeResult, milling_lobes_sd
+
+    chunks = np.array_split(speeds, min(n_chunks, speeds.size))
+    parts = [milling_lobes_sd(model, cut, chunk, n_intervals=n_intervals)
+             for chunk in progress(chunks, total=len(chunks), description="lobes (SD)")]
+    info = dict(parts[0].info)
+    info["evaluations"] = int(sum(p.info.get("evaluations", 0) for p in parts))
+    return LobeResult(parts[0].method, *(np.concatenate([getattr(p, a) for p in parts]) for a in
+                      ("spindle_speed_rpm", "depth_m", "chatter_freq_hz", "lobe", "kind")), (), info)
 
 
 def register(app: typer.Typer) -> None:
@@ -183,7 +200,7 @@ def register(app: typer.Typer) -> None:
                 res = stability.milling_lobes_zoa(frf, cut, frf2, cross_terms=cross_terms, spindle_speed_rpm=speeds)
             else:
                 model, _ = _fit_tip_model(frf, frf2, modes, band, max_order)
-                res = stability.milling_lobes_sd(model, cut, speeds, n_intervals=intervals)
+                res = _sd_lobes_with_progress(model, cut, speeds, intervals)
             title = f"Milling lobes ({method_l.upper()}), {teeth} teeth, a/D = {immersion:g}, {mode_txt}-milling"
         if plot is not None:
             from jointdb.plots._lobes import plot_lobes
