@@ -58,6 +58,23 @@ def tool_model(spec: StackSpec, max_element_length: float = 0.005) -> BeamModel:
 
     Fluted sections use the equivalent diameter ``fluted_ratio × diameter``.
     Points: ``tip`` (node 1), ``base`` (node 2).
+
+    Parameters
+    ----------
+    spec
+        The stack (tool segments, material, gauge length in m, loss factor).
+    max_element_length
+        FE mesh size [m].
+
+    Returns
+    -------
+    BeamModel
+        Planar (x, ry) model, length = gauge length; hysteretic damping η = tool.loss_factor.
+
+    Raises
+    ------
+    InputError
+        Unknown tool material.
     """
     tool = spec.tool
     material = get_material(tool.material)
@@ -96,6 +113,25 @@ def holder_model(spec: StackSpec, max_element_length: float = 0.005) -> BeamMode
     """Free–free model of the holder with the clamped tool shank (nose at z = 0).
 
     Points: ``nose`` (node 3, at the holder face), ``base`` (node 4, spindle side).
+    Over the insertion length each section is the composite of
+    :func:`composite_material` (Schmitz & Duncan 2005; theory.md §4).
+
+    Parameters
+    ----------
+    spec
+        The stack (holder segments in m, materials, tool shank, gauge length).
+    max_element_length
+        FE mesh size [m].
+
+    Returns
+    -------
+    BeamModel
+        Planar (x, ry) model of length ``holder.length``.
+
+    Raises
+    ------
+    InputError
+        Unknown materials, or a holder bore smaller than the tool shank.
     """
     holder = spec.holder
     h_mat = get_material(holder.material)

@@ -92,7 +92,18 @@ def spindle_model(spec: StackSpec) -> BeamModel:
 
 def prediction_grid(spec: StackSpec, freq=None) -> np.ndarray:
     """Frequency lines [Hz] of a prediction: ``freq`` if given, else the stack file's
-    ``frequency``, else a measured spindle FRF's own lines above 0 Hz, else 10–5000 Hz by 5 Hz."""
+    ``frequency``, else a measured spindle FRF's own lines above 0 Hz, else 10–5000 Hz by 5 Hz.
+
+    Returns
+    -------
+    ndarray
+        ``(n_freq,)`` strictly increasing lines, all > 0 Hz.
+
+    Raises
+    ------
+    InputError
+        Empty, non-finite, non-positive or non-increasing lines.
+    """
     if freq is not None:
         out = np.asarray(freq, dtype=float)
     elif spec.frequency is not None:
@@ -154,7 +165,26 @@ def _planes(frf: FRF, what: str, node: int | None = None) -> tuple[dict[str, np.
 
 def stack_parts(spec: StackSpec, freq=None) -> dict[str, FRF]:
     """Free receptances of the parts: ``tool`` (nodes 1, 2), ``holder`` (3, 4), ``spindle`` (node 5 for a model,
-    the file's node for a measurement), all on the prediction grid."""
+    the file's node for a measurement), all on the prediction grid.
+
+    Parameters
+    ----------
+    spec
+        The stack (a measured spindle must have its FRF attached).
+    freq
+        Frequency lines [Hz]; default :func:`prediction_grid`.
+
+    Returns
+    -------
+    dict[str, FRF]
+        ``"tool"``, ``"holder"``: 4×4 receptances over (x, ry) at their two
+        points; ``"spindle"``: the spindle side at its nose (m/N, rad/(N·m), ...).
+
+    Raises
+    ------
+    InputError
+        Bad grid, a spindle file not loaded or not covering the grid.
+    """
     f = prediction_grid(spec, freq)
     parts = {
         "tool": tool_model(spec).frf(f, ["tip", "base"]),
