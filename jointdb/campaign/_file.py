@@ -148,6 +148,8 @@ def load_campaign(path: "str | Path") -> Campaign:
         raw = json.loads(cpath.read_text(encoding="utf-8"))
     except json.JSONDecodeError as exc:
         raise InputError(f"campaign {cpath.name}: not valid JSON: {exc}") from None
+    except UnicodeDecodeError:
+        raise InputError(f"campaign {cpath.name}: not a UTF-8 text file") from None
     if not isinstance(raw, dict):
         raise InputError(f"campaign {cpath.name}: the top level must be a JSON object")
     if raw.get("format") != FORMAT:

@@ -49,3 +49,12 @@ def test_coincident_points_are_refused():
         rotations_by_finite_difference(h, 3, 3, 0.01)
     with pytest.raises(InputError, match="both node 1"):
         identify_planar_joint(J, J, 3, J, 1, 1)
+
+
+def test_binary_campaign_file_gives_one_input_error(tmp_path):
+    from jointdb.campaign import load_campaign
+
+    bad = tmp_path / "bad.json"
+    bad.write_bytes(b"\xff\xfe\x00binary")
+    with pytest.raises(InputError, match="not a UTF-8 text file"):
+        load_campaign(bad)
