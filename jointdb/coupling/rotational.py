@@ -86,9 +86,17 @@ def rotations_by_extension(
     cond = condition(e)
     if np.all(~np.isfinite(cond)):
         raise NumericalError("the extension's joint-to-point receptances are singular at every line")
-    einv = np.linalg.inv(e)
-    s = np.swapaxes(einv, 1, 2) @ m @ einv
-    h33 = np.linalg.inv(s) - h00
+    try:
+        einv = np.linalg.inv(e)
+        s = np.swapaxes(einv, 1, 2) @ m @ einv
+        h33 = np.linalg.inv(s) - h00
+    except np.linalg.LinAlgError:
+        bad = np.flatnonzero(~np.isfinite(cond))
+        where = f" (e.g. {freq[bad[0]]:g} Hz)" if bad.size else ""
+        raise NumericalError(
+            f"the extension equations are singular at some line{where}; choose measured points at "
+            "other distances from the joint, or drop that line"
+        ) from None
     h33 = 0.5 * (h33 + np.swapaxes(h33, 1, 2))
     a = [Dof(a_point, t), Dof(a_point, r)]
     return FRF(freq, h33, a, a, Quantity.RECEPTANCE), cond
