@@ -62,6 +62,22 @@ def _read_json(path: Path, what: str) -> Any:
         raise InputError(f"{what} {path}: not valid JSON (line {exc.lineno}, column {exc.colno}: {exc.msg})") from None
 
 
+#: FRF file formats by suffix (reading and writing).
+FRF_SUFFIXES = {".uff": "uff58", ".unv": "uff58", ".uff58": "uff58", ".uf": "uff58", ".58": "uff58",
+                ".h5": "hdf5", ".hdf5": "hdf5", ".hdf": "hdf5", ".csv": "csv"}
+
+
+def frf_format(path: Path | str, option: str = "") -> str:
+    """``"uff58"``, ``"hdf5"`` or ``"csv"`` from the suffix; InputError naming the option otherwise."""
+    p = Path(path)
+    fmt = FRF_SUFFIXES.get(p.suffix.lower())
+    if fmt is None:
+        where = f"{option} {str(p)!r}" if option else str(p)
+        raise InputError(f"{where}: unknown FRF file type {p.suffix.lower()!r}; use .uff/.unv (UFF58), "
+                         ".h5/.hdf5 or .csv")
+    return fmt
+
+
 def read_frf_file(path: Path | str) -> FRF:
     """Read an FRF from UFF58 (``.uff``, ``.unv``), HDF5 (``.h5``, ``.hdf5``) or CSV by suffix.
 
@@ -72,32 +88,35 @@ def read_frf_file(path: Path | str) -> FRF:
     from jointdb import io
 
     p = Path(path)
+    fmt = frf_format(p)
     if not p.exists():
         raise NotFoundError(f"FRF file {p} does not exist")
-    suffix = p.suffix.lower()
-    if suffix in (".uff", ".unv", ".uf"):
+    if fmt == "uff58":
         return io.read_frf_uff58(p)
-    if suffix in (".h5", ".hdf5"):
+    if fmt == "hdf5":
         return io.read_frf_hdf5(p)
-    if suffix == ".csv":
-        return io.read_frf_csv(p)
-    raise InputError(f"{p}: unknown FRF file type {suffix!r}; use .uff/.unv (UFF58), .h5/.hdf5 or .csv")
+    return io.read_frf_csv(p)
 
 
-def write_frf_file(path: Path | str, frf: FRF) -> Path:
-    """Write an FRF as UFF58 / HDF5 / CSV chosen by the suffix."""
+def write_frf_file(path: Path | str, frf: FRF, *, binary: bool = False, round_freq: bool = True,
+                   option: str = "--out") -> Path:
+    """Write an FRF as UFF58 / HDF5 / CSV chosen by the suffix (atomically).
+
+    ``binary`` writes UFF58 as 58b (exact); ``round_freq`` lets ASCII UFF58
+    round frequencies to its 6 significant digits (see :func:`jointdb.io.write_uff58`).
+    """
     from jointdb import io
 
     p = Path(path)
-    suffix = p.suffix.lower()
-    if suffix in (".uff", ".unv"):
-        io.write_uff58(p, frf, round_freq=True)
-    elif suffix in (".h5", ".hdf5"):
+    fmt = frf_format(p, option)
+    if not p.parent.is_dir():
+        raise InputError(f"{option} {str(p)!r}: directory {str(p.parent)!r} does not exist")
+    if fmt == "uff58":
+        io.write_uff58(p, frf, binary=binary, round_freq=round_freq)
+    elif fmt == "hdf5":
         io.write_frf_hdf5(p, frf)
-    elif suffix == ".csv":
-        io.write_frf_csv(p, frf)
     else:
-        raise InputError(f"--out {p}: unknown file type {suffix!r}; use .uff, .h5 or .csv")
+        io.write_frf_csv(p, frf)
     return p
 
 

@@ -15,9 +15,6 @@ import typer
 
 from jointdb.errors import InputError
 
-FRF_SUFFIXES = {".uff": "uff58", ".unv": "uff58", ".uff58": "uff58", ".h5": "hdf5", ".hdf5": "hdf5", ".csv": "csv"}
-
-
 def _split(text: str | None) -> list[str] | None:
     if text is None:
         return None
@@ -60,24 +57,11 @@ def write_frf_file(path: Path, frf, *, binary: bool = False) -> str:
 
     ``binary`` selects binary UFF58 (58b, exact) instead of ASCII.
     """
-    fmt = FRF_SUFFIXES.get(path.suffix.lower())
-    if fmt is None:
-        raise InputError(f"--out {str(path)!r}: unknown file type; use one of {', '.join(sorted(FRF_SUFFIXES))}")
-    if not path.parent.exists():
-        raise InputError(f"--out {str(path)!r}: directory {str(path.parent)!r} does not exist")
-    if fmt == "uff58":
-        from jointdb.io import write_uff58
+    from jointdb.app import frf_format
+    from jointdb.app import write_frf_file as write
 
-        write_uff58(path, frf, binary=binary)
-    elif fmt == "hdf5":
-        from jointdb.io import write_frf_hdf5
-
-        write_frf_hdf5(path, frf)
-    else:
-        from jointdb.io import write_frf_csv
-
-        write_frf_csv(path, frf)
-    return fmt
+    write(path, frf, binary=binary, round_freq=False)
+    return frf_format(path)
 
 
 def mode_rows(modes) -> list[dict]:
@@ -178,8 +162,12 @@ def register(app: typer.Typer) -> None:
 
         model = load_model(model_file)
         q = Quantity.parse(quantity)
-        if out is not None and out.suffix.lower() not in FRF_SUFFIXES:
-            raise InputError(f"--out {str(out)!r}: unknown file type; use one of {', '.join(sorted(FRF_SUFFIXES))}")
+        if out is not None:
+            from jointdb.app import frf_format
+
+            frf_format(out, "--out")
+            if not out.parent.is_dir():  # fail before the computation, not after
+                raise InputError(f"--out {str(out)!r}: directory {str(out.parent)!r} does not exist")
         if plot is not None and plot.suffix.lower() != ".png":
             raise InputError(f"--plot {str(plot)!r} must end in .png")
         rigid = rigid_body_count(model.assemble()) > 0

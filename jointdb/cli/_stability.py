@@ -11,20 +11,11 @@ import typer
 from jointdb._output import emit, message, progress
 from jointdb.errors import InputError
 
-_UFF_SUFFIXES = {".uff", ".unv", ".uff58", ".58"}
-_HDF_SUFFIXES = {".h5", ".hdf5", ".hdf"}
-
-
 def read_frf_file(path: Path):
-    """Read a tool-tip FRF from UFF58 or the HDF5 exchange file (by suffix)."""
-    from jointdb import io
+    """Read a tool-tip FRF from UFF58, the HDF5 exchange file or CSV (by suffix)."""
+    from jointdb.app import read_frf_file as read
 
-    suffix = path.suffix.lower()
-    if suffix in _UFF_SUFFIXES:
-        return io.read_frf_uff58(path)
-    if suffix in _HDF_SUFFIXES:
-        return io.read_frf_hdf5(path)
-    raise InputError(f"{path}: unknown FRF file type {suffix!r}; use a UFF58 (.uff/.unv) or HDF5 (.h5) file")
+    return read(path)
 
 
 def _node_select(frf, node: Optional[int]):

@@ -72,7 +72,7 @@ def test_frf_writes_uff58_and_hdf5(tmp_path, suffix):
         (["modes", "{bad}", "--n", "0"], "--n must be >= 1"),
         (["frf", "{bad}", "--fmin", "0"], "rigid-body modes"),
         (["frf", "{model}", "--points", "nose"], "unknown point 'nose'"),
-        (["frf", "{model}", "--out", "x.txt"], "unknown file type"),
+        (["frf", "{model}", "--out", "x.txt"], "unknown FRF file type"),
         (["frf", "{model}", "--df", "1", "--n-lines", "5"], "either --df or --n-lines"),
         (["modes", "{broken}"], "segments[1].outer_diameter: must be > 0"),
     ],
