@@ -47,9 +47,12 @@ def register(app: typer.Typer) -> None:
         for label, path in (("--out", out), ("--plot", plot)):
             if path is not None and not path.parent.exists():
                 raise InputError(f"{label} {str(path)!r}: directory {str(path.parent)!r} does not exist")
-        if out is not None and out.suffix.lower() not in (".uff", ".unv", ".h5", ".hdf5", ".csv"):
-            raise InputError(f"--out {str(out)!r}: unknown file type; use .uff, .h5 or .csv")
+        if out is not None:
+            application.frf_format(out, "--out")
         spec = application.load_stack(stack_file)
+        from jointdb.cli._store import check_db_target
+
+        check_db_target(db)  # a mistyped --db is not found, not created empty
         freq = None
         if fmin is not None or fmax is not None or df is not None:
             base = spec.frequency or FrequencyGrid()

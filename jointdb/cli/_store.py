@@ -27,9 +27,43 @@ BlobsOpt = Annotated[
 ]
 
 
-def _repo(db: str | None, blobs: Path | None = None):
+def check_db_target(db: str | None, create: bool = False) -> None:
+    """Refuse a mistyped SQLite ``--db``/``$JOINTDB_URL`` before it becomes a new empty database.
+
+    Commands that write (``catalogue``, ``joints import``) may create the file,
+    but not its directory; the others need an existing file. The per-user
+    default database is created on first use as before.
+
+    Raises
+    ------
+    NotFoundError, InputError
+    """
+    import os
+
+    from sqlalchemy.engine import make_url
+
+    from jointdb.store._db import resolve_url
+
+    given = db if db is not None else os.environ.get("JOINTDB_URL")
+    if not given:
+        return
+    url = make_url(resolve_url(given))
+    if url.get_backend_name() != "sqlite":
+        return
+    path = Path(str(url.database))
+    if path.exists():
+        return
+    if not create:
+        raise NotFoundError(f"database {path} does not exist (`jointdb catalogue`, `jointdb joints import` "
+                            "or `jointdb db upgrade` creates it)")
+    if not path.parent.is_dir():
+        raise InputError(f"database {path}: directory {path.parent} does not exist")
+
+
+def _repo(db: str | None, blobs: Path | None = None, *, create: bool = False):
     from jointdb.store import Repository
 
+    check_db_target(db, create)
     return Repository(db, blobs=blobs)
 
 
@@ -244,7 +278,7 @@ def register(app: typer.Typer) -> None:
             geometry={**dict(base.get("geometry") or {}), **dict(given.geometry)},
             extra={**dict(base.get("extra") or {}), **dict(given.extra)},
         )
-        repo = _repo(db, blobs)
+        repo = _repo(db, blobs, create=True)
         jv = repo.catalogue(name, jtype, frf, conditions, kind, prov, q, parent, raw_frfs=raw, author=author)
         if label:
             jv = repo.label(jv.name, jv.version, label, author=author)
@@ -408,7 +442,7 @@ def register(app: typer.Typer) -> None:
         """
         if not bundle.is_file():  # before opening (and maybe creating) the database
             raise NotFoundError(f"bundle {bundle} does not exist")
-        summary = _repo(db, blobs).import_(bundle, author=author)
+        summary = _repo(db, blobs, create=True).import_(bundle, author=author)
         summary["labels_skipped"] = ", ".join(summary["labels_skipped"]) or None
         emit(summary, as_json=as_json)
 

@@ -167,13 +167,13 @@ def test_exit_codes_and_one_line_errors(tmp_path):
     """Through the real entry point: exit code of the error class, one stderr line, no traceback."""
     jointdb = [sys.executable, "-c", "from jointdb.cli import main; main()"]
     db = str(tmp_path / "e.sqlite")
-    out = subprocess.run(jointdb + ["joints", "show", "missing", "--db", db], capture_output=True, text=True)
-    assert out.returncode == NotFoundError.exit_code
-    assert out.stderr.strip().splitlines() == ["error: no joint named 'missing' (see `jointdb joints list`)"]
     store_blobs = tmp_path / "e.sqlite.blobs"
     write_frf_file(tmp_path / "j.h5", spring_joint())
     subprocess.run(jointdb + ["catalogue", str(tmp_path / "j.h5"), "--name", "A", "--type", "tool-holder",
                               "--model-kind", "spring-damper-planar", "--db", db], check=True, capture_output=True)
+    out = subprocess.run(jointdb + ["joints", "show", "missing", "--db", db], capture_output=True, text=True)
+    assert out.returncode == NotFoundError.exit_code
+    assert out.stderr.strip().splitlines() == ["error: no joint named 'missing' (see `jointdb joints list`)"]
     blob = next(store_blobs.glob("*/*.h5"))
     data = bytearray(blob.read_bytes())
     data[len(data) // 2] ^= 0xFF
@@ -201,3 +201,20 @@ def test_catalogue_straight_from_a_campaign(tmp_path):
     jv = repo.get("th-camp")
     assert set(jv.raw_blobs) == {"measured"} and repo.load_raw(jv, "measured").n_freq > 0
     assert repo.check().ok
+
+
+def test_db_path_in_a_missing_directory_is_refused_not_created(tmp_path):
+    target = tmp_path / "nodir" / "x.sqlite"
+    write_frf_file(tmp_path / "j.h5", spring_joint())
+    r = run("catalogue", tmp_path / "j.h5", "--name", "A", "--type", "tool-holder",
+            "--model-kind", "spring-damper-planar", "--db", target, ok=False)
+    assert r.exit_code != 0 and isinstance(r.exception, InputError) and "does not exist" in str(r.exception)
+    assert not target.parent.exists()
+
+
+def test_reading_commands_do_not_create_a_mistyped_database(tmp_path):
+    target = tmp_path / "typo.sqlite"
+    for args in (["joints", "list"], ["query", "--type", "tool-holder", "--torque", "3"], ["db", "check"]):
+        r = run(*args, "--db", target, ok=False)
+        assert isinstance(r.exception, NotFoundError) and "does not exist" in str(r.exception), args
+    assert not target.exists()
