@@ -13,7 +13,7 @@ from typing import Annotated, Optional
 
 import typer
 
-from jointdb.errors import InputError
+from jointdb.errors import InputError, NotFoundError
 
 
 def _check_out(path: Path | None, suffixes: tuple[str, ...], option: str) -> None:
@@ -60,8 +60,10 @@ def register(app: typer.Typer) -> None:
         written = [str(out)]
         if report is not None:
             from jointdb._output import to_jsonable
+            from jointdb.io._atomic import atomic_path
 
-            report.write_text(json.dumps(to_jsonable(rep), indent=2) + "\n", encoding="utf-8")
+            with atomic_path(report) as tmp:  # never a half-written report
+                tmp.write_text(json.dumps(to_jsonable(rep), indent=2) + "\n", encoding="utf-8")
             written.append(str(report))
         if plots is not None:
             written += _identify_plots(plots, result)
@@ -99,7 +101,7 @@ def register(app: typer.Typer) -> None:
         _check_out(out, (".h5", ".hdf5", ".uff", ".unv"), "--out")
         _check_out(plot, (".png",), "--plot")
         if joint is not None and not joint.is_file():
-            raise InputError(f"--joint {joint}: file not found")
+            raise NotFoundError(f"--joint {joint}: file not found")
         c = load_campaign(campaign)
         res = couple_campaign(c, joint)
         g = res["assembly"]
