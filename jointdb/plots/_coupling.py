@@ -11,17 +11,9 @@ from pathlib import Path
 import numpy as np
 
 from jointdb.frf import FRF
+from jointdb.plots._frf import _pyplot, save_figure
 
 __all__ = ["save_kc_plot", "save_comparison_plot"]
-
-
-def _pyplot():
-    import matplotlib
-
-    matplotlib.use("Agg", force=True)
-    import matplotlib.pyplot as plt
-
-    return plt
 
 
 def save_kc_plot(path: "str | Path", joint: FRF, kc_fit=None, title: str | None = None,
@@ -51,10 +43,7 @@ def save_kc_plot(path: "str | Path", joint: FRF, kc_fit=None, title: str | None 
         ax.set_xlabel("frequency [Hz]")
     fig.suptitle(title or "identified joint: equivalent stiffness and damping")
     fig.tight_layout()
-    path = Path(path)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return save_figure(fig, path, dpi=110)
 
 
 def save_comparison_plot(path: "str | Path", curves: Sequence[tuple[str, FRF]], pairs=None,
@@ -80,7 +69,4 @@ def save_comparison_plot(path: "str | Path", curves: Sequence[tuple[str, FRF]], 
     axes[0, 0].legend(fontsize=8)
     fig.suptitle(title or "assembly FRF")
     fig.tight_layout()
-    path = Path(path)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return save_figure(fig, path, dpi=110)

@@ -130,15 +130,37 @@ def nyquist_figure(frf: FRF, pairs: Sequence[tuple] | None = None, title: str | 
     return fig
 
 
-def _save(fig, path) -> Path:
-    p = Path(path)
-    if p.suffix.lower() != ".png":
-        raise InputError(f"plot file {str(p)!r} must end in .png")
-    fig.savefig(p, dpi=120)
-    import matplotlib.pyplot as plt
+def save_figure(fig, path, dpi: int = 120) -> Path:
+    """Write a figure atomically (no half-written file on failure) and close it.
 
-    plt.close(fig)
+    The format follows the suffix (``.png``, ``.pdf``, ``.svg``, ...). The one
+    place the plot modules (FRF, coupling, stack, lobes) save figures.
+
+    Raises
+    ------
+    InputError
+        Unknown image suffix, or the directory does not exist.
+    """
+    from jointdb.io._atomic import atomic_path
+
+    p = Path(path)
+    plt = _pyplot()
+    try:
+        fmt = p.suffix.lower().lstrip(".")
+        if fmt not in fig.canvas.get_supported_filetypes():
+            raise InputError(f"plot file {str(p)!r}: unknown image type {p.suffix!r}; use .png (or .pdf, .svg)")
+        with atomic_path(p) as tmp:
+            fig.savefig(tmp, dpi=dpi, format=fmt)
+    finally:
+        plt.close(fig)
     return p
+
+
+def _save(fig, path) -> Path:
+    if Path(path).suffix.lower() != ".png":
+        _pyplot().close(fig)
+        raise InputError(f"plot file {str(path)!r} must end in .png")
+    return save_figure(fig, path, dpi=120)
 
 
 def save_bode(path, frf: FRF, pairs: Sequence[tuple] | None = None, title: str | None = None, **kwargs) -> Path:

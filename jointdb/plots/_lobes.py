@@ -7,16 +7,12 @@ from pathlib import Path
 
 import numpy as np
 
+from jointdb.plots._frf import _pyplot, save_figure
+
 __all__ = ["plot_lobes", "plot_stabilisation", "plot_modal_fit"]
 
 
-def _plt():
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
+_plt = _pyplot
 
 
 _UNIT = {"m": 1.0, "mm": 1e3, "um": 1e6}
@@ -59,11 +55,8 @@ def plot_lobes(
     ax.set_title(title or "Stability lobes")
     ax.grid(True, alpha=0.3)
     ax.legend(loc="upper left", fontsize=8)
-    path = Path(path)
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return save_figure(fig, path, dpi=120)
 
 
 def plot_stabilisation(fit, path, *, frf=None, title: str | None = None) -> Path:
@@ -90,10 +83,7 @@ def plot_stabilisation(fit, path, *, frf=None, title: str | None = None) -> Path
     ax.set_title(title or "Stabilisation diagram (pLSCF)")
     ax.legend(loc="upper left", fontsize=8)
     fig.tight_layout()
-    path = Path(path)
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return save_figure(fig, path, dpi=120)
 
 
 def plot_modal_fit(frf, fit, path, *, title: str | None = None, max_entries: int = 6) -> Path:
@@ -118,7 +108,4 @@ def plot_modal_fit(frf, fit, path, *, title: str | None = None, max_entries: int
     axes[0].legend(fontsize=7, ncol=2)
     axes[0].set_title(title or f"Modal fit: {fit.model.n_modes} modes, NMSE {fit.quality.nmse_total:.2e}")
     fig.tight_layout()
-    path = Path(path)
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return save_figure(fig, path, dpi=120)

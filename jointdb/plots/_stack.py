@@ -10,16 +10,9 @@ from pathlib import Path
 
 import numpy as np
 
+from jointdb.plots._frf import _pyplot, save_figure
+
 __all__ = ["save_tip_comparison", "save_joint_distances"]
-
-
-def _pyplot():
-    import matplotlib
-
-    matplotlib.use("Agg", force=True)
-    import matplotlib.pyplot as plt
-
-    return plt
 
 
 def save_tip_comparison(path, prediction, *, title: str | None = None,
@@ -64,10 +57,7 @@ def save_tip_comparison(path, prediction, *, title: str | None = None,
         ax_c.grid(True, alpha=0.3)
     fig.suptitle(title or "Predicted tool-tip FRF")
     fig.tight_layout()
-    path = Path(path)
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return save_figure(fig, path, dpi=120)
 
 
 def save_joint_distances(path, resolutions, *, title: str | None = None) -> Path:
@@ -88,7 +78,4 @@ def save_joint_distances(path, resolutions, *, title: str | None = None) -> Path
         axes[0, 0].set_axis_off()
     fig.suptitle(title or "Joint choice")
     fig.tight_layout()
-    path = Path(path)
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return save_figure(fig, path, dpi=120)
