@@ -90,30 +90,26 @@ __all__ = [
 ]
 
 
-def upgrade(url: str | None = None, revision: str = "head") -> str | None:
-    """Apply Alembic migrations to ``revision``; returns the new revision."""
+def _migrate(step: str, url: str | None, revision: str) -> str | None:
     from jointdb.store import _db
 
     resolved = _db.resolve_url(url)
     read, write = _db.make_engines(resolved)
     try:
-        _db.upgrade(write, revision)
+        getattr(_db, step)(write, revision)
         return _db.current_revision(read)
     finally:
         read.dispose()
+
+
+def upgrade(url: str | None = None, revision: str = "head") -> str | None:
+    """Apply Alembic migrations to ``revision``; returns the new revision."""
+    return _migrate("upgrade", url, revision)
 
 
 def downgrade(url: str | None = None, revision: str = "-1") -> str | None:
     """Revert Alembic migrations to ``revision`` (``-1`` one step, ``base`` all)."""
-    from jointdb.store import _db
-
-    resolved = _db.resolve_url(url)
-    read, write = _db.make_engines(resolved)
-    try:
-        _db.downgrade(write, revision)
-        return _db.current_revision(read)
-    finally:
-        read.dispose()
+    return _migrate("downgrade", url, revision)
 
 
 def current_revision(url: str | None = None) -> str | None:
