@@ -206,6 +206,7 @@ class Repository:
             raise InputError(f"parent version must be a version number >= 1, got {parent!r}")
         actor = current_actor(author or prov.author or None)
 
+        self._precheck_catalogue(name, joint_type, parent)  # refuse conflicts before writing any blob
         blob = self.blobs.put(frf)  # durable before the row exists
         raw_blobs = {str(k): self.blobs.put(v) for k, v in sorted(raw.items())}
 
@@ -270,6 +271,26 @@ class Repository:
             return to_version(joint, row)
 
         return self._retrying(write)
+
+    def _precheck_catalogue(self, name: str, joint_type: str, parent: int | None) -> None:
+        """The conflicts :meth:`catalogue` would raise, checked before any blob is written.
+
+        The write transaction checks them again (another writer may have come between).
+        """
+        with self._read() as s:
+            joint = s.scalar(select(JointRow).where(JointRow.name == name))
+            if joint is None:
+                latest = None
+            elif joint.joint_type != joint_type:
+                raise ConflictError(
+                    f"joint {name!r} is a {joint.joint_type} joint, not {joint_type}; use another name"
+                )
+            else:
+                latest = s.scalar(select(func.max(VersionRow.version)).where(VersionRow.joint_id == joint.id))
+        if parent is not None and (latest is None or parent > latest):
+            raise ConflictError(
+                f"parent version {parent} of joint {name!r} does not exist (latest is {latest or 'none'})"
+            )
 
     # ------------------------------------------------------------------ reads
     def _joint(self, session: Session, name: str) -> JointRow:

@@ -155,10 +155,12 @@ def test_deprecate_is_a_new_state_not_a_deletion(repo):
 
 def test_parent_and_type_conflicts(repo):
     _cat(repo)
+    blobs_before = blob_files(repo)
     with pytest.raises(ConflictError, match="tool-holder joint"):
-        repo.catalogue("T1", "holder-spindle", spring_joint(), planar_conditions(), "spring-damper-planar")
+        repo.catalogue("T1", "holder-spindle", spring_joint(k=(7e6, 1e5)), planar_conditions(), "spring-damper-planar")
     with pytest.raises(ConflictError, match="parent version 5"):
-        _cat(repo, parent=5)
+        _cat(repo, parent=5, k=7e6)
+    assert blob_files(repo) == blobs_before  # refused before any blob was written
     v = _cat(repo, parent=1)
     assert v.parent_version == 1
 
