@@ -74,7 +74,8 @@ def register(app: typer.Typer) -> None:
                 message(f"warning: {res.interface}: the request lies outside the catalogued range of "
                         f"{', '.join(res.outside_range)}; the joint is extrapolated")
             for w in res.warnings:
-                message(f"warning: {res.interface}: {w}")
+                if not (res.extrapolating and "outside the catalogued range" in w):  # said just above
+                    message(f"warning: {res.interface}: {w}")
         for note in pred.notes:
             message(f"note: {note}")
         files = {}

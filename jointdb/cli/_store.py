@@ -504,8 +504,11 @@ def register(app: typer.Typer) -> None:
     ) -> None:
         """Remove blobs no row references (and stale temporary files). Example: jointdb db gc --dry-run"""
         removed = _repo(db, blobs).gc(min_age_s=min_age, dry_run=dry_run)
-        emit([{"removed" if not dry_run else "would_remove": r} for r in removed] if removed else
-             "nothing to remove", as_json=as_json)
+        if as_json:  # always a list for machines (empty when nothing was removed)
+            emit([{"removed" if not dry_run else "would_remove": r} for r in removed], as_json=True)
+        else:
+            emit([{"removed" if not dry_run else "would_remove": r} for r in removed] if removed else
+                 "nothing to remove")
 
     @db_app.command("audit")
     def db_audit(
