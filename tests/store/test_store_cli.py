@@ -94,7 +94,7 @@ def test_catalogue_query_and_joints_commands(db, files, tmp_path):
     assert imported["new_versions"] == 3
     check = run_json("db", "check", "--db", db)
     assert check["ok"] and check["versions_checked"] == 4
-    assert run_json("db", "gc", "--dry-run", "--min-age", 0, "--db", db) == "nothing to remove"
+    assert run_json("db", "gc", "--dry-run", "--min-age", 0, "--db", db) == []
     audit = run_json("db", "audit", "--joint", "TH-20", "--db", db)
     assert [a["action"] for a in audit] == ["label", "label", "catalogue", "catalogue"]
     assert {a["actor"] for a in audit} == {"tester"}
