@@ -240,12 +240,17 @@ class BeamModel:
         length = self.length
         tol = _merge_tol(length)
         names = set()
+        nodes: dict[int, str] = {}
         for i, p in enumerate(pts):
             if not isinstance(p, NamedPoint):
                 raise FieldError(f"points[{i}]", f"must be a NamedPoint, got {type(p).__name__}")
             if p.name in names:
                 raise FieldError(f"points[{i}].name", f"duplicate point name {p.name!r}")
             names.add(p.name)
+            if p.node in nodes:
+                # two points with one node label would give duplicate FRF DOFs (e.g. two "1x")
+                raise FieldError(f"points[{i}].node", f"node {p.node} is already used by point {nodes[p.node]!r}")
+            nodes[p.node] = p.name
             if p.position > length + tol:
                 raise FieldError(f"points[{i}].position", f"{p.position:g} m is beyond the model's length {length:g} m")
         for i, ing in enumerate(ings):

@@ -185,3 +185,10 @@ def test_import_jointdb_fe_pulls_in_no_io_or_ui_library():
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == ""
+
+
+def test_two_points_with_one_node_label_are_refused_at_construction():
+    from jointdb.fe import NamedPoint
+
+    with pytest.raises(InputError, match=r"points\[1\]\.node: node 1 is already used by point 'a'"):
+        BeamModel((Segment(0.1, 0.01),), (NamedPoint("a", 0.1, 1), NamedPoint("b", 0.05, 1)))
