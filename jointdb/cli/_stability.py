@@ -28,6 +28,21 @@ def _node_select(frf, node: Optional[int]):
     return frf.select(outs, ins)
 
 
+def _translational(frf, path: Path):
+    """The translational entries of a tool-tip FRF: turning adds driving points, and a
+    rotation (rad/(N·m)) must not be added to a displacement (m/N)."""
+    outs = [d for d in frf.outputs if not d.is_rotation]
+    ins = [d for d in frf.inputs if not d.is_rotation]
+    if not outs or not ins:
+        raise InputError(f"{path}: turning needs a translational tool-tip FRF (x, y or z); the file has "
+                         f"outputs {' '.join(map(str, frf.outputs))}, inputs {' '.join(map(str, frf.inputs))}")
+    if len(outs) < len(frf.outputs) or len(ins) < len(frf.inputs):
+        dropped = sorted({str(d) for d in (*frf.outputs, *frf.inputs) if d.is_rotation})
+        message(f"note: rotational DOFs {' '.join(dropped)} ignored for turning")
+        frf = frf.select(outs, ins)
+    return frf
+
+
 def _floats(text: Optional[str], name: str):
     if text is None:
         return None
@@ -180,6 +195,7 @@ def register(app: typer.Typer) -> None:
         if op_l == "turning":
             if kf is None:
                 raise InputError("turning needs --kf (cutting coefficient in N/m²)")
+            frf = _translational(frf, frf_file)
             res = stability.turning_lobes(frf, kf, _floats(orientation, "--orientation"), spindle_speed_rpm=speeds)
             title = f"Turning lobes, K_f = {kf:g} N/m²"
         else:
