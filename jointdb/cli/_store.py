@@ -503,6 +503,8 @@ def register(app: typer.Typer) -> None:
         db: DbOpt = None, blobs: BlobsOpt = None, as_json: JsonOpt = False,
     ) -> None:
         """Remove blobs no row references (and stale temporary files). Example: jointdb db gc --dry-run"""
+        if not min_age >= 0:
+            raise InputError(f"--min-age must be >= 0 seconds, got {min_age:g}")
         removed = _repo(db, blobs).gc(min_age_s=min_age, dry_run=dry_run)
         if as_json:  # always a list for machines (empty when nothing was removed)
             emit([{"removed" if not dry_run else "would_remove": r} for r in removed], as_json=True)
@@ -517,6 +519,8 @@ def register(app: typer.Typer) -> None:
         db: DbOpt = None, blobs: BlobsOpt = None, as_json: JsonOpt = False,
     ) -> None:
         """The append-only audit log: who catalogued, labelled, deprecated, imported what. Example: jointdb db audit --joint T1"""
+        if limit < 1:
+            raise InputError(f"--limit must be >= 1, got {limit}")
         rows = _repo(db, blobs).audit(joint, limit)
         if not as_json:
             rows = [{**r, "details": json.dumps(r["details"], default=str)} for r in rows]
