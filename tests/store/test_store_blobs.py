@@ -200,3 +200,32 @@ def test_gc_restores_a_referenced_blob_an_interrupted_gc_set_aside(repo):
     repo.gc(min_age_s=0)
     assert repo.check().ok and not aside.exists()
     assert repo.load_frf(jv).allclose(spring_joint(), rtol=0)
+
+
+def test_gc_racing_catalogues_of_an_old_stored_blob_never_loses_it(repo):
+    """Writers re-catalogue an FRF whose blob is old and unreferenced while gc runs; no row may lose its blob."""
+    import threading
+
+    stop = threading.Event()
+    errors: list[BaseException] = []
+
+    def collector():
+        try:
+            while not stop.is_set():
+                repo.gc(min_age_s=3600)
+        except BaseException as exc:  # noqa: BLE001 - reported below
+            errors.append(exc)
+
+    t = threading.Thread(target=collector)
+    t.start()
+    try:
+        for i in range(40):
+            frf = spring_joint(k=(5e6 + 1e3 * i, 5e4))
+            _age(repo.blobs.path(repo.blobs.put(frf)))  # stored earlier, now an old orphan: a gc candidate
+            repo.catalogue(f"R{i}", "tool-holder", frf, planar_conditions(), "spring-damper-planar")
+    finally:
+        stop.set()
+        t.join()
+    assert not errors
+    report = repo.check()
+    assert report.ok, report.problems
