@@ -63,15 +63,19 @@ def bundled_catalogue(stack: ExitStack) -> Path:
 
 def _write_json(path: Path, data: Any) -> Path:
     from jointdb._output import to_jsonable
+    from jointdb.io._atomic import atomic_path
 
-    path.write_text(json.dumps(to_jsonable(data), indent=2) + "\n", encoding="utf-8")
+    with atomic_path(path) as tmp:  # like every other output file: whole or not at all
+        tmp.write_text(json.dumps(to_jsonable(data), indent=2) + "\n", encoding="utf-8")
     return path
 
 
 def _write_csv(path: Path, rows: list[dict[str, Any]]) -> Path:
     import csv
 
-    with path.open("w", newline="", encoding="utf-8") as fh:
+    from jointdb.io._atomic import atomic_path
+
+    with atomic_path(path) as tmp, tmp.open("w", newline="", encoding="utf-8") as fh:
         writer = csv.DictWriter(fh, fieldnames=list(rows[0].keys()) if rows else ["empty"])
         writer.writeheader()
         writer.writerows(rows)
