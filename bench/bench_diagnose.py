@@ -8,6 +8,7 @@ Generates seeded cases with the independent truth model of
 :mod:`jointdb.diagnose_bench`, diagnoses each, and prints per hidden effect the
 named-first and top-3 rates, the median mismatch improvement, the confusion
 matrix, the false-alarm rate on null cases, parameter recovery (fitted / true)
+and the coverage of the reported ±2σ (how often the truth lies within it)
 where the truth has a directly comparable parameter, and timing as a ratio to
 one direct FRF synthesis of the nominal model on all recorded lines (the
 reference, timed in this process).
@@ -25,25 +26,38 @@ from jointdb.fe import model_from_dict
 
 
 def _recovery(cases):
+    """Fitted / true and the coverage of the reported ±2σ, where the truth has a comparable parameter."""
     rows = []
-    pick = {
-        "gain": ("gain", lambda t: t["gain"]),
-        "delay": ("delay", lambda t: t["delay_s"]),
-        "hysteretic_damping": ("eta", lambda t: t["eta"]),
-        "sensor_mass": ("mass", lambda t: t["mass_kg"]),
-    }
-    for eff, (key, truth) in pick.items():
-        ratios = []
+    pick = [
+        ("gain", "gain", lambda t: t["gain"], None),
+        ("delay", "delay", lambda t: t["delay_s"], None),
+        ("hysteretic_damping", "eta", lambda t: t["eta"], None),
+        ("sensor_mass", "mass", lambda t: t["mass_kg"], None),
+        ("sensor_mass", "rotary_inertia", lambda t: t["rotary_inertia_kgm2"], None),
+        # a bed loss factor is only comparable with the distributed joint's loss factor
+        ("joint_damping", "eta_joint", lambda t: t["bed_loss"], "joint_distributed_damped"),
+    ]
+    for eff, key, truth, only in pick:
+        ratios, inside, rel_sig = [], [], []
         for c in cases:
             if c.effect != eff or not c.first:
                 continue
+            if only is not None and not c.names[0].startswith(only):
+                continue
             vals = {(k[2:] if k.startswith("a.") else k): v for k, v in c.fitted.items() if not k.startswith("b.")}
+            sig = {(k[2:] if k.startswith("a.") else k): v for k, v in c.sigmas.items() if not k.startswith("b.")}
             if key in vals:
-                ratios.append(vals[key] / truth(c.truth))
+                t = truth(c.truth)
+                ratios.append(vals[key] / t)
+                s = sig.get(key, 0.0)
+                inside.append(abs(vals[key] - t) <= 2 * s)
+                rel_sig.append(s / abs(vals[key]))
         if ratios:
             rows.append({"effect": eff, "parameter": key, "n": len(ratios),
                          "median fitted/true": round(float(np.median(ratios)), 3),
-                         "5-95 % range": f"{np.percentile(ratios, 5):.3f}–{np.percentile(ratios, 95):.3f}"})
+                         "5-95 % range": f"{np.percentile(ratios, 5):.3f}–{np.percentile(ratios, 95):.3f}",
+                         "median reported σ/value": f"{np.median(rel_sig):.2g}",
+                         "truth within ±2σ": f"{sum(inside)}/{len(inside)}"})
     return rows
 
 

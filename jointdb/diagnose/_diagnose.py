@@ -11,7 +11,7 @@ import numpy as np
 
 from jointdb.diagnose._compare import Signature, signature
 from jointdb.diagnose._data import Measurement, Observation, prepare
-from jointdb.diagnose._fit import Fit, ModelEvaluator, fit_candidate, nominal_fit
+from jointdb.diagnose._fit import Fit, ModelEvaluator, fit_candidate, jackknife_spread, nominal_fit
 from jointdb.diagnose.physics import Combination, Context, candidates_for
 from jointdb.errors import InputError
 
@@ -22,8 +22,11 @@ BIC_MARGIN = 10.0
 #: ... and reduce the mismatch by at least this factor (false-alarm threshold,
 #: chosen on null cases of the benchmark generator: see docs/validation/diagnose-bench.md).
 MIN_IMPROVEMENT = 1.5
-#: A combination must beat the best single explanation by this factor as well.
-MIN_PAIR_IMPROVEMENT = 1.25
+#: A combination (a second effect) must beat the best single explanation by this
+#: factor in mismatch, and by BIC_MARGIN in BIC *per independent line group*
+#: (ΔBIC divided by the residual's correlation time τ), so that a second effect
+#: is not added merely to soak up the model-form error of the first.
+MIN_PAIR_IMPROVEMENT = 2.0
 #: Parsimony: an explanation with fewer parameters whose mismatch is within
 #: this factor of the BIC-best one is preferred (BIC alone under-penalises,
 #: because residuals on neighbouring lines are correlated).
@@ -97,13 +100,17 @@ class Diagnosis:
             "explained": self.explained,
             "verdict": self.verdict,
             "criterion": f"BIC = n ln(RSS/n) + p ln n; accept if ΔBIC <= -{BIC_MARGIN:g} and "
-                         f"mismatch falls >= {MIN_IMPROVEMENT:g}x; prefer fewer parameters within "
+                         f"mismatch falls >= {MIN_IMPROVEMENT:g}x; a second effect only if it lowers BIC by "
+                         f">= {BIC_MARGIN:g} per residual correlation length and mismatch >= "
+                         f"{MIN_PAIR_IMPROVEMENT:g}x below the best single; prefer fewer parameters within "
                          f"{OCCAM_TOLERANCE:g}x of the best mismatch",
             "mismatch_before": self.mismatch_before,
             "mismatch_after": self.mismatch_after,
             "best": None if b is None else {
                 "name": b.name, "family": b.family, "description": b.describe(),
-                "values": b.values, "sigmas": b.sigmas, "parameters_at_bound": b.at_bound},
+                "values": b.values, "sigmas": b.sigmas, "sigmas_statistical": b.sigmas_stat,
+                "sigmas_model_form": b.sigmas_model, "reduced_chi2": b.chi2_red,
+                "residual_correlation_lines": b.tau, "parameters_at_bound": b.at_bound},
             "ranking": [{"rank": r["rank"], "explanation": r["explanation"], "family": f.family,
                          "values": f.values, "sigmas": f.sigmas, "delta_bic": r["dBIC"],
                          "mismatch": f.mismatch, "improvement": r["gain x"]}
@@ -261,7 +268,8 @@ def diagnose(model, measurements: Sequence[Measurement], mapping: Mapping[int, s
                 combo = Combination(a.candidate, b.candidate)
                 start = {f"a.{k}": v for k, v in a.values.items()} | {f"b.{k}": v for k, v in b.values.items()}
                 pf = fit_candidate(ev, model, combo, start=start, max_nfev=12 * (len(combo.params) + 1))
-                if pf.bic <= best_single.bic - BIC_MARGIN and pf.mismatch * MIN_PAIR_IMPROVEMENT <= \
+                tau = max(best_single.tau, 1.0)
+                if (best_single.bic - pf.bic) / tau >= BIC_MARGIN and pf.mismatch * MIN_PAIR_IMPROVEMENT <= \
                         best_single.mismatch:
                     pair_fits.append(pf)
         fits = sorted(fits + pair_fits, key=lambda f: f.bic)
@@ -271,6 +279,9 @@ def diagnose(model, measurements: Sequence[Measurement], mapping: Mapping[int, s
         near = [f for f in fits if passes(f, nominal) and f.mismatch <= OCCAM_TOLERANCE * best.mismatch]
         best = min(near, key=lambda f: (f.p, f.bic))
         fits = [best] + [f for f in fits if f is not best]
+        # honest uncertainty of the selected explanation: statistical (χ²_red, τ) ⊕ model-form (jackknife)
+        best.sigmas_model = jackknife_spread(ev, model, best)
+        best.sigmas = {k: float(np.hypot(v, best.sigmas_model.get(k, 0.0))) for k, v in best.sigmas_stat.items()}
     augmented: tuple = ()
     chain: dict = {}
     level_table: list = []

@@ -11,8 +11,13 @@ Selection criterion: the Bayesian information criterion of the weighted
 residual, ``BIC = n ln(RSS/n) + p ln n`` (Schwarz 1978), p = number of fitted
 parameters. Fits use ``scipy.optimize.least_squares`` (trust-region
 reflective, bounded, parameters in log space where physical) from the
-candidate's start and its extra starts; the uncertainty is the usual
-linearised one, ``cov = s² (JᵀJ)⁻¹`` with ``s² = RSS/(n − p)``.
+candidate's start and its extra starts. Uncertainty: the linearised
+``cov = χ²_red τ (JᵀJ)⁻¹`` with ``χ²_red = RSS/(n − p)`` (absorbs a residual
+larger than the noise) and τ the integrated autocorrelation time of the
+residual along frequency (n/τ independent lines); for the selected
+explanation, a delete-one-block jackknife over frequency adds the model-form
+spread (:func:`jackknife_spread`), and the reported σ is the root sum of
+squares of the two.
 """
 
 from __future__ import annotations
@@ -111,6 +116,13 @@ class Fit:
     mismatch_levels: np.ndarray
     nfev: int = 0
     at_bound: list = field(default_factory=list)
+    #: χ²_red = RSS/(n − p) of the weighted residual (> 1: model-form error or underestimated noise)
+    chi2_red: float = 1.0
+    #: integrated autocorrelation time of the residual along frequency (n_eff = n / tau)
+    tau: float = 1.0
+    #: statistical σ (linearised, scaled by χ²_red and τ) and model-form σ (jackknife), if computed
+    sigmas_stat: dict = field(default_factory=dict)
+    sigmas_model: dict = field(default_factory=dict)
 
     @property
     def name(self) -> str:
@@ -138,21 +150,79 @@ def nominal_fit(ev: ModelEvaluator, nominal) -> Fit:
 
 
 def _correlation_inflation(r: np.ndarray, ev: ModelEvaluator) -> float:
-    """Variance inflation ``(1 + ρ)/(1 − ρ)`` for residuals correlated along frequency.
+    """Variance inflation τ = n / n_eff for residuals correlated along frequency.
 
-    ρ is the lag-one autocorrelation of the residual along the fit lines (per
-    FRF, real and imaginary parts). Model error makes neighbouring residuals
-    alike, so the textbook covariance (independent residuals) would be too
-    optimistic by about this factor.
+    τ = 1 + 2 Σ_k ρ_k is the integrated autocorrelation time of the residual
+    along the fit lines (per FRF, real and imaginary parts), summed until ρ_k
+    falls below 0.05 (at most 50 lags). Model-form error makes neighbouring
+    residuals alike, so only about n/τ of the n residuals are independent; the
+    textbook covariance (independent residuals) is too optimistic by τ.
     """
     shape = (2,) + ev.rec.shape
     x = r.reshape(shape)
     x = np.moveaxis(x, 2, -1).reshape(-1, shape[2])        # series along frequency
-    a, b = x[:, :-1], x[:, 1:]
     den = float((x * x).sum())
-    rho = float((a * b).sum()) / den if den > 0 else 0.0
-    rho = min(max(rho, 0.0), 0.99)
-    return (1 + rho) / (1 - rho)
+    if den <= 0 or x.shape[1] < 3:
+        return 1.0
+    tau = 1.0
+    for k in range(1, min(50, x.shape[1] - 1)):
+        rho = float((x[:, :-k] * x[:, k:]).sum()) / den
+        if rho < 0.05:
+            break
+        tau += 2 * rho
+    return float(min(tau, max(ev.n / 4.0, 1.0)))
+
+
+#: Contiguous frequency blocks for the delete-one-block jackknife (model-form spread).
+JACKKNIFE_BLOCKS = 5
+
+
+def jackknife_spread(ev: ModelEvaluator, nominal, fit: "Fit", blocks: int = JACKKNIFE_BLOCKS) -> dict:
+    """Model-form spread of a fit's parameters: delete-one-block jackknife over frequency.
+
+    The fit lines are cut into ``blocks`` contiguous groups (in practice: the
+    background and each resonance); the candidate is refitted with each group
+    left out, starting from the full fit. If the candidate's physics is only an
+    approximation, different parts of the spectrum ask for different values and
+    the refits scatter. Returns ``{name: σ_jk}`` (SI) with
+    ``σ_jk² = (B−1)/B Σ_b (θ_b − θ̄)²`` (in the fit's log space where the
+    parameter is logarithmic). Costs ``blocks`` short refits.
+    """
+    import copy
+
+    cand = fit.candidate
+    params = cand.params
+    if not params or ev.freq.size < 2 * blocks:
+        return {}
+    lo = np.array([q.u_bounds[0] for q in params])
+    hi = np.array([q.u_bounds[1] for q in params])
+    u_hat = np.clip([q.to_u(fit.values[q.name]) for q in params], lo + 1e-9, hi - 1e-9)
+    edges = np.linspace(0, ev.freq.size, blocks + 1).astype(int)
+    us = []
+    for a, b in zip(edges[:-1], edges[1:]):
+        sub = copy.copy(ev)
+        w = np.array(ev.w, copy=True)
+        w[:, a:b] = 0.0
+        sub.w = w
+        sub.n = int(2 * np.count_nonzero(w))
+
+        def fun(u, sub=sub):
+            vals = {q.name: q.from_u(x) for q, x in zip(params, u)}
+            try:
+                return sub.residual(sub.predict(nominal, cand, vals))
+            except (NumericalError, np.linalg.LinAlgError):
+                return np.full(sub.n if sub.n else 1, 1e3)
+
+        res = scipy.optimize.least_squares(fun, u_hat, bounds=(lo, hi), method="trf", diff_step=1e-4,
+                                           max_nfev=8 * (len(params) + 1), xtol=1e-6, ftol=1e-6)
+        us.append(res.x)
+    us = np.asarray(us)
+    var = (blocks - 1) / blocks * ((us - us.mean(axis=0)) ** 2).sum(axis=0)
+    out = {}
+    for q, x, v in zip(params, u_hat, var):
+        s = float(np.sqrt(v))
+        out[q.name] = float(abs(q.from_u(x)) * s) if q.log else float(q.scale * s)
+    return out
 
 
 def _changes_model(cand) -> bool:
@@ -277,4 +347,4 @@ def fit_candidate(ev: ModelEvaluator, nominal, cand, start: dict | None = None, 
     at_bound = [q.name for q, x, a, b in zip(params, res.x, lo, hi) if min(x - a, b - x) < 1e-3]
     H = ev.predict(nominal, cand, values)
     return Fit(cand, values, sigmas, rss, ev.n, p, _bic(rss, ev.n, p), ev.mismatch(H), ev.mismatch(H, True),
-               nfev, at_bound)
+               nfev, at_bound, chi2_red=rss / dof, tau=inflate, sigmas_stat=dict(sigmas))

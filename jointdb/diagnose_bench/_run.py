@@ -27,6 +27,7 @@ class CaseResult:
     level_improvements: tuple = ()
     affected_mode: int | None = None
     fitted: dict = field(default_factory=dict)
+    sigmas: dict = field(default_factory=dict)   # reported 1-sigma of the fitted values (SI)
     truth: dict = field(default_factory=dict)
     top_improvement: float = 1.0   # nominal / best-ranked mismatch on the fit lines, accepted or not
 
@@ -110,6 +111,7 @@ def run_case(case: BenchCase) -> CaseResult:
         mismatch_before=d.mismatch_before, mismatch_after=d.mismatch_after, seconds=dt,
         level_improvements=lv, affected_mode=d.before.affected_mode,
         fitted={} if best is None else dict(best.values), truth=case.truth,
+        sigmas={} if best is None else dict(best.sigmas),
         top_improvement=(d.nominal.mismatch / d.ranking[0].mismatch) if d.ranking else 1.0,
     )
 

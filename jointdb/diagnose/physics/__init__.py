@@ -119,7 +119,9 @@ class Combination(Candidate):
         return [{p.name: values[f"{k}.{p.name}"] for p in c.params} for k, c in zip("ab", self.parts)]
 
     def apply(self, model, values, level=0):
-        for c, v in zip(self.parts, self._split(values)):
+        # candidates that move the model's coordinates (e.g. an insertion prepended) go last
+        todo = sorted(zip(self.parts, self._split(values)), key=lambda cv: bool(getattr(cv[0], "reshapes", False)))
+        for c, v in todo:
             model = c.apply(model, v, level)
         return model
 
@@ -160,6 +162,7 @@ def candidates_for(ctx: Context) -> list[Candidate]:
 # the library (import order = report order for ties)
 from jointdb.diagnose.physics import (  # noqa: E402,F401
     amplitude,
+    bed,
     chain,
     damping,
     diameter,
