@@ -31,6 +31,10 @@ def fsync_dir(directory: Path) -> None:
         os.close(fd)
 
 
+#: OSError subclasses that mean "the system refused the write" (not a bug in the caller).
+_SYSTEM_WRITE_ERRORS = (OSError, PermissionError, IsADirectoryError, FileExistsError)
+
+
 @functools.cache
 def _umask() -> int:
     # Read once per process (os.umask can only be read by setting it).
@@ -50,7 +54,8 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
     Raises
     ------
     InputError
-        If the target directory does not exist or ``path`` is a directory.
+        If the target directory does not exist, ``path`` is a directory, or the
+        system refuses the write (permissions, disk full).
     """
     target = Path(path)
     directory = target.parent if str(target.parent) else Path(".")
@@ -58,7 +63,10 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
         raise InputError(f"cannot write {target}: directory {directory} does not exist")
     if target.is_dir():
         raise InputError(f"cannot write {target}: it is a directory")
-    fd, tmp_name = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=directory)
+    try:
+        fd, tmp_name = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=directory)
+    except OSError as exc:  # read-only or full directory: a user-facing error, not a traceback
+        raise InputError(f"cannot write {target}: {exc.strerror or exc}") from None
     os.close(fd)
     tmp = Path(tmp_name)
     try:
@@ -68,8 +76,10 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
             os.fsync(fh.fileno())
         os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600; give the usual permissions
         os.replace(tmp, target)
-    except BaseException:
+    except BaseException as exc:
         with contextlib.suppress(FileNotFoundError):
             tmp.unlink()
+        if isinstance(exc, OSError) and type(exc) in _SYSTEM_WRITE_ERRORS:  # disk full, permissions, ...
+            raise InputError(f"cannot write {target}: {exc.strerror or exc}") from None
         raise
     fsync_dir(directory)

@@ -243,9 +243,9 @@ class BlobStore:
             except (IntegrityError, NotFoundError):
                 pass  # corrupt or collected meanwhile: rewrite it atomically below
         new_dir = not final.parent.is_dir()
-        final.parent.mkdir(parents=True, exist_ok=True)
         tmp = final.parent / f"{_TMP_PREFIX}{uuid.uuid4().hex}.h5"
         try:
+            final.parent.mkdir(parents=True, exist_ok=True)
             write_frf_file(tmp, frf)
             fd = os.open(tmp, os.O_RDONLY)
             try:
@@ -253,6 +253,8 @@ class BlobStore:
             finally:
                 os.close(fd)
             os.replace(tmp, final)
+        except OSError as exc:  # read-only or full blob directory: one line for the user, nothing kept
+            raise InputError(f"cannot write to the blob store {self.root}: {exc.strerror or exc}") from None
         finally:
             if tmp.exists():
                 tmp.unlink()

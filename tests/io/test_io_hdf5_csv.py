@@ -121,7 +121,7 @@ def test_failed_hdf5_write_leaves_nothing_behind(tmp_path, monkeypatch):
         return real(self, name, *a, **k)
 
     monkeypatch.setattr(h5py.Group, "create_dataset", failing)
-    with pytest.raises(OSError):
+    with pytest.raises(InputError, match="cannot write .*disk full"):  # one line for the user
         write_frf_hdf5(target, make_frf())
     assert list(tmp_path.iterdir()) == []
     monkeypatch.setattr(h5py.Group, "create_dataset", real)
@@ -129,7 +129,7 @@ def test_failed_hdf5_write_leaves_nothing_behind(tmp_path, monkeypatch):
     write_frf_hdf5(target, first)
     before = target.read_bytes()
     monkeypatch.setattr(h5py.Group, "create_dataset", failing)
-    with pytest.raises(OSError):
+    with pytest.raises(InputError, match="cannot write"):
         write_frf_hdf5(target, make_frf(seed=2))
     assert target.read_bytes() == before and [p.name for p in tmp_path.iterdir()] == ["t.h5"]
     monkeypatch.setattr(h5py.Group, "create_dataset", real)
@@ -289,7 +289,7 @@ def test_failed_csv_write_leaves_previous_file(tmp_path, monkeypatch):
             raise OSError("disk full (simulated)")
 
     monkeypatch.setattr(csv, "writer", Boom)
-    with pytest.raises(OSError):
+    with pytest.raises(InputError, match="cannot write"):
         write_frf_csv(target, make_frf(seed=2))
     assert target.read_bytes() == before and [p.name for p in tmp_path.iterdir()] == ["t.csv"]
 

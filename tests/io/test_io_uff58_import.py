@@ -291,7 +291,7 @@ def test_failed_uff_write_leaves_nothing_behind(tmp_path, monkeypatch):
         return real(self, *a, **k)
 
     monkeypatch.setattr(pyuff.UFF, "write_sets", failing)
-    with pytest.raises(OSError):
+    with pytest.raises(InputError, match="cannot write"):
         write_uff58(target, frf)
     assert list(tmp_path.iterdir()) == []
     # an existing file is left as it was
@@ -300,7 +300,7 @@ def test_failed_uff_write_leaves_nothing_behind(tmp_path, monkeypatch):
     before = target.read_bytes()
     calls["n"] = 0
     monkeypatch.setattr(pyuff.UFF, "write_sets", failing)
-    with pytest.raises(OSError):
+    with pytest.raises(InputError, match="cannot write"):
         write_uff58(target, make_frf(np.arange(1.0, 11.0), seed=9, digits12=True))
     assert target.read_bytes() == before
     assert [p.name for p in tmp_path.iterdir()] == ["t.uff"]
@@ -354,6 +354,6 @@ def test_failed_binary_uff_write_leaves_nothing_behind(tmp_path, monkeypatch):
     write_uff58(target, make_frf(np.arange(1.0, 11.0)), binary=True)
     before = target.read_bytes()
     monkeypatch.setattr(W, "_write_58b", failing)
-    with pytest.raises(OSError):
+    with pytest.raises(InputError, match="cannot write"):
         write_uff58(target, make_frf(np.arange(1.0, 11.0), seed=4), binary=True)
     assert target.read_bytes() == before and [p.name for p in tmp_path.iterdir()] == ["b.uff"]

@@ -229,3 +229,19 @@ def test_gc_racing_catalogues_of_an_old_stored_blob_never_loses_it(repo):
     assert not errors
     report = repo.check()
     assert report.ok, report.problems
+
+
+def test_unwritable_blob_store_is_one_line_and_writes_no_row(repo, monkeypatch):
+    import errno
+
+    import jointdb.store._blobs as blobs_mod
+    from jointdb.errors import InputError
+
+    def refuse(path, frf):
+        raise PermissionError(errno.EACCES, "Permission denied")
+
+    monkeypatch.setattr(blobs_mod, "write_frf_file", refuse)
+    with pytest.raises(InputError, match="cannot write to the blob store .*Permission denied"):
+        repo.catalogue("T1", "tool-holder", spring_joint(), planar_conditions(), "spring-damper-planar")
+    monkeypatch.undo()
+    assert repo.list_joints() == [] and not repo.blobs.temporaries()
