@@ -214,7 +214,7 @@ def jackknife_spread(ev: ModelEvaluator, nominal, fit: "Fit", blocks: int = JACK
                 return np.full(sub.n if sub.n else 1, 1e3)
 
         res = scipy.optimize.least_squares(fun, u_hat, bounds=(lo, hi), method="trf", diff_step=1e-4,
-                                           max_nfev=8 * (len(params) + 1), xtol=1e-6, ftol=1e-6)
+                                           max_nfev=min(8 * (len(params) + 1), 24), xtol=1e-6, ftol=1e-6)
         us.append(res.x)
     us = np.asarray(us)
     var = (blocks - 1) / blocks * ((us - us.mean(axis=0)) ** 2).sum(axis=0)
