@@ -39,7 +39,8 @@ def oriented_frf(frf: FRF, orientation: Sequence[float] | np.ndarray | None = No
     Raises
     ------
     InputError
-        If the orientation does not match the FRF's shape.
+        If the orientation does not match the FRF's shape, or if it weights a
+        rotational DOF (a rad/(N·m) term cannot be added to m/N receptances).
     """
     h = _receptance(frf).values
     n_o, n_i = h.shape[1:]
@@ -55,6 +56,16 @@ def oriented_frf(frf: FRF, orientation: Sequence[float] | np.ndarray | None = No
         mu = np.diag(mu)
     if mu.shape != (n_o, n_i):
         raise InputError(f"orientation matrix has shape {mu.shape}, the FRF is {n_o}×{n_i}")
+    rot_out = np.array([d.is_rotation for d in frf.outputs])
+    rot_in = np.array([d.is_rotation for d in frf.inputs])
+    weighted = mu != 0
+    if np.any(weighted & (rot_out[:, None] | rot_in[None, :])):
+        rotational = [str(d) for d in (*frf.outputs, *frf.inputs) if d.is_rotation]
+        raise InputError(
+            "the oriented FRF would add rotational terms (" + ", ".join(dict.fromkeys(rotational))
+            + ") to translational receptances; select the translational DOFs first, "
+            "e.g. frf.select(['1x', '1y'], ['1x', '1y'])"
+        )
     return np.einsum("fij,ij->f", h, mu)
 
 

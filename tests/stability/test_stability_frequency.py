@@ -175,3 +175,19 @@ def test_bad_speeds_lobe_counts_and_cut_values_raise_input_error():
         MillingCut(2, "6e8", 2e8)
     with pytest.raises(InputError, match="n_teeth must be finite"):
         MillingCut(float("nan"), 6e8, 2e8)
+
+
+def test_oriented_frf_refuses_to_mix_rotations_into_translations():
+    from jointdb.errors import InputError
+    from jointdb.frf import FRF
+    from jointdb.stability import oriented_frf
+
+    freq = np.linspace(10.0, 1000.0, 50)
+    h = np.zeros((50, 2, 2), complex)
+    h[:, 0, 0] = 1e-6 / (1 - (freq / 500) ** 2 + 0.02j * freq / 500)
+    h[:, 1, 1] = 1e-3 * h[:, 0, 0]
+    frf = FRF(freq, h, ["1x", "1ry"], ["1x", "1ry"])
+    with pytest.raises(InputError, match="rotational terms"):
+        oriented_frf(frf)
+    # weighting only the translational driving point is fine and equals H_xx
+    assert np.allclose(oriented_frf(frf, np.array([[1.0, 0.0], [0.0, 0.0]])), h[:, 0, 0])
