@@ -17,6 +17,13 @@ effects):
    (``n ln(RSS/n) + p ln n``). An explanation is accepted only if it lowers the
    BIC by ``BIC_MARGIN`` *and* cuts the mismatch by ``MIN_IMPROVEMENT`` ×
    (the false-alarm threshold); otherwise the verdict says nothing is added.
+   A pair (second effect) must in addition beat the best single explanation
+   by ``MIN_PAIR_IMPROVEMENT`` × in mismatch and by ``BIC_MARGIN`` per residual
+   correlation length, so no surrogate second effect is invented.
+4. Uncertainty of the selected explanation: statistical (``χ²_red · τ ·
+   (JᵀJ)⁻¹``, τ = correlation length of the residual in lines) combined with a
+   model-form spread (delete-one-block jackknife over frequency); both parts
+   are reported (``Fit.sigmas_stat``, ``Fit.sigmas_model``).
 
 Mismatch = weighted RMS of ``|log(H_model/H_recorded)|`` (≈ relative error;
 weights from coherence with a 2 % model floor).
@@ -28,14 +35,14 @@ weights from coherence with a 2 % model floor).
 
 from jointdb.diagnose._compare import ModePair, Peak, Signature, find_peaks, pair_modes, signature
 from jointdb.diagnose._data import Measurement, Observation, prepare
-from jointdb.diagnose._diagnose import BIC_MARGIN, MIN_IMPROVEMENT, Diagnosis, diagnose
-from jointdb.diagnose._fit import Fit, ModelEvaluator, fit_candidate
+from jointdb.diagnose._diagnose import BIC_MARGIN, MIN_IMPROVEMENT, MIN_PAIR_IMPROVEMENT, Diagnosis, diagnose
+from jointdb.diagnose._fit import Fit, ModelEvaluator, fit_candidate, jackknife_spread
 from jointdb.diagnose.physics import Candidate, Context, Param, candidates_for, register
 
 __all__ = [
     "diagnose", "Diagnosis", "Measurement", "Observation", "prepare",
     "signature", "Signature", "ModePair", "Peak", "find_peaks", "pair_modes",
-    "Fit", "ModelEvaluator", "fit_candidate",
+    "Fit", "ModelEvaluator", "fit_candidate", "jackknife_spread",
     "Candidate", "Param", "Context", "register", "candidates_for",
-    "BIC_MARGIN", "MIN_IMPROVEMENT",
+    "BIC_MARGIN", "MIN_IMPROVEMENT", "MIN_PAIR_IMPROVEMENT",
 ]

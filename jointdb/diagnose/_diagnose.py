@@ -15,7 +15,7 @@ from jointdb.diagnose._fit import Fit, ModelEvaluator, fit_candidate, jackknife_
 from jointdb.diagnose.physics import Combination, Context, candidates_for
 from jointdb.errors import InputError
 
-__all__ = ["Diagnosis", "diagnose", "BIC_MARGIN", "MIN_IMPROVEMENT"]
+__all__ = ["Diagnosis", "diagnose", "BIC_MARGIN", "MIN_IMPROVEMENT", "MIN_PAIR_IMPROVEMENT"]
 
 #: An explanation must lower the BIC by at least this much ...
 BIC_MARGIN = 10.0
