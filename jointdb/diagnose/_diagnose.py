@@ -281,6 +281,16 @@ def diagnose(model, measurements: Sequence[Measurement], mapping: Mapping[int, s
         fits = [best] + [f for f in fits if f is not best]
         # honest uncertainty of the selected explanation: statistical (χ²_red, τ) ⊕ model-form (jackknife)
         best.sigmas_model = jackknife_spread(ev, model, best)
+        # model-form spread across the accepted variants of the same physics (e.g. a sensor as point mass,
+        # with rotary inertia, with an offset): RMS deviation of their estimates of a shared parameter
+        if best.candidate.slot:
+            rivals = [g for g in fits if g is not best and g.candidate.slot == best.candidate.slot
+                      and passes(g, nominal)]
+            for k in best.values:
+                dev = [g.values[k] - best.values[k] for g in rivals if k in g.values]
+                if dev:
+                    v = float(np.sqrt(np.mean(np.square(dev))))
+                    best.sigmas_model[k] = float(np.hypot(best.sigmas_model.get(k, 0.0), v))
         best.sigmas = {k: float(np.hypot(v, best.sigmas_model.get(k, 0.0))) for k, v in best.sigmas_stat.items()}
     augmented: tuple = ()
     chain: dict = {}
