@@ -11,7 +11,6 @@ import json
 from pathlib import Path
 from typing import Annotated, Optional
 
-import numpy as np
 import typer
 
 from jointdb.errors import InputError
@@ -46,23 +45,12 @@ def _parse_floats(text: str | None, option: str) -> list[float]:
 def _read_recording(path: Path):
     """FRF and (if the file has coherence records, UFF58 function type 6) the coherence."""
     from jointdb.diagnose import Measurement
-    from jointdb.io import read_frf_uff58, read_uff58
+    from jointdb.io import read_coherence_uff58, read_frf_uff58
 
     if not path.exists():
         raise InputError(f"recording {path}: no such file")
     frf = read_frf_uff58(path)
-    coh = None
-    records = [r for r in read_uff58(path) if r.function_type == 6]
-    if records:
-        coh = np.full(frf.values.shape, np.nan)
-        for r in records:
-            if r.response in frf.outputs and r.reference in frf.inputs:
-                i, j = frf.outputs.index(r.response), frf.inputs.index(r.reference)
-                coh[:, i, j] = np.interp(frf.freq, r.freq, np.abs(r.values))
-        if np.isnan(coh).any():
-            missing = [f"{o}/{i}" for a, o in enumerate(frf.outputs) for b, i in enumerate(frf.inputs)
-                       if np.isnan(coh[0, a, b])]
-            raise InputError(f"recording {path}: coherence records missing for {', '.join(missing)}")
+    coh = read_coherence_uff58(path, frf)  # None when the file has no coherence records
     return Measurement(frf=frf, coherence=coh, label=path.name)
 
 
