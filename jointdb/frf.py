@@ -402,33 +402,29 @@ class FRF:
     @staticmethod
     def concat_outputs(parts: Sequence["FRF"]) -> "FRF":
         """Stack FRFs with the same grid, inputs and quantity along outputs."""
-        if not parts:
-            raise InputError("nothing to stack: give at least one FRF")
-        first = parts[0]
-        for p in parts[1:]:
-            if p.inputs != first.inputs or p.quantity != first.quantity or not np.array_equal(p.freq, first.freq):
-                raise InputError("FRFs to stack must share frequencies, inputs and quantity")
-        return FRF(
-            first.freq,
-            np.concatenate([p.values for p in parts], axis=1),
-            tuple(d for p in parts for d in p.outputs),
-            first.inputs,
-            first.quantity,
-        )
+        return _concat(parts, along="outputs")
 
     @staticmethod
     def concat_inputs(parts: Sequence["FRF"]) -> "FRF":
         """Stack FRFs with the same grid, outputs and quantity along inputs."""
-        if not parts:
-            raise InputError("nothing to stack: give at least one FRF")
-        first = parts[0]
-        for p in parts[1:]:
-            if p.outputs != first.outputs or p.quantity != first.quantity or not np.array_equal(p.freq, first.freq):
-                raise InputError("FRFs to stack must share frequencies, outputs and quantity")
-        return FRF(
-            first.freq,
-            np.concatenate([p.values for p in parts], axis=2),
-            first.outputs,
-            tuple(d for p in parts for d in p.inputs),
-            first.quantity,
-        )
+        return _concat(parts, along="inputs")
+
+
+def _concat(parts: Sequence[FRF], along: str) -> FRF:
+    """Stack FRFs along ``"outputs"`` or ``"inputs"``; the other labels, grid and quantity must agree."""
+    if not parts:
+        raise InputError("nothing to stack: give at least one FRF")
+    shared = "inputs" if along == "outputs" else "outputs"
+    first = parts[0]
+    for p in parts[1:]:
+        if (
+            getattr(p, shared) != getattr(first, shared)
+            or p.quantity != first.quantity
+            or not np.array_equal(p.freq, first.freq)
+        ):
+            raise InputError(f"FRFs to stack must share frequencies, {shared} and quantity")
+    stacked = tuple(d for p in parts for d in getattr(p, along))
+    values = np.concatenate([p.values for p in parts], axis=1 if along == "outputs" else 2)
+    if along == "outputs":
+        return FRF(first.freq, values, stacked, first.inputs, first.quantity)
+    return FRF(first.freq, values, first.outputs, stacked, first.quantity)
