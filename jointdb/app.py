@@ -13,7 +13,6 @@
 
 from __future__ import annotations
 
-import json
 import os
 import warnings
 from collections.abc import Mapping
@@ -23,6 +22,7 @@ from typing import Any
 
 import numpy as np
 
+from jointdb._jsonfile import read_json_file
 from jointdb.errors import InputError, NotFoundError
 from jointdb.frf import FRF
 from jointdb.stack import (
@@ -49,17 +49,6 @@ __all__ = [
 ]
 
 # ------------------------------------------------------------------ files
-def _read_json(path: Path, what: str) -> Any:
-    try:
-        text = Path(path).read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise NotFoundError(f"{what} {path} does not exist") from None
-    except OSError as exc:
-        raise InputError(f"cannot read {what} {path}: {exc.strerror}") from None
-    try:
-        return json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise InputError(f"{what} {path}: not valid JSON (line {exc.lineno}, column {exc.colno}: {exc.msg})") from None
 
 
 #: FRF file formats by suffix (reading and writing).
@@ -131,7 +120,7 @@ def load_stack(path: Path | str) -> StackSpec:
         Missing stack / spindle files.
     """
     p = Path(path)
-    doc = _read_json(p, "stack file")
+    doc = read_json_file(p, "stack file")
     try:
         spec = stack_from_dict(doc)
     except InputError as exc:
@@ -141,7 +130,7 @@ def load_stack(path: Path | str) -> StackSpec:
         frf = read_frf_file(p.parent / sp.file)
         spec = spec.replace(spindle=MeasuredSpindle(sp.file, sp.node, frf))
     elif isinstance(sp, ModelledSpindle) and isinstance(sp.model, str):
-        model = _read_json(p.parent / sp.model, "spindle model file")
+        model = read_json_file(p.parent / sp.model, "spindle model file")
         spec = spec.replace(spindle=ModelledSpindle(model, sp.point))
     return spec
 

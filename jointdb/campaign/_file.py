@@ -32,7 +32,6 @@ and numerics); the CLI module stays thin.
 
 from __future__ import annotations
 
-import json
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -40,6 +39,7 @@ from typing import Any
 
 import numpy as np
 
+from jointdb._jsonfile import read_json_file
 from jointdb.errors import InputError
 from jointdb.frf import FRF, Dof, Quantity, dofs
 
@@ -138,18 +138,13 @@ def load_campaign(path: "str | Path") -> Campaign:
 
     Raises
     ------
+    NotFoundError
+        If the campaign file does not exist.
     InputError
         Naming the exact field, e.g. ``campaign c.json: interface.a: unknown substructure 'holdr'``.
     """
     cpath = Path(path)
-    if not cpath.is_file():
-        raise InputError(f"campaign file '{path}' not found")
-    try:
-        raw = json.loads(cpath.read_text(encoding="utf-8"))
-    except json.JSONDecodeError as exc:
-        raise InputError(f"campaign {cpath.name}: not valid JSON: {exc}") from None
-    except UnicodeDecodeError:
-        raise InputError(f"campaign {cpath.name}: not a UTF-8 text file") from None
+    raw = read_json_file(cpath, "campaign file")
     if not isinstance(raw, dict):
         raise InputError(f"campaign {cpath.name}: the top level must be a JSON object")
     if raw.get("format") != FORMAT:

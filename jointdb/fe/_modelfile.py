@@ -30,12 +30,12 @@ field, e.g. ``segments[1].outer_diameter: must be > 0, got -0.01``.
 
 from __future__ import annotations
 
-import json
 import math
 from pathlib import Path
 from typing import Any
 
-from jointdb.errors import InputError, NotFoundError
+from jointdb._jsonfile import read_json_file
+from jointdb.errors import InputError
 from jointdb.fe._ingredients import (
     Clamp,
     FieldError,
@@ -230,14 +230,7 @@ def load_model(path: "str | Path") -> BeamModel:
         On invalid JSON (with line and column) or an invalid field (with its path).
     """
     p = Path(path)
-    if not p.is_file():
-        raise NotFoundError(f"model file {str(p)!r} does not exist")
-    try:
-        data = json.loads(p.read_text(encoding="utf-8"))
-    except json.JSONDecodeError as exc:
-        raise InputError(f"{p}: not valid JSON (line {exc.lineno}, column {exc.colno}: {exc.msg})") from None
-    except UnicodeDecodeError:
-        raise InputError(f"{p}: not a UTF-8 text file") from None
+    data = read_json_file(p, "model file")
     try:
         return model_from_dict(data)
     except InputError as exc:
