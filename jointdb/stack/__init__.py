@@ -67,9 +67,8 @@ from jointdb.stack._spec import (
     StackSpec,
     Tool,
     ToolSegment,
-    stack_from_dict,
-    stack_to_dict,
 )
+from jointdb.stack._stackfile import stack_from_dict, stack_to_dict
 
 __all__ = [
     "FORMAT",
