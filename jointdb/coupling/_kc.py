@@ -8,7 +8,7 @@ import numpy as np
 
 from jointdb.coupling._common import as_receptance
 from jointdb.errors import InputError
-from jointdb.frf import FRF, Dof, Quantity
+from jointdb.frf import FRF, Dof
 
 __all__ = ["equivalent_stiffness_damping", "fit_constant_kc", "KCFit"]
 

@@ -76,6 +76,7 @@ __all__ = [
     "read_frf_hdf5_attrs",
     "read_frf_hdf5_full",
     "read_coherence_uff58",
+    "coherence_from_records",
     "read_frf_uff58",
     "read_uff58",
     "read_uff58_records",

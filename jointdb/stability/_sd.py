@@ -144,7 +144,6 @@ def _exp_integrals(ai: np.ndarray, dt: float):
 
 def _step_matrices(sys: SDSystem, depth: float, h: np.ndarray, dt: float):
     """Φ0 (m,n,n) and the delayed-term gains P = (Φ1−Φ2)aBH_i, Q = Φ2 aBH_i (m,n,n_q)."""
-    n, m = sys.n, h.shape[0]
     bh = depth * np.einsum("ij,mjk->mik", sys.b, h)  # (m, n, nq)
     ai = sys.a[None] - np.einsum("mik,kj->mij", bh, sys.c)
     phi0, phi1, phi2 = _exp_integrals(ai, dt)

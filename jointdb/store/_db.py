@@ -150,8 +150,6 @@ def current_revision(engine: Engine) -> str | None:
 
 
 def _run(write_engine: Engine, fn, revision: str) -> None:
-    from alembic import command
-
     cfg = alembic_config()
     with write_engine.begin() as conn:
         cfg.attributes["connection"] = conn
