@@ -1,7 +1,7 @@
 """The ``jointdb`` command line: a thin shell over the library.
 
 Each command group lives in its own module (``_models``, ``_coupling``,
-``_store``, ``_stability``, ``_predict``, ``_diagnose``, ``_demo``) and
+``_store``, ``_db``, ``_stability``, ``_predict``, ``_diagnose``, ``_demo``) and
 registers itself on the one Typer app here; this keeps every file readable in
 one sitting (design.md puts the CLI in one ``cli.py``; we split it along the
 command groups for that reason). Output goes through :mod:`jointdb._output`.
@@ -34,9 +34,9 @@ def _root() -> None:
 
 
 def _register_all() -> None:
-    from jointdb.cli import _coupling, _demo, _diagnose, _models, _predict, _stability, _store
+    from jointdb.cli import _coupling, _db, _demo, _diagnose, _models, _predict, _stability, _store
 
-    for module in (_models, _coupling, _store, _predict, _stability, _diagnose, _demo):
+    for module in (_models, _coupling, _store, _db, _predict, _stability, _diagnose, _demo):
         module.register(app)
 
 

@@ -1,4 +1,4 @@
-"""CLI for the joint database: ``catalogue``, ``joints ...``, ``query``, ``db ...``.
+"""CLI for the joint database: ``catalogue``, ``joints ...``, ``query`` (``db ...``: :mod:`jointdb.cli._db`).
 
 Thin: parse options, call :mod:`jointdb.store`, render with :func:`jointdb._output.emit`.
 Every command takes ``--db URL`` (or a SQLite path; default ``JOINTDB_URL`` or
@@ -15,7 +15,7 @@ from typing import Annotated, Any, Optional
 import typer
 
 from jointdb._output import emit, message
-from jointdb.errors import InputError, IntegrityError, NotFoundError
+from jointdb.errors import InputError, NotFoundError
 
 DbOpt = Annotated[
     Optional[str],
@@ -214,13 +214,10 @@ def _version_detail(v) -> dict[str, Any]:
 
 
 def register(app: typer.Typer) -> None:
-    """Add ``catalogue``, ``query``, ``joints ...`` and ``db ...`` to the app."""
+    """Add ``catalogue``, ``query`` and ``joints ...`` to the app (``db ...`` is in :mod:`jointdb.cli._db`)."""
     joints = typer.Typer(help="List, inspect, label, deprecate, diff, export and import catalogued joints.",
                          no_args_is_help=True)
-    db_app = typer.Typer(help="Database administration: migrations, integrity check, garbage collection.",
-                         no_args_is_help=True)
     app.add_typer(joints, name="joints")
-    app.add_typer(db_app, name="db")
 
     @app.command("catalogue")
     def catalogue(
@@ -445,92 +442,3 @@ def register(app: typer.Typer) -> None:
         summary = _repo(db, blobs, create=True).import_(bundle, author=author)
         summary["labels_skipped"] = ", ".join(summary["labels_skipped"]) or None
         emit(summary, as_json=as_json)
-
-    # ----------------------------------------------------------------- db ...
-    @db_app.command("upgrade")
-    def db_upgrade(
-        to: Annotated[str, typer.Option("--to", help="Target revision.")] = "head",
-        db: DbOpt = None, as_json: JsonOpt = False,
-    ) -> None:
-        """Create or migrate the schema (Alembic). Example: jointdb db upgrade --db postgresql+psycopg://host/jointdb"""
-        from jointdb.store import upgrade
-        from jointdb.store._db import resolve_url
-
-        rev = upgrade(db, to)
-        emit({"database": resolve_url(db), "revision": rev}, as_json=as_json)
-
-    @db_app.command("downgrade")
-    def db_downgrade(
-        to: Annotated[str, typer.Option("--to", help="Target revision: -1 (one step) or base (drops all tables).")] = "-1",
-        yes: Annotated[bool, typer.Option("--yes", help="Confirm a downgrade to base (deletes all data).")] = False,
-        db: DbOpt = None, as_json: JsonOpt = False,
-    ) -> None:
-        """Revert schema migrations. Example: jointdb db downgrade --to -1"""
-        from jointdb.store import downgrade
-        from jointdb.store._db import resolve_url
-
-        if to == "base" and not yes:
-            raise InputError("downgrading to base drops every table and all data; add --yes if you mean it")
-        rev = downgrade(db, to)
-        emit({"database": resolve_url(db), "revision": rev}, as_json=as_json)
-
-    @db_app.command("check")
-    def db_check(
-        quick: Annotated[bool, typer.Option("--quick", help="Only check blobs exist (do not read and hash them).")] = False,
-        db: DbOpt = None, blobs: BlobsOpt = None, as_json: JsonOpt = False,
-    ) -> None:
-        """Walk every row and blob; report missing or corrupt data (exit code 5 on problems).
-
-        Example: jointdb db check
-        """
-        report = _repo(db, blobs).check(verify_blobs=not quick)
-        data = {"ok": report.ok, "versions_checked": report.versions_checked, "blobs_checked": report.blobs_checked,
-                "problems": list(report.problems), "orphan_blobs": len(report.orphan_blobs),
-                "temporaries": len(report.temporaries)}
-        if as_json:
-            emit(data, as_json=True)
-        else:
-            emit({k: v for k, v in data.items() if k != "problems"}, title="db check")
-            for p in report.problems:
-                message(f"problem: {p}")
-        if not report.ok:
-            raise IntegrityError(f"db check found {len(report.problems)} problem(s)")
-
-    @db_app.command("gc")
-    def db_gc(
-        min_age: Annotated[float, typer.Option("--min-age", help="Only remove files older than this many seconds.")] = 3600.0,
-        dry_run: Annotated[bool, typer.Option("--dry-run", help="List what would be removed.")] = False,
-        db: DbOpt = None, blobs: BlobsOpt = None, as_json: JsonOpt = False,
-    ) -> None:
-        """Remove blobs no row references (and stale temporary files). Example: jointdb db gc --dry-run"""
-        if not min_age >= 0:
-            raise InputError(f"--min-age must be >= 0 seconds, got {min_age:g}")
-        removed = _repo(db, blobs).gc(min_age_s=min_age, dry_run=dry_run)
-        if as_json:  # always a list for machines (empty when nothing was removed)
-            emit([{"removed" if not dry_run else "would_remove": r} for r in removed], as_json=True)
-        else:
-            emit([{"removed" if not dry_run else "would_remove": r} for r in removed] if removed else
-                 "nothing to remove")
-
-    @db_app.command("audit")
-    def db_audit(
-        joint: Annotated[Optional[str], typer.Option("--joint", help="Only entries of this joint.")] = None,
-        limit: Annotated[int, typer.Option("--limit", help="Newest N entries.")] = 50,
-        db: DbOpt = None, blobs: BlobsOpt = None, as_json: JsonOpt = False,
-    ) -> None:
-        """The append-only audit log: who catalogued, labelled, deprecated, imported what. Example: jointdb db audit --joint T1"""
-        if limit < 1:
-            raise InputError(f"--limit must be >= 1, got {limit}")
-        rows = _repo(db, blobs).audit(joint, limit)
-        if not as_json:
-            rows = [{**r, "details": json.dumps(r["details"], default=str)} for r in rows]
-        emit(rows, as_json=as_json, title="audit log", columns=["at", "actor", "action", "joint", "version", "details"])
-
-    @db_app.command("info")
-    def db_info(db: DbOpt = None, blobs: BlobsOpt = None, as_json: JsonOpt = False) -> None:
-        """Where the database and blobs are, and the schema revision. Example: jointdb db info"""
-        from jointdb.store import current_revision, head_revision
-
-        repo = _repo(db, blobs)
-        emit({"database": repo.url, "blobs": str(repo.blobs.root), "revision": current_revision(repo.url),
-              "head": head_revision()}, as_json=as_json)
