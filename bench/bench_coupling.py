@@ -23,18 +23,9 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 import numpy as np  # noqa: E402
 
 from jointdb.coupling import Interface, couple, spring_damper_joint  # noqa: E402
+from _synthetic import modal_receptance  # noqa: E402  (bench/ is on sys.path when run as a script)
 from jointdb.frf import FRF, Dof  # noqa: E402
 
-
-def modal_receptance(freq, n, seed):
-    """Receptance (n_freq, n, n) of a random damped n-DOF modal model (symmetric, passive)."""
-    rng = np.random.default_rng(seed)
-    fn = np.sort(rng.uniform(50, 5000, n))
-    zeta = rng.uniform(0.005, 0.03, n)
-    phi = rng.standard_normal((n, n)) / np.sqrt(n)
-    w, wn = 2 * np.pi * freq[:, None], 2 * np.pi * fn[None, :]
-    d = 1.0 / (wn**2 - w**2 + 2j * zeta * wn * w)  # unit modal masses
-    return np.einsum("im,fm,jm->fij", phi, d, phi, optimize=True)
 
 
 def main(argv=None) -> None:

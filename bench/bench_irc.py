@@ -23,17 +23,9 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 import numpy as np  # noqa: E402
 
 from jointdb.coupling import identify_joint_matrix  # noqa: E402
+from _synthetic import modal_receptance  # noqa: E402  (bench/ is on sys.path when run as a script)
 from jointdb.frf import DIRECTIONS, FRF, Dof  # noqa: E402
 
-
-def modal_receptance(freq, n, seed):
-    rng = np.random.default_rng(seed)
-    fn = np.sort(rng.uniform(50, 5000, n))
-    zeta = rng.uniform(0.005, 0.03, n)
-    phi = rng.standard_normal((n, n)) / np.sqrt(n)
-    w, wn = 2 * np.pi * freq[:, None], 2 * np.pi * fn[None, :]
-    d = 1.0 / (wn**2 - w**2 + 2j * zeta * wn * w)
-    return np.einsum("im,fm,jm->fij", phi, d, phi, optimize=True)
 
 
 def main(argv=None) -> None:
