@@ -18,6 +18,24 @@ def eb_frequencies(beta_l, length, diameter, mat=STEEL):
     return beta_l**2 / length**2 * np.sqrt(mat.E * inertia / (mat.rho * area)) / (2 * np.pi)
 
 
+def frequency_rtol(model, freq_hz):
+    """Round-off bound on the relative error of natural frequencies ``freq_hz`` [Hz] of ``model``.
+
+    ``scipy.linalg.eigh(K, M)`` reduces ``K φ = λ M φ`` to a standard symmetric
+    problem ``A = L⁻¹ K L⁻ᵀ`` (``M = L Lᵀ``) and solves it backward stably: each
+    computed eigenvalue is exact for a perturbation of norm ~ n·eps·‖A‖ with
+    ‖A‖ = λ_max (Weyl). The relative error of λ_i is therefore n·eps·λ_max/λ_i;
+    f ∝ √λ halves it. λ_max/λ_1 of a fine beam mesh is 1e5–1e8, so this is far
+    above the last digits seen, yet far below any modelling difference (≥ 1e-4).
+    """
+    import scipy.linalg
+
+    mats = model.assemble()
+    free = ~mats.fixed
+    lam = scipy.linalg.eigh(mats.K[np.ix_(free, free)], mats.M[np.ix_(free, free)], eigvals_only=True)
+    return 0.5 * lam.size * np.finfo(float).eps * lam[-1] / (2 * np.pi * np.asarray(freq_hz)) ** 2
+
+
 def uniform(length, diameter, *, n_el, theory="euler-bernoulli", kind="planar", ingredients=(), inner=0.0):
     return BeamModel(
         segments=(Segment(length, diameter, inner, STEEL),),
@@ -114,7 +132,11 @@ def test_timoshenko_cantilever_static_tip_deflection_includes_shear_exactly():
     area, inertia = np.pi * D**2 / 4, np.pi * D**4 / 64
     kappa = 6 * (1 + STEEL.nu) / (7 + 6 * STEEL.nu)
     exact = L**3 / (3 * STEEL.E * inertia) + L / (kappa * STEEL.G * area)
-    assert h.real == pytest.approx(exact, rel=1e-10)
+    # one solve K x = F: relative error ≤ n·eps·cond(K) (cond ~1.5e5 here, so ~2e-10)
+    mats = model.assemble()
+    free = ~mats.fixed
+    k_free = mats.K[np.ix_(free, free)]
+    assert h.real == pytest.approx(exact, rel=k_free.shape[0] * np.finfo(float).eps * np.linalg.cond(k_free))
     assert h.imag == 0.0
 
 
@@ -140,17 +162,23 @@ def test_axial_and_torsional_frequencies_of_a_fixed_free_bar():
 def test_frame3d_round_section_bends_identically_in_x_and_y_and_like_planar():
     L, D = 0.1, 0.012
     for theory in ("timoshenko", "euler-bernoulli"):
-        f3 = uniform(L, D, n_el=20, theory=theory, kind="frame3d", ingredients=[Clamp(0.0)]).modes(40)
+        model3 = uniform(L, D, n_el=20, theory=theory, kind="frame3d", ingredients=[Clamp(0.0)])
+        f3 = model3.modes(40)
         dirs = np.array([d.direction for d in f3.dof_labels])
         sx = np.sum(f3.shapes[np.isin(dirs, ["x", "ry"])] ** 2, axis=0)
         sy = np.sum(f3.shapes[np.isin(dirs, ["y", "rx"])] ** 2, axis=0)
         total = np.sum(f3.shapes**2, axis=0)
         fx = f3.freq_hz[(sx + sy) / total > 0.99]
-        planar = uniform(L, D, n_el=20, theory=theory, ingredients=[Clamp(0.0)]).modes(4).freq_hz
-        # bending modes come in x/y pairs of equal frequency, equal to the planar model's
+        model2 = uniform(L, D, n_el=20, theory=theory, ingredients=[Clamp(0.0)])
+        planar = model2.modes(4).freq_hz
+        # bending modes come in x/y pairs of equal frequency, equal to the planar model's;
+        # the two members of a degenerate pair come from one solve but are mixed by round-off
+        # of order the solver's bound (λ_max/λ of this 20-element frame is up to ~5e7, so the
+        # bound on mode 1 is ~1e-6 while the modes are spaced by factors > 2)
         pairs = fx[: 2 * planar.size].reshape(-1, 2)
-        np.testing.assert_allclose(pairs[:, 0], pairs[:, 1], rtol=1e-10)
-        np.testing.assert_allclose(pairs[:, 0], planar, rtol=1e-10)
+        tol3, tol2 = frequency_rtol(model3, planar), frequency_rtol(model2, planar)
+        assert np.all(np.abs(pairs[:, 0] / pairs[:, 1] - 1) <= 2 * tol3)
+        assert np.all(np.abs(pairs[:, 0] / planar - 1) <= tol3 + tol2)
 
 
 def test_stepped_shaft_of_equal_segments_equals_the_uniform_shaft():
@@ -168,18 +196,22 @@ def test_point_mass_lowers_frequencies_as_the_rayleigh_quotient_says():
     L, D = 0.3, 0.01
     base = uniform(L, D, n_el=30, theory="timoshenko", ingredients=[Clamp(0.0)])
     modes = base.modes(3)
+    tol_base = frequency_rtol(base, modes.freq_hz)
     tip_x = base.mesh().dof(base.mesh().node_at(L), "x")
     beam_mass = STEEL.rho * np.pi * D**2 / 4 * L
     for fraction in (0.001, 0.01, 0.05):
         m = fraction * beam_mass
-        loaded = base.with_ingredient(PointMass(L, m)).modes(3).freq_hz
+        model = base.with_ingredient(PointMass(L, m))
+        loaded = model.modes(3).freq_hz
+        # round-off of both eigen-solves (≤ ~1.5e-7 here; the second-order gaps checked are ≥ 2.4e-7)
+        tol = tol_base + frequency_rtol(model, loaded)
         phi = modes.shapes[tip_x]  # mass-normalised: φᵀMφ = 1
         rayleigh = modes.freq_hz / np.sqrt(1.0 + m * phi**2)  # Rayleigh quotient with the unloaded shape
         assert np.all(loaded < modes.freq_hz)
         # for the fundamental mode the quotient is an upper bound ...
-        assert loaded[0] <= rayleigh[0] * (1 + 1e-12)
+        assert loaded[0] <= rayleigh[0] * (1 + tol[0])
         # ... and for every mode it is stationary: the error is second order in the added mass
-        assert np.all(np.abs(loaded / rayleigh - 1) < 2 * (m * phi**2) ** 2 + 1e-9)
+        assert np.all(np.abs(loaded / rayleigh - 1) < 2 * (m * phi**2) ** 2 + tol)
         error, shift = np.abs(loaded / rayleigh - 1), np.abs(rayleigh / modes.freq_hz - 1)
         assert error[0] < 0.01 * shift[0]
         if fraction <= 0.01:
