@@ -5,7 +5,11 @@ section), named points that map model positions to measurement node numbers,
 and a tuple of independent, composable *ingredients* — :class:`Clamp`,
 :class:`Support`, :class:`PointMass`, :class:`ModalDamping`,
 :class:`RayleighDamping`, :class:`HystereticDamping` — each applied to the
-assembled matrices by its own ``apply(matrices, mesh)`` step.
+assembled matrices by its own ``apply(matrices, mesh)`` step. Two ingredients
+describe interfaces inside the shaft: a :class:`Joint` splits the beam at a
+position into two sides tied by springs (a tool–holder face, a flange), and an
+:class:`Insertion` puts a concentric part inside the host over an overlap (a
+tool shank in the holder bore), tied rigidly or by a :class:`Contact` layer.
 
 DOFs (api-contracts.md): planar models have ``x`` and ``ry`` (= +dx/dz) per
 node; 3-D frames have ``x y z rx ry rz`` with z axial, ``rz`` torsion,
@@ -41,6 +45,7 @@ from jointdb.fe._ingredients import (
     RayleighDamping,
     Support,
 )
+from jointdb.fe._joints import Contact, Insertion, Joint
 from jointdb.fe._materials import MATERIALS, Material, get_material
 from jointdb.fe._model import BeamModel, FEMatrices, Mesh, Modes, NamedPoint, Segment
 from jointdb.fe._modelfile import FORMAT, load_model, model_from_dict, model_to_dict
@@ -59,6 +64,9 @@ __all__ = [
     "ModalDamping",
     "RayleighDamping",
     "HystereticDamping",
+    "Joint",
+    "Insertion",
+    "Contact",
     "BeamModel",
     "FEMatrices",
     "Mesh",
