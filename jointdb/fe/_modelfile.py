@@ -17,12 +17,23 @@ Format (SI units; every field except ``segments`` optional)::
       "clamps": [{"position": 0.09}],        # optional "directions": ["x"]
       "supports": [{"position": 0.05, "stiffness": {"x": 1e7}, "damping": {"x": 50}}],
       "point_masses": [{"position": 0.0, "mass": 0.002, "rotary_inertia": 1e-8}],
+      "joints": [{"position": 0.035, "stiffness": {"x": 2e8, "ry": 4e5}, "loss_factor": 0.05,
+                  "label": "flange"}],        # splits the shaft; directions not given stay rigid
+      "insertions": [{"start": 0.06, "end": 0.09, "outer_diameter": 0.012, "material": "carbide",
+                      "joined_at": "start",   # the end that continues as the main beam (the mouth)
+                      "contact": "rigid",     # or {"stiffness_per_length": {"x": 5e11}, "loss_factor": 0.1}
+                      "label": "tool shank in holder bore"}],
       "damping": [{"type": "modal", "zeta": 0.01},
                   {"type": "rayleigh", "alpha": 0.0, "beta": 1e-7},
                   {"type": "hysteretic", "eta": 0.002}]
     }
 
-Segment materials are a library name (:data:`MATERIALS`), a name defined in
+A joint splits the shaft at its position into two sides tied by springs (a
+tool–holder face, a bolted flange). An insertion is a concentric part inside the
+host segments over ``[start, end]`` (a tool shank in the holder bore) that
+continues as the main beam beyond ``joined_at``; it is bonded to the host
+(``"rigid"``) or held by a distributed contact layer (N/m² per direction, with a
+loss factor). Segment materials are a library name (:data:`MATERIALS`), a name defined in
 ``materials``, or an inline ``{"E": ..., "nu": ..., "rho": ...}``. Positions
 are metres from z = 0 (the start of the first segment). Errors name the exact
 field, e.g. ``segments[1].outer_diameter: must be > 0, got -0.01``.
@@ -45,6 +56,7 @@ from jointdb.fe._ingredients import (
     RayleighDamping,
     Support,
 )
+from jointdb.fe._joints import Contact, Insertion, Joint
 from jointdb.fe._materials import MATERIALS, Material
 from jointdb.fe._model import BeamModel, NamedPoint, Segment
 
@@ -54,7 +66,7 @@ FORMAT = "jointdb-beam-model/1"
 
 _TOP = {
     "format", "name", "description", "kind", "theory", "max_element_length", "materials", "segments",
-    "points", "clamps", "supports", "point_masses", "damping", "source",
+    "points", "clamps", "supports", "point_masses", "damping", "source", "joints", "insertions",
 }
 _DAMPING = {
     "modal": (ModalDamping, {"zeta"}),
@@ -184,6 +196,30 @@ def model_from_dict(data: Any) -> BeamModel:
                                   rotary_inertia=m.get("rotary_inertia", 0.0),
                                   polar_inertia=m.get("polar_inertia", 0.0)))
         paths.append(p)
+    for i, j in enumerate(_list(d.get("joints", []), "joints")):
+        p = f"joints[{i}]"
+        j = _obj(j, p)
+        _keys(j, p, {"position", "stiffness", "damping", "loss_factor", "label"}, {"position", "stiffness"})
+        ingredients.append(_build(Joint, p, position=j["position"], stiffness=j["stiffness"],
+                                  damping=j.get("damping", {}), loss_factor=j.get("loss_factor", 0.0),
+                                  label=str(j.get("label", ""))))
+        paths.append(p)
+    for i, s in enumerate(_list(d.get("insertions", []), "insertions")):
+        p = f"insertions[{i}]"
+        s = _obj(s, p)
+        _keys(s, p, {"start", "end", "outer_diameter", "inner_diameter", "material", "joined_at", "contact", "label"},
+              {"start", "end", "outer_diameter"})
+        contact = s.get("contact", "rigid")
+        if isinstance(contact, dict):
+            _keys(contact, f"{p}.contact", {"stiffness_per_length", "loss_factor"}, {"stiffness_per_length"})
+            contact = _build(Contact, f"{p}.contact", stiffness_per_length=contact["stiffness_per_length"],
+                             loss_factor=contact.get("loss_factor", 0.0))
+        ingredients.append(_build(Insertion, p, start=s["start"], end=s["end"], outer_diameter=s["outer_diameter"],
+                                  inner_diameter=s.get("inner_diameter", 0.0),
+                                  material=_material(s.get("material", "steel"), f"{p}.material", named),
+                                  joined_at=s.get("joined_at", "end"), contact=contact,
+                                  label=str(s.get("label", ""))))
+        paths.append(p)
     damping = d.get("damping", [])
     if isinstance(damping, dict):
         damping = [damping]
@@ -252,7 +288,7 @@ def model_to_dict(model: BeamModel) -> dict:
                      "inner_diameter": s.inner_diameter, "material": mat})
     out["segments"] = segs
     out["points"] = [{"name": p.name, "position": p.position, "node": p.node} for p in model.points]
-    clamps, supports, masses, damping = [], [], [], []
+    clamps, supports, masses, damping, joints, insertions = [], [], [], [], [], []
     for ing in model.ingredients:
         if isinstance(ing, Clamp):
             c = {"position": ing.position}
@@ -271,9 +307,31 @@ def model_to_dict(model: BeamModel) -> dict:
             damping.append({"type": "rayleigh", "alpha": ing.alpha, "beta": ing.beta})
         elif isinstance(ing, HystereticDamping):
             damping.append({"type": "hysteretic", "eta": ing.eta})
+        elif isinstance(ing, Joint):
+            j = {"position": ing.position, "stiffness": dict(ing.stiffness)}
+            if ing.damping:
+                j["damping"] = dict(ing.damping)
+            if ing.loss_factor:
+                j["loss_factor"] = ing.loss_factor
+            if ing.label:
+                j["label"] = ing.label
+            joints.append(j)
+        elif isinstance(ing, Insertion):
+            mat = ing.material
+            if isinstance(mat, Material):
+                mat = {"name": mat.name, "E": mat.E, "nu": mat.nu, "rho": mat.rho}
+            contact = "rigid" if ing.rigid else {"stiffness_per_length": dict(ing.contact.stiffness_per_length),
+                                                 "loss_factor": ing.contact.loss_factor}
+            e = {"start": ing.start, "end": ing.end, "outer_diameter": ing.outer_diameter,
+                 "inner_diameter": ing.inner_diameter, "material": mat, "joined_at": ing.joined_at,
+                 "contact": contact}
+            if ing.label:
+                e["label"] = ing.label
+            insertions.append(e)
         else:  # pragma: no cover - a new ingredient class must be added here
             raise InputError(f"cannot write ingredient {type(ing).__name__} to a model file")
-    for key, value in (("clamps", clamps), ("supports", supports), ("point_masses", masses), ("damping", damping)):
+    for key, value in (("clamps", clamps), ("supports", supports), ("point_masses", masses), ("damping", damping),
+                       ("joints", joints), ("insertions", insertions)):
         if value:
             out[key] = value
     return out
