@@ -32,6 +32,7 @@ and numerics); the CLI module stays thin.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -40,6 +41,7 @@ from typing import Any
 import numpy as np
 
 from jointdb._jsonfile import read_json_file
+from jointdb._limits import check_lines
 from jointdb.errors import InputError
 from jointdb.frf import FRF, Dof, Quantity, dofs
 
@@ -133,6 +135,25 @@ def _substructures(cpath: Path, where: str, raw: Any) -> dict[str, Substructure]
     return out
 
 
+def _conditions(cpath: Path, raw: Any) -> dict[str, Any]:
+    """The joint's conditions: torque and preload finite and >= 0, materials a list of names."""
+    if raw is None:
+        return {}
+    if not isinstance(raw, dict):
+        raise _err(cpath, "conditions", "must be an object such as {\"torque_nm\": 30, \"materials\": [...]}")
+    for key in ("torque_nm", "preload_n"):
+        if key in raw:
+            v = raw[key]
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+                raise _err(cpath, f"conditions.{key}", f"must be a finite number, got {v!r}")
+            if v < 0:
+                raise _err(cpath, f"conditions.{key}", f"must be >= 0, got {v:g}")
+    mats = raw.get("materials")
+    if mats is not None and not (isinstance(mats, list) and all(isinstance(m, str) and m.strip() for m in mats)):
+        raise _err(cpath, "conditions.materials", f"must be a list of material names, got {mats!r}")
+    return dict(raw)
+
+
 def load_campaign(path: "str | Path") -> Campaign:
     """Read and check a campaign file (structure, names, DOFs, that files exist).
 
@@ -173,7 +194,8 @@ def load_campaign(path: "str | Path") -> Campaign:
     meas = tuple(_file(cpath, f"measurements[{i}]", m) for i, m in enumerate(meas_raw))
     band = raw.get("band")
     if band is not None:
-        if not (isinstance(band, list) and len(band) == 2 and all(isinstance(v, (int, float)) for v in band)
+        if not (isinstance(band, list) and len(band) == 2
+                and all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in band)
                 and 0 <= band[0] < band[1]):
             raise _err(cpath, "band", "must be [fmin, fmax] in Hz with fmin < fmax")
         band = (float(band[0]), float(band[1]))
@@ -217,9 +239,10 @@ def load_campaign(path: "str | Path") -> Campaign:
     couple = raw.get("couple", {})
     if not isinstance(couple, dict):
         raise _err(cpath, "couple", "must be an object")
+    conditions = _conditions(cpath, raw.get("conditions", {}))
     return Campaign(
         path=cpath, name=str(raw.get("name", cpath.stem)), joint_type=str(raw.get("joint_type", "")),
-        conditions=raw.get("conditions", {}) or {}, joint_model=model, substructures=subs, interface=interface,
+        conditions=conditions, joint_model=model, substructures=subs, interface=interface,
         measurements=meas, band=band, model_options=mopts, options=opts, validation=validation, couple=couple,
     )
 
@@ -304,8 +327,12 @@ def grid_for_couple(c: Campaign) -> np.ndarray:
             f0, f1, df = float(spec["min"]), float(spec["max"]), float(spec["step"])
         except (KeyError, TypeError, ValueError):
             raise _err(c.path, "couple.frequency", "must be {\"min\": Hz, \"max\": Hz, \"step\": Hz}") from None
-        if not (0 < f0 < f1 and df > 0):
-            raise _err(c.path, "couple.frequency", "needs 0 < min < max and step > 0")
+        if not (math.isfinite(f0) and math.isfinite(f1) and math.isfinite(df) and 0 < f0 < f1 and df > 0):
+            raise _err(c.path, "couple.frequency", "needs finite 0 < min < max and step > 0")
+        try:
+            check_lines((f1 - f0) / df + 1, "couple.frequency.step")
+        except InputError as exc:
+            raise InputError(f"campaign {c.path.name}: {exc}") from None
         return np.arange(f0, f1 + 0.5 * df, df)
     if not c.measurements:
         raise _err(c.path, "couple.frequency", "no measurements to take the grid from; give {min, max, step}")

@@ -13,7 +13,9 @@ from typing import Annotated, Optional
 import numpy as np
 import typer
 
+from jointdb._limits import check_lines
 from jointdb.errors import InputError
+
 
 def _split(text: str | None) -> list[str] | None:
     if text is None:
@@ -35,17 +37,19 @@ def frequency_grid(fmin: float | None, fmax: float, df: float | None, n_lines: i
     if not np.isfinite(fmax) or fmax <= 0:
         raise InputError(f"--fmax must be > 0 Hz, got {fmax:g}")
     start = 0.0 if fmin is None else float(fmin)
-    if start < 0 or start >= fmax:
+    if not np.isfinite(start) or start < 0 or start >= fmax:
         raise InputError(f"--fmin must be in [0, fmax) = [0, {fmax:g}) Hz, got {start:g}")
     if df is not None:
         if not np.isfinite(df) or df <= 0:
             raise InputError(f"--df must be > 0 Hz, got {df:g}")
+        check_lines((fmax - start) / df + 1, "--df")
         n = int(np.floor((fmax - start) / df + 1e-9)) + 1
         grid = start + df * np.arange(n)
     else:
         n = 1001 if n_lines is None else int(n_lines)
         if n < 2:
             raise InputError(f"--n-lines must be >= 2, got {n}")
+        check_lines(n, "--n-lines")
         grid = np.linspace(start, fmax, n)
     if fmin is None and avoid_zero and grid[0] == 0.0:
         grid = grid[1:] if grid.size > 1 else grid + (df or fmax / 1000)
@@ -106,9 +110,9 @@ def register(app: typer.Typer) -> None:
         """
         from jointdb.fe import load_model
 
-        model = load_model(model_file)
         if n < 1:
             raise InputError(f"--n must be >= 1, got {n}")
+        model = load_model(model_file)
         modes = model.modes(n)
         rows = mode_rows(modes)
         if as_json:

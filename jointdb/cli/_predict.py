@@ -6,6 +6,7 @@ work; this module parses options, writes the requested files and renders.
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 from typing import Annotated, Optional
 
@@ -40,6 +41,7 @@ def register(app: typer.Typer) -> None:
         Example: jointdb predict fixtures/stacks/endmill-modelled-spindle.json --out tip.uff --plot tip.png
         """
         from jointdb import app as application
+        from jointdb._limits import check_lines
         from jointdb._output import emit, message
         from jointdb.errors import InputError
         from jointdb.stack import FrequencyGrid, prediction_grid
@@ -58,9 +60,11 @@ def register(app: typer.Typer) -> None:
             base = spec.frequency or FrequencyGrid()
             grid = FrequencyGrid(fmin if fmin is not None else base.fmin, fmax if fmax is not None else base.fmax,
                                  df if df is not None else base.step)
-            if grid.fmin <= 0 or grid.fmax <= grid.fmin or grid.step <= 0:
-                raise InputError(f"--fmin/--fmax/--df: need 0 < fmin < fmax and df > 0, got "
+            if not (math.isfinite(grid.fmin) and math.isfinite(grid.fmax) and math.isfinite(grid.step)) or \
+                    grid.fmin <= 0 or grid.fmax <= grid.fmin or grid.step <= 0:
+                raise InputError(f"--fmin/--fmax/--df: need finite 0 < fmin < fmax and df > 0, got "
                                  f"{grid.fmin:g}, {grid.fmax:g}, {grid.step:g}")
+            check_lines((grid.fmax - grid.fmin) / grid.step + 1, "--df")
             freq = prediction_grid(spec, grid.lines())
         result = application.predict_stack(spec, db, freq)
         pred = result.prediction

@@ -11,6 +11,18 @@ import typer
 from jointdb._output import emit, message, progress
 from jointdb.errors import InputError
 
+#: Largest sizes accepted from options (far above real use; they bound memory and run time).
+MAX_SPEEDS = 100_000
+MAX_TEETH = 1000
+MAX_INTERVALS = 2000
+MAX_ORDER = 400
+
+
+def _at_most(value: int, option: str, limit: int) -> None:
+    if value > limit:
+        raise InputError(f"{option} {value}: the limit is {limit}")
+
+
 def read_frf_file(path: Path):
     """Read a tool-tip FRF from UFF58, the HDF5 exchange file or CSV (by suffix)."""
     from jointdb.app import read_frf_file as read
@@ -102,6 +114,13 @@ def register(app: typer.Typer) -> None:
         """
         from jointdb.modal import fit_modes
 
+        _at_most(max_order, "--max-order", MAX_ORDER)
+        if modes is not None:
+            _at_most(modes, "--modes", MAX_ORDER)
+        if band is not None and not (np.all(np.isfinite(band)) and 0 <= band[0] < band[1]):
+            raise InputError(f"--band must be FMIN FMAX with finite 0 <= FMIN < FMAX Hz, got {band[0]:g} {band[1]:g}")
+        if plot is not None and plot.exists() and not plot.is_dir():
+            raise InputError(f"--plot {str(plot)!r}: exists and is not a directory")
         frf = read_frf_file(frf_file)
         fit = fit_modes(frf, n_modes=modes, band=band, max_order=max_order, residuals=not no_residuals)
         rows = []
@@ -187,8 +206,20 @@ def register(app: typer.Typer) -> None:
             raise InputError(f"--op must be turning or milling, got {op!r}")
         if method_l not in ("zoa", "sd"):
             raise InputError(f"--method must be zoa or sd, got {method!r}")
-        if not (0 < rpm_min < rpm_max) or n_speeds < 2:
-            raise InputError("need 0 < --rpm-min < --rpm-max and --n-speeds >= 2")
+        if not (0 < rpm_min < rpm_max) or not np.isfinite(rpm_max) or n_speeds < 2:
+            raise InputError("need finite 0 < --rpm-min < --rpm-max and --n-speeds >= 2")
+        _at_most(n_speeds, "--n-speeds", MAX_SPEEDS)
+        _at_most(teeth, "--teeth", MAX_TEETH)
+        if intervals < 2:
+            raise InputError(f"--intervals must be >= 2, got {intervals}")
+        _at_most(intervals, "--intervals", MAX_INTERVALS)
+        _at_most(max_order, "--max-order", MAX_ORDER)
+        for name, value in (("--kf", kf), ("--kt", kt), ("--kr", kr), ("--immersion", immersion)):
+            if value is not None and not np.isfinite(value):
+                raise InputError(f"{name} must be a finite number, got {value}")
+        for name, path in (("--plot", plot),):
+            if path is not None and not path.parent.is_dir():
+                raise InputError(f"{name} {str(path)!r}: directory {str(path.parent)!r} does not exist")
         speeds = np.linspace(rpm_min, rpm_max, n_speeds)
         frf = _node_select(read_frf_file(frf_file), node)
         frf2 = _node_select(read_frf_file(frf_y), node) if frf_y is not None else None
@@ -212,7 +243,6 @@ def register(app: typer.Typer) -> None:
         if plot is not None:
             from jointdb.plots._lobes import plot_lobes
 
-            plot.parent.mkdir(parents=True, exist_ok=True)
             message(f"wrote {plot_lobes(res, plot, title=title)}")
         finite = np.isfinite(res.depth_m)
         if finite.any():

@@ -46,6 +46,7 @@ from pathlib import Path
 from typing import Any
 
 from jointdb._jsonfile import read_json_file
+from jointdb._limits import check_model_limits
 from jointdb.errors import InputError
 from jointdb.fe._ingredients import (
     Clamp,
@@ -137,9 +138,11 @@ def model_from_dict(data: Any) -> BeamModel:
     Raises
     ------
     InputError
-        Naming the exact field that is wrong, e.g. ``segments[1].outer_diameter: must be > 0, got 0``.
+        Naming the exact field that is wrong, e.g. ``segments[1].outer_diameter: must be > 0, got 0``,
+        or a resource limit exceeded (segments, elements, magnitudes; see :mod:`jointdb._limits`).
     """
     d = _obj(data, "model")
+    check_model_limits(d)  # sizes, magnitudes and element count before anything is built
     _keys(d, "", _TOP, {"segments"})
     fmt = d.get("format", FORMAT)
     if fmt != FORMAT:

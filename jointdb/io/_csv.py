@@ -74,8 +74,17 @@ def read_frf_csv(path: str | os.PathLike) -> FRF:
     p = Path(path)
     if not p.is_file():
         raise NotFoundError(f"CSV file {p} does not exist")
-    with open(p, newline="", encoding="utf-8") as fh:
-        rows = list(csv.reader(fh))
+    try:
+        with open(p, newline="", encoding="utf-8") as fh:
+            reader = csv.reader(fh)
+            try:
+                rows = list(reader)
+            except csv.Error as exc:  # NUL bytes, a field beyond the csv module's size limit
+                raise InputError(f"{p}: line {reader.line_num}: not a CSV line ({exc})") from None
+    except UnicodeDecodeError as exc:
+        raise InputError(f"{p}: not a UTF-8 text file (byte {exc.start})") from None
+    except OSError as exc:
+        raise InputError(f"cannot read {p}: {exc.strerror or exc}") from None
     if not rows:
         raise InputError(f"{p}: empty CSV file")
     header = rows[0]

@@ -41,6 +41,7 @@ fsync, ``os.replace``; a failure never leaves a half-written file.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 from pathlib import Path
@@ -56,6 +57,8 @@ from jointdb.io._units import unit_label
 HDF5_FORMAT = "jointdb-frf"
 HDF5_FORMAT_VERSION = 1
 _CHUNK_BYTES = 256 * 1024
+#: Largest dataset read from an exchange file (200 000 lines x 20 x 20 entries is 1.2 GiB).
+MAX_DATASET_BYTES = 2 * 2**30
 _COMPLEX_CONVENTION = "values[..., 0] = real part, values[..., 1] = imaginary part (float64)"
 _TIME_CONVENTION = "x(t) = Re{X exp(+i omega t)}"
 _DOF_CONVENTION = "labels <node><direction>, directions x y z rx ry rz (UFF58 codes 1..6), always positive"
@@ -150,19 +153,19 @@ def _open(path: str | os.PathLike):
         raise NotFoundError(f"HDF5 file {p} does not exist")
     try:
         f = h5py.File(p, "r")
-    except OSError as exc:
+    except (OSError, RuntimeError) as exc:
         raise InputError(f"{p}: not a readable HDF5 file ({exc})") from None
     try:
-        fmt = f.attrs.get("format")
-        fmt = fmt.decode() if isinstance(fmt, bytes) else fmt
+        fmt = _scalar_text(_attr(f, "format", p))
         if fmt != HDF5_FORMAT:
-            raise InputError(f"{p}: not a jointdb FRF file (format attribute is {fmt!r}, expected {HDF5_FORMAT!r})")
-        version = f.attrs.get("format_version")
-        if version is None or int(version) < 1:
-            raise InputError(f"{p}: missing or invalid format_version attribute")
-        if int(version) > HDF5_FORMAT_VERSION:
+            shown = fmt if fmt is not None else "missing or not a string"
+            raise InputError(f"{p}: not a jointdb FRF file (format attribute is {shown!r}, expected {HDF5_FORMAT!r})")
+        version = _scalar_int(_attr(f, "format_version", p))
+        if version is None or version < 1:
+            raise InputError(f"{p}: missing or invalid format_version attribute (expected an integer >= 1)")
+        if version > HDF5_FORMAT_VERSION:
             raise InputError(
-                f"{p}: written in {HDF5_FORMAT} version {int(version)}; this jointdb reads up to "
+                f"{p}: written in {HDF5_FORMAT} version {version}; this jointdb reads up to "
                 f"version {HDF5_FORMAT_VERSION} (upgrade jointdb)"
             )
     except BaseException:
@@ -171,21 +174,82 @@ def _open(path: str | os.PathLike):
     return p, f
 
 
+@contextlib.contextmanager
+def _damaged(p: Path):
+    """HDF5 library errors while walking the file's structure: the file is damaged (one line)."""
+    try:
+        yield
+    except (OSError, RuntimeError, KeyError) as exc:
+        raise InputError(f"{p}: damaged HDF5 file ({exc})") from None
+
+
+def _attr(f, name: str, p: Path):
+    """A root attribute, or ``None`` if absent; an attribute HDF5 cannot decode is an input error."""
+    try:
+        return f.attrs.get(name)
+    except (OSError, RuntimeError, KeyError, TypeError, ValueError) as exc:
+        raise InputError(f"{p}: attribute {name!r} cannot be read ({exc})") from None
+
+
+def _scalar_text(v) -> str | None:
+    """A string attribute's text (str or UTF-8 bytes, numpy scalars included), else ``None``."""
+    if isinstance(v, np.ndarray):
+        if v.shape not in ((), (1,)):
+            return None
+        v = v.reshape(()).item()
+    if isinstance(v, bytes):
+        try:
+            return v.decode("utf-8")
+        except UnicodeDecodeError:
+            return None
+    return str(v) if isinstance(v, str) else None
+
+
+def _scalar_int(v) -> int | None:
+    """An integer attribute's value (a whole number, numpy scalars included), else ``None``."""
+    if isinstance(v, np.ndarray):
+        if v.shape not in ((), (1,)):
+            return None
+        v = v.reshape(()).item()
+    if isinstance(v, (bool, np.bool_)) or not isinstance(v, (int, float, np.integer, np.floating)):
+        return None
+    if not np.isfinite(v) or int(v) != v:
+        return None
+    return int(v)
+
+
 def _attr_str(f, name: str, p: Path) -> str:
     if name not in f.attrs:
         raise InputError(f"{p}: missing attribute {name!r}")
-    v = f.attrs[name]
-    return v.decode() if isinstance(v, bytes) else str(v)
+    v = _attr(f, name, p)
+    text = _scalar_text(v)
+    if text is None:
+        raise InputError(f"{p}: attribute {name!r} must be a string, got {type(v).__name__}")
+    return text
 
 
 def _read_dataset(f, name: str, p: Path) -> np.ndarray:
+    import h5py  # lazy
+
     if name not in f:
         raise InputError(f"{p}: missing dataset {name!r}")
+    d = f[name]
+    if not isinstance(d, h5py.Dataset):
+        raise InputError(f"{p}: {name!r} must be a dataset, got a {type(d).__name__.lower()}")
     try:
-        return f[name][()]
+        nbytes = int(np.prod(d.shape, dtype=float)) * d.dtype.itemsize if d.shape is not None else 0
+    except TypeError:
+        nbytes = 0
+    if nbytes > MAX_DATASET_BYTES:
+        raise InputError(f"{p}: dataset {name!r} declares shape {d.shape} ({nbytes / 2**30:.3g} GiB); the limit "
+                         f"is {MAX_DATASET_BYTES / 2**30:g} GiB")
+    try:
+        return d[()]
     except OSError as exc:  # fletcher32 / gzip failure: the bytes on disk are damaged
         raise IntegrityError(f"{p}: dataset {name!r} failed its checksum or decompression ({exc}); "
                              "the file is corrupt") from None
+    except (TypeError, ValueError, UnicodeDecodeError) as exc:  # a type h5py/numpy cannot read
+        raise InputError(f"{p}: dataset {name!r} cannot be read ({exc})") from None
 
 
 def _labels(raw: np.ndarray, name: str, p: Path):
@@ -204,31 +268,38 @@ def read_frf_hdf5_full(path: str | os.PathLike) -> tuple[FRF, dict]:
         If the file does not exist.
     InputError
         Not HDF5, not a jointdb FRF file, a newer format version, missing or
-        malformed datasets or attributes (named).
+        malformed datasets or attributes (named), or a dataset declared larger
+        than :data:`MAX_DATASET_BYTES`.
     IntegrityError
         If a chunk fails its fletcher32 checksum (corrupt file).
     """
     p, f = _open(path)
-    with f:
+    with f, _damaged(p):
         quantity = _attr_str(f, "quantity", p)
         meta_text = _attr_str(f, "metadata", p) if "metadata" in f.attrs else "{}"
         freq = _read_dataset(f, "freq", p)
         raw = _read_dataset(f, "values", p)
         outputs = _labels(_read_dataset(f, "outputs", p), "outputs", p)
         inputs = _labels(_read_dataset(f, "inputs", p), "inputs", p)
+    raw = np.asarray(raw)
+    if not np.issubdtype(raw.dtype, np.number):
+        raise InputError(f"{p}: dataset 'values' holds {raw.dtype} data; expected float64 (n_freq, n_out, n_in, 2)")
     if np.iscomplexobj(raw):
         values = raw.astype(np.complex128)
     elif raw.ndim == 4 and raw.shape[-1] == 2:
         values = raw[..., 0].astype(np.float64) + 1j * raw[..., 1].astype(np.float64)
     else:
         raise InputError(f"{p}: dataset 'values' has shape {raw.shape}; expected (n_freq, n_out, n_in, 2)")
+    freq = np.asarray(freq)
+    if not np.issubdtype(freq.dtype, np.number) or np.iscomplexobj(freq):
+        raise InputError(f"{p}: dataset 'freq' holds {freq.dtype} data; expected float64 Hz")
     try:
         frf = FRF(freq, values, outputs, inputs, quantity)
     except InputError as exc:
         raise InputError(f"{p}: {exc}") from None
     try:
         meta = json.loads(meta_text)
-    except json.JSONDecodeError:
+    except (ValueError, RecursionError):  # JSONDecodeError is a ValueError
         raise InputError(f"{p}: attribute 'metadata' is not valid JSON") from None
     return frf, meta
 
@@ -246,9 +317,9 @@ def read_frf_hdf5_attrs(path: str | os.PathLike) -> dict:
     mixed in.
     """
     p, f = _open(path)
-    with f:
+    with f, _damaged(p):
         text = _attr_str(f, "metadata", p) if "metadata" in f.attrs else "{}"
     try:
         return json.loads(text)
-    except json.JSONDecodeError:
+    except (ValueError, RecursionError):  # JSONDecodeError is a ValueError
         raise InputError(f"{p}: attribute 'metadata' is not valid JSON") from None

@@ -183,7 +183,10 @@ def frf_from_records(
             f"missing {len(missing)} pair(s) response/reference: {_pairs(missing)}"
             + ("" if fill == "reciprocity" else " (fill='reciprocity' may complete it)")
         )
-    frf = FRF(grid, values, tuple(outputs), tuple(inputs), target)
+    try:
+        frf = FRF(grid, values, tuple(outputs), tuple(inputs), target)
+    except InputError as exc:
+        raise InputError(f"{source}: {exc}") from None
     return UffImport(frf, tuple(used), tuple(skipped), tuple(notes))
 
 

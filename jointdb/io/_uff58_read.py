@@ -224,6 +224,8 @@ def _record_from_dict(d: dict, index: int, path: Path, units: _UnitSystem | None
         )
     if types[0] == 0 and func_type == 4:
         notes.append("abscissa data type unknown (code 0); read as frequency")
+    if func_type in (0, 4, 6):
+        _check_abscissa(x, where)
     if func_type in (0, 4):
         if not assume_si:
             f_factor = U.frequency_factor(labels[0], where)
@@ -254,6 +256,17 @@ def _record_from_dict(d: dict, index: int, path: Path, units: _UnitSystem | None
         ids=tuple(str(d.get(f"id{k}", "")) for k in range(1, 6)),
         conversions=tuple(notes),
     )
+
+
+def _check_abscissa(x: np.ndarray, where: str) -> None:
+    """Frequencies >= 0 and strictly increasing (naming the first offending value)."""
+    if x[0] < 0:
+        raise InputError(f"{where}: frequencies must be >= 0 Hz, the first is {x[0]:g}")
+    bad = np.flatnonzero(np.diff(x) <= 0)
+    if bad.size:
+        k = int(bad[0]) + 1
+        raise InputError(f"{where}: frequencies must be strictly increasing; value {k + 1} ({x[k]:g}) does not "
+                         f"exceed value {k} ({x[k - 1]:g})")
 
 
 def _ordinate_factor(labels, quantity, response, reference, units, assume_si, where, notes) -> float:

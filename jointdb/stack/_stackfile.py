@@ -13,6 +13,7 @@ import re
 from collections.abc import Mapping, Sequence
 from typing import Any
 
+from jointdb._limits import LENGTH_RANGE, MAX_SEGMENTS, check_count, check_elements, check_range
 from jointdb.errors import InputError
 from jointdb.stack._spec import (
     FORMAT,
@@ -94,15 +95,24 @@ def _list(obj: Mapping[str, Any], key: str, path: str) -> list:
     return list(value)
 
 
+def _lengths_in_range(obj: Mapping[str, Any], path: str, keys: Sequence[str]) -> None:
+    """Lengths and diameters within the physical range of :mod:`jointdb._limits` (1 µm … 100 m)."""
+    for key in keys:
+        check_range(obj.get(key), f"{path}.{key}", *LENGTH_RANGE)
+
+
 # ------------------------------------------------------------------ parsing
 def _tool(obj: Any, path: str) -> Tool:
     obj = _mapping(obj, path)
     _known(obj, path, ("material", "segments", "fluted_ratio", "loss_factor"))
     segs = []
-    for i, raw in enumerate(_list(obj, "segments", path)):
+    raws = _list(obj, "segments", path)
+    check_count(len(raws), f"{path}.segments", MAX_SEGMENTS, "segments")
+    for i, raw in enumerate(raws):
         p = f"{path}.segments[{i}]"
         raw = _mapping(raw, p)
         _known(raw, p, ("length", "diameter", "fluted"))
+        _lengths_in_range(raw, p, ("length", "diameter"))
         fluted = raw.get("fluted", False)
         if not isinstance(fluted, bool):
             raise _fail(f"{p}.fluted", f"must be true or false, got {fluted!r}")
@@ -126,10 +136,13 @@ def _holder(obj: Any, path: str) -> Holder:
     obj = _mapping(obj, path)
     _known(obj, path, ("material", "segments", "loss_factor"))
     segs = []
-    for i, raw in enumerate(_list(obj, "segments", path)):
+    raws = _list(obj, "segments", path)
+    check_count(len(raws), f"{path}.segments", MAX_SEGMENTS, "segments")
+    for i, raw in enumerate(raws):
         p = f"{path}.segments[{i}]"
         raw = _mapping(raw, p)
         _known(raw, p, ("length", "outer_diameter", "inner_diameter"))
+        _lengths_in_range(raw, p, ("length", "outer_diameter", "inner_diameter"))
         seg = HolderSegment(
             _number(raw, "length", p, positive=True),
             _number(raw, "outer_diameter", p, positive=True),
@@ -270,6 +283,9 @@ def stack_from_dict(doc: Any) -> StackSpec:
         raise _fail("gauge_length", "required field is missing (or give insertion_length)")
     tool = _tool(doc["tool"], "tool")
     holder = _holder(doc["holder"], "holder")
+    # the tool and holder are meshed with 5 mm elements (jointdb.stack._parts)
+    check_elements([s.length for s in tool.segments], 0.005, "planar", "tool.segments")
+    check_elements([s.length for s in holder.segments], 0.005, "planar", "holder.segments")
     spindle = _spindle(doc["spindle"], "spindle")
     given_insertion = _number(doc, "insertion_length", "", default=None, nonneg=True)
     if "gauge_length" in doc:
