@@ -9,10 +9,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from jointdb.diagnose._compare import Signature, signature
+from jointdb.diagnose._compare import Signature, find_peaks, signature
 from jointdb.diagnose._data import Measurement, Observation, prepare
 from jointdb.diagnose._fit import Fit, ModelEvaluator, fit_candidate, jackknife_spread, nominal_fit
+from jointdb.diagnose._verdict import implausibility_text, levels_text, separating_measurement, shift_text
 from jointdb.diagnose.physics import Combination, Context, candidates_for
+from jointdb.diagnose.physics.interface import screen_sites
 from jointdb.errors import InputError
 
 __all__ = ["Diagnosis", "diagnose", "BIC_MARGIN", "MIN_IMPROVEMENT", "MIN_PAIR_IMPROVEMENT"]
@@ -31,6 +33,13 @@ MIN_PAIR_IMPROVEMENT = 2.0
 #: this factor of the BIC-best one is preferred (BIC alone under-penalises,
 #: because residuals on neighbouring lines are correlated).
 OCCAM_TOLERANCE = 1.15
+#: A fit whose parameters lie outside their plausible range keeps only 1/(1 + w Σd²) of its BIC gain
+#: (d: distance outside the range in units of its width; see Param.implausibility).
+PLAUSIBILITY_WEIGHT = 4.0
+#: Another explanation within this factor of the best's mismatch is named as a close alternative.
+CLOSE_CALL = 1.25
+#: Families of linear joints (a level-dependent joint starts from their fit at the same place).
+JOINT_FAMILIES = ("joint_compliance", "joint_damping")
 
 
 @dataclass
@@ -79,6 +88,30 @@ class Diagnosis:
     seconds: float = 0.0
     H_before: np.ndarray | None = None
     H_after: np.ndarray | None = None
+    #: local modal fits per excitation level of the recordings and of the augmented model (``LevelAnalysis``)
+    levels_data: object = None
+    levels_model: object = None
+    #: a close second explanation (another physics within CLOSE_CALL of the best) and how to separate them
+    alternative: Fit | None = None
+    advice: str = ""
+
+    @property
+    def location(self) -> str | None:
+        """Where the selected explanation sits, in words (joints, sensors), or None."""
+        if self.best is None:
+            return None
+        c = self.best.candidate
+        c = c.parts[0] if hasattr(c, "parts") else c
+        return getattr(c, "location", None)
+
+    @property
+    def position(self) -> float | None:
+        """Axial position [m] of the selected explanation (model coordinates), or None."""
+        if self.best is None:
+            return None
+        c = self.best.candidate
+        c = c.parts[0] if hasattr(c, "parts") else c
+        return getattr(c, "position", None)
 
     def table(self) -> list[dict]:
         """Ranked explanations as rows (name, family, parameters, ΔBIC, mismatch, improvement)."""
@@ -89,6 +122,7 @@ class Diagnosis:
                 "parameters": "; ".join(f"{q.name}={q.fmt(f.values[q.name], f.sigmas.get(q.name))}"
                                         for q in f.candidate.params) if f.candidate else "",
                 "dBIC": round(f.bic - self.nominal.bic, 1),
+                "plausible": not f.implausible,
                 "mismatch %": round(100 * f.mismatch, 2),
                 "gain x": round(self.nominal.mismatch / f.mismatch, 2) if f.mismatch > 0 else None,
             })
@@ -99,15 +133,18 @@ class Diagnosis:
         return {
             "explained": self.explained,
             "verdict": self.verdict,
-            "criterion": f"BIC = n ln(RSS/n) + p ln n; accept if ΔBIC <= -{BIC_MARGIN:g} and "
+            "criterion": f"BIC = n ln(RSS/n) + p ln n (gain shrunk for implausible parameters); accept if "
+                         f"ΔBIC <= -{BIC_MARGIN:g} and "
                          f"mismatch falls >= {MIN_IMPROVEMENT:g}x; a second effect only if it lowers BIC by "
                          f">= {BIC_MARGIN:g} per residual correlation length and mismatch >= "
                          f"{MIN_PAIR_IMPROVEMENT:g}x below the best single; prefer fewer parameters within "
                          f"{OCCAM_TOLERANCE:g}x of the best mismatch",
             "mismatch_before": self.mismatch_before,
             "mismatch_after": self.mismatch_after,
+            "location": self.location, "position_m": self.position,
             "best": None if b is None else {
                 "name": b.name, "family": b.family, "description": b.describe(),
+                "implausible": dict(b.implausible),
                 "values": b.values, "sigmas": b.sigmas, "sigmas_statistical": b.sigmas_stat,
                 "sigmas_model_form": b.sigmas_model, "reduced_chi2": b.chi2_red,
                 "residual_correlation_lines": b.tau, "parameters_at_bound": b.at_bound},
@@ -124,58 +161,77 @@ class Diagnosis:
             "frac": self.before.frac,
             "level_shifts": self.before.level_shifts, "affected_mode": self.before.affected_mode,
             "level_table": self.level_table,
+            "levels": None if self.levels_data is None else self.levels_data.to_dict(),
+            "levels_model": None if self.levels_model is None else self.levels_model.to_dict(),
+            "alternative": None if self.alternative is None else {
+                "name": self.alternative.name, "family": self.alternative.family,
+                "description": self.alternative.describe(), "mismatch": self.alternative.mismatch,
+                "separating_measurement": self.advice},
             "chain_correction": self.chain_correction,
             "seconds": self.seconds,
         }
 
 
-def _shift_text(sig: Signature) -> str:
-    if not sig.pairs:
-        return "no resonance of the model could be paired with one in the recording"
-    low, high, same = [], [], []
-    for p in sig.pairs:
-        s = 100 * p.shift
-        (same if abs(s) < 0.7 else low if s < 0 else high).append((p.mode, abs(s)))
+def _plausibility(fit: Fit, nominal: Fit) -> None:
+    """Mark parameters outside their plausible range and shrink the fit's BIC gain accordingly.
 
-    def grp(items, word):
-        modes = ", ".join(str(m) for m, _ in items)
-        vals = [v for _, v in items]
-        rng = f"{min(vals):.1f} %" if len(vals) == 1 or max(vals) - min(vals) < 0.3 else \
-            f"{min(vals):.1f}–{max(vals):.1f} %"
-        return f"mode{'s' if len(items) > 1 else ''} {modes} {'is' if len(items) == 1 else 'are'} {rng} {word}"
+    ``score = BIC_nominal + ΔBIC / (1 + PLAUSIBILITY_WEIGHT Σ d²)`` for a gain
+    (ΔBIC < 0), ``d`` being each parameter's distance outside its plausible
+    range in units of the range width (:meth:`Param.implausibility`).
+    """
+    params = fit.candidate.params if fit.candidate is not None else ()
+    bad = {q.name: q.implausibility(fit.values[q.name]) for q in params}
+    fit.implausible = {k: v for k, v in bad.items() if v > 0}
+    d2 = sum(v * v for v in fit.implausible.values())
+    gain = fit.bic - nominal.bic
+    fit.score = nominal.bic + (gain / (1.0 + PLAUSIBILITY_WEIGHT * d2) if gain < 0 else gain)
 
-    parts = []
-    if low:
-        parts.append(grp(low, "low in the recording"))
-    if high:
-        parts.append(grp(high, "high in the recording"))
-    if same:
-        m = ", ".join(str(m) for m, _ in same)
-        parts.append(f"mode{'s' if len(same) > 1 else ''} {m} {'is' if len(same) == 1 else 'are'} "
-                     "unchanged in frequency")
-    text = "; ".join(parts)
-    damp = [p.damping_ratio for p in sig.pairs if np.isfinite(p.damping_ratio)]
-    if damp and (max(damp) > 1.4 or min(damp) < 0.7):
-        text += "; recorded damping is " + ", ".join(f"×{d:.2g}" for d in damp) + " the model's (by mode)"
-    if abs(sig.gain_db) > 0.5:
-        text += f"; away from resonances the recording is {sig.gain_db:+.1f} dB off"
-    if sig.delay_r2 > 0.5 and abs(sig.delay_s) > 3e-6:
-        text += f"; its phase drifts in proportion to frequency (≈ {sig.delay_s * 1e6:.0f} µs)"
-    if sig.extra_peaks:
-        text += "; extra recorded peak(s) at " + ", ".join(f"{f:.0f}" for f in sig.extra_peaks) + " Hz"
-    if sig.missing_peaks:
-        text += "; model peak(s) missing in the recording at " + ", ".join(f"{f:.0f}" for f in sig.missing_peaks) \
-            + " Hz"
-    if sig.level_shifts:
-        w = max(sig.level_shifts, key=lambda s: abs(s["shift"]))
-        text += (f"; with rising excitation level mode {sig.affected_mode} moves {100 * w['shift']:+.1f} % "
-                 f"and its damping changes ×{w['damping_ratio']:.2g}")
-    return text
+
+def _level_analysis(obs: Observation, centres=None):
+    """Local modal fits per level (None with a single level or when no mode can be fitted)."""
+    if len(obs.levels) < 2:
+        return None
+    from jointdb.diagnose._levels import track_modes
+    from jointdb.errors import NumericalError
+
+    try:
+        return track_modes(obs.full_freq, obs.full_values, obs.full_weight, obs.levels, centres=centres)
+    except (InputError, NumericalError, np.linalg.LinAlgError):
+        return None
+
+
+def _model_level_analysis(full: ModelEvaluator, H: np.ndarray, obs: Observation, data):
+    """The same local modal fits on a model's per-level FRFs (for trends comparable with the data's)."""
+    if data is None or not data.tracks:
+        return None
+    from jointdb.diagnose._levels import track_modes
+    from jointdb.errors import NumericalError
+
+    centres = [t.freq_hz[data.order[0]] for t in data.tracks]
+    try:
+        return track_modes(full.freq, H, np.where(full.w > 0, full.w, 0.0), obs.levels, centres=centres)
+    except (InputError, NumericalError, np.linalg.LinAlgError):
+        return None
+
+
+def _per_level_start(cand, fits: list[Fit]) -> dict | None:
+    """Start a level-dependent candidate from the best fitted linear joint at the same place."""
+    names = {q.name for q in cand.params}
+    same = [f for f in fits if f.candidate.slot == cand.slot and f.family in JOINT_FAMILIES]
+    if not same:
+        same = [f for f in fits if f.family in JOINT_FAMILIES and not hasattr(f.candidate, "site")]
+    if not same:
+        return None
+    seed = min(same, key=lambda f: f.bic).values
+    start = {k: v for k, v in seed.items() if k in names}
+    if "eta_joint" in seed and "eta_0" in names:
+        start["eta_0"] = seed["eta_joint"]
+    return start or None
 
 
 def diagnose(model, measurements: Sequence[Measurement], mapping: Mapping[int, str] | None = None,
              band: tuple[float | None, float | None] = (None, None), combinations: bool = True,
-             families: Sequence[str] | None = None) -> Diagnosis:
+             families: Sequence[str] | None = None, mask_nonfinite: bool = False) -> Diagnosis:
     """Locate the mismatch between a model and recordings and explain it with candidate physics.
 
     Parameters
@@ -192,6 +248,8 @@ def diagnose(model, measurements: Sequence[Measurement], mapping: Mapping[int, s
         Also fit pairs of the best single explanations.
     families
         Restrict the candidate families (default: all offered).
+    mask_nonfinite
+        Give non-finite recorded lines zero weight (with a note) instead of refusing them.
 
     Returns
     -------
@@ -205,7 +263,8 @@ def diagnose(model, measurements: Sequence[Measurement], mapping: Mapping[int, s
     """
     t0 = time.perf_counter()
     modes = model.modes(8).freq_hz
-    obs = prepare(model, measurements, mapping, band, model_freqs=modes)
+    kw = {"mask_nonfinite": True} if mask_nonfinite else {}
+    obs = prepare(model, measurements, mapping, band, model_freqs=modes, **kw)
     ev = ModelEvaluator(obs)
     full = ModelEvaluator(obs, full=True, method="direct")
     H0_full = full.predict(model)
@@ -218,37 +277,47 @@ def diagnose(model, measurements: Sequence[Measurement], mapping: Mapping[int, s
             "record (or choose with --band) a range that contains them"
         )
     nominal = nominal_fit(ev, model)
+    nominal.score = nominal.bic
+    levels_data = _level_analysis(obs)
+    level_dependent = levels_data is not None and levels_data.differs
     ctx = Context(model=model, points=tuple(dict.fromkeys(obs.out_points)), n_levels=len(obs.levels),
                   levels=obs.levels, modes_hz=modes)
     cands = candidates_for(ctx)
     if families is not None:
         cands = [c for c in cands if c.family in set(families)]
+    # joints inside the stack: screen the sites on the recorded frequency shifts, fit only the best few
+    sites = sorted({c.site for c in cands if hasattr(c, "site")}, key=lambda st: st.position)
+    kept = set(screen_sites(model, sites, before.pairs)) if sites else set()
+    cands = [c for c in cands if not hasattr(c, "site") or c.site in kept]
+    if not level_dependent:
+        # a level-dependent explanation of recordings that agree across levels is invented physics
+        cands = [c for c in cands if not c.per_level]
     # recorded resonances for the stage-1 frequency pre-fit: the strong recorded
     # peaks (10 % of the strongest), each pulling its nearest model mode
-    from jointdb.diagnose._compare import find_peaks
-
     rpk = find_peaks(full.freq, full.rec[0], full.w[0])
     top = max((p.height for p in rpk), default=0.0)
     strong = sorted(p.freq_hz for p in rpk if p.height >= 0.1 * top)
     target = np.asarray(strong) if strong else None
-    singles = [c for c in cands if not c.per_level]
-    fits = [fit_candidate(ev, model, c, target_freqs=target) for c in singles]
+    fits = [fit_candidate(ev, model, c, target_freqs=target) for c in cands if not c.per_level]
     for c in cands:
         if c.per_level:
-            joints = [f for f in fits if f.family in ("joint_compliance", "joint_damping")]
-            seed = min(joints, key=lambda f: f.bic).values if joints else None
-            start = {k: v for k, v in (seed or {}).items() if k in {q.name for q in c.params}}
-            fits.append(fit_candidate(ev, model, c, start=start or None))
-    fits.sort(key=lambda f: f.bic)
+            fits.append(fit_candidate(ev, model, c, start=_per_level_start(c, fits)))
+    for f in fits:
+        _plausibility(f, nominal)
+    fits.sort(key=lambda f: f.score)
+
+    def eligible(f):
+        # when the levels disagree beyond noise, only an explanation that accounts for all of them may win
+        return not level_dependent or f.candidate.per_level
 
     def passes(f, ref):
-        return f.bic <= ref.bic - BIC_MARGIN and f.mismatch * MIN_IMPROVEMENT <= ref.mismatch
+        return f.score <= ref.score - BIC_MARGIN and f.mismatch * MIN_IMPROVEMENT <= ref.mismatch
 
     def simplest(f):
         """The member of f's slot with fewest parameters that is practically as good."""
-        near = [g for g in fits if g.candidate.slot == f.candidate.slot and passes(g, nominal)
+        near = [g for g in fits if g.candidate.slot == f.candidate.slot and passes(g, nominal) and eligible(g)
                 and g.mismatch <= OCCAM_TOLERANCE * f.mismatch]
-        return min(near, key=lambda g: (g.p, g.bic)) if near else f
+        return min(near, key=lambda g: (g.p, g.score)) if near else f
 
     if combinations and fits:
         tops = []
@@ -258,26 +327,30 @@ def diagnose(model, measurements: Sequence[Measurement], mapping: Mapping[int, s
                 tops.append(f)
             if len(tops) == 3:
                 break
-        best_single = fits[0]
+        best_single = next((f for f in fits if eligible(f)), fits[0])
         pair_fits = []
         for i in range(len(tops)):
             for j in range(i + 1, len(tops)):
                 a, b = tops[i], tops[j]
                 if a.candidate.per_level and b.candidate.per_level:
                     continue
+                if level_dependent and not (a.candidate.per_level or b.candidate.per_level):
+                    continue
                 combo = Combination(a.candidate, b.candidate)
                 start = {f"a.{k}": v for k, v in a.values.items()} | {f"b.{k}": v for k, v in b.values.items()}
                 pf = fit_candidate(ev, model, combo, start=start, max_nfev=12 * (len(combo.params) + 1))
+                _plausibility(pf, nominal)
                 tau = max(best_single.tau, 1.0)
-                if (best_single.bic - pf.bic) / tau >= BIC_MARGIN and pf.mismatch * MIN_PAIR_IMPROVEMENT <= \
+                if (best_single.score - pf.score) / tau >= BIC_MARGIN and pf.mismatch * MIN_PAIR_IMPROVEMENT <= \
                         best_single.mismatch:
                     pair_fits.append(pf)
-        fits = sorted(fits + pair_fits, key=lambda f: f.bic)
+        fits = sorted(fits + pair_fits, key=lambda f: f.score)
 
-    best = fits[0] if fits and passes(fits[0], nominal) else None
+    ok = [f for f in fits if eligible(f) and passes(f, nominal)]
+    best = ok[0] if ok else None
     if best is not None:
-        near = [f for f in fits if passes(f, nominal) and f.mismatch <= OCCAM_TOLERANCE * best.mismatch]
-        best = min(near, key=lambda f: (f.p, f.bic))
+        near = [f for f in ok if f.mismatch <= OCCAM_TOLERANCE * best.mismatch]
+        best = min(near, key=lambda f: (bool(f.implausible), f.p, f.score))
         fits = [best] + [f for f in fits if f is not best]
         # honest uncertainty of the selected explanation: statistical (χ²_red, τ) ⊕ model-form (jackknife)
         best.sigmas_model = jackknife_spread(ev, model, best)
@@ -302,6 +375,7 @@ def diagnose(model, measurements: Sequence[Measurement], mapping: Mapping[int, s
         augmented = tuple(c.apply(model, best.values, lv) for lv in range(len(obs.levels) if c.per_level else 1))
         parts = c.parts if isinstance(c, Combination) else (c,)
         prefix = ("a.", "b.") if isinstance(c, Combination) else ("",)
+        H1_full = full.predict(model, c, best.values)
         for part, pre in zip(parts, prefix):
             if part.family == "gain":
                 chain["gain"] = best.values[pre + "gain"]
@@ -309,18 +383,34 @@ def diagnose(model, measurements: Sequence[Measurement], mapping: Mapping[int, s
                 chain["delay_s"] = best.values[pre + "delay"]
             if hasattr(part, "level_table"):
                 vals = {k[len(pre):]: v for k, v in best.values.items() if k.startswith(pre)}
-                level_table = part.level_table(vals)
-        H1_full = full.predict(model, c, best.values)
+                f1 = levels_data.tracks[0].freq_hz if levels_data is not None and levels_data.tracks else None
+                grid = None if f1 is None else np.linspace(0.9 * f1.min(), 1.1 * f1.max(), 81)
+                level_table = part.level_table(vals, models=augmented if isinstance(c, type(part)) else None,
+                                               input_point=obs.in_points[0], freq_hz=grid)
         after = signature(full, np.asarray(H1_full))
     mis0 = full.mismatch(np.asarray(H0_full))
     mis1 = full.mismatch(np.asarray(H1_full)) if H1_full is not None else mis0
+    levels_model = _model_level_analysis(full, np.asarray(H1_full), obs, levels_data) \
+        if H1_full is not None and levels_data is not None else None
 
-    where = _shift_text(before)
-    if best is None:
-        runner = fits[0] if fits else None
+    where = shift_text(before) + levels_text(levels_data)
+    alternative, advice = None, ""
+    if best is not None and mis1 * MIN_IMPROVEMENT > mis0:
+        # the fit lines improved but the whole band did not: not an explanation (never explained=True below 1.5x)
+        verdict = (f"The recording differs from the model ({where}; mismatch {100 * mis0:.1f} %). The best "
+                   f"candidate, {best.describe()}, improves the fit lines but brings the whole band only to "
+                   f"{100 * mis1:.1f} % (less than {MIN_IMPROVEMENT:g}× better). Nothing is added.")
+        best, augmented, chain, level_table, after, H1_full, levels_model = None, (), {}, [], None, None, None
+        mis1 = mis0
+    elif best is None:
+        runner = next((f for f in fits if eligible(f)), fits[0] if fits else None)
         if nominal.mismatch < 0.08 or runner is None:
             verdict = (f"No significant mismatch: model and recording agree to {100 * mis0:.1f} % "
                        f"({where}); no physics is added.")
+        elif level_dependent and not any(f.candidate.per_level for f in fits):
+            verdict = (f"The recording differs from the model ({where}; mismatch {100 * mis0:.1f} %) and changes "
+                       "with the excitation level, but no amplitude-dependent candidate could be fitted. "
+                       "Nothing is added.")
         else:
             verdict = (f"The recording differs from the model ({where}; mismatch {100 * mis0:.1f} %), but no "
                        f"candidate physics explains it well: the best, {runner.describe()}, only brings it to "
@@ -331,12 +421,24 @@ def diagnose(model, measurements: Sequence[Measurement], mapping: Mapping[int, s
             lv = " Per level: " + "; ".join(
                 f"{r['level'] if r['level'] is not None else i + 1}: k_x {r['k_x_n_per_m'] / 1e6:.3g} N/µm, "
                 f"k_ry {r['k_ry_nm_per_rad'] / 1e3:.3g} kN·m/rad, η {r['loss_factor']:.3g}"
+                + (f", slip {r['slip_amplitude_m'] * 1e6:.3g} µm" if np.isfinite(r.get("slip_amplitude_m", np.nan))
+                   else "")
                 for i, r in enumerate(level_table)) + "."
-        verdict = (f"{where[0].upper() + where[1:]}. Best explained by {best.describe()}; "
-                   f"mismatch {100 * mis0:.1f} % → {100 * mis1:.1f} %.{lv}")
+        verdict = (f"{where[0].upper() + where[1:]}. Best explained by {best.describe()}"
+                   f"{implausibility_text(best)}; mismatch {100 * mis0:.1f} % → {100 * mis1:.1f} %.{lv}")
+        rivals = [f for f in ok if f is not best and f.candidate.slot != best.candidate.slot
+                  and f.family.split(" + ")[0] != best.family.split(" + ")[0]
+                  and f.mismatch <= CLOSE_CALL * best.mismatch]
+        if rivals:
+            alternative = rivals[0]
+            advice = separating_measurement(best, alternative, len(obs.levels), len(set(obs.out_points)))
+            verdict += (f" A close alternative is {alternative.describe()}{implausibility_text(alternative)} "
+                        f"(mismatch {100 * alternative.mismatch:.1f} % against {100 * best.mismatch:.1f} % on the "
+                        f"fit lines); to tell them apart, {advice}.")
     return Diagnosis(
         explained=best is not None, verdict=verdict, best=best, ranking=fits, nominal=nominal, before=before,
         after=after, mismatch_before=mis0, mismatch_after=mis1, augmented=augmented, chain_correction=chain,
         observation=obs, level_table=level_table, seconds=time.perf_counter() - t0,
         H_before=np.asarray(H0_full), H_after=None if H1_full is None else np.asarray(H1_full),
+        levels_data=levels_data, levels_model=levels_model, alternative=alternative, advice=advice,
     )

@@ -123,6 +123,10 @@ class Fit:
     #: statistical σ (linearised, scaled by χ²_red and τ) and model-form σ (jackknife), if computed
     sigmas_stat: dict = field(default_factory=dict)
     sigmas_model: dict = field(default_factory=dict)
+    #: ranking criterion: the BIC with its gain shrunk for implausible parameters (set by the diagnosis)
+    score: float = float("nan")
+    #: parameters outside their plausible range: {name: distance in units of the range width}
+    implausible: dict = field(default_factory=dict)
 
     @property
     def name(self) -> str:

@@ -30,7 +30,9 @@ class Param:
     """A fitted parameter: SI ``unit``, bounds, start; ``log`` = fitted in log space.
 
     ``show``/``show_unit`` convert for display (e.g. ``show=1e3, show_unit="g"``).
-    ``starts`` are extra starting values for multi-start fits.
+    ``starts`` are extra starting values for multi-start fits. ``plausible``
+    is the physically plausible range (default: the fit bounds); a fitted value
+    outside it is reported and penalised (:meth:`implausibility`).
     """
 
     name: str
@@ -42,6 +44,20 @@ class Param:
     show: float = 1.0
     show_unit: str = ""
     starts: tuple[float, ...] = ()
+    plausible: tuple[float, float] | None = None
+
+    def implausibility(self, value: float) -> float:
+        """Distance of ``value`` outside the plausible range, in units of that range's width
+        (in log space for logarithmic parameters); 0 inside."""
+        if self.plausible is None:
+            return 0.0
+        lo, hi = self.plausible
+        if self.log and lo > 0 and value > 0:
+            x, a, b = np.log(value), np.log(lo), np.log(hi)
+        else:
+            x, a, b = value, lo, hi
+        width = max(b - a, 1e-12)
+        return float(max(a - x, x - b, 0.0) / width)
 
     def to_u(self, value: float) -> float:
         return float(np.log(value / self.start)) if self.log else (value - self.start) / self.scale
@@ -166,7 +182,9 @@ from jointdb.diagnose.physics import (  # noqa: E402,F401
     chain,
     damping,
     diameter,
+    interface,
     joint,
+    microslip,
     sensor,
     suspension,
     theory,

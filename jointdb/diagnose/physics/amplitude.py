@@ -36,7 +36,7 @@ class AmplitudeDependentJoint(CompliantJoint):
         return model.with_ingredient(self.support(values, scale=s, eta=values[f"eta_{level + 1}"],
                                                   omega=self.omega1))
 
-    def level_table(self, values, sigmas=None):
+    def level_table(self, values, sigmas=None, **_):
         """Per level: (level, k_x, k_ry, loss factor)."""
         rows = []
         for i in range(self.n_levels):

@@ -58,6 +58,15 @@ class DistributedJoint(Candidate):
             ps.append(Param("eta_joint", "-", 1e-3, 2.0, 0.1, starts=(0.5,)))
         self.params = tuple(ps)
 
+    @property
+    def position(self) -> float:
+        """Where the joint is [m] (nominal coordinates): the clamp face."""
+        return self.clamp.position
+
+    @property
+    def location(self) -> str:
+        return f"the clamp (z = {self.clamp.position * 1e3:.4g} mm)"
+
     def apply(self, model, values, level=0):
         L = float(values["insertion"])
         kb = float(values["k_bed"])

@@ -3,7 +3,9 @@
 A fluted section is not a circle: its bending stiffness and its mass follow
 *effective* diameters that are usually guessed (0.75–0.85 × the nominal), and
 the two are not the same (the second moment of a fluted section falls faster
-than its area). One candidate per segment fits the bending-effective diameter
+than its area). Only the section at the free end (the cutting part) may
+plausibly be off by much (±20 %); any other section is plausible within ±3 %
+of its drawing, and a fit beyond that is penalised and reported. One candidate per segment fits the bending-effective diameter
 (the segment's outer diameter) and the mass-effective one (realised as a
 density scaled by ``(d_mass/d_bend)²`` on that segment).
 """
@@ -19,16 +21,21 @@ from jointdb.fe import Material, get_material
 class EffectiveDiameter(Candidate):
     family = "fluted_diameter"
 
-    def __init__(self, index, segment):
+    def __init__(self, index, segment, free_end: bool = False):
         self.index = index
         self.slot = f"diameter[{index}]"
         self.name = f"diameter@segment{index}"
         self.d0 = segment.outer_diameter
         self.explanation = (f"a wrong effective diameter of segment {index} "
                             f"(nominal {segment.outer_diameter * 1e3:.3g} mm, e.g. a fluted section)")
-        self.params = (Param("diameter", "m", 0.6 * self.d0, 1.4 * self.d0, self.d0, show=1e3, show_unit="mm"),
+        # a fluted section (at the free end: the cutting part) can have an effective diameter far
+        # from its nominal; a plain turned or ground section is within a few per cent of its drawing
+        band = FLUTED_BAND if free_end else PLAIN_BAND
+        pl = (self.d0 * (1 - band), self.d0 * (1 + band))
+        self.params = (Param("diameter", "m", 0.6 * self.d0, 1.4 * self.d0, self.d0, show=1e3, show_unit="mm",
+                             plausible=pl),
                        Param("mass_diameter", "m", 0.6 * self.d0, 1.4 * self.d0, self.d0, show=1e3,
-                             show_unit="mm"))
+                             show_unit="mm", plausible=pl))
 
     def apply(self, model, values, level=0):
         segs = list(model.segments)
@@ -41,6 +48,24 @@ class EffectiveDiameter(Candidate):
         return model.replace(segments=tuple(segs))
 
 
+#: Plausible effective-diameter error of the section at the free end (flutes), and of any other section.
+FLUTED_BAND = 0.20
+PLAIN_BAND = 0.03
+
+
+def _free_end_segment(model) -> int | None:
+    """Index of the segment at the free end (the end farthest from the clamps), if the model is clamped."""
+    from jointdb.diagnose.physics._util import full_clamps
+
+    clamps = full_clamps(model)
+    if not clamps:
+        return None
+    mid = 0.5 * model.length
+    return len(model.segments) - 1 if clamps[0].position <= mid else 0
+
+
 @register
 def _factory(ctx):
-    return [EffectiveDiameter(i, s) for i, s in enumerate(ctx.model.segments)]
+    tip = _free_end_segment(ctx.model)
+    return [EffectiveDiameter(i, s, free_end=(tip is None or i == tip)) for i, s in
+            enumerate(ctx.model.segments)]

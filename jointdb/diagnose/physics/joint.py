@@ -42,6 +42,15 @@ class CompliantJoint(Candidate):
                             "instead of a rigid one")
         self.params = joint_params(model, clamp, dirs)
 
+    @property
+    def position(self) -> float:
+        """Where the joint is [m]: the clamp."""
+        return self.clamp.position
+
+    @property
+    def location(self) -> str:
+        return f"the clamp (z = {self.clamp.position * 1e3:.4g} mm)"
+
     def support(self, values, scale=1.0, eta=0.0, omega=1.0):
         k = {d: values[f"k_{d}"] * scale for d in self.dirs}
         c = {d: eta * v / omega for d, v in k.items()} if eta > 0 else {}

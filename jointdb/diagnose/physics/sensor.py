@@ -22,7 +22,8 @@ class SensorMass(Candidate):
         self.name = f"sensor_mass{'_inertia' if inertia else ''}@{point}"
         self.explanation = (f"an unmodelled sensor (added mass{' and rotary inertia' if inertia else ''}) "
                             f"at point {point!r}")
-        ps = [Param("mass", "kg", 1e-4, 0.2, 0.005, show=1e3, show_unit="g", starts=(0.03,))]
+        # tap-test accelerometers weigh 0.2–30 g (with cable and mount); 0.2 kg is not a sensor
+        ps = [Param("mass", "kg", 1e-4, 0.2, 0.005, show=1e3, show_unit="g", starts=(0.03,), plausible=(1e-4, 0.04))]
         if inertia:
             ps.append(Param("rotary_inertia", "kg·m²", 1e-10, 1e-4, 1e-6, show=1e9, show_unit="g·mm²"))
         if offset:
