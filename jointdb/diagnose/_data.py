@@ -10,7 +10,7 @@ import numpy as np
 from jointdb.errors import InputError
 from jointdb.frf import FRF, Dof
 
-__all__ = ["Measurement", "Observation", "prepare"]
+__all__ = ["Measurement", "Observation", "RecordedArrays", "prepare"]
 
 #: A model-error floor on the log-FRF residual (2 %): lines with excellent
 #: coherence cannot dominate the fit because no model is better than this.
@@ -35,10 +35,33 @@ class Measurement:
         Free text (e.g. the file name) used in messages.
     """
 
-    frf: FRF
+    frf: FRF | RecordedArrays
     coherence: np.ndarray | None = None
     level: float | None = None
     label: str = ""
+
+    @classmethod
+    def from_arrays(cls, freq, values, outputs, inputs, quantity="receptance", coherence=None,
+                    level: float | None = None, label: str = "") -> "Measurement":
+        """A recording given as plain arrays, which may hold NaN/Inf lines (an :class:`FRF` refuses them).
+
+        :func:`prepare` refuses the non-finite lines, naming them, or masks
+        them with ``mask_nonfinite=True``. ``freq`` ``(n_freq,)`` [Hz],
+        ``values`` ``(n_freq, n_out, n_in)``, ``outputs``/``inputs`` DOF labels.
+        """
+        return cls(RecordedArrays(np.asarray(freq, dtype=float), np.asarray(values, dtype=complex),
+                                  tuple(outputs), tuple(inputs), quantity), coherence, level, label)
+
+
+@dataclass(frozen=True, eq=False)
+class RecordedArrays:
+    """Recorded FRF values as they came, unchecked (see :meth:`Measurement.from_arrays`)."""
+
+    freq: np.ndarray
+    values: np.ndarray
+    outputs: tuple
+    inputs: tuple
+    quantity: str = "receptance"
 
 
 @dataclass(frozen=True, eq=False)
@@ -49,6 +72,8 @@ class Observation:
     standard deviation of ``log H`` per entry (from coherence, with the model
     floor), ``weight = 1/sigma`` (0 for unusable lines). ``points`` are model
     point names of the outputs/inputs and ``directions`` their directions.
+    ``notes`` says what :func:`prepare` did to the recordings beyond mapping
+    them (masked non-finite lines, resampling, lines cut to the common band).
     """
 
     freq: np.ndarray
@@ -63,6 +88,7 @@ class Observation:
     full_freq: np.ndarray          # all recorded lines inside the band
     full_values: np.ndarray        # (n_level, n_full, n_out, n_in)
     full_weight: np.ndarray
+    notes: tuple[str, ...] = ()    # what was masked, resampled or cut, one sentence each
 
     @property
     def model_points(self) -> list[str]:
@@ -115,9 +141,121 @@ def _sigma_from_coherence(coh: np.ndarray) -> np.ndarray:
     return np.sqrt((1.0 - g) / g)
 
 
+def _lines_text(freq: np.ndarray, idx: np.ndarray, limit: int = 3) -> str:
+    """``line 937 (2345 Hz)`` / ``lines 937–940 (2345–2348.8 Hz), line 1200 (3000 Hz) and 4 more`` (1-based)."""
+    runs = np.split(idx, np.flatnonzero(np.diff(idx) > 1) + 1)
+    parts = []
+    for r in runs[:limit]:
+        if r.size == 1:
+            parts.append(f"line {r[0] + 1} ({freq[r[0]]:g} Hz)")
+        else:
+            parts.append(f"lines {r[0] + 1}–{r[-1] + 1} ({freq[r[0]]:g}–{freq[r[-1]]:g} Hz)")
+    more = sum(r.size for r in runs[limit:])
+    return ", ".join(parts) + (f" and {more} more line{'s' if more > 1 else ''}" if more else "")
+
+
+def _finite(m: Measurement, k: int, mask: bool, notes: list[str]):
+    """The recording as an :class:`FRF` plus its coherence and the mask of non-finite entries (or None).
+
+    Non-finite frequencies, values or coherence are refused (naming the
+    recording, the FRF entry and the lines) unless ``mask``; masked lines get
+    a placeholder interpolated from their finite neighbours and a note.
+    """
+    label = m.label or f"recording {k + 1}"
+    src = m.frf
+    coh = None if m.coherence is None else np.asarray(m.coherence, dtype=float)
+    if isinstance(src, FRF) and (coh is None or np.all(np.isfinite(coh))):
+        return src, coh, None
+    freq = np.asarray(src.freq, dtype=float)
+    values = np.asarray(src.values, dtype=complex)
+    outs, ins = tuple(Dof.parse(d) for d in src.outputs), tuple(Dof.parse(d) for d in src.inputs)
+    if values.ndim == 1 and len(outs) == len(ins) == 1:
+        values = values.reshape(-1, 1, 1)
+    if freq.ndim != 1 or values.shape != (freq.size, len(outs), len(ins)):
+        raise InputError(f"{label}: values have shape {values.shape}, expected (n_freq, n_out, n_in) = "
+                         f"({freq.size}, {len(outs)}, {len(ins)})")
+    if coh is not None and coh.ndim == 1 and coh.shape == freq.shape:
+        coh = np.broadcast_to(coh[:, None, None], values.shape)
+    if coh is not None and coh.shape != values.shape:
+        raise InputError(f"{label}: coherence has shape {coh.shape}, the FRF has {values.shape}")
+    bad_f = ~np.isfinite(freq)
+    bad = ~np.isfinite(values) | (~np.isfinite(coh) if coh is not None else False)
+    hint = "fix the recording, or pass mask_nonfinite=True (CLI: --mask-nonfinite) to give those lines zero weight"
+    if bad_f.any():
+        idx = np.flatnonzero(bad_f)
+        if not mask:
+            where = ", ".join(f"line {i + 1}" for i in idx[:3]) + (f" and {idx.size - 3} more" if idx.size > 3 else "")
+            raise InputError(f"{label}: the frequency of {where} is {freq[idx[0]]} (not a number); {hint}")
+        notes.append(f"{label}: {idx.size} line(s) with a non-finite frequency dropped "
+                     f"({', '.join(str(i + 1) for i in idx[:5])}{' …' if idx.size > 5 else ''})")
+    keep = ~bad_f
+    freq, values, bad = freq[keep], values[keep], bad[keep]
+    coh = coh[keep] if coh is not None else None
+    if bad.any():
+        entries = [(o, i) for o in range(len(outs)) for i in range(len(ins)) if bad[:, o, i].any()]
+        o, i = entries[0]
+        idx = np.flatnonzero(bad[:, o, i])
+        what = "values" if not np.all(np.isfinite(values[:, o, i])) else "coherence"
+        where = f"FRF {outs[o]}/{ins[i]}"
+        if idx.size == freq.size:
+            first = f"{where}: every {'value' if what == 'values' else 'coherence value'} is non-finite (NaN/Inf)"
+        else:
+            raw = values[idx, o, i] if what == "values" else coh[idx, o, i]
+            kinds = "/".join(k for k, f in (("NaN", np.isnan), ("Inf", np.isinf)) if f(raw).any())
+            first = (f"{where}: {idx.size} non-finite {what if idx.size > 1 or what != 'values' else 'value'} "
+                     f"({kinds}) at {_lines_text(freq, idx)}")
+        others = f"; {len(entries) - 1} more FRF entr{'ies' if len(entries) > 2 else 'y'} too" \
+            if len(entries) > 1 else ""
+        if not mask:
+            raise InputError(f"{label}: {first}{others}; {hint}")
+        if bad.all():
+            raise InputError(f"{label}: every value is non-finite (NaN/Inf); nothing to diagnose")
+        notes.append(f"{label}: {int(bad.sum())} non-finite value(s) masked (zero weight): "
+                     + "; ".join(f"FRF {outs[a]}/{ins[b]} at {_lines_text(freq, np.flatnonzero(bad[:, a, b]))}"
+                                 for a, b in entries[:4])
+                     + (f"; and {len(entries) - 4} more FRF entries" if len(entries) > 4 else ""))
+        fill = values.copy()
+        for a, b in entries:  # a few entries; lines batched by np.interp
+            good = ~bad[:, a, b]
+            if good.any():
+                fill[:, a, b] = np.interp(freq, freq[good], values[good, a, b].real) + \
+                    1j * np.interp(freq, freq[good], values[good, a, b].imag)
+            else:
+                fill[:, a, b] = 1.0
+        values = fill
+        if coh is not None:
+            coh = np.where(np.isfinite(coh), coh, 0.0)
+    if freq.size == 0:
+        raise InputError(f"{label}: no line has a finite frequency")
+    frf = FRF(freq, values, outs, ins, src.quantity)
+    return frf, coh, (bad if bad.any() else None)
+
+
+def _cut_notes(frfs, labels, lo: float, hi: float) -> list[str]:
+    """Say what each recording loses by cutting all to their common range ``lo``–``hi``."""
+    out = []
+    for frf, label in zip(frfs, labels):
+        cut = (frf.freq < lo) | (frf.freq > hi)
+        if not cut.any():
+            continue
+        ind = indicator(frf.values)
+        top = ind.max()
+        lost = [frf.freq[i] for i in peak_indices(frf.freq, frf.values) if cut[i] and ind[i] >= 0.01 * top]
+        sides = []
+        if (frf.freq < lo).any():
+            sides.append(f"below {lo:g} Hz")
+        if (frf.freq > hi).any():
+            sides.append(f"above {hi:g} Hz")
+        out.append(f"{label}: {int(cut.sum())} line(s) {' and '.join(sides)} dropped, outside the range all "
+                   f"recordings share ({lo:g}–{hi:g} Hz)"
+                   + (f", including recorded peak(s) at {', '.join(f'{f:.0f}' for f in lost)} Hz" if lost else ""))
+    return out
+
+
 def prepare(model, measurements: Sequence[Measurement], mapping: Mapping[int, str] | None = None,
             band: tuple[float | None, float | None] = (None, None), lines_per_mode: int = 36,
-            background_lines: int = 40, model_freqs: Sequence[float] = ()) -> Observation:
+            background_lines: int = 40, model_freqs: Sequence[float] = (),
+            mask_nonfinite: bool = False) -> Observation:
     """Map, check and thin the recordings for diagnosis.
 
     Parameters
@@ -137,26 +275,42 @@ def prepare(model, measurements: Sequence[Measurement], mapping: Mapping[int, st
         and log-spaced lines elsewhere.
     model_freqs
         Natural frequencies of the nominal model [Hz] (to keep lines around them).
+    mask_nonfinite
+        Give NaN/Inf lines (values, coherence; a non-finite frequency drops
+        its line) zero weight instead of refusing them; ``Observation.notes``
+        says how many were masked and where.
+
+    Returns
+    -------
+    Observation
+        With ``notes``: masked lines, recordings interpolated onto the first
+        one's lines, lines cut to the range all recordings share (and the
+        recorded peaks lost with them).
 
     Raises
     ------
     InputError
-        No recordings; DOFs that differ between recordings or have no model
-        point; directions the model lacks; no common frequency range; no line
-        with usable coherence.
+        No recordings; non-finite values (naming recording, FRF entry and
+        lines) unless ``mask_nonfinite``; DOFs that differ between recordings
+        or have no model point; directions the model lacks; no common
+        frequency range; no line with usable coherence.
     """
     mapping = dict(mapping or {})
     if not measurements:
         raise InputError("no recording given: pass at least one FRF file")
-    first = measurements[0].frf
-    for m in measurements[1:]:
-        if m.frf.outputs != first.outputs or m.frf.inputs != first.inputs:
+    notes: list[str] = []
+    checked = [_finite(m, k, mask_nonfinite, notes) for k, m in enumerate(measurements)]
+    labels = [m.label or f"recording {k + 1}" for k, m in enumerate(measurements)]
+    frfs = [c[0] for c in checked]
+    first = frfs[0]
+    for frf, lab in zip(frfs[1:], labels[1:]):
+        if frf.outputs != first.outputs or frf.inputs != first.inputs:
             raise InputError(
-                f"{m.label or 'recording'}: its DOFs ({', '.join(map(str, m.frf.outputs))} / "
-                f"{', '.join(map(str, m.frf.inputs))}) differ from the first recording's; "
+                f"{lab}: its DOFs ({', '.join(map(str, frf.outputs))} / "
+                f"{', '.join(map(str, frf.inputs))}) differ from the first recording's; "
                 "several recordings must be the same test at different excitation levels"
             )
-    label = measurements[0].label or "recording"
+    label = labels[0]
     dirs_ok = ("x", "ry") if model.kind == "planar" else ("x", "y", "z", "rx", "ry", "rz")
     for d in (*first.outputs, *first.inputs):
         if d.direction not in dirs_ok:
@@ -165,8 +319,9 @@ def prepare(model, measurements: Sequence[Measurement], mapping: Mapping[int, st
     outs = [_point_for(d, model, mapping, "output", label) for d in first.outputs]
     ins = [_point_for(d, model, mapping, "input", label) for d in first.inputs]
 
-    lo = max(m.frf.freq[0] for m in measurements)
-    hi = min(m.frf.freq[-1] for m in measurements)
+    common_lo = max(frf.freq[0] for frf in frfs)
+    common_hi = min(frf.freq[-1] for frf in frfs)
+    lo, hi = common_lo, common_hi
     if band[0] is not None:
         lo = max(lo, band[0])
     if band[1] is not None:
@@ -175,42 +330,62 @@ def prepare(model, measurements: Sequence[Measurement], mapping: Mapping[int, st
         raise InputError(
             "the recordings share no frequency range"
             + (f" with the requested band {band[0]}–{band[1]} Hz" if any(b is not None for b in band) else "")
-            + ": " + "; ".join(f"{m.label or i}: {m.frf.freq[0]:g}–{m.frf.freq[-1]:g} Hz"
-                               for i, m in enumerate(measurements))
+            + ": " + "; ".join(f"{lab}: {frf.freq[0]:g}–{frf.freq[-1]:g} Hz" for frf, lab in zip(frfs, labels))
         )
+    if len(frfs) > 1:
+        notes += _cut_notes(frfs, labels, common_lo, common_hi)
     base = first.freq[(first.freq >= lo) & (first.freq <= hi) & (first.freq > 0)]
     if base.size < 8:
         raise InputError(f"only {base.size} recorded lines between {lo:g} and {hi:g} Hz; need at least 8")
     vals, wts = [], []
-    for m in measurements:
-        frf = m.frf.to("receptance")
-        if not np.array_equal(frf.freq, first.freq):
-            frf = frf.resample(base)
-            idx = np.arange(base.size)
+    for (frf0, coh, bad), m, lab in zip(checked, measurements, labels):
+        frf = frf0.to("receptance")
+        idx = np.searchsorted(frf.freq, base).clip(0, frf.freq.size - 1)
+        same = bool(np.allclose(frf.freq[idx], base, rtol=1e-12, atol=0.0))   # base lines are recorded lines
+        if same:
+            v = frf.values[idx]
+            n_in = int(((frf.freq >= base[0]) & (frf.freq <= base[-1])).sum())
+            if n_in > base.size:
+                notes.append(f"{lab}: only {base.size} of its {n_in} lines between {base[0]:g} and {base[-1]:g} Hz "
+                             f"are used (those on the grid of {label}); the others are dropped")
         else:
-            idx = np.searchsorted(frf.freq, base)
-        v = frf.values[idx]
-        if m.coherence is not None:
-            coh = np.asarray(m.coherence, dtype=float)
+            inside = (frf.freq >= base[0]) & (frf.freq <= base[-1])
+            df = np.median(np.diff(frf.freq)) if frf.freq.size > 1 else 0.0
+            df0 = np.median(np.diff(base)) if base.size > 1 else 0.0
+            notes.append(f"{lab}: its {int(inside.sum())} lines between {base[0]:g} and {base[-1]:g} Hz "
+                         f"(spacing {df:.4g} Hz) were interpolated linearly onto the {base.size} lines of "
+                         f"{label} (spacing {df0:.4g} Hz)"
+                         + ("; its grid is coarser, so resonance peaks lose height" if df > 1.01 * df0 else ""))
+            v = frf.resample(base).values
+        if bad is not None:
+            bad = bad[idx] if same else np.stack(
+                [np.interp(base, frf.freq, b.astype(float)) > 0 for b in bad.reshape(bad.shape[0], -1).T],
+                -1).reshape(v.shape)
+        if coh is not None:
             if coh.ndim == 1:
-                coh = np.broadcast_to(coh[:, None, None], frf.values.shape)
+                coh = np.broadcast_to(coh[:, None, None], frf.values.shape) if coh.shape == frf.freq.shape else coh
             if coh.shape != frf.values.shape:
-                raise InputError(f"{m.label or 'recording'}: coherence has shape {coh.shape}, "
-                                 f"the FRF has {frf.values.shape}")
-            coh = coh[idx] if np.array_equal(m.frf.freq, first.freq) else \
-                np.stack([np.interp(base, m.frf.freq, c) for c in coh.reshape(coh.shape[0], -1).T],
+                raise InputError(f"{lab}: coherence has shape {coh.shape}, the FRF has {frf.values.shape}")
+            coh = coh[idx] if same else \
+                np.stack([np.interp(base, frf.freq, c) for c in coh.reshape(coh.shape[0], -1).T],
                          -1).reshape(v.shape)
             sigma = _sigma_from_coherence(coh)
             usable = coh >= MIN_COHERENCE
+            if bad is not None:
+                usable &= ~bad
             if usable.mean() < 0.1:
                 raise InputError(
-                    f"{m.label or 'recording'}: only {100 * usable.mean():.0f} % of the lines between "
+                    f"{lab}: only {100 * usable.mean():.0f} % of the lines between "
                     f"{lo:g} and {hi:g} Hz have coherence >= {MIN_COHERENCE}; no usable data to diagnose"
                 )
         else:
             sigma = roughness_sigma(v)
             usable = sigma < 1.0
+            if bad is not None:
+                usable &= ~bad
         w = np.where(usable & np.isfinite(v) & (np.abs(v) > 0), 1.0 / np.sqrt(sigma**2 + MODEL_FLOOR**2), 0.0)
+        if not w.any():
+            raise InputError(f"{lab}: no usable line between {lo:g} and {hi:g} Hz")
         vals.append(np.where(w > 0, v, 1.0))
         wts.append(w)
     values = np.stack(vals)
@@ -222,7 +397,7 @@ def prepare(model, measurements: Sequence[Measurement], mapping: Mapping[int, st
         out_points=tuple(outs), out_dirs=tuple(d.direction for d in first.outputs),
         in_points=tuple(ins), in_dirs=tuple(d.direction for d in first.inputs),
         levels=tuple(m.level for m in measurements), labels=tuple(m.label for m in measurements),
-        full_freq=base, full_values=values, full_weight=weight,
+        full_freq=base, full_values=values, full_weight=weight, notes=tuple(notes),
     )
 
 

@@ -104,3 +104,115 @@ def test_signature_reads_gain_and_delay_from_the_data(case):
     assert sig.gain_db == pytest.approx(20 * np.log10(g), abs=0.3)
     assert sig.delay_s == pytest.approx(tau, rel=0.15)
     assert all(abs(p.shift) < 0.005 for p in sig.pairs)
+
+
+# --------------------------------------------------------------- non-finite values and grids (issue 9, item 5)
+
+def _with(frf, coherence=None, label="tap.uff", **edits):
+    """The recording as arrays with some entries replaced: edits = {"values": [(line, out, in, value), ...]}."""
+    freq, v = frf.freq.copy(), frf.values.copy()
+    for k, o, i, x in edits.get("values", ()):
+        v[k, o, i] = x
+    for k, x in edits.get("freq", ()):
+        freq[k] = x
+    return Measurement.from_arrays(freq, v, frf.outputs, frf.inputs, coherence=coherence, label=label)
+
+
+def test_a_nonfinite_value_is_refused_naming_file_entry_and_line(case):
+    c, model = case
+    r = c.recordings[0]
+    m = _with(r.frf, r.coherence, values=[(100, 0, 0, np.inf)])
+    f = r.frf.freq[100]
+    msg = rf"tap\.uff: FRF 1x/1x: 1 non-finite value \(Inf\) at line 101 \({f:g} Hz\).*--mask-nonfinite"
+    with pytest.raises(InputError, match=msg):
+        prepare(model, [m])
+    with pytest.raises(InputError, match=msg):
+        diagnose(model, [m])
+    m = _with(r.frf, values=[(7, 2, 1, np.nan), (8, 2, 1, np.nan), (9, 2, 1, np.nan), (300, 0, 1, np.nan)])
+    with pytest.raises(InputError) as exc:
+        prepare(model, [m])
+    text = str(exc.value)
+    assert "\n" not in text and "FRF 1x/2x: 1 non-finite value (NaN) at line 301" in text and "1 more FRF entry" in text
+
+
+def test_masked_nonfinite_lines_get_zero_weight_and_a_note(case):
+    c, model = case
+    r = c.recordings[0]
+    clean = prepare(model, [Measurement(r.frf, r.coherence, label="tap.uff")])
+    m = _with(r.frf, r.coherence, values=[(100, 0, 0, np.inf), (101, 1, 0, np.nan), (102, 1, 0, np.nan)])
+    obs = prepare(model, [m], mask_nonfinite=True)
+    assert obs.full_weight[0, 100, 0, 0] == 0 and np.all(obs.full_weight[0, 101:103, 1, 0] == 0)
+    keep = np.ones(obs.full_weight.shape, dtype=bool)
+    keep[0, 100, 0, 0] = keep[0, 101:103, 1, 0] = False
+    np.testing.assert_array_equal(obs.full_weight[keep], clean.full_weight[keep])   # nothing else changed
+    assert np.all(np.isfinite(obs.full_values)) and np.all(np.isfinite(obs.values))
+    assert obs.notes == ("tap.uff: 3 non-finite value(s) masked (zero weight): FRF 1x/1x at line 101 "
+                         f"({r.frf.freq[100]:g} Hz); FRF 2x/1x at lines 102–103 "
+                         f"({r.frf.freq[101]:g}–{r.frf.freq[102]:g} Hz)",)
+    assert clean.notes == ()
+
+
+def test_nonfinite_coherence_and_frequency_are_named(case):
+    c, model = case
+    r = c.recordings[0]
+    coh = r.coherence.copy()
+    coh[50, 2, 1] = np.nan
+    with pytest.raises(InputError, match=r"tap\.uff: FRF 3x/2x: 1 non-finite coherence \(NaN\) at line 51"):
+        prepare(model, [Measurement(r.frf, coh, label="tap.uff")])
+    obs = prepare(model, [Measurement(r.frf, coh, label="tap.uff")], mask_nonfinite=True)
+    assert obs.full_weight[0, 50, 2, 1] == 0 and "1 non-finite value(s) masked" in obs.notes[0]
+    m = _with(r.frf, freq=[(40, np.nan)])
+    with pytest.raises(InputError, match=r"tap\.uff: the frequency of line 41 is nan"):
+        prepare(model, [m])
+    obs = prepare(model, [m], mask_nonfinite=True)
+    assert obs.full_freq.size == r.frf.n_freq - 1 and "non-finite frequency dropped (41)" in obs.notes[0]
+
+
+def test_an_all_nan_frf_is_one_line_and_no_numpy_warning(case):
+    import warnings
+
+    c, model = case
+    r = c.recordings[0]
+    v = r.frf.values.copy()
+    v[:, 2, 1] = np.nan
+    m = Measurement.from_arrays(r.frf.freq, v, r.frf.outputs, r.frf.inputs, label="tap.uff")
+    nan_all = Measurement.from_arrays(r.frf.freq, np.full(v.shape, np.nan), r.frf.outputs, r.frf.inputs,
+                                      label="empty.uff")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(InputError) as exc:
+            diagnose(model, [m])
+        assert str(exc.value).startswith("tap.uff: FRF 3x/2x: every value is non-finite (NaN/Inf)")
+        assert "\n" not in str(exc.value)
+        with pytest.raises(InputError, match=r"^empty\.uff: every value is non-finite \(NaN/Inf\); nothing"):
+            prepare(model, [nan_all], mask_nonfinite=True)
+        obs = prepare(model, [m], mask_nonfinite=True)
+    clean = prepare(model, [Measurement(r.frf)])
+    assert np.all(obs.full_weight[0, :, 2, 1] == 0)
+    # the other five FRFs are used as without the NaN entry
+    np.testing.assert_array_equal(obs.full_weight[0, :, :2], clean.full_weight[0, :, :2])
+    np.testing.assert_array_equal(obs.full_weight[0, :, 2, 0], clean.full_weight[0, :, 2, 0])
+
+
+def test_recordings_on_different_grids_say_what_was_dropped(case):
+    c, model = case
+    r = c.recordings[0]
+    # the second level stops at 3000 Hz: the first loses its lines above, with the recorded 2nd mode (≈ 3969 Hz)
+    short = r.frf.band(None, 3000.0)
+    obs = prepare(model, [Measurement(r.frf, level=1.0, label="low.uff"), Measurement(short, level=2.0,
+                                                                                      label="high.uff")])
+    n_cut = int((r.frf.freq > 3000.0).sum())
+    assert obs.full_freq[-1] == 3000.0
+    assert len(obs.notes) == 1
+    assert obs.notes[0].startswith(f"low.uff: {n_cut} line(s) above 3000 Hz dropped, outside the range all "
+                                   "recordings share (5–3000 Hz), including recorded peak(s) at 39")
+    # the second level on a grid half as fine, shifted by a quarter line: interpolated, and said so
+    shifted = r.frf.resample(np.arange(r.frf.freq[0] + 2.5, r.frf.freq[-1], 10.0))
+    obs = prepare(model, [Measurement(r.frf, level=1.0, label="low.uff"), Measurement(shifted, level=2.0,
+                                                                                        label="high.uff")])
+    assert any(n.startswith("high.uff: its ") and "interpolated linearly onto" in n and
+               "coarser, so resonance peaks lose height" in n for n in obs.notes)
+    assert any(n.startswith("low.uff: ") and "below 7.5 Hz" in n and "above" in n for n in obs.notes)
+    # the same grid: no note
+    same = prepare(model, [Measurement(r.frf, level=1.0), Measurement(r.frf, level=2.0)])
+    assert same.notes == ()
