@@ -1,22 +1,13 @@
-"""Amplitude dependence read from the recordings alone: a local modal fit per mode and level.
+"""Amplitude dependence read from the recordings alone: each mode followed across levels.
 
 A joint that micro-slips softens and gains damping as the vibration grows.
 Whether recordings at several excitation levels show that is a question about
 the *data*, and must not depend on how well the beam model fits them (a model
 with the wrong form shifts every nearest-line peak comparison). So each
 recorded resonance is fitted on its own, at every level, by a local modal
-model in a band around it,
-
-    H_e(ω) = Σ_p A_e,p / (ω_p² − ω² + 2i ζ_p ω_p ω) + L_e (ω_c/ω)² + U_e,
-
-with one pole (ω_p, ζ_p) shared by all FRF entries ``e``, a complex modal
-constant ``A_e,p`` per entry, and lower (``L``, mass-like) and upper (``U``,
-stiffness-like) residual terms per entry for the modes outside the band. A
-recorded neighbour peak inside the band gets its own pole. The poles are
-found by variable projection: nonlinear least squares on (ω_p, ζ_p) only, the
-linear coefficients solved exactly for each trial pole. The residual of entry
-``e`` at a line is ``w / |H_recorded| · (H_fit − H_recorded)``: ``w = 1/σ`` of
-``log H`` makes that the relative error in units of its noise.
+model in a band around it (:func:`jointdb.diagnose._modalfit.local_modal_fit`:
+a pole shared by all FRF entries, modal constants and out-of-band terms per
+entry, variable projection).
 
 Then per mode the levels are compared: the frequencies (and, separately, the
 damping ratios) of all levels are tested against a common value with their
@@ -37,6 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from jointdb.diagnose._data import indicator, peak_indices
+from jointdb.diagnose._modalfit import BAND_HALFWIDTHS, MIN_BAND, ModalFit, local_modal_fit
 from jointdb.errors import InputError
 
 __all__ = ["ModalFit", "ModeTrack", "LevelAnalysis", "local_modal_fit", "track_modes",
@@ -58,253 +50,10 @@ FREQ_FLOOR = 1e-3
 #: model-form error of a few per cent on ζ when neighbours are close; 15 % is
 #: beyond both.
 ZETA_FLOOR = 1.15
-#: Default band: this many half-power half-widths each side of the peak ...
-BAND_HALFWIDTHS = 4.0
-#: ... but at least this fraction of the frequency each side (and at most MAX_BAND).
-MIN_BAND = 0.025
-MAX_BAND = 0.15
 #: Recorded peaks (6 dB prominence) at least this fraction of the strongest are
 #: tracked. Receptance peaks fall like 1/ω², so a mode at 4× the frequency of
 #: the first is ~16× lower at equal damping: the fraction is small on purpose.
 STRONG_PEAK = 0.01
-_MIN_LINES = 8
-_ZETA_BOUNDS = (1e-5, 0.3)
-
-
-@dataclass(frozen=True, eq=False)
-class ModalFit:
-    """One local modal fit (see the module docstring).
-
-    Attributes
-    ----------
-    freq_hz, zeta
-        Natural frequency [Hz] and damping ratio of the fitted mode (the pole
-        ``ω_r = 2π f``, ``ζ``).
-    sigma_freq_hz, sigma_zeta
-        Their 1-σ statistical uncertainties: ``(JᵀJ)⁻¹`` of the projected
-        residual scaled by the reduced χ² (nothing for model-form error).
-    peak
-        Largest ``|H_fit(f_r)|`` over the FRF entries used (receptance units of
-        the input, e.g. m/N).
-    peak_entries
-        ``(n_out, n_in)`` ``|H_fit(f_r)|`` per entry (0 for entries not used).
-    residues
-        ``(n_out, n_in)`` complex modal constants ``A`` [1/kg for receptance]
-        of the fitted mode.
-    band
-        ``(f_lo, f_hi)`` [Hz] of the lines used.
-    n_lines
-        Recorded lines in the band with non-zero weight (per entry, summed).
-    chi2_red
-        Reduced χ² of the fit (≈ 0.5 for complex noise of the stated σ split
-        evenly between real and imaginary parts; ≫ 1 = the local model or the
-        stated σ is off).
-    neighbours
-        ``((f_hz, ζ), ...)`` of other recorded peaks in the band fitted along.
-    """
-
-    freq_hz: float
-    zeta: float
-    sigma_freq_hz: float
-    sigma_zeta: float
-    peak: float
-    peak_entries: np.ndarray
-    residues: np.ndarray
-    band: tuple[float, float]
-    n_lines: int
-    chi2_red: float
-    neighbours: tuple = ()
-
-
-def _half_power(freq: np.ndarray, ind: np.ndarray, i: int) -> float:
-    """Half of the half-power bandwidth [Hz] of indicator peak ``i`` (one-sided when cut by the grid)."""
-    half = ind[i] / np.sqrt(2.0)
-    below = np.where(ind[:i] <= half)[0]
-    above = np.where(ind[i + 1:] <= half)[0]
-    fl = fh = None
-    if below.size:
-        k = below[-1]
-        fl = np.interp(half, [ind[k], ind[k + 1]], [freq[k], freq[k + 1]])
-    if above.size:
-        k = i + 1 + above[0]
-        fh = np.interp(half, [ind[k], ind[k - 1]], [freq[k], freq[k - 1]])
-    if fl is not None and fh is not None:
-        return float(fh - fl) / 2.0
-    if fl is not None:
-        return float(freq[i] - fl)
-    if fh is not None:
-        return float(fh - freq[i])
-    return float(freq[-1] - freq[0]) / 2.0
-
-
-def _basis(omega: np.ndarray, poles: np.ndarray, omega_c: float) -> np.ndarray:
-    """``(n_line, n_pole + 3)``: one column per pole, then the out-of-band terms
-    (ω_c/ω)² (modes below), 1 (modes above) and ω/ω_c − 1 (their curvature)."""
-    wr, z = poles[:, 0], poles[:, 1]
-    cols = 1.0 / (wr[None] ** 2 - omega[:, None] ** 2 + 2j * z[None] * wr[None] * omega[:, None])
-    r = omega / omega_c
-    return np.concatenate([cols, np.column_stack([r**-2, np.ones_like(r), r - 1.0]) + 0j], 1)
-
-
-def _project(phi: np.ndarray, y: np.ndarray, s: np.ndarray):
-    """Weighted complex least squares per FRF entry with a shared basis.
-
-    ``phi`` ``(n, k)``, ``y`` and ``s`` ``(n, n_e)`` (``s`` = residual weights,
-    0 = unused line). Returns the coefficients ``(n_e, k)`` and the weighted
-    residual ``(n, n_e)``. Columns are normalised before the SVD solve, so
-    the pole columns (large near resonance) and the residual terms are
-    resolved alike.
-    """
-    n_e = y.shape[1]
-    coef = np.zeros((n_e, phi.shape[1]), complex)
-    res = np.zeros(y.shape, complex)
-    for e in range(n_e):  # a few FRF entries; the lines are batched
-        a = s[:, e, None] * phi
-        b = s[:, e] * y[:, e]
-        scale = np.linalg.norm(a, axis=0)
-        scale[scale == 0] = 1.0
-        c, *_ = np.linalg.lstsq(a / scale, b, rcond=None)
-        coef[e] = c / scale
-        res[:, e] = a @ coef[e] - b
-    return coef, res
-
-
-def local_modal_fit(freq: np.ndarray, values: np.ndarray, weight: np.ndarray | None, f_centre: float, *,
-                    search: float = 0.01, band_halfwidths: float = BAND_HALFWIDTHS, min_band: float = MIN_BAND,
-                    max_band: float = MAX_BAND) -> ModalFit:
-    """Fit one mode (common pole for all FRF entries) in a band around a recorded resonance.
-
-    Parameters
-    ----------
-    freq
-        ``(n_freq,)`` [Hz], increasing, > 0.
-    values
-        ``(n_freq, n_out, n_in)`` complex receptances (any consistent FRF).
-    weight
-        ``(n_freq, n_out, n_in)`` ``1/σ`` of ``log H`` per line and entry (0 =
-        unusable line), or None for equal weights.
-    f_centre
-        Where to look [Hz]: the peak of the CMIF-like indicator within
-        ``± search · f_centre`` is the centre of the band and the start of
-        the pole.
-    search
-        Relative half-width of the peak search (0 = take ``f_centre`` as is).
-    band_halfwidths, min_band, max_band
-        Band half-width: ``band_halfwidths`` half-power half-widths, at least
-        ``min_band`` and at most ``max_band`` of the peak frequency.
-
-    Returns
-    -------
-    ModalFit
-
-    Raises
-    ------
-    InputError
-        Shapes that do not match; ``f_centre`` outside the recorded lines;
-        fewer than 8 usable lines in the band.
-    """
-    import scipy.optimize
-
-    freq = np.asarray(freq, dtype=float)
-    values = np.asarray(values)
-    if values.ndim != 3 or values.shape[0] != freq.size:
-        raise InputError(f"local modal fit: values have shape {values.shape}, expected ({freq.size}, n_out, n_in)")
-    ok = np.isfinite(values) & (np.abs(values) > 0)
-    if weight is None:
-        weight = np.ones(values.shape)
-    weight = np.where(ok, np.asarray(weight, dtype=float), 0.0)
-    if weight.shape != values.shape:
-        raise InputError(f"local modal fit: weight has shape {weight.shape}, values {values.shape}")
-    if not freq[0] <= f_centre <= freq[-1]:
-        raise InputError(f"local modal fit: {f_centre:g} Hz is outside the recorded {freq[0]:g}–{freq[-1]:g} Hz")
-    vals = np.where(ok, values, 0.0)
-    ind = indicator(vals, weight)
-    win = np.where(np.abs(freq - f_centre) <= search * f_centre)[0]
-    i = int(win[np.argmax(ind[win])]) if win.size else int(np.argmin(np.abs(freq - f_centre)))
-    f_pk = float(freq[i])
-    hw = max(_half_power(freq, ind, i), 0.5 * float(np.median(np.diff(freq))) if freq.size > 1 else 0.0)
-    half = min(max(band_halfwidths * hw, min_band * f_pk), max_band * f_pk)
-    sel = (freq >= f_pk - half) & (freq <= f_pk + half)
-    f_b, y, w = freq[sel], vals[sel], weight[sel]
-    n_out, n_in = values.shape[1:]
-    y = y.reshape(f_b.size, -1)
-    s = w.reshape(f_b.size, -1) / np.where(np.abs(y) > 0, np.abs(y), 1.0)
-    used = (s > 0).sum(axis=0) >= _MIN_LINES
-    if not used.any():
-        raise InputError(f"local modal fit at {f_pk:.4g} Hz: fewer than {_MIN_LINES} usable lines in "
-                         f"{f_b[0] if f_b.size else f_pk:.4g}–{f_b[-1] if f_b.size else f_pk:.4g} Hz; "
-                         "record a finer frequency grid or a wider band")
-    y, s = y[:, used], s[:, used]
-    omega = 2 * np.pi * f_b
-    w_c = 2 * np.pi * f_pk
-    n_e = int(used.sum())
-    n_res = 2 * int((s > 0).sum())
-
-    def solve(starts):
-        n_p = len(starts)
-
-        def poles_of(x):
-            x = x.reshape(n_p, 2)
-            return np.column_stack([w_c * x[:, 0], np.exp(x[:, 1])])
-
-        def resid(x):
-            _, r = _project(_basis(omega, poles_of(x), w_c), y, s)
-            return np.concatenate([r.real.ravel(), r.imag.ravel()])
-
-        x0 = np.array([[f / f_pk, np.log(np.clip(z, *_ZETA_BOUNDS))] for f, z in starts]).ravel()
-        lo = np.tile([f_b[0] / f_pk * 0.98, np.log(_ZETA_BOUNDS[0])], n_p)
-        hi = np.tile([f_b[-1] / f_pk * 1.02, np.log(_ZETA_BOUNDS[1])], n_p)
-        x0 = np.clip(x0, lo + 1e-12, hi - 1e-12)
-        sol = scipy.optimize.least_squares(resid, x0, bounds=(lo, hi), x_scale=np.tile([1e-3, 0.1], n_p),
-                                           xtol=1e-14, ftol=1e-14, gtol=1e-14, max_nfev=400)
-        r = resid(sol.x)
-        n_par = sol.x.size + 2 * (n_p + 3) * n_e
-        return sol.x, r, poles_of, resid, n_par
-
-    # a neighbouring recorded peak in the band is fitted along as a pole of its own when it earns
-    # its parameters (BIC); candidates: local maxima of the smoothed indicator 10 % above their saddles
-    import scipy.signal
-
-    sm = np.convolve(np.log(np.maximum(ind[sel], 1e-300)), np.ones(3) / 3, mode="same")
-    cand, props = scipy.signal.find_peaks(sm, prominence=0.1)
-    cand = [int(k) for k in cand[np.argsort(-props["prominences"])] if abs(int(k) + np.argmax(sel) - i) > 2]
-    starts = [(f_pk, max(hw / f_pk, 2e-4))]
-    x, r, poles_of, resid, n_par = solve(starts)
-
-    def bic(r, n_par):
-        return n_res * np.log(max(float(r @ r), 1e-300) / n_res) + n_par * np.log(n_res)
-
-    for k in cand[:2]:
-        kk = k + int(np.argmax(sel))
-        trial = starts + [(float(freq[kk]), max(_half_power(freq, ind, kk) / freq[kk], 2e-4))]
-        x2, r2, p2, res2, n2 = solve(trial)
-        if bic(r2, n2) <= bic(r, n_par) - 10.0 and abs(p2(x2)[0, 0] - p2(x2)[1, 0]) > 2 * np.pi * 1e-3 * f_pk:
-            starts, x, r, poles_of, resid, n_par = trial, x2, r2, p2, res2, n2
-    # central-difference Jacobian at the solution (more accurate than the solver's forward one)
-    jac = np.empty((r.size, x.size))
-    for k in range(x.size):
-        h = 1e-6 if k % 2 == 0 else 1e-5
-        dx = np.zeros_like(x)
-        dx[k] = h
-        jac[:, k] = (resid(x + dx) - resid(x - dx)) / (2 * h)
-    chi2_red = float(r @ r) / max(r.size - n_par, 1)
-    cov = np.linalg.pinv(jac.T @ jac) * chi2_red
-    poles = poles_of(x)
-    f_r, z_r = poles[0, 0] / (2 * np.pi), poles[0, 1]
-    sig_f = f_pk * float(np.sqrt(max(cov[0, 0], 0.0)))
-    sig_z = z_r * float(np.sqrt(max(cov[1, 1], 0.0)))
-    coef, _ = _project(_basis(omega, poles, w_c), y, s)
-    h_at = _basis(np.array([poles[0, 0]]), poles, w_c)[0] @ coef.T
-    peaks = np.zeros(n_out * n_in)
-    peaks[used] = np.abs(h_at)
-    res = np.zeros(n_out * n_in, complex)
-    res[used] = coef[:, 0]
-    return ModalFit(
-        freq_hz=float(f_r), zeta=float(z_r), sigma_freq_hz=sig_f, sigma_zeta=sig_z,
-        peak=float(peaks.max()), peak_entries=peaks.reshape(n_out, n_in), residues=res.reshape(n_out, n_in),
-        band=(float(f_b[0]), float(f_b[-1])), n_lines=int((s > 0).sum()), chi2_red=chi2_red,
-        neighbours=tuple((float(p[0] / (2 * np.pi)), float(p[1])) for p in poles[1:]),
-    )
 
 
 @dataclass(frozen=True, eq=False)
@@ -316,7 +65,8 @@ class ModeTrack:
     Attributes
     ----------
     mode
-        1-based order of the mode among the tracked ones (by frequency).
+        1-based order of the mode among the recorded peaks (or the given
+        centres) by frequency; a peak that cannot be fitted leaves a gap.
     freq_hz, sigma_freq_hz, zeta, sigma_zeta
         Local-fit frequency [Hz] and damping ratio per level, with 1-σ.
     peak
@@ -537,7 +287,7 @@ def track_modes(freq: np.ndarray, values: np.ndarray, weight: np.ndarray | None,
         spread_f = float(f.max() / f.min() - 1)
         spread_z = float(z.max() / z.min())
         tracks.append(ModeTrack(
-            mode=len(tracks) + 1, freq_hz=f, sigma_freq_hz=sf, zeta=z, sigma_zeta=sz, peak=peak, amplitude=amp,
+            mode=m + 1, freq_hz=f, sigma_freq_hz=sf, zeta=z, sigma_zeta=sz, peak=peak, amplitude=amp,
             amplitude_unit="m" if known else "m/N", entry=(int(e[0]), int(e[1])),
             chi2_freq=c_f, p_freq=p_f, chi2_zeta=c_z, p_zeta=p_z,
             freq_change=float(f[order[-1]] / f[order[0]] - 1), zeta_ratio=float(z[order[-1]] / z[order[0]]),
