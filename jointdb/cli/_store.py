@@ -15,6 +15,13 @@ from typing import Annotated, Any, Optional
 import typer
 
 from jointdb._output import emit, message
+from jointdb.cli._joint_files import (
+    _JOINT_MODEL_KINDS,
+    _numeric_metrics,
+    _read_joint_file,
+    _write_joint_file,
+    merge_conditions,
+)
 from jointdb.errors import InputError, NotFoundError
 
 DbOpt = Annotated[
@@ -28,11 +35,12 @@ BlobsOpt = Annotated[
 
 
 def check_db_target(db: str | None, create: bool = False) -> None:
-    """Refuse a mistyped SQLite ``--db``/``$JOINTDB_URL`` before it becomes a new empty database.
+    """Refuse an unusable SQLite ``--db``/``$JOINTDB_URL`` before anything is opened or created.
 
-    Commands that write (``catalogue``, ``joints import``) may create the file,
-    but not its directory; the others need an existing file. The per-user
-    default database is created on first use as before.
+    A directory, an empty (0-byte) or non-SQLite file is refused (InputError);
+    a missing file is NotFoundError unless ``create`` (``catalogue``,
+    ``joints import``, ``db upgrade``), and even then its directory must exist
+    (the per-user default directory is created).
 
     Raises
     ------
@@ -40,31 +48,28 @@ def check_db_target(db: str | None, create: bool = False) -> None:
     """
     import os
 
-    from sqlalchemy.engine import make_url
-
-    from jointdb.store._db import resolve_url
+    from jointdb.store._db import check_sqlite_file, is_sqlite, resolve_url, sqlite_path
 
     given = db if db is not None else os.environ.get("JOINTDB_URL")
-    if not given:
+    url = resolve_url(given)
+    if not is_sqlite(url):
         return
-    url = make_url(resolve_url(given))
-    if url.get_backend_name() != "sqlite":
-        return
-    path = Path(str(url.database))
-    if path.exists():
+    path = sqlite_path(url)
+    if check_sqlite_file(path):
         return
     if not create:
         raise NotFoundError(f"database {path} does not exist (`jointdb catalogue`, `jointdb joints import` "
                             "or `jointdb db upgrade` creates it)")
-    if not path.parent.is_dir():
+    if given and not path.parent.is_dir():
         raise InputError(f"database {path}: directory {path.parent} does not exist")
 
 
 def _repo(db: str | None, blobs: Path | None = None, *, create: bool = False):
+    """The repository of ``--db``; only writing commands (``create``) may create a new SQLite file."""
     from jointdb.store import Repository
 
     check_db_target(db, create)
-    return Repository(db, blobs=blobs)
+    return Repository(db, blobs=blobs, auto_create=None if create else False)
 
 
 def _pairs(items: list[str] | None, what: str, numeric: bool = True) -> dict[str, Any]:
@@ -102,82 +107,8 @@ def _conditions(materials, preload, torque, geometry, extra=None):
     )
 
 
-#: ``joint_model`` of `jointdb identify` files -> model kind of the catalogue
-_JOINT_MODEL_KINDS = {"planar": "spring-damper-planar", "n-point": "n-point-translational", "matrix": "full-matrix"}
-
-
-def _numeric_metrics(data: Any, prefix: str = "") -> dict[str, float]:
-    """Finite numeric scalars of a (nested) mapping, keys joined with '.'."""
-    import math
-
-    out: dict[str, float] = {}
-    if not isinstance(data, dict):
-        return out
-    for key, value in data.items():
-        name = f"{prefix}{key}"
-        if isinstance(value, bool):
-            continue
-        if isinstance(value, (int, float)) and math.isfinite(float(value)):
-            out[name] = float(value)
-        elif isinstance(value, dict):
-            out.update(_numeric_metrics(value, name + "."))
-    return out
-
-
-def _read_joint_file(path: Path) -> tuple[Any, dict[str, Any], dict[str, str], dict[str, Any]]:
-    """FRF, metadata, input-file hashes and raw measurement FRFs from a joint or campaign file.
-
-    Accepts the HDF5 exchange file of ``jointdb identify`` (``format = jointdb-frf``,
-    metadata ``joint_model``, ``joint_type``, ``conditions``, ``quality``,
-    ``settings``), a jointdb FRF blob file, or a campaign JSON file (identified
-    here first, as ``jointdb identify`` would).
-    """
-    import h5py
-
-    from jointdb.store import file_sha256, read_frf_file
-
-    if not path.is_file():
-        raise InputError(f"{path}: no such file")
-    hashes = {path.name: file_sha256(path)}
-    if path.suffix.lower() == ".json":
-        try:
-            from jointdb.campaign import load_campaign
-            from jointdb.campaign import identify_campaign, joint_attrs
-        except ImportError:
-            raise InputError(f"{path}: cataloguing straight from a campaign needs `jointdb identify`") from None
-        outcome = identify_campaign(load_campaign(path))
-        text = path.read_text(encoding="utf-8")
-        for sibling in sorted(path.parent.iterdir()):
-            if sibling.is_file() and sibling != path and f'"{sibling.name}"' in text:
-                hashes[sibling.name] = file_sha256(sibling)
-        raw = {"measured": outcome.measured} if outcome.measured is not None else {}
-        return outcome.result.joint, joint_attrs(outcome), hashes, raw
-    try:
-        with h5py.File(path, "r", locking=False) as f:
-            fmt = f.attrs.get("format")
-            fmt = fmt.decode() if isinstance(fmt, bytes) else str(fmt)
-    except OSError as exc:
-        raise InputError(f"{path}: not an HDF5 file ({exc})") from None
-    if fmt == "jointdb-frf-blob":
-        return read_frf_file(path), {}, hashes, {}
-    from jointdb.io import read_frf_hdf5_full
-
-    frf, meta = read_frf_hdf5_full(path)
-    return frf, dict(meta or {}), hashes, {}
-
-
 #: columns of version tables for people (``--json`` has every field)
 _TABLE = ["name", "version", "state", "labels", "materials", "torque_nm", "preload_n"]
-
-
-def _write_joint_file(path: Path, frf, meta: dict[str, Any]) -> None:
-    """Write a joint FRF as the HDF5 exchange file of ``jointdb identify`` (readable by
-    ``jointdb couple --joint`` and ``jointdb catalogue``), with ``meta`` as its metadata."""
-    from jointdb.io import write_frf_hdf5
-
-    kinds = {v: k for k, v in _JOINT_MODEL_KINDS.items()}
-    meta = {"kind": "joint", "joint_model": kinds.get(meta.pop("model_kind", ""), ""), **meta}
-    write_frf_hdf5(path, frf, json.loads(json.dumps(meta, default=str)))
 
 
 def _version_row(v) -> dict[str, Any]:
@@ -235,13 +166,16 @@ def register(app: typer.Typer) -> None:
         parent: Annotated[Optional[int], typer.Option("--parent", help="Version this one corrects (default: latest).")] = None,
         author: Annotated[Optional[str], typer.Option("--author", help="Author (default: $JOINTDB_AUTHOR or login).")] = None,
         label: Annotated[Optional[str], typer.Option("--label", help="Also point this label at the new version.")] = None,
+        override: Annotated[bool, typer.Option("--override-conditions", help="Store the options' conditions even where the file records other values.")] = False,
         db: DbOpt = None,
         blobs: BlobsOpt = None,
         as_json: JsonOpt = False,
     ) -> None:
         """Catalogue an identified joint FRF as a new immutable version.
 
-        Conditions given as options override those recorded in the file.
+        Conditions given as options complete those recorded in the file; an option
+        that contradicts the file is refused unless --override-conditions.
+        The version and its --label are written together or not at all.
         Example: jointdb catalogue joint.h5 --name T1-HSK63 --type tool-holder
         --material carbide --material steel --torque 40 --geometry diameter_m=0.02
         """
@@ -264,21 +198,15 @@ def register(app: typer.Typer) -> None:
             input_files=hashes,
             author=author or "",
         )
-        base = dict(meta.get("conditions") or {}) if isinstance(meta.get("conditions"), dict) else {}
-        given = _conditions(material, preload, torque, geometry, extra)
-        from jointdb.store import Conditions
+        conditions = merge_conditions(joint_file, meta.get("conditions"),
+                                      _conditions(material, preload, torque, geometry, extra), override)
+        if label is not None:
+            from jointdb.store._types import check_label
 
-        conditions = Conditions(
-            materials=given.materials or tuple(base.get("materials") or ()),
-            preload_n=given.preload_n if given.preload_n is not None else base.get("preload_n"),
-            torque_nm=given.torque_nm if given.torque_nm is not None else base.get("torque_nm"),
-            geometry={**dict(base.get("geometry") or {}), **dict(given.geometry)},
-            extra={**dict(base.get("extra") or {}), **dict(given.extra)},
-        )
+            label = check_label(label)  # before the database is opened (or created)
         repo = _repo(db, blobs, create=True)
-        jv = repo.catalogue(name, jtype, frf, conditions, kind, prov, q, parent, raw_frfs=raw, author=author)
-        if label:
-            jv = repo.label(jv.name, jv.version, label, author=author)
+        jv = repo.catalogue(name, jtype, frf, conditions, kind, prov, q, parent, raw_frfs=raw, author=author,
+                            label=label)
         message(f"catalogued {jv.name} v{jv.version} ({jv.blob_sha256[:12]})")
         emit(_version_detail(jv), as_json=as_json, title=f"{jv.name} v{jv.version}")
 
@@ -418,27 +346,47 @@ def register(app: typer.Typer) -> None:
     def export(
         bundle: Annotated[Path, typer.Argument(help="Bundle file to write (HDF5).")],
         names: Annotated[Optional[list[str]], typer.Argument(help="Joint names (default: all).")] = None,
+        sign: Annotated[Optional[Path], typer.Option("--sign", help="Sign the bundle with this Ed25519 private key (`jointdb keys create`).")] = None,
         db: DbOpt = None, blobs: BlobsOpt = None, as_json: JsonOpt = False,
     ) -> None:
-        """Export joints with all versions and provenance to one portable HDF5 bundle.
+        """Export joints with all versions, provenance, labels and states to one portable HDF5 bundle.
 
-        Example: jointdb joints export lab.h5 T1 T2
+        Example: jointdb joints export lab.h5 T1 T2 --sign lab-key
         """
-        counts = _repo(db, blobs).export(names or None, bundle)
+        key = None
+        if sign is not None:
+            from jointdb.store._signing import load_private_key
+
+            key = load_private_key(sign)  # before anything is read or written
+        counts = _repo(db, blobs).export(names or None, bundle, sign_key=key)
         emit({"bundle": str(bundle), **counts}, as_json=as_json)
 
     @joints.command("import")
     def import_(
         bundle: Annotated[Path, typer.Argument(help="Bundle file written by `jointdb joints export`.")],
         author: Annotated[Optional[str], typer.Option("--author")] = None,
+        require_signature: Annotated[bool, typer.Option("--require-signature", help="Refuse a bundle not signed by a --trust key.")] = False,
+        trust: Annotated[Optional[list[Path]], typer.Option("--trust", help="Trusted Ed25519 public key (NAME.pub; repeat).")] = None,
         db: DbOpt = None, blobs: BlobsOpt = None, as_json: JsonOpt = False,
     ) -> None:
         """Import a bundle: identical versions are no-ops, conflicting ones are refused.
 
-        Example: jointdb joints import lab.h5 --db postgresql+psycopg://host/jointdb
+        The whole bundle (hashes, fields, labels, states, signature) is verified
+        before the database is opened, so a refused bundle creates nothing.
+        Example: jointdb joints import lab.h5 --require-signature --trust lab-key.pub --db other.sqlite
         """
-        if not bundle.is_file():  # before opening (and maybe creating) the database
-            raise NotFoundError(f"bundle {bundle} does not exist")
-        summary = _repo(db, blobs, create=True).import_(bundle, author=author)
+        from jointdb.store._bundle_read import read_bundle
+        from jointdb.store._signing import load_public_key
+
+        keys = [load_public_key(p) for p in trust or []]
+        check_db_target(db, create=True)  # a bad --db is reported before the bundle is read
+        verified = read_bundle(bundle, keys, require_signature)
+        for note in verified.notes:
+            message(note)
+        summary = _repo(db, blobs, create=True).import_(verified, author=author)
         summary["labels_skipped"] = ", ".join(summary["labels_skipped"]) or None
         emit(summary, as_json=as_json)
+
+    from jointdb.cli import _keys
+
+    _keys.register(app)

@@ -91,34 +91,58 @@ __all__ = [
 
 
 def _migrate(step: str, url: str | None, revision: str) -> str | None:
+    from alembic.util.exc import CommandError
+
+    from jointdb.errors import InputError
     from jointdb.store import _db
 
     resolved = _db.resolve_url(url)
+    sqlite = _db.is_sqlite(resolved)
+    if sqlite and _db.open_sqlite_target(resolved, create=step == "upgrade", revision=revision):
+        return current_revision(resolved)  # a new file, created at `revision`
     read, write = _db.make_engines(resolved)
     try:
-        getattr(_db, step)(write, revision)
-        return _db.current_revision(read)
+        with _db.db_errors(resolved):
+            if sqlite:
+                _db.check_jointdb_sqlite(read, _db.sqlite_path(resolved))
+            try:
+                getattr(_db, step)(write, revision)
+            except CommandError as exc:
+                raise InputError(f"cannot {step} to {revision!r}: {exc}") from None
+            return _db.current_revision(read)
     finally:
         read.dispose()
 
 
 def upgrade(url: str | None = None, revision: str = "head") -> str | None:
-    """Apply Alembic migrations to ``revision``; returns the new revision."""
+    """Apply Alembic migrations to ``revision``; returns the new revision.
+
+    A SQLite file that does not exist is created (atomically); an existing file
+    must be a jointdb database (see :func:`jointdb.store._db.open_sqlite_target`).
+    """
     return _migrate("upgrade", url, revision)
 
 
 def downgrade(url: str | None = None, revision: str = "-1") -> str | None:
-    """Revert Alembic migrations to ``revision`` (``-1`` one step, ``base`` all)."""
+    """Revert Alembic migrations to ``revision`` (``-1`` one step, ``base`` all).
+
+    Never creates a database (NotFoundError for a missing SQLite file). The
+    command line asks for ``--yes`` first (see :func:`jointdb.store._db.downgrade_plan`).
+    """
     return _migrate("downgrade", url, revision)
 
 
 def current_revision(url: str | None = None) -> str | None:
-    """The schema revision of a database (None when it has none)."""
+    """The schema revision of a database (None when it has none, or when a SQLite file does not exist)."""
     from jointdb.store import _db
 
-    read, _ = _db.make_engines(_db.resolve_url(url))
+    resolved = _db.resolve_url(url)
+    if _db.is_sqlite(resolved) and not _db.check_sqlite_file(_db.sqlite_path(resolved)):
+        return None  # nothing is created to answer
+    read, _ = _db.make_engines(resolved)
     try:
-        return _db.current_revision(read)
+        with _db.db_errors(resolved):
+            return _db.current_revision(read)
     finally:
         read.dispose()
 

@@ -38,6 +38,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+import re
 import time
 import uuid
 from collections.abc import Iterator
@@ -60,6 +61,7 @@ _TMP_PREFIX = ".tmp-"
 _GC_PREFIX = _TMP_PREFIX + "gc-"  # a blob `gc` moved aside for its last check: ".tmp-gc-<sha>-<uuid>.h5"
 USERBLOCK = 512
 _FILE_MAGIC = b"jointdb-blob-file-sha256:"
+_HEX64 = re.compile(r"[0-9a-f]{64}")
 
 
 def frf_sha256(frf: FRF) -> str:
@@ -214,6 +216,15 @@ class BlobStore:
         return f"BlobStore({str(self.root)!r})"
 
     def path(self, digest: str) -> Path:
+        """File of a blob; the digest (often read from the database) must be 64 lower-case hex digits.
+
+        Raises
+        ------
+        IntegrityError
+            ``digest`` is not a SHA-256 hex digest (never used to build a path).
+        """
+        if not isinstance(digest, str) or not _HEX64.fullmatch(digest):
+            raise IntegrityError(f"blob digest {str(digest)[:80]!r} is not a SHA-256 hex digest; refusing to use it")
         return self.root / digest[:2] / f"{digest}.h5"
 
     def exists(self, digest: str) -> bool:
@@ -305,7 +316,7 @@ class BlobStore:
             if not sub.is_dir() or len(sub.name) != 2:
                 continue
             for p in sorted(sub.glob("*.h5")):
-                if p.name.startswith(_TMP_PREFIX):
+                if p.name.startswith(_TMP_PREFIX) or not _HEX64.fullmatch(p.stem):
                     continue
                 st = p.stat()
                 yield BlobInfo(p.stem, p, st.st_size, st.st_mtime)

@@ -1,8 +1,9 @@
 """Portable HDF5 bundles: export joints with all versions, import them elsewhere.
 
-Bundle layout (``format = "jointdb-bundle"``, ``format_version = 1``)::
+Bundle layout (``format = "jointdb-bundle"``, ``format_version = 2``)::
 
-    /                      attrs: format, format_version, exported_at, software_version
+    /                      attrs: format, format_version, exported_at, software_version,
+                                  bundle_sha256, [signature, signer_public_key]
     /joints/jNNNN          attrs: name, joint_type, created_at, created_by,
                                   labels (JSON {label: version}), states (JSON list)
     /joints/jNNNN/vNNNN    attrs: record (JSON, the full version record incl.
@@ -10,12 +11,22 @@ Bundle layout (``format = "jointdb-bundle"``, ``format_version = 1``)::
         frf/               the joint FRF in the blob layout (jointdb.store._blobs)
         raw/<key>/         raw measurement FRFs, same layout
 
-Import verifies every record hash and FRF hash, validates the content as a new
-catalogue entry would, then compares with the target database:
-a version that exists there with the same uuid and record hash is a no-op; a
-version number that exists with different content, a joint name with another
-joint type, or a gap in the numbering raises :class:`ConflictError` and nothing
-is written. Labels are imported only where the target has no such label yet.
+``bundle_sha256`` covers every joint's name, type, creation, labels, states and
+record hashes (:func:`jointdb.store._bundle_read.manifest_sha256`); each record
+hash covers the record including its FRF hashes. ``signature`` (optional) is an
+Ed25519 signature of that hash (:mod:`jointdb.store._signing`), so an edit with
+every hash recomputed is still refused by ``--require-signature``. A hash only
+detects damage; only a signature from a trusted key says who exported it.
+
+Import reads and verifies the whole bundle first
+(:func:`jointdb.store._bundle_read.read_bundle`: every hash, every field with
+the catalogue's own rules, the signature), then compares with the target
+database: a version that exists there with the same uuid and record hash is a
+no-op; a version number that exists with different content, a joint name with
+another joint type, or a gap in the numbering raises :class:`ConflictError`
+and nothing is written. Labels are imported only where the target has no such
+label yet. Format version 1 bundles (no bundle hash) are still read, but their
+labels and states are covered by no hash.
 """
 
 from __future__ import annotations
@@ -28,23 +39,23 @@ from typing import TYPE_CHECKING, Any
 
 from sqlalchemy import select
 
-from jointdb.errors import ConflictError, InputError, IntegrityError, NotFoundError
-from jointdb.frf import FRF
+from jointdb.errors import ConflictError, InputError, IntegrityError
 from jointdb.io._atomic import atomic_path
-from jointdb.store._blobs import frf_sha256, read_frf_group, write_frf_group
+from jointdb.store._blobs import write_frf_group
+from jointdb.store._bundle_read import FORMAT, FORMAT_VERSION, Bundle, manifest_sha256, read_bundle
 from jointdb.store._models import AuditRow, JointRow, LabelRow, StateRow, VersionRow, utcnow
 from jointdb.store._records import current_actor, record_dict, record_sha256, row_from_record
-from jointdb.store._types import Conditions, check_joint_type, check_model_kind, check_name
 
 if TYPE_CHECKING:  # pragma: no cover
     from jointdb.store._repository import Repository
 
-FORMAT = "jointdb-bundle"
-FORMAT_VERSION = 1
+def export_bundle(repo: "Repository", names: Iterable[str] | None, path: str | os.PathLike,
+                  sign_key=None) -> dict[str, Any]:
+    """Write the named joints (all when ``names`` is None) to ``path``; returns counts.
 
-
-def export_bundle(repo: "Repository", names: Iterable[str] | None, path: str | os.PathLike) -> dict[str, int]:
-    """Write the named joints (all when ``names`` is None) to ``path``; returns counts."""
+    ``sign_key``: an Ed25519 private key (:func:`jointdb.store._signing.load_private_key`)
+    to sign the bundle hash with. Every record hash is checked before writing.
+    """
     import h5py
 
     from jointdb import __version__
@@ -65,13 +76,33 @@ def export_bundle(repo: "Repository", names: Iterable[str] | None, path: str | o
                  "at": st.at.isoformat(timespec="microseconds")}
                 for st in s.scalars(select(StateRow).where(StateRow.joint_id == j.id).order_by(StateRow.id))
             ]
-            plan.append((j, [(record_dict(j.name, j.joint_type, r), r.record_sha256) for r in rows], labels, states))
+            records = []
+            for r in rows:
+                record = record_dict(j.name, j.joint_type, r)
+                if record_sha256(record) != r.record_sha256:
+                    raise IntegrityError(f"{j.name} v{r.version}: record hash mismatch; run `jointdb db check`")
+                records.append((record, r.record_sha256))
+            plan.append((j, records, labels, states))
+    digest = manifest_sha256([
+        {"name": j.name, "joint_type": j.joint_type, "created_at": j.created_at.isoformat(timespec="microseconds"),
+         "created_by": j.created_by, "labels": labels, "states": states,
+         "versions": [{"record": rec, "digest": d} for rec, d in records]}
+        for j, records, labels, states in plan
+    ])
+    signature = None
+    if sign_key is not None:
+        from jointdb.store._signing import fingerprint, sign_digest
+
+        signature = sign_digest(sign_key, digest)
     n_versions = 0
     with atomic_path(path) as tmp, h5py.File(tmp, "w") as f:  # a failure leaves no partial file
         f.attrs["format"] = FORMAT
         f.attrs["format_version"] = FORMAT_VERSION
         f.attrs["exported_at"] = utcnow().isoformat()
         f.attrs["software_version"] = __version__
+        f.attrs["bundle_sha256"] = digest
+        if signature is not None:
+            f.attrs["signature"], f.attrs["signer_public_key"] = signature
         root = f.create_group("joints")
         for i, (j, records, labels, states) in enumerate(plan):
             g = root.create_group(f"j{i:04d}")
@@ -81,76 +112,19 @@ def export_bundle(repo: "Repository", names: Iterable[str] | None, path: str | o
             g.attrs["created_by"] = j.created_by
             g.attrs["labels"] = json.dumps(labels, sort_keys=True)
             g.attrs["states"] = json.dumps(states)
-            for record, digest in records:
-                if record_sha256(record) != digest:
-                    raise IntegrityError(f"{j.name} v{record['version']}: record hash mismatch; run `jointdb db check`")
+            for record, record_digest in records:
                 vg = g.create_group(f"v{record['version']:04d}")
                 vg.attrs["record"] = json.dumps(record, sort_keys=True)
-                vg.attrs["record_sha256"] = digest
+                vg.attrs["record_sha256"] = record_digest
                 write_frf_group(vg.create_group("frf"), repo.blobs.get(record["blob_sha256"]), record["blob_sha256"])
                 for key, raw_digest in record["raw_blobs"].items():
                     rg = vg.require_group("raw").create_group(key)
                     write_frf_group(rg, repo.blobs.get(raw_digest), raw_digest)
                 n_versions += 1
-    return {"joints": len(plan), "versions": n_versions}
-
-
-def _read_bundle(path: str | os.PathLike) -> list[dict[str, Any]]:
-    """Read and verify a bundle completely (no database access)."""
-    import h5py
-
-    where = os.fspath(path)
-    if not os.path.isfile(path):
-        raise NotFoundError(f"bundle {where} does not exist")
-    try:
-        f = h5py.File(path, "r", locking=False)
-    except OSError as exc:
-        raise InputError(f"{where}: cannot open bundle ({exc})") from None
-    joints = []
-    with f:
-        if str(f.attrs.get("format", "")) != FORMAT:
-            raise InputError(f"{where}: not a jointdb bundle (format attribute {f.attrs.get('format')!r})")
-        if int(f.attrs.get("format_version", 0)) > FORMAT_VERSION:
-            raise InputError(f"{where}: bundle format {f.attrs['format_version']} is newer than this jointdb")
-        for gname in sorted(f.get("joints", {})):
-            g = f["joints"][gname]
-            name = check_name(str(g.attrs["name"]))
-            jt = check_joint_type(str(g.attrs["joint_type"]))
-            versions = []
-            for vname in sorted(k for k in g if k.startswith("v")):
-                vg = g[vname]
-                record = json.loads(str(vg.attrs["record"]))
-                digest = str(vg.attrs["record_sha256"])
-                label = f"{where}: {name} {vname}"
-                if record_sha256(record) != digest:
-                    raise IntegrityError(f"{label}: record hash mismatch (bundle altered or damaged)")
-                if record["name"] != name or record["joint_type"] != jt:
-                    raise IntegrityError(f"{label}: record names another joint")
-                try:
-                    frf, _ = read_frf_group(vg["frf"], label)
-                except (OSError, KeyError) as exc:
-                    raise IntegrityError(f"{label}: cannot read FRF ({exc})") from None
-                if frf_sha256(frf) != record["blob_sha256"]:
-                    raise IntegrityError(f"{label}: FRF content does not match its hash")
-                raw: dict[str, FRF] = {}
-                for key, raw_digest in record["raw_blobs"].items():
-                    raw_frf, _ = read_frf_group(vg["raw"][key], f"{label} raw {key}")
-                    if frf_sha256(raw_frf) != raw_digest:
-                        raise IntegrityError(f"{label}: raw measurement {key!r} does not match its hash")
-                    raw[key] = raw_frf
-                # validate as a catalogue entry would
-                Conditions.from_dict(record["conditions"])
-                check_model_kind(record["model_kind"], frf)
-                versions.append({"record": record, "digest": digest, "frf": frf, "raw": raw})
-            numbers = [v["record"]["version"] for v in versions]
-            if numbers != list(range(1, len(numbers) + 1)):
-                raise InputError(f"{where}: joint {name!r} versions {numbers} are not numbered 1..n")
-            joints.append({
-                "name": name, "joint_type": jt, "created_at": str(g.attrs["created_at"]),
-                "created_by": str(g.attrs["created_by"]), "labels": json.loads(str(g.attrs["labels"])),
-                "states": json.loads(str(g.attrs["states"])), "versions": versions,
-            })
-    return joints
+    out: dict[str, Any] = {"joints": len(plan), "versions": n_versions, "bundle_sha256": digest}
+    if signature is not None:
+        out["signed_by"] = fingerprint(bytes.fromhex(signature[1]))
+    return out
 
 
 def _plan(session, joints: list[dict[str, Any]]) -> list[tuple[dict, list[dict]]]:
@@ -189,9 +163,19 @@ def _plan(session, joints: list[dict[str, Any]]) -> list[tuple[dict, list[dict]]
     return plan
 
 
-def import_bundle(repo: "Repository", path: str | os.PathLike, author: str | None = None) -> dict[str, Any]:
-    """Import a bundle (module docstring); returns counts of new and unchanged versions."""
-    joints = _read_bundle(path)
+def import_bundle(repo: "Repository", bundle: "Bundle | str | os.PathLike", author: str | None = None,
+                  trusted_keys=(), require_signature: bool = False) -> dict[str, Any]:
+    """Import a bundle (module docstring); returns counts of new and unchanged versions.
+
+    ``bundle``: a path, or a :class:`Bundle` already read with :func:`read_bundle`
+    (the command line reads it before opening, and maybe creating, the database).
+    """
+    if not isinstance(bundle, Bundle):
+        bundle = read_bundle(bundle, trusted_keys, require_signature)
+    elif require_signature and not bundle.signature_verified:
+        raise IntegrityError(f"{bundle.path}: the bundle is not signed by a trusted key")
+    joints = bundle.joints
+    path = bundle.path
     with repo._read() as s:
         plan = _plan(s, joints)  # refuse conflicts before touching anything
     for _, new in plan:
@@ -200,7 +184,8 @@ def import_bundle(repo: "Repository", path: str | os.PathLike, author: str | Non
             for raw in v["raw"].values():
                 repo.blobs.put(raw)
     actor = current_actor(author)
-    summary: dict[str, Any] = {"joints": len(joints), "new_versions": 0, "unchanged_versions": 0, "labels_skipped": []}
+    summary: dict[str, Any] = {"joints": len(joints), "new_versions": 0, "unchanged_versions": 0, "labels_skipped": [],
+                               "signed_by": bundle.signer, "signature_verified": bundle.signature_verified}
 
     def write(s) -> None:
         summary["new_versions"] = summary["unchanged_versions"] = 0
@@ -236,7 +221,8 @@ def import_bundle(repo: "Repository", path: str | os.PathLike, author: str | Non
                                    author=st["author"], at=datetime.fromisoformat(st["at"])))
             if new:
                 s.add(AuditRow(at=now, actor=actor, action="import", joint_name=j["name"], version=None,
-                               details={"bundle": os.fspath(path),
+                               details={"bundle": os.fspath(path), "bundle_sha256": bundle.digest,
+                                        "signed_by": bundle.signer if bundle.signature_verified else None,
                                         "versions": [v["record"]["version"] for v in new]}))
 
     repo._retrying(write)

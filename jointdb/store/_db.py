@@ -1,4 +1,4 @@
-"""Database location, engines and Alembic migrations.
+"""Database location, opening checks, engines, error translation and Alembic migrations.
 
 Location, first match wins: the ``url`` argument (CLI ``--db``), the
 ``JOINTDB_URL`` environment variable, then the per-user default SQLite file
@@ -8,9 +8,20 @@ A plain path is taken as a SQLite file.
 Blobs live in ``<sqlite file>.blobs/`` beside a SQLite database, or in the
 directory given by ``blobs=`` / ``JOINTDB_BLOBS`` (required for PostgreSQL).
 
+Opening a SQLite path (:func:`open_sqlite_target`): a directory, an empty
+(0-byte) file, a file that is not SQLite, or a SQLite database that is not a
+jointdb database is refused with one line; it is never re-created. A file that
+does not exist is created only when the caller asks (``create=True``), and then
+atomically: the schema is built in a temporary file beside it which is then
+hard-linked into place, so another process sees either no file or a complete
+database.
+
 SQLite connections run with WAL, ``foreign_keys=ON``, ``synchronous=FULL`` and a
 30 s busy timeout; write transactions start with ``BEGIN IMMEDIATE`` (the
 ``write`` engine), reads with a plain deferred ``BEGIN``.
+
+Database errors that a user can cause or meet (no server, no driver, a damaged
+file) are turned into jointdb errors by :func:`translate_error`.
 
 Migrations are the Alembic scripts in ``jointdb/migrations`` (shipped in the
 wheel); the Alembic configuration is built in code from the package path, so
@@ -19,14 +30,18 @@ no ``alembic.ini`` is needed at run time.
 
 from __future__ import annotations
 
+import contextlib
+import functools
 import os
+import re
+import uuid
 from pathlib import Path
 
 from sqlalchemy import Engine, create_engine, event, inspect
 from sqlalchemy.engine import make_url
-from sqlalchemy.exc import ArgumentError
+from sqlalchemy.exc import ArgumentError, DBAPIError, NoSuchModuleError
 
-from jointdb.errors import InputError
+from jointdb.errors import ConflictError, InputError, IntegrityError, JointdbError, NotFoundError
 
 __all__ = [
     "resolve_url",
@@ -38,10 +53,17 @@ __all__ = [
     "head_revision",
     "upgrade",
     "downgrade",
+    "downgrade_plan",
+    "open_sqlite_target",
+    "translate_error",
     "BUSY_TIMEOUT_S",
 ]
 
 BUSY_TIMEOUT_S = 30.0
+PG_CONNECT_TIMEOUT_S = 10
+SQLITE_MAGIC = b"SQLite format 3\x00"
+#: Tables of the jointdb schema (besides ``alembic_version``).
+SCHEMA_TABLES = frozenset({"joints", "joint_versions", "joint_states", "labels", "audit_log"})
 
 
 def default_sqlite_path() -> Path:
@@ -54,14 +76,20 @@ def resolve_url(url: str | os.PathLike | None = None) -> str:
     text = str(url) if url is not None else os.environ.get("JOINTDB_URL") or ""
     if not text:
         text = str(default_sqlite_path())
+    if "\0" in text:
+        raise InputError("database path or URL contains a NUL character")
     if "://" not in text:
         if text == ":memory:":
             raise InputError("in-memory databases are not supported; give a file path or URL")
-        text = "sqlite:///" + str(Path(text).expanduser().resolve())
+        try:
+            text = "sqlite:///" + str(Path(text).expanduser().resolve())
+        except (OSError, RuntimeError) as exc:
+            raise InputError(f"cannot use database path {text!r}: {exc}") from None
     try:
         parsed = make_url(text)
-    except ArgumentError:
-        raise InputError(f"cannot read database URL {text!r}") from None
+    except (ArgumentError, ValueError):
+        raise InputError(f"cannot read database URL {safe_url(text)!r}; expected e.g. "
+                         "postgresql+psycopg://user@host/jointdb or a SQLite file path") from None
     if parsed.get_backend_name() not in ("sqlite", "postgresql"):
         raise InputError(f"unsupported database {parsed.get_backend_name()!r}: use sqlite or postgresql")
     if parsed.get_backend_name() == "sqlite" and parsed.database in (None, "", ":memory:"):
@@ -69,8 +97,20 @@ def resolve_url(url: str | os.PathLike | None = None) -> str:
     return text
 
 
+def safe_url(url: str) -> str:
+    """The URL with any password hidden (for messages)."""
+    try:
+        return make_url(url).render_as_string(hide_password=True)
+    except (ArgumentError, ValueError):
+        return re.sub(r"(://[^:/@]*:)[^@]*@", r"\1***@", url)
+
+
 def is_sqlite(url: str) -> bool:
     return make_url(url).get_backend_name() == "sqlite"
+
+
+def sqlite_path(url: str) -> Path:
+    return Path(str(make_url(url).database))
 
 
 def blob_dir(url: str, blobs: str | os.PathLike | None = None) -> Path:
@@ -89,9 +129,175 @@ def blob_dir(url: str, blobs: str | os.PathLike | None = None) -> Path:
     )
 
 
+# --------------------------------------------------------------------------- errors
+def translate_error(exc: BaseException, url: str | None = None) -> JointdbError:
+    """A one-line jointdb error for a database-level exception.
+
+    - a refusal by the immutability guards (message starting ``jointdb:``) -> ConflictError;
+    - a damaged SQLite file (``malformed``, ``not a database``) -> IntegrityError;
+    - no server, no such database, cannot open the file, no driver -> InputError;
+    - anything else -> JointdbError (exit 1) with the driver's first line.
+    """
+    where = f"database {safe_url(url)}" if url else "database"
+    if isinstance(exc, JointdbError):
+        return exc
+    if isinstance(exc, ImportError):
+        name = getattr(exc, "name", "") or ""
+        if "psycopg" in name or "psycopg" in str(exc):
+            return InputError('PostgreSQL support is not installed: pip install "jointdb[postgres]" '
+                              "(and use a postgresql+psycopg:// URL)")
+        return InputError(f"{where}: the database driver cannot be imported ({exc})")
+    if isinstance(exc, NoSuchModuleError):
+        return InputError(f"{where}: unknown database driver ({exc}); use sqlite:/// or postgresql+psycopg://")
+    orig = getattr(exc, "orig", None) or exc
+    text = str(orig).strip().splitlines()[0] if str(orig).strip() else type(orig).__name__
+    low = text.lower()
+    if "jointdb:" in low:
+        return ConflictError(text[low.index("jointdb:"):])
+    if "malformed" in low or "not a database" in low or "disk i/o error" in low:
+        return IntegrityError(f"{where} is damaged ({text}); restore it from a backup")
+    if isinstance(exc, DBAPIError) and exc.connection_invalidated or any(
+        s in low for s in ("connection", "could not connect", "unable to open database", "does not exist",
+                           "timeout expired", "password authentication", "could not translate host")
+    ):
+        return InputError(f"cannot open {where}: {text}")
+    return JointdbError(f"{where}: {text}")
+
+
+@contextlib.contextmanager
+def db_errors(url: str | None = None):
+    """Turn database-level exceptions raised inside into jointdb errors (:func:`translate_error`)."""
+    try:
+        yield
+    except (DBAPIError, NoSuchModuleError, ImportError) as exc:
+        raise translate_error(exc, url) from None
+
+
+def with_db_errors(method):
+    """Method decorator: :func:`db_errors` with ``self.url``."""
+
+    @functools.wraps(method)
+    def wrapper(self, *args, **kwargs):
+        with db_errors(getattr(self, "url", None)):
+            return method(self, *args, **kwargs)
+
+    return wrapper
+
+
+# --------------------------------------------------------------------------- SQLite files
+def check_sqlite_file(path: Path) -> bool:
+    """Whether a SQLite database file exists at ``path`` (False: nothing there).
+
+    Raises
+    ------
+    InputError
+        ``path`` is a directory or not a regular file, is empty (0 bytes) or is
+        not a SQLite file.
+    """
+    try:
+        if path.is_dir():
+            raise InputError(f"database {path} is a directory; give a database file such as {path / 'jointdb.sqlite'}")
+        if not path.exists():
+            return False
+        if not path.is_file():
+            raise InputError(f"database {path} is not a regular file")
+        size = path.stat().st_size
+        if size == 0:
+            wal = Path(str(path) + "-wal")
+            if wal.is_file() and wal.stat().st_size > 0:
+                return True  # a database whose pages are still in its write-ahead log
+            raise InputError(f"database {path} is an empty file (0 bytes), not a jointdb database; refusing to "
+                             "use it (restore it from a backup, or remove it to start a new database)")
+        with open(path, "rb") as fh:
+            head = fh.read(len(SQLITE_MAGIC))
+    except OSError as exc:
+        raise InputError(f"cannot read database {path}: {exc.strerror or exc}") from None
+    if head != SQLITE_MAGIC:
+        raise InputError(f"{path} is not a SQLite database (it does not start with the SQLite header); "
+                         "give a jointdb database file")
+    return True
+
+
+def _sqlite_tables(engine: Engine) -> set[str]:
+    with engine.connect() as conn:
+        return set(inspect(conn).get_table_names())
+
+
+def check_jointdb_sqlite(engine: Engine, path: Path) -> None:
+    """Refuse a SQLite database that is not a jointdb database (no ``alembic_version``, other tables)."""
+    tables = _sqlite_tables(engine)
+    if "alembic_version" not in tables:
+        what = f"tables: {', '.join(sorted(tables)[:5])}" if tables else "no tables"
+        raise InputError(f"{path} is a SQLite database but not a jointdb database ({what}); refusing to touch it")
+    foreign = tables - SCHEMA_TABLES - {"alembic_version"}
+    if foreign:
+        raise InputError(f"{path} has tables jointdb does not know ({', '.join(sorted(foreign)[:5])}); "
+                         "refusing to touch it")
+
+
+def create_sqlite_database(path: Path, revision: str = "head") -> None:
+    """Create a new SQLite jointdb database at ``path`` atomically (module docstring).
+
+    If another process created ``path`` meanwhile, its database is kept and
+    this one discarded.
+    """
+    from jointdb.io._atomic import fsync_dir
+
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise InputError(f"cannot create directory {path.parent} for database {path.name}: "
+                         f"{exc.strerror or exc}") from None
+    tmp = path.parent / f".{path.name}.tmp-{uuid.uuid4().hex}"
+    try:
+        engine, write = _sqlite_engine("sqlite:///" + str(tmp))
+        try:
+            upgrade(write, revision)
+        finally:
+            engine.dispose()  # the last connection checkpoints the WAL into the file
+        fd = os.open(tmp, os.O_RDONLY)
+        try:
+            os.fsync(fd)
+        finally:
+            os.close(fd)
+        try:
+            os.link(tmp, path)  # never replaces a database another process created first
+        except FileExistsError:
+            pass
+        except OSError:  # no hard links on this file system
+            if not path.exists():
+                os.replace(tmp, path)
+        fsync_dir(path.parent)
+    except OSError as exc:
+        raise InputError(f"cannot create database {path}: {exc.strerror or exc}") from None
+    finally:
+        for suffix in ("", "-wal", "-shm", "-journal"):
+            with contextlib.suppress(OSError):
+                Path(str(tmp) + suffix).unlink()
+
+
+def open_sqlite_target(url: str, create: bool, revision: str = "head") -> bool:
+    """Check (and with ``create``, create) the SQLite file of ``url``; True when it was created.
+
+    Raises
+    ------
+    NotFoundError
+        The file does not exist and ``create`` is False (nothing is created).
+    InputError
+        Not a usable jointdb SQLite database (see :func:`check_sqlite_file`).
+    """
+    path = sqlite_path(url)
+    if check_sqlite_file(path):
+        return False
+    if not create:
+        raise NotFoundError(f"database {path} does not exist (`jointdb catalogue`, `jointdb joints import` "
+                            "or `jointdb db upgrade` creates it)")
+    create_sqlite_database(path, revision)
+    return True
+
+
+# --------------------------------------------------------------------------- engines
 def _sqlite_engine(url: str) -> tuple[Engine, Engine]:
-    u = make_url(url)
-    Path(str(u.database)).parent.mkdir(parents=True, exist_ok=True)
     engine = create_engine(url, connect_args={"timeout": BUSY_TIMEOUT_S})
 
     @event.listens_for(engine, "connect")
@@ -113,10 +319,23 @@ def _sqlite_engine(url: str) -> tuple[Engine, Engine]:
 
 
 def make_engines(url: str) -> tuple[Engine, Engine]:
-    """``(read_engine, write_engine)`` for a URL; identical for PostgreSQL."""
-    if is_sqlite(url):
-        return _sqlite_engine(url)
-    engine = create_engine(url, pool_pre_ping=True)
+    """``(read_engine, write_engine)`` for a URL; identical for PostgreSQL.
+
+    No connection is opened here (and no file created); for SQLite call
+    :func:`open_sqlite_target` first.
+
+    Raises
+    ------
+    InputError
+        The driver is not installed (e.g. psycopg: ``pip install "jointdb[postgres]"``).
+    """
+    with db_errors(url):
+        if is_sqlite(url):
+            return _sqlite_engine(url)
+        kwargs: dict = {"pool_pre_ping": True}
+        if "connect_timeout" not in make_url(url).query:
+            kwargs["connect_args"] = {"connect_timeout": PG_CONNECT_TIMEOUT_S}
+        engine = create_engine(url, **kwargs)
     return engine, engine
 
 
@@ -136,10 +355,14 @@ def alembic_config(url: str | None = None):
     return cfg
 
 
-def head_revision() -> str:
+def _script():
     from alembic.script import ScriptDirectory
 
-    return ScriptDirectory.from_config(alembic_config()).get_current_head()
+    return ScriptDirectory.from_config(alembic_config())
+
+
+def head_revision() -> str:
+    return _script().get_current_head()
 
 
 def current_revision(engine: Engine) -> str | None:
@@ -170,36 +393,86 @@ def downgrade(write_engine: Engine, revision: str = "-1") -> None:
     _run(write_engine, command.downgrade, revision)
 
 
-def ensure_schema(read_engine: Engine, write_engine: Engine, auto_create: bool) -> None:
-    """Create the schema of a new empty database; refuse an outdated one with advice.
+#: What reverting each revision removes (every step of ours drops data or a guard).
+DOWNGRADE_DROPS = {
+    "0001": "every table and all data",
+    "0002": "the triggers that refuse UPDATE and DELETE of history rows",
+    "0003": "the guards against REPLACE/UPSERT, TRUNCATE and dropping the triggers",
+}
 
-    Runs under the write lock (SQLite ``BEGIN IMMEDIATE``) so that several
-    processes opening a new database at once migrate it exactly once.
+
+def downgrade_plan(current: str | None, target: str) -> tuple[str | None, list[str]]:
+    """``(target_revision, revisions_reverted_newest_first)`` for a downgrade from ``current``.
+
+    ``target``: ``base``, ``-N`` (N steps) or a revision id below ``current``.
+
+    Raises
+    ------
+    InputError
+        Unknown revision, a target above the current revision, or more steps than exist.
+    """
+    script = _script()
+    chain: list[str] = []  # current, its parent, ... down to the first revision
+    rev = current
+    while rev is not None:
+        chain.append(rev)
+        try:
+            rev = script.get_revision(rev).down_revision
+        except Exception:  # noqa: BLE001 - alembic raises several types for unknown ids
+            raise InputError(f"the database is at revision {rev!r}, which this jointdb does not know") from None
+    text = str(target).strip()
+    if text == "base":
+        return None, chain
+    if re.fullmatch(r"-\d+", text):
+        n = int(text[1:])
+        if n > len(chain):
+            raise InputError(f"cannot go {n} steps down from revision {current or 'base'} "
+                             f"(only {len(chain)} below it)")
+        return (chain[n] if n < len(chain) else None), chain[:n]
+    if text in chain:
+        return text, chain[:chain.index(text)]
+    known = [r.revision for r in script.walk_revisions()]
+    if text in known:
+        raise InputError(f"revision {text} is not below the current revision {current or 'base'}; "
+                         "use `jointdb db upgrade --to` to go up")
+    raise InputError(f"unknown revision {text!r}; use base, -N or one of {', '.join(sorted(known))}")
+
+
+def ensure_schema(read_engine: Engine, write_engine: Engine, auto_create: bool) -> None:
+    """Refuse a database without the current schema, with advice.
+
+    SQLite files are created (atomically, with their schema) before this is
+    called, so here a SQLite database must already be a jointdb one. A
+    PostgreSQL database without any schema is migrated when ``auto_create``
+    (under the write transaction, so concurrent first users migrate once).
     """
     from alembic.runtime.migration import MigrationContext
 
     head = head_revision()
     with read_engine.connect() as conn:
         current = MigrationContext.configure(conn).get_current_revision()
+        tables = set(inspect(conn).get_table_names())
     if current == head:
         return
     if current is None:
-        if not auto_create:
+        if not auto_create or read_engine.dialect.name == "sqlite":
             raise InputError(
                 "this database has no jointdb schema yet; run `jointdb db upgrade --db URL` first"
             )
+        if tables & {"joints", "joint_versions"}:
+            raise InputError("database has jointdb tables but no migration record; refusing to touch it")
         from alembic import command
 
         cfg = alembic_config()
         with write_engine.begin() as conn:
-            now = MigrationContext.configure(conn).get_current_revision()
-            tables = set(inspect(conn).get_table_names()) if now is None else set()
-            if now is None and tables & {"joints", "joint_versions"}:
-                raise InputError("database has jointdb tables but no migration record; refusing to touch it")
-            if now is None:
+            if MigrationContext.configure(conn).get_current_revision() is None:
                 cfg.attributes["connection"] = conn
                 command.upgrade(cfg, "head")
         return
+    known = {r.revision for r in _script().walk_revisions()}
+    if current not in known:
+        raise InputError(f"database schema is at revision {current}, which this jointdb ({head}) does not know; "
+                         "use a newer jointdb")
     raise InputError(
         f"database schema is at revision {current}, this jointdb needs {head}; run `jointdb db upgrade`"
     )

@@ -10,7 +10,7 @@ from sqlalchemy import select
 from jointdb.errors import IntegrityError, NotFoundError
 from jointdb.frf import FRF
 from jointdb.store._models import AuditRow, JointRow, VersionRow, utcnow
-from jointdb.store._records import current_actor, record_dict, record_sha256
+from jointdb.store._records import check_record, current_actor
 from jointdb.store._types import JointVersion
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -36,13 +36,17 @@ def check(repo: "Repository", verify_blobs: bool = True) -> "CheckReport":
 
     Problems reported: a row whose blob is missing or corrupt, a row whose
     record hash does not match its content, gaps or duplicates in a joint's
-    version numbers. Orphan blobs and left-over temporary files are listed but
-    are not problems (``jointdb db gc`` removes them).
+    version numbers, a missing or disabled immutability guard (trigger).
+    Orphan blobs and left-over temporary files are listed but are not problems
+    (``jointdb db gc`` removes them); ``notes`` says what the backend cannot guard.
     """
+    from jointdb.store._guards import missing_guards
     from jointdb.store._repository import CheckReport
 
     problems: list[str] = []
     n_rows = 0
+    with repo.read_engine.connect() as conn:
+        problems, notes = missing_guards(conn)
     with repo._read() as s:
         joints = {j.id: j for j in s.scalars(select(JointRow))}
         numbers: dict[int, list[int]] = {}
@@ -50,7 +54,9 @@ def check(repo: "Repository", verify_blobs: bool = True) -> "CheckReport":
             n_rows += 1
             joint = joints[row.joint_id]
             numbers.setdefault(row.joint_id, []).append(row.version)
-            if record_sha256(record_dict(joint.name, joint.joint_type, row)) != row.record_sha256:
+            try:
+                check_record(joint.name, joint.joint_type, row)
+            except IntegrityError:
                 problems.append(f"{joint.name} v{row.version}: record hash mismatch (row content was altered)")
     for joint_id, nums in numbers.items():
         if nums != list(range(1, len(nums) + 1)):
@@ -62,12 +68,15 @@ def check(repo: "Repository", verify_blobs: bool = True) -> "CheckReport":
         if verify_blobs:
             problem = repo.blobs.verify(digest)
         else:
-            problem = None if repo.blobs.exists(digest) else f"blob {digest} is missing"
+            try:
+                problem = None if repo.blobs.exists(digest) else f"blob {digest} is missing"
+            except IntegrityError as exc:  # a digest that is not hex
+                problem = str(exc)
         if problem:
             problems.append(f"{', '.join(users)}: {problem}")
     orphans = tuple(b.sha256 for b in repo.blobs.walk() if b.sha256 not in refs)
     temps = tuple(str(p) for p in repo.blobs.temporaries())
-    return CheckReport(n_rows, n_blobs, tuple(problems), orphans, temps)
+    return CheckReport(n_rows, n_blobs, tuple(problems), orphans, temps, tuple(notes))
 
 
 def gc(repo: "Repository", min_age_s: float = 3600.0, dry_run: bool = False) -> list[str]:

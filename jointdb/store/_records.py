@@ -10,6 +10,7 @@ from collections.abc import Iterable, Mapping
 from datetime import datetime
 from typing import Any
 
+from jointdb.errors import IntegrityError
 from jointdb.store._models import JointRow, StateRow, VersionRow
 from jointdb.store._types import Conditions, JointVersion, Provenance
 
@@ -67,6 +68,26 @@ def record_sha256(record: Mapping[str, Any]) -> str:
     return hashlib.sha256(text.encode()).hexdigest()
 
 
+def check_record(joint_name: str, joint_type: str, row: VersionRow) -> None:
+    """Refuse a version row whose content no longer hashes to its ``record_sha256``.
+
+    Raises
+    ------
+    IntegrityError
+        The row (or the joint's name or type) was altered after it was written,
+        or the database file is damaged there.
+    """
+    try:
+        ok = record_sha256(record_dict(joint_name, joint_type, row)) == row.record_sha256
+    except (TypeError, ValueError, AttributeError):  # a stored field of the wrong shape
+        ok = False
+    if not ok:
+        raise IntegrityError(
+            f"{joint_name} v{row.version}: stored record does not match its record hash (the row was altered "
+            "or the database is damaged); refusing to use it - run `jointdb db check`"
+        )
+
+
 def row_from_record(record: Mapping[str, Any], joint_id: int) -> VersionRow:
     """A new VersionRow from a record dict (bundle import)."""
     c = record["conditions"]
@@ -114,6 +135,8 @@ def state_of(version: int, states: Iterable[StateRow]) -> str:
 
 
 def to_version(joint: JointRow, row: VersionRow, state: str = "active", labels: Iterable[str] = ()) -> JointVersion:
+    """The public value of a row, after :func:`check_record` (every read verifies the record hash)."""
+    check_record(joint.name, joint.joint_type, row)
     conditions = Conditions.__new__(Conditions)  # stored data was validated on the way in
     object.__setattr__(conditions, "materials", tuple(row.materials))
     object.__setattr__(conditions, "preload_n", row.preload_n)

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import os
 import random
-import re
 import time
 import uuid as uuidlib
 from collections.abc import Iterable, Mapping
@@ -31,6 +30,7 @@ from jointdb.store._types import (
     as_provenance,
     as_quality,
     check_joint_type,
+    check_label,
     check_model_kind,
     check_name,
     dof_strings,
@@ -67,6 +67,7 @@ class CheckReport:
     problems: tuple[str, ...]
     orphan_blobs: tuple[str, ...] = ()
     temporaries: tuple[str, ...] = ()
+    notes: tuple[str, ...] = ()
 
     @property
     def ok(self) -> bool:
@@ -117,12 +118,22 @@ class Repository:
         check_schema: bool = True,
     ):
         self.url = _db.resolve_url(url)
-        self.read_engine, self.write_engine = _db.make_engines(self.url)
-        self.blobs = BlobStore(_db.blob_dir(self.url, blobs))
         self.is_sqlite = _db.is_sqlite(self.url)
-        if check_schema:
-            auto = self.is_sqlite if auto_create is None else auto_create
-            _db.ensure_schema(self.read_engine, self.write_engine, auto)
+        auto = self.is_sqlite if auto_create is None else bool(auto_create)
+        created = False
+        if self.is_sqlite:  # refuse a directory, an empty or foreign file; create a missing one only if asked
+            created = _db.open_sqlite_target(self.url, create=auto and check_schema)
+        self.blobs = BlobStore(_db.blob_dir(self.url, blobs))
+        self.read_engine, self.write_engine = _db.make_engines(self.url)
+        try:
+            with _db.db_errors(self.url):
+                if self.is_sqlite and not created:
+                    _db.check_jointdb_sqlite(self.read_engine, _db.sqlite_path(self.url))
+                if check_schema:
+                    _db.ensure_schema(self.read_engine, self.write_engine, auto)
+        except BaseException:
+            self.read_engine.dispose()
+            raise
 
     # ----------------------------------------------------------------- admin
     def close(self) -> None:
@@ -162,6 +173,7 @@ class Repository:
         raise AssertionError("unreachable")  # pragma: no cover
 
     # ------------------------------------------------------------- catalogue
+    @_db.with_db_errors
     def catalogue(
         self,
         name: str,
@@ -175,6 +187,7 @@ class Repository:
         *,
         raw_frfs: Mapping[str, FRF] | None = None,
         author: str | None = None,
+        label: str | None = None,
     ) -> JointVersion:
         """Store a joint FRF as a new joint (version 1) or a new version of one.
 
@@ -182,11 +195,14 @@ class Repository:
         write transaction in which the next version number is taken (behind
         ``UNIQUE(joint_id, version)``; retried after rollback on a conflict).
 
+        ``label`` (optional) is pointed at the new version in the same
+        transaction: both happen or neither.
+
         Raises
         ------
         InputError
-            Bad name, type, conditions, model kind / DOF structure, provenance or
-            quality; nothing is written.
+            Bad name, type, conditions, model kind / DOF structure, provenance,
+            quality or label; nothing is written.
         ConflictError
             The name exists with another joint type; or ``parent`` does not exist.
         """
@@ -205,6 +221,7 @@ class Repository:
         if parent is not None and (isinstance(parent, bool) or int(parent) < 1):
             raise InputError(f"parent version must be a version number >= 1, got {parent!r}")
         actor = current_actor(author or prov.author or None)
+        label = check_label(label) if label is not None else None
 
         self._precheck_catalogue(name, joint_type, parent)  # refuse conflicts before writing any blob
         blob = self.blobs.put(frf)  # durable before the row exists
@@ -268,7 +285,11 @@ class Repository:
                 )
             )
             session.flush()
-            return to_version(joint, row)
+            labels: tuple[str, ...] = ()
+            if label is not None:
+                self._move_label(session, joint, name, number, label, actor, now)
+                labels = (label,)
+            return to_version(joint, row, labels=labels)
 
         return self._retrying(write)
 
@@ -311,6 +332,7 @@ class Repository:
             out.setdefault(lab.version, []).append(lab.label)
         return out
 
+    @_db.with_db_errors
     def get(
         self,
         name: str,
@@ -365,6 +387,7 @@ class Repository:
             row = rows[0]
             return to_version(joint, row, "deprecated", labels.get(row.version, ()))
 
+    @_db.with_db_errors
     def history(self, name: str) -> list[JointVersion]:
         """All versions of a joint, oldest first, with their current state and labels."""
         with self._read() as s:
@@ -374,6 +397,7 @@ class Repository:
             rows = s.scalars(select(VersionRow).where(VersionRow.joint_id == joint.id).order_by(VersionRow.version))
             return [to_version(joint, r, state_of(r.version, states), labels.get(r.version, ())) for r in rows]
 
+    @_db.with_db_errors
     def list_joints(self, joint_type: str | None = None, include_deprecated: bool = True) -> list[JointVersion]:
         """The current version (as :meth:`get`) of every joint, by name."""
         with self._read() as s:
@@ -384,6 +408,7 @@ class Repository:
         out = [self.get(n) for n in names]
         return [v for v in out if include_deprecated or v.state == "active"]
 
+    @_db.with_db_errors
     def load_frf(self, version: JointVersion | str, number: int | None = None) -> FRF:
         """The joint FRF of a version, read from its blob and verified against its hash.
 
@@ -397,6 +422,7 @@ class Repository:
         jv = version if isinstance(version, JointVersion) else self.get(version, number)
         return self.blobs.get(jv.blob_sha256)
 
+    @_db.with_db_errors
     def load_raw(self, version: JointVersion, key: str) -> FRF:
         """One raw measurement FRF stored with a version."""
         if key not in version.raw_blobs:
@@ -404,30 +430,39 @@ class Repository:
         return self.blobs.get(version.raw_blobs[key])
 
     # ---------------------------------------------------------- label / state
+    @_db.with_db_errors
     def label(self, name: str, version: int, label: str, author: str | None = None) -> JointVersion:
-        """Point ``label`` of a joint at ``version`` (created or moved)."""
-        label = str(label).strip()
-        if not re.fullmatch(r"[A-Za-z0-9][A-Za-z0-9_.-]{0,99}", label):
-            raise InputError(f"label {label!r} must be letters, digits, '.', '_' or '-' (max 100)")
+        """Point ``label`` of a joint at ``version`` (created or moved).
+
+        The label row is locked (``SELECT ... FOR UPDATE`` on PostgreSQL; SQLite
+        writers are serialised by ``BEGIN IMMEDIATE``) so that the audit row's
+        ``previous_version`` is the version the label really pointed at.
+        """
+        label = check_label(label)
         actor = current_actor(author)
         self.get(name, version)  # NotFoundError for an unknown joint or version
 
         def write(s: Session) -> None:
-            joint = self._joint(s, name)
-            row = s.scalar(select(LabelRow).where(LabelRow.joint_id == joint.id, LabelRow.label == label))
-            now = utcnow()
-            old = None
-            if row is None:
-                s.add(LabelRow(joint_id=joint.id, label=label, version=int(version), updated_at=now, updated_by=actor))
-            else:
-                old = row.version
-                row.version, row.updated_at, row.updated_by = int(version), now, actor
-            s.add(AuditRow(at=now, actor=actor, action="label", joint_name=name, version=int(version),
-                           details={"label": label, "previous_version": old}))
+            self._move_label(s, self._joint(s, name), name, int(version), label, actor, utcnow())
 
         self._retrying(write)
         return self.get(name, version)
 
+    @staticmethod
+    def _move_label(s: Session, joint: JointRow, name: str, version: int, label: str, actor: str, now) -> None:
+        row = s.scalar(
+            select(LabelRow).where(LabelRow.joint_id == joint.id, LabelRow.label == label).with_for_update()
+        )
+        old = None
+        if row is None:  # two creators at once: the unique constraint refuses one, which is retried
+            s.add(LabelRow(joint_id=joint.id, label=label, version=version, updated_at=now, updated_by=actor))
+        else:
+            old = row.version
+            row.version, row.updated_at, row.updated_by = version, now, actor
+        s.add(AuditRow(at=now, actor=actor, action="label", joint_name=name, version=version,
+                       details={"label": label, "previous_version": old}))
+
+    @_db.with_db_errors
     def deprecate(
         self, name: str, version: int | None = None, reason: str = "", author: str | None = None, undo: bool = False
     ) -> list[JointVersion]:
@@ -453,6 +488,7 @@ class Repository:
         self._retrying(write)
         return self.history(name)
 
+    @_db.with_db_errors
     def audit(self, name: str | None = None, limit: int = 100) -> list[dict[str, Any]]:
         """The newest audit-log entries (optionally for one joint)."""
         with self._read() as s:
@@ -466,6 +502,7 @@ class Repository:
             ]
 
     # -------------------------------------------------------------- diff, etc.
+    @_db.with_db_errors
     def diff(self, name: str, version_a: int, version_b: int | None = None, other: str | None = None) -> VersionDiff:
         """Compare two versions (of one joint, or of ``name`` and ``other``)."""
         from jointdb.store._maintenance import diff_versions
@@ -474,18 +511,21 @@ class Repository:
         b = self.get(other or name, version_b) if (version_b is not None or other) else self.get(name)
         return diff_versions(self, a, b)
 
+    @_db.with_db_errors
     def check(self, verify_blobs: bool = True) -> CheckReport:
         """Walk every row and blob; report missing or corrupt data (``jointdb db check``)."""
         from jointdb.store._maintenance import check
 
         return check(self, verify_blobs)
 
+    @_db.with_db_errors
     def gc(self, min_age_s: float = 3600.0, dry_run: bool = False) -> list[str]:
         """Remove blobs no row references (and stale temporaries) older than ``min_age_s``."""
         from jointdb.store._maintenance import gc
 
         return gc(self, min_age_s, dry_run)
 
+    @_db.with_db_errors
     def nearest(self, joint_type: str, conditions: Conditions | Mapping[str, Any], k: int = 3,
                 at: datetime | str | None = None):
         """The ``k`` closest current versions of ``joint_type``; see :mod:`jointdb.store._query`."""
@@ -493,23 +533,33 @@ class Repository:
 
         return nearest(self, joint_type, conditions, k, _as_utc(at))
 
+    @_db.with_db_errors
     def interpolate(self, matches, conditions: Conditions | Mapping[str, Any] | None = None):
         """An interpolated joint between matches (dynamic stiffness); see :mod:`jointdb.store._query`."""
         from jointdb.store._query import interpolate
 
         return interpolate(self, matches, conditions)
 
-    def export(self, names: Iterable[str] | None, path: str | os.PathLike) -> dict[str, int]:
-        """Write joints (all versions, provenance, labels, states) to one HDF5 bundle."""
+    @_db.with_db_errors
+    def export(self, names: Iterable[str] | None, path: str | os.PathLike, *, sign_key=None) -> dict[str, Any]:
+        """Write joints (all versions, provenance, labels, states) to one HDF5 bundle.
+
+        ``sign_key``: an Ed25519 private key (``jointdb.store._signing.load_private_key``)
+        to sign the bundle with.
+        """
         from jointdb.store._bundle import export_bundle
 
-        return export_bundle(self, names, path)
+        return export_bundle(self, names, path, sign_key)
 
-    def import_(self, path: str | os.PathLike, author: str | None = None) -> dict[str, Any]:
-        """Import a bundle; identical versions are no-ops, conflicting ones raise ConflictError."""
+    @_db.with_db_errors
+    def import_(self, path, author: str | None = None, *, trusted_keys=(),
+                require_signature: bool = False) -> dict[str, Any]:
+        """Import a bundle (a path or a verified ``Bundle``); identical versions are no-ops,
+        conflicting ones raise ConflictError; ``require_signature`` refuses a bundle not
+        signed by one of ``trusted_keys`` (Ed25519 public keys)."""
         from jointdb.store._bundle import import_bundle
 
-        return import_bundle(self, path, author)
+        return import_bundle(self, path, author, trusted_keys, require_signature)
 
 
 def _is_unique_violation(exc: DBIntegrityError) -> bool:
@@ -522,4 +572,3 @@ def _is_transient(exc: OperationalError) -> bool:
     text = str(exc.orig).lower()
     sqlstate = getattr(exc.orig, "sqlstate", None)
     return "locked" in text or "busy" in text or sqlstate in ("40001", "40P01")
-

@@ -33,6 +33,7 @@ __all__ = [
     "check_model_kind",
     "check_joint_type",
     "check_name",
+    "check_label",
 ]
 
 # --------------------------------------------------------------------------- materials
@@ -111,6 +112,24 @@ def check_name(name: str) -> str:
         raise InputError(
             f"joint name {name!r} must be 1-200 printable characters without '/' or surrounding spaces"
         )
+    return text
+
+
+_LABEL = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]{0,99}")
+
+
+def check_label(label: str) -> str:
+    """Label name: 1-100 letters, digits, '.', '_' or '-', starting with a letter or digit.
+
+    Raises
+    ------
+    InputError
+        Any other text (spaces, '/', quotes, empty, too long).
+    """
+    text = label.strip() if isinstance(label, str) else ""
+    if not isinstance(label, str) or not _LABEL.fullmatch(text):
+        raise InputError(f"label {str(label)[:120]!r} must be 1-100 letters, digits, '.', '_' or '-' "
+                         "(starting with a letter or digit)")
     return text
 
 

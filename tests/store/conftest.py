@@ -76,9 +76,20 @@ def empty_backend(request, tmp_path):
     try:
         yield Backend("postgresql", url, tmp_path / "pgblobs")
     finally:
-        with engine.begin() as conn:
-            conn.exec_driver_sql(f"DROP SCHEMA {schema} CASCADE")
+        drop_pg_schema(engine, schema)
         engine.dispose()
+
+
+def drop_pg_schema(engine, schema: str) -> None:
+    """Drop a test schema: first the DDL guard (event triggers) a superuser migration installed,
+    which would refuse it, then the schema."""
+    from jointdb.store._guards import event_trigger_names, guard_function
+
+    with engine.begin() as conn:
+        for name in event_trigger_names(schema):
+            conn.exec_driver_sql(f'DROP EVENT TRIGGER IF EXISTS "{name}"')
+        conn.exec_driver_sql(f"DROP FUNCTION IF EXISTS {guard_function(schema)}()")
+        conn.exec_driver_sql(f"DROP SCHEMA {schema} CASCADE")
 
 
 @pytest.fixture

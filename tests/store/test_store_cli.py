@@ -87,8 +87,9 @@ def test_catalogue_query_and_joints_commands(db, files, tmp_path):
     assert "outside the catalogued range" in table.stderr and "d_torque_nm" in table.stdout
 
     bundle = tmp_path / "lab.h5"
-    assert run_json("joints", "export", bundle, "TH-20", "TH-40", "--db", db) == {
-        "bundle": str(bundle), "joints": 2, "versions": 3}
+    exported = run_json("joints", "export", bundle, "TH-20", "TH-40", "--db", db)
+    assert {k: exported[k] for k in ("bundle", "joints", "versions")} == {"bundle": str(bundle), "joints": 2,
+                                                                          "versions": 3}
     other = tmp_path / "other.sqlite"
     imported = run_json("joints", "import", bundle, "--db", other, "--blobs", tmp_path / "other-blobs")
     assert imported["new_versions"] == 3
@@ -142,9 +143,13 @@ def test_exchange_file_from_identify_is_read_with_its_metadata(db, tmp_path):
                     "cond": {"max": 12.5}},
         "settings": {"smoothing": 21},
     })
-    out = run_json("catalogue", path, "--name", "TH-id", "--torque", 35, "--db", db)
+    r = run("catalogue", path, "--name", "TH-id", "--torque", 35, "--db", db, ok=False)
+    assert isinstance(r.exception, InputError)  # the option contradicts the file: refused, naming both values
+    assert "torque_nm = 30 but --torque gives 35" in str(r.exception) and "--override-conditions" in str(r.exception)
+    assert run_json("joints", "list", "--db", db) == []
+    out = run_json("catalogue", path, "--name", "TH-id", "--torque", 35, "--override-conditions", "--db", db)
     assert out["joint_type"] == "tool-holder" and out["model_kind"] == "spring-damper-planar"
-    assert out["torque_nm"] == 35.0  # the option overrides the file
+    assert out["torque_nm"] == 35.0  # the option overrides the file when asked
     assert out["materials"] == "steel + tungsten-carbide" and json.loads(out["geometry"]) == {"d_m": 0.012}
     assert json.loads(out["quality"]) == {"cond.max": 12.5, "passive_fraction": 1.0, "residual_rel": 0.002}
     assert out["method"] == "irc-planar" and json.loads(out["parameters"]) == {"settings": {"smoothing": 21}}
@@ -153,14 +158,14 @@ def test_exchange_file_from_identify_is_read_with_its_metadata(db, tmp_path):
 
 def test_db_upgrade_downgrade_commands(tmp_path):
     url = tmp_path / "m.sqlite"
-    assert run_json("db", "upgrade", "--db", url)["revision"] == "0002"
-    assert run_json("db", "downgrade", "--db", url)["revision"] == "0001"
+    assert run_json("db", "upgrade", "--db", url)["revision"] == "0003"
+    assert run_json("db", "downgrade", "--yes", "--db", url)["revision"] == "0002"
     r = run("db", "downgrade", "--to", "base", "--db", url, ok=False)
     assert isinstance(r.exception, InputError) and "--yes" in str(r.exception)
     assert run_json("db", "downgrade", "--to", "base", "--yes", "--db", url)["revision"] is None
-    assert run_json("db", "upgrade", "--db", url)["revision"] == "0002"
+    assert run_json("db", "upgrade", "--db", url)["revision"] == "0003"
     info = run_json("db", "info", "--db", url)
-    assert info["revision"] == info["head"] == "0002"
+    assert info["revision"] == info["head"] == "0003"
 
 
 def test_exit_codes_and_one_line_errors(tmp_path):

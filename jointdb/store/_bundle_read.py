@@ -1,0 +1,325 @@
+"""Reading, validating and verifying a bundle before anything touches a database.
+
+Everything a bundle carries is checked with the rules a new catalogue entry,
+label or state change must pass (names, types, conditions, provenance, quality,
+model kind against the FRF, label names, states, times parsed strictly as ISO
+8601 with a time zone), every record and FRF hash is recomputed, and the
+bundle hash (format version 2: over joints, labels, states and every record
+hash, see :func:`manifest_sha256`) is compared. A signature, when present or
+required, is verified against the trusted public keys. Any failure is one
+:class:`InputError` (malformed) or :class:`IntegrityError` (altered or
+damaged) line naming the bundle and the place; nothing has been written.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import re
+import uuid as uuidlib
+from dataclasses import dataclass, field
+from datetime import datetime
+from typing import Any
+
+import numpy as np
+
+from jointdb.errors import InputError, IntegrityError, JointdbError, NotFoundError
+from jointdb.frf import FRF
+from jointdb.store._blobs import frf_sha256, read_frf_group
+from jointdb.store._records import record_sha256
+from jointdb.store._types import (
+    Conditions,
+    Provenance,
+    as_quality,
+    check_joint_type,
+    check_label,
+    check_model_kind,
+    check_name,
+    dof_strings,
+)
+
+FORMAT = "jointdb-bundle"
+FORMAT_VERSION = 2
+MAX_STATES = 100_000
+_HEX64 = re.compile(r"[0-9a-f]{64}")
+_RAW_KEY = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]{0,99}")
+
+
+@dataclass
+class Bundle:
+    """A bundle read and verified completely (no database access)."""
+
+    path: str
+    joints: list[dict[str, Any]]
+    digest: str | None  # bundle hash (None for format version 1 bundles)
+    signer: str | None = None  # fingerprint of the key that signed it, if any
+    signature_verified: bool = False
+    notes: list[str] = field(default_factory=list)
+
+
+def parse_time(value: Any, what: str) -> datetime:
+    """An ISO 8601 time with a time zone, e.g. ``2026-01-31T12:00:00+00:00``; InputError otherwise."""
+    if not isinstance(value, str) or len(value) > 64:
+        raise InputError(f"{what}: {str(value)[:40]!r} is not an ISO 8601 time")
+    try:
+        at = datetime.fromisoformat(value)
+    except ValueError:
+        raise InputError(f"{what}: {value!r} is not an ISO 8601 time (e.g. 2026-01-31T12:00:00+00:00)") from None
+    if at.tzinfo is None:
+        raise InputError(f"{what}: {value!r} has no time zone")
+    return at
+
+
+def _text(value: Any, what: str, limit: int = 200) -> str:
+    if not isinstance(value, str) or len(value) > limit or not value.isprintable():
+        raise InputError(f"{what} must be printable text of at most {limit} characters, got {str(value)[:40]!r}")
+    return value
+
+
+def _int(value: Any, what: str, lo: int, hi: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, int) or not lo <= value <= hi:
+        raise InputError(f"{what} must be a whole number in {lo}..{hi}, got {str(value)[:40]!r}")
+    return value
+
+
+def manifest(joints: list[dict[str, Any]]) -> dict[str, Any]:
+    """What the bundle hash covers: every joint's identity, labels, states and record hashes."""
+    return {
+        "format": FORMAT,
+        "format_version": FORMAT_VERSION,
+        "joints": [
+            {
+                "name": j["name"], "joint_type": j["joint_type"], "created_at": j["created_at"],
+                "created_by": j["created_by"], "labels": j["labels"], "states": j["states"],
+                "versions": [{"version": v["record"]["version"], "record_sha256": v["digest"]} for v in j["versions"]],
+            }
+            for j in joints
+        ],
+    }
+
+
+def manifest_sha256(joints: list[dict[str, Any]]) -> str:
+    text = json.dumps(manifest(joints), sort_keys=True, separators=(",", ":"), allow_nan=False, ensure_ascii=True)
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def _attr(obj, key: str, where: str) -> str:
+    if key not in obj.attrs:
+        raise InputError(f"{where}: attribute {key!r} is missing")
+    value = obj.attrs[key]
+    if isinstance(value, bytes):
+        value = value.decode("utf-8", "replace")
+    if not isinstance(value, str):
+        raise InputError(f"{where}: attribute {key!r} must be text")
+    return value
+
+
+def _json(text: str, where: str) -> Any:
+    if len(text) > 50_000_000:
+        raise InputError(f"{where}: JSON text of {len(text)} characters is too large")
+    try:
+        return json.loads(text)
+    except RecursionError:
+        raise InputError(f"{where}: JSON nested too deeply") from None
+    except json.JSONDecodeError as exc:
+        raise InputError(f"{where}: not valid JSON ({exc.msg} at line {exc.lineno})") from None
+
+
+def _check_record(record: Any, name: str, jt: str, frf: FRF, label: str) -> None:
+    """The record is a well-formed catalogue entry describing ``frf``."""
+    if not isinstance(record, dict):
+        raise InputError(f"{label}: record must be a JSON object")
+    version = _int(record.get("version"), f"{label}: version", 1, 10**9)
+    try:
+        uuidlib.UUID(str(record.get("uuid")))
+    except ValueError:
+        raise InputError(f"{label}: uuid {str(record.get('uuid'))[:40]!r} is not a UUID") from None
+    parse_time(record.get("created_at"), f"{label}: created_at")
+    _text(record.get("author"), f"{label}: author")
+    cond = record.get("conditions")
+    if not isinstance(cond, dict) or Conditions.from_dict(cond).to_dict() != cond:
+        raise InputError(f"{label}: conditions are not in the catalogue's form (materials, preload_n, torque_nm, "
+                         "geometry, extra)")
+    if check_model_kind(record.get("model_kind"), frf) != record.get("model_kind"):
+        raise InputError(f"{label}: model kind {record.get('model_kind')!r} is not in canonical form")
+    described = {"dofs": list(dof_strings(frf.outputs)), "quantity": frf.quantity.value, "n_freq": frf.n_freq,
+                 "freq_min_hz": float(frf.freq[0]), "freq_max_hz": float(frf.freq[-1])}
+    for key, value in described.items():
+        if record.get(key) != value:
+            raise InputError(f"{label}: {key} {str(record.get(key))[:60]!r} does not describe the FRF ({value!r})")
+    prov = record.get("provenance")
+    if not isinstance(prov, dict) or set(prov) != {"input_files", "method", "parameters", "software_version"}:
+        raise InputError(f"{label}: provenance must have input_files, method, parameters, software_version")
+    if not isinstance(prov["parameters"], dict) or not isinstance(prov["input_files"], dict):
+        raise InputError(f"{label}: provenance parameters and input_files must be JSON objects")
+    checked = Provenance(method=prov["method"], parameters=prov["parameters"], input_files=prov["input_files"])
+    if checked.method != prov["method"] or dict(checked.input_files) != prov["input_files"]:
+        raise InputError(f"{label}: provenance is not in canonical form")
+    _text(prov["software_version"], f"{label}: software_version", 50)
+    parent = record.get("parent_version")
+    if parent is not None:
+        _int(parent, f"{label}: parent_version", 1, version - 1)
+    quality = record.get("quality")
+    if not isinstance(quality, dict) or as_quality(quality) != quality:
+        raise InputError(f"{label}: quality must map names to finite numbers")
+    if not isinstance(record.get("blob_sha256"), str) or not _HEX64.fullmatch(record["blob_sha256"]):
+        raise InputError(f"{label}: blob_sha256 is not a SHA-256 hex digest")
+    raw = record.get("raw_blobs")
+    if not isinstance(raw, dict) or not all(
+        isinstance(k, str) and _RAW_KEY.fullmatch(k) and isinstance(d, str) and _HEX64.fullmatch(d)
+        for k, d in raw.items()
+    ):
+        raise InputError(f"{label}: raw_blobs must map simple names to SHA-256 hex digests")
+    if record.get("name") != name or record.get("joint_type") != jt:
+        raise IntegrityError(f"{label}: record names another joint")
+
+
+def _check_labels(labels: Any, n: int, where: str) -> dict[str, int]:
+    if not isinstance(labels, dict):
+        raise InputError(f"{where}: labels must be a JSON object {{label: version}}")
+    out = {}
+    for label, version in labels.items():
+        text = check_label(label)
+        if text != label:
+            raise InputError(f"{where}: label {label!r} has surrounding spaces")
+        out[label] = _int(version, f"{where}: label {label!r} version", 1, n)
+    return out
+
+
+def _check_states(states: Any, n: int, where: str) -> list[dict[str, Any]]:
+    if not isinstance(states, list) or len(states) > MAX_STATES:
+        raise InputError(f"{where}: states must be a JSON list (at most {MAX_STATES})")
+    for i, st in enumerate(states):
+        w = f"{where}: state {i + 1}"
+        if not isinstance(st, dict) or set(st) != {"version", "state", "reason", "author", "at"}:
+            raise InputError(f"{w} must have exactly version, state, reason, author, at")
+        if st["version"] is not None:
+            _int(st["version"], f"{w}: version", 1, n)
+        if st["state"] not in ("active", "deprecated"):
+            raise InputError(f"{w}: state must be 'active' or 'deprecated', got {str(st['state'])[:40]!r}")
+        if not isinstance(st["reason"], str) or len(st["reason"]) > 10_000:
+            raise InputError(f"{w}: reason must be text of at most 10000 characters")
+        _text(st["author"], f"{w}: author")
+        parse_time(st["at"], f"{w}: at")
+    return states
+
+
+def _read_joint(g, where: str) -> dict[str, Any]:
+    name = check_name(_attr(g, "name", where))
+    jt = check_joint_type(_attr(g, "joint_type", where))
+    if jt != _attr(g, "joint_type", where):
+        raise InputError(f"{where}: joint type {_attr(g, 'joint_type', where)!r} is not in canonical form")
+    where = f"{where} ({name})"
+    created_at = _attr(g, "created_at", where)
+    parse_time(created_at, f"{where}: created_at")
+    created_by = _text(_attr(g, "created_by", where), f"{where}: created_by")
+    versions = []
+    for vname in sorted(k for k in g if k.startswith("v")):
+        vg = g[vname]
+        label = f"{where} {vname}"
+        record = _json(_attr(vg, "record", label), f"{label} record")
+        digest = _attr(vg, "record_sha256", label)
+        if not isinstance(record, dict) or record_sha256(record) != digest:
+            raise IntegrityError(f"{label}: record hash mismatch (bundle altered or damaged)")
+        if "frf" not in vg:
+            raise InputError(f"{label}: the FRF group is missing")
+        frf, _ = read_frf_group(vg["frf"], label)
+        _check_record(record, name, jt, frf, label)
+        if frf_sha256(frf) != record["blob_sha256"]:
+            raise IntegrityError(f"{label}: FRF content does not match its hash")
+        raw: dict[str, FRF] = {}
+        for key, raw_digest in record["raw_blobs"].items():
+            if "raw" not in vg or key not in vg["raw"]:
+                raise InputError(f"{label}: raw measurement {key!r} is missing")
+            raw_frf, _ = read_frf_group(vg["raw"][key], f"{label} raw {key}")
+            if frf_sha256(raw_frf) != raw_digest:
+                raise IntegrityError(f"{label}: raw measurement {key!r} does not match its hash")
+            raw[key] = raw_frf
+        versions.append({"record": record, "digest": digest, "frf": frf, "raw": raw})
+    numbers = [v["record"]["version"] for v in versions]
+    if not numbers or numbers != list(range(1, len(numbers) + 1)):
+        raise InputError(f"{where}: versions {numbers[:10]} are not numbered 1..n")
+    labels = _check_labels(_json(_attr(g, "labels", where), f"{where} labels"), len(numbers), where)
+    states = _check_states(_json(_attr(g, "states", where), f"{where} states"), len(numbers), where)
+    return {"name": name, "joint_type": jt, "created_at": created_at, "created_by": created_by,
+            "labels": labels, "states": states, "versions": versions}
+
+
+def read_bundle(path: str | os.PathLike, trusted_keys=(), require_signature: bool = False) -> Bundle:
+    """Read and verify a bundle completely (module docstring); no database is touched.
+
+    Parameters
+    ----------
+    trusted_keys
+        Ed25519 public keys (:func:`jointdb.store._signing.load_public_key`) whose
+        signature is accepted.
+    require_signature
+        Refuse a bundle that is not signed by one of ``trusted_keys``.
+
+    Raises
+    ------
+    NotFoundError, InputError, IntegrityError
+    """
+    import h5py
+
+    from jointdb.store import _signing
+
+    where = os.fspath(path)
+    if os.path.isdir(where):
+        raise InputError(f"bundle {where} is a directory")
+    if not os.path.isfile(where):
+        raise NotFoundError(f"bundle {where} does not exist")
+    if require_signature and not trusted_keys:
+        raise InputError("--require-signature needs at least one trusted public key (--trust KEY.pub)")
+    try:
+        f = h5py.File(where, "r", locking=False)
+    except OSError as exc:
+        raise InputError(f"{where}: not a jointdb bundle (cannot open as HDF5: {str(exc).splitlines()[0]})") from None
+    try:
+        with f:
+            if f.attrs.get("format") != FORMAT and str(f.attrs.get("format", "")) != FORMAT:
+                raise InputError(f"{where}: not a jointdb bundle (format attribute {str(f.attrs.get('format'))[:40]!r})")
+            fmt_version = f.attrs.get("format_version", 0)
+            if isinstance(fmt_version, bool) or not isinstance(fmt_version, (int, np.integer)) \
+                    or int(fmt_version) not in (1, 2):
+                raise InputError(f"{where}: bundle format version {str(fmt_version)[:20]} is not one this jointdb "
+                                 f"reads (1..{FORMAT_VERSION})")
+            if "joints" not in f or not isinstance(f["joints"], h5py.Group):
+                raise InputError(f"{where}: the joints group is missing")
+            joints = [_read_joint(f["joints"][g], f"{where}: joint {g}") for g in sorted(f["joints"])]
+            names = [j["name"] for j in joints]
+            if len(set(names)) != len(names):
+                raise InputError(f"{where}: a joint appears twice")
+            digest = None
+            if int(fmt_version) >= 2:
+                digest = manifest_sha256(joints)
+                if _attr(f, "bundle_sha256", where) != digest:
+                    raise IntegrityError(f"{where}: bundle hash mismatch (joints, labels or states were altered "
+                                         "after export)")
+            signature = f.attrs.get("signature")
+            signer = f.attrs.get("signer_public_key")
+    except JointdbError:
+        raise
+    except (OSError, KeyError, TypeError, ValueError, AttributeError, RecursionError, UnicodeError) as exc:
+        raise InputError(f"{where}: malformed bundle ({type(exc).__name__}: {str(exc).splitlines()[0][:200]})") from None
+    bundle = Bundle(where, joints, digest)
+    if signature is not None:
+        if digest is None:
+            raise InputError(f"{where}: a signed bundle must be format version 2")
+        try:
+            bundle.signer = _signing.fingerprint(bytes.fromhex(str(signer)))
+        except ValueError:
+            raise InputError(f"{where}: signer_public_key is not hex") from None
+        if trusted_keys:
+            key = _signing.verify_digest(trusted_keys, digest, str(signature))
+            if key is None:
+                raise IntegrityError(f"{where}: the signature does not verify with any trusted key (bundle altered, "
+                                     f"or signed by key {bundle.signer} which is not trusted)")
+            bundle.signature_verified = True
+            bundle.signer = _signing.fingerprint(_signing.public_raw(key))
+        else:
+            bundle.notes.append(f"signed by key {bundle.signer} (not verified: no --trust key given)")
+    if require_signature and not bundle.signature_verified:
+        raise IntegrityError(f"{where}: the bundle is not signed; --require-signature refuses it")
+    return bundle
