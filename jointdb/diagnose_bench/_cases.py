@@ -11,13 +11,12 @@ finite frequency resolution (bin-averaged lines), seeded complex noise
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-
 import numpy as np
 import scipy.signal
 
+from jointdb.diagnose_bench._measure import BenchCase, Recording, dof_labels, lines, record
+from jointdb.diagnose_bench._stack_cases import STACK_EFFECTS, generate_stack_case
 from jointdb.diagnose_bench._truth_fe import TruthBeam
-from jointdb.frf import FRF, Dof
 
 __all__ = ["EFFECTS", "BenchCase", "Recording", "generate_case", "generate_suite"]
 
@@ -33,32 +32,11 @@ EFFECTS: tuple[str, ...] = (
     "gain",
     "delay",
     "softening_joint",
+    *STACK_EFFECTS,
 )
 
 STEEL = dict(E=210e9, nu=0.3, rho=7800.0)
 POINT_NAMES = ("tip", "flute", "shank")
-
-
-@dataclass(frozen=True)
-class Recording:
-    """One recorded FRF set (outputs x at the points, inputs x at tip and flute)."""
-
-    frf: FRF
-    coherence: np.ndarray          # (n_freq, n_out, n_in), 0..1
-    level_n: float | None = None   # excitation force amplitude [N], if known
-
-
-@dataclass(frozen=True)
-class BenchCase:
-    """A seeded case: the nominal model (jointdb.fe JSON dict) and its recordings."""
-
-    name: str
-    effects: tuple[str, ...]
-    seed: int
-    truth: dict                    # the hidden parameters, for scoring only
-    model: dict                    # jointdb.fe model description (what is diagnosed)
-    recordings: tuple[Recording, ...]
-    point_map: dict = field(default_factory=dict)   # node -> point name
 
 
 def _geometry(rng):
@@ -112,32 +90,19 @@ def _rayleigh_for(beam, zeta=0.01):
 
 
 def _measure(rng, beam, g, f_max, df, level=None, law=None, chain=None):
-    """Bin-averaged receptances at the recorded lines, plus noise and coherence."""
+    """Bin-averaged receptances of the beam truth at the recorded lines, plus noise and coherence."""
     pts = _points(g)
     nodes_out = [beam.node_at(pts[n][1]) for n in POINT_NAMES]
     outs = [2 * n for n in nodes_out]
     ins = outs[:2]
-    freq = np.arange(1, int(f_max / df) + 1) * df
-    sub = np.array([-0.25, 0.25]) * df          # 2-point bin average (finite resolution)
-    fine = (freq[:, None] + sub[None, :]).ravel()
+    freq, fine = lines(f_max, df)
     if law is None:
         H = beam.receptance(fine, outs, ins)
     else:
         cols = [beam.receptance_amplitude_dependent(fine, outs, [i], level, law) for i in ins]
         H = np.concatenate(cols, axis=2)
-    H = H.reshape(freq.size, 2, len(outs), len(ins)).mean(axis=1)
-    if chain is not None:
-        H = H * chain(freq)[:, None, None]
-    rel = float(rng.uniform(0.01, 0.02))
-    # noise floor of an accelerometer channel: flat in accelerance, so ∝ 1/ω² in receptance
-    w2 = (2 * np.pi * freq[:, None, None]) ** 2
-    floor = 1e-4 * np.abs(H * w2).max(axis=0, keepdims=True) / w2
-    sigma = rel * np.abs(H) + floor
-    noise = (rng.standard_normal(H.shape) + 1j * rng.standard_normal(H.shape)) * sigma / np.sqrt(2)
-    coh = np.abs(H) ** 2 / (np.abs(H) ** 2 + sigma**2 * (1 + 0.2 * rng.random(H.shape)))
-    labels = tuple(Dof(pts[n][0], "x") for n in POINT_NAMES)
-    frf = FRF(freq, H + noise, labels, labels[:2], "receptance")
-    return Recording(frf=frf, coherence=coh, level_n=level), rel
+    labels = dof_labels(pts[n][0] for n in POINT_NAMES)
+    return record(rng, freq, H, labels, labels[:2], level=level, chain=chain)
 
 
 def generate_case(effect: str, seed: int) -> BenchCase:
@@ -151,6 +116,8 @@ def generate_case(effect: str, seed: int) -> BenchCase:
     if effect not in EFFECTS:
         raise ValueError(f"unknown effect {effect!r}; expected one of {', '.join(EFFECTS)}")
     rng = np.random.default_rng([seed, EFFECTS.index(effect)])
+    if effect in STACK_EFFECTS:
+        return generate_stack_case(effect, seed, rng)
     g = _geometry(rng)
     clamped = _truth_beam(g)
     alpha, beta, f12 = _rayleigh_for(clamped)
