@@ -52,9 +52,6 @@ def register(app: typer.Typer) -> None:
         if out is not None:
             application.frf_format(out, "--out")
         spec = application.load_stack(stack_file)
-        from jointdb.cli._store import check_db_target
-
-        check_db_target(db)  # a mistyped --db is not found, not created empty
         freq = None
         if fmin is not None or fmax is not None or df is not None:
             base = spec.frequency or FrequencyGrid()
@@ -66,6 +63,10 @@ def register(app: typer.Typer) -> None:
                                  f"{grid.fmin:g}, {grid.fmax:g}, {grid.step:g}")
             check_lines((grid.fmax - grid.fmin) / grid.step + 1, "--df")
             freq = prediction_grid(spec, grid.lines())
+        from jointdb.cli._store import check_db_target
+
+        if any(j.kind in ("catalogued", "query") for j in spec.interfaces.values()):  # only then is a db read
+            check_db_target(db)  # after every option is checked; a mistyped --db is not found, not created empty
         result = application.predict_stack(spec, db, freq)
         pred = result.prediction
         for res in result.joints.values():

@@ -8,6 +8,7 @@ into one :class:`~jointdb.frf.FRF` lives in :mod:`jointdb.io._uff58_group`.
 from __future__ import annotations
 
 import os
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -337,8 +338,10 @@ def read_uff58(path: str | os.PathLike, *, assume_si: bool = False) -> list[UffR
     data = p.read_bytes()
     _scan_blocks(p, data)
     try:
-        uff = pyuff.UFF(str(p))
-        types = [int(t) for t in uff.get_set_types()]
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # numpy warnings on garbage; refused below with one line
+            uff = pyuff.UFF(str(p))
+            types = [int(t) for t in uff.get_set_types()]
     except Exception as exc:  # pyuff raises bare Exception for every failure
         raise InputError(f"{p}: cannot be read as a universal file ({exc})") from None
     if 58 not in types:
@@ -350,7 +353,9 @@ def read_uff58(path: str | os.PathLike, *, assume_si: bool = False) -> list[UffR
         if t not in (58, 164):
             continue
         try:
-            d = uff.read_sets(i)
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")  # e.g. NaN arithmetic on a damaged 58b block: refused below
+                d = uff.read_sets(i)
         except Exception as exc:  # pyuff raises bare Exception for every failure
             raise InputError(f"{p}: dataset #{i + 1} ({t}) is malformed and cannot be parsed ({exc})") from None
         if t == 164:

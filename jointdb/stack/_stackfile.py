@@ -13,7 +13,14 @@ import re
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-from jointdb._limits import LENGTH_RANGE, MAX_SEGMENTS, check_count, check_elements, check_range
+from jointdb._limits import (
+    LENGTH_RANGE,
+    MAX_SEGMENTS,
+    check_count,
+    check_elements,
+    check_model_limits,
+    check_range,
+)
 from jointdb.errors import InputError
 from jointdb.stack._spec import (
     FORMAT,
@@ -171,6 +178,11 @@ def _spindle(obj: Any, path: str) -> MeasuredSpindle | ModelledSpindle:
         model = obj["model"]
         if not isinstance(model, (Mapping, str)):
             raise _fail(f"{path}.model", "must be a beam model object or the path of a model JSON file")
+        if isinstance(model, Mapping):
+            try:
+                check_model_limits(dict(model))
+            except InputError as exc:
+                raise _fail(f"{path}.model", str(exc)) from None
         return ModelledSpindle(model, _string(obj, "point", path))
     raise _fail(path, "needs 'file' + 'node' (measured FRF with rotations) or 'model' + 'point' (beam model)")
 

@@ -14,6 +14,7 @@ import json
 import os
 import shutil
 import sys
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
@@ -28,6 +29,9 @@ FIXTURES = ROOT / "fixtures"
 MODEL_FIXTURE = FIXTURES / "models" / "end-mill-in-holder.json"
 STACK_FIXTURE = FIXTURES / "stacks" / "endmill-modelled-spindle.json"
 CAMPAIGN_FIXTURE = FIXTURES / "campaigns" / "th-steel-30nm"
+
+#: Warning classes Python does not show to a console user by default.
+_HIDDEN_BY_DEFAULT = (DeprecationWarning, PendingDeprecationWarning, ImportWarning, ResourceWarning)
 
 #: Exit codes of jointdb.errors (InputError, NotFoundError, ...).
 INPUT, NOT_FOUND, INTEGRITY = 2, 3, 5
@@ -140,12 +144,17 @@ def run_main(args: list[str], cwd: Path, monkeypatch, capsys) -> tuple[int, str,
     monkeypatch.setenv("COLUMNS", "200")
     capsys.readouterr()
     code = 0
-    try:
-        main()
-    except SystemExit as exc:
-        code = exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 1)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        try:
+            main()
+        except SystemExit as exc:
+            code = exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 1)
     out = capsys.readouterr()
-    return code, out.out, out.err
+    # a console user would see every warning on stderr too (two lines each: message and source line)
+    shown = "".join(f"{w.filename}:{w.lineno}: {w.category.__name__}: {w.message}\n  (source line)\n"
+                    for w in caught if not issubclass(w.category, _HIDDEN_BY_DEFAULT))
+    return code, out.out, out.err + shown
 
 
 def check_case(case: Case, tmp_path: Path, monkeypatch, capsys) -> str:
