@@ -43,15 +43,97 @@ def _parse_floats(text: str | None, option: str) -> list[float]:
 
 
 def _read_recording(path: Path):
-    """FRF and (if the file has coherence records, UFF58 function type 6) the coherence."""
+    """FRF and (if the file has coherence records, UFF58 function type 6) the coherence.
+
+    A file whose dataset-58 records hold NaN/Inf values (which the UFF reader
+    refuses) is read with those lines marked non-finite, so that diagnosis
+    names them or, with ``--mask-nonfinite``, gives them zero weight.
+    """
     from jointdb.diagnose import Measurement
     from jointdb.io import read_coherence_uff58, read_frf_uff58
 
     if not path.exists():
         raise InputError(f"recording {path}: no such file")
-    frf = read_frf_uff58(path)
+    try:
+        frf = read_frf_uff58(path)
+    except InputError:
+        gaps = _nonfinite_records(path)
+        if gaps is None:
+            raise
+        return _read_with_gaps(path, *gaps)
     coh = read_coherence_uff58(path, frf)  # None when the file has no coherence records
     return Measurement(frf=frf, coherence=coh, label=path.name)
+
+
+def _nonfinite_records(path: Path):
+    """``(datasets, {dataset index: non-finite value lines})`` of a universal file, or None if it has none."""
+    import numpy as np
+    import pyuff
+
+    try:
+        sets = pyuff.UFF(str(path)).read_sets()
+    except Exception:  # pyuff raises bare Exception for every failure: the reader's own message stands
+        return None
+    sets = [sets] if isinstance(sets, dict) else list(sets)
+    bad = {}
+    for k, d in enumerate(sets):
+        if int(d.get("type", 0)) != 58:
+            continue
+        x, y = np.asarray(d.get("x"), dtype=float), np.asarray(d.get("data"))
+        if x.shape != y.shape or not np.issubdtype(y.dtype, np.number):
+            return None
+        if not np.all(np.isfinite(x)):
+            line = int(np.flatnonzero(~np.isfinite(x))[0]) + 1
+            raise InputError(f"{path}: dataset #{k + 1}: the frequency of line {line} is {x[line - 1]}; "
+                             "a line without a frequency cannot be used: fix the file")
+        if not np.all(np.isfinite(y)):
+            bad[k] = np.flatnonzero(~np.isfinite(y))
+    return (sets, bad) if bad else None
+
+
+def _read_with_gaps(path: Path, sets: list, bad: dict):
+    """Read a universal file with NaN/Inf values through the ordinary reader (units, signs, grouping)
+    by way of a copy with those values zeroed, and mark them non-finite again in the result."""
+    import tempfile
+
+    import numpy as np
+    import pyuff
+
+    from jointdb.diagnose import Measurement
+    from jointdb.frf import Dof
+    from jointdb.io import read_coherence_uff58, read_frf_uff58
+
+    clean = []
+    for k, d in enumerate(sets):
+        if k in bad:
+            d = dict(d)
+            d["data"] = np.where(np.isfinite(d["data"]), d["data"], 0)
+        clean.append(d)
+    with tempfile.TemporaryDirectory() as tmp:
+        copy = Path(tmp) / path.name
+        try:
+            pyuff.UFF(str(copy)).write_sets(clean, mode="overwrite")
+            frf = read_frf_uff58(copy)
+            coh = read_coherence_uff58(copy, frf)
+        except InputError as exc:
+            raise InputError(str(exc).replace(str(copy), str(path))) from None
+    values = frf.values.copy()
+    coh = None if coh is None else coh.copy()
+    oi = {d: i for i, d in enumerate(frf.outputs)}
+    ii = {d: i for i, d in enumerate(frf.inputs)}
+    for k, lines in bad.items():
+        d = sets[k]
+        try:
+            out, inp = Dof.from_uff(d["rsp_node"], d["rsp_dir"])[0], Dof.from_uff(d["ref_node"], d["ref_dir"])[0]
+        except (InputError, KeyError):
+            continue  # a record the reader does not place in the FRF matrix
+        if out in oi and inp in ii:
+            if int(d.get("func_type", 0)) == 6:
+                if coh is not None:
+                    coh[lines, oi[out], ii[inp]] = np.nan
+            else:
+                values[lines, oi[out], ii[inp]] = np.nan
+    return Measurement.from_arrays(frf.freq, values, frf.outputs, frf.inputs, frf.quantity, coh, label=path.name)
 
 
 def register(app: typer.Typer) -> None:
@@ -67,6 +149,7 @@ def register(app: typer.Typer) -> None:
         out: Annotated[Optional[Path], typer.Option("--out", help="Write the augmented model (JSON).")] = None,
         plots: Annotated[Optional[Path], typer.Option("--plots", help="Directory for before/after PNGs.")] = None,
         no_combinations: Annotated[bool, typer.Option("--no-combinations", help="Fit single explanations only.")] = False,
+        mask_nonfinite: Annotated[bool, typer.Option("--mask-nonfinite", help="Give NaN/Inf lines of the recordings zero weight (with a note) instead of refusing them.")] = False,
         as_json: Annotated[bool, typer.Option("--json", help="Machine-readable result on stdout.")] = False,
     ) -> None:
         """Locate where a model and recordings disagree, name the missing physics, refit.
@@ -101,7 +184,9 @@ def register(app: typer.Typer) -> None:
             raise InputError(f"--band {band!r}: write FMIN:FMAX, e.g. 100:5000")
         with single_blas_thread():
             result = diagnose(nominal, ms, mapping=_parse_map(mapping), band=tuple(b) if b else (None, None),
-                              combinations=not no_combinations)
+                              combinations=not no_combinations, mask_nonfinite=mask_nonfinite)
+        for note in result.observation.notes:
+            message(f"note: {note}")
         written = []
         if out is not None:
             if result.explained and result.augmented and any(a is not nominal for a in result.augmented):
@@ -118,14 +203,16 @@ def register(app: typer.Typer) -> None:
             else:
                 message("nothing to add to the model: --out not written")
         if plots is not None:
-            from jointdb.plots._diagnose import plot_diagnosis
+            from jointdb.plots._diagnose import plot_backbone, plot_diagnosis
 
             plots.mkdir(parents=True, exist_ok=True)
             written += plot_diagnosis(result, plots)
+            if len(result.observation.levels) >= 2 and result.levels_data is not None and result.levels_data.tracks:
+                written.append(str(plot_backbone(result.levels_data, plots / "backbone.png", result.levels_model)))
         if written:
             message(f"wrote {', '.join(written)}")
         if as_json:
-            emit(result.to_dict(), as_json=True)
+            emit(result.to_dict() | {"input_notes": list(result.observation.notes)}, as_json=True)
             return
         emit(result.verdict)
         emit(result.table()[:8], title="ranked explanations (BIC; ΔBIC vs the nominal model)")
@@ -135,6 +222,8 @@ def register(app: typer.Typer) -> None:
                   "DOFs showing it": ", ".join(p.dofs)} for p in result.before.pairs]
         if modes:
             emit(modes, title="modes: model vs recording (before)")
+        if result.levels_data is not None and result.levels_data.tracks:
+            emit("recorded modes per excitation level (local modal fit, ±1σ):\n" + result.levels_data.summary())
         if result.level_table:
             emit(result.level_table, title="amplitude-dependent joint per level")
 

@@ -17,6 +17,8 @@ __all__ = ["Measurement", "Observation", "RecordedArrays", "prepare"]
 MODEL_FLOOR = 0.02
 #: Lines with coherence below this are not used.
 MIN_COHERENCE = 0.5
+#: |Re| or |Im| at or above this is an overflow marker, not a measurement.
+_OVERFLOW = 1e300
 
 
 @dataclass(frozen=True)
@@ -164,7 +166,8 @@ def _finite(m: Measurement, k: int, mask: bool, notes: list[str]):
     label = m.label or f"recording {k + 1}"
     src = m.frf
     coh = None if m.coherence is None else np.asarray(m.coherence, dtype=float)
-    if isinstance(src, FRF) and (coh is None or np.all(np.isfinite(coh))):
+    if isinstance(src, FRF) and (coh is None or np.all(np.isfinite(coh))) and not _overflow(src.values).any():
+        _note_zeros(src, label, notes)
         return src, coh, None
     freq = np.asarray(src.freq, dtype=float)
     values = np.asarray(src.values, dtype=complex)
@@ -179,7 +182,7 @@ def _finite(m: Measurement, k: int, mask: bool, notes: list[str]):
     if coh is not None and coh.shape != values.shape:
         raise InputError(f"{label}: coherence has shape {coh.shape}, the FRF has {values.shape}")
     bad_f = ~np.isfinite(freq)
-    bad = ~np.isfinite(values) | (~np.isfinite(coh) if coh is not None else False)
+    bad = ~np.isfinite(values) | _overflow(values) | (~np.isfinite(coh) if coh is not None else False)
     hint = "fix the recording, or pass mask_nonfinite=True (CLI: --mask-nonfinite) to give those lines zero weight"
     if bad_f.any():
         idx = np.flatnonzero(bad_f)
@@ -195,13 +198,15 @@ def _finite(m: Measurement, k: int, mask: bool, notes: list[str]):
         entries = [(o, i) for o in range(len(outs)) for i in range(len(ins)) if bad[:, o, i].any()]
         o, i = entries[0]
         idx = np.flatnonzero(bad[:, o, i])
-        what = "values" if not np.all(np.isfinite(values[:, o, i])) else "coherence"
+        what = "values" if (~np.isfinite(values[:, o, i]) | _overflow(values[:, o, i])).any() else "coherence"
         where = f"FRF {outs[o]}/{ins[i]}"
         if idx.size == freq.size:
             first = f"{where}: every {'value' if what == 'values' else 'coherence value'} is non-finite (NaN/Inf)"
         else:
             raw = values[idx, o, i] if what == "values" else coh[idx, o, i]
-            kinds = "/".join(k for k, f in (("NaN", np.isnan), ("Inf", np.isinf)) if f(raw).any())
+            kinds = "/".join(k for k, f in (("NaN", np.isnan), ("Inf", np.isinf),
+                                            ("±1.8e308, an Inf as some UFF writers store it", _overflow))
+                             if f(raw).any())
             first = (f"{where}: {idx.size} non-finite {what if idx.size > 1 or what != 'values' else 'value'} "
                      f"({kinds}) at {_lines_text(freq, idx)}")
         others = f"; {len(entries) - 1} more FRF entr{'ies' if len(entries) > 2 else 'y'} too" \
@@ -228,7 +233,29 @@ def _finite(m: Measurement, k: int, mask: bool, notes: list[str]):
     if freq.size == 0:
         raise InputError(f"{label}: no line has a finite frequency")
     frf = FRF(freq, values, outs, ins, src.quantity)
+    _note_zeros(frf, label, notes, bad)
     return frf, coh, (bad if bad.any() else None)
+
+
+def _overflow(values: np.ndarray) -> np.ndarray:
+    """Finite values no FRF can have: ±1.8e308 (DBL_MAX) is how some UFF writers store an Inf."""
+    v = np.asarray(values)
+    return np.isfinite(v) & (np.maximum(np.abs(v.real), np.abs(v.imag)) >= _OVERFLOW)
+
+
+def _note_zeros(frf: FRF, label: str, notes: list[str], skip: np.ndarray | None = None) -> None:
+    """Exactly-zero values (above 0 Hz) get zero weight; say so (some UFF writers store a NaN as 0)."""
+    zero = (frf.values == 0) & (frf.freq > 0)[:, None, None]
+    if skip is not None:
+        zero &= ~skip
+    if not zero.any():
+        return
+    entries = [(o, i) for o in range(zero.shape[1]) for i in range(zero.shape[2]) if zero[:, o, i].any()]
+    notes.append(f"{label}: {int(zero.sum())} value(s) exactly 0 get zero weight (some UFF writers store a NaN "
+                 "as 0): " + "; ".join(f"FRF {frf.outputs[o]}/{frf.inputs[i]} at "
+                                       f"{_lines_text(frf.freq, np.flatnonzero(zero[:, o, i]))}"
+                                       for o, i in entries[:4])
+                 + (f"; and {len(entries) - 4} more FRF entries" if len(entries) > 4 else ""))
 
 
 def _cut_notes(frfs, labels, lo: float, hi: float) -> list[str]:

@@ -126,7 +126,15 @@ def _fmt(v: float, s: float) -> str:
     if not (np.isfinite(s) and s > 0):
         return f"{v:.6g}"
     d = max(0, int(-np.floor(np.log10(s))))
+    if d > 3:  # a noise-free model: no point in more digits
+        return f"{v:.3f} ± <0.001"
     return f"{v:.{d}f} ± {s:.{d}f}"
+
+
+def _pct(z: float) -> str:
+    """A damping ratio in per cent: 1 decimal from 1 %, else 2 significant digits."""
+    p = 100 * z
+    return f"{p:.1f}" if p >= 1 else f"{p:.2g}"
 
 
 @dataclass(frozen=True, eq=False)
@@ -154,12 +162,12 @@ class LevelAnalysis:
 
     def summary(self) -> str:
         """One line per mode, levels from lowest to highest, e.g.
-        ``mode 1: 2305 ± 1 → 2260 ± 1 → 2185 ± 2 Hz, ζ 1.10 → 1.40 → 2.00 % (changes with level)``."""
+        ``mode 1: 2305 ± 1 → 2260 ± 1 → 2185 ± 2 Hz, ζ 1.1 → 1.4 → 2.0 % (changes with level: …)``."""
         lines = []
         o = list(self.order)
         for t in self.tracks:
             f = " → ".join(_fmt(t.freq_hz[k], t.sigma_freq_hz[k]) for k in o)
-            z = " → ".join(f"{100 * t.zeta[k]:.3g}" for k in o)
+            z = " → ".join(_pct(t.zeta[k]) for k in o)
             if len(o) < 2:
                 verdict = ""
             elif t.differs:

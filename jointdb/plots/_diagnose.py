@@ -4,7 +4,11 @@
   phase for every recorded output (first input; one column per level), with
   the located mode bands shaded by their mismatch;
 - ``diagnose-shifts.png``: per-mode frequency shift and damping ratio
-  (recorded vs model) before and after the refit.
+  (recorded vs model) before and after the refit;
+- ``backbone.png`` (:func:`plot_backbone`, with recordings at several
+  excitation levels): per mode, the local-fit frequency and damping ratio
+  against the response amplitude of each level, with 1-σ error bars, and
+  optionally the augmented model's values at the same levels.
 """
 
 from __future__ import annotations
@@ -13,14 +17,14 @@ from pathlib import Path
 
 import numpy as np
 
+from jointdb.errors import InputError
+from jointdb.plots._frf import save_figure
+
 
 def _plt():
-    import matplotlib
+    from jointdb.plots._frf import _pyplot
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
+    return _pyplot()
 
 
 def plot_diagnosis(result, directory: Path) -> list[str]:
@@ -61,9 +65,7 @@ def plot_diagnosis(result, directory: Path) -> list[str]:
     fig.suptitle(f"mismatch {100 * result.mismatch_before:.1f} % → {100 * result.mismatch_after:.1f} % "
                  "(shaded: located mode bands, darker = larger mismatch)", fontsize=9)
     fig.tight_layout()
-    paths = [str(directory / "diagnose-frf.png")]
-    fig.savefig(paths[0], dpi=110)
-    plt.close(fig)
+    paths = [str(save_figure(fig, directory / "diagnose-frf.png", dpi=110))]
 
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(10, 4))
     modes = [p.mode for p in result.before.pairs]
@@ -84,7 +86,71 @@ def plot_diagnosis(result, directory: Path) -> list[str]:
     a1.set_title("per-mode frequency shift")
     a2.set_title("per-mode damping ratio")
     fig.tight_layout()
-    paths.append(str(directory / "diagnose-shifts.png"))
-    fig.savefig(paths[1], dpi=110)
-    plt.close(fig)
+    paths.append(str(save_figure(fig, directory / "diagnose-shifts.png", dpi=110)))
     return paths
+
+
+def plot_backbone(analysis, path, model_analysis=None) -> Path:
+    """Backbone figure: frequency and damping ratio of each mode against the response amplitude per level.
+
+    Parameters
+    ----------
+    analysis
+        :class:`jointdb.diagnose._levels.LevelAnalysis` of the recordings
+        (one row of panels per tracked mode; error bars are the 1-σ of the
+        local fits).
+    path
+        Image file to write (``.png``; ``.pdf``/``.svg`` also work).
+    model_analysis
+        Optional ``LevelAnalysis`` of the augmented model's per-level FRFs,
+        drawn dashed over the recorded points (matched by mode number).
+
+    Returns
+    -------
+    pathlib.Path
+        The file written (atomically).
+
+    Raises
+    ------
+    InputError
+        No tracked mode, or an unknown image suffix.
+    """
+    if not analysis.tracks:
+        raise InputError("backbone plot: no mode could be followed across the levels")
+    plt = _plt()
+    order = list(analysis.order)
+    model = {t.mode: t for t in (model_analysis.tracks if model_analysis is not None else ())}
+    n = len(analysis.tracks)
+    fig, axes = plt.subplots(n, 2, figsize=(10, 2.8 * n + 0.6), squeeze=False)
+    for row, t in zip(axes, analysis.tracks):
+        ax_f, ax_z = row
+        x = t.amplitude[order]
+        label = "recorded (local modal fit)" + (" — changes with level" if t.differs else "")
+        ax_f.errorbar(x, t.freq_hz[order], yerr=t.sigma_freq_hz[order], fmt="o-", capsize=3, label=label)
+        ax_z.errorbar(x, 100 * t.zeta[order], yerr=100 * t.sigma_zeta[order], fmt="o-", capsize=3)
+        m = model.get(t.mode)
+        if m is not None and len(m.freq_hz) == len(t.freq_hz):
+            o = list(model_analysis.order)
+            ax_f.plot(m.amplitude[o], m.freq_hz[o], "s--", color="k", mfc="none", label="augmented model")
+            ax_z.plot(m.amplitude[o], 100 * m.zeta[o], "s--", color="k", mfc="none")
+        for ax in (ax_f, ax_z):
+            ax.ticklabel_format(axis="y", useOffset=False, style="plain")
+            if np.all(x > 0) and x.max() > 3 * x.min():
+                from matplotlib.ticker import NullFormatter
+
+                ax.set_xscale("log")
+                ax.xaxis.set_minor_formatter(NullFormatter())
+            ax.grid(True, alpha=0.3)
+            ax.set_xlabel(f"response amplitude at the peak [{t.amplitude_unit}]")
+        for k, lv in zip(order, x):
+            level = analysis.levels[k]
+            if level is not None:
+                ax_f.annotate(f"{level:g}", (lv, t.freq_hz[k]), textcoords="offset points", xytext=(4, 4),
+                              fontsize=7, color="0.35")
+        ax_f.set_ylabel(f"mode {t.mode}: frequency [Hz]")
+        ax_z.set_ylabel(f"mode {t.mode}: damping ratio ζ [%]")
+        ax_f.legend(fontsize=7, loc="best")
+    fig.suptitle("backbone: each mode's frequency and damping per excitation level (labels: level; "
+                 "bars: ±1σ)", fontsize=9)
+    fig.tight_layout()
+    return save_figure(fig, path, dpi=110)

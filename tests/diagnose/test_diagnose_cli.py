@@ -74,3 +74,65 @@ def test_diagnose_bench_command_small_run():
 def test_diagnose_bench_rejects_unknown_effect():
     res = subprocess.run(JOINTDB + ["diagnose-bench", "--effects", "gremlins"], capture_output=True, text=True)
     assert res.returncode == 2 and "unknown gremlins" in res.stderr
+
+
+def _nan_in_first_value(src, dst):
+    """Copy a UFF58 file written by write_uff58 with the first value of its first FRF record set to NaN
+    (as a text field, the way some acquisition software exports a dropped line)."""
+    lines = src.read_text().split("\n")
+    k = next(i for i, line in enumerate(lines) if line.strip().startswith("13    0    0    0")) + 2
+    lines[k] = f"{'NaN':>20s}" + lines[k][20:]
+    dst.write_text("\n".join(lines))
+
+
+def test_diagnose_command_names_a_nonfinite_line_or_masks_it(files):
+    d, case = files
+    _nan_in_first_value(d / "tap.uff", d / "tap-nan.uff")
+    f0 = case.recordings[0].frf.freq[0]
+    res = subprocess.run(JOINTDB + ["diagnose", str(d / "model.json"), str(d / "tap-nan.uff")],
+                         capture_output=True, text=True)
+    assert res.returncode == 2 and res.stderr.strip().count("\n") == 0, res.stderr
+    assert f"tap-nan.uff: FRF 1x/1x: 1 non-finite value (NaN) at line 1 ({f0:g} Hz)" in res.stderr
+    assert "--mask-nonfinite" in res.stderr
+    res = subprocess.run(JOINTDB + ["diagnose", str(d / "model.json"), str(d / "tap-nan.uff"), "--mask-nonfinite",
+                                    "--no-combinations", "--json"], capture_output=True, text=True)
+    assert res.returncode == 0, res.stderr
+    assert f"note: tap-nan.uff: 1 non-finite value(s) masked (zero weight): FRF 1x/1x at line 1 ({f0:g} Hz)" \
+        in res.stderr
+    out = json.loads(res.stdout[res.stdout.index("{"):])
+    assert out["input_notes"] and out["best"]["family"].startswith("sensor_mass")
+
+
+def test_diagnose_command_an_inf_stored_as_the_largest_double_is_refused(files, tmp_path):
+    """pyuff writes an Inf as 1.797e308 (and a NaN as 0): the reader takes that file, diagnose must not."""
+    import numpy as np
+    import pyuff
+
+    d, case = files
+    sets = pyuff.UFF(str(d / "tap.uff")).read_sets()
+    k = next(i for i, s in enumerate(sets) if s.get("type") == 58)
+    sets[k]["data"] = np.array(sets[k]["data"], dtype=complex)
+    sets[k]["data"][9] = np.inf
+    pyuff.UFF(str(tmp_path / "inf.uff")).write_sets(sets, mode="overwrite")
+    res = subprocess.run(JOINTDB + ["diagnose", str(d / "model.json"), str(tmp_path / "inf.uff")],
+                         capture_output=True, text=True)
+    assert res.returncode == 2 and res.stderr.strip().count("\n") == 0, res.stderr
+    f9 = case.recordings[0].frf.freq[9]
+    assert f"inf.uff: FRF 1x/1x: 1 non-finite value (±1.8e308, an Inf as some UFF writers store it) at line 10 " \
+           f"({f9:g} Hz)" in res.stderr
+
+
+def test_diagnose_command_writes_a_backbone_for_several_levels(tmp_path):
+    case = generate_case("softening_joint", 1)
+    (tmp_path / "model.json").write_text(json.dumps(case.model))
+    recs = []
+    for i, r in enumerate(case.recordings):
+        write_uff58(tmp_path / f"level{i + 1}.uff", r.frf)
+        recs.append(str(tmp_path / f"level{i + 1}.uff"))
+    levels = ",".join(f"{r.level_n:g}" for r in case.recordings)
+    res = CliRunner().invoke(app, ["diagnose", str(tmp_path / "model.json"), *recs, "--levels", levels,
+                                   "--plots", str(tmp_path / "figs"), "--no-combinations"])
+    assert res.exit_code == 0, res.output
+    assert "backbone.png" in [p.name for p in (tmp_path / "figs").iterdir()]
+    assert (tmp_path / "figs" / "backbone.png").stat().st_size > 10_000
+    assert "recorded modes per excitation level" in res.stdout and "changes with level" in res.stdout

@@ -195,7 +195,7 @@ def test_level_dependent_set_is_flagged_with_the_right_signs():
     assert m2.amplitude[0] == pytest.approx(m2.peak[0] * 0.5)
     line = a.summary().splitlines()[1]
     assert line.startswith("mode 2: 2305") and "→" in line and "changes with level" in line
-    assert "ζ 1.1 → 1.4 → 2 %" in line
+    assert "ζ 1.1 → 1.4 → 2.0 %" in line
     d = a.to_dict()
     assert d["differs"] is True and d["modes"][1]["differs_freq"] is True and len(d["modes"][1]["freq_hz"]) == 3
 
@@ -270,3 +270,22 @@ def test_single_level_never_differs():
     vals, wts = level_set([[(1000.0, 0.01)]], [0.02], rng)
     a = track_modes(FREQ, vals, wts, [None])
     assert not a.differs and a.tracks[0].amplitude_unit == "m/N" and "within noise" not in a.summary()
+
+
+def test_backbone_plot_of_data_and_model(tmp_path):
+    from jointdb.diagnose._levels import LevelAnalysis
+    from jointdb.plots._diagnose import plot_backbone
+
+    truth = [[(1200.0, 0.012), (2305.0, 0.011)], [(1200.0, 0.012), (2260.0, 0.014)],
+             [(1200.0, 0.012), (2185.0, 0.020)]]
+    rng = np.random.default_rng(5)
+    vals, wts = level_set(truth, [0.01] * 3, rng)
+    a = track_modes(FREQ, vals, wts, [0.5, 5.0, 25.0])
+    model = track_modes(FREQ, np.stack([synth(t) for t in truth]), None, [0.5, 5.0, 25.0],
+                        centres=[t.freq_hz[0] for t in a.tracks])
+    assert [t.mode for t in model.tracks] == [t.mode for t in a.tracks]
+    path = plot_backbone(a, tmp_path / "backbone.png", model)
+    assert path.stat().st_size > 10_000 and path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    with pytest.raises(InputError, match="no mode could be followed"):
+        plot_backbone(LevelAnalysis((), (1.0, 2.0), (0, 1)), tmp_path / "none.png")
+    assert not (tmp_path / "none.png").exists()
