@@ -37,6 +37,8 @@ from jointdb.diagnose._compare import ModePair, Peak, Signature, find_peaks, pai
 from jointdb.diagnose._data import Measurement, Observation, prepare
 from jointdb.diagnose._diagnose import BIC_MARGIN, MIN_IMPROVEMENT, MIN_PAIR_IMPROVEMENT, Diagnosis, diagnose
 from jointdb.diagnose._fit import Fit, ModelEvaluator, fit_candidate, jackknife_spread
+from jointdb.diagnose._levels import LevelAnalysis, ModeTrack, track_modes
+from jointdb.diagnose._modalfit import ModalFit, local_modal_fit
 from jointdb.diagnose.physics import Candidate, Context, Param, candidates_for, register
 
 __all__ = [
@@ -45,4 +47,5 @@ __all__ = [
     "Fit", "ModelEvaluator", "fit_candidate", "jackknife_spread",
     "Candidate", "Param", "Context", "register", "candidates_for",
     "BIC_MARGIN", "MIN_IMPROVEMENT", "MIN_PAIR_IMPROVEMENT",
+    "track_modes", "LevelAnalysis", "ModeTrack", "local_modal_fit", "ModalFit",
 ]
