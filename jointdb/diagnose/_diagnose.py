@@ -12,7 +12,13 @@ import numpy as np
 from jointdb.diagnose._compare import Signature, find_peaks, signature
 from jointdb.diagnose._data import Measurement, Observation, prepare
 from jointdb.diagnose._fit import Fit, ModelEvaluator, fit_candidate, jackknife_spread, nominal_fit
-from jointdb.diagnose._verdict import implausibility_text, levels_text, separating_measurement, shift_text
+from jointdb.diagnose._verdict import (
+    implausibility_text,
+    level_table_text,
+    levels_text,
+    separating_measurement,
+    shift_text,
+)
 from jointdb.diagnose.physics import Combination, Context, candidates_for
 from jointdb.diagnose.physics.interface import screen_sites
 from jointdb.errors import InputError
@@ -38,6 +44,8 @@ OCCAM_TOLERANCE = 1.15
 PLAUSIBILITY_WEIGHT = 4.0
 #: Another explanation within this factor of the best's mismatch is named as a close alternative.
 CLOSE_CALL = 1.25
+#: Interface sites at which level-dependent joints are fitted (those of the best linear joint fits).
+LEVEL_SITES = 2
 #: Families of linear joints (a level-dependent joint starts from their fit at the same place).
 JOINT_FAMILIES = ("joint_compliance", "joint_damping")
 
@@ -217,7 +225,8 @@ def _model_level_analysis(full: ModelEvaluator, H: np.ndarray, obs: Observation,
 def _per_level_start(cand, fits: list[Fit]) -> dict | None:
     """Start a level-dependent candidate from the best fitted linear joint at the same place."""
     names = {q.name for q in cand.params}
-    same = [f for f in fits if f.candidate.slot == cand.slot and f.family in JOINT_FAMILIES]
+    same = [f for f in fits if f.candidate.slot == cand.slot and f.family in JOINT_FAMILIES
+            and names >= {q.name for q in f.candidate.params} - {"eta_joint"}]
     if not same:
         same = [f for f in fits if f.family in JOINT_FAMILIES and not hasattr(f.candidate, "site")]
     if not same:
@@ -299,8 +308,12 @@ def diagnose(model, measurements: Sequence[Measurement], mapping: Mapping[int, s
     strong = sorted(p.freq_hz for p in rpk if p.height >= 0.1 * top)
     target = np.asarray(strong) if strong else None
     fits = [fit_candidate(ev, model, c, target_freqs=target) for c in cands if not c.per_level]
+    # level-dependent joints (each fit costs one model per level) only where a linear joint fits best
+    linear = sorted((f for f in fits if hasattr(f.candidate, "site") and f.family in JOINT_FAMILIES),
+                    key=lambda f: f.bic)
+    best_sites = list(dict.fromkeys(f.candidate.site for f in linear))[:LEVEL_SITES]
     for c in cands:
-        if c.per_level:
+        if c.per_level and (not hasattr(c, "site") or c.site in best_sites):
             fits.append(fit_candidate(ev, model, c, start=_per_level_start(c, fits)))
     for f in fits:
         _plausibility(f, nominal)
@@ -416,14 +429,7 @@ def diagnose(model, measurements: Sequence[Measurement], mapping: Mapping[int, s
                        f"candidate physics explains it well: the best, {runner.describe()}, only brings it to "
                        f"{100 * runner.mismatch:.1f} % on the fit lines. Nothing is added.")
     else:
-        lv = ""
-        if level_table:
-            lv = " Per level: " + "; ".join(
-                f"{r['level'] if r['level'] is not None else i + 1}: k_x {r['k_x_n_per_m'] / 1e6:.3g} N/µm, "
-                f"k_ry {r['k_ry_nm_per_rad'] / 1e3:.3g} kN·m/rad, η {r['loss_factor']:.3g}"
-                + (f", slip {r['slip_amplitude_m'] * 1e6:.3g} µm" if np.isfinite(r.get("slip_amplitude_m", np.nan))
-                   else "")
-                for i, r in enumerate(level_table)) + "."
+        lv = level_table_text(level_table)
         verdict = (f"{where[0].upper() + where[1:]}. Best explained by {best.describe()}"
                    f"{implausibility_text(best)}; mismatch {100 * mis0:.1f} % → {100 * mis1:.1f} %.{lv}")
         rivals = [f for f in ok if f is not best and f.candidate.slot != best.candidate.slot

@@ -7,7 +7,8 @@ import numpy as np
 
 from jointdb.diagnose._compare import Signature
 
-__all__ = ["shift_text", "separating_measurement", "where_text", "implausibility_text", "levels_text"]
+__all__ = ["shift_text", "separating_measurement", "where_text", "implausibility_text", "levels_text",
+           "level_table_text"]
 
 
 def shift_text(sig: Signature) -> str:
@@ -122,3 +123,22 @@ def levels_text(analysis) -> str:
         z = " → ".join(f"{100 * t.zeta[k]:.3g}" for k in o)
         parts.append(f"mode {t.mode} {f} Hz, ζ {z} %")
     return "; with rising excitation level " + "; ".join(parts)
+
+
+def level_table_text(rows: list) -> str:
+    """`` Per level: 0.5: k_x … N/µm, k_ry … kN·m/rad, η …, slip … µm; …`` (empty without rows)."""
+    if not rows:
+        return ""
+    out = []
+    for i, r in enumerate(rows):
+        name = r["level"] if r["level"] is not None else i + 1
+        if "k_contact_n_per_m2" in r:
+            text = f"{name}: k' {r['k_contact_n_per_m2'] / 1e9:.3g} GN/m²"
+        else:
+            text = f"{name}: k_x {r['k_x_n_per_m'] / 1e6:.3g} N/µm, k_ry {r['k_ry_nm_per_rad'] / 1e3:.3g} kN·m/rad"
+        text += f", η {r['loss_factor']:.3g}"
+        slip = r.get("slip_amplitude_m", float("nan"))
+        if np.isfinite(slip):
+            text += f", slip {slip * 1e6:.3g} µm"
+        out.append(text)
+    return " Per level: " + "; ".join(out) + "."

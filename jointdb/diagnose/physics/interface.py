@@ -48,8 +48,11 @@ from jointdb.fe import Contact, Insertion, Joint, get_material
 
 __all__ = ["Site", "interface_sites", "screen_sites", "InterfaceJoint", "InterfaceContact", "SITES_KEPT"]
 
-#: Sites kept for fitting after the screening (the clamp's own candidates are always fitted).
-SITES_KEPT = 2
+#: Sites kept for fitting after the screening (the clamp's own candidates are always fitted). A fit at
+#: one site costs ~1 s on a tool-in-holder model, so a stack with up to this many sites is fitted at all
+#: of them; the first-order screening only trims models with more (it cannot tell sites apart reliably
+#: from frequencies alone: the mode *shapes* at the measured points decide between them).
+SITES_KEPT = 6
 
 
 @dataclass(frozen=True)
@@ -166,7 +169,7 @@ class InterfaceJoint(_Located):
               Param("k_ry", "N·m/rad", 0.03 * kr, 1e4 * kr, 10 * kr, show=1e-3, show_unit="kN·m/rad",
                     starts=(1 * kr, 300 * kr))]
         if damped:
-            ps.append(Param("eta_joint", "-", 1e-3, 2.0, 0.1, starts=(0.4,), plausible=(1e-3, 0.6)))
+            ps.append(Param("eta_joint", "-", 1e-3, 2.0, 0.1, starts=(0.4,), plausible=(1e-3, 1.0)))
         self.params = tuple(ps)
 
     def joint(self, values, scale: float = 1.0, eta: float | None = None) -> Joint:
@@ -223,15 +226,15 @@ class InterfaceContact(_Located):
             ps.append(Param("insertion", "m", 0.5 * d, hi, min(2.5 * d, 0.7 * hi), show=1e3, show_unit="mm"))
         ps.insert(0, Param("k_contact", "N/m²", 1e10, 1e14, 1e12, show=1e-9, show_unit="GN/m²", starts=(2e11, 5e12)))
         if damped:
-            ps.append(Param("eta_joint", "-", 1e-3, 2.0, 0.1, starts=(0.4,), plausible=(1e-3, 0.6)))
+            ps.append(Param("eta_joint", "-", 1e-3, 2.0, 0.1, starts=(0.4,), plausible=(1e-3, 1.0)))
         self.params = tuple(ps)
         self.planes = _planes(model)
 
     def _room(self, model) -> float:
-        """Length of host available beyond the site (up to the next site, clamp or end)."""
+        """Length of host available beyond the site (up to the host segment's far end or a clamp)."""
         z = self.site.position
-        stops = [0.0, model.length] + [c.position for c in full_clamps(model)]
-        stops += [s.position for s in interface_sites(model) if s.position != z]
+        ends = np.concatenate([[0.0], np.cumsum([s.length for s in model.segments])])
+        stops = list(ends) + [c.position for c in full_clamps(model)]
         if self.inner_is_upper:
             below = [s for s in stops if s < z - 1e-9]
             return z - max(below)
@@ -328,6 +331,8 @@ def _factory(ctx):
     out = []
     for site in interface_sites(ctx.model):
         out += [InterfaceJoint(ctx.model, site), InterfaceJoint(ctx.model, site, damped=True)]
+        if site.lower == site.upper and site.insertion is None:
+            continue            # a point inside one segment: nothing is inserted there
         for damped in (False, True):
             try:
                 out.append(InterfaceContact(ctx.model, site, damped=damped))

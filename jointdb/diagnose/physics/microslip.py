@@ -3,7 +3,8 @@
 As the vibration grows, a clamped contact slips at the edges of its contact
 area: its stiffness falls and its damping rises with the slip amplitude. With
 recordings at several excitation levels the candidate is a point joint at an
-interface site (see :mod:`jointdb.diagnose.physics.interface`) whose stiffness
+interface site (see :mod:`jointdb.diagnose.physics.interface`), or a contact
+layer over an insertion there, whose stiffness
 and loss follow a describing-function law of the excitation amplitude ``F_l``
 of level ``l`` (all levels fitted *jointly*, one law)::
 
@@ -27,13 +28,75 @@ from __future__ import annotations
 import numpy as np
 
 from jointdb.diagnose.physics import Param, register
-from jointdb.diagnose.physics.interface import InterfaceJoint, Site, interface_sites
+from jointdb.diagnose.physics.interface import InterfaceContact, InterfaceJoint, Site, interface_sites
 
-__all__ = ["MicroslipJoint", "slip_amplitude"]
+__all__ = ["MicroslipJoint", "MicroslipContact", "slip_amplitude"]
 
 
 def _known_levels(levels) -> bool:
     return all(lv is not None and np.isfinite(lv) and lv > 0 for lv in levels)
+
+
+def _law_params(levels) -> tuple[bool, list]:
+    """Whether the describing-function law applies (levels known) and its parameters after the stiffness."""
+    law = _known_levels(levels)
+    extra = [Param("eta_0", "-", 1e-3, 1.0, 0.05, starts=(0.2,), plausible=(1e-3, 1.0))]
+    if law:
+        lv = np.asarray(levels, dtype=float)
+        extra += [Param("force_slip", "N", lv.min() / 30, lv.max() * 30, float(np.sqrt(lv.min() * lv.max()))),
+                  Param("s_max", "-", 0.0, 0.95, 0.3, log=False),
+                  Param("eta_max", "-", 1e-3, 1.5, 0.1, starts=(0.4,), plausible=(1e-3, 1.0))]
+    else:
+        extra += [Param(f"s_{i + 1}", "-", 0.2, 1.5, 0.95) for i in range(1, len(levels))]
+        extra += [Param(f"eta_{i + 1}", "-", 1e-3, 1.0, 0.1) for i in range(1, len(levels))]
+    return law, extra
+
+
+def _state(law: bool, levels, values, level: int) -> tuple[float, float]:
+    if law:
+        r = levels[level] / values["force_slip"]
+        g = r / (1 + r)
+        return 1.0 - values["s_max"] * g, values["eta_0"] + values["eta_max"] * g
+    if level == 0:
+        return 1.0, values["eta_0"]
+    return values[f"s_{level + 1}"], values[f"eta_{level + 1}"]
+
+
+class MicroslipContact(InterfaceContact):
+    """A contact layer over an insertion whose stiffness falls and loss rises with the excitation level."""
+
+    family = "softening_joint"
+    per_level = True
+
+    def __init__(self, model, site: Site, levels):
+        super().__init__(model, site, damped=False)
+        self.family = "softening_joint"
+        self.name = f"interface_contact_microslip@{site.position * 1e3:.4g}mm"
+        self.levels = tuple(levels)
+        self.explanation = (f"an amplitude-dependent (micro-slip) contact over the insertion at {site.location} "
+                            "whose stiffness falls and damping rises with the excitation")
+        self.law, extra = _law_params(self.levels)
+        self.params = self.params + tuple(extra)
+
+    def state(self, values, level: int) -> tuple[float, float]:
+        """(stiffness scale, loss factor) at ``level`` (0-based)."""
+        return _state(self.law, self.levels, values, level)
+
+    def apply(self, model, values, level=0):
+        s, eta = self.state(values, level)
+        v = dict(values)
+        v["k_contact"] = values["k_contact"] * s
+        v["eta_joint"] = eta
+        return super().apply(model, v, level)
+
+    def level_table(self, values, sigmas=None, **_):
+        """Per level: level, contact stiffness per length, loss factor."""
+        rows = []
+        for i, lv in enumerate(self.levels):
+            s, eta = self.state(values, i)
+            rows.append({"level": lv, "k_contact_n_per_m2": values["k_contact"] * s, "loss_factor": eta,
+                         "stiffness_scale": s, "position_m": self.site.position})
+        return rows
 
 
 class MicroslipJoint(InterfaceJoint):
@@ -47,29 +110,14 @@ class MicroslipJoint(InterfaceJoint):
         self.family = "softening_joint"
         self.name = f"interface_microslip@{site.position * 1e3:.4g}mm"
         self.levels = tuple(levels)
-        self.law = _known_levels(self.levels)
         self.explanation = (f"an amplitude-dependent (micro-slip) joint at {site.location} whose stiffness falls "
                             "and damping rises with the excitation")
-        extra = [Param("eta_0", "-", 1e-3, 1.0, 0.05, starts=(0.2,), plausible=(1e-3, 0.6))]
-        if self.law:
-            lv = np.asarray(self.levels, dtype=float)
-            extra += [Param("force_slip", "N", lv.min() / 30, lv.max() * 30, float(np.sqrt(lv.min() * lv.max()))),
-                      Param("s_max", "-", 0.0, 0.95, 0.3, log=False),
-                      Param("eta_max", "-", 1e-3, 1.5, 0.1, starts=(0.4,), plausible=(1e-3, 0.8))]
-        else:
-            extra += [Param(f"s_{i + 1}", "-", 0.2, 1.5, 0.95) for i in range(1, len(self.levels))]
-            extra += [Param(f"eta_{i + 1}", "-", 1e-3, 1.0, 0.1) for i in range(1, len(self.levels))]
+        self.law, extra = _law_params(self.levels)
         self.params = self.params + tuple(extra)
 
     def state(self, values, level: int) -> tuple[float, float]:
         """(stiffness scale, loss factor) at ``level`` (0-based)."""
-        if self.law:
-            r = self.levels[level] / values["force_slip"]
-            g = r / (1 + r)
-            return 1.0 - values["s_max"] * g, values["eta_0"] + values["eta_max"] * g
-        if level == 0:
-            return 1.0, values["eta_0"]
-        return values[f"s_{level + 1}"], values[f"eta_{level + 1}"]
+        return _state(self.law, self.levels, values, level)
 
     def apply(self, model, values, level=0):
         s, eta = self.state(values, level)
@@ -110,4 +158,12 @@ def slip_amplitude(model, joint, input_point: str, freq_hz: np.ndarray, force: f
 def _factory(ctx):
     if ctx.n_levels < 2:
         return []
-    return [MicroslipJoint(ctx.model, site, ctx.levels) for site in interface_sites(ctx.model)]
+    out = []
+    for site in interface_sites(ctx.model):
+        out.append(MicroslipJoint(ctx.model, site, ctx.levels))
+        if site.lower != site.upper or site.insertion is not None:
+            try:
+                out.append(MicroslipContact(ctx.model, site, ctx.levels))
+            except ValueError:
+                pass
+    return out
