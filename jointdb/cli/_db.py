@@ -49,9 +49,9 @@ def register(app: typer.Typer) -> None:
         Example: jointdb db downgrade --to -1 --yes
         """
         from jointdb.store import current_revision, downgrade
-        from jointdb.store._db import DOWNGRADE_DROPS, downgrade_plan, resolve_url, safe_url
+        from jointdb.store._db import DOWNGRADE_DROPS, check_existing, downgrade_plan, resolve_url, safe_url
 
-        check_db_target(db, create=False)  # never creates a database
+        check_existing(resolve_url(db))  # never creates a database; refuses a foreign one
         current = current_revision(db)
         target, steps = downgrade_plan(current, to)
         if steps and not yes:

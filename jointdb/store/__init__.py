@@ -103,8 +103,6 @@ def _migrate(step: str, url: str | None, revision: str) -> str | None:
     read, write = _db.make_engines(resolved)
     try:
         with _db.db_errors(resolved):
-            if sqlite:
-                _db.check_jointdb_sqlite(read, _db.sqlite_path(resolved))
             try:
                 getattr(_db, step)(write, revision)
             except CommandError as exc:
@@ -137,8 +135,10 @@ def current_revision(url: str | None = None) -> str | None:
     from jointdb.store import _db
 
     resolved = _db.resolve_url(url)
-    if _db.is_sqlite(resolved) and not _db.check_sqlite_file(_db.sqlite_path(resolved)):
-        return None  # nothing is created to answer
+    if _db.is_sqlite(resolved):
+        if not _db.check_sqlite_file(_db.sqlite_path(resolved)):
+            return None  # nothing is created to answer
+        _db.check_jointdb_sqlite(_db.sqlite_path(resolved))  # a foreign file is refused, not touched
     read, _ = _db.make_engines(resolved)
     try:
         with _db.db_errors(resolved):

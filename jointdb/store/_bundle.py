@@ -44,7 +44,7 @@ from jointdb.io._atomic import atomic_path
 from jointdb.store._blobs import write_frf_group
 from jointdb.store._bundle_read import FORMAT, FORMAT_VERSION, Bundle, manifest_sha256, read_bundle
 from jointdb.store._models import AuditRow, JointRow, LabelRow, StateRow, VersionRow, utcnow
-from jointdb.store._records import current_actor, record_dict, record_sha256, row_from_record
+from jointdb.store._records import check_record, current_actor, record_dict, row_from_record
 
 if TYPE_CHECKING:  # pragma: no cover
     from jointdb.store._repository import Repository
@@ -78,10 +78,8 @@ def export_bundle(repo: "Repository", names: Iterable[str] | None, path: str | o
             ]
             records = []
             for r in rows:
-                record = record_dict(j.name, j.joint_type, r)
-                if record_sha256(record) != r.record_sha256:
-                    raise IntegrityError(f"{j.name} v{r.version}: record hash mismatch; run `jointdb db check`")
-                records.append((record, r.record_sha256))
+                check_record(j.name, j.joint_type, r)  # IntegrityError: nothing is written
+                records.append((record_dict(j.name, j.joint_type, r), r.record_sha256))
             plan.append((j, records, labels, states))
     digest = manifest_sha256([
         {"name": j.name, "joint_type": j.joint_type, "created_at": j.created_at.isoformat(timespec="microseconds"),

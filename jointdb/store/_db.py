@@ -218,14 +218,32 @@ def check_sqlite_file(path: Path) -> bool:
     return True
 
 
-def _sqlite_tables(engine: Engine) -> set[str]:
-    with engine.connect() as conn:
-        return set(inspect(conn).get_table_names())
+def sqlite_tables(path: Path) -> set[str]:
+    """Table names of an existing SQLite file, read through a read-only connection
+    (no pragma is run, so a foreign file is not changed by looking at it).
+
+    Raises
+    ------
+    IntegrityError
+        The file has the SQLite header but cannot be read (damaged).
+    """
+    import sqlite3
+
+    try:
+        conn = sqlite3.connect(f"{path.as_uri()}?mode=ro", uri=True, timeout=BUSY_TIMEOUT_S)
+    except sqlite3.Error as exc:
+        raise InputError(f"cannot open database {path}: {exc}") from None
+    try:
+        return {r[0] for r in conn.execute("SELECT name FROM sqlite_master WHERE type = 'table'")}
+    except sqlite3.DatabaseError as exc:
+        raise translate_error(exc, f"sqlite:///{path}") from None
+    finally:
+        conn.close()
 
 
-def check_jointdb_sqlite(engine: Engine, path: Path) -> None:
+def check_jointdb_sqlite(path: Path) -> None:
     """Refuse a SQLite database that is not a jointdb database (no ``alembic_version``, other tables)."""
-    tables = _sqlite_tables(engine)
+    tables = sqlite_tables(path)
     if "alembic_version" not in tables:
         what = f"tables: {', '.join(sorted(tables)[:5])}" if tables else "no tables"
         raise InputError(f"{path} is a SQLite database but not a jointdb database ({what}); refusing to touch it")
@@ -279,21 +297,37 @@ def create_sqlite_database(path: Path, revision: str = "head") -> None:
 def open_sqlite_target(url: str, create: bool, revision: str = "head") -> bool:
     """Check (and with ``create``, create) the SQLite file of ``url``; True when it was created.
 
+    An existing file must be a jointdb database (:func:`check_sqlite_file`,
+    :func:`check_jointdb_sqlite`), checked without changing it.
+
     Raises
     ------
     NotFoundError
         The file does not exist and ``create`` is False (nothing is created).
-    InputError
-        Not a usable jointdb SQLite database (see :func:`check_sqlite_file`).
+    InputError, IntegrityError
+        Not a usable jointdb SQLite database, or a damaged one.
     """
     path = sqlite_path(url)
     if check_sqlite_file(path):
+        check_jointdb_sqlite(path)
         return False
     if not create:
         raise NotFoundError(f"database {path} does not exist (`jointdb catalogue`, `jointdb joints import` "
                             "or `jointdb db upgrade` creates it)")
     create_sqlite_database(path, revision)
     return True
+
+
+def check_existing(url: str) -> None:
+    """Refuse a target that is not an existing jointdb database, creating nothing (SQLite only;
+    a PostgreSQL URL is checked when it is connected to).
+
+    Raises
+    ------
+    NotFoundError, InputError, IntegrityError
+    """
+    if is_sqlite(url):
+        open_sqlite_target(url, create=False)
 
 
 # --------------------------------------------------------------------------- engines

@@ -120,15 +120,12 @@ class Repository:
         self.url = _db.resolve_url(url)
         self.is_sqlite = _db.is_sqlite(self.url)
         auto = self.is_sqlite if auto_create is None else bool(auto_create)
-        created = False
         if self.is_sqlite:  # refuse a directory, an empty or foreign file; create a missing one only if asked
-            created = _db.open_sqlite_target(self.url, create=auto and check_schema)
+            _db.open_sqlite_target(self.url, create=auto and check_schema)
         self.blobs = BlobStore(_db.blob_dir(self.url, blobs))
         self.read_engine, self.write_engine = _db.make_engines(self.url)
         try:
             with _db.db_errors(self.url):
-                if self.is_sqlite and not created:
-                    _db.check_jointdb_sqlite(self.read_engine, _db.sqlite_path(self.url))
                 if check_schema:
                     _db.ensure_schema(self.read_engine, self.write_engine, auto)
         except BaseException:

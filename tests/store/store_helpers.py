@@ -49,3 +49,103 @@ def reseal(path) -> None:
 
     data = Path(path).read_bytes()
     Path(path).write_bytes(_userblock(hashlib.sha256(data[USERBLOCK:]).hexdigest()) + data[USERBLOCK:])
+
+
+def run_cli(*args, env: dict | None = None, input: str | None = None):
+    """The real entry point in a subprocess: ``(returncode, stdout, stderr)``."""
+    import os
+    import subprocess
+    import sys
+
+    full_env = {**os.environ, **(env or {})}
+    out = subprocess.run([sys.executable, "-m", "jointdb", *map(str, args)], capture_output=True, text=True,
+                         env=full_env, input=input, timeout=300)
+    return out.returncode, out.stdout, out.stderr
+
+
+def assert_one_line_error(result, code: int, contains: str = "") -> str:
+    """Exit ``code``, exactly one line on stderr starting with ``error:``, no traceback."""
+    rc, _, err = result
+    lines = err.strip().splitlines()
+    assert rc == code and len(lines) == 1 and lines[0].startswith("error: "), (rc, err)
+    assert "Traceback" not in err and contains in lines[0], err
+    return lines[0]
+
+
+def alter_version_row(url: str, sql: str) -> None:
+    """Change a history row behind jointdb's back (what an adversary with full rights could do):
+    the guards are removed first, then ``sql`` runs."""
+    import sqlalchemy as sa
+
+    engine = sa.create_engine(url)
+    try:
+        with engine.begin() as conn:
+            if conn.dialect.name == "sqlite":
+                conn.exec_driver_sql("DROP TRIGGER joint_versions_no_update")
+            else:
+                from jointdb.store._guards import event_trigger_names
+
+                schema = conn.exec_driver_sql("SELECT current_schema()").scalar()
+                for name in event_trigger_names(schema):
+                    conn.exec_driver_sql(f'DROP EVENT TRIGGER IF EXISTS "{name}"')
+                conn.exec_driver_sql("ALTER TABLE joint_versions DISABLE TRIGGER joint_versions_immutable")
+            conn.exec_driver_sql(sql)
+    finally:
+        engine.dispose()
+
+
+def run_main(capsys, *args):
+    """The console entry point (``jointdb.cli.main``) in this process: ``(exit_code, stdout, stderr)``.
+
+    Any exception other than SystemExit propagates (a traceback is a test failure).
+    """
+    import sys
+
+    from jointdb.cli import main
+
+    capsys.readouterr()
+    old = sys.argv
+    sys.argv = ["jointdb", *map(str, args)]
+    try:
+        main()
+        code = 0
+    except SystemExit as exc:
+        code = exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 1)
+    finally:
+        sys.argv = old
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def tree_state(*roots) -> dict[str, str]:
+    """Every file under ``roots`` -> SHA-256 of its bytes (SQLite ``-wal``/``-shm`` side files skipped:
+    a reader may leave them; their content is compared through :func:`db_rows`)."""
+    import hashlib
+
+    state = {}
+    for root in map(Path, roots):
+        if root.is_file():
+            state[str(root)] = hashlib.sha256(root.read_bytes()).hexdigest()
+            continue
+        if not root.exists():
+            continue
+        for p in sorted(root.rglob("*")):
+            if p.is_file() and not p.name.endswith(("-wal", "-shm")):
+                state[str(p)] = hashlib.sha256(p.read_bytes()).hexdigest()
+            elif p.is_dir():
+                state[str(p)] = "dir"
+    return state
+
+
+def db_rows(url: str) -> dict[str, list]:
+    """All rows of the jointdb tables (as text), read through a fresh connection."""
+    import sqlalchemy as sa
+
+    engine = sa.create_engine(url)
+    try:
+        with engine.connect() as conn:
+            tables = set(sa.inspect(conn).get_table_names())
+            return {t: sorted(tuple(map(str, r)) for r in conn.execute(sa.text(f"SELECT * FROM {t}")))
+                    for t in sorted(tables)}
+    finally:
+        engine.dispose()
