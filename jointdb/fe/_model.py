@@ -186,11 +186,16 @@ class Mesh:
 
     def dof_labels(self) -> tuple[Dof, ...]:
         """``Dof(node, direction)`` of every global DOF (the first node that owns it)."""
+        cached = self.__dict__.get("_labels")
+        if cached is not None:
+            return cached
         labels: dict[int, Dof] = {}
         for node in range(self.n_nodes):
             for k, d in enumerate(self.directions):
                 labels.setdefault(int(self.dof_table[node, k]), Dof(node, d))
-        return tuple(labels[i] for i in range(self.n_dof))
+        out = tuple(labels[i] for i in range(self.n_dof))
+        self.__dict__["_labels"] = out
+        return out
 
 
 @dataclass(frozen=True, eq=False)
@@ -363,7 +368,16 @@ class BeamModel:
 
     def mesh(self) -> Mesh:
         """Nodes at segment ends, point and ingredient positions, refined to ``max_element_length``;
-        then the interfaces: splits for joints, extra nodes for inserted parts (see :mod:`jointdb.fe._joints`)."""
+        then the interfaces: splits for joints, extra nodes for inserted parts (see :mod:`jointdb.fe._joints`).
+
+        Computed once per model (a model is immutable; :meth:`replace` makes a new one)."""
+        cached = self.__dict__.get("_mesh")
+        if cached is None:
+            cached = self._make_mesh()
+            self.__dict__["_mesh"] = cached
+        return cached
+
+    def _make_mesh(self) -> Mesh:
         ends = np.concatenate([[0.0], np.cumsum([s.length for s in self.segments])])
         length = float(ends[-1])
         tol = _merge_tol(length, self.max_element_length)
