@@ -125,16 +125,16 @@ def _fmt(v: float, s: float) -> str:
     """``v ± s`` with as many decimals as the first significant digit of ``s`` needs."""
     if not (np.isfinite(s) and s > 0):
         return f"{v:.6g}"
-    d = max(0, int(-np.floor(np.log10(s))))
-    if d > 3:  # a noise-free model: no point in more digits
-        return f"{v:.3f} ± <0.001"
+    if s < 1e-8 * abs(v):  # a noise-free model: no uncertainty worth printing
+        return f"{v:.6g}"
+    d = min(max(0, int(-np.floor(np.log10(s)))), 8)
     return f"{v:.{d}f} ± {s:.{d}f}"
 
 
 def _pct(z: float) -> str:
-    """A damping ratio in per cent: 1 decimal from 1 %, else 2 significant digits."""
+    """A damping ratio in per cent with two significant digits (1.1, 0.42, 0.063)."""
     p = 100 * z
-    return f"{p:.1f}" if p >= 1 else f"{p:.2g}"
+    return f"{p:.1f}" if p >= 1 else f"{p:.2f}" if p >= 0.1 else f"{p:.3f}"
 
 
 @dataclass(frozen=True, eq=False)
