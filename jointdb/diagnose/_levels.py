@@ -154,6 +154,7 @@ class LevelAnalysis:
     tracks: tuple
     levels: tuple
     order: tuple
+    skipped: tuple = ()     # centres [Hz] that could not be fitted at some level (too few lines)
 
     @property
     def differs(self) -> bool:
@@ -177,6 +178,9 @@ class LevelAnalysis:
             else:
                 verdict = " (same at every level within noise)"
             lines.append(f"mode {t.mode}: {f} Hz, ζ {z} %{verdict}")
+        if self.skipped:
+            lines.append("not followed (too few recorded lines around the peak at some level): "
+                         + ", ".join(f"{f:.0f}" for f in self.skipped) + " Hz")
         return "\n".join(lines)
 
     def to_dict(self) -> dict:
@@ -184,6 +188,7 @@ class LevelAnalysis:
         return {
             "differs": self.differs,
             "levels": [None if v is None else float(v) for v in self.levels],
+            "not_followed_hz": [float(f) for f in self.skipped],
             "criterion": (f"per mode: chi2 of the per-level frequencies (ln zeta) about their mean, p < {P_LEVELS:g}, "
                           f"and a spread > {100 * FREQ_FLOOR:g} % in frequency (damping ratio max/min > "
                           f"{ZETA_FLOOR:g})"),
@@ -266,7 +271,7 @@ def track_modes(freq: np.ndarray, values: np.ndarray, weight: np.ndarray | None,
         top = max((inds[first][k] for k in idx), default=0.0)
         centres = [float(freq[k]) for k in idx if inds[first][k] >= STRONG_PEAK * top]
     centres = sorted(float(c) for c in centres if freq[0] <= c <= freq[-1])
-    tracks = []
+    tracks, skipped = [], []
     for m, fc in enumerate(centres):
         lo = np.sqrt(centres[m - 1] * fc) if m > 0 else freq[0]
         hi = np.sqrt(centres[m + 1] * fc) if m + 1 < len(centres) else freq[-1]
@@ -282,7 +287,8 @@ def track_modes(freq: np.ndarray, values: np.ndarray, weight: np.ndarray | None,
                                            band_halfwidths=band_halfwidths, min_band=min_band)
                 prev = fits[lv].freq_hz
         except InputError:
-            continue  # too few lines around this peak at some level: not tracked
+            skipped.append(fc)  # too few lines around this peak at some level: not tracked, and said so
+            continue
         f = np.array([fi.freq_hz for fi in fits])
         sf = np.array([fi.sigma_freq_hz for fi in fits])
         z = np.array([fi.zeta for fi in fits])
@@ -303,4 +309,4 @@ def track_modes(freq: np.ndarray, values: np.ndarray, weight: np.ndarray | None,
             differs_freq=bool(n_lv > 1 and p_f < P_LEVELS and spread_f > FREQ_FLOOR),
             differs_zeta=bool(n_lv > 1 and p_z < P_LEVELS and spread_z > ZETA_FLOOR),
             fits=tuple(fits)))
-    return LevelAnalysis(tracks=tuple(tracks), levels=tuple(levels), order=order)
+    return LevelAnalysis(tracks=tuple(tracks), levels=tuple(levels), order=order, skipped=tuple(skipped))

@@ -129,6 +129,12 @@ def test_too_few_lines_and_bad_shapes_are_refused():
         local_modal_fit(FREQ, synth([(1000.0, 0.01)]), None, 5000.0)
     with pytest.raises(InputError, match="expected"):
         track_modes(FREQ, synth([(1000.0, 0.01)]), None, [1.0])
+    # a peak that cannot be fitted at some level is not followed, and the analysis says so
+    f = np.concatenate([np.arange(200.0, 2000.0, 2.0), np.arange(2000.0, 4000.0, 200.0)])  # coarse above 2 kHz
+    a = track_modes(f, np.stack([synth([(1000.0, 0.01)], f)] * 2), None, [1.0, 2.0], centres=[1000.0, 3800.0])
+    assert [t.mode for t in a.tracks] == [1] and a.skipped == (3800.0,)
+    assert a.summary().splitlines()[-1] == "not followed (too few recorded lines around the peak at some level): " \
+                                           "3800 Hz"
 
 
 # --------------------------------------------------------------------- noisy data
