@@ -72,6 +72,14 @@ def _repo(db: str | None, blobs: Path | None = None, *, create: bool = False):
     return Repository(db, blobs=blobs, auto_create=None if create else False)
 
 
+def _check_output(path: Path | None) -> None:
+    """Refuse an output file whose directory does not exist before any work (or warning) is done."""
+    if path is not None and not path.parent.is_dir():
+        raise InputError(f"cannot write {path}: directory {path.parent} does not exist")
+    if path is not None and path.is_dir():
+        raise InputError(f"cannot write {path}: it is a directory")
+
+
 def _pairs(items: list[str] | None, what: str, numeric: bool = True) -> dict[str, Any]:
     out: dict[str, Any] = {}
     for item in items or []:
@@ -200,10 +208,16 @@ def register(app: typer.Typer) -> None:
         )
         conditions = merge_conditions(joint_file, meta.get("conditions"),
                                       _conditions(material, preload, torque, geometry, extra), override)
-        if label is not None:
-            from jointdb.store._types import check_label
+        # everything the library would refuse is refused before the database is opened (or created)
+        from jointdb.store._types import check_joint_type, check_label, check_model_kind, check_name
 
-            label = check_label(label)  # before the database is opened (or created)
+        check_name(name)
+        jtype = check_joint_type(jtype)
+        kind = check_model_kind(kind, frf)
+        if label is not None:
+            label = check_label(label)
+        if parent is not None and parent < 1:
+            raise InputError(f"--parent must be a version number >= 1, got {parent}")
         repo = _repo(db, blobs, create=True)
         jv = repo.catalogue(name, jtype, frf, conditions, kind, prov, q, parent, raw_frfs=raw, author=author,
                             label=label)
@@ -228,6 +242,7 @@ def register(app: typer.Typer) -> None:
 
         Example: jointdb query --type tool-holder --material carbide+steel --torque 35 -k 3
         """
+        _check_output(interpolate)
         repo = _repo(db, blobs)
         req = _conditions(material, preload, torque, geometry)
         with warnings.catch_warnings(record=True) as caught:
@@ -278,6 +293,7 @@ def register(app: typer.Typer) -> None:
         db: DbOpt = None, blobs: BlobsOpt = None, as_json: JsonOpt = False,
     ) -> None:
         """Show one version (latest, pinned, at a time, or by label). Example: jointdb joints show T1 --version 2"""
+        _check_output(frf_out)
         repo = _repo(db, blobs)
         jv = repo.get(name, version=version, at=at, label=label)
         if frf_out is not None:

@@ -122,9 +122,9 @@ class Repository:
         auto = self.is_sqlite if auto_create is None else bool(auto_create)
         if self.is_sqlite:  # refuse a directory, an empty or foreign file; create a missing one only if asked
             _db.open_sqlite_target(self.url, create=auto and check_schema)
-        self.blobs = BlobStore(_db.blob_dir(self.url, blobs))
-        self.read_engine, self.write_engine = _db.make_engines(self.url)
+        self.read_engine, self.write_engine = _db.make_engines(self.url)  # a missing driver first
         try:
+            self.blobs = BlobStore(_db.blob_dir(self.url, blobs))
             with _db.db_errors(self.url):
                 if check_schema:
                     _db.ensure_schema(self.read_engine, self.write_engine, auto)

@@ -73,3 +73,54 @@ def test_eight_processes_hundred_versions_each(backend):
     report = repo.check()
     assert report.ok, report.problems
     assert report.versions_checked == 800
+
+
+N_MOVERS = 8
+N_MOVES = 60
+
+
+def _mover(url: str, blobs: str, proc: int, n: int, queue) -> None:
+    try:
+        import random
+
+        from jointdb.store import Repository
+
+        repo = Repository(url, blobs=blobs)
+        rng = random.Random(proc)
+        for _ in range(n):
+            repo.label("L", rng.randint(1, 5), "released", author=f"mover-{proc}")
+        repo.close()
+        queue.put((proc, None))
+    except BaseException as exc:  # report any failure to the parent
+        queue.put((proc, repr(exc)))
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="uses fork")
+def test_concurrent_label_moves_record_the_true_previous_version(backend):
+    """8 processes x 60 moves of one label: read in commit order, each audit row's previous
+    version is the version the row before it set (the label row is locked while it is moved)."""
+    repo = backend.repo()
+    for i in range(5):
+        repo.catalogue("L", "tool-holder", spring_joint(k=(1e6 + i, 8e4), n=8), None, "spring-damper-planar")
+    repo.close()
+    ctx = mp.get_context("fork")
+    queue = ctx.Queue()
+    procs = [ctx.Process(target=_mover, args=(backend.url, str(backend.blobs), p, N_MOVES, queue))
+             for p in range(N_MOVERS)]
+    for p in procs:
+        p.start()
+    results = dict(queue.get(timeout=600) for _ in procs)
+    for p in procs:
+        p.join(timeout=60)
+    assert results == {p: None for p in range(N_MOVERS)}
+    repo = backend.repo()
+    moves = [a for a in reversed(repo.audit("L", limit=10_000)) if a["action"] == "label"]
+    assert len(moves) == N_MOVERS * N_MOVES
+    previous = None
+    wrong = 0
+    for a in moves:
+        wrong += a["details"]["previous_version"] != previous
+        previous = a["version"]
+    assert wrong == 0, f"{wrong} of {len(moves)} audit rows record a wrong previous version"
+    assert repo.get("L", label="released").version == previous
+    repo.close()
