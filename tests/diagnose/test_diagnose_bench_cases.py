@@ -110,10 +110,12 @@ def test_stack_null_case_nominal_agrees_with_the_truth_at_the_noise_level(seed):
     c = _case("interface_none", seed)
     model = _load(c.model)
     chi = _chi(model, c.recordings[0])
-    # noise alone gives chi ≈ 1 (the coherence's σ is up to 10 % generous); what may remain:
-    # the spindle face (rigid-clamp shift ≤ 0.08 %), the contact at k' ≥ 1e16 and the 5 mm mesh.
-    # A 0.5 % error in a natural frequency (1 % damping) already gives chi > 3.
-    assert chi < 1.6, chi
+    # noise alone gives chi ≈ 0.95-1 (the coherence's σ is up to 10 % generous); what may remain:
+    # the spindle face (rigid-clamp shift ≤ 1.5e-4), the contact at k' ≥ 1e16 and the 3 mm mesh
+    # (together ≲ 2e-4 in mode 3: chi 0.96-0.99 measured on development seeds 0-5). The same
+    # nominal on a 5 mm mesh (mode 3 ≈ 5e-4 high) gave chi up to 1.15, and up to 1.35 with a
+    # spindle face 3x softer; leaving out the inserted shank gives chi > 40.
+    assert chi < 1.25, chi
     # leaving the inserted shank out of the nominal model is far from the truth (the check can fail)
     plain = model_from_dict({k: v for k, v in c.model.items() if k != "insertions"})
     assert _chi(plain, c.recordings[0]) > 10
