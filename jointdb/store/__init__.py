@@ -18,10 +18,13 @@ API (contract in /work/api-contracts.md; additions are keyword arguments or new 
 - ``Repository(url=None, *, blobs=None, auto_create=None)`` - ``url``: SQLAlchemy URL
   or SQLite path (default ``$JOINTDB_URL``, else ``$XDG_DATA_HOME/jointdb/jointdb.sqlite``);
   ``blobs``: blob directory (default ``$JOINTDB_BLOBS``, else ``<sqlite file>.blobs``;
-  required for PostgreSQL). A new SQLite database is migrated on first use;
-  PostgreSQL needs ``jointdb db upgrade`` first.
+  required for PostgreSQL). A missing SQLite file is created (atomically, with its
+  schema) unless ``auto_create=False``; an existing file that is empty, not SQLite or
+  not a jointdb database is refused, never re-created. PostgreSQL needs
+  ``jointdb db upgrade`` first.
 - ``.catalogue(name, joint_type, frf, conditions, model_kind, provenance=None,
-  quality=None, parent=None, *, raw_frfs=None, author=None) -> JointVersion``
+  quality=None, parent=None, *, raw_frfs=None, author=None, label=None) -> JointVersion``
+  (the label is set in the same transaction)
 - ``.get(name, version=None, at=None, label=None) -> JointVersion`` (default: latest
   non-deprecated); ``.load_frf(jv)`` or ``.load_frf(name, number) -> FRF`` (verified);
   ``.load_raw(jv, key) -> FRF``
@@ -29,12 +32,16 @@ API (contract in /work/api-contracts.md; additions are keyword arguments or new 
   ``.label(name, version, label)``, ``.deprecate(name, version=None, reason="", undo=False)``,
   ``.audit(name=None, limit=100)``
 - ``.diff(name, version_a, version_b=None, other=None) -> VersionDiff``
-- ``.export(names_or_None, path) -> counts``, ``.import_(path) -> summary`` (ConflictError
-  on a conflicting version; identical content is a no-op)
+- ``.export(names_or_None, path, *, sign_key=None) -> counts``,
+  ``.import_(path, author=None, *, trusted_keys=(), require_signature=False) -> summary``
+  (ConflictError on a conflicting version; identical content is a no-op; bundle hash
+  and Ed25519 signatures: :mod:`jointdb.store._bundle`, :mod:`jointdb.store._signing`)
 - ``.nearest(joint_type, conditions, k=3, at=None) -> list[Match]`` (distance defined in
   :mod:`jointdb.store._query`; warns :class:`OutsideCatalogueWarning`);
   ``.interpolate(matches, conditions=None) -> InterpolatedJoint`` (``.frf``, ``.neighbours``)
-- ``.check(verify_blobs=True) -> CheckReport`` (``.ok``, ``.problems``), ``.gc(min_age_s=3600, dry_run=False)``
+- every read verifies the version's record hash (IntegrityError on a mismatch)
+- ``.check(verify_blobs=True) -> CheckReport`` (``.ok``, ``.problems``, ``.notes``; also
+  missing immutability guards), ``.gc(min_age_s=3600, dry_run=False)``
 - ``upgrade(url=None, revision="head")``, ``downgrade(url=None, revision="-1")``,
   ``current_revision(url=None)``, ``head_revision()``
 

@@ -7,10 +7,10 @@ import hashlib
 import json
 import os
 from collections.abc import Iterable, Mapping
-from datetime import datetime
+from datetime import datetime, timezone
 from typing import Any
 
-from jointdb.errors import IntegrityError
+from jointdb.errors import InputError, IntegrityError
 from jointdb.store._models import JointRow, StateRow, VersionRow
 from jointdb.store._types import Conditions, JointVersion, Provenance
 
@@ -26,6 +26,25 @@ def current_actor(author: str | None = None) -> str:
         return getpass.getuser()[:200]
     except (KeyError, OSError):  # no passwd entry in some containers
         return "unknown"
+
+
+def software_version() -> str:
+    from jointdb import __version__
+
+    return __version__
+
+
+def as_utc(at: datetime | str | None) -> datetime | None:
+    if at is None:
+        return None
+    if isinstance(at, str):
+        try:
+            at = datetime.fromisoformat(at)
+        except ValueError:
+            raise InputError(f"cannot read time {at!r}; use ISO 8601, e.g. 2026-01-31T12:00:00Z") from None
+    if at.tzinfo is None:
+        at = at.replace(tzinfo=timezone.utc)
+    return at.astimezone(timezone.utc)
 
 
 def record_dict(joint_name: str, joint_type: str, row: VersionRow) -> dict[str, Any]:

@@ -7,8 +7,7 @@ import random
 import time
 import uuid as uuidlib
 from collections.abc import Iterable, Mapping
-from dataclasses import dataclass, field
-from datetime import datetime, timezone
+from datetime import datetime
 from typing import Any
 
 from sqlalchemy import func, select
@@ -20,8 +19,18 @@ from jointdb.errors import ConflictError, InputError, NotFoundError
 from jointdb.frf import FRF
 from jointdb.store import _db
 from jointdb.store._blobs import BlobStore
+from jointdb.store._labels import LabelsAndStates
+from jointdb.store._reports import CheckReport, VersionDiff, _is_transient, _is_unique_violation
 from jointdb.store._models import AuditRow, JointRow, LabelRow, StateRow, VersionRow, utcnow
-from jointdb.store._records import current_actor, record_dict, record_sha256, state_of, to_version
+from jointdb.store._records import (
+    as_utc,
+    current_actor,
+    record_dict,
+    record_sha256,
+    software_version,
+    state_of,
+    to_version,
+)
 from jointdb.store._types import (
     Conditions,
     JointVersion,
@@ -39,61 +48,7 @@ from jointdb.store._types import (
 MAX_WRITE_ATTEMPTS = 60
 
 
-def _software_version() -> str:
-    from jointdb import __version__
-
-    return __version__
-
-
-def _as_utc(at: datetime | str | None) -> datetime | None:
-    if at is None:
-        return None
-    if isinstance(at, str):
-        try:
-            at = datetime.fromisoformat(at)
-        except ValueError:
-            raise InputError(f"cannot read time {at!r}; use ISO 8601, e.g. 2026-01-31T12:00:00Z") from None
-    if at.tzinfo is None:
-        at = at.replace(tzinfo=timezone.utc)
-    return at.astimezone(timezone.utc)
-
-
-@dataclass(frozen=True)
-class CheckReport:
-    """Result of :meth:`Repository.check`; ``ok`` when nothing is missing or corrupt."""
-
-    versions_checked: int
-    blobs_checked: int
-    problems: tuple[str, ...]
-    orphan_blobs: tuple[str, ...] = ()
-    temporaries: tuple[str, ...] = ()
-    notes: tuple[str, ...] = ()
-
-    @property
-    def ok(self) -> bool:
-        return not self.problems
-
-
-@dataclass(frozen=True)
-class VersionDiff:
-    """Differences between two versions (:meth:`Repository.diff`).
-
-    ``frf_entries`` rows: ``output``, ``input``, ``max_rel_diff`` = max over the
-    common frequency lines of ``|H_b − H_a|`` divided by the peak ``|H_a|`` of
-    that entry.
-    """
-
-    a: str
-    b: str
-    conditions: Mapping[str, tuple[Any, Any]]
-    fields: Mapping[str, tuple[Any, Any]]
-    frf_entries: tuple[Mapping[str, Any], ...]
-    max_relative_difference: float | None
-    same_blob: bool
-    notes: tuple[str, ...] = field(default_factory=tuple)
-
-
-class Repository:
+class Repository(LabelsAndStates):
     """A joint database: SQL rows (SQLite or PostgreSQL) plus an HDF5 blob store.
 
     Parameters
@@ -104,9 +59,21 @@ class Repository:
     blobs
         Blob directory; default ``JOINTDB_BLOBS`` or ``<sqlite file>.blobs``.
     auto_create
-        Create the schema (Alembic ``upgrade head``) when the database is new
-        and empty. Default: True for SQLite, False for PostgreSQL (run
-        ``jointdb db upgrade`` on a shared server).
+        Create a missing SQLite file (atomically, with the schema), or migrate
+        an empty PostgreSQL schema. Default: True for SQLite, False for
+        PostgreSQL (run ``jointdb db upgrade`` on a shared server). An existing
+        SQLite file that is empty, not SQLite or not a jointdb database is
+        always refused (InputError), never re-created.
+
+    Raises
+    ------
+    NotFoundError
+        A missing SQLite file without ``auto_create``.
+    InputError
+        Unusable target (directory, foreign file, unreachable server, missing
+        driver, outdated schema).
+    IntegrityError
+        A damaged SQLite file.
     """
 
     def __init__(
@@ -265,7 +232,7 @@ class Repository:
                 input_files=dict(prov.input_files),
                 method=prov.method,
                 method_params=dict(prov.parameters),
-                software_version=prov.software_version or _software_version(),
+                software_version=prov.software_version or software_version(),
                 parent_version=parent if parent is not None else latest,
                 quality=qual,
             )
@@ -349,7 +316,7 @@ class Repository:
         InputError
             ``label`` combined with ``version`` or ``at`` (labels are current pointers).
         """
-        at = _as_utc(at)
+        at = as_utc(at)
         if label is not None and (version is not None or at is not None):
             raise InputError("a label names one version now; do not combine it with --version or --at")
         with self._read() as s:
@@ -426,78 +393,6 @@ class Repository:
             raise NotFoundError(f"{version.name} v{version.version} has no raw measurement {key!r}")
         return self.blobs.get(version.raw_blobs[key])
 
-    # ---------------------------------------------------------- label / state
-    @_db.with_db_errors
-    def label(self, name: str, version: int, label: str, author: str | None = None) -> JointVersion:
-        """Point ``label`` of a joint at ``version`` (created or moved).
-
-        The label row is locked (``SELECT ... FOR UPDATE`` on PostgreSQL; SQLite
-        writers are serialised by ``BEGIN IMMEDIATE``) so that the audit row's
-        ``previous_version`` is the version the label really pointed at.
-        """
-        label = check_label(label)
-        actor = current_actor(author)
-        self.get(name, version)  # NotFoundError for an unknown joint or version
-
-        def write(s: Session) -> None:
-            self._move_label(s, self._joint(s, name), name, int(version), label, actor, utcnow())
-
-        self._retrying(write)
-        return self.get(name, version)
-
-    @staticmethod
-    def _move_label(s: Session, joint: JointRow, name: str, version: int, label: str, actor: str, now) -> None:
-        row = s.scalar(
-            select(LabelRow).where(LabelRow.joint_id == joint.id, LabelRow.label == label).with_for_update()
-        )
-        old = None
-        if row is None:  # two creators at once: the unique constraint refuses one, which is retried
-            s.add(LabelRow(joint_id=joint.id, label=label, version=version, updated_at=now, updated_by=actor))
-        else:
-            old = row.version
-            row.version, row.updated_at, row.updated_by = version, now, actor
-        s.add(AuditRow(at=now, actor=actor, action="label", joint_name=name, version=version,
-                       details={"label": label, "previous_version": old}))
-
-    @_db.with_db_errors
-    def deprecate(
-        self, name: str, version: int | None = None, reason: str = "", author: str | None = None, undo: bool = False
-    ) -> list[JointVersion]:
-        """Mark a version (or, with ``version=None``, the whole joint) deprecated.
-
-        Nothing is deleted: a new state row is appended (``undo=True`` appends
-        ``active`` again); the latest applicable row wins. A joint deprecated as
-        a whole stays deprecated, including versions catalogued later, until it
-        is undone. Returns the joint's history afterwards.
-        """
-        actor = current_actor(author)
-        if version is not None:
-            self.get(name, version)
-        state = "active" if undo else "deprecated"
-
-        def write(s: Session) -> None:
-            joint = self._joint(s, name)
-            now = utcnow()
-            s.add(StateRow(joint_id=joint.id, version=version, state=state, reason=str(reason), author=actor, at=now))
-            s.add(AuditRow(at=now, actor=actor, action="undeprecate" if undo else "deprecate", joint_name=name,
-                           version=version, details={"reason": str(reason)}))
-
-        self._retrying(write)
-        return self.history(name)
-
-    @_db.with_db_errors
-    def audit(self, name: str | None = None, limit: int = 100) -> list[dict[str, Any]]:
-        """The newest audit-log entries (optionally for one joint)."""
-        with self._read() as s:
-            q = select(AuditRow).order_by(AuditRow.id.desc()).limit(limit)
-            if name:
-                q = q.where(AuditRow.joint_name == name)
-            return [
-                {"at": r.at.isoformat(timespec="seconds"), "actor": r.actor, "action": r.action,
-                 "joint": r.joint_name, "version": r.version, "details": r.details}
-                for r in s.scalars(q)
-            ]
-
     # -------------------------------------------------------------- diff, etc.
     @_db.with_db_errors
     def diff(self, name: str, version_a: int, version_b: int | None = None, other: str | None = None) -> VersionDiff:
@@ -528,7 +423,7 @@ class Repository:
         """The ``k`` closest current versions of ``joint_type``; see :mod:`jointdb.store._query`."""
         from jointdb.store._query import nearest
 
-        return nearest(self, joint_type, conditions, k, _as_utc(at))
+        return nearest(self, joint_type, conditions, k, as_utc(at))
 
     @_db.with_db_errors
     def interpolate(self, matches, conditions: Conditions | Mapping[str, Any] | None = None):
@@ -557,15 +452,3 @@ class Repository:
         from jointdb.store._bundle import import_bundle
 
         return import_bundle(self, path, author, trusted_keys, require_signature)
-
-
-def _is_unique_violation(exc: DBIntegrityError) -> bool:
-    text = str(exc.orig).lower()
-    sqlstate = getattr(exc.orig, "sqlstate", None)
-    return sqlstate == "23505" or "unique" in text or "duplicate key" in text
-
-
-def _is_transient(exc: OperationalError) -> bool:
-    text = str(exc.orig).lower()
-    sqlstate = getattr(exc.orig, "sqlstate", None)
-    return "locked" in text or "busy" in text or sqlstate in ("40001", "40P01")

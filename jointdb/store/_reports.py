@@ -1,0 +1,57 @@
+"""Result types of repository operations and the classification of write conflicts."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+from sqlalchemy.exc import IntegrityError as DBIntegrityError
+from sqlalchemy.exc import OperationalError
+
+
+@dataclass(frozen=True)
+class CheckReport:
+    """Result of :meth:`Repository.check`; ``ok`` when nothing is missing or corrupt."""
+
+    versions_checked: int
+    blobs_checked: int
+    problems: tuple[str, ...]
+    orphan_blobs: tuple[str, ...] = ()
+    temporaries: tuple[str, ...] = ()
+    notes: tuple[str, ...] = ()
+
+    @property
+    def ok(self) -> bool:
+        return not self.problems
+
+
+@dataclass(frozen=True)
+class VersionDiff:
+    """Differences between two versions (:meth:`Repository.diff`).
+
+    ``frf_entries`` rows: ``output``, ``input``, ``max_rel_diff`` = max over the
+    common frequency lines of ``|H_b − H_a|`` divided by the peak ``|H_a|`` of
+    that entry.
+    """
+
+    a: str
+    b: str
+    conditions: Mapping[str, tuple[Any, Any]]
+    fields: Mapping[str, tuple[Any, Any]]
+    frf_entries: tuple[Mapping[str, Any], ...]
+    max_relative_difference: float | None
+    same_blob: bool
+    notes: tuple[str, ...] = field(default_factory=tuple)
+
+
+def _is_unique_violation(exc: DBIntegrityError) -> bool:
+    text = str(exc.orig).lower()
+    sqlstate = getattr(exc.orig, "sqlstate", None)
+    return sqlstate == "23505" or "unique" in text or "duplicate key" in text
+
+
+def _is_transient(exc: OperationalError) -> bool:
+    text = str(exc.orig).lower()
+    sqlstate = getattr(exc.orig, "sqlstate", None)
+    return "locked" in text or "busy" in text or sqlstate in ("40001", "40P01")
