@@ -19,7 +19,8 @@ At each site three kinds of joint are offered:
 ``interface_contact[_damped]@z``
     a distributed contact joint over an overlap: the smaller part continues
     inside the larger one over an insertion length ``L`` and rests on a contact
-    layer of stiffness ``k'`` per length (:class:`jointdb.fe.Insertion` with a
+    layer of stiffness ``k'`` per length across and ``k' r²/2`` against relative
+    rotation of the sections (:class:`jointdb.fe.Insertion` with a
     :class:`jointdb.fe.Contact`), optionally with a loss factor. At the mouth of
     an existing bonded insertion, its tie is replaced by the contact layer (the
     length is the model's own);
@@ -242,7 +243,20 @@ class InterfaceContact(_Located):
         return min(above) - z
 
     def contact(self, values, scale: float = 1.0, eta: float | None = None) -> Contact:
-        k = {t: values["k_contact"] * scale for t, _ in self.planes}
+        """The contact layer: ``k'`` across, and ``k' r²/2`` against relative rotation of the sections.
+
+        A layer of equal normal and tangential stiffness ``k_a`` per area on a
+        bore of radius ``r`` gives ``k' = ∮ k_a (cos²φ + sin²φ) r dφ = 2π r k_a``
+        per length against relative deflection, and, through the axial shear at
+        ``r cos φ``, ``k_θ' = ∮ k_a (r cos φ)² r dφ = π r³ k_a = k' r²/2`` against
+        relative rotation of the two sections (which a Timoshenko shank would
+        otherwise be free to take).
+        """
+        r = 0.5 * (self.existing.outer_diameter if self.existing is not None else self.section.outer_diameter)
+        k = {}
+        for t, rot in self.planes:
+            k[t] = values["k_contact"] * scale
+            k[rot] = values["k_contact"] * scale * r * r / 2.0
         loss = values.get("eta_joint", 0.0) if eta is None else eta
         return Contact(k, loss_factor=loss)
 
