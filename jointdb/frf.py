@@ -139,6 +139,28 @@ def _readonly(a: np.ndarray) -> np.ndarray:
     return a
 
 
+def _check_labels(outputs: tuple, inputs: tuple) -> None:
+    """InputError unless both label tuples are non-empty and free of duplicates."""
+    for name, labels in (("output", outputs), ("input", inputs)):
+        if not labels:
+            raise InputError(f"at least one {name} DOF is needed")
+        if len(set(labels)) != len(labels):
+            seen: set[Dof] = set()
+            dup = next(d for d in labels if d in seen or seen.add(d))  # type: ignore[func-returns-value]
+            raise InputError(f"duplicate {name} DOF {dup}")
+
+
+def _take(values: np.ndarray, rows, cols) -> np.ndarray:
+    """``values[:, rows][:, :, cols]`` in one gather: a new array ``(n_freq, len(rows), len(cols))``.
+
+    Indexing the last two axes together copies only the requested entries
+    (indexing them one after the other first copies whole rows).
+    """
+    r = np.asarray(rows, dtype=np.intp).reshape(-1, 1)
+    c = np.asarray(cols, dtype=np.intp).reshape(1, -1)
+    return values[:, r, c]
+
+
 @dataclass(frozen=True, eq=False)
 class FRF:
     """A set of frequency response functions on labelled DOFs.
@@ -185,13 +207,7 @@ class FRF:
             )
         outputs = dofs(self.outputs)
         inputs = dofs(self.inputs)
-        for name, labels in (("output", outputs), ("input", inputs)):
-            if not labels:
-                raise InputError(f"at least one {name} DOF is needed")
-            if len(set(labels)) != len(labels):
-                seen: set[Dof] = set()
-                dup = next(d for d in labels if d in seen or seen.add(d))  # type: ignore[func-returns-value]
-                raise InputError(f"duplicate {name} DOF {dup}")
+        _check_labels(outputs, inputs)
         values = np.array(self.values, dtype=np.complex128, copy=True)
         if values.ndim == 1 and len(outputs) == 1 and len(inputs) == 1:
             values = values.reshape(-1, 1, 1)
@@ -213,6 +229,39 @@ class FRF:
             "_index",
             {"out": {d: i for i, d in enumerate(outputs)}, "in": {d: i for i, d in enumerate(inputs)}},
         )
+
+    @classmethod
+    def _trusted(
+        cls, freq: np.ndarray, values: np.ndarray, outputs: tuple, inputs: tuple, quantity: Quantity
+    ) -> "FRF":
+        """An FRF from parts that are valid by construction, without copying or re-checking them.
+
+        For results computed inside the package: ``freq`` is the (read-only,
+        already validated) grid of an existing FRF or a subset of it, ``values``
+        a new complex128 array of the right shape owned by the caller (it is
+        made read-only, not copied), ``outputs``/``inputs`` tuples of
+        :class:`Dof` (checked: non-empty, distinct — cheap) and ``quantity`` a
+        :class:`Quantity`. Public constructors (``FRF(...)``, :meth:`replace`)
+        validate everything.
+        """
+        _check_labels(outputs, inputs)
+        if values.dtype != np.complex128 or values.shape != (freq.size, len(outputs), len(inputs)):
+            raise ValueError(  # a programming error inside the package, never user input
+                f"internal FRF: values {values.dtype} {values.shape} do not match "
+                f"({freq.size}, {len(outputs)}, {len(inputs)})"
+            )
+        self = object.__new__(cls)
+        object.__setattr__(self, "freq", freq if not freq.flags.writeable else _readonly(freq))
+        object.__setattr__(self, "values", _readonly(values))
+        object.__setattr__(self, "outputs", outputs)
+        object.__setattr__(self, "inputs", inputs)
+        object.__setattr__(self, "quantity", quantity)
+        object.__setattr__(
+            self,
+            "_index",
+            {"out": {d: i for i, d in enumerate(outputs)}, "in": {d: i for i, d in enumerate(inputs)}},
+        )
+        return self
 
     # ----------------------------------------------------------------- basics
     @property
@@ -275,19 +324,19 @@ class FRF:
         """
         oi = self._positions("out", outputs) if outputs is not None else list(range(len(self.outputs)))
         ii = self._positions("in", inputs) if inputs is not None else list(range(len(self.inputs)))
-        return FRF(
-            self.freq,
-            self.values[:, oi][:, :, ii],
-            tuple(self.outputs[i] for i in oi),
-            tuple(self.inputs[i] for i in ii),
-            self.quantity,
-        )
+        out_labels = tuple(self.outputs[i] for i in oi)
+        in_labels = tuple(self.inputs[i] for i in ii)
+        return FRF._trusted(self.freq, _take(self.values, oi, ii), out_labels, in_labels, self.quantity)
 
     def block(self, outputs: Iterable, inputs: Iterable) -> np.ndarray:
-        """Values on the given DOFs as an array ``(n_freq, len(outputs), len(inputs))``."""
-        oi = self._positions("out", outputs)
-        ii = self._positions("in", inputs)
-        return self.values[:, oi][:, :, ii]
+        """Values on the given DOFs as a new array ``(n_freq, len(outputs), len(inputs))``.
+
+        Raises
+        ------
+        InputError
+            If a requested DOF is not present.
+        """
+        return _take(self.values, self._positions("out", outputs), self._positions("in", inputs))
 
     def entry(self, output, input) -> np.ndarray:  # noqa: A002 - field's own word
         """One FRF ``H[output, input]`` as an array ``(n_freq,)``."""
@@ -316,7 +365,14 @@ class FRF:
                 "(division by iω); drop the 0 Hz line first, e.g. frf.band(fmin=...)"
             )
         factor = iw**dp
-        return self.replace(values=self.values * factor[:, None, None], quantity=target)
+        values = self.values * factor[:, None, None]
+        if not np.all(np.isfinite(values)):  # (iω)^p can overflow extreme values
+            n_bad = int(np.count_nonzero(~np.isfinite(values)))
+            raise InputError(
+                f"FRF values contain {n_bad} NaN or inf entries after converting {self.quantity.value} "
+                f"to {target.value} (values too large)"
+            )
+        return FRF._trusted(self.freq, values, self.outputs, self.inputs, target)
 
     def band(self, fmin: float | None = None, fmax: float | None = None) -> "FRF":
         """The lines with ``fmin <= f <= fmax`` (``fmin`` exclusive of 0 when given as 0+)."""
@@ -327,7 +383,7 @@ class FRF:
             mask &= self.freq <= fmax
         if not mask.any():
             raise InputError(f"no frequency lines in [{fmin}, {fmax}] Hz")
-        return self.replace(freq=self.freq[mask], values=self.values[mask])
+        return FRF._trusted(self.freq[mask], self.values[mask], self.outputs, self.inputs, self.quantity)
 
     def resample(self, freq: Sequence[float] | np.ndarray) -> "FRF":
         """Linear interpolation (real and imaginary parts) onto another grid.
@@ -375,20 +431,23 @@ class FRF:
         union: list[Dof] = list(self.outputs) + [d for d in self.inputs if d not in self._index["out"]]
         target_out = dofs(outputs) if outputs is not None else tuple(union)
         target_in = dofs(inputs) if inputs is not None else tuple(union)
+        _check_labels(target_out, target_in)
         o_idx, i_idx = self._index["out"], self._index["in"]
-        vals = np.empty((self.n_freq, len(target_out), len(target_in)), dtype=np.complex128)
+        rows = np.empty((len(target_out), len(target_in)), dtype=np.intp)
+        cols = np.empty_like(rows)
         for a, row in enumerate(target_out):  # loops over DOF pairs, not frequency lines
             for b, col in enumerate(target_in):
                 if row in o_idx and col in i_idx:
-                    vals[:, a, b] = self.values[:, o_idx[row], i_idx[col]]
+                    rows[a, b], cols[a, b] = o_idx[row], i_idx[col]
                 elif col in o_idx and row in i_idx:
-                    vals[:, a, b] = self.values[:, o_idx[col], i_idx[row]]
+                    rows[a, b], cols[a, b] = o_idx[col], i_idx[row]
                 else:
                     raise InputError(
                         f"H[{row}, {col}] is known neither directly nor by reciprocity; "
                         "measure a row or column that covers it"
                     )
-        return FRF(self.freq, vals, target_out, target_in, self.quantity)
+        vals = self.values[:, rows, cols]
+        return FRF._trusted(self.freq, vals, target_out, target_in, self.quantity)
 
     def reciprocity_error(self) -> float:
         """Largest relative asymmetry ``|H_ij − H_ji| / max|H|`` over common DOFs."""
@@ -426,5 +485,5 @@ def _concat(parts: Sequence[FRF], along: str) -> FRF:
     stacked = tuple(d for p in parts for d in getattr(p, along))
     values = np.concatenate([p.values for p in parts], axis=1 if along == "outputs" else 2)
     if along == "outputs":
-        return FRF(first.freq, values, stacked, first.inputs, first.quantity)
-    return FRF(first.freq, values, first.outputs, stacked, first.quantity)
+        return FRF._trusted(first.freq, values, stacked, first.inputs, first.quantity)
+    return FRF._trusted(first.freq, values, first.outputs, stacked, first.quantity)

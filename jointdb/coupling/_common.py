@@ -10,7 +10,15 @@ import numpy as np
 from jointdb.errors import InputError
 from jointdb.frf import FRF, Dof, Quantity
 
-__all__ = ["IdentificationResult", "fetch", "as_receptance", "check_grid", "same_grid", "fill_bad_lines"]
+__all__ = [
+    "IdentificationResult",
+    "fetch",
+    "reciprocal_index",
+    "as_receptance",
+    "check_grid",
+    "same_grid",
+    "fill_bad_lines",
+]
 
 
 @dataclass(frozen=True, eq=False)
@@ -96,6 +104,8 @@ def as_receptance(name: str, frf: FRF) -> FRF:
 
 def check_grid(ref_name: str, ref: np.ndarray, name: str, freq: np.ndarray) -> None:
     """InputError unless ``freq`` equals the reference grid ``ref`` (Hz) to 1e-9 relative."""
+    if freq is ref or (freq.shape == ref.shape and np.array_equal(freq, ref)):
+        return
     if freq.shape != ref.shape or not np.allclose(freq, ref, rtol=1e-9, atol=1e-12):
         raise InputError(
             f"{name} has {freq.size} lines {freq[0]:g}–{freq[-1]:g} Hz but {ref_name} has "
@@ -112,23 +122,43 @@ def same_grid(named: Mapping[str, FRF]) -> np.ndarray:
     return ref.freq
 
 
-def fetch(name: str, frf: FRF, outs: Sequence[Dof], ins: Sequence[Dof], need: str = "") -> np.ndarray:
-    """Block of ``frf`` on outs × ins, using reciprocity entry by entry where needed."""
+def reciprocal_index(frf: FRF, outs: Sequence[Dof], ins: Sequence[Dof]):
+    """Where each entry of the block ``outs × ins`` sits in ``frf.values``, directly or by reciprocity.
+
+    Returns
+    -------
+    (rows, cols), None
+        Integer arrays ``(len(outs), len(ins))`` with
+        ``frf.values[:, rows, cols]`` the requested block: ``H[o, i]`` where
+        measured, else ``H[i, o]`` (reciprocity ``H_oi = H_io``).
+    None, (o, i)
+        The first requested pair known neither way.
+    """
     oidx, iidx = frf._index["out"], frf._index["in"]
-    res = np.empty((frf.n_freq, len(outs), len(ins)), dtype=complex)
-    for r, o in enumerate(outs):
+    rows = np.empty((len(outs), len(ins)), dtype=np.intp)
+    cols = np.empty_like(rows)
+    for r, o in enumerate(outs):  # loops over DOF pairs, not frequency lines
         for c, i in enumerate(ins):
             if o in oidx and i in iidx:
-                res[:, r, c] = frf.values[:, oidx[o], iidx[i]]
+                rows[r, c], cols[r, c] = oidx[o], iidx[i]
             elif i in oidx and o in iidx:
-                res[:, r, c] = frf.values[:, oidx[i], iidx[o]]
+                rows[r, c], cols[r, c] = oidx[i], iidx[o]
             else:
-                hint = f" ({need})" if need else ""
-                raise InputError(
-                    f"{name} has no FRF between {o} and {i}{hint}; it has outputs "
-                    f"{' '.join(map(str, frf.outputs))} and inputs {' '.join(map(str, frf.inputs))}"
-                )
-    return res
+                return None, (o, i)
+    return (rows, cols), None
+
+
+def fetch(name: str, frf: FRF, outs: Sequence[Dof], ins: Sequence[Dof], need: str = "") -> np.ndarray:
+    """Block of ``frf`` on outs × ins (a new array), using reciprocity entry by entry where needed."""
+    index, missing = reciprocal_index(frf, outs, ins)
+    if missing is not None:
+        o, i = missing
+        hint = f" ({need})" if need else ""
+        raise InputError(
+            f"{name} has no FRF between {o} and {i}{hint}; it has outputs "
+            f"{' '.join(map(str, frf.outputs))} and inputs {' '.join(map(str, frf.inputs))}"
+        )
+    return frf.values[:, index[0], index[1]]
 
 
 def fill_bad_lines(values: np.ndarray, bad: np.ndarray, freq: np.ndarray, what: str) -> np.ndarray:

@@ -30,6 +30,7 @@ import numpy as np
 
 from jointdb.coupling._common import as_receptance as _receptance
 from jointdb.coupling._common import check_grid as _check_grid
+from jointdb.coupling._common import reciprocal_index
 from jointdb.errors import InputError, NumericalError
 from jointdb.frf import FRF, Dof, Quantity, dofs
 
@@ -175,35 +176,37 @@ def _as_pairs(items, what: str) -> list[tuple[str, Dof]]:
     return out
 
 
-class _Blocks:
-    """Fetch blocks of a substructure's receptance, using reciprocity if needed."""
+def _gather(name: str, frf: FRF, outs: Sequence[Dof], ins: Sequence[Dof]) -> np.ndarray:
+    """Block ``outs × ins`` of a substructure's receptance in one gather, by reciprocity where needed."""
+    oidx, iidx = frf._index["out"], frf._index["in"]
+    for d in list(outs) + list(ins):
+        if d not in oidx and d not in iidx:
+            raise InputError(
+                f"substructure {name!r} has no FRF for DOF {d} "
+                f"(it has: {' '.join(str(x) for x in dict.fromkeys(frf.outputs + frf.inputs))})"
+            )
+    index, missing = reciprocal_index(frf, outs, ins)
+    if missing is not None:
+        raise InputError(
+            f"substructure {name!r}: H[{missing[0]}, {missing[1]}] is known neither directly nor by "
+            "reciprocity; measure a row or column that covers it"
+        )
+    return frf.values[:, index[0], index[1]]
 
-    def __init__(self, name: str, frf: FRF):
-        self.name = name
-        self.frf = frf
-        self._full: FRF | None = None
 
-    def block(self, outs: Sequence[Dof], ins: Sequence[Dof]) -> np.ndarray:
-        if not outs or not ins:
-            return np.zeros((self.frf.n_freq, len(outs), len(ins)), dtype=complex)
-        oset, iset = self.frf._index["out"], self.frf._index["in"]
-        if all(d in oset for d in outs) and all(d in iset for d in ins):
-            return self.frf.block(outs, ins)
-        if all(d in iset for d in outs) and all(d in oset for d in ins):
-            return np.swapaxes(self.frf.block(ins, outs), 1, 2)
-        if self._full is None:
-            try:
-                self._full = self.frf.complete_reciprocal()
-            except InputError as exc:
-                raise InputError(f"substructure {self.name!r}: {exc}") from None
-        have = self._full._index["out"]
-        for d in list(outs) + list(ins):
-            if d not in have:
-                raise InputError(
-                    f"substructure {self.name!r} has no FRF for DOF {d} "
-                    f"(it has: {' '.join(str(x) for x in self._full.outputs)})"
-                )
-        return self._full.block(outs, ins)
+def _span(idx: np.ndarray) -> "slice | np.ndarray":
+    """A slice when ``idx`` is a run of consecutive integers (basic indexing: no gather), else ``idx``."""
+    if idx.size and np.array_equal(idx, np.arange(idx[0], idx[0] + idx.size)):
+        return slice(int(idx[0]), int(idx[0]) + idx.size)
+    return idx
+
+
+def _at(rows: np.ndarray, cols: np.ndarray):
+    """Index of the ``rows × cols`` sub-block of the last two axes (slices where possible)."""
+    r, c = _span(rows), _span(cols)
+    if isinstance(r, slice) or isinstance(c, slice):
+        return (slice(None), r, c)
+    return (slice(None), r[:, None], c[None, :])
 
 
 def _joint_matrix(iface: Interface, freq: np.ndarray, label: str) -> np.ndarray | None:
@@ -218,6 +221,8 @@ def _joint_matrix(iface: Interface, freq: np.ndarray, label: str) -> np.ndarray 
         if len(j.outputs) != n or len(j.inputs) != n:
             raise InputError(f"joint of {label} is {len(j.outputs)}×{len(j.inputs)}, the interface has {n} DOFs")
         for side in (iface.a_dofs, iface.b_dofs):
+            if j.inputs == side and j.outputs == side:
+                return j.values  # already in interface order (read-only; only read)
             if set(j.inputs) == set(side) and set(j.outputs) == set(side):
                 return j.block(side, side)
         return np.asarray(j.values)
@@ -323,74 +328,67 @@ def couple(
                 f"{', '.join(f'{n}:{d}' for n, d in pairs)}); give the substructures distinct node numbers"
             )
 
-    # Contact DOF index C: unique (substructure, dof) pairs, grouped per substructure.
-    contact: dict[str, list[Dof]] = {name: [] for name in subs}
-    for iface, _ in flat:
-        for name, side in ((iface.a, iface.a_dofs), (iface.b, iface.b_dofs)):
-            for d in side:
-                if d not in contact[name]:
-                    contact[name].append(d)
-    offset: dict[str, int] = {}
-    n_c = 0
-    for name in subs:
-        offset[name] = n_c
-        n_c += len(contact[name])
-    pos = {(name, d): offset[name] + i for name in subs for i, d in enumerate(contact[name])}
-
+    # One row per paired contact DOF (a Lagrange multiplier λ): B u = u_a − u_b.
+    # For each substructure s: the λ rows it takes part in, its DOF there and the
+    # sign (+1 on side a, −1 on side b). Then, with only the blocks needed,
+    #   Z = Σ_s B_s H_s,CC B_sᵀ + H_J,  U = H_oC Bᵀ,  V = B H_Ci,  G = H_oi − U Z⁻¹ V.
     n_lambda = sum(len(i.a_dofs) for i, _ in flat)
-    bmat = np.zeros((n_lambda, n_c))
+    lam_rows: dict[str, list[int]] = {name: [] for name in subs}
+    lam_dofs: dict[str, list[Dof]] = {name: [] for name in subs}
+    lam_sign: dict[str, list[float]] = {name: [] for name in subs}
     nf = freq.size
-    hj = np.zeros((nf, n_lambda, n_lambda), dtype=complex)
+    joints: list[tuple[np.ndarray, np.ndarray]] = []
     row = 0
     for iface, label in flat:
         n = len(iface.a_dofs)
         for r, (da, db) in enumerate(zip(iface.a_dofs, iface.b_dofs)):
-            bmat[row + r, pos[(iface.a, da)]] += 1.0
-            bmat[row + r, pos[(iface.b, db)]] -= 1.0
+            for name, d, sign in ((iface.a, da, 1.0), (iface.b, db, -1.0)):
+                lam_rows[name].append(row + r)
+                lam_dofs[name].append(d)
+                lam_sign[name].append(sign)
         jm = _joint_matrix(iface, freq, label)
         if jm is not None:
-            hj[:, row : row + n, row : row + n] = jm
+            joints.append((np.arange(row, row + n), jm))
         row += n
 
-    blocks = {name: _Blocks(name, frf) for name, frf in subs.items()}
-    h_cc = np.zeros((nf, n_c, n_c), dtype=complex)
-    for name in subs:
-        c = contact[name]
-        if c:
-            o = offset[name]
-            h_cc[:, o : o + len(c), o : o + len(c)] = blocks[name].block(c, c)
+    n_out, n_in = len(outs), len(ins)
+    z = np.zeros((nf, n_lambda, n_lambda), dtype=complex)
+    u = np.zeros((nf, n_out, n_lambda), dtype=complex)
+    v = np.zeros((nf, n_lambda, n_in), dtype=complex)
+    g = np.zeros((nf, n_out, n_in), dtype=complex)
+    for name, frf in subs.items():
+        ro = np.array([r for r, (n_, _) in enumerate(outs) if n_ == name], dtype=np.intp)
+        ci = np.array([c_ for c_, (n_, _) in enumerate(ins) if n_ == name], dtype=np.intp)
+        lr = np.array(lam_rows[name], dtype=np.intp)
+        if not lr.size and not (ro.size and ci.size):
+            continue
+        nl = lr.size
+        blk = _gather(
+            name, frf, lam_dofs[name] + [outs[r][1] for r in ro], lam_dofs[name] + [ins[c_][1] for c_ in ci]
+        )
+        if nl:
+            sign = np.array(lam_sign[name])
+            flip = not np.all(sign == 1.0)
+            cc = blk[:, :nl, :nl]
+            z[_at(lr, lr)] += cc if np.all(sign == sign[0]) else cc * np.outer(sign, sign)
+            if ro.size:
+                u[_at(ro, lr)] = blk[:, nl:, :nl] * sign if flip else blk[:, nl:, :nl]
+            if ci.size:
+                v[_at(lr, ci)] = blk[:, :nl, nl:] * sign[:, None] if flip else blk[:, :nl, nl:]
+        if ro.size and ci.size:
+            g[_at(ro, ci)] = blk[:, nl:, nl:]
+    for rows, jm in joints:
+        z[_at(rows, rows)] += jm
 
-    h_oc = np.zeros((nf, len(outs), n_c), dtype=complex)
-    for r, (name, d) in enumerate(outs):
-        c = contact[name]
-        if c:
-            h_oc[:, r, offset[name] : offset[name] + len(c)] = blocks[name].block([d], c)[:, 0, :]
-    h_ci = np.zeros((nf, n_c, len(ins)), dtype=complex)
-    for col, (name, d) in enumerate(ins):
-        c = contact[name]
-        if c:
-            h_ci[:, offset[name] : offset[name] + len(c), col] = blocks[name].block(c, [d])[:, :, 0]
-    h_oi = np.zeros((nf, len(outs), len(ins)), dtype=complex)
-    for name in substructures:
-        ro = [r for r, (n_, _) in enumerate(outs) if n_ == name]
-        ci = [c_ for c_, (n_, _) in enumerate(ins) if n_ == name]
-        if ro and ci:
-            blk = blocks[name].block([outs[r][1] for r in ro], [ins[c_][1] for c_ in ci])
-            h_oi[:, np.array(ro)[:, None], np.array(ci)[None, :]] = blk
-
-    # Interface problem: Z λ = B H_Ci,  G = H_oi − (H_oC Bᵀ) Z⁻¹ (B H_Ci).
-    z = bmat @ h_cc @ bmat.T + hj
-    rhs = bmat @ h_ci
+    # Interface problem: Z λ = V,  G = H_oi − U λ.
     try:
-        lam = np.linalg.solve(z, rhs)
+        lam = np.linalg.solve(z, v)
     except np.linalg.LinAlgError:
         raise NumericalError(
             "the interface matrix B H_CC Bᵀ + H_J is singular at some frequency line; "
             "check for redundant interfaces or rigid couplings between rigid-body DOFs"
         ) from None
-    h_oi -= (h_oc @ bmat.T) @ lam
-    g = h_oi
+    g -= u @ lam
     if not np.all(np.isfinite(g)):
         raise NumericalError("coupling produced NaN/inf: the interface matrix is singular at some line")
-    return FRF(freq, g, tuple(d for _, d in outs), tuple(d for _, d in ins), Quantity.RECEPTANCE)
-
+    return FRF._trusted(freq, g, tuple(d for _, d in outs), tuple(d for _, d in ins), Quantity.RECEPTANCE)
