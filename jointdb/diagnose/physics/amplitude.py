@@ -3,15 +3,18 @@
 A joint under load slips at the edges of its contact as the vibration grows:
 its stiffness falls and its damping rises with the excitation level. With
 recordings at several levels, the candidate replaces the clamp by a joint whose
-stiffness ``k·s_l`` and loss factor ``η_l`` are fitted per level (``s`` = 1 at
-the first level). Only offered when there are at least two levels.
+stiffness and loss follow the micro-slip law of
+:mod:`jointdb.diagnose.physics.microslip` in the excitation level (all levels
+jointly; per-level values when the levels' amplitudes are unknown). Only
+offered when there are at least two levels.
 """
 
 from __future__ import annotations
 
-from jointdb.diagnose.physics import Param, register
+from jointdb.diagnose.physics import register
 from jointdb.diagnose.physics._util import full_clamps, without_ingredient
 from jointdb.diagnose.physics.joint import CompliantJoint
+from jointdb.diagnose.physics.microslip import _law_params, _state
 
 
 class AmplitudeDependentJoint(CompliantJoint):
@@ -22,27 +25,30 @@ class AmplitudeDependentJoint(CompliantJoint):
         super().__init__(model, clamp, ("x", "ry"))
         self.name = "joint_amplitude_dependent"
         self.omega1 = omega1
-        self.levels = levels
+        self.levels = tuple(levels)
         self.n_levels = n_levels
-        self.explanation = ("an amplitude-dependent (micro-slip) joint at the clamp whose stiffness and "
-                            "damping change with the excitation level")
-        extra = [Param(f"s_{i + 1}", "-", 0.2, 3.0, 1.0) for i in range(1, n_levels)]
-        extra += [Param(f"eta_{i + 1}", "-", 1e-3, 2.0, 0.05, starts=(0.3,)) for i in range(n_levels)]
+        self.explanation = ("an amplitude-dependent (micro-slip) joint at the clamp whose stiffness falls and "
+                            "damping rises with the excitation level")
+        self.law, extra = _law_params(self.levels)
         self.params = self.params + tuple(extra)
+
+    def state(self, values, level: int) -> tuple[float, float]:
+        """(stiffness scale, loss factor) at ``level`` (0-based)."""
+        return _state(self.law, self.levels, values, level)
 
     def apply(self, model, values, level=0):
         model = without_ingredient(model, self.clamp)
-        s = 1.0 if level == 0 else values[f"s_{level + 1}"]
-        return model.with_ingredient(self.support(values, scale=s, eta=values[f"eta_{level + 1}"],
-                                                  omega=self.omega1))
+        s, eta = self.state(values, level)
+        return model.with_ingredient(self.support(values, scale=s, eta=eta, omega=self.omega1))
 
     def level_table(self, values, sigmas=None, **_):
         """Per level: (level, k_x, k_ry, loss factor)."""
         rows = []
         for i in range(self.n_levels):
-            s = 1.0 if i == 0 else values[f"s_{i + 1}"]
+            s, eta = self.state(values, i)
             rows.append({"level": self.levels[i], "k_x_n_per_m": values["k_x"] * s,
-                         "k_ry_nm_per_rad": values["k_ry"] * s, "loss_factor": values[f"eta_{i + 1}"]})
+                         "k_ry_nm_per_rad": values["k_ry"] * s, "loss_factor": eta,
+                         "position_m": self.clamp.position})
         return rows
 
 
