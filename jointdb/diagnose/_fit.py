@@ -252,7 +252,9 @@ def _prefit_frequencies(nominal, cand, params, u0, lo, hi, target):
         lr = np.log(f[None, :] / target[:, None])
         return lr[np.arange(n), np.argmin(np.abs(lr), axis=1)]
 
-    res = scipy.optimize.least_squares(fun, u0, bounds=(lo, hi), method="trf", diff_step=1e-4, max_nfev=20 * (len(u0) + 1))
+    # a rough match is all stage 2 needs: loose tolerances, few evaluations (each is an eigen-solve)
+    res = scipy.optimize.least_squares(fun, u0, bounds=(lo, hi), method="trf", diff_step=1e-4,
+                                       max_nfev=10 * (len(u0) + 1), xtol=1e-4, ftol=1e-4)
     return res.x, float(2 * res.cost)
 
 
@@ -326,8 +328,8 @@ def fit_candidate(ev: ModelEvaluator, nominal, cand, start: dict | None = None, 
             continue
         try:
             res = scipy.optimize.least_squares(fun, u_start, bounds=(lo, hi), method="trf", diff_step=1e-4,
-                                               x_scale=1.0, max_nfev=max_nfev or 30 * (p + 1), xtol=1e-6,
-                                               ftol=1e-6)
+                                               x_scale=1.0, max_nfev=max_nfev or 30 * (p + 1), xtol=1e-5,
+                                               ftol=1e-5)
         except ValueError as exc:  # pragma: no cover - defensive
             raise InputError(f"cannot fit candidate {cand.name}: {exc}") from None
         nfev += res.nfev
