@@ -83,7 +83,9 @@ def emit(
     from rich.console import Console
     from rich.table import Table
 
-    console = Console(file=sys.stdout, soft_wrap=True)
+    # piped or logged output is not cut to 80 columns: tables keep their full cells
+    width = None if sys.stdout.isatty() else 10_000
+    console = Console(file=sys.stdout, soft_wrap=True, width=width)
     if isinstance(data, str):
         console.print(data, highlight=False, markup=False)
         return
