@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -18,7 +18,37 @@ __all__ = [
     "check_grid",
     "same_grid",
     "fill_bad_lines",
+    "LazyExtra",
 ]
+
+
+class LazyExtra(Mapping):
+    """A read-only mapping whose values may be computed on first access (then kept).
+
+    ``LazyExtra(values, deferred)``: ``values`` are stored as given; each
+    ``deferred[name]`` is a function of no arguments called the first time
+    ``name`` is read. Used for diagnostics that cost a decomposition of their
+    own (e.g. the condition number of an intermediate matrix) so that
+    identification does not pay for them unless they are looked at.
+    """
+
+    def __init__(self, values: Mapping[str, object], deferred: Mapping[str, Callable[[], object]]):
+        self._values = dict(values)
+        self._deferred = dict(deferred)
+
+    def __getitem__(self, key: str) -> object:
+        if key not in self._values and key in self._deferred:
+            self._values[key] = self._deferred.pop(key)()
+        return self._values[key]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(list(self._values) + [k for k in self._deferred if k not in self._values])
+
+    def __len__(self) -> int:
+        return len(self._values) + len(self._deferred)
+
+    def __repr__(self) -> str:
+        return f"LazyExtra({', '.join(self)})"
 
 
 @dataclass(frozen=True, eq=False)
@@ -148,8 +178,22 @@ def reciprocal_index(frf: FRF, outs: Sequence[Dof], ins: Sequence[Dof]):
     return (rows, cols), None
 
 
-def fetch(name: str, frf: FRF, outs: Sequence[Dof], ins: Sequence[Dof], need: str = "") -> np.ndarray:
-    """Block of ``frf`` on outs × ins (a new array), using reciprocity entry by entry where needed."""
+def _run(idx: np.ndarray) -> "slice | None":
+    """``idx`` as a slice when it is a run of consecutive integers."""
+    if idx.size and np.array_equal(idx, np.arange(idx[0], idx[0] + idx.size)):
+        return slice(int(idx[0]), int(idx[0]) + idx.size)
+    return None
+
+
+def fetch(
+    name: str, frf: FRF, outs: Sequence[Dof], ins: Sequence[Dof], need: str = "", view: bool = False
+) -> np.ndarray:
+    """Block of ``frf`` on outs × ins, using reciprocity entry by entry where needed.
+
+    A new array; with ``view=True`` a read-only view of ``frf.values`` (or of
+    its transpose) when the block is one contiguous rectangle there, so that
+    nothing is copied.
+    """
     index, missing = reciprocal_index(frf, outs, ins)
     if missing is not None:
         o, i = missing
@@ -158,7 +202,15 @@ def fetch(name: str, frf: FRF, outs: Sequence[Dof], ins: Sequence[Dof], need: st
             f"{name} has no FRF between {o} and {i}{hint}; it has outputs "
             f"{' '.join(map(str, frf.outputs))} and inputs {' '.join(map(str, frf.inputs))}"
         )
-    return frf.values[:, index[0], index[1]]
+    rows, cols = index
+    if view and rows.size:
+        for r, c, flip in ((rows, cols, False), (cols.T, rows.T, True)):  # direct, or all by reciprocity
+            if (r == r[:, :1]).all() and (c == c[:1, :]).all():
+                rs, cs = _run(r[:, 0]), _run(c[0, :])
+                if rs is not None and cs is not None:
+                    block = frf.values[:, rs, cs]
+                    return np.swapaxes(block, 1, 2) if flip else block
+    return frf.values[:, rows, cols]
 
 
 def fill_bad_lines(values: np.ndarray, bad: np.ndarray, freq: np.ndarray, what: str) -> np.ndarray:

@@ -1,6 +1,15 @@
 """Batched linear algebra for identification: regularised pseudo-inverses, smoothing.
 
 All functions take frequency-first stacks ``(n_freq, m, n)``.
+
+Least squares with model matrices (:func:`equilibrated_pinv`): per line, one
+small Hermitian eigenvalue problem of the equilibrated Gram matrix gives the
+condition number, and the pseudo-inverse follows from the Gram matrix by a
+solve (the normal equations) where that condition number is small enough for
+their round-off (``eps·cond²``) to stay below ``2e-10``; the other lines go
+through one SVD, reused for the pseudo-inverse and the condition number.
+Block-diagonal model matrices (each measured DOF sees only its own body's
+contacts) are handled block by block.
 """
 
 from __future__ import annotations
@@ -11,7 +20,7 @@ import numpy as np
 
 from jointdb.errors import InputError
 
-__all__ = ["Regularisation", "pinv", "condition", "savgol_smooth"]
+__all__ = ["Regularisation", "pinv", "condition", "pinv_condition", "equilibrated_pinv", "inverse", "frobenius", "savgol_smooth"]
 
 
 @dataclass(frozen=True)
@@ -57,9 +66,21 @@ class Regularisation:
         raise InputError(f"cannot read a regularisation from {value!r}; use e.g. 'tikhonov:1e-3' or 'tsvd:1e-4'")
 
 
+#: Lines whose equilibrated model matrix has a condition number below this are solved
+#: through the normal equations (relative round-off ~ eps·cond² <= 2e-10); others by SVD.
+NORMAL_EQUATIONS_MAX_COND = 1e3
+
+
 def pinv(a: np.ndarray, reg: Regularisation = Regularisation()) -> np.ndarray:
     """Batched (regularised) pseudo-inverse of ``a`` with shape ``(n_freq, m, n)`` → ``(n_freq, n, m)``."""
+    return pinv_condition(a, reg)[0]
+
+
+def pinv_condition(a: np.ndarray, reg: Regularisation = Regularisation()) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`pinv` and :func:`condition` of ``a`` from one batched SVD: ``((n_freq, n, m), (n_freq,))``."""
     u, s, vh = np.linalg.svd(a, full_matrices=False)
+    with np.errstate(divide="ignore"):
+        cond = np.where(s[:, -1] > 0, s[:, 0] / np.where(s[:, -1] > 0, s[:, -1], 1.0), np.inf)
     smax = s[:, :1]
     if reg.method == "tikhonov" and reg.rel > 0:
         mu = reg.rel * smax
@@ -69,11 +90,144 @@ def pinv(a: np.ndarray, reg: Regularisation = Regularisation()) -> np.ndarray:
         tol = np.maximum(tol, np.finfo(float).eps * max(a.shape[1:]) * smax)
         with np.errstate(divide="ignore"):
             inv_s = np.where(s > tol, 1.0 / np.where(s > 0, s, 1.0), 0.0)
-    return np.conj(np.swapaxes(vh, 1, 2)) @ (inv_s[:, :, None] * np.conj(np.swapaxes(u, 1, 2)))
+    return np.conj(np.swapaxes(vh, 1, 2)) @ (inv_s[:, :, None] * np.conj(np.swapaxes(u, 1, 2))), cond
+
+
+def equilibrated_pinv(
+    blocks: "list[np.ndarray]", reg: Regularisation = Regularisation(), wide: bool = False
+) -> tuple[list[np.ndarray], np.ndarray]:
+    """Pseudo-inverse of a block-diagonal model matrix through its equilibrated form.
+
+    The matrix is ``a = diag(a_1, a_2, ...)`` (e.g. measured DOFs on each body
+    against that body's contact DOFs). Tall (``wide=False``): its columns are
+    scaled to unit norm per line, ``a = a_s · diag(scale)``; wide: its rows,
+    ``a = diag(scale) · a_s``. The scaling keeps mixed units (translations,
+    rotations) from inflating the condition number and makes the
+    regularisation threshold unit-free. Returns the diagonal blocks of
+    ``diag(1/scale) · pinv(a_s)`` (tall) or ``pinv(a_s) · diag(1/scale)``
+    (wide): ``pinv(a)`` itself when nothing is regularised or truncated.
+
+    Parameters
+    ----------
+    blocks
+        The diagonal blocks ``(n_freq, m_k, n_k)``; ``m_k >= n_k`` (tall) or
+        ``m_k <= n_k`` (wide) for a full-rank problem.
+    reg
+        Regularisation of ``pinv(a_s)`` (thresholds relative to the largest
+        singular value of the whole ``a_s``).
+    wide
+        Whether the matrix has more columns than rows (rows are equilibrated).
+
+    Returns
+    -------
+    pinvs : list of ndarray ``(n_freq, n_k, m_k)``
+        Diagonal blocks of the pseudo-inverse (it is block diagonal too).
+    cond : ndarray ``(n_freq,)``
+        2-norm condition number of the whole ``a_s`` (inf when rank deficient).
+
+    Notes
+    -----
+    Where ``cond < NORMAL_EQUATIONS_MAX_COND`` (and no singular value is
+    truncated) each block is inverted on its own: ``inv(a_s)`` for a square
+    block, else through the normal equations with the Gram matrix
+    ``G_s = a_sᴴ a_s`` (tall) or ``a_s a_sᴴ`` (wide):
+    ``pinv(a_s) = (G_s + μ²I)⁻¹ a_sᴴ`` or ``a_sᴴ (G_s + μ²I)⁻¹``. The
+    eigenvalues of the Gram matrices give the condition number (the singular
+    values of a block-diagonal matrix are those of its blocks), with relative
+    round-off ~ eps·cond², below 2e-10 there. Elsewhere one SVD of the whole
+    ``a_s`` gives both, as :func:`pinv_condition`.
+    """
+    nf = blocks[0].shape[0]
+    lam_max = np.zeros(nf)
+    lam_min = np.full(nf, np.inf)
+    parts = []
+    for ab in blocks:
+        abh = np.conj(np.swapaxes(ab, 1, 2))
+        gram = ab @ abh if wide else abh @ ab  # its diagonal holds the squared row/column norms
+        sb = np.sqrt(np.einsum("fii->fi", gram).real)
+        sb = np.where(sb > 0, sb, 1.0)
+        gram /= sb[:, :, None] * sb[:, None, :]  # Gram matrix of the equilibrated block
+        if (ab.shape[2] if wide else ab.shape[1]) < (ab.shape[1] if wide else ab.shape[2]):
+            lam_min[:] = 0.0  # fewer equations than unknowns: rank deficient at every line
+        else:
+            lam = np.linalg.eigvalsh(gram)
+            lam_max = np.maximum(lam_max, lam[:, -1])
+            lam_min = np.minimum(lam_min, lam[:, 0])
+        parts.append((ab, abh, sb, gram))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        cond = np.where(lam_min > 0, np.sqrt(lam_max / np.where(lam_min > 0, lam_min, 1.0)), np.inf)
+    fast = cond < NORMAL_EQUATIONS_MAX_COND
+    if reg.method == "tsvd" and reg.rel > 0:
+        fast &= cond * reg.rel < 1.0  # no singular value below the truncation threshold
+    tikhonov = reg.method == "tikhonov" and reg.rel > 0
+    out = []
+    for ab, abh, sb, gram in parts:
+        n = gram.shape[1]
+        if not fast.any():
+            out.append(np.zeros(abh.shape, dtype=complex))
+            continue
+        if ab.shape[1] == ab.shape[2] and not tikhonov:  # square: a solve, no normal equations
+            a_s = ab / (sb[:, :, None] if wide else sb[:, None, :])
+            a_s[~fast] = np.eye(n)  # those lines are solved by SVD below
+            x = np.linalg.inv(a_s)
+            out.append(x / (sb[:, None, :] if wide else sb[:, :, None]))
+            continue
+        if tikhonov:
+            gram = gram + (reg.rel**2 * lam_max)[:, None, None] * np.eye(n)
+        gram[~fast] = np.eye(n)  # those lines are solved by SVD below
+        gi = np.linalg.inv(gram) / (sb[:, :, None] * sb[:, None, :])  # S⁻¹ G_s⁻¹ S⁻¹
+        out.append(abh @ gi if wide else gi @ abh)
+    slow = np.flatnonzero(~fast)
+    if slow.size:
+        rows = np.cumsum([0] + [ab.shape[1] for ab in blocks])
+        cols = np.cumsum([0] + [ab.shape[2] for ab in blocks])
+        whole = np.zeros((slow.size, rows[-1], cols[-1]), dtype=complex)
+        scale = np.ones((slow.size, rows[-1] if wide else cols[-1]))
+        for k, (ab, _, sb, _) in enumerate(parts):
+            whole[:, rows[k] : rows[k + 1], cols[k] : cols[k + 1]] = ab[slow]
+            span = slice(rows[k], rows[k + 1]) if wide else slice(cols[k], cols[k + 1])
+            scale[:, span] = sb[slow]
+        if wide:
+            ps, cond[slow] = pinv_condition(whole / scale[:, :, None], reg)
+            ps /= scale[:, None, :]
+        else:
+            ps, cond[slow] = pinv_condition(whole / scale[:, None, :], reg)
+            ps /= scale[:, :, None]
+        for k, pk in enumerate(out):
+            pk[slow] = ps[:, cols[k] : cols[k + 1], rows[k] : rows[k + 1]]
+    return out, cond
+
+
+def frobenius(x: np.ndarray) -> np.ndarray:
+    """``‖x‖_F`` per line of a complex stack ``(n_freq, m, n)``, any strides (no copy, no temporary)."""
+    return np.sqrt(np.einsum("fij,fij->f", x.real, x.real) + np.einsum("fij,fij->f", x.imag, x.imag))
+
+
+def inverse(p: np.ndarray) -> np.ndarray:
+    """Batched inverse of square ``(n_freq, n, n)``; the SVD pseudo-inverse on numerically singular lines.
+
+    ``inv`` and ``pinv`` agree to round-off unless ``cond₂ > 1/(n·eps)``, where
+    ``pinv`` drops singular values. ``‖p‖_F‖p⁻¹‖_F >= cond₂`` flags those
+    lines (with a factor 100 to spare), which are then pseudo-inverted.
+    """
+    n = p.shape[-1]
+    try:
+        x = np.linalg.inv(p)
+        with np.errstate(over="ignore", invalid="ignore"):
+            est = frobenius(p) * frobenius(x)
+        bad = ~(est < 0.01 / (n * np.finfo(float).eps))  # also NaN
+    except np.linalg.LinAlgError:  # exactly singular at some line
+        x = np.empty_like(p)
+        bad = np.ones(p.shape[0], dtype=bool)
+    if bad.any():
+        x[bad] = pinv(p[bad])
+    return x
 
 
 def condition(a: np.ndarray) -> np.ndarray:
     """2-norm condition number per line, ``(n_freq,)`` (inf for rank deficiency)."""
+    if a.shape[0] == 0:
+        return np.zeros(0)
     s = np.linalg.svd(a, compute_uv=False)
     with np.errstate(divide="ignore"):
         return np.where(s[:, -1] > 0, s[:, 0] / np.where(s[:, -1] > 0, s[:, -1], 1.0), np.inf)

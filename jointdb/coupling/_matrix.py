@@ -1,0 +1,209 @@
+"""Full joint matrix with inertia by inverse receptance coupling (theory.md §2c, thesis ch. 6).
+
+Computed block by block: a DOF measured on body A sees the joint only through
+A's contact DOFs, so ``H_IC = diag(H_{I_a C_a}, H_{I_b C_b})`` and
+``H_CI = diag(H_{C_a I_a}, H_{C_b I_b})`` (after ordering the measured DOFs by
+body). Their pseudo-inverses are block diagonal too, and ``P = H_IC⁺ D H_CI⁺``
+is formed from the four blocks ``P_xy = H_{I_x C_x}⁺ D_xy H_{C_y I_y}⁺``; the
+zero blocks are never stored or multiplied.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+
+import numpy as np
+
+from jointdb.coupling._common import IdentificationResult, LazyExtra, as_receptance, fetch, same_grid
+from jointdb.coupling._linalg import Regularisation, condition, frobenius, inverse, savgol_smooth
+from jointdb.coupling._multi import _pinv_pair, _sym
+from jointdb.errors import InputError, NumericalError
+from jointdb.frf import FRF, Dof, Quantity, dofs
+
+__all__ = ["identify_joint_matrix"]
+
+
+def _measured_blocks(
+    G: FRF, meas: "list[list[Dof]]", smoothing: int | None, order: int, symmetrize: bool
+) -> dict[tuple[int, int], np.ndarray]:
+    """Blocks ``G[I_x, I_y]`` of the measured assembly FRFs (smoothed, symmetrised as asked)."""
+    sides = [k for k, m in enumerate(meas) if m]
+    g = {}
+    for x in sides:
+        for y in sides:
+            blk = fetch("assembly", G, meas[x], meas[y], "the measured DOFs, directly or by reciprocity", view=True)
+            g[x, y] = savgol_smooth(blk, int(smoothing), order) if smoothing else blk
+    if symmetrize:
+        for x in sides:
+            for y in sides:
+                if x < y:
+                    g[x, y] = 0.5 * (g[x, y] + np.swapaxes(g[y, x], 1, 2))
+                    g[y, x] = np.swapaxes(g[x, y], 1, 2)
+                elif x == y:
+                    g[x, x] = _sym(g[x, x])
+    return g
+
+
+def identify_joint_matrix(
+    assembly: FRF,
+    substructures: Mapping[str, FRF],
+    measured: Sequence[tuple[str, "Dof | str"]],
+    a: str,
+    a_dofs: Sequence["Dof | str"],
+    b: str,
+    b_dofs: Sequence["Dof | str"],
+    *,
+    regularisation: "Regularisation | str | None" = None,
+    smoothing: int | None = None,
+    smoothing_order: int = 4,
+    symmetrize: bool = True,
+    condition_limit: float = 1e8,
+) -> IdentificationResult:
+    """Identify the full receptance matrix of a joint with inertia (theory.md §2c, thesis eq. 6.1–6.15).
+
+    With the joint a body ``J`` rigidly attached to A's ``a_dofs`` and B's
+    ``b_dofs`` (``C = [a_dofs; b_dofs]``, nc DOFs) and L measured DOFs ``I``
+    on A and B: ``H_IC P H_CI = D = H_II − G_II`` with
+    ``P = (H_CC + H^J)⁻¹``; least squares ``P = H_IC⁺ D H_CI⁺`` (L ≥ nc), then
+    ``H^J = P⁻¹ − H_CC``.
+
+    Parameters
+    ----------
+    assembly
+        Measured assembly receptances on the L measured DOFs (labelled by the
+        substructures' DOF labels, so these must be distinct between A and B).
+    substructures
+        Mapping with (at least) ``a`` and ``b``: free receptances over their
+        measured and contact DOFs (incl. rotations at the contacts).
+    measured
+        ``(name, Dof)`` pairs of the L measured DOFs, on ``a`` or ``b``.
+    a_dofs, b_dofs
+        Contact DOFs (e.g. all six at one node on each side); nc = total.
+    regularisation
+        For the pseudo-inverses of ``H_IC`` and ``H_CI`` (``"tikhonov:1e-3"``, ``"tsvd:1e-4"``).
+    smoothing, smoothing_order, symmetrize
+        As in :func:`identify_n_point_joints`.
+
+    Returns
+    -------
+    IdentificationResult
+        ``joint``: the joint body's free receptance over ``a_dofs + b_dofs``
+        (use ``result.joint_substructure()`` in :func:`couple`);
+        ``condition``: cond(H_IC)·cond(H_CI) per line (the Kronecker system's
+        condition number, after column/row equilibration); ``residual``: the
+        measured FRFs re-coupled with the identified joint,
+        ``‖H_II − H_IC (H_CC + H^J)⁻¹ H_CI − G_II‖ / ‖G_II‖``;
+        ``extra["condition_p"]``: cond(P) (computed when first read).
+
+    Raises
+    ------
+    InputError
+        L < nc, unknown names or DOFs, label clashes, grid mismatch.
+    NumericalError
+        If ``H_IC`` is singular at every line (the measured DOFs do not
+        determine the joint), or the identified joint is not finite.
+    """
+    if a not in substructures or b not in substructures:
+        raise InputError(f"substructures must contain {a!r} and {b!r} (have: {', '.join(substructures)})")
+    ad, bd = dofs(a_dofs), dofs(b_dofs)
+    if set(ad) & set(bd):
+        raise InputError(
+            f"contact DOF labels on {a!r} and {b!r} overlap ({', '.join(map(str, set(ad) & set(bd)))}); "
+            "use distinct node numbers on the two bodies"
+        )
+    pairs = [(str(n), Dof.parse(d)) for n, d in measured]
+    for name, _ in pairs:
+        if name not in (a, b):
+            raise InputError(f"measured DOF on {name!r}: only {a!r} and {b!r} take part in this joint")
+    labels = [d for _, d in pairs]
+    if len(set(labels)) != len(labels):
+        raise InputError("measured DOF labels must be distinct between the two bodies")
+    nc = len(ad) + len(bd)
+    L = len(pairs)
+    if L < nc:
+        raise InputError(f"{L} measured DOFs cannot identify a {nc}×{nc} joint matrix; measure at least {nc}")
+    reg = Regularisation.parse(regularisation)
+    G = as_receptance("assembly", assembly)
+    A = as_receptance(f"substructure {a!r}", substructures[a])
+    B = as_receptance(f"substructure {b!r}", substructures[b])
+    freq = same_grid({"assembly": G, f"substructure {a!r}": A, f"substructure {b!r}": B})
+    nf = freq.size
+
+    # Per body x: measured DOFs I_x, contacts C_x, and one gather of its receptance over I_x + C_x.
+    meas = [[d for n, d in pairs if n == a], [d for n, d in pairs if n == b]]
+    contacts = [list(ad), list(bd)]
+    h_ii, h_ic, h_ci, h_cc = [], [], [], []
+    for x, (name, sub) in enumerate(((a, A), (b, B))):
+        m, lab = len(meas[x]), meas[x] + contacts[x]
+        blk = fetch(f"substructure {name!r}", sub, lab, lab, "measured and contact DOFs, incl. rotations", view=True)
+        h_ii.append(blk[:, :m, :m])
+        h_ic.append(blk[:, :m, m:])
+        h_ci.append(blk[:, m:, :m])
+        h_cc.append(blk[:, m:, m:])
+    g = _measured_blocks(G, meas, smoothing, smoothing_order, symmetrize)
+    # D = H_II − G_II: its off-diagonal blocks are −G_xy (the sign is applied to the small products)
+    d = {(x, y): (h_ii[x] - g[x, y] if x == y else g[x, y]) for x, y in g}
+
+    left, right, cond_ic, cond_ci = _pinv_pair(h_ic, h_ci, reg)
+    cond = cond_ic * cond_ci
+    if np.all(cond > condition_limit):
+        raise NumericalError(
+            f"H_IC (measured DOFs × contact DOFs) is singular at every line (condition > {condition_limit:g}); "
+            f"the {L} measured DOFs do not determine the {nc}×{nc} joint — measure other DOFs"
+        )
+    span = [slice(0, len(ad)), slice(len(ad), nc)]
+    p = np.zeros((nf, nc, nc), dtype=complex)
+    for (x, y), dxy in d.items():
+        pxy = p[:, span[x], span[y]]
+        np.matmul(left[x] @ dxy, right[y], out=pxy)
+        if x != y:
+            np.negative(pxy, out=pxy)
+    if symmetrize:
+        p = _sym(p)
+    hj = inverse(p)
+    for x in (0, 1):
+        hj[:, span[x], span[x]] -= h_cc[x]
+    if symmetrize:
+        hj = _sym(hj)
+    if not np.all(np.isfinite(hj)):
+        raise NumericalError("the identified joint matrix is not finite at some line; check the measured FRFs")
+
+    # Re-coupled measurement: G_rec − G = D − H_IC (H_CC + H^J)⁻¹ H_CI, block by block. H_CC + H^J
+    # is the inverse of P exactly without symmetrisation and, with it, when H_CC is symmetric:
+    # then (H_CC + H^J)⁻¹ = P to round-off and no further inverse is needed.
+    if symmetrize and not all(np.array_equal(c, np.swapaxes(c, 1, 2)) for c in h_cc):
+        joined = hj.copy()
+        for x in (0, 1):
+            joined[:, span[x], span[x]] += h_cc[x]
+        q = np.linalg.inv(joined)
+    else:
+        q = p
+    num = np.zeros(nf)
+    den = np.zeros(nf)
+    for (x, y), dxy in d.items():
+        rec = h_ic[x] @ q[:, span[x], span[y]] @ h_ci[y]
+        num += frobenius(dxy - rec if x == y else dxy + rec) ** 2  # off the diagonal D_xy = −G_xy
+        den += frobenius(g[x, y]) ** 2
+    residual = np.sqrt(num) / np.maximum(np.sqrt(den), 1e-300)
+
+    ill = cond > condition_limit
+    return IdentificationResult(
+        joint=FRF._trusted(freq, hj, ad + bd, ad + bd, Quantity.RECEPTANCE),
+        model="matrix",
+        residual=residual,
+        condition=cond,
+        unreliable=ill,
+        flags={"ill_conditioned": ill},
+        extra=LazyExtra({"n_measured": L, "nc": nc}, {"condition_p": lambda: condition(p)}),
+        settings={
+            "measured": [f"{n}:{d}" for n, d in pairs],
+            "a": a,
+            "a_dofs": [str(x) for x in ad],
+            "b": b,
+            "b_dofs": [str(x) for x in bd],
+            "regularisation": f"{reg.method}:{reg.rel:g}",
+            "smoothing": smoothing,
+            "smoothing_order": smoothing_order,
+            "symmetrize": symmetrize,
+        },
+    )
