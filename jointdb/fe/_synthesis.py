@@ -198,10 +198,7 @@ def frf_direct(
     """
     f = _check_freq(freq_hz)
     free = ~matrices.fixed
-    Kc = (matrices.K + 1j * matrices.K_loss)[np.ix_(free, free)]
-    Mf = matrices.M[np.ix_(free, free)]
-    Cf = matrices.C[np.ix_(free, free)]
-    nf = Kc.shape[0]
+    nf = int(free.sum())
     if f.min() == 0.0 and rigid_body_count(matrices) > 0:
         raise InputError(
             "the model has rigid-body modes (it is not fully supported), so its receptance at 0 Hz is "
@@ -221,6 +218,9 @@ def frf_direct(
             return out
         if algorithm == "spectral":
             raise InputError("the spectral algorithm needs classical damping (no dampers in supports); use 'lu'")
+    Kc = (matrices.K + 1j * matrices.K_loss)[np.ix_(free, free)]
+    Mf = matrices.M[np.ix_(free, free)]
+    Cf = matrices.C[np.ix_(free, free)]
     rhs = np.zeros((nf, int(ok.sum())), dtype=complex)
     rhs[pos[ok], np.arange(rhs.shape[1])] = 1.0
     out = np.zeros((f.size, m, m), dtype=complex)
@@ -329,6 +329,13 @@ def frf_modal(matrices, freq_hz, dof_index, n_modes: int | None = None, residual
     return out
 
 
+def _project(a, free, phi) -> np.ndarray:
+    """``φᵀ A φ`` over the free DOFs; a zero matrix (no such damping) costs no product."""
+    if not a.any():
+        return np.zeros((phi.shape[1], phi.shape[1]))
+    return phi.T @ (a[np.ix_(free, free)] @ phi)
+
+
 def _modal_sum(matrices, f, lam, phi, n_rb, pos, ok, coupled: str = "solve"):
     """Σ_r φ_r φ_rᵀ / (ω_r² + iκ_r + iωc_r − ω²) over the given modes, ``(n_freq, m, m)``.
 
@@ -338,10 +345,7 @@ def _modal_sum(matrices, f, lam, phi, n_rb, pos, ok, coupled: str = "solve"):
     """
     free = ~matrices.fixed
     m = pos.size
-    Cf = matrices.C[np.ix_(free, free)]
-    Lf = matrices.K_loss[np.ix_(free, free)]
-    Cm = phi.T @ Cf @ phi
-    Lm = phi.T @ Lf @ phi
+    Cm, Lm = (_project(a, free, phi) for a in (matrices.C, matrices.K_loss))
     # rigid-body modes strain nothing: no hysteretic loss (drop round-off), and no
     # negative modal damping from round-off either
     Lm[:n_rb, :] = 0.0
@@ -355,11 +359,23 @@ def _modal_sum(matrices, f, lam, phi, n_rb, pos, ok, coupled: str = "solve"):
     diag_scale = np.abs(np.diag(Cm)).max(initial=0.0) + np.abs(np.diag(Lm)).max(initial=0.0)
     classical = off == 0.0 or off <= 1e-8 * diag_scale
     if classical:
-        den = lam[None, :] + 1j * np.diag(Lm)[None, :] + 1j * w[:, None] * np.diag(Cm)[None, :] - w[:, None] ** 2
-        if np.any(den == 0):
-            k = int(np.argwhere(den == 0)[0, 0])
+        # den_fr = ω_r² − ω_f² + i(κ_r + ω_f c_r), written part by part (no complex temporaries)
+        den = np.empty((f.size, lam.size), dtype=complex)
+        np.subtract(lam[None, :], (w**2)[:, None], out=den.real)
+        np.multiply(w[:, None], np.diag(Cm)[None, :], out=den.imag)
+        den.imag += np.diag(Lm)[None, :]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            np.reciprocal(den, out=den)
+        # Σ_r φ_ir φ_jr / den_r for every line at once: one matrix product of the (n_freq × modes)
+        # modal factors with the (modes × pairs i <= j) products of mode-shape entries (symmetric)
+        iu, ju = np.triu_indices(m)
+        sym = (den @ (phi_io[iu] * phi_io[ju]).T.astype(complex))
+        out = np.empty((f.size, m, m), dtype=complex)
+        out[:, iu, ju] = sym
+        out[:, ju, iu] = sym
+        if not np.all(np.isfinite(sym)):  # 1/0: a denominator vanished
+            k = int(np.argwhere(~np.isfinite(sym))[0, 0])
             raise NumericalError(f"an undamped resonance lies exactly on the line {f[k]:g} Hz; add damping")
-        out = np.einsum("ir,fr,jr->fij", phi_io, 1.0 / den, phi_io)
     elif coupled == "none":
         return None, Lm, False
     else:

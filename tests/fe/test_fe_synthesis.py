@@ -278,3 +278,51 @@ def test_receptances_are_reciprocal_and_passive(model, freq, method):
     assert np.all(diag_imag <= 1e-8 * scale[:, :, 0])
     eig = np.linalg.eigvalsh(0.5 * (h.imag + np.swapaxes(h.imag, 1, 2)))
     assert np.all(eig <= 1e-8 * scale[:, 0])
+
+
+@pytest.mark.parametrize(
+    "ingredients",
+    [(Clamp(0.0), ModalDamping(0.02)), (Clamp(0.0), HystereticDamping(0.01), RayleighDamping(20.0, 0.0)),
+     (ModalDamping(0.01),)],
+    ids=["clamped-modal", "clamped-hysteretic-mass-proportional", "free-free"],
+)
+def test_spectral_sum_equals_the_plain_modal_sum(ingredients):
+    """The spectral path (one product of 1/den with the mode-shape pair products, symmetric pairs
+    only) against Σ_r φ_ir φ_jr / (ω_r² + iκ_r + iωc_r − ω²) written with einsum on the same
+    eigen-solution: the same terms summed in another order, so equal to m_modes·eps·Σ_r|term|."""
+    from jointdb.fe._synthesis import eigen_free
+
+    model = shaft(ingredients)
+    mats = model.assemble()
+    freq = np.linspace(5.0, 9000.0, 211)
+    idx = [0, 1, 10, 11, 24, 25]  # includes the clamped root DOFs (zero rows) for the clamped models
+    got = frf_direct(mats, freq, idx, algorithm="spectral")
+    lam, phi, n_rb = eigen_free(mats, None)
+    free = ~mats.fixed
+    c = np.diag(phi.T @ mats.C[np.ix_(free, free)] @ phi).clip(0.0)
+    kappa = np.diag(phi.T @ mats.K_loss[np.ix_(free, free)] @ phi).clip(0.0)
+    kappa[:n_rb] = 0.0
+    pos = np.cumsum(free)[idx] - 1
+    phi_io = np.where(free[idx][:, None], phi[pos], 0.0)
+    w = 2 * np.pi * freq[:, None]
+    terms = 1.0 / (lam[None, :] + 1j * kappa[None, :] + 1j * w * c[None, :] - w**2)
+    want = np.einsum("ir,fr,jr->fij", phi_io, terms, phi_io)
+    bound = lam.size * np.finfo(float).eps * np.einsum("ir,fr,jr->fij", np.abs(phi_io), np.abs(terms), np.abs(phi_io))
+    assert np.all(np.abs(got - want) <= 4 * bound + 1e-300)
+    assert np.array_equal(got, np.swapaxes(got, 1, 2))  # filled from the pairs i <= j
+
+
+def test_spectral_sum_refuses_a_line_exactly_on_an_undamped_resonance():
+    from jointdb.fe import FEMatrices
+    from jointdb.frf import Dof
+
+    lam = (2 * np.pi * 50.0) ** 2  # two 1 kg masses on springs to ground: 50 Hz twice, no damping
+    mats = FEMatrices(K=lam * np.eye(2), M=np.eye(2), C=np.zeros((2, 2)), K_loss=np.zeros((2, 2)),
+                      dof_labels=(Dof(0, "x"), Dof(1, "x")), node_positions=np.array([0.0, 1.0]),
+                      fixed=np.zeros(2, bool))
+    from jointdb.errors import NumericalError
+
+    with pytest.raises(NumericalError, match="exactly on the line 50 Hz"):
+        frf_direct(mats, np.array([10.0, 50.0, 90.0]), [0], algorithm="spectral")
+    ok = frf_direct(mats, np.array([10.0, 49.0]), [0], algorithm="spectral")
+    assert np.allclose(ok[:, 0, 0], 1.0 / (lam - (2 * np.pi * np.array([10.0, 49.0])) ** 2), rtol=1e-14)
