@@ -2,12 +2,19 @@
 
 Each command group lives in its own module (``_models``, ``_coupling``,
 ``_store``, ``_db``, ``_stability``, ``_predict``, ``_diagnose``, ``_demo``) and
-registers itself on the one Typer app here; this keeps every file readable in
-one sitting (design.md puts the CLI in one ``cli.py``; we split it along the
-command groups for that reason). Output goes through :mod:`jointdb._output`.
+registers itself on a Typer app; this keeps every file readable in one sitting
+(design.md puts the CLI in one ``cli.py``; we split it along the command groups
+for that reason). Output goes through :mod:`jointdb._output`.
 
 User errors (:class:`jointdb.errors.JointdbError`) become one line on stderr
 and the error class's exit code, with no traceback.
+
+Start-up: ``jointdb <command>`` imports only the module that registers that
+command, and ``jointdb --help`` none (it lists :data:`COMMANDS`, whose
+summaries a test keeps equal to the commands' own help). Help and usage errors
+are formatted by Click without Rich: Typer's Rich help imports a Markdown
+renderer that costs as much as numpy. :data:`app` — every command registered —
+is built on first use, for running the CLI in-process (tests, other programs).
 """
 
 from __future__ import annotations
@@ -18,29 +25,88 @@ import typer
 
 from jointdb.errors import JointdbError
 
-app = typer.Typer(
-    name="jointdb",
-    help="Identify, catalogue and reuse machine-tool joint dynamics.",
-    no_args_is_help=True,
-    add_completion=False,
-    pretty_exceptions_enable=False,
-)
+#: The command modules, in the order they register (which is the order of ``jointdb --help``).
+MODULES = ("_models", "_coupling", "_store", "_db", "_predict", "_stability", "_diagnose", "_demo")
+
+#: Every top-level command as ``jointdb --help`` lists it: the module that registers it and
+#: the first paragraph of its help.
+COMMANDS: dict[str, tuple[str, str]] = {
+    "modes": ("_models", "Natural frequencies of a beam model (undamped), lowest first."),
+    "frf": ("_models", "FRFs between named points of a beam model, to UFF58 / HDF5 / CSV and a Bode plot."),
+    "identify": (
+        "_coupling",
+        "Identify a joint (IRC) from a campaign's measured assembly FRFs and substructure models.",
+    ),
+    "couple": (
+        "_coupling",
+        "Couple a campaign's substructures through a joint (RC) and compare with its measurements.",
+    ),
+    "catalogue": ("_store", "Catalogue an identified joint FRF as a new immutable version."),
+    "query": ("_store", "Find the k catalogued joints closest to given conditions (distance per condition)."),
+    "predict": ("_predict", "Predict the tool-tip FRF of a tool / holder / spindle stack (three-component RC)."),
+    "modal-fit": ("_stability", "Fit modes to an FRF (pLSCF poles + LSFD residues) and report the fit quality."),
+    "lobes": ("_stability", "Stability lobes from a tool-tip FRF (turning: Tlusty; milling: ZOA or SD)."),
+    "diagnose": ("_diagnose", "Locate where a model and recordings disagree, name the missing physics, refit."),
+    "diagnose-bench": ("_diagnose", "Run the concealed-effect benchmark: generate, diagnose, score per effect."),
+    "demo": ("_demo", "Run the main job end to end on the bundled data (SQLite, bundled fixtures)."),
+    "joints": ("_store", "List, inspect, label, deprecate, diff, export and import catalogued joints."),
+    "keys": ("_store", "Ed25519 keys to sign exported bundles and verify imported ones."),
+    "db": ("_db", "Database administration: migrations, integrity check, garbage collection."),
+}
 
 
-@app.callback()
-def _root() -> None:
-    """jointdb: joint identification (IRC), a versioned joint database, tool-tip
-    prediction (RC), chatter stability lobes and model/measurement diagnosis."""
+def _new_app() -> typer.Typer:
+    app_ = typer.Typer(
+        name="jointdb",
+        help="Identify, catalogue and reuse machine-tool joint dynamics.",
+        no_args_is_help=True,
+        add_completion=False,
+        pretty_exceptions_enable=False,
+        rich_markup_mode=None,  # plain Click help: no Rich/Markdown import at start-up
+    )
+
+    @app_.callback()
+    def _root() -> None:
+        """jointdb: joint identification (IRC), a versioned joint database, tool-tip
+        prediction (RC), chatter stability lobes and model/measurement diagnosis."""
+
+    return app_
 
 
-def _register_all() -> None:
-    from jointdb.cli import _coupling, _db, _demo, _diagnose, _models, _predict, _stability, _store
+def _app_with(modules) -> typer.Typer:
+    """An app with the commands of the given modules registered."""
+    import importlib
 
-    for module in (_models, _coupling, _store, _db, _predict, _stability, _diagnose, _demo):
-        module.register(app)
+    app_ = _new_app()
+    for name in MODULES:
+        if name in modules:
+            importlib.import_module(f"jointdb.cli.{name}").register(app_)
+    return app_
 
 
-_register_all()
+def _summary_app() -> typer.Typer:
+    """The root app for ``jointdb`` / ``jointdb --help``: each command a stub with its summary."""
+    app_ = _new_app()
+    for name, (_, summary) in COMMANDS.items():
+
+        def stub() -> None:
+            pass
+
+        stub.__doc__ = summary
+        app_.command(name)(stub)
+    return app_
+
+
+_full_app: typer.Typer | None = None
+
+
+def __getattr__(name: str):
+    if name == "app":  # every command registered, built once
+        global _full_app
+        if _full_app is None:
+            _full_app = _app_with(MODULES)
+        return _full_app
+    raise AttributeError(f"module 'jointdb.cli' has no attribute {name!r}")
 
 
 def main() -> None:
@@ -50,8 +116,16 @@ def main() -> None:
     itself with exit code 2; :class:`JointdbError` becomes one line on stderr
     and the error class's exit code.
     """
+    args = sys.argv[1:]
+    first = args[0] if args else None
+    if first in COMMANDS:
+        cli = _app_with({COMMANDS[first][0]})
+    elif first is None or (first == "--help" and len(args) == 1):
+        cli = _summary_app()
+    else:  # anything else (an unknown command, ...): the full app, for Click's own messages
+        cli = __getattr__("app")
     try:
-        app()
+        cli()
     except JointdbError as exc:
         sys.stderr.write(f"error: {exc}\n")
         sys.exit(exc.exit_code)

@@ -7,7 +7,6 @@ Harmonic convention ``x = X e^{iωt}`` (theory.md §0): the dynamic stiffness is
 from __future__ import annotations
 
 import numpy as np
-import scipy.linalg
 
 from jointdb.errors import InputError, NumericalError
 
@@ -88,6 +87,8 @@ def eigen_free(matrices, n: int | None, max_value: float | None = None):
     if nf == 0:
         raise InputError("every DOF of the model is fixed; nothing can move")
     n_rb = rigid_body_count(matrices)
+    import scipy.linalg  # deferred: importing jointdb.fe stays cheap (CLI start-up)
+
     kwargs = {}
     if max_value is not None:
         kwargs["subset_by_value"] = (-np.inf, max_value)
