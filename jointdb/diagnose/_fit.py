@@ -60,6 +60,17 @@ class ModelEvaluator:
             H = model.frf(self.freq, points=self.points, directions=self.dirs).values
         return H[:, self.oi][:, :, self.ii]
 
+    def dof_indices(self, model) -> tuple[list[int], list[int]]:
+        """Global DOF indices in ``model``'s mesh of the recorded outputs and inputs."""
+        mesh = model.mesh()
+
+        def dof(point, direction):
+            return mesh.dof(mesh.node_at(model.point(point).position, f"point {point!r}"), direction)
+
+        obs = self.obs
+        return ([dof(p, d) for p, d in zip(obs.out_points, obs.out_dirs)],
+                [dof(p, d) for p, d in zip(obs.in_points, obs.in_dirs)])
+
     def predict(self, nominal, cand=None, values=None) -> np.ndarray:
         """``(n_level, n_freq, n_out, n_in)`` predictions of nominal (+ candidate)."""
         n_lv = self.rec.shape[0]
@@ -73,8 +84,12 @@ class ModelEvaluator:
                 self._cache = self.frf(nominal)
                 self._cache_key = key
             base = self._cache
+        line_by_line = getattr(cand, "receptance_at_level", None)
         for lv in range(n_lv):
-            if cand.per_level or base is None:
+            H_lv = line_by_line(self, nominal, values, lv) if line_by_line is not None else None
+            if H_lv is not None:
+                base = H_lv
+            elif cand.per_level or base is None:
                 base = self.frf(cand.apply(nominal, values, lv))
             H = base
             factor = cand.chain(self.freq, values, lv)

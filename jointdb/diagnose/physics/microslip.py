@@ -18,7 +18,12 @@ softening has happened. When the levels' amplitudes are not known, the law
 cannot be written in them and the stiffness scale and loss are fitted per level
 instead (stiffness scale 1 at the first level).
 
-The slip amplitude each level produced at the joint (relative displacement of
+When the forces are known, the FRF at every line is solved by single-harmonic
+balance with the law applied to the local slip amplitude there (so the joint is
+soft and lossy at a resonance and nearly linear away from it; see
+:mod:`jointdb.diagnose.physics._harmonic`); the law's ``F_slip`` is then the
+force at which the slip at the linear joint's largest response reaches the
+half-softening amplitude. The slip amplitude each level produced at the joint (relative displacement of
 the two sides at the level's first resonance) is reported with ``k(a)`` and
 ``η(a)`` (:meth:`MicroslipJoint.level_table`).
 """
@@ -62,7 +67,63 @@ def _state(law: bool, levels, values, level: int) -> tuple[float, float]:
     return values[f"s_{level + 1}"], values[f"eta_{level + 1}"]
 
 
-class MicroslipContact(InterfaceContact):
+class _LineByLine:
+    """Harmonic balance line by line when the levels' forces are known (see :mod:`._harmonic`)."""
+
+    def _law(self, values, a_unit: float):
+        a_c = values["force_slip"] * a_unit
+
+        def law(a):
+            g = (a / a_c) / (1 + a / a_c)
+            return 1.0 - values["s_max"] * g, values["eta_0"] + values["eta_max"] * g
+        return law
+
+    #: solve line by line (set on the selected candidate for its final refinement; the screening fits use
+    #: the cheaper per-level describing function at the linear peak, :meth:`apply`)
+    line_by_line = False
+
+    def refined(self):
+        """A copy that solves every line by harmonic balance (None when the forces are unknown)."""
+        if not self.law:
+            return None
+        import copy
+
+        c = copy.copy(self)
+        c.line_by_line = True
+        c.name = self.name + "+hb"
+        return c
+
+    def receptance_at_level(self, ev, nominal, values, level):
+        """``(n_freq, n_out, n_in)`` at the evaluator's lines and DOFs, or None to use :meth:`apply`."""
+        if not (self.law and self.line_by_line):
+            return None
+        from jointdb.diagnose.physics._harmonic import harmonic_balance_receptance
+        from jointdb.fe import frf_modal
+
+        key = (id(ev), id(nominal), tuple(sorted((k, values[k]) for k in ("k_x", "k_ry", "k_contact", "insertion",
+                                                                          "eta_0") if k in values)))
+        cached = getattr(self, "_linear_cache", None)
+        if cached is None or cached[0] != key:
+            lin, rows = self._linear(nominal, values)
+            mats = lin.assemble()
+            out_dofs, in_dofs = ev.dof_indices(lin)
+            n_modes = min(ev.n_modes, max(1, lin.mesh().n_dof - 4)) if ev.method == "modal" else None
+            every = list(dict.fromkeys(out_dofs + in_dofs + rows.dofs))
+            H = frf_modal(mats, ev.freq, every, n_modes=n_modes)
+            pos = {d: i for i, d in enumerate(every)}
+            # slip per unit force at the linear joint's worst line sets the scale of the law
+            rel = [np.abs(H[:, pos[a], pos[in_dofs[0]]] - H[:, pos[b], pos[in_dofs[0]]]) * w
+                   for (a, b), w in zip(rows.pairs, rows.weight)]
+            a_unit = max(float(np.max(np.sum(rel, axis=0))), 1e-300)
+            cached = (key, mats, rows, out_dofs, in_dofs, n_modes, H, a_unit)
+            self._linear_cache = cached
+        _, mats, rows, out_dofs, in_dofs, n_modes, H, a_unit = cached
+        return harmonic_balance_receptance(mats, ev.freq, out_dofs, in_dofs, rows, float(self.levels[level]),
+                                           self._law(values, a_unit), values["eta_0"], n_modes=n_modes,
+                                           linear=H)
+
+
+class MicroslipContact(_LineByLine, InterfaceContact):
     """A contact layer over an insertion whose stiffness falls and loss rises with the excitation level."""
 
     family = "softening_joint"
@@ -89,6 +150,29 @@ class MicroslipContact(InterfaceContact):
         v["eta_joint"] = eta
         return super().apply(model, v, level)
 
+    def _linear(self, nominal, values):
+        """The model with the contact at its small-amplitude state, and the contact's relative DOFs."""
+        from jointdb.diagnose.physics._harmonic import JointRows
+        from jointdb.fe import Insertion
+
+        v = dict(values)
+        v["eta_joint"] = values["eta_0"]
+        model = InterfaceContact.apply(self, nominal, v)
+        ins = [i for i in model.ingredients if isinstance(i, Insertion) and not i.rigid][-1]
+        mesh = model.mesh()
+        k = ins.contact.stiffness_per_length
+        radius = 0.5 * ins.outer_diameter
+        pairs, stiff, group, weight = [], [], [], []
+        for g, (inner, host, trib) in enumerate(mesh.contact_pairs(ins)):
+            for t, r in self.planes:
+                for d, w in ((t, 1.0), (r, radius)):
+                    if k.get(d, 0.0) > 0:
+                        pairs.append((mesh.dof(inner, d), mesh.dof(host, d)))
+                        stiff.append(k[d] * trib)
+                        group.append(g)
+                        weight.append(w)
+        return model, JointRows(pairs, stiff, group, weight)
+
     def level_table(self, values, sigmas=None, **_):
         """Per level: level, contact stiffness per length, loss factor."""
         rows = []
@@ -99,7 +183,7 @@ class MicroslipContact(InterfaceContact):
         return rows
 
 
-class MicroslipJoint(InterfaceJoint):
+class MicroslipJoint(_LineByLine, InterfaceJoint):
     """A point joint at a site whose stiffness falls and loss rises with the excitation level."""
 
     family = "softening_joint"
@@ -122,6 +206,24 @@ class MicroslipJoint(InterfaceJoint):
     def apply(self, model, values, level=0):
         s, eta = self.state(values, level)
         return model.with_ingredient(self.joint(values, scale=s, eta=eta))
+
+    def _linear(self, nominal, values):
+        """The model with the joint at its small-amplitude state, and the joint's relative DOFs."""
+        from jointdb.diagnose.physics._harmonic import JointRows
+
+        joint = self.joint(values, scale=1.0, eta=values["eta_0"])
+        model = nominal.with_ingredient(joint)
+        mesh = model.mesh()
+        a, b = mesh.split_nodes(joint)
+        segs = nominal.segments
+        radius = 0.5 * min(segs[self.site.lower].outer_diameter, segs[self.site.upper].outer_diameter)
+        pairs, stiff, weight = [], [], []
+        for t, r in self.planes:
+            for d, w, key in ((t, 1.0, "k_x"), (r, radius, "k_ry")):
+                pairs.append((mesh.dof(a, d), mesh.dof(b, d)))
+                stiff.append(values[key])
+                weight.append(w)
+        return model, JointRows(pairs, stiff, [0] * len(pairs), weight)
 
     def level_table(self, values, sigmas=None, models=None, input_point=None, freq_hz=None):
         """Per level: level, k_x, k_ry, loss factor (and the slip amplitude when ``models`` are given)."""
