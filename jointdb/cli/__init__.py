@@ -109,12 +109,22 @@ def __getattr__(name: str):
     raise AttributeError(f"module 'jointdb.cli' has no attribute {name!r}")
 
 
+def _click_errors():
+    """Click's usage-error, error and abort classes (Typer vendors Click in recent releases)."""
+    try:
+        from click import Abort, ClickException, UsageError
+    except ImportError:
+        from typer import Abort
+        from typer._click.exceptions import ClickException, UsageError
+    return UsageError, ClickException, Abort
+
+
 def main() -> None:
     """Console-script entry point: run the app, mapping jointdb errors to exit codes.
 
-    Usage errors (unknown option, missing argument) are reported by Typer/Click
-    itself with exit code 2; :class:`JointdbError` becomes one line on stderr
-    and the error class's exit code.
+    Usage errors (unknown option, missing argument, a value of the wrong type)
+    become one ``error:`` line on stderr with exit code 2; :class:`JointdbError`
+    becomes one line on stderr and the error class's exit code.
     """
     args = sys.argv[1:]
     first = args[0] if args else None
@@ -124,8 +134,23 @@ def main() -> None:
         cli = _summary_app()
     else:  # anything else (an unknown command, ...): the full app, for Click's own messages
         cli = __getattr__("app")
+    UsageError, ClickException, Abort = _click_errors()
     try:
-        cli()
+        rv = typer.main.get_command(cli).main(args=args, prog_name="jointdb", standalone_mode=False)
     except JointdbError as exc:
         sys.stderr.write(f"error: {exc}\n")
         sys.exit(exc.exit_code)
+    except UsageError as exc:
+        # one line, like every other error: what is wrong and where to look
+        where = exc.ctx.command_path if exc.ctx is not None else "jointdb"
+        text = " ".join(exc.format_message().split())
+        sys.stderr.write(f"error: {text} (see '{where} --help')\n")
+        sys.exit(exc.exit_code)
+    except ClickException as exc:
+        sys.stderr.write(f"error: {exc.format_message()}\n")
+        sys.exit(exc.exit_code)
+    except Abort:
+        sys.stderr.write("error: interrupted\n")
+        sys.exit(130)
+    if isinstance(rv, int) and rv:
+        sys.exit(rv)

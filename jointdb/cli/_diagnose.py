@@ -53,7 +53,9 @@ def _read_recording(path: Path):
     from jointdb.io import read_coherence_uff58, read_frf_uff58
 
     if not path.exists():
-        raise InputError(f"recording {path}: no such file")
+        from jointdb.errors import NotFoundError
+
+        raise NotFoundError(f"recording {path}: no such file")
     try:
         frf = read_frf_uff58(path)
     except InputError:
@@ -190,14 +192,14 @@ def register(app: typer.Typer) -> None:
         written = []
         if out is not None:
             if result.explained and result.augmented and any(a is not nominal for a in result.augmented):
-                if len(result.augmented) == 1:
-                    out.write_text(json.dumps(model_to_dict(result.augmented[0]), indent=2) + "\n", encoding="utf-8")
-                    written.append(str(out))
-                else:
-                    for i, a in enumerate(result.augmented):
-                        p = out.with_name(f"{out.stem}-level{i + 1}{out.suffix}")
-                        p.write_text(json.dumps(model_to_dict(a), indent=2) + "\n", encoding="utf-8")
-                        written.append(str(p))
+                from jointdb.io._atomic import atomic_path
+
+                targets = [out] if len(result.augmented) == 1 else \
+                    [out.with_name(f"{out.stem}-level{i + 1}{out.suffix}") for i in range(len(result.augmented))]
+                for p, a in zip(targets, result.augmented):
+                    with atomic_path(p) as tmp:
+                        tmp.write_text(json.dumps(model_to_dict(a), indent=2) + "\n", encoding="utf-8")
+                    written.append(str(p))
             elif result.explained:
                 message("the explanation is in the measurement chain; the model needs no change: --out not written")
             else:
