@@ -216,6 +216,19 @@ def _chi2(x: np.ndarray, s: np.ndarray) -> tuple[float, float]:
     return c, float(scipy.stats.chi2.sf(c, x.size - 1))
 
 
+#: A tracked mode is a resonance only if every level's local fit has 1e-4 < ζ < MAX_ZETA, lies inside its
+#: band, is determined to 1 % in frequency, and stays within MAX_DRIFT of the lowest level's frequency.
+MAX_ZETA = 0.2
+MAX_DRIFT = 0.10
+
+
+def _credible(f, sf, z, fits, first) -> bool:
+    """True if the per-level local fits describe one resonance (see ``MAX_ZETA``, ``MAX_DRIFT``)."""
+    inside = all(fi.band[0] <= fi.freq_hz <= fi.band[1] for fi in fits)
+    return bool(inside and np.all((z > 1e-4) & (z < MAX_ZETA)) and np.all(sf < 0.01 * f)
+                and np.all(np.abs(f / f[first] - 1) < MAX_DRIFT))
+
+
 def track_modes(freq: np.ndarray, values: np.ndarray, weight: np.ndarray | None,
                 levels: Sequence[float | None], centres: Sequence[float] | None = None, *,
                 band_halfwidths: float = BAND_HALFWIDTHS, min_band: float = MIN_BAND) -> LevelAnalysis:
@@ -293,6 +306,9 @@ def track_modes(freq: np.ndarray, values: np.ndarray, weight: np.ndarray | None,
         sf = np.array([fi.sigma_freq_hz for fi in fits])
         z = np.array([fi.zeta for fi in fits])
         sz = np.array([fi.sigma_zeta for fi in fits])
+        if not _credible(f, sf, z, fits, order[0]):
+            skipped.append(fc)  # no resonance to follow here (a weak local maximum, a tail): not a mode
+            continue
         e = np.unravel_index(int(np.argmax(fits[first].peak_entries)), fits[first].peak_entries.shape)
         peak = np.array([fi.peak_entries[e] for fi in fits])
         amp = peak * np.array([float(v) for v in levels]) if known else peak
