@@ -45,7 +45,7 @@ PLAUSIBILITY_WEIGHT = 4.0
 #: Another explanation within this factor of the best's mismatch is named as a close alternative.
 CLOSE_CALL = 1.25
 #: Evaluations per parameter (+1) of the harmonic-balance refinement of a selected micro-slip joint.
-REFINE_EVALUATIONS = 4
+REFINE_EVALUATIONS = 3
 #: Interface sites at which level-dependent joints are fitted (those of the best linear joint fits).
 LEVEL_SITES = 2
 #: Families of linear joints (a level-dependent joint starts from their fit at the same place).

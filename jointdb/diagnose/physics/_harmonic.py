@@ -26,7 +26,9 @@ import numpy as np
 __all__ = ["JointRows", "harmonic_balance_receptance"]
 
 #: Fixed-point iterations and relaxation of the harmonic balance.
-HB_ITERATIONS = 30
+HB_ITERATIONS = 25
+#: Stop when the stiffness update is below this fraction of the largest small-amplitude stiffness.
+HB_TOL = 1e-4
 HB_RELAX = 0.6
 
 
@@ -112,7 +114,7 @@ def harmonic_balance_receptance(mats, freq_hz, out_dofs, in_dofs, rows: JointRow
             target = rows.stiffness[None] * s * (1 + 1j * eta) - k0[None]
             step = target - dk
             dk = dk + HB_RELAX * step
-            if np.max(np.abs(step)) <= 1e-6 * np.max(np.abs(k0)):
+            if np.max(np.abs(step)) <= HB_TOL * np.max(np.abs(k0)):
                 break
         corr = np.linalg.solve(eye + HbB * dk[:, None, :], hbi[:, :, None])[:, :, 0]
         cols.append(H[:, oi, idx[d_in]] - np.einsum("for,fr->fo", Hob, dk * corr))
