@@ -45,7 +45,8 @@ def test_interface_candidates_put_their_joint_at_the_site_and_into_the_model_fil
     m2 = contact.apply(HOLDER_TOOL, {"k_contact": 5e11, "insertion": 0.03})
     ins = model_to_dict(m2)["insertions"][0]
     assert ins["start"] == pytest.approx(0.055) and ins["end"] == pytest.approx(0.085) and ins["joined_at"] == "end"
-    assert ins["contact"]["stiffness_per_length"] == {"x": 5e11}
+    # across: k'; against relative rotation of the sections: k' r^2/2 (axial shear of an isotropic layer, r = 6 mm)
+    assert ins["contact"]["stiffness_per_length"] == pytest.approx({"x": 5e11, "ry": 5e11 * 0.006**2 / 2})
     # the insertion cannot be longer than the host segment (40 mm here)
     assert contact.params[1].upper <= 0.04 + 1e-12
     assert m2.modes(1).freq_hz[0] < HOLDER_TOOL.modes(1).freq_hz[0]
