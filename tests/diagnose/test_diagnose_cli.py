@@ -56,7 +56,7 @@ def test_diagnose_command_bad_map_is_one_line_and_exit_2(files):
     assert res.stderr.strip().count("\n") == 0 and "no point 'nose'" in res.stderr
     res = subprocess.run(JOINTDB + ["diagnose", str(d / "model.json"), str(d / "missing.uff")],
                          capture_output=True, text=True)
-    assert res.returncode == 2 and "no such file" in res.stderr
+    assert res.returncode == 3 and "no such file" in res.stderr   # not found, like every missing file
 
 
 def test_diagnose_bench_command_small_run():
