@@ -43,6 +43,11 @@ def _recovery(cases):
         ("sensor_mass", "rotary_inertia", lambda t: t["rotary_inertia_kgm2"], None),
         # a bed loss factor is only comparable with the distributed joint's loss factor
         ("joint_damping", "eta_joint", lambda t: t["bed_loss"], "joint_distributed_damped"),
+        # the tool-in-holder truth: the contact layer's stiffness, loss and the insertion length are
+        # comparable with the interface contact candidate's (not with a point joint's)
+        ("interface_joint", "k_contact", lambda t: t["contact_stiffness_n_per_m2"], "interface_contact"),
+        ("interface_joint", "eta_joint", lambda t: max(t["contact_loss"], 1e-3), "interface_contact_damped"),
+        ("interface_joint", "insertion", lambda t: t["insertion_m"], "interface_contact"),
     ]
     for eff, key, truth, only in pick:
         ratios, inside, rel_sig = [], [], []
