@@ -13,13 +13,13 @@ from jointdb.errors import InputError
 from jointdb.fe._elements import bar_matrices, bending_matrices, section_properties, shear_coefficient
 from jointdb.fe._ingredients import FieldError, Ingredient, _number
 from jointdb.fe._materials import Material, get_material
-from jointdb.frf import DIRECTIONS, FRF, Dof
+from jointdb.fe._mesh import Mesh, _merge_tol, interface_mesh
+from jointdb.frf import FRF, Dof
 
 __all__ = ["Segment", "NamedPoint", "Mesh", "FEMatrices", "Modes", "BeamModel", "THEORIES", "KINDS"]
 
 THEORIES = ("timoshenko", "euler-bernoulli")
 KINDS = ("planar", "frame3d")
-PLANAR_DIRECTIONS = ("x", "ry")
 
 
 @dataclass(frozen=True)
@@ -93,112 +93,6 @@ class NamedPoint:
 
 
 @dataclass(frozen=True, eq=False)
-class Mesh:
-    """Nodes, elements and DOF numbering of a model.
-
-    The main chain of nodes (``0 .. n_main-1``, ascending z) comes first; nodes
-    added by interfaces (the far side of a :class:`jointdb.fe.Joint`, the nodes
-    of an inserted part) follow. ``element_nodes (n_el, 2)`` connects nodes;
-    ``element_section`` indexes ``sections`` (the model's segments, then the
-    inserted parts' sections). ``dof_table (n_nodes, n_dir)`` gives each node's
-    global DOFs; nodes tied in a direction share that DOF.
-    """
-
-    node_positions: np.ndarray
-    element_segment: np.ndarray
-    kind: str
-    tol: float = 0.0
-    element_nodes: np.ndarray | None = None
-    sections: tuple = ()
-    n_main: int = 0
-    dof_table: np.ndarray | None = None
-    splits: tuple = ()            # (ingredient, staying node, new node)
-    contacts: tuple = ()          # (ingredient, node pairs (inner, host, tributary length [m]),
-    #                                 elements (inner a, inner b, host a, host b, length [m]))
-
-    def __post_init__(self) -> None:
-        n = self.node_positions.size
-        if self.element_nodes is None:
-            object.__setattr__(self, "element_nodes", np.column_stack([np.arange(n - 1), np.arange(1, n)]))
-        if not self.n_main:
-            object.__setattr__(self, "n_main", n)
-        if self.dof_table is None:
-            nd = len(self.directions)
-            object.__setattr__(self, "dof_table", np.arange(n * nd).reshape(n, nd))
-
-    @property
-    def element_section(self) -> np.ndarray:
-        return self.element_segment
-
-    @property
-    def directions(self) -> tuple[str, ...]:
-        return PLANAR_DIRECTIONS if self.kind == "planar" else DIRECTIONS
-
-    @property
-    def n_nodes(self) -> int:
-        return self.node_positions.size
-
-    @property
-    def n_dof(self) -> int:
-        return int(self.dof_table.max()) + 1
-
-    @property
-    def length(self) -> float:
-        return float(self.node_positions[self.n_main - 1])
-
-    def node_at(self, position: float, what: str = "position") -> int:
-        """Index of the main-chain node at ``position`` (mesh nodes include every declared position)."""
-        main = self.node_positions[: self.n_main]
-        i = int(np.argmin(np.abs(main - position)))
-        if abs(main[i] - position) > max(self.tol, _merge_tol(self.length)):
-            raise InputError(f"{what} at {position:g} m is not a mesh node (model length {self.length:g} m)")
-        return i
-
-    def dof(self, node: int, direction: str) -> int:
-        """Global DOF index of a node's direction."""
-        try:
-            return int(self.dof_table[node, self.directions.index(direction)])
-        except ValueError:
-            raise InputError(
-                f"direction {direction!r} does not exist in a {self.kind} model ({', '.join(self.directions)})"
-            ) from None
-
-    def split_nodes(self, ingredient) -> tuple[int, int]:
-        """``(staying node, new node)`` of the split made by ``ingredient``."""
-        for ing, a, b in self.splits:
-            if ing is ingredient:
-                return a, b
-        raise InputError(f"{type(ingredient).__name__} at {ingredient.positions()} m is not part of this mesh")
-
-    def contact_pairs(self, ingredient) -> tuple:
-        """``((inner node, host node, tributary length), ...)`` of an insertion's contact layer."""
-        for ing, pairs, _ in self.contacts:
-            if ing is ingredient:
-                return pairs
-        return ()
-
-    def contact_elements(self, ingredient) -> tuple:
-        """``((inner a, inner b, host a, host b, length), ...)``: the overlap's element pairs."""
-        for ing, _, elems in self.contacts:
-            if ing is ingredient:
-                return elems
-        return ()
-
-    def dof_labels(self) -> tuple[Dof, ...]:
-        """``Dof(node, direction)`` of every global DOF (the first node that owns it)."""
-        cached = self.__dict__.get("_labels")
-        if cached is not None:
-            return cached
-        labels: dict[int, Dof] = {}
-        for node in range(self.n_nodes):
-            for k, d in enumerate(self.directions):
-                labels.setdefault(int(self.dof_table[node, k]), Dof(node, d))
-        out = tuple(labels[i] for i in range(self.n_dof))
-        self.__dict__["_labels"] = out
-        return out
-
-
-@dataclass(frozen=True, eq=False)
 class FEMatrices:
     """Assembled matrices over all mesh DOFs (SI).
 
@@ -232,11 +126,6 @@ class Modes:
     shapes: np.ndarray
     dof_labels: tuple[Dof, ...]
     n_rigid: int = 0
-
-
-def _merge_tol(length: float, max_element_length: float = 0.0) -> float:
-    """Positions closer than this share a node (avoids ill-conditioned sliver elements)."""
-    return max(1e-9 * max(abs(length), 1e-3), 1e-3 * max_element_length)
 
 
 def _as_tuple(value, what: str) -> tuple:
@@ -401,7 +290,7 @@ class BeamModel:
         if not topo:
             return Mesh(node_positions=nodes, element_segment=seg, kind=self.kind, tol=tol,
                         sections=self.segments)
-        return _interfaces(self, nodes, seg, tol, topo)
+        return interface_mesh(self, nodes, seg, tol, topo)
 
     def _bare(self, mesh: Mesh) -> tuple[np.ndarray, np.ndarray]:
         segs = mesh.sections or self.segments
@@ -546,89 +435,3 @@ class BeamModel:
         else:
             raise InputError(f"method must be 'direct' or 'modal', got {method!r}")
         return FRF(freq, values, tuple(labels), tuple(labels), "receptance")
-
-
-def _interfaces(model: "BeamModel", nodes: np.ndarray, seg: np.ndarray, tol: float, topo: list) -> Mesh:
-    """The mesh with joints split and inserted parts added (see :mod:`jointdb.fe._joints`)."""
-    from jointdb.fe._joints import Insertion
-
-    n_main = nodes.size
-    length = float(nodes[-1])
-    nd = len(PLANAR_DIRECTIONS if model.kind == "planar" else DIRECTIONS)
-    dirs = PLANAR_DIRECTIONS if model.kind == "planar" else DIRECTIONS
-    positions = list(nodes)
-    elements = [[e, e + 1] for e in range(n_main - 1)]
-    section = list(seg)
-    sections = list(model.segments)
-    splits, contacts, tied = [], [], []        # tied: (new node, staying node, directions shared)
-    split_at: dict[int, str] = {}
-
-    def main_node(z, what):
-        i = int(np.argmin(np.abs(nodes - z)))
-        if abs(nodes[i] - z) > tol:  # pragma: no cover - every declared position is a node
-            raise InputError(f"{what} at {z:g} m is not a mesh node")
-        return i
-
-    index = {id(ing): i for i, ing in enumerate(model.ingredients)}
-    for ing in topo:
-        where = f"ingredients[{index[id(ing)]}]"
-        z = ing.split_position()
-        what = (f"insertion {ing.start:g}–{ing.end:g} m (mouth at {ing.mouth:g} m)" if isinstance(ing, Insertion)
-                else f"joint at {ing.positions()[0]:g} m")
-        if z is not None:
-            j = main_node(z, what)
-            if j == 0 or j == n_main - 1:
-                raise FieldError(where, f"{what}: an interface must be inside the model (0 < z < {length:g} m), "
-                                        "not at its end")
-            if j in split_at:
-                raise FieldError(where, f"{what}: the model already has an interface there ({split_at[j]})")
-            split_at[j] = what
-            new = len(positions)
-            positions.append(float(nodes[j]))
-            right = not isinstance(ing, Insertion) or ing.joined_at == "end"
-            if right:
-                elements[j][0] = new          # element j: (j, j+1) -> (new, j+1)
-            else:
-                elements[j - 1][1] = new      # element j-1: (j-1, j) -> (j-1, new)
-            splits.append((ing, j, new))
-            shared = tuple(d for d in dirs if d not in ing.free_directions()) if not isinstance(ing, Insertion) \
-                else ()
-            tied.append((new, j, shared))
-        if isinstance(ing, Insertion):
-            lo, hi = main_node(ing.start, what), main_node(ing.end, what)
-            host = list(range(lo, hi + 1))
-            k_sec = len(sections)
-            sections.append(Segment(ing.length, ing.outer_diameter, ing.inner_diameter, ing.material))
-            if ing.rigid:
-                inner = host
-            else:
-                mouth = hi if ing.joined_at == "end" else lo
-                inner = []
-                for h in host:
-                    if h == mouth:
-                        inner.append(splits[-1][2])
-                    else:
-                        inner.append(len(positions))
-                        positions.append(float(nodes[h]))
-            for a, b in zip(inner[:-1], inner[1:]):
-                elements.append([a, b])
-                section.append(k_sec)
-            if not ing.rigid:
-                zs = nodes[host]
-                trib = np.zeros(len(host))
-                dz = np.diff(zs)
-                trib[:-1] += dz / 2
-                trib[1:] += dz / 2
-                pairs = tuple(zip(inner, host, (float(t) for t in trib)))
-                elems = tuple((inner[k], inner[k + 1], host[k], host[k + 1], float(dz[k])) for k in range(len(dz)))
-                contacts.append((ing, pairs, elems))
-    n_nodes = len(positions)
-    table = np.arange(n_nodes * nd).reshape(n_nodes, nd)
-    for new, j, shared in tied:
-        for d in shared:
-            k = dirs.index(d)
-            table[new, k] = table[j, k]
-    _, table = np.unique(table, return_inverse=True)
-    return Mesh(node_positions=np.asarray(positions), element_segment=np.asarray(section), kind=model.kind, tol=tol,
-                element_nodes=np.asarray(elements), sections=tuple(sections), n_main=n_main,
-                dof_table=table.reshape(n_nodes, nd), splits=tuple(splits), contacts=tuple(contacts))
