@@ -67,8 +67,22 @@ def _state(law: bool, levels, values, level: int) -> tuple[float, float]:
     return values[f"s_{level + 1}"], values[f"eta_{level + 1}"]
 
 
-class _LineByLine:
-    """Harmonic balance line by line when the levels' forces are known (see :mod:`._harmonic`)."""
+class _Microslip:
+    """What the micro-slip joint and contact share: the law over the levels, and harmonic balance
+    line by line when the levels' forces are known (see :mod:`._harmonic`)."""
+
+    family = "softening_joint"
+    per_level = True
+
+    def _use_levels(self, levels) -> None:
+        self.family = "softening_joint"
+        self.levels = tuple(levels)
+        self.law, extra = _law_params(self.levels)
+        self.params = self.params + tuple(extra)
+
+    def state(self, values, level: int) -> tuple[float, float]:
+        """(stiffness scale, loss factor) at ``level`` (0-based)."""
+        return _state(self.law, self.levels, values, level)
 
     def _law(self, values, a_unit: float):
         a_c = values["force_slip"] * a_unit
@@ -123,25 +137,15 @@ class _LineByLine:
                                            linear=H)
 
 
-class MicroslipContact(_LineByLine, InterfaceContact):
+class MicroslipContact(_Microslip, InterfaceContact):
     """A contact layer over an insertion whose stiffness falls and loss rises with the excitation level."""
-
-    family = "softening_joint"
-    per_level = True
 
     def __init__(self, model, site: Site, levels):
         super().__init__(model, site, damped=False)
-        self.family = "softening_joint"
         self.name = f"interface_contact_microslip@{site.position * 1e3:.4g}mm"
-        self.levels = tuple(levels)
         self.explanation = (f"an amplitude-dependent (micro-slip) contact over the insertion at {site.location} "
                             "whose stiffness falls and damping rises with the excitation")
-        self.law, extra = _law_params(self.levels)
-        self.params = self.params + tuple(extra)
-
-    def state(self, values, level: int) -> tuple[float, float]:
-        """(stiffness scale, loss factor) at ``level`` (0-based)."""
-        return _state(self.law, self.levels, values, level)
+        self._use_levels(levels)
 
     def apply(self, model, values, level=0):
         s, eta = self.state(values, level)
@@ -183,25 +187,15 @@ class MicroslipContact(_LineByLine, InterfaceContact):
         return rows
 
 
-class MicroslipJoint(_LineByLine, InterfaceJoint):
+class MicroslipJoint(_Microslip, InterfaceJoint):
     """A point joint at a site whose stiffness falls and loss rises with the excitation level."""
-
-    family = "softening_joint"
-    per_level = True
 
     def __init__(self, model, site: Site, levels):
         super().__init__(model, site, damped=False)
-        self.family = "softening_joint"
         self.name = f"interface_microslip@{site.position * 1e3:.4g}mm"
-        self.levels = tuple(levels)
         self.explanation = (f"an amplitude-dependent (micro-slip) joint at {site.location} whose stiffness falls "
                             "and damping rises with the excitation")
-        self.law, extra = _law_params(self.levels)
-        self.params = self.params + tuple(extra)
-
-    def state(self, values, level: int) -> tuple[float, float]:
-        """(stiffness scale, loss factor) at ``level`` (0-based)."""
-        return _state(self.law, self.levels, values, level)
+        self._use_levels(levels)
 
     def apply(self, model, values, level=0):
         s, eta = self.state(values, level)
