@@ -317,8 +317,7 @@ def screen_sites(model, sites: list[Site], pairs, keep: int = SITES_KEPT) -> lis
     good = [p for p in pairs if np.isfinite(p.shift)]
     if len(good) < 2:
         return list(sites)[: keep + 1]
-    n = len(model.modes(12).freq_hz)
-    modes = model.modes(n).freq_hz
+    modes = model.modes(12).freq_hz
     y, idx = [], []
     for p in good:
         r = int(np.argmin(np.abs(modes - p.model.freq_hz)))
