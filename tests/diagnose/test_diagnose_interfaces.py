@@ -120,3 +120,19 @@ def test_separating_measurement_names_what_tells_two_explanations_apart():
 def test_a_place_that_already_has_a_joint_is_not_offered_again():
     m = HOLDER_TOOL.with_ingredient(Joint(0.045, {"x": 1e9, "ry": 1e6}))
     assert 0.045 not in [round(s.position, 6) for s in interface_sites(m)]
+
+
+def test_screening_ranks_the_joint_site_first_from_the_frequency_shifts_it_causes():
+    # eight steps, seven sites: a joint at each in turn; the first-order sensitivity screening must
+    # rank that site first from the shifts of modes 1-4 alone (noise-free, so no tolerance)
+    from types import SimpleNamespace as NS
+
+    segs = tuple(Segment(0.02, d) for d in (0.05, 0.045, 0.04, 0.035, 0.03, 0.025, 0.02, 0.016))
+    m = BeamModel(segs, points=(NamedPoint("tip", 0.16, 1),), ingredients=(Clamp(0.0),))
+    sites = interface_sites(m)
+    assert len(sites) == 7
+    f0 = m.modes(4).freq_hz
+    for s in sites:
+        f1 = m.with_ingredient(Joint(s.position, {"x": 5e8, "ry": 2e5})).modes(4).freq_hz
+        pairs = [NS(model=NS(freq_hz=a), shift=b / a - 1) for a, b in zip(f0, f1)]
+        assert screen_sites(m, sites, pairs, keep=3)[0] == s
