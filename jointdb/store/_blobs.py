@@ -292,6 +292,8 @@ class BlobStore:
         try:
             check_file_checksum(path)
             frf = read_frf_file(path, verify=False)
+        except FileNotFoundError:  # collected (set aside by gc) between the check above and the read
+            raise NotFoundError(f"blob {digest} is missing (expected at {path})") from None
         except InputError as exc:  # a stored blob that no longer validates is corrupt
             raise IntegrityError(f"blob {digest} is corrupt: {exc}") from None
         actual = frf_sha256(frf)

@@ -245,3 +245,30 @@ def test_unwritable_blob_store_is_one_line_and_writes_no_row(repo, monkeypatch):
         repo.catalogue("T1", "tool-holder", spring_joint(), planar_conditions(), "spring-damper-planar")
     monkeypatch.undo()
     assert repo.list_joints() == [] and not repo.blobs.temporaries()
+
+
+def test_a_blob_collected_between_the_check_and_the_read_is_missing_and_put_rewrites_it(tmp_path, monkeypatch):
+    """The race a fresh-clone run once hit: gc sets the blob aside after ``put`` found it but before it
+    was read back. ``get`` must say NotFound (not leak FileNotFoundError) and ``put`` write a fresh copy."""
+    import jointdb.store._blobs as blobs_mod
+
+    store = BlobStore(tmp_path / "blobs")
+    frf = spring_joint()
+    digest = store.put(frf)
+    real = blobs_mod.check_file_checksum
+    calls = {"n": 0}
+
+    def vanishing(path):
+        calls["n"] += 1
+        if calls["n"] == 1:                 # gc moves it aside just now
+            os.replace(path, str(path) + ".aside")
+        return real(path)
+
+    monkeypatch.setattr(blobs_mod, "check_file_checksum", vanishing)
+    with pytest.raises(NotFoundError):
+        store.get(digest)
+    calls["n"] = 0
+    os.replace(str(store.path(digest)) + ".aside", store.path(digest))
+    assert store.put(frf) == digest          # found, vanished while verified, rewritten
+    monkeypatch.setattr(blobs_mod, "check_file_checksum", real)
+    assert store.get(digest).allclose(frf, rtol=0)
