@@ -39,9 +39,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from jointdb.errors import InputError
 from jointdb.fe._ingredients import FieldError, Ingredient, _check_directions, _number
-from jointdb.fe._materials import Material, get_material
+from jointdb.fe._materials import Material
+from jointdb.fe._model import Segment
 
 __all__ = ["Joint", "Contact", "Insertion"]
 
@@ -202,17 +202,10 @@ class Insertion(Ingredient):
         _number(self, "end", minimum=0.0)
         if not self.end > self.start:
             raise FieldError("end", f"must be > start ({self.start:g} m), got {self.end:g}")
-        _number(self, "outer_diameter", minimum=0.0, strict=True)
-        _number(self, "inner_diameter", minimum=0.0)
-        if self.inner_diameter >= self.outer_diameter:
-            raise FieldError("inner_diameter", f"must be < outer_diameter ({self.outer_diameter:g} m), "
-                                               f"got {self.inner_diameter:g}")
-        try:
-            get_material(self.material)
-        except InputError as exc:
-            raise FieldError("material", str(exc)) from None
-        if isinstance(self.material, str):
-            object.__setattr__(self, "material", self.material.strip().lower())
+        # the inserted part's section is validated (and its material normalised) as a segment's
+        section = Segment(self.end - self.start, self.outer_diameter, self.inner_diameter, self.material)
+        for name in ("outer_diameter", "inner_diameter", "material"):
+            object.__setattr__(self, name, getattr(section, name))
         if self.joined_at not in ("start", "end"):
             raise FieldError("joined_at", f"must be 'start' or 'end', got {self.joined_at!r}")
         if isinstance(self.contact, str):
@@ -225,6 +218,11 @@ class Insertion(Ingredient):
     def __hash__(self) -> int:
         return hash((self.start, self.end, self.outer_diameter, self.inner_diameter, str(self.material),
                      self.joined_at, self.contact))
+
+    @property
+    def section(self) -> Segment:
+        """The inserted part's section as a segment over the overlap."""
+        return Segment(self.length, self.outer_diameter, self.inner_diameter, self.material)
 
     @property
     def rigid(self) -> bool:

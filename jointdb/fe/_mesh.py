@@ -142,7 +142,6 @@ def interface_mesh(model, nodes: np.ndarray, seg: np.ndarray, tol: float, topo: 
     ingredients that change the topology (in model order).
     """
     from jointdb.fe._joints import Insertion
-    from jointdb.fe._model import Segment  # the inserted parts' sections are segments too
 
     n_main = nodes.size
     length = float(nodes[-1])
@@ -190,7 +189,7 @@ def interface_mesh(model, nodes: np.ndarray, seg: np.ndarray, tol: float, topo: 
             lo, hi = main_node(ing.start, what), main_node(ing.end, what)
             host = list(range(lo, hi + 1))
             k_sec = len(sections)
-            sections.append(Segment(ing.length, ing.outer_diameter, ing.inner_diameter, ing.material))
+            sections.append(ing.section)
             if ing.rigid:
                 inner = host
             else:
