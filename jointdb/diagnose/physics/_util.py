@@ -29,3 +29,18 @@ def point_position(model, name: str) -> float:
 
 def without_ingredient(model, ingredient):
     return model.without(lambda i: i is ingredient)
+
+
+class AtClamp:
+    """Mixin for candidates that sit at a model's clamp (``self.clamp``): where they are, in metres and words."""
+
+    clamp: object
+
+    @property
+    def position(self) -> float:
+        """Where the joint is [m] (nominal coordinates): the clamp."""
+        return self.clamp.position
+
+    @property
+    def location(self) -> str:
+        return f"the clamp (z = {self.clamp.position * 1e3:.4g} mm)"

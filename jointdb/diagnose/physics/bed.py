@@ -23,14 +23,14 @@ import dataclasses
 import numpy as np
 
 from jointdb.diagnose.physics import Candidate, Param, register
-from jointdb.diagnose.physics._util import full_clamps, without_ingredient
+from jointdb.diagnose.physics._util import AtClamp, full_clamps, without_ingredient
 from jointdb.fe import Support
 
 #: Springs spread over the insertion length (evenly, at the centres of N equal parts).
 N_SPRINGS = 6
 
 
-class DistributedJoint(Candidate):
+class DistributedJoint(AtClamp, Candidate):
     family = "joint_compliance"
     slot = "clamp"
     #: changes the model's coordinates: applied after other candidates in a combination
@@ -57,15 +57,6 @@ class DistributedJoint(Candidate):
         if damped:
             ps.append(Param("eta_joint", "-", 1e-3, 2.0, 0.1, starts=(0.5,)))
         self.params = tuple(ps)
-
-    @property
-    def position(self) -> float:
-        """Where the joint is [m] (nominal coordinates): the clamp face."""
-        return self.clamp.position
-
-    @property
-    def location(self) -> str:
-        return f"the clamp (z = {self.clamp.position * 1e3:.4g} mm)"
 
     def apply(self, model, values, level=0):
         L = float(values["insertion"])

@@ -10,7 +10,7 @@ dampers with one joint loss factor η (``c = η k / ω₁``).
 from __future__ import annotations
 
 from jointdb.diagnose.physics import Candidate, Param, register
-from jointdb.diagnose.physics._util import bending_stiffness_at, full_clamps, without_ingredient
+from jointdb.diagnose.physics._util import AtClamp, bending_stiffness_at, full_clamps, without_ingredient
 from jointdb.fe import Clamp, Support
 
 
@@ -29,7 +29,7 @@ def joint_params(model, clamp, dirs):
     return tuple(out)
 
 
-class CompliantJoint(Candidate):
+class CompliantJoint(AtClamp, Candidate):
     family = "joint_compliance"
     slot = "clamp"
 
@@ -41,15 +41,6 @@ class CompliantJoint(Candidate):
         self.explanation = (f"a compliant {kind} joint at the clamp (z = {clamp.position:g} m) "
                             "instead of a rigid one")
         self.params = joint_params(model, clamp, dirs)
-
-    @property
-    def position(self) -> float:
-        """Where the joint is [m]: the clamp."""
-        return self.clamp.position
-
-    @property
-    def location(self) -> str:
-        return f"the clamp (z = {self.clamp.position * 1e3:.4g} mm)"
 
     def support(self, values, scale=1.0, eta=0.0, omega=1.0):
         k = {d: values[f"k_{d}"] * scale for d in self.dirs}
