@@ -29,6 +29,8 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 import numpy as np  # noqa: E402
 import scipy.linalg  # noqa: E402
 
+from _synthetic import interleaved_timing  # noqa: E402  (bench/ is on sys.path when run as a script)
+
 from jointdb.fe import BeamModel, Clamp, ModalDamping, NamedPoint, Segment, frf_direct  # noqa: E402
 
 
@@ -86,15 +88,7 @@ def main(argv=None) -> None:
         "frf_direct": lambda: frf_direct(mats, freq, idx, algorithm="spectral"),
         "model.frf": lambda: model.frf(freq, method="direct"),
     }
-    times = {k: [] for k in contenders}
-    out = {}
-    for _ in range(args.repeat):
-        for k, fn in contenders.items():
-            t0 = time.perf_counter()
-            out[k] = fn()
-            times[k].append(time.perf_counter() - t0)
-    ratio = {k: float(np.median(np.array(times[k]) / np.array(times["plain"]))) for k in contenders}
-    med = {k: float(np.median(v)) for k, v in times.items()}
+    out, ratio, med = interleaved_timing(contenders, args.repeat)
     ref = out["plain"]
     scale = np.abs(ref).max()
     print(f"  plain eigh + einsum(optimize=True) (reference) : {med['plain'] * 1e3:8.1f} ms")

@@ -26,7 +26,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import time
 
 # single-threaded BLAS for every contender (small matrices; avoids thread thrashing on shared machines)
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
@@ -34,7 +33,7 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 
 import numpy as np  # noqa: E402
 
-from _synthetic import modal_receptance  # noqa: E402  (bench/ is on sys.path when run as a script)
+from _synthetic import interleaved_timing, modal_receptance  # noqa: E402  (bench/ is on sys.path when run as a script)
 from jointdb.coupling import identify_joint_matrix  # noqa: E402
 from jointdb.frf import DIRECTIONS, FRF, Dof  # noqa: E402
 
@@ -99,15 +98,7 @@ def main(argv=None) -> None:
         "ours": lambda: ours(subs),
         "ours_nr": lambda: ours(subs_nr),
     }
-    times = {k: [] for k in contenders}
-    out = {}
-    for _ in range(args.repeat):  # interleaved, so that all see the same machine load
-        for k, fn in contenders.items():
-            t0 = time.perf_counter()
-            out[k] = fn()
-            times[k].append(time.perf_counter() - t0)
-    ratio = {k: float(np.median(np.array(times[k]) / np.array(times["plain"]))) for k in contenders}
-    med = {k: float(np.median(v)) for k, v in times.items()}
+    out, ratio, med = interleaved_timing(contenders, args.repeat)
     hj = out["plain"]
     print(f"full-matrix identification: nc = {nc}, L = {L}, {args.lines} lines "
           f"(median of {args.repeat} interleaved runs; ratios are medians of per-run ratios)")
