@@ -2,17 +2,20 @@
 
 :func:`run_main_job` is what ``jointdb demo`` runs. It
 
-1. identifies the tool–holder joint of every bundled measurement campaign
-   (IRC, theory §2a; six campaigns: clamping torque 40 / 80 / 120 N·m × carbide
-   or steel tool in a steel holder) and catalogues each as a joint version;
-2. reads the bundled new stack (a fluted carbide end mill at 100 N·m) and asks
-   the database for the nearest tool–holder joint, reporting the chosen
-   version, its distance, the other candidates and any extrapolation;
+1. identifies the joint of every bundled measurement campaign (IRC, theory
+   §2a) and catalogues each as a joint version: six tool–holder campaigns
+   (clamping torque 40 / 80 / 120 N·m × carbide or steel tool in a steel
+   holder) and six holder–spindle campaigns (HSK-A63 or BT40 taper × three
+   drawbar forces);
+2. reads the bundled new stack (a fluted carbide end mill at 100 N·m on an
+   HSK-A63 spindle at 20 kN, whose bearings are softer in y than in x) and asks
+   the database for the nearest joint at each of its two interfaces, reporting
+   the chosen version, its distance, the other candidates and any extrapolation;
 3. predicts the tool-tip FRF (three-component RC, theory §4) with that joint,
    with rigid joints and, as a cross-check, with a joint interpolated between
    the nearest neighbours; writes it (UFF58, CSV) and a comparison plot;
 4. computes milling stability lobes (zero-order approximation, theory §5)
-   from both predictions and plots them;
+   from both predictions (x and y bending planes) and plots them;
 
 printing what it does through ``say`` and writing everything into ``out_dir``.
 """
@@ -82,6 +85,31 @@ def _write_csv(path: Path, rows: list[dict[str, Any]]) -> Path:
     return path
 
 
+def _joint_types(campaigns: list[Path]) -> dict[str, int]:
+    """Joint type → number of campaigns (read from the campaign files, in order of first appearance)."""
+    counts: dict[str, int] = {}
+    for path in campaigns:
+        jt = str(json.loads(path.read_text(encoding="utf-8")).get("joint_type", "?"))
+        counts[jt] = counts.get(jt, 0) + 1
+    return counts
+
+
+def _condition_columns(cond: dict[str, Any]) -> dict[str, Any]:
+    """Flat condition columns of a catalogued campaign and a one-line description of them."""
+    extra = dict(cond.get("extra") or {})
+    cols: dict[str, Any] = {"preload_n": cond.get("preload_n"), "taper": extra.get("taper"),
+                            "holder_family": extra.get("holder_family")}
+    parts = ["+".join(cond.get("materials", []))]
+    if cond.get("torque_nm") is not None:
+        parts.append(f"{cond['torque_nm']:g} N·m")
+    if extra.get("taper"):
+        parts.append(str(extra["taper"]))
+    if cond.get("preload_n") is not None:
+        parts.append(f"drawbar {cond['preload_n'] / 1e3:g} kN")
+    cols["condition"] = ", ".join(p for p in parts if p)
+    return cols
+
+
 def run_main_job(
     out_dir: Path,
     db_url: str | None = None,
@@ -132,10 +160,13 @@ def run_main_job(
 
         # 1. catalogue ---------------------------------------------------------------
         campaigns = sorted((cat / "campaigns").glob("*/campaign.json"))
-        say(f"[1/4] identify and catalogue {len(campaigns)} tool–holder campaigns (IRC, theory §2a)")
+        kinds = _joint_types(campaigns)
+        say(f"[1/4] identify and catalogue {len(campaigns)} campaigns "
+            f"({', '.join(f'{n} {t}' for t, n in kinds.items())}; IRC, theory §2a)")
         for path in campaigns:
             outcome = app.catalogue_campaign(repo, path)
-            row = outcome.row()
+            row = {"joint_type": outcome.campaign.joint_type, **outcome.row(),
+                   **_condition_columns(outcome.campaign.conditions)}
             truth_file = path.parent / "truth.json"
             if truth_file.is_file() and "k_x_n_per_m" in row:  # synthetic campaign: compare with the true joint
                 truth = json.loads(truth_file.read_text(encoding="utf-8"))
@@ -144,7 +175,7 @@ def run_main_job(
             result.catalogued.append(row)
             vs_truth = (f"  (true k: {row['k_x_error']:+.2%}, {row['k_theta_error']:+.2%})"
                         if "k_x_error" in row else "")
-            say(f"      {row['joint']:<26} {row['materials']:<23} {row['torque_nm']:>4g} N·m  "
+            say(f"      {row['joint']:<26} {row['condition']:<34} "
                 f"k_x={row['k_x_n_per_m']:.3e} N/m  k_θ={row['k_theta_nm_per_rad']:.3e} N·m/rad  "
                 f"c_x={row['c_x_ns_per_m']:.0f} N·s/m{vs_truth}  "
                 f"{'new version' if row['new'] else 'already catalogued'}")
@@ -225,7 +256,9 @@ def run_main_job(
             "best_speed_rpm": float(lobes.spindle_speed_rpm[best]),
             "best_depth_m": float(lobes.depth_m[best]),
             "cut": DEMO_CUT,
+            "planes": "x and y (tool-tip FRF 1x,1x and 1y,1y" + (", equal" if same_y else "") + ")",
         }
+        say(f"      from the x and y planes of the tip FRF{' (y equal to x)' if same_y else ''}")
         say(f"      unconditionally stable below {lobes.min_depth_m * 1e3:.3f} mm "
             f"(with rigid joints: {lobes_rigid.min_depth_m * 1e3:.3f} mm); "
             f"best pocket {lobes.depth_m[best] * 1e3:.2f} mm at {lobes.spindle_speed_rpm[best]:.0f} rpm")
@@ -241,6 +274,9 @@ def run_main_job(
             "interpolated_cross_check": result.interpolated,
             "notes": list(pred.notes),
             "lobes": result.lobes,
+            "interfaces": {j["interface"]: {"joint": j["joint"], "distance": j["distance"],
+                                            "extrapolating": j["extrapolating"]} for j in result.joints},
+            "planes": ["x", "y"],
         }
         result.files.append(_write_json(out / "summary.json", summary))
     say(f"done: {len(result.files)} files in {out}")

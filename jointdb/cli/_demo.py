@@ -190,7 +190,8 @@ def register(app: typer.Typer) -> None:
         """Run the main job end to end on the bundled data (SQLite, bundled fixtures).
 
         Part A: tool model, modes, tip FRF, files, Bode plot. Part B: identify and
-        catalogue six tool-holder joints, query the nearest for a new stack, predict
+        catalogue six tool-holder and six holder-spindle joints, query the nearest
+        for both interfaces of a new stack (two bending planes), predict
         its tool-tip FRF and draw milling stability lobes. Lists the files written.
 
         Example: jointdb demo --out demo-out

@@ -26,7 +26,7 @@ def _generator():
 
 def test_bundled_campaigns_cover_three_torques_and_two_materials():
     seen = set()
-    for path in sorted(BUNDLED.glob("campaigns/*/campaign.json")):
+    for path in sorted(BUNDLED.glob("campaigns/th-*/campaign.json")):
         camp = load_campaign(path)
         assert camp.joint_type == "tool-holder" and camp.joint_model == "planar"
         seen.add((tuple(camp.conditions["materials"]), camp.conditions["torque_nm"]))
@@ -35,6 +35,7 @@ def test_bundled_campaigns_cover_three_torques_and_two_materials():
     assert len({m for m, _ in seen}) == 2
     demo = stack_from_dict(json.loads((BUNDLED / "demo-stack.json").read_text()))
     assert demo.interfaces["tool-holder"].kind == "query"
+    assert demo.interfaces["holder-spindle"].kind == "query"
 
 
 def test_true_joints_follow_the_documented_trend():
@@ -55,4 +56,4 @@ def test_make_catalogue_regenerates_the_bundled_files_byte_for_byte(tmp_path):
     for rel in sorted(names):
         assert (tmp_path / rel).read_bytes() == (BUNDLED / rel).read_bytes(), rel
     bundled = {p.relative_to(BUNDLED).as_posix() for p in BUNDLED.rglob("*") if p.is_file()}
-    assert len(bundled) == 4 + 6 * 3 + 1
+    assert len(bundled) == 4 + 6 * 3 + 1 + 2 + 6 * 3  # + the holder–spindle models and campaigns
