@@ -246,8 +246,9 @@ def run_main_job(
         say(f"[4/4] milling stability lobes (zero-order approximation, theory §5): {cut.n_teeth} teeth, "
             f"K_t={cut.kt:.3g} N/m², K_r={cut.kr:.3g} N/m², a_e/D={cut.radial_immersion:g}, "
             f"{'down' if cut.down_milling else 'up'}-milling, {n_speeds} speeds")
-        lobes = milling_lobes_zoa(pred.tip, cut, spindle_speed_rpm=speeds)
-        lobes_rigid = milling_lobes_zoa(pred.rigid, cut, spindle_speed_rpm=speeds)
+        cross = bool(np.any(pred.tip.values[:, 0, 1]))  # planes coupled by the spindle: use H[x,y], H[y,x]
+        lobes = milling_lobes_zoa(pred.tip, cut, cross_terms=cross, spindle_speed_rpm=speeds)
+        lobes_rigid = milling_lobes_zoa(pred.rigid, cut, cross_terms=cross, spindle_speed_rpm=speeds)
         best = int(np.nanargmax(np.where(np.isfinite(lobes.depth_m), lobes.depth_m, -np.inf)))
         result.lobes = {
             "method": lobes.method,

@@ -17,6 +17,7 @@ from jointdb.fe import BeamModel, model_from_dict
 from jointdb.frf import FRF, Dof, Quantity
 from jointdb.stack._chain import tool_tip_chain
 from jointdb.stack._parts import NODES, TIP_NODE, holder_model, tool_model
+from jointdb.stack._twoplane import spindle_four, two_plane_tip
 from jointdb.stack._spec import INTERFACE_NAMES, FrequencyGrid, MeasuredSpindle, ModelledSpindle, StackSpec
 
 __all__ = ["Prediction", "predict_tool_tip", "prediction_grid", "stack_parts", "spindle_model"]
@@ -33,12 +34,14 @@ class Prediction:
     ----------
     tip
         Receptance at the tool tip, outputs = inputs = ``(1x, 1y)`` [m/N]
-        (x and y planes; no cross terms: each bending plane is planar).
+        (x and y planes; cross terms H[1x,1y], H[1y,1x] when the spindle FRF couples the planes,
+        zero otherwise).
     rigid
         The same stack with every interface rigid (for comparison).
     tip_rotation
         Full planar 2×2 tip blocks per plane, ``{"x": (n_freq, 2, 2), "y": ...}``
-        over (translation, rotation θ = +d(displacement)/dz).
+        over (translation, rotation θ = +d(displacement)/dz); with coupled planes also
+        ``"xy"``: the (n_freq, 4, 4) block over (x, θ_x, y, θ_y).
     interfaces
         Interface name → what was used there (``"rigid"``, ``"k=..."``, ``"th@3"`` ...).
     notes
@@ -272,13 +275,25 @@ def predict_tool_tip(spec: StackSpec, resolved_joints: Mapping[str, FRF] | None 
     joints, labels = {}, {}
     for name in INTERFACE_NAMES:
         joints[name], labels[name] = _joint_planes(name, spec, resolved, f)
+    out = (Dof(TIP_NODE, "x"), Dof(TIP_NODE, "y"))
+    spindle4 = spindle_four(parts["spindle"], spindle_node) if has_y else None
+    if spindle4 is not None:  # the spindle couples the planes: one chain over (x, θx, y, θy)
+        tip4 = two_plane_tip(tool, holder, spindle4, joints["tool-holder"], joints["holder-spindle"])
+        rigid4 = two_plane_tip(tool, holder, spindle4)
+        notes.append("x and y planes coupled through the spindle FRF's cross terms; the tip FRF has H[1x,1y], H[1y,1x]")
+
+        def full(b4):
+            return FRF(f, b4[:, [0, 2]][:, :, [0, 2]], out, out,
+                       Quantity.RECEPTANCE)
+
+        tips = {"x": tip4[:, :2, :2], "y": tip4[:, 2:, 2:], "xy": tip4}
+        return Prediction(full(tip4), full(rigid4), tips, labels, tuple(notes))
     tips, rigid = {}, {}
     for plane in ("x", "y"):
         jt = joints["tool-holder"][plane] if joints["tool-holder"] is not None else None
         jh = joints["holder-spindle"][plane] if joints["holder-spindle"] is not None else None
         tips[plane] = tool_tip_chain(tool, holder, spindle[plane], jt, jh)
         rigid[plane] = tool_tip_chain(tool, holder, spindle[plane])
-    out = (Dof(TIP_NODE, "x"), Dof(TIP_NODE, "y"))
 
     def diag(blocks):
         v = np.zeros((f.size, 2, 2), dtype=complex)

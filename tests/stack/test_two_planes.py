@@ -1,0 +1,67 @@
+"""Two bending planes: an asymmetric spindle gives different x and y tips; a spindle whose planes are coupled
+(anisotropic bearings on rotated axes) gives the cross terms, and they transform as the rotation says."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from jointdb.frf import FRF, Dof
+from jointdb.stack import JointChoice, MeasuredSpindle, predict_tool_tip, spindle_model, stack_from_dict
+
+ROOT = Path(__file__).resolve().parents[2]
+DEMO = json.loads((ROOT / "jointdb" / "data" / "catalogue" / "demo-stack.json").read_text())
+JOINTS = {"tool-holder": JointChoice("explicit", k=(3e7, 4.5e5), c=(230.0, 1.7)),
+          "holder-spindle": JointChoice("explicit", k=(1.5e8, 2e6), c=(1500.0, 15.0))}
+FREQ = np.arange(100.0, 5000.0, 10.0)
+
+
+def _spec():
+    return stack_from_dict(DEMO).replace(interfaces=JOINTS)
+
+
+def _spindle_frf(spec):
+    model = spindle_model(spec)
+    return model.frf(FREQ, ["nose"], directions=("x", "y", "rx", "ry"))
+
+
+def test_asymmetric_spindle_gives_two_different_planes_without_cross_terms():
+    pred = predict_tool_tip(_spec(), freq=FREQ)
+    hx, hy = pred.tip.entry("1x", "1x"), pred.tip.entry("1y", "1y")
+    fx, fy = FREQ[np.argmax(np.abs(hx))], FREQ[np.argmax(np.abs(hy))]
+    assert fy < fx  # the y bearings are 25 % softer
+    assert not np.any(pred.tip.values[:, 0, 1]) and not any("equal to the x plane" in n for n in pred.notes)
+
+
+def test_x_only_spindle_keeps_working_with_y_equal_to_x_and_says_so():
+    spec = _spec()
+    frf = _spindle_frf(spec)
+    keep = [d for d in frf.outputs if d.direction in ("x", "ry")]
+    xonly = FRF(FREQ, frf.block(keep, keep), keep, keep, "receptance")
+    pred = predict_tool_tip(spec.replace(spindle=MeasuredSpindle("s.uff", 5, xonly)), freq=FREQ)
+    np.testing.assert_array_equal(pred.tip.entry("1x", "1x"), pred.tip.entry("1y", "1y"))
+    assert any("y plane taken equal to the x plane" in n for n in pred.notes)
+
+
+@pytest.mark.parametrize("angle_deg", [30.0, 60.0])
+def test_rotated_anisotropic_spindle_gives_cross_terms_that_rotate_with_it(angle_deg):
+    spec = _spec()
+    frf = _spindle_frf(spec)  # principal axes u = x, v = y
+    ref = predict_tool_tip(spec.replace(spindle=MeasuredSpindle("s.uff", 5, frf)), freq=FREQ)
+    # the same spindle turned by φ about z: H' = R H Rᵀ over (x, y, rx, ry) (translations and rotations turn alike)
+    c, s = np.cos(np.radians(angle_deg)), np.sin(np.radians(angle_deg))
+    order = [Dof(5, d) for d in ("x", "y", "rx", "ry")]
+    r2 = np.array([[c, -s], [s, c]])
+    R = np.zeros((4, 4))
+    R[:2, :2] = R[2:, 2:] = r2
+    turned = FRF(FREQ, R @ frf.block(order, order) @ R.T, order, order, "receptance")
+    pred = predict_tool_tip(spec.replace(spindle=MeasuredSpindle("s.uff", 5, turned)), freq=FREQ)
+    assert any("coupled" in n for n in pred.notes)
+    want = r2 @ ref.tip.values @ r2.T  # the tool and holder are axisymmetric: the tip turns with the spindle
+    scale = np.abs(ref.tip.values).max()
+    np.testing.assert_allclose(pred.tip.values, want, atol=1e-9 * scale)
+    assert np.abs(pred.tip.values[:, 0, 1]).max() > 0.05 * scale  # real cross terms
+    np.testing.assert_allclose(pred.tip.values[:, 0, 1], pred.tip.values[:, 1, 0], atol=1e-9 * scale)
