@@ -56,7 +56,9 @@ def _damping(eta: float) -> tuple:
 def tool_model(spec: StackSpec, max_element_length: float = 0.005) -> BeamModel:
     """Free–free Timoshenko model of the tool overhang (tip at z = 0, holder face at the gauge length).
 
-    Fluted sections use the equivalent diameter ``fluted_ratio × diameter``.
+    Fluted sections use the equivalent diameter ``fluted_ratio × diameter``; with
+    ``tool.fluted_area_ratio`` their density is scaled so that their mass per length is that
+    of the true fluted section.
     Points: ``tip`` (node 1), ``base`` (node 2).
 
     Parameters
@@ -85,7 +87,11 @@ def tool_model(spec: StackSpec, max_element_length: float = 0.005) -> BeamModel:
             break
         length = min(seg.length, spec.gauge_length - pos)
         diameter = seg.diameter * (tool.fluted_ratio if seg.fluted else 1.0)
-        segments.append(Segment(length, diameter, 0.0, material))
+        mat = material
+        if seg.fluted and tool.fluted_area_ratio is not None:  # true mass per length, Kops–Vo stiffness
+            scale = tool.fluted_area_ratio / tool.fluted_ratio**2
+            mat = Material(f"{material.name} (fluted)", material.E, material.nu, material.rho * scale)
+        segments.append(Segment(length, diameter, 0.0, mat))
         pos += length
     return BeamModel(
         tuple(segments),

@@ -76,12 +76,19 @@ class Tool:
         Equivalent diameter of a fluted section / cutter diameter (Kops & Vo: 0.656).
     loss_factor
         Structural (hysteretic) loss factor η of the tool's beam model, ``K(1 + iη)``.
+    fluted_area_ratio
+        Cross-section area of a fluted section / the full circle's (e.g. ≈ 0.6 for a 4-flute
+        cutter, from its CAD model or its mass). ``None``: the fluted section's mass is that of
+        the equivalent cylinder (``fluted_ratio²`` of the full circle's), which underestimates it.
+        Given, the fluted section keeps the equivalent cylinder's bending stiffness and gets
+        this mass per length (its density is scaled).
     """
 
     segments: tuple[ToolSegment, ...]
     material: str = "carbide"
     fluted_ratio: float = KOPS_VO_RATIO
     loss_factor: float = 0.0
+    fluted_area_ratio: float | None = None
 
     @property
     def length(self) -> float:

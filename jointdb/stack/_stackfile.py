@@ -111,7 +111,7 @@ def _lengths_in_range(obj: Mapping[str, Any], path: str, keys: Sequence[str]) ->
 # ------------------------------------------------------------------ parsing
 def _tool(obj: Any, path: str) -> Tool:
     obj = _mapping(obj, path)
-    _known(obj, path, ("material", "segments", "fluted_ratio", "loss_factor"))
+    _known(obj, path, ("material", "segments", "fluted_ratio", "fluted_area_ratio", "loss_factor"))
     segs = []
     raws = _list(obj, "segments", path)
     check_count(len(raws), f"{path}.segments", MAX_SEGMENTS, "segments")
@@ -136,6 +136,7 @@ def _tool(obj: Any, path: str) -> Tool:
         material=_string(obj, "material", path, "carbide"),
         fluted_ratio=_number(obj, "fluted_ratio", path, default=KOPS_VO_RATIO, positive=True, upper=1.0),
         loss_factor=_number(obj, "loss_factor", path, default=0.0, nonneg=True),
+        fluted_area_ratio=_number(obj, "fluted_area_ratio", path, default=None, positive=True, upper=1.0),
     )
 
 
@@ -369,6 +370,7 @@ def stack_to_dict(spec: StackSpec) -> dict[str, Any]:
             "material": spec.tool.material,
             "fluted_ratio": spec.tool.fluted_ratio,
             "loss_factor": spec.tool.loss_factor,
+            **({"fluted_area_ratio": spec.tool.fluted_area_ratio} if spec.tool.fluted_area_ratio is not None else {}),
             "segments": [
                 {"length": s.length, "diameter": s.diameter, **({"fluted": True} if s.fluted else {})}
                 for s in spec.tool.segments
