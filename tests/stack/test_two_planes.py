@@ -65,3 +65,27 @@ def test_rotated_anisotropic_spindle_gives_cross_terms_that_rotate_with_it(angle
     np.testing.assert_allclose(pred.tip.values, want, atol=1e-9 * scale)
     assert np.abs(pred.tip.values[:, 0, 1]).max() > 0.05 * scale  # real cross terms
     np.testing.assert_allclose(pred.tip.values[:, 0, 1], pred.tip.values[:, 1, 0], atol=1e-9 * scale)
+
+
+def test_fluted_area_ratio_gives_the_fluted_section_its_true_mass_and_round_trips():
+    from jointdb.stack import stack_to_dict, tool_model
+
+    doc = json.loads(json.dumps(DEMO))
+    plain = stack_from_dict(doc)
+    doc["tool"]["fluted_area_ratio"] = 0.6
+    heavy = stack_from_dict(doc)
+    assert stack_from_dict(stack_to_dict(heavy)).tool.fluted_area_ratio == 0.6
+    assert "fluted_area_ratio" not in stack_to_dict(plain)["tool"]
+    m0, m1 = tool_model(plain).assemble(), tool_model(heavy).assemble()
+    np.testing.assert_array_equal(m0.K, m1.K)  # the Kops–Vo bending stiffness is kept
+    # mass of the 30 mm fluted section: 0.6 of the full Ø12 circle instead of 0.656² of it
+    ux = [i for i, d in enumerate(m0.dof_labels) if d.direction == "x"]
+    extra = float(np.sum(m1.M[np.ix_(ux, ux)]) - np.sum(m0.M[np.ix_(ux, ux)]))
+    area = np.pi * 0.012**2 / 4
+    from jointdb.fe import get_material
+
+    want = get_material("carbide").rho * area * (0.6 - 0.656**2) * 0.030
+    assert extra == pytest.approx(want, rel=1e-9)
+    doc["tool"]["fluted_area_ratio"] = 1.5
+    with pytest.raises(Exception, match="fluted_area_ratio"):
+        stack_from_dict(doc)
