@@ -24,6 +24,12 @@ Public API
   models; :func:`composite_material`; :func:`tool_tip_chain`, :func:`attach`
   — the coupling algebra on arrays.
 
+Bending planes: x and y are predicted separately (the tool and holder are
+axisymmetric); a spindle side without y terms gives y = x (with a note). A
+spindle FRF with x–y cross terms couples the planes: one chain over
+(x, θ_x, y, θ_y) (:mod:`jointdb.stack._twoplane`) and a tip FRF with
+``H[1x,1y]``, ``H[1y,1x]``.
+
 Node numbers: tip 1, tool at holder face 2, holder nose 3, holder base 4,
 spindle nose 5 (:data:`NODES`). Interfaces: :data:`INTERFACE_NAMES` =
 ``("tool-holder", "holder-spindle")``; joint FRFs are planar receptances on
@@ -35,7 +41,7 @@ Stack file (JSON, SI units; fields other than these are refused)::
     {
       "format": "jointdb-stack/1",
       "name": "12 mm carbide end mill in a steel chuck",
-      "tool": {"material": "carbide", "loss_factor": 0.002,
+      "tool": {"material": "carbide", "loss_factor": 0.002,   # optional "fluted_area_ratio": 0.6
                "segments": [{"length": 0.030, "diameter": 0.012, "fluted": true},
                             {"length": 0.050, "diameter": 0.012}]},
       "gauge_length": 0.050,                  # or "insertion_length": 0.030
@@ -46,7 +52,9 @@ Stack file (JSON, SI units; fields other than these are refused)::
                  | {"file": "spindle.uff", "node": 5},
       "interfaces": {"tool-holder": {"query": {"joint_type": "tool-holder",
                                                "materials": ["steel", "carbide"], "torque_nm": 60}},
-                     "holder-spindle": "rigid" | "name@version" | {"k": [kx, kθ], "c": [cx, cθ]}},
+                     "holder-spindle": "rigid" | "name@version" | "name@label" | {"k": [kx, kθ], "c": [cx, cθ]}
+                                       | {"query": {"joint_type": "holder-spindle", "preload_n": 20000,
+                                                    "geometry": {"taper_diameter_m": 0.063}, ...}}},
       "frequency": {"min": 10, "max": 5000, "step": 5}
     }
 """
