@@ -70,6 +70,8 @@ def register(app: typer.Typer) -> None:
         extra: Annotated[Optional[list[str]], typer.Option("--extra", help="Free-form condition key=value (repeat), e.g. taper=HSK-A63.")] = None,
         name: Annotated[Optional[str], typer.Option("--name", help="Campaign / joint name (default: the folder name).")] = None,
         out: Annotated[Optional[Path], typer.Option("--out", help="Campaign file to write (default: FOLDER/campaign.json).")] = None,
+        smoothing: Annotated[Optional[int], typer.Option("--smoothing", help="Savitzky-Golay window (odd number of lines) for the identification.")] = None,
+        fit_band: Annotated[Optional[str], typer.Option("--fit-band", help="FMIN,FMAX [Hz] of the constant (k, c) fit.")] = None,
         force: Annotated[bool, typer.Option("--force", help="Overwrite an existing campaign file.")] = False,
     ) -> None:
         """Write a campaign file for the UFF58 and model files in FOLDER.
@@ -99,6 +101,21 @@ def register(app: typer.Typer) -> None:
         conditions = {"materials": list(mats or []), "torque_nm": torque, "preload_n": preload,
                       "geometry": _pairs(geometry, "--geometry"), "extra": _pairs(extra, "--extra")}
         doc, notes = scaffold_campaign(folder, joint_type=jt, conditions=conditions, name=name)
+        options: dict[str, Any] = {}
+        if smoothing is not None:
+            if smoothing < 3 or smoothing % 2 == 0:
+                raise InputError(f"--smoothing {smoothing}: must be an odd number of lines >= 3")
+            options["smoothing"] = smoothing
+        if fit_band is not None:
+            try:
+                lo, hi = (float(v) for v in fit_band.split(","))
+            except ValueError:
+                raise InputError(f"--fit-band {fit_band!r}: expected FMIN,FMAX in Hz, e.g. 100,4000") from None
+            if not 0 <= lo < hi:
+                raise InputError(f"--fit-band {fit_band!r}: need 0 <= FMIN < FMAX")
+            options["fit_band"] = [lo, hi]
+        if options:
+            doc["options"] = options
         if target.resolve().parent != folder.resolve():
             raise InputError(f"--out {target}: write the campaign file into {folder} (its paths are relative to it)")
         _write_json_atomic(target, doc)

@@ -30,7 +30,7 @@ def test_init_check_identify_catalogue_from_a_folder_of_measurements_and_models(
     db = tmp_path / "joints.sqlite"
 
     init = run("campaign", "init", folder, "--type", "tool-holder", "--material", "steel", "--material", "carbide",
-               "--torque", "30")
+               "--torque", "30", "--smoothing", "21", "--fit-band", "100,4000")
     assert init.returncode == 0, init.stderr
     camp = folder / "campaign.json"
     assert init.stdout.strip() == str(camp)
@@ -42,6 +42,7 @@ def test_init_check_identify_catalogue_from_a_folder_of_measurements_and_models(
     assert doc["interface"] == {"a": "holder", "a_dofs": ["3x", "3ry"], "b": "tool", "b_dofs": ["2x", "2ry"]}
     assert doc["planar"] == {"b_tip": 1} and doc["name"] == folder.name
     assert doc["conditions"] == {"materials": ["steel", "tungsten-carbide"], "torque_nm": 30.0}
+    assert doc["options"] == {"smoothing": 21, "fit_band": [100.0, 4000.0]}
 
     check = run("campaign", "check", camp)
     assert check.returncode == 0, check.stderr
@@ -89,6 +90,8 @@ def test_init_without_the_joint_type_names_the_flag_and_writes_nothing(tmp_path)
         shutil.copy(TH / name, folder / name)
     out = run("campaign", "init", folder)
     assert out.returncode != 0 and "--type" in out.stderr and "Traceback" not in out.stderr
+    out = run("campaign", "init", folder, "--type", "tool-holder", "--smoothing", "20")
+    assert out.returncode != 0 and "--smoothing" in out.stderr
     assert not (folder / "campaign.json").exists()
     (folder / "tool.json").unlink()
     out = run("campaign", "init", folder, "--type", "tool-holder")
