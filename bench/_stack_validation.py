@@ -45,7 +45,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from jointdb.fe import (BeamModel, Clamp, HystereticDamping, NamedPoint, PointMass, Segment, Support,  # noqa: F401
+from jointdb.fe import (BeamModel, HystereticDamping, NamedPoint, PointMass, Segment, Support,
                         get_material, model_to_dict)
 from jointdb.fe._joints import Contact, Insertion
 from jointdb.fe._materials import Material

@@ -127,7 +127,7 @@ def report(rows: list[dict], catalogue: list[dict], seconds: float) -> str:
         f"| rigid joints | {median('freq', 'rigid'):.1%} / {worst('freq', 'rigid'):.1%} | "
         f"{median('peak', 'rigid'):.1%} / {worst('peak', 'rigid'):.1%} | "
         f"{median('floor', 'rigid'):.1%} / {worst('floor', 'rigid'):.1%} |",
-        f"| goal | 3 % | 20 % | 20 % |",
+        "| goal | 3 % | 20 % | 20 % |",
         f"| stacks meeting the goal (catalogue) | {met['freq']} of {len(inside)} | {met['peak']} of {len(inside)} |"
         f" {met['floor']} of {len(inside)} |",
         "",

@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from jointdb.errors import InputError
-from jointdb.frf import FRF, Dof
+from jointdb.frf import FRF
 from jointdb.stack._chain import attach
 
 __all__ = ["spindle_four", "two_plane_tip"]
