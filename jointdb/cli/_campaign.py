@@ -85,6 +85,8 @@ def register(app: typer.Typer) -> None:
         from jointdb._output import message
         from jointdb.campaign._scaffold import scaffold_campaign
 
+        if not folder.is_dir():
+            raise InputError(f"FOLDER {folder}: not a directory (give the folder holding the UFF58 and model files)")
         target = out if out is not None else folder / "campaign.json"
         if target.exists() and not force:
             raise InputError(f"--out {target}: exists; give --force to overwrite")
