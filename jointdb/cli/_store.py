@@ -302,7 +302,18 @@ def register(app: typer.Typer) -> None:
                 "catalogue": {"name": jv.name, "version": jv.version, "uuid": jv.uuid, "blob_sha256": jv.blob_sha256},
                 "quality": dict(jv.quality)})
             message(f"wrote {jv.name} v{jv.version} FRF to {frf_out}")
-        emit(_version_detail(jv), as_json=as_json, title=f"{jv.name} v{jv.version}")
+        from jointdb.cli._joint_summary import constant_kc, kc_rows_for_people, readable
+
+        kc = constant_kc(repo.load_frf(jv))
+        detail = _version_detail(jv)
+        if as_json:
+            emit(detail | {"constant_kc": kc}, as_json=True)
+            return
+        emit({k: readable(v) for k, v in detail.items()}, title=f"{jv.name} v{jv.version}")
+        if kc is not None:
+            kc_rows = kc_rows_for_people(kc)
+            emit(kc_rows, columns=list(dict.fromkeys(c for r in kc_rows for c in r)), title=f"constant k, c per DOF: {kc['method']} "
+                 f"({kc['band_hz'][0]:g}–{kc['band_hz'][1]:g} Hz, {kc['n_lines']} lines)")
 
     @joints.command("history")
     def history(name: Annotated[str, typer.Argument(help="Joint name.")],
