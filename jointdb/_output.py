@@ -227,11 +227,22 @@ def configure_logging(verbose: int = 0, quiet: bool = False) -> None:
         else logging.WARNING
     logger = logging.getLogger("jointdb")
     logger.setLevel(level)
-    if not any(getattr(h, "_jointdb_cli", False) for h in logger.handlers):
-        handler = logging.StreamHandler()  # resolves sys.stderr at each record (test capture friendly)
+    if not any(isinstance(h, _StderrHandler) for h in logger.handlers):
+        handler = _StderrHandler()
         handler.setFormatter(logging.Formatter("%(levelname)s %(name)s: %(message)s"))
-        handler._jointdb_cli = True  # type: ignore[attr-defined]
         logger.addHandler(handler)
+
+
+class _StderrHandler(logging.StreamHandler):
+    """A stream handler writing to whatever ``sys.stderr`` is at each record (redirections, test runners)."""
+
+    @property
+    def stream(self):  # type: ignore[override]
+        return sys.stderr
+
+    @stream.setter
+    def stream(self, value) -> None:
+        pass
 
 
 def write_rows(path: Path, rows: Sequence[Mapping[str, Any]], *, columns: Sequence[str] | None = None,

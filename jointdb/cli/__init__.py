@@ -127,11 +127,11 @@ def __getattr__(name: str):
 
 def _click_errors():
     """Click's usage-error, error and abort classes (Typer vendors Click in recent releases)."""
-    try:
-        from click import Abort, ClickException, UsageError
-    except ImportError:
+    try:  # the Click that Typer runs on: its vendored copy when it has one, else the click package
         from typer import Abort
         from typer._click.exceptions import ClickException, UsageError
+    except ImportError:
+        from click import Abort, ClickException, UsageError
     return UsageError, ClickException, Abort
 
 

@@ -10,7 +10,7 @@ import numpy as np
 from jointdb.plots._axes import phase_deg
 from jointdb.plots._frf import _pyplot, save_figure
 
-__all__ = ["plot_lobes", "plot_stabilisation", "plot_modal_fit"]
+__all__ = ["plot_lobes", "lobes_figure", "plot_stabilisation", "plot_modal_fit"]
 
 
 _plt = _pyplot
@@ -19,10 +19,15 @@ _plt = _pyplot
 _UNIT = {"m": 1.0, "mm": 1e3, "um": 1e6}
 
 
-def plot_lobes(
-    results, path, *, title: str | None = None, depth_unit: str = "mm", labels: Sequence[str] | None = None,
+def plot_lobes(results, path, **kwargs) -> Path:
+    """Write :func:`lobes_figure` (same keyword arguments) to the PNG ``path``; returns the path."""
+    return save_figure(lobes_figure(results, **kwargs), path, dpi=120)
+
+
+def lobes_figure(
+    results, *, title: str | None = None, depth_unit: str = "mm", labels: Sequence[str] | None = None,
     show_lobes: bool = True, depth_max: float | None = None, shade: bool = True,
-) -> Path:
+):
     """Stability lobe diagram: limiting depth against spindle speed, the stable region shaded.
 
     ``results`` is one :class:`~jointdb.stability.LobeResult` or a sequence (overlaid,
@@ -31,7 +36,7 @@ def plot_lobes(
     boundaries with a real multiplier +1, not chatter limits) and non-finite
     depths are not drawn: the line breaks there and the legend counts them.
     Individual lobes (turning/ZOA) are drawn thin behind the envelope when
-    ``show_lobes``. Returns the path.
+    ``show_lobes``. Returns the matplotlib figure.
     """
     from jointdb.stability import plottable_depth
 
@@ -70,7 +75,7 @@ def plot_lobes(
     ax.grid(True, alpha=0.3)
     ax.legend(loc="upper left", fontsize=8)
     fig.tight_layout()
-    return save_figure(fig, path, dpi=120)
+    return fig
 
 
 def plot_stabilisation(fit, path, *, frf=None, title: str | None = None) -> Path:
