@@ -64,17 +64,18 @@ _SUFFIX_UNITS = (
 
 
 def header(column: str) -> str:
-    """Table header of a column: ``"depth_mm"`` → ``"depth [mm]"``, ``"flip_speeds"`` → ``"flip speeds"``.
+    """Table header of a column: the unit suffix of an SI name written out, ``"depth_mm"`` →
+    ``"depth [mm]"``, ``"spindle_speed_rpm"`` → ``"spindle_speed [rpm]"`` (the name stays as in ``--json``).
 
-    Per-condition distances ``d_*`` (dimensionless) and names already holding a
-    unit (``"peak (Hz)"``, ``"k [N/m]"``) are kept as they are.
+    Names without a unit suffix, per-condition distances ``d_*`` (dimensionless) and
+    names already holding a unit (``"peak (Hz)"``, ``"k [N/m]"``) are kept as they are.
     """
     if column.startswith("d_") or "[" in column or "(" in column:
         return column
     for suffix, unit in _SUFFIX_UNITS:
         if column.endswith(suffix) and len(column) > len(suffix):
-            return f"{column[: -len(suffix)].replace('_', ' ')} [{unit}]"
-    return column.replace("_", " ")
+            return f"{column[: -len(suffix)]} [{unit}]"
+    return column
 
 
 def _fmt(value: Any) -> str:

@@ -13,7 +13,7 @@ from typing import Annotated, Optional
 
 import typer
 
-from jointdb.cli._options import LegacyPlotOpt, PlotsOpt, plot_file, plots_dir
+from jointdb.cli._options import LegacyPlotOpt, PlotsOpt, deprecation_note, plot_file, plots_dir
 
 from jointdb.errors import InputError, NotFoundError
 
@@ -70,6 +70,7 @@ def register(app: typer.Typer) -> None:
             written.append(str(report))
         if plots is not None:
             written += _identify_plots(plots, result)
+            deprecation_note()
         message(f"wrote {', '.join(written)}")
         if as_json:
             emit(rep, as_json=True)

@@ -37,13 +37,14 @@ def plots_dir(plots: Path | None, legacy: Path | None, *, one_file: bool = False
         Both spellings given; the path exists and is not a directory; its parent
         does not exist.
     """
+    global _legacy_used
+    _legacy_used = legacy is not None
     if plots is not None and legacy is not None:
         raise InputError("give --plots DIR only (--plot is its deprecated spelling)")
     if legacy is not None:
-        from jointdb._output import message
-
-        message("note: --plot is deprecated; use --plots DIR (the figures get fixed names in DIR)")
-        if legacy.suffix.lower() == ".png":
+        if legacy.suffix and not legacy.is_dir():  # a file name, as --plot FILE.png took
+            if legacy.suffix.lower() != ".png":
+                raise InputError(f"--plot {str(legacy)!r} must end in .png (or use --plots DIR)")
             if not one_file:
                 raise InputError(f"--plot {str(legacy)!r}: this command writes several figures; use --plots DIR")
             if not legacy.parent.is_dir():
@@ -59,11 +60,27 @@ def plots_dir(plots: Path | None, legacy: Path | None, *, one_file: bool = False
     return plots
 
 
+#: Set when the deprecated ``--plot`` was given; :func:`deprecation_note` says so once the figures are written
+#: (not before: a refused command keeps its one error line).
+_legacy_used = False
+
+
+def deprecation_note() -> None:
+    """Tell the user (stderr) that ``--plot`` is deprecated, if it was used; once."""
+    global _legacy_used
+    if _legacy_used:
+        from jointdb._output import message
+
+        message("note: --plot is deprecated; use --plots DIR (the figures get fixed names in DIR)")
+        _legacy_used = False
+
+
 def plot_file(target: Path | None, name: str) -> Path | None:
     """Where a one-figure command writes its figure: ``DIR/name`` (DIR created), or the deprecated
-    ``--plot FILE.png`` itself; None without a plot option."""
+    ``--plot FILE.png`` itself; None without a plot option. Called when the figure is drawn."""
     if target is None:
         return None
+    deprecation_note()
     if target.suffix.lower() == ".png" and not target.is_dir():
         return target
     target.mkdir(parents=True, exist_ok=True)

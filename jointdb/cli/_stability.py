@@ -9,7 +9,15 @@ import numpy as np
 import typer
 
 from jointdb._output import emit, message, progress, write_rows
-from jointdb.cli._options import LegacyPlotOpt, PlotsOpt, TableOpt, check_out, plot_file, plots_dir
+from jointdb.cli._options import (
+    LegacyPlotOpt,
+    PlotsOpt,
+    TableOpt,
+    check_out,
+    deprecation_note,
+    plot_file,
+    plots_dir,
+)
 from jointdb.errors import InputError
 
 #: Largest sizes accepted from options (far above real use; they bound memory and run time).
@@ -194,6 +202,7 @@ def register(app: typer.Typer) -> None:
             from jointdb.plots._lobes import plot_modal_fit, plot_stabilisation
 
             plot.mkdir(parents=True, exist_ok=True)
+            deprecation_note()
             p1 = plot_stabilisation(fit, plot / "modal-fit-stabilisation.png", frf=frf)
             p2 = plot_modal_fit(frf, fit, plot / "modal-fit-overlay.png")
             message(f"wrote {p1} and {p2}")

@@ -46,17 +46,19 @@ def robust_limits(y, *, lower_pct: float = 2.0, upper_pct: float = 98.0, margin:
 
 
 def plot_clipped(ax, x, y, limits, **line_kw):
-    """Plot ``y`` against ``x`` within ``limits``; values outside are drawn as triangles on the edge.
+    """Plot ``y`` against ``x`` within ``limits``; values outside are triangles on the edge, not line.
 
     Returns the number of clipped points (also put in the legend as "n clipped").
     """
     x = np.asarray(x, dtype=float)
     y = np.asarray(y, dtype=float)
-    line, = ax.plot(x, y, **line_kw)
     if limits is None:
+        ax.plot(x, y, **line_kw)
         return 0
     lo, hi = limits
     above, below = y > hi, y < lo
+    # the line stops at off-scale values (no bars running into the edge); a marker on the edge shows each
+    line, = ax.plot(x, np.where(above | below, np.nan, y), **line_kw)
     colour = line.get_color()
     if above.any():
         ax.plot(x[above], np.full(above.sum(), hi), "^", color=colour, ms=4, clip_on=False)

@@ -72,6 +72,8 @@ def save_tip_comparison(path, prediction, *, title: str | None = None,
         ax_m.set_ylabel(f"|H_{d}{d}| [m/N]")
         ax_m.set_title(f"tool tip, {d} direction")
         ax_m.grid(True, which="both", alpha=0.3)
+        lo, hi = ax_m.get_ylim()
+        ax_m.set_ylim(lo, hi * 10)  # a decade of headroom: the legend does not cover a peak
         ax_m.legend(fontsize=7, loc="upper left")
         ax_c.set_ylabel("Re (dark), Im (light) [µm/N]")
         ax_c.set_xlabel("frequency [Hz]")

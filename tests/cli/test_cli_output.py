@@ -88,8 +88,8 @@ def test_version_flag():
 
 def test_headers_carry_units():
     assert header("depth_mm") == "depth [mm]"
-    assert header("spindle_speed_rpm") == "spindle speed [rpm]"
-    assert header("k_x_n_per_m") == "k x [N/m]"
+    assert header("spindle_speed_rpm") == "spindle_speed [rpm]"
+    assert header("k_x_n_per_m") == "k_x [N/m]"
     assert header("torque_nm") == "torque [N·m]"
     assert header("d_torque_nm") == "d_torque_nm"  # a dimensionless distance term, not a torque
     assert header("peak (Hz)") == "peak (Hz)"
@@ -169,9 +169,9 @@ def test_lobes_out_by_suffix_equals_json_rows(tmp_path, tip_h5, suffix):
         assert [float(x["depth_m"]) for x in back] == [x["depth_m"] for x in rows]
     # the default output is a summary; depth in mm with the unit in the header
     r = run(*args)
-    assert r.returncode == 0 and len(r.stdout.splitlines()) < 25 and "min depth [mm]" in r.stdout
+    assert r.returncode == 0 and len(r.stdout.splitlines()) < 25 and "min_depth [mm]" in r.stdout
     floor_mm = min(x["depth_m"] for x in rows if x["kind"] != "fold") * 1e3
-    line = next(x for x in r.stdout.splitlines() if "min depth [mm]" in x)
+    line = next(x for x in r.stdout.splitlines() if "min_depth [mm]" in x)
     assert float(line.split("|")[2]) == pytest.approx(floor_mm, rel=1e-5)  # 6 significant digits shown
 
 
