@@ -217,8 +217,12 @@ def run_main_job(
             f"K_t={cut.kt:.3g} N/m², K_r={cut.kr:.3g} N/m², a_e/D={cut.radial_immersion:g}, "
             f"{'down' if cut.down_milling else 'up'}-milling, {n_speeds} speeds, refined near the minima and pockets")
         # more speeds near the envelope's minima and pockets (equal to the plain grid at its speeds)
-        lobes = refine_lobes(lambda s: milling_lobes_zoa(pred.tip, cut, spindle_speed_rpm=s), speeds)
-        lobes_rigid = refine_lobes(lambda s: milling_lobes_zoa(pred.rigid, cut, spindle_speed_rpm=s), speeds)
+        # the lobes from the same prediction on 4x finer lines: ZOA draws each lobe through the FRF's lines,
+        # and at high speeds (low lobe numbers) 20 Hz lines are far apart in speed
+        fine = np.linspace(grid[0], grid[-1], 4 * (grid.size - 1) + 1)
+        lob = predict_tool_tip(spec, {n: r.frf for n, r in resolutions.items() if r.frf is not None}, fine)
+        lobes = refine_lobes(lambda s: milling_lobes_zoa(lob.tip, cut, spindle_speed_rpm=s), speeds)
+        lobes_rigid = refine_lobes(lambda s: milling_lobes_zoa(lob.rigid, cut, spindle_speed_rpm=s), speeds)
         best = int(np.nanargmax(np.where(np.isfinite(lobes.depth_m), lobes.depth_m, -np.inf)))
         result.lobes = {
             "method": lobes.method,

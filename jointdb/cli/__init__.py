@@ -143,6 +143,10 @@ def main() -> None:
     becomes one line on stderr and the error class's exit code.
     """
     args = sys.argv[1:]
+    # -v/-q may be written after the command too (`jointdb lobes ... -q`): they are the app's, moved to the front
+    upto = args.index("--") if "--" in args else len(args)
+    is_global = [a in ("-q", "--quiet", "--verbose") or (a[:2] == "-v" and set(a[1:]) == {"v"}) for a in args[:upto]]
+    args = [a for a, g in zip(args, is_global) if g] + [a for a, g in zip(args, is_global) if not g] + args[upto:]
     # the first word that is not a global option (-v/-vv/-q/--verbose/--quiet) names the command
     first = next((a for a in args if not (a in ("--verbose", "--quiet") or (a[:1] == "-" and a[1:2] != "-"
                                                                              and set(a[1:]) <= {"v", "q"}))), None)

@@ -200,6 +200,8 @@ def test_verbose_and_quiet_set_the_logging_level(tip_h5, tmp_path):
     assert "DEBUG jointdb.stability._adaptive: lobe refinement round 1" in debug.stderr
     assert quiet.stderr == ""  # only warnings and errors under -q
     assert quiet.stdout == plain.stdout  # results are not affected
+    after = run(*args, "-q")  # the global flags may follow the command as well
+    assert after.returncode == 0 and after.stderr == "" and after.stdout == plain.stdout
 
 
 def test_configure_logging_levels():
