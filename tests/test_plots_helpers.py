@@ -126,3 +126,14 @@ def _campaign_dirs():
     from importlib import resources
 
     return [p for p in resources.files("jointdb").joinpath("data", "catalogue", "campaigns").iterdir() if p.is_dir()]
+
+
+def test_query_out_equals_json_rows(demo_db, tmp_path):
+    out, _ = demo_db
+    env = {**os.environ, "OPENBLAS_NUM_THREADS": "1"}
+    args = [sys.executable, "-m", "jointdb", "query", "--type", "tool-holder", "--material", "carbide+steel",
+            "--torque", "100", "-k", "3", "--db", str(out / "joints.sqlite")]
+    rj = subprocess.run([*args, "--json"], capture_output=True, text=True, env=env, timeout=120)
+    ro = subprocess.run([*args, "--out", str(tmp_path / "m.json")], capture_output=True, text=True, env=env, timeout=120)
+    assert rj.returncode == 0 and ro.returncode == 0, ro.stderr
+    assert json.loads((tmp_path / "m.json").read_text(encoding="utf-8"))["rows"] == json.loads(rj.stdout)

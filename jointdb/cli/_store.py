@@ -234,6 +234,7 @@ def register(app: typer.Typer) -> None:
         k: Annotated[int, typer.Option("-k", help="Number of nearest versions.")] = 3,
         at: Annotated[Optional[str], typer.Option("--at", help="Query the catalogue as it was at this ISO time.")] = None,
         interpolate: Annotated[Optional[Path], typer.Option("--interpolate", help="Also write the interpolated joint FRF (dynamic stiffness) to this HDF5 file.")] = None,
+        out: Annotated[Optional[Path], typer.Option("--out", help="Write the matches (one row each) to .csv, .json or .h5.")] = None,
         db: DbOpt = None,
         blobs: BlobsOpt = None,
         as_json: JsonOpt = False,
@@ -242,7 +243,10 @@ def register(app: typer.Typer) -> None:
 
         Example: jointdb query --type tool-holder --material carbide+steel --torque 35 -k 3
         """
+        from jointdb.cli._options import check_out
+
         _check_output(interpolate)
+        check_out(out, (".csv", ".json", ".h5", ".hdf5"))
         repo = _repo(db, blobs)
         req = _conditions(material, preload, torque, geometry)
         with warnings.catch_warnings(record=True) as caught:
@@ -259,6 +263,11 @@ def register(app: typer.Typer) -> None:
                         "preload_n": c.preload_n, "extrapolating": m.extrapolating})
             rows.append(row)
         result: Any = rows
+        if out is not None:
+            from jointdb._output import write_rows
+
+            write_rows(out, rows, kind="matches", meta={"joint_type": joint_type, "request": req.to_dict()})
+            message(f"wrote {out} ({len(rows)} matches)")
         if interpolate is not None:
             ij = repo.interpolate(matches, req)
             _write_joint_file(interpolate, ij.frf, {
