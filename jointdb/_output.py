@@ -88,11 +88,11 @@ def _fmt(value: Any) -> str:
     return str(value)
 
 
-def _cell(text: str):
-    """A table cell taken literally (``[mm]`` is a unit, not rich markup)."""
+def _cell(text: str, markdown: bool = False):
+    """A table cell taken literally (``[mm]`` is a unit, not rich markup); ``|`` escaped in a Markdown table."""
     from rich.text import Text
 
-    return Text(text)
+    return Text(text.replace("|", "\\|") if markdown else text)
 
 
 def emit(
@@ -138,7 +138,7 @@ def emit(
         table.add_column("field", style="bold")
         table.add_column("value")
         for key, value in data.items():
-            table.add_row(_cell(header(str(key))), _cell(_fmt(value)))
+            table.add_row(_cell(header(str(key)), not tty), _cell(_fmt(value), not tty))
         console.print(table)
         return
     rows = list(data)
@@ -148,9 +148,9 @@ def emit(
     cols = list(columns) if columns else list(rows[0].keys())
     table = Table(title=title, **style)
     for col in cols:
-        table.add_column(_cell(header(col)), overflow="fold")
+        table.add_column(_cell(header(col), not tty), overflow="fold")
     for row in rows:
-        table.add_row(*(_cell(_fmt(row.get(col))) for col in cols))
+        table.add_row(*(_cell(_fmt(row.get(col)), not tty) for col in cols))
     console.print(table)
 
 

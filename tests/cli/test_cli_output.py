@@ -105,6 +105,10 @@ def test_piped_table_is_plain_and_untruncated():
     assert "torque [N·m]" in r.stdout
     assert not any(ch in r.stdout for ch in "┏┃│└")  # plain ASCII (Markdown) table, no box drawing
     assert "\x1b[" not in r.stdout  # no colour codes in a pipe
+    code = "from jointdb._output import emit; emit({'max |H[1x,1x]|': '4.5e-06 at 1888 Hz'})"
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=ENV)
+    row = next(x for x in r.stdout.splitlines() if "max" in x)
+    assert row.replace("\\|", "").count("|") == 3  # a | inside a cell is escaped: still two columns
 
 
 def test_piped_progress_prints_lines_with_counts_and_eta():
