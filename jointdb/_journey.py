@@ -144,8 +144,8 @@ def run_main_job(
     """
     from jointdb import app, io
     from jointdb.plots._lobes import plot_lobes
-    from jointdb.plots._stack import save_joint_distances, save_tip_comparison
-    from jointdb.stability import MillingCut, milling_lobes_zoa
+    from jointdb.plots._stack import joints_legend, save_joint_distances, save_tip_comparison
+    from jointdb.stability import MillingCut, milling_lobes_zoa, refine_lobes
     from jointdb.stack import stack_to_dict
     from jointdb.store import Repository
 
@@ -234,21 +234,29 @@ def run_main_job(
             say(f"          peak {irow['peak_m_per_n']:.3e} m/N at {irow['peak_hz']:.0f} Hz "
                 f"(nearest joint: {result.prediction[0]['peak_m_per_n']:.3e} m/N at "
                 f"{result.prediction[0]['peak_hz']:.0f} Hz)")
-            extra.append(("interpolated joint", ipred.tip))
+            extra.append((joints_legend({n: ires[n] for n in sorted(queried)}), ipred.tip))
         io.write_uff58(out / "tip.uff", pred.tip, round_freq=True)
         io.write_frf_csv(out / "tip.csv", pred.tip)
         result.files += [out / "tip.uff", out / "tip.csv"]
-        result.files.append(save_tip_comparison(out / "tip-vs-rigid.png", pred, title=spec.name, extra=extra))
+        result.files.append(save_tip_comparison(out / "tip-vs-rigid.png", pred, title=spec.name, extra=extra,
+                                                label=joints_legend(resolutions)))
 
         # 4. lobes ---------------------------------------------------------------------
         cut = MillingCut(**DEMO_CUT)
         speeds = np.linspace(*speed_range_rpm, n_speeds)
         say(f"[4/4] milling stability lobes (zero-order approximation, theory §5): {cut.n_teeth} teeth, "
             f"K_t={cut.kt:.3g} N/m², K_r={cut.kr:.3g} N/m², a_e/D={cut.radial_immersion:g}, "
-            f"{'down' if cut.down_milling else 'up'}-milling, {n_speeds} speeds")
+            f"{'down' if cut.down_milling else 'up'}-milling, {n_speeds} speeds, refined near the minima and pockets")
         cross = bool(np.any(pred.tip.values[:, 0, 1]))  # planes coupled by the spindle: use H[x,y], H[y,x]
-        lobes = milling_lobes_zoa(pred.tip, cut, cross_terms=cross, spindle_speed_rpm=speeds)
-        lobes_rigid = milling_lobes_zoa(pred.rigid, cut, cross_terms=cross, spindle_speed_rpm=speeds)
+        # more speeds near the envelope's minima and pockets (equal to the plain grid at its speeds)
+        # the lobes from the same prediction on 4x finer lines: ZOA draws each lobe through the FRF's lines,
+        # and at high speeds (low lobe numbers) 20 Hz lines are far apart in speed
+        fine = np.linspace(grid[0], grid[-1], 4 * (grid.size - 1) + 1)
+        lob = predict_tool_tip(spec, {n: r.frf for n, r in resolutions.items() if r.frf is not None}, fine)
+        lobes = refine_lobes(lambda s: milling_lobes_zoa(lob.tip, cut, cross_terms=cross, spindle_speed_rpm=s),
+                             speeds)
+        lobes_rigid = refine_lobes(
+            lambda s: milling_lobes_zoa(lob.rigid, cut, cross_terms=cross, spindle_speed_rpm=s), speeds)
         best = int(np.nanargmax(np.where(np.isfinite(lobes.depth_m), lobes.depth_m, -np.inf)))
         result.lobes = {
             "method": lobes.method,

@@ -70,10 +70,26 @@ def _new_app() -> typer.Typer:
         rich_markup_mode=None,  # plain Click help: no Rich/Markdown import at start-up
     )
 
+    def _show_version(value: bool) -> None:
+        if value:
+            from jointdb import __version__
+
+            typer.echo(f"jointdb {__version__}")
+            raise typer.Exit()
+
     @app_.callback()
-    def _root() -> None:
+    def _root(
+        verbose: int = typer.Option(0, "-v", "--verbose", count=True, show_default=False,
+                                    help="More log messages on stderr (-v: info, -vv: debug)."),
+        quiet: bool = typer.Option(False, "-q", "--quiet", help="Only warnings and errors on stderr; no progress."),
+        version: bool = typer.Option(False, "--version", is_eager=True, callback=_show_version,
+                                     help="Print the jointdb version and exit."),
+    ) -> None:
         """jointdb: joint identification (IRC), a versioned joint database, tool-tip
         prediction (RC), chatter stability lobes and model/measurement diagnosis."""
+        from jointdb._output import configure_logging
+
+        configure_logging(verbose, quiet)
 
     return app_
 
@@ -116,11 +132,11 @@ def __getattr__(name: str):
 
 def _click_errors():
     """Click's usage-error, error and abort classes (Typer vendors Click in recent releases)."""
-    try:
-        from click import Abort, ClickException, UsageError
-    except ImportError:
+    try:  # the Click that Typer runs on: its vendored copy when it has one, else the click package
         from typer import Abort
         from typer._click.exceptions import ClickException, UsageError
+    except ImportError:
+        from click import Abort, ClickException, UsageError
     return UsageError, ClickException, Abort
 
 
@@ -132,10 +148,16 @@ def main() -> None:
     becomes one line on stderr and the error class's exit code.
     """
     args = sys.argv[1:]
-    first = args[0] if args else None
+    # -v/-q may be written after the command too (`jointdb lobes ... -q`): they are the app's, moved to the front
+    upto = args.index("--") if "--" in args else len(args)
+    is_global = [a in ("-q", "--quiet", "--verbose") or (a[:2] == "-v" and set(a[1:]) == {"v"}) for a in args[:upto]]
+    args = [a for a, g in zip(args, is_global) if g] + [a for a, g in zip(args, is_global) if not g] + args[upto:]
+    # the first word that is not a global option (-v/-vv/-q/--verbose/--quiet) names the command
+    first = next((a for a in args if not (a in ("--verbose", "--quiet") or (a[:1] == "-" and a[1:2] != "-"
+                                                                             and set(a[1:]) <= {"v", "q"}))), None)
     if first in COMMANDS:
         cli = _app_with({COMMANDS[first][0]})
-    elif first is None or (first == "--help" and len(args) == 1):
+    elif first is None or first in ("--help", "--version"):
         cli = _summary_app()
     else:  # anything else (an unknown command, ...): the full app, for Click's own messages
         cli = __getattr__("app")

@@ -13,6 +13,8 @@ from typing import Annotated, Optional
 
 import typer
 
+from jointdb.cli._options import LegacyPlotOpt, PlotsOpt, deprecation_note, plot_file, plots_dir
+
 from jointdb.errors import InputError, NotFoundError
 
 
@@ -34,9 +36,11 @@ def register(app: typer.Typer) -> None:
         out: Annotated[Path, typer.Option("--out", help="Joint FRF HDF5 exchange file to write (.h5).")],
         report: Annotated[Optional[Path], typer.Option("--report", help="Also write the report as JSON.")] = None,
         plots: Annotated[
-            Optional[Path], typer.Option("--plots", help="Directory for PNGs: k(ω), c(ω) and measured vs reconstructed.")
+            Optional[Path], typer.Option("--plots", metavar="DIR",
+                                         help="Directory for PNGs: k(ω), c(ω) and measured vs reconstructed.")
         ] = None,
         as_json: Annotated[bool, typer.Option("--json", help="Machine-readable report on stdout.")] = False,
+        plot: LegacyPlotOpt = None,
     ) -> None:
         """Identify a joint (IRC) from a campaign's measured assembly FRFs and substructure models.
 
@@ -48,8 +52,7 @@ def register(app: typer.Typer) -> None:
 
         _check_out(out, (".h5", ".hdf5"), "--out")
         _check_out(report, (".json",), "--report")
-        if plots is not None and plots.exists() and not plots.is_dir():
-            raise InputError(f"--plots {plots}: exists and is not a directory")
+        plots = plots_dir(plots, plot)
         c = load_campaign(campaign)
         result = identify_campaign(c)
         rep = result.report()
@@ -67,14 +70,18 @@ def register(app: typer.Typer) -> None:
             written.append(str(report))
         if plots is not None:
             written += _identify_plots(plots, result)
+            deprecation_note()
         message(f"wrote {', '.join(written)}")
         if as_json:
             emit(rep, as_json=True)
         else:
             flat = {k: v for k, v in rep.items() if not isinstance(v, (dict, list))}
+            from jointdb.frf import Dof
+
             for row in rep.get("constant_fit", []):
-                flat[f"k {row['dof']}"] = row["k"]
-                flat[f"c {row['dof']}"] = row["c"]
+                rot = Dof.parse(row["dof"]).is_rotation
+                flat[f"k {row['dof']} [{'N·m/rad' if rot else 'N/m'}]"] = row["k"]
+                flat[f"c {row['dof']} [{'N·m·s/rad' if rot else 'N·s/m'}]"] = row["c"]
                 flat[f"fit error {row['dof']}"] = row["error"]
             for k, v in rep.get("validation", {}).items():
                 flat[f"validation {k}"] = v
@@ -87,19 +94,22 @@ def register(app: typer.Typer) -> None:
             Optional[Path], typer.Option("--joint", help="Joint HDF5 file from 'jointdb identify' (default: the campaign's couple.joint, else rigid).")
         ] = None,
         out: Annotated[Optional[Path], typer.Option("--out", help="Write the assembly FRF (.h5 or .uff).")] = None,
-        plot: Annotated[Optional[Path], typer.Option("--plot", help="PNG of the coupled (and measured) FRF.")] = None,
+        plots: PlotsOpt = None,
         as_json: Annotated[bool, typer.Option("--json", help="Machine-readable summary on stdout.")] = False,
+        plot: LegacyPlotOpt = None,
     ) -> None:
         """Couple a campaign's substructures through a joint (RC) and compare with its measurements.
 
-        Example: jointdb couple fixtures/campaigns/th-steel-30nm/campaign.json --joint joint.h5 --plot couple.png
+        With --plots DIR the coupled (and measured) FRF is drawn in DIR/couple.png.
+
+        Example: jointdb couple fixtures/campaigns/th-steel-30nm/campaign.json --joint joint.h5 --plots figs
         """
         from jointdb._output import emit, message
         from jointdb.campaign import load_campaign
         from jointdb.campaign import couple_campaign
 
         _check_out(out, (".h5", ".hdf5", ".uff", ".unv"), "--out")
-        _check_out(plot, (".png",), "--plot")
+        plot = plots_dir(plots, plot, one_file=True)
         if joint is not None and not joint.is_file():
             raise NotFoundError(f"--joint {joint}: file not found")
         c = load_campaign(campaign)
@@ -122,7 +132,7 @@ def register(app: typer.Typer) -> None:
             curves = [(f"coupled ({res['joint']})", g)]
             if res["measured"] is not None:
                 curves.insert(0, ("measured", res["measured"].select(g.outputs, g.inputs)))
-            save_comparison_plot(plot, curves, title=f"{c.name}: coupled assembly")
+            plot = save_comparison_plot(plot_file(plot, "couple.png"), curves, title=f"{c.name}: coupled assembly")
             written.append(str(plot))
         if written:
             message(f"wrote {', '.join(written)}")

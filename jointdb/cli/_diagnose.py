@@ -149,7 +149,7 @@ def register(app: typer.Typer) -> None:
         levels: Annotated[Optional[str], typer.Option("--levels", help="Excitation level of each recording, e.g. 2,10,50 (N).")] = None,
         band: Annotated[Optional[str], typer.Option("--band", help="Frequency band FMIN:FMAX in Hz.")] = None,
         out: Annotated[Optional[Path], typer.Option("--out", help="Write the augmented model (JSON).")] = None,
-        plots: Annotated[Optional[Path], typer.Option("--plots", help="Directory for before/after PNGs.")] = None,
+        plots: Annotated[Optional[Path], typer.Option("--plots", metavar="DIR", help="Directory for before/after PNGs.")] = None,
         no_combinations: Annotated[bool, typer.Option("--no-combinations", help="Fit single explanations only.")] = False,
         mask_nonfinite: Annotated[bool, typer.Option("--mask-nonfinite", help="Give NaN/Inf lines of the recordings zero weight (with a note) instead of refusing them.")] = False,
         as_json: Annotated[bool, typer.Option("--json", help="Machine-readable result on stdout.")] = False,
@@ -236,14 +236,20 @@ def register(app: typer.Typer) -> None:
                                                          "report results on seeds >= 1000).")] = 1000,
         effects: Annotated[Optional[str], typer.Option("--effects", help="Comma-separated subset of effects.")] = None,
         write_case: Annotated[Optional[Path], typer.Option("--write-case", help="Only write one case (model JSON + UFF58 recordings) of each effect to this directory.")] = None,
+        out: Annotated[Optional[Path], typer.Option("--out", help="Write one row per case to .csv, .json or .h5.")] = None,
         as_json: Annotated[bool, typer.Option("--json", help="Machine-readable result on stdout.")] = False,
     ) -> None:
         """Run the concealed-effect benchmark: generate, diagnose, score per effect.
 
+        Progress: a bar on a terminal; one line per case (count, elapsed, ETA) when piped or logged.
+
         Example: jointdb diagnose-bench --cases 20 --seed 1000
         """
-        from jointdb._output import emit, message, progress
+        from jointdb._output import emit, message, progress, progress_line, write_rows
+        from jointdb.cli._options import check_out
         from jointdb.diagnose_bench import EFFECTS, generate_case, run_case, single_blas_thread
+
+        check_out(out, (".csv", ".json", ".h5", ".hdf5"))
 
         chosen = EFFECTS if not effects else tuple(e.strip() for e in effects.split(",") if e.strip())
         bad = [e for e in chosen if e not in EFFECTS]
@@ -273,11 +279,17 @@ def register(app: typer.Typer) -> None:
                     r = run_case(generate_case(e, s))
                     results.append(r)
                     where = "" if r.placed is None else (" placed" if r.placed else " NOT placed")
-                    message(f"[{k}/{len(jobs)}] {r.case}: named {r.named}{where}, "
-                            f"improvement {r.improvement:.2f}x, {r.seconds:.1f} s")
+                    message(f"{progress_line('diagnose-bench', k, len(jobs), time.perf_counter() - t0)} — "
+                            f"{r.case}: named {r.named}{where}, improvement {r.improvement:.2f}x, {r.seconds:.1f} s")
         bench = BenchResult(results, time.perf_counter() - t0)
         rows, cols, m = bench.confusion()
         per = bench.per_effect()
+        if out is not None:
+            write_rows(out, [{"case": c.case, "effect": c.effect, "named": c.named, "explanation": " + ".join(c.names),
+                              "top3": ", ".join(c.top3), "improvement": c.improvement, "seconds_s": c.seconds,
+                              "position_m": c.position, "placed": c.placed} for c in bench.cases],
+                       kind="diagnose_bench", meta={"seed": seed, "cases_per_effect": cases, "per_effect": per})
+            message(f"wrote {out}")
         if as_json:
             emit({"per_effect": per, "confusion": {"rows": rows, "columns": cols, "counts": m},
                   "total_seconds": bench.seconds,

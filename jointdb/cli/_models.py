@@ -13,6 +13,8 @@ from typing import Annotated, Optional
 import numpy as np
 import typer
 
+from jointdb.cli._options import LegacyPlotOpt, PlotsOpt, plot_file, plots_dir
+
 from jointdb._limits import check_lines
 from jointdb.errors import InputError
 
@@ -102,6 +104,7 @@ def register(app: typer.Typer) -> None:
     def modes_cmd(
         model_file: Annotated[Path, typer.Argument(metavar="MODEL.json", help="Beam model description (JSON).")],
         n: Annotated[int, typer.Option("--n", help="Number of lowest modes.")] = 10,
+        out: Annotated[Optional[Path], typer.Option("--out", help="Write the modes to .csv, .json or .h5.")] = None,
         as_json: Annotated[bool, typer.Option("--json", help="Machine-readable output.")] = False,
     ) -> None:
         """Natural frequencies of a beam model (undamped), lowest first.
@@ -110,11 +113,19 @@ def register(app: typer.Typer) -> None:
         """
         from jointdb.fe import load_model
 
+        from jointdb.cli._options import check_out
+
         if n < 1:
             raise InputError(f"--n must be >= 1, got {n}")
+        check_out(out, (".csv", ".json", ".h5", ".hdf5"))
         model = load_model(model_file)
         modes = model.modes(n)
         rows = mode_rows(modes)
+        if out is not None:
+            from jointdb._output import message, write_rows
+
+            write_rows(out, rows, kind="modes", meta={"model": model.name or model_file.name, "theory": model.theory})
+            message(f"wrote {out}")
         if as_json:
             from jointdb._output import emit
 
@@ -153,12 +164,15 @@ def register(app: typer.Typer) -> None:
         binary: Annotated[
             bool, typer.Option("--binary", help="UFF58 output as binary 58b (exact; ASCII keeps 6 digits of frequency).")
         ] = False,
-        plot: Annotated[Optional[Path], typer.Option("--plot", help="Write a Bode plot of the driving points (.png).")] = None,
+        plots: PlotsOpt = None,
         as_json: Annotated[bool, typer.Option("--json", help="Machine-readable summary.")] = False,
+        plot: LegacyPlotOpt = None,
     ) -> None:
         """FRFs between named points of a beam model, to UFF58 / HDF5 / CSV and a Bode plot.
 
-        Example: jointdb frf fixtures/models/end-mill-in-holder.json --points tip --fmax 8000 --df 2 --out tip.uff --plot tip.png
+        With --plots DIR the Bode plot of the driving points is DIR/frf-bode.png.
+
+        Example: jointdb frf fixtures/models/end-mill-in-holder.json --points tip --fmax 8000 --df 2 --out tip.uff --plots figs
         """
         from jointdb._output import emit, message
         from jointdb.fe import load_model, rigid_body_count
@@ -172,8 +186,7 @@ def register(app: typer.Typer) -> None:
             frf_format(out, "--out")
             if not out.parent.is_dir():  # fail before the computation, not after
                 raise InputError(f"--out {str(out)!r}: directory {str(out.parent)!r} does not exist")
-        if plot is not None and plot.suffix.lower() != ".png":
-            raise InputError(f"--plot {str(plot)!r} must end in .png")
+        plot = plots_dir(plots, plot, one_file=True)
         rigid = rigid_body_count(model.assemble()) > 0
         grid = frequency_grid(fmin, fmax, df, n_lines, avoid_zero=rigid)
         if rigid and fmin is None:
@@ -200,7 +213,7 @@ def register(app: typer.Typer) -> None:
         if plot is not None:
             from jointdb.plots._frf import save_bode
 
-            save_bode(plot, frf, title=model.name or model_file.name)
+            plot = save_bode(plot_file(plot, "frf-bode.png"), frf, title=model.name or model_file.name)
             message(f"wrote Bode plot {plot}")
             summary["plot"] = str(plot)
         emit(summary, as_json=as_json, title="FRF synthesis")

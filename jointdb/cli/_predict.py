@@ -12,6 +12,8 @@ from typing import Annotated, Optional
 
 import typer
 
+from jointdb.cli._options import LegacyPlotOpt, PlotsOpt, plot_file, plots_dir
+
 
 def register(app: typer.Typer) -> None:
     """Add ``predict`` to the app."""
@@ -24,12 +26,12 @@ def register(app: typer.Typer) -> None:
                                                   "(default: $JOINTDB_URL or the per-user database).")] = None,
         out: Annotated[Optional[Path], typer.Option("--out", help="Write the tool-tip FRF (x, y): "
                                                     ".uff (UFF58), .h5 (HDF5) or .csv.")] = None,
-        plot: Annotated[Optional[Path], typer.Option("--plot", help="PNG comparing the prediction with "
-                                                     "rigid joints.")] = None,
+        plots: PlotsOpt = None,
         fmin: Annotated[Optional[float], typer.Option(help="Lowest line [Hz] (overrides the stack file).")] = None,
         fmax: Annotated[Optional[float], typer.Option(help="Highest line [Hz].")] = None,
         df: Annotated[Optional[float], typer.Option(help="Line spacing [Hz].")] = None,
         as_json: Annotated[bool, typer.Option("--json", help="Machine-readable output.")] = False,
+        plot: LegacyPlotOpt = None,
     ) -> None:
         """Predict the tool-tip FRF of a tool / holder / spindle stack (three-component RC).
 
@@ -38,7 +40,10 @@ def register(app: typer.Typer) -> None:
         the given conditions. The chosen versions, their distances and any
         extrapolation are reported.
 
-        Example: jointdb predict fixtures/stacks/endmill-modelled-spindle.json --out tip.uff --plot tip.png
+        With --plots DIR, DIR/tip-vs-rigid.png compares the prediction with rigid
+        joints (the legend names the joint versions and interpolation weights).
+
+        Example: jointdb predict fixtures/stacks/endmill-modelled-spindle.json --out tip.uff --plots figs
         """
         from jointdb import app as application
         from jointdb._limits import check_lines
@@ -46,7 +51,8 @@ def register(app: typer.Typer) -> None:
         from jointdb.errors import InputError
         from jointdb.stack import FrequencyGrid, prediction_grid
 
-        for label, path in (("--out", out), ("--plot", plot)):
+        plot = plots_dir(plots, plot, one_file=True)
+        for label, path in (("--out", out),):
             if path is not None and not path.parent.exists():
                 raise InputError(f"{label} {str(path)!r}: directory {str(path.parent)!r} does not exist")
         if out is not None:
@@ -89,9 +95,10 @@ def register(app: typer.Typer) -> None:
             files["tip_frf"] = str(out)
             message(f"wrote {out}")
         if plot is not None:
-            from jointdb.plots._stack import save_tip_comparison
+            from jointdb.plots._stack import joints_legend, save_tip_comparison
 
-            save_tip_comparison(plot, pred, title=spec.name)
+            plot = save_tip_comparison(plot_file(plot, "tip-vs-rigid.png"), pred, title=spec.name,
+                                       label=joints_legend(result.joints))
             files["plot"] = str(plot)
             message(f"wrote {plot}")
         joints = [r.row() for r in result.joints.values()]

@@ -8,7 +8,16 @@ from typing import Optional
 import numpy as np
 import typer
 
-from jointdb._output import emit, message, progress
+from jointdb._output import emit, message, progress, write_rows
+from jointdb.cli._options import (
+    LegacyPlotOpt,
+    PlotsOpt,
+    TableOpt,
+    check_out,
+    deprecation_note,
+    plot_file,
+    plots_dir,
+)
 from jointdb.errors import InputError
 
 #: Largest sizes accepted from options (far above real use; they bound memory and run time).
@@ -95,6 +104,43 @@ def _sd_lobes_with_progress(model, cut, speeds: np.ndarray, n_intervals: int, n_
                       ("spindle_speed_rpm", "depth_m", "chatter_freq_hz", "lobe", "kind")), (), info)
 
 
+#: Formats of ``lobes --out`` (by suffix).
+LOBE_FORMATS = (".csv", ".json", ".h5", ".hdf5")
+
+
+def lobe_rows_mm(res) -> list[dict]:
+    """The lobe table for people: depth in mm (the unit of the plot and the summary)."""
+    return [{"spindle_speed_rpm": r["spindle_speed_rpm"], "depth_mm": r["depth_m"] * 1e3,
+             "chatter_freq_hz": r["chatter_freq_hz"], "lobe": r["lobe"], "kind": r["kind"]} for r in res.table()]
+
+
+def lobe_summary(res, n_base: int) -> dict:
+    """Summary of a lobe result in SI units: the smallest limiting depth (the floor on this grid),
+    the deepest pocket, counts of speeds, flips and folds. Folds (multiplier +1) are not chatter limits
+    and are left out of the floor and the pocket."""
+    from jointdb.stability import plottable_depth
+
+    d = plottable_depth(res)
+    out: dict = {"method": res.method, "speeds": int(res.spindle_speed_rpm.size),
+                 "speeds_added_by_refinement": int(res.spindle_speed_rpm.size - n_base),
+                 "speed_range_rpm": [float(res.spindle_speed_rpm[0]), float(res.spindle_speed_rpm[-1])]}
+    if np.isfinite(d).any():
+        i = int(np.nanargmin(d))
+        j = int(np.nanargmax(d))
+        out |= {"min_depth_m": float(d[i]), "min_depth_speed_rpm": float(res.spindle_speed_rpm[i]),
+                "min_depth_chatter_freq_hz": float(res.chatter_freq_hz[i]), "min_depth_kind": str(res.kind[i]),
+                "best_pocket_depth_m": float(d[j]), "best_pocket_speed_rpm": float(res.spindle_speed_rpm[j])}
+    out |= {"flip_speeds": int(np.sum(res.kind == "flip")), "fold_speeds_not_limits": int(np.sum(res.kind == "fold")),
+            "no_limit_speeds": int(np.sum(~np.isfinite(res.depth_m)))}
+    return out
+
+
+def _summary_for_people(summary: dict) -> dict:
+    """The SI summary with depths in mm (as in the plot and the table)."""
+    return {(k[:-2] + "_mm" if k.endswith("depth_m") else k): (v * 1e3 if k.endswith("depth_m") else v)
+            for k, v in summary.items()}
+
+
 def register(app: typer.Typer) -> None:
     """Add ``modal-fit`` and ``lobes`` to the app."""
 
@@ -105,12 +151,16 @@ def register(app: typer.Typer) -> None:
         modes: Optional[int] = typer.Option(None, "--modes", help="Number of modes (default: all well-stabilised poles)."),
         max_order: int = typer.Option(30, "--max-order", help="Highest pLSCF model order of the stabilisation diagram."),
         no_residuals: bool = typer.Option(False, "--no-residuals", help="Do not fit upper/lower residual terms."),
-        plot: Optional[Path] = typer.Option(None, "--plot", help="Folder for the stabilisation diagram and the fit overlay (PNG)."),
-        as_json: bool = typer.Option(False, "--json", help="Machine-readable output."),
+        plots: PlotsOpt = None,
+        out: Optional[Path] = typer.Option(None, "--out", help="Write the modes (SI) to .csv, .json or .h5."),
+        as_json: bool = typer.Option(False, "--json", help="Machine-readable output (SI units)."),
+        plot: LegacyPlotOpt = None,
     ) -> None:
         """Fit modes to an FRF (pLSCF poles + LSFD residues) and report the fit quality.
 
-        Example: jointdb modal-fit tip.uff --band 5 1000 --modes 6 --plot out/
+        Writes modal-fit-stabilisation.png and modal-fit-overlay.png with --plots.
+
+        Example: jointdb modal-fit tip.uff --band 5 1000 --modes 6 --plots figs
         """
         from jointdb.modal import fit_modes
 
@@ -119,13 +169,19 @@ def register(app: typer.Typer) -> None:
             _at_most(modes, "--modes", MAX_ORDER)
         if band is not None and not (np.all(np.isfinite(band)) and 0 <= band[0] < band[1]):
             raise InputError(f"--band must be FMIN FMAX with finite 0 <= FMIN < FMAX Hz, got {band[0]:g} {band[1]:g}")
-        if plot is not None and plot.exists() and not plot.is_dir():
-            raise InputError(f"--plot {str(plot)!r}: exists and is not a directory")
+        plot = plots_dir(plots, plot)
+        check_out(out, LOBE_FORMATS)
         frf = read_frf_file(frf_file)
         fit = fit_modes(frf, n_modes=modes, band=band, max_order=max_order, residuals=not no_residuals)
-        rows = []
+        rows, table_rows = [], []
         for k in range(fit.model.n_modes):
             row = {"mode": k + 1, "freq_hz": float(fit.freq_hz[k]), "zeta": float(fit.zeta[k])}
+            for i, o in enumerate(fit.model.outputs):
+                for j, inp in enumerate(fit.model.inputs):
+                    r = fit.residues[k, i, j]
+                    table_rows.append({"mode": k + 1, "freq_hz": float(fit.freq_hz[k]), "zeta": float(fit.zeta[k]),
+                                       "output": str(o), "input": str(inp), "residue_re": float(r.real),
+                                       "residue_im": float(r.imag)})
             for i, o in enumerate(fit.model.outputs):
                 for j, inp in enumerate(fit.model.inputs):
                     r = fit.residues[k, i, j]
@@ -146,9 +202,14 @@ def register(app: typer.Typer) -> None:
             from jointdb.plots._lobes import plot_modal_fit, plot_stabilisation
 
             plot.mkdir(parents=True, exist_ok=True)
+            deprecation_note()
             p1 = plot_stabilisation(fit, plot / "modal-fit-stabilisation.png", frf=frf)
             p2 = plot_modal_fit(frf, fit, plot / "modal-fit-overlay.png")
             message(f"wrote {p1} and {p2}")
+        if out is not None:
+            write_rows(out, table_rows, kind="modes", meta={
+                "source": str(frf_file), "residue_unit": "receptance (m/N or rad/(N·m)) · rad/s", **quality})
+            message(f"wrote {out}")
         if as_json:
             modes_json = [
                 {"mode": k + 1, "freq_hz": float(fit.freq_hz[k]), "zeta": float(fit.zeta[k]), "residues": fit.residues[k]}
@@ -192,12 +253,22 @@ def register(app: typer.Typer) -> None:
         frf_y: Optional[Path] = typer.Option(None, "--frf-y", help="Separate file with the y-direction tool-tip FRF."),
         node: Optional[int] = typer.Option(None, "--node", help="Use only the DOFs of this node (tool tip)."),
         cross_terms: bool = typer.Option(False, "--cross-terms", help="ZOA: use the measured cross FRFs xy/yx."),
-        plot: Optional[Path] = typer.Option(None, "--plot", help="Write the lobe diagram to this PNG file."),
-        as_json: bool = typer.Option(False, "--json", help="Machine-readable output."),
+        refine: int = typer.Option(3, "--refine", help="Rounds of extra speeds near the minima and pockets "
+                                   "of the lobes (0: only the --n-speeds grid)."),
+        plots: PlotsOpt = None,
+        out: Optional[Path] = typer.Option(None, "--out", help="Write the lobe table (SI: depth in m) to "
+                                           ".csv, .json or .h5."),
+        table: TableOpt = False,
+        as_json: bool = typer.Option(False, "--json", help="Machine-readable summary and table (SI units)."),
+        plot: LegacyPlotOpt = None,
     ) -> None:
         """Stability lobes from a tool-tip FRF (turning: Tlusty; milling: ZOA or SD).
 
-        Example: jointdb lobes tip.h5 --op milling --method sd --teeth 2 --kt 6e8 --kr 2e8 --immersion 0.1
+        Prints a summary (smallest limiting depth, deepest pocket); --table prints
+        every speed (depth in mm), --json everything in SI units. With --plots DIR
+        the diagram is DIR/lobes.png.
+
+        Example: jointdb lobes tip.h5 --op milling --method sd --teeth 2 --kt 6e8 --kr 2e8 --immersion 0.1 --plots figs
         """
         from jointdb import stability
 
@@ -217,9 +288,10 @@ def register(app: typer.Typer) -> None:
         for name, value in (("--kf", kf), ("--kt", kt), ("--kr", kr), ("--immersion", immersion)):
             if value is not None and not np.isfinite(value):
                 raise InputError(f"{name} must be a finite number, got {value}")
-        for name, path in (("--plot", plot),):
-            if path is not None and not path.parent.is_dir():
-                raise InputError(f"{name} {str(path)!r}: directory {str(path.parent)!r} does not exist")
+        if refine < 0 or refine > 10:
+            raise InputError(f"--refine must be between 0 and 10 rounds, got {refine}")
+        plot = plots_dir(plots, plot, one_file=True)
+        check_out(out, LOBE_FORMATS)
         speeds = np.linspace(rpm_min, rpm_max, n_speeds)
         frf = _node_select(read_frf_file(frf_file), node)
         frf2 = _node_select(read_frf_file(frf_y), node) if frf_y is not None else None
@@ -227,7 +299,9 @@ def register(app: typer.Typer) -> None:
             if kf is None:
                 raise InputError("turning needs --kf (cutting coefficient in N/m²)")
             frf = _translational(frf, frf_file)
-            res = stability.turning_lobes(frf, kf, _floats(orientation, "--orientation"), spindle_speed_rpm=speeds)
+            mu = _floats(orientation, "--orientation")
+            res = stability.refine_lobes(lambda s: stability.turning_lobes(frf, kf, mu, spindle_speed_rpm=s),
+                                         speeds, rounds=refine)
             title = f"Turning lobes, K_f = {kf:g} N/m²"
         else:
             if kt is None or kr is None:
@@ -235,23 +309,27 @@ def register(app: typer.Typer) -> None:
             cut = stability.MillingCut(teeth, kt, kr, immersion, not up)
             mode_txt = "up" if up else "down"
             if method_l == "zoa":
-                res = stability.milling_lobes_zoa(frf, cut, frf2, cross_terms=cross_terms, spindle_speed_rpm=speeds)
+                res = stability.refine_lobes(lambda s: stability.milling_lobes_zoa(
+                    frf, cut, frf2, cross_terms=cross_terms, spindle_speed_rpm=s), speeds, rounds=refine)
             else:
                 model, _ = _fit_tip_model(frf, frf2, modes, band, max_order)
-                res = _sd_lobes_with_progress(model, cut, speeds, intervals)
+                res = stability.refine_lobes(lambda s: _sd_lobes_with_progress(model, cut, s, intervals),
+                                             speeds, rounds=refine)
             title = f"Milling lobes ({method_l.upper()}), {teeth} teeth, a/D = {immersion:g}, {mode_txt}-milling"
+        summary = lobe_summary(res, n_speeds)
         if plot is not None:
             from jointdb.plots._lobes import plot_lobes
 
-            message(f"wrote {plot_lobes(res, plot, title=title)}")
-        finite = np.isfinite(res.depth_m)
-        if finite.any():
-            i = int(np.nanargmin(np.where(finite, res.depth_m, np.nan)))
-            message(
-                f"{title}: smallest limiting depth {res.depth_m[i] * 1e3:.4g} mm at {res.spindle_speed_rpm[i]:.0f} rpm "
-                f"({res.chatter_freq_hz[i]:.1f} Hz, {res.kind[i]})"
-            )
+            message(f"wrote {plot_lobes(res, plot_file(plot, 'lobes.png'), title=title)}")
+        if out is not None:
+            write_rows(out, res.table(), kind="lobes", meta={"title": title, "method": res.method, "info": res.info,
+                                                             "summary": summary})
+            message(f"wrote {out} ({len(res.spindle_speed_rpm)} rows)")
         if as_json:
-            emit({"method": res.method, "info": res.info, "rows": res.table()}, as_json=True)
+            emit({"method": res.method, "info": res.info, "summary": summary, "rows": res.table()}, as_json=True)
             return
-        emit(res.table(), columns=["spindle_speed_rpm", "depth_m", "chatter_freq_hz", "lobe", "kind"], title=title)
+        if table:
+            emit(lobe_rows_mm(res), columns=["spindle_speed_rpm", "depth_mm", "chatter_freq_hz", "lobe", "kind"],
+                 title=title)
+            return
+        emit(_summary_for_people(summary), title=f"{title} (--table: all {summary['speeds']} speeds)")

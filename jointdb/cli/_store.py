@@ -234,6 +234,7 @@ def register(app: typer.Typer) -> None:
         k: Annotated[int, typer.Option("-k", help="Number of nearest versions.")] = 3,
         at: Annotated[Optional[str], typer.Option("--at", help="Query the catalogue as it was at this ISO time.")] = None,
         interpolate: Annotated[Optional[Path], typer.Option("--interpolate", help="Also write the interpolated joint FRF (dynamic stiffness) to this HDF5 file.")] = None,
+        out: Annotated[Optional[Path], typer.Option("--out", help="Write the matches (one row each) to .csv, .json or .h5.")] = None,
         db: DbOpt = None,
         blobs: BlobsOpt = None,
         as_json: JsonOpt = False,
@@ -242,7 +243,10 @@ def register(app: typer.Typer) -> None:
 
         Example: jointdb query --type tool-holder --material carbide+steel --torque 35 -k 3
         """
+        from jointdb.cli._options import check_out
+
         _check_output(interpolate)
+        check_out(out, (".csv", ".json", ".h5", ".hdf5"))
         repo = _repo(db, blobs)
         req = _conditions(material, preload, torque, geometry)
         with warnings.catch_warnings(record=True) as caught:
@@ -259,6 +263,11 @@ def register(app: typer.Typer) -> None:
                         "preload_n": c.preload_n, "extrapolating": m.extrapolating})
             rows.append(row)
         result: Any = rows
+        if out is not None:
+            from jointdb._output import write_rows
+
+            write_rows(out, rows, kind="matches", meta={"joint_type": joint_type, "request": req.to_dict()})
+            message(f"wrote {out} ({len(rows)} matches)")
         if interpolate is not None:
             ij = repo.interpolate(matches, req)
             _write_joint_file(interpolate, ij.frf, {
@@ -302,7 +311,18 @@ def register(app: typer.Typer) -> None:
                 "catalogue": {"name": jv.name, "version": jv.version, "uuid": jv.uuid, "blob_sha256": jv.blob_sha256},
                 "quality": dict(jv.quality)})
             message(f"wrote {jv.name} v{jv.version} FRF to {frf_out}")
-        emit(_version_detail(jv), as_json=as_json, title=f"{jv.name} v{jv.version}")
+        from jointdb.cli._joint_summary import constant_kc, kc_rows_for_people, readable
+
+        kc = constant_kc(repo.load_frf(jv))
+        detail = _version_detail(jv)
+        if as_json:
+            emit(detail | {"constant_kc": kc}, as_json=True)
+            return
+        emit({k: readable(v) for k, v in detail.items()}, title=f"{jv.name} v{jv.version}")
+        if kc is not None:
+            kc_rows = kc_rows_for_people(kc)
+            emit(kc_rows, columns=list(dict.fromkeys(c for r in kc_rows for c in r)), title=f"constant k, c per DOF: {kc['method']} "
+                 f"({kc['band_hz'][0]:g}–{kc['band_hz'][1]:g} Hz, {kc['n_lines']} lines)")
 
     @joints.command("history")
     def history(name: Annotated[str, typer.Argument(help="Joint name.")],

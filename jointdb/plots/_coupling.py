@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from jointdb.frf import FRF
+from jointdb.plots._axes import phase_deg, plot_clipped, robust_limits
 from jointdb.plots._frf import _pyplot, save_figure
 
 __all__ = ["save_kc_plot", "save_comparison_plot"]
@@ -28,10 +29,18 @@ def save_kc_plot(path: "str | Path", joint: FRF, kc_fit=None, title: str | None 
     for i, dof in enumerate(joint.inputs):
         unit_k = "N·m/rad" if dof.is_rotation else "N/m"
         unit_c = "N·m·s/rad" if dof.is_rotation else "N·s/m"
-        for ax, y, lab in ((axes[i, 0], k[:, i], f"k {dof} [{unit_k}]"), (axes[i, 1], c[:, i], f"c {dof} [{unit_c}]")):
-            ax.plot(joint.freq, y, lw=1.2, label="identified")
+        fits = (kc_fit.k[i], kc_fit.c[i]) if kc_fit is not None else (None, None)
+        for ax, y, lab, fit in ((axes[i, 0], k[:, i], f"k {dof} [{unit_k}]", fits[0]),
+                                (axes[i, 1], c[:, i], f"c {dof} [{unit_c}]", fits[1])):
+            # scaled by the 2nd-98th percentile (and the constant fit), not by single spikes
+            lim = robust_limits(y)
+            if lim is not None and fit is not None and np.isfinite(fit):
+                pad = 0.1 * (lim[1] - lim[0])
+                lim = (min(lim[0], fit - pad), max(lim[1], fit + pad))
+            plot_clipped(ax, joint.freq, y, lim, lw=1.2, label="identified")
             if flagged is not None and flagged.any():
-                ax.plot(joint.freq[flagged], y[flagged], "x", ms=3, color="tab:red", label="flagged line")
+                yf = np.clip(y[flagged], *lim) if lim is not None else y[flagged]
+                ax.plot(joint.freq[flagged], yf, "x", ms=3, color="tab:red", label="flagged line")
             ax.set_ylabel(lab)
             ax.grid(True, alpha=0.3)
         if kc_fit is not None:
@@ -59,7 +68,7 @@ def save_comparison_plot(path: "str | Path", curves: Sequence[tuple[str, FRF]], 
         for k, (label, frf) in enumerate(curves):
             h = frf.entry(o, i)
             axes[0, j].semilogy(frf.freq, np.abs(h), styles[k % 4], lw=1.3, label=label)
-            axes[1, j].plot(frf.freq, np.degrees(np.angle(h)), styles[k % 4], lw=1.1)
+            axes[1, j].plot(*phase_deg(frf.freq, h), styles[k % 4], lw=1.1)
         axes[0, j].set_title(f"H({o}, {i})")
         axes[0, j].grid(True, which="both", alpha=0.3)
         axes[1, j].grid(True, alpha=0.3)

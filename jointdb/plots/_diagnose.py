@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from jointdb.errors import InputError
+from jointdb.plots._axes import phase_deg
 from jointdb.plots._frf import save_figure
 
 
@@ -48,11 +49,11 @@ def plot_diagnosis(result, directory: Path) -> list[str]:
             label = f"{obs.out_points[i]}:{obs.out_dirs[i]}/{obs.in_points[0]}:{obs.in_dirs[0]}"
             line, = ax_m.semilogy(f, np.abs(rec), lw=1.0, label=f"recorded {label}")
             ax_m.semilogy(f, np.abs(result.H_before[lv, :, i, 0]), "--", color=line.get_color(), lw=0.8)
-            ax_p.plot(f, np.degrees(np.angle(rec)), lw=1.0, color=line.get_color())
-            ax_p.plot(f, np.degrees(np.angle(result.H_before[lv, :, i, 0])), "--", color=line.get_color(), lw=0.8)
+            ax_p.plot(*phase_deg(f, rec), lw=1.0, color=line.get_color())
+            ax_p.plot(*phase_deg(f, result.H_before[lv, :, i, 0]), "--", color=line.get_color(), lw=0.8)
             if result.H_after is not None:
                 ax_m.semilogy(f, np.abs(result.H_after[lv, :, i, 0]), ":", color="k", lw=1.0)
-                ax_p.plot(f, np.degrees(np.angle(result.H_after[lv, :, i, 0])), ":", color="k", lw=1.0)
+                ax_p.plot(*phase_deg(f, result.H_after[lv, :, i, 0]), ":", color="k", lw=1.0)
         lvl = obs.levels[lv]
         ax_m.set_title(f"level {lvl:g}" if lvl is not None else "recording")
         ax_m.set_ylabel("|H| [m/N]")

@@ -13,6 +13,7 @@ import numpy as np
 
 from jointdb.errors import InputError
 from jointdb.frf import FRF, Dof
+from jointdb.plots._axes import phase_deg
 
 __all__ = ["bode_figure", "nyquist_figure", "save_bode", "save_nyquist"]
 
@@ -87,7 +88,7 @@ def bode_figure(
             tag = f"H[{out},{inp}] [{_unit(data, out, inp)}]" + (f" {name}" if name else "")
             mag = np.abs(h)
             ax_m.semilogy(data.freq, np.where(mag > 0, mag, np.nan), style, label=tag, linewidth=1.2)
-            ax_p.plot(data.freq, np.degrees(np.angle(h)), style, linewidth=1.0)
+            ax_p.plot(*phase_deg(data.freq, h), style, linewidth=1.0)
     units = {_unit(frf, o, i) for o, i in sel}
     ax_m.set_ylabel(f"|{frf.quantity.value}|" + (f" [{units.pop()}]" if len(units) == 1 else ""))
     ax_p.set_ylabel("phase [°]")

@@ -7,9 +7,10 @@ from pathlib import Path
 
 import numpy as np
 
+from jointdb.plots._axes import phase_deg
 from jointdb.plots._frf import _pyplot, save_figure
 
-__all__ = ["plot_lobes", "plot_stabilisation", "plot_modal_fit"]
+__all__ = ["plot_lobes", "lobes_figure", "plot_stabilisation", "plot_modal_fit"]
 
 
 _plt = _pyplot
@@ -18,16 +19,27 @@ _plt = _pyplot
 _UNIT = {"m": 1.0, "mm": 1e3, "um": 1e6}
 
 
-def plot_lobes(
-    results, path, *, title: str | None = None, depth_unit: str = "mm", labels: Sequence[str] | None = None,
-    show_lobes: bool = True, depth_max: float | None = None,
-) -> Path:
-    """Stability lobe diagram: limiting depth against spindle speed.
+def plot_lobes(results, path, **kwargs) -> Path:
+    """Write :func:`lobes_figure` (same keyword arguments) to the PNG ``path``; returns the path."""
+    return save_figure(lobes_figure(results, **kwargs), path, dpi=120)
+
+
+def lobes_figure(
+    results, *, title: str | None = None, depth_unit: str = "mm", labels: Sequence[str] | None = None,
+    show_lobes: bool = True, depth_max: float | None = None, shade: bool = True,
+):
+    """Stability lobe diagram: limiting depth against spindle speed, the stable region shaded.
 
     ``results`` is one :class:`~jointdb.stability.LobeResult` or a sequence (overlaid,
-    e.g. ZOA and SD). Flip-type limits are marked. Individual lobes (turning/ZOA)
-    are drawn thin behind the envelope when ``show_lobes``. Returns the path.
+    e.g. ZOA and SD, or with and without joints); the region below the first
+    result's limit is shaded as stable. Flip-type limits are marked. Folds (SD
+    boundaries with a real multiplier +1, not chatter limits) and non-finite
+    depths are not drawn: the line breaks there and the legend counts them.
+    Individual lobes (turning/ZOA) are drawn thin behind the envelope when
+    ``show_lobes``. Returns the matplotlib figure.
     """
+    from jointdb.stability import plottable_depth
+
     plt = _plt()
     if not isinstance(results, (list, tuple)):
         results = [results]
@@ -38,14 +50,21 @@ def plot_lobes(
     for i, res in enumerate(results):
         c = colours[i % len(colours)]
         label = labels[i] if labels else res.method
+        d = plottable_depth(res)
+        n = res.spindle_speed_rpm
+        if shade and i == 0:
+            ax.fill_between(n, 0, np.where(np.isfinite(d), d * scale, 0), where=np.isfinite(d), color=c,
+                            alpha=0.12, lw=0, label=f"stable ({label})" if len(results) > 1 else "stable")
         if show_lobes and res.lobes:
             for lobe in res.lobes:
-                ax.plot(lobe.spindle_speed_rpm, lobe.depth_m * scale, color=c, lw=0.4, alpha=0.35)
-        d = np.where(np.isfinite(res.depth_m), res.depth_m, np.nan)
-        ax.plot(res.spindle_speed_rpm, d * scale, color=c, lw=1.6, label=label)
-        flip = res.kind == "flip"
+                ax.plot(lobe.spindle_speed_rpm, lobe.depth_m * scale, color=c, lw=0.4, alpha=0.25)
+        ax.plot(n, d * scale, color=c, lw=1.6, label=label)
+        flip = (res.kind == "flip") & np.isfinite(d)
         if np.any(flip):
-            ax.plot(res.spindle_speed_rpm[flip], d[flip] * scale, "v", color=c, ms=3.5, label=f"{label}: flip")
+            ax.plot(n[flip], d[flip] * scale, "v", color=c, ms=3.5, label=f"{label}: flip")
+        folds = int(np.sum(res.kind == "fold"))
+        if folds:
+            ax.plot([], [], " ", label=f"{label}: {folds} fold point{'s' if folds > 1 else ''} (multiplier +1) not drawn")
         if np.any(np.isfinite(d)):
             top = max(top, float(np.nanmax(d)) * scale)
     ax.set_xlim(min(float(r.spindle_speed_rpm.min()) for r in results), max(float(r.spindle_speed_rpm.max()) for r in results))
@@ -56,7 +75,7 @@ def plot_lobes(
     ax.grid(True, alpha=0.3)
     ax.legend(loc="upper left", fontsize=8)
     fig.tight_layout()
-    return save_figure(fig, path, dpi=120)
+    return fig
 
 
 def plot_stabilisation(fit, path, *, frf=None, title: str | None = None) -> Path:
@@ -100,10 +119,11 @@ def plot_modal_fit(frf, fit, path, *, title: str | None = None, max_entries: int
         axes[0].semilogy(part.freq, np.abs(part.values[:, i, j]), color=c, lw=1.0, label=f"{lab} measured")
         axes[0].semilogy(part.freq, np.abs(syn.values[:, i, j]), color=c, lw=1.0, ls="--",
                          label=f"{lab} fit (FRAC {fit.quality.frac[i, j]:.3f})")
-        axes[1].plot(part.freq, np.degrees(np.angle(part.values[:, i, j])), color=c, lw=0.8)
-        axes[1].plot(part.freq, np.degrees(np.angle(syn.values[:, i, j])), color=c, lw=0.8, ls="--")
+        axes[1].plot(*phase_deg(part.freq, part.values[:, i, j]), color=c, lw=0.8)
+        axes[1].plot(*phase_deg(part.freq, syn.values[:, i, j]), color=c, lw=0.8, ls="--")
     axes[0].set_ylabel(f"|H| ({part.quantity.value}, SI)")
     axes[1].set_ylabel("phase [deg]")
+    axes[1].set_yticks([-180, -90, 0, 90, 180])
     axes[1].set_xlabel("frequency [Hz]")
     axes[0].legend(fontsize=7, ncol=2)
     axes[0].set_title(title or f"Modal fit: {fit.model.n_modes} modes, NMSE {fit.quality.nmse_total:.2e}")

@@ -12,11 +12,29 @@ import numpy as np
 
 from jointdb.plots._frf import _pyplot, save_figure
 
-__all__ = ["save_tip_comparison", "save_joint_distances"]
+__all__ = ["save_tip_comparison", "save_joint_distances", "joints_legend"]
+
+
+def joints_legend(resolutions) -> str:
+    """Short legend text naming the joints used: ``"tool-holder: th-er32-carbide-120nm v1"``, or for an
+    interpolated joint its neighbours and weights (``"… v1 (w=0.550), … v1 (w=0.450)"``); rigid joints omitted.
+
+    ``resolutions``: mapping interface → :class:`jointdb.app.JointResolution`.
+    """
+    parts = []
+    for name, res in resolutions.items():
+        if res.kind == "interpolated":
+            text = res.description.split(" from ", 1)[-1]
+            parts.append(f"{name}: interpolated {text}")
+        elif res.name:
+            parts.append(f"{name}: {res.name} v{res.version}")
+        elif res.kind == "explicit":
+            parts.append(f"{name}: explicit k, c")
+    return "; ".join(parts) or "rigid"
 
 
 def save_tip_comparison(path, prediction, *, title: str | None = None,
-                        extra: Sequence[tuple[str, object]] = ()) -> Path:
+                        extra: Sequence[tuple[str, object]] = (), label: str = "with catalogued joints") -> Path:
     """Tool-tip receptance magnitude, real and imaginary parts: with joints vs rigid joints.
 
     Parameters
@@ -27,6 +45,9 @@ def save_tip_comparison(path, prediction, *, title: str | None = None,
         :class:`jointdb.stack.Prediction`.
     extra
         Further ``(label, FRF)`` curves on the same tip DOFs (e.g. a measurement).
+    label
+        Legend of the prediction: name the joint versions (and interpolation
+        weights), e.g. with :func:`joints_legend`.
 
     Returns
     -------
@@ -40,7 +61,7 @@ def save_tip_comparison(path, prediction, *, title: str | None = None,
     fig, axes = plt.subplots(2, len(directions), figsize=(7.5 * len(directions), 6.5), sharex=True, squeeze=False)
     for col, d in enumerate(directions):
         dof = f"1{d}"
-        curves = [("with catalogued joints", tip, "C0", "-"), ("rigid joints", rigid, "C3", "--")]
+        curves = [(label, tip, "C0", "-"), ("rigid joints", rigid, "C3", "--")]
         curves += [(label, frf, f"C{2 + i}", ":") for i, (label, frf) in enumerate(extra)]
         ax_m, ax_c = axes[0, col], axes[1, col]
         for label, frf, colour, style in curves:
@@ -51,7 +72,9 @@ def save_tip_comparison(path, prediction, *, title: str | None = None,
         ax_m.set_ylabel(f"|H_{d}{d}| [m/N]")
         ax_m.set_title(f"tool tip, {d} direction")
         ax_m.grid(True, which="both", alpha=0.3)
-        ax_m.legend(fontsize=8)
+        lo, hi = ax_m.get_ylim()
+        ax_m.set_ylim(lo, hi * 10)  # a decade of headroom: the legend does not cover a peak
+        ax_m.legend(fontsize=7, loc="upper left")
         ax_c.set_ylabel("Re (dark), Im (light) [µm/N]")
         ax_c.set_xlabel("frequency [Hz]")
         ax_c.grid(True, alpha=0.3)

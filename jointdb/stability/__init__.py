@@ -10,10 +10,13 @@ Public API
 ``milling_lobes_sd(model, cut, spindle_speed_rpm, *, n_intervals=40, rtol=1e-4, depth_max=None) -> LobeResult``
 ``milling_lobes_sd_grid(model, cut, speeds, depths, *, n_intervals=40)`` (dense-grid reference)
 ``sd_system``, ``monodromy``, ``spectral_radius``, ``critical_depth`` (SD building blocks)
+``refine_lobes(compute, speeds, *, rounds=3) -> LobeResult`` (adaptive speeds near the envelope's turning points;
+equal to the plain computation at the shared speeds), ``plottable_depth(result)`` (folds and non-finite as NaN)
 ``LobeResult`` (frozen: spindle_speed_rpm, depth_m, chatter_freq_hz, lobe, kind, lobes, info;
 ``.table()``, ``.min_depth_m``), ``Lobe``, ``mean_directional_matrix``, ``tool_tip_matrix``.
 """
 
+from jointdb.stability._adaptive import merge_lobe_results, plottable_depth, refine_lobes
 from jointdb.stability._cutting import MillingCut, interval_directional_matrices, mean_directional_matrix
 from jointdb.stability._frequency import milling_lobes_zoa, oriented_frf, tlusty_limit, tool_tip_matrix, turning_lobes
 from jointdb.stability._results import Lobe, LobeResult, envelope, lobes_from_transfer
@@ -35,11 +38,14 @@ __all__ = [
     "interval_directional_matrices",
     "lobes_from_transfer",
     "mean_directional_matrix",
+    "merge_lobe_results",
     "milling_lobes_sd",
     "milling_lobes_sd_grid",
     "milling_lobes_zoa",
     "monodromy",
     "oriented_frf",
+    "plottable_depth",
+    "refine_lobes",
     "sd_system",
     "spectral_radius",
     "tlusty_limit",

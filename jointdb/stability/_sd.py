@@ -32,6 +32,7 @@ eigenvector's history samples (dominant harmonic of the periodic part).
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Sequence
 
 import numpy as np
@@ -42,6 +43,8 @@ from jointdb.errors import InputError, NumericalError
 from jointdb.modal._model import ModalModel
 from jointdb.stability._cutting import MillingCut, interval_directional_matrices, mean_directional_matrix
 from jointdb.stability._results import LobeResult, spindle_speeds
+
+log = logging.getLogger(__name__)
 
 __all__ = ["SDSystem", "sd_system", "monodromy", "spectral_radius", "critical_depth", "milling_lobes_sd", "milling_lobes_sd_grid"]
 
@@ -377,6 +380,7 @@ def milling_lobes_sd(
     start = 0.5 * _floor_estimate(sys)
     rows = [critical_depth(sys, s, n_intervals, start=start, rtol=rtol, depth_max=depth_max) for s in speeds]
     depth, fc, kind, lobe, calls = (list(col) for col in zip(*rows))
+    log.debug("SD lobes: %d speeds, %d monodromy matrices (m = %d)", speeds.size, sum(calls), n_intervals)
     return LobeResult(
         "milling-sd",
         speeds,

@@ -90,6 +90,10 @@ def _cases() -> list[Case]:
     add("intervals-huge", [*lobes, *mill, "--method", "sd", "--intervals", "10000000"], "--intervals")
     add("max-order-huge", [*lobes, *mill, "--method", "sd", "--max-order", "1000000"], "--max-order")
     add("plot-missing-dir", ["lobes", "tip.h5", *mill, "--plot", "nodir/l.png"], "nodir")
+    add("plots-missing-parent", ["lobes", "tip.h5", *mill, "--plots", "nodir/figs"], "nodir")
+    add("plots-is-a-file", ["lobes", "tip.h5", *mill, "--plots", "tip.h5"], "--plots")
+    add("plots-and-plot", ["lobes", "tip.h5", *mill, "--plots", "figs", "--plot", "l.png"], "--plots")
+    add("out-suffix", ["lobes", "tip.h5", *mill, "--out", "l.txt"], "l.txt")
     add("frf-y-missing", [*lobes, *mill, "--frf-y", "nothere.h5"], "nothere.h5", (NOT_FOUND,))
     add("frf-unknown-suffix", ["lobes", "tip.dat", *mill], "tip.dat", files={"tip.dat": b"1,2,3\n"})
     # modal-fit
@@ -108,6 +112,7 @@ def _cases() -> list[Case]:
     add("out-suffix", ["predict", "s.json", "--out", "tip.txt"], "tip.txt")
     add("out-missing-dir", ["predict", "s.json", "--out", "nodir/tip.h5"], "nodir")
     add("plot-missing-dir", ["predict", "s.json", "--plot", "nodir/p.png"], "nodir")
+    add("plots-missing-parent", ["predict", "s.json", "--plots", "nodir/figs"], "nodir")
     add("stack-missing", ["predict", "nothere.json"], "nothere.json", (NOT_FOUND,))
     return c
 

@@ -59,7 +59,10 @@ def test_lobes_turning_table(tip_files):
     d, k = tip_files
     r = run(["lobes", str(d / "tip.h5"), "--op", "turning", "--kf", "1e9", "--n-speeds", "20"])
     assert r.exit_code == 0, r.output
-    assert "spindle_speed_rpm" in r.stdout and "hopf" in r.stdout
+    assert "speeds_added_by_refinement" in r.stdout and "min_depth [mm]" in r.stdout  # a summary by default
+    r = run(["lobes", str(d / "tip.h5"), "--op", "turning", "--kf", "1e9", "--n-speeds", "20", "--table"])
+    assert r.exit_code == 0, r.output
+    assert "spindle_speed [rpm]" in r.stdout and "depth [mm]" in r.stdout and "hopf" in r.stdout
 
 
 def test_lobes_user_errors_are_one_line(tip_files, tmp_path):

@@ -1,0 +1,71 @@
+"""Small drawing helpers shared by the figures: phase without wrap bars, robust axis limits."""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["phase_deg", "robust_limits", "plot_clipped"]
+
+
+def phase_deg(freq, h) -> tuple[np.ndarray, np.ndarray]:
+    """Phase of ``h`` in degrees in (−180, 180], with the line broken where it wraps.
+
+    A wrap (a jump of more than 180° between neighbouring lines) gets a NaN
+    inserted between the two points, so a plotted line stops at ±180° instead of
+    drawing a vertical bar across the axis.
+
+    Returns
+    -------
+    (freq, phase)
+        Arrays of equal length (``len(freq)`` plus one per wrap).
+    """
+    f = np.asarray(freq, dtype=float)
+    p = np.degrees(np.angle(np.asarray(h)))
+    jumps = np.flatnonzero(np.abs(np.diff(p)) > 180.0) + 1
+    if jumps.size == 0:
+        return f, p
+    return np.insert(f, jumps, np.nan), np.insert(p, jumps, np.nan)
+
+
+def robust_limits(y, *, lower_pct: float = 2.0, upper_pct: float = 98.0, margin: float = 0.15,
+                  include_zero: bool = False) -> tuple[float, float] | None:
+    """Axis limits from percentiles of the finite values (single spikes do not set the scale).
+
+    The range between the ``lower_pct`` and ``upper_pct`` percentiles, widened by
+    ``margin`` of its span on each side; ``None`` when no value is finite.
+    """
+    v = np.asarray(y, dtype=float)
+    v = v[np.isfinite(v)]
+    if v.size == 0:
+        return None
+    lo, hi = np.percentile(v, [lower_pct, upper_pct])
+    if include_zero:
+        lo, hi = min(lo, 0.0), max(hi, 0.0)
+    span = hi - lo if hi > lo else (abs(hi) or 1.0)
+    return float(lo - margin * span), float(hi + margin * span)
+
+
+def plot_clipped(ax, x, y, limits, **line_kw):
+    """Plot ``y`` against ``x`` within ``limits``; values outside are triangles on the edge, not line.
+
+    Returns the number of clipped points (also put in the legend as "n clipped").
+    """
+    x = np.asarray(x, dtype=float)
+    y = np.asarray(y, dtype=float)
+    if limits is None:
+        ax.plot(x, y, **line_kw)
+        return 0
+    lo, hi = limits
+    above, below = y > hi, y < lo
+    # the line stops at off-scale values (no bars running into the edge); a marker on the edge shows each
+    line, = ax.plot(x, np.where(above | below, np.nan, y), **line_kw)
+    colour = line.get_color()
+    if above.any():
+        ax.plot(x[above], np.full(above.sum(), hi), "^", color=colour, ms=4, clip_on=False)
+    if below.any():
+        ax.plot(x[below], np.full(below.sum(), lo), "v", color=colour, ms=4, clip_on=False)
+    n = int(above.sum() + below.sum())
+    if n:
+        ax.plot([], [], "^", color=colour, ms=4, label=f"{n} values off scale (at the edge)")
+    ax.set_ylim(lo, hi)
+    return n
