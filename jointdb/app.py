@@ -367,8 +367,8 @@ def catalogue_campaign(repo, path: Path | str, author: str | None = None) -> Cat
         if outcome.validation is not None:
             quality["validation_error"] = float(outcome.validation["identified_joint_error_mean"])
         prov = Provenance(
-            method=f"irc-{camp.joint_model}",
-            parameters={k: attrs[k] for k in ("settings", "interface", "campaign")},
+            method=str(attrs.get("method", f"irc-{camp.joint_model}")),
+            parameters={k: attrs[k] for k in ("settings", "interface", "campaign", "uncertainty") if k in attrs},
             input_files=_campaign_files(camp),
             software_version=str(software_version),
         )

@@ -144,7 +144,8 @@ class SpringDamperModel:
     def start(self, k: np.ndarray, c: np.ndarray) -> np.ndarray:
         th = np.zeros((len(self.labels), 2, self.order + 1))
         th[:, 0, 0] = np.log(np.maximum(k, 1e-300))
-        th[:, 1, 0] = np.log(np.maximum(c, 1e-300 + 1e-12 * np.abs(k)))
+        # a damping estimate at or below zero (noise) starts at a loss factor of ~1e-3 at 1 kHz
+        th[:, 1, 0] = np.log(np.where(c > 1e-9 * np.abs(k), c, 1.6e-7 * np.abs(k)))
         return th.ravel()
 
     def kc(self, theta: np.ndarray, freq: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -321,9 +322,19 @@ def fit(model, blocks: CoupledBlocks, measured: np.ndarray, sigma: np.ndarray, t
     good = np.isfinite(sigma) & (sigma > 0) & np.isfinite(measured) & sel[None]
     wts = np.where(good, 1.0 / np.where(good, sigma, 1.0), 0.0)
 
+    big = None
+
     def resid(th):
-        g, _ = model.evaluate(th, blocks, jac=False)
-        r = ((g - measured) * wts)[good]
+        try:
+            with np.errstate(over="ignore", invalid="ignore"):
+                g, _ = model.evaluate(th, blocks, jac=False)
+        except np.linalg.LinAlgError:  # a trial step made the interface singular: reject the step
+            g = None
+        r = None if g is None else ((g - measured) * wts)[good]
+        if r is None or not np.all(np.isfinite(r)):
+            if big is None:
+                raise NumericalError("output-error fit: the coupled model is singular at the start point")
+            return big
         return np.concatenate([r.real, r.imag])
 
     def jacobian(th):
@@ -332,8 +343,7 @@ def fit(model, blocks: CoupledBlocks, measured: np.ndarray, sigma: np.ndarray, t
         return np.concatenate([jr.real, jr.imag])
 
     r0 = resid(theta0)
-    if not np.all(np.isfinite(r0)):
-        raise NumericalError("output-error fit: the coupled model is not finite at the start point")
+    big = np.full_like(r0, 1e3 * max(np.sqrt(np.mean(r0 ** 2)), 1.0))
     log = isinstance(model, SpringDamperModel)
     sol = least_squares(resid, theta0, jac=jacobian, method="trf", x_scale="jac", max_nfev=max_nfev,
                         xtol=1e-12, ftol=1e-12, gtol=1e-12)

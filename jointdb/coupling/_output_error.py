@@ -24,7 +24,7 @@ from jointdb.coupling._oe_core import (
     coupled_blocks,
     fit,
 )
-from jointdb.errors import InputError
+from jointdb.errors import InputError, NumericalError
 from jointdb.frf import FRF, Dof, dofs
 
 __all__ = [
@@ -109,13 +109,36 @@ def _band_mask(freq: np.ndarray, band) -> np.ndarray:
     return m
 
 
+def _multi_start(model, blocks, measured, s, k0, c0, entries) -> OutputErrorResult:
+    """Fit from the IRC start and from two damping guesses; keep the lowest cost.
+
+    In log-parameters the misfit flattens out as a damping goes to zero (``∂z/∂log c = iωc``),
+    so a per-line estimate that is far too small can strand the fit there; a start with more
+    damping (×5, and a loss factor of 1 % at mid-band) avoids that. Stiffnesses start from IRC.
+    """
+    k0, c0 = np.abs(np.asarray(k0, float)), np.asarray(c0, float)
+    w_mid = 2 * np.pi * float(np.mean(blocks.freq))
+    starts = [c0, 5 * np.abs(c0), 0.01 * k0 / w_mid]
+    best = None
+    for c in starts:
+        try:
+            res = fit(model, blocks, measured, s, model.start(k0, c), entries)
+        except NumericalError:
+            continue
+        if best is None or res.cost < best.cost:
+            best = res
+    if best is None:
+        raise NumericalError("output-error fit: the coupled model is singular at every start point")
+    return best
+
+
 def _fit_springs(blocks, measured, sigma, labels, k0, c0, order, band, settings) -> OutputErrorResult:
     use = _band_mask(blocks.freq, band)
     s = np.where(use[:, None, None], _sigma(measured, sigma), np.inf)
     model = SpringDamperModel(dofs(labels), int(order))
     if model.order < 0:
         raise InputError(f"order must be >= 0 (0 = constant k, c), got {order}")
-    res = fit(model, blocks, measured, s, model.start(np.asarray(k0, float), np.asarray(c0, float)))
+    res = _multi_start(model, blocks, measured, s, k0, c0, None)
     object.__setattr__(res, "settings", {**settings, "order": model.order,
                                           "band_hz": None if band is None else [float(band[0]), float(band[1])]})
     return res
@@ -246,8 +269,7 @@ def fit_n_point_joints(
     use = _band_mask(blocks.freq, band)
     s = np.where(use[:, None, None], _sigma(measured, sigma), np.inf)
     model = SpringDamperModel(ca, int(order))
-    res = fit(model, blocks, measured, s, model.start(np.asarray(start[0], float), np.asarray(start[1], float)),
-              entries)
+    res = _multi_start(model, blocks, measured, s, start[0], start[1], entries)
     object.__setattr__(res, "settings", {"model": "n-point", "order": model.order,
                                           "band_hz": None if band is None else [float(band[0]), float(band[1])]})
     return res
