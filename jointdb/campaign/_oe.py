@@ -22,6 +22,7 @@ from jointdb.coupling import (
     spring_damper_joint,
 )
 from jointdb.coupling._kc import KCFit
+from jointdb.coupling._propagate import uncertainty_record  # noqa: F401  (re-exported for _run)
 from jointdb.coupling._quality import parameter_verdicts, peak_errors, peak_verdicts
 from jointdb.frf import FRF
 
@@ -114,24 +115,3 @@ def verdict(fit: OutputErrorResult | None, peaks: list[dict], mean_dev: float, v
         lines.append(f"OK: {se}dominant peaks of the {where} assembly within {worst:.1%} in amplitude")
     return lines
 
-
-def uncertainty_record(fit: OutputErrorResult) -> dict[str, Any]:
-    """What a joint file and a catalogued version keep to propagate the joint's uncertainty.
-
-    ``theta`` and its ``covariance`` are the fitted parameters as optimised (natural logs
-    of k and c for spring–dampers, ``theta_is_log``); ``names`` label them; ``dofs`` are the
-    joint's DOF labels. A sample ``θ ~ N(theta, covariance)`` gives one plausible joint.
-    """
-    rec = {
-        "format": "jointdb-joint-uncertainty/1",
-        "model": "spring-damper" if fit.log_parameters else "joint-body",
-        "names": list(fit.names),
-        "theta": [float(x) for x in fit.theta],
-        "covariance": [[float(x) for x in row] for row in fit.covariance],
-        "theta_is_log": bool(fit.log_parameters),
-        "dofs": [str(d) for d in fit.model.labels],
-        "residual_rms": float(fit.residual_rms),
-    }
-    if fit.log_parameters:
-        rec["order"] = int(fit.model.order)
-    return rec
