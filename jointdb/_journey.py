@@ -207,7 +207,11 @@ def run_main_job(
         io.write_uff58(out / "tip.uff", pred.tip, round_freq=True)
         io.write_frf_csv(out / "tip.csv", pred.tip)
         result.files += [out / "tip.uff", out / "tip.csv"]
-        result.files.append(save_tip_comparison(out / "tip-vs-rigid.png", pred, title=spec.name, extra=extra))
+        from jointdb._journey_band import journey_bands
+
+        tip_band, lobe_band, band_summary = journey_bands(spec, resolutions, grid, say)
+        result.files.append(save_tip_comparison(out / "tip-vs-rigid.png", pred, title=spec.name, extra=extra,
+                                                band=tip_band))
 
         # 4. lobes ---------------------------------------------------------------------
         cut = MillingCut(**DEMO_CUT)
@@ -217,6 +221,7 @@ def run_main_job(
             f"{'down' if cut.down_milling else 'up'}-milling, {n_speeds} speeds")
         lobes = milling_lobes_zoa(pred.tip, cut, spindle_speed_rpm=speeds)
         lobes_rigid = milling_lobes_zoa(pred.rigid, cut, spindle_speed_rpm=speeds)
+        lobe_band = lobe_band(cut, speeds) if lobe_band is not None else None
         best = int(np.nanargmax(np.where(np.isfinite(lobes.depth_m), lobes.depth_m, -np.inf)))
         result.lobes = {
             "method": lobes.method,
@@ -232,7 +237,12 @@ def run_main_job(
         result.files.append(_write_csv(out / "lobes.csv", lobes.table()))
         result.files.append(plot_lobes([lobes, lobes_rigid], out / "lobes.png",
                                        labels=["with catalogued joints", "rigid joints"],
-                                       title=f"Stability lobes: {spec.name}"))
+                                       title=f"Stability lobes: {spec.name}", band=lobe_band))
+        if lobe_band is not None:
+            band_summary["lobes"] = lobe_band.to_json()
+            lo, mid, hi = lobe_band.critical_depth_m * 1e3
+            say(f"      critical depth 5–95 %: {lo:.3f} – {hi:.3f} mm (median {mid:.3f} mm, "
+                f"{lobe_band.samples} sampled joints)")
         summary = {
             "database": url,
             "catalogued": result.catalogued,
@@ -241,6 +251,7 @@ def run_main_job(
             "interpolated_cross_check": result.interpolated,
             "notes": list(pred.notes),
             "lobes": result.lobes,
+            "band": band_summary or None,
         }
         result.files.append(_write_json(out / "summary.json", summary))
     say(f"done: {len(result.files)} files in {out}")

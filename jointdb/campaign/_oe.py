@@ -115,3 +115,15 @@ def verdict(fit: OutputErrorResult | None, peaks: list[dict], mean_dev: float, v
         lines.append(f"OK: {se}dominant peaks of the {where} assembly within {worst:.1%} in amplitude")
     return lines
 
+
+
+def kc_of_fit(fit: OutputErrorResult, irc_joint: FRF, irc_kc: KCFit) -> KCFit:
+    """The output-error (k, c) as a :class:`KCFit` over the IRC fit's band; ``error`` is the relative
+    misfit of the per-line IRC joint against it (how far the line-by-line estimate scatters)."""
+    k, c = fit.values[0::2], fit.values[1::2]
+    lo, hi = irc_kc.band_hz
+    use = (irc_joint.freq >= lo) & (irc_joint.freq <= hi)
+    h = np.diagonal(irc_joint.values[use], axis1=1, axis2=2)
+    model = 1.0 / (k[None, :] + 1j * (2 * np.pi * irc_joint.freq[use])[:, None] * c[None, :])
+    err = np.linalg.norm(h - model, axis=0) / np.linalg.norm(h, axis=0)
+    return KCFit(irc_kc.dofs, k, c, err, irc_kc.band_hz)

@@ -140,7 +140,15 @@ def identify_campaign(c: Campaign) -> IdentifyOutcome:
                                         symmetrize=bool(o.get("symmetrize", True)), **common)
     except InputError as exc:
         raise InputError(f"campaign {c.path.name}: {exc}") from None
-    from jointdb.campaign._oe import METHODS, entry_peaks, fit_output_error, joint_from_fit, method_of, verdict
+    from jointdb.campaign._oe import (
+        METHODS,
+        entry_peaks,
+        fit_output_error,
+        joint_from_fit,
+        kc_of_fit,
+        method_of,
+        verdict,
+    )
 
     method = method_of(c)
     if method not in METHODS:
@@ -154,6 +162,8 @@ def identify_campaign(c: Campaign) -> IdentifyOutcome:
     irc_reconstructed = None
     if method == "output-error":
         oe = fit_output_error(c, measured, subs, res, kc)
+        if kc is not None and oe.log_parameters and oe.model.order == 0:
+            kc = kc_of_fit(oe, res.joint, kc)
         irc_reconstructed = _couple_like(c, subs, _joint_for_couple(res), measured)
         res = joint_from_fit(c, oe, freq, res)
     joint = _joint_for_couple(res)

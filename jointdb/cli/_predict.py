@@ -83,6 +83,9 @@ def register(app: typer.Typer) -> None:
                     message(f"warning: {res.interface}: {w}")
         for note in pred.notes:
             message(f"note: {note}")
+        from jointdb.cli._predict_band import band_for
+
+        tip_band = band_for(result)
         files = {}
         if out is not None:
             application.write_frf_file(out, pred.tip)
@@ -91,14 +94,14 @@ def register(app: typer.Typer) -> None:
         if plot is not None:
             from jointdb.plots._stack import save_tip_comparison
 
-            save_tip_comparison(plot, pred, title=spec.name)
+            save_tip_comparison(plot, pred, title=spec.name, band=tip_band)
             files["plot"] = str(plot)
             message(f"wrote {plot}")
         joints = [r.row() for r in result.joints.values()]
         if as_json:
             emit({"stack": spec.name, "joints": joints, "prediction": pred.summary(), "notes": list(pred.notes),
                   "frequency_hz": [float(pred.tip.freq[0]), float(pred.tip.freq[-1]), int(pred.tip.n_freq)],
-                  "files": files}, as_json=True)
+                  "files": files, "band": None if tip_band is None else tip_band.to_json()}, as_json=True)
             return
         emit([{"interface": j["interface"], "joint": j["joint"] if j["kind"] != "explicit" else "explicit k, c",
                "distance": j["distance"], "extrapolating": j["extrapolating"]} for j in joints],

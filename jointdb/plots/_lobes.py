@@ -20,13 +20,14 @@ _UNIT = {"m": 1.0, "mm": 1e3, "um": 1e6}
 
 def plot_lobes(
     results, path, *, title: str | None = None, depth_unit: str = "mm", labels: Sequence[str] | None = None,
-    show_lobes: bool = True, depth_max: float | None = None,
+    show_lobes: bool = True, depth_max: float | None = None, band=None,
 ) -> Path:
     """Stability lobe diagram: limiting depth against spindle speed.
 
     ``results`` is one :class:`~jointdb.stability.LobeResult` or a sequence (overlaid,
     e.g. ZOA and SD). Flip-type limits are marked. Individual lobes (turning/ZOA)
-    are drawn thin behind the envelope when ``show_lobes``. Returns the path.
+    are drawn thin behind the envelope when ``show_lobes``; ``band`` (a
+    :class:`jointdb.stability._band.LobeBand`) is shaded. Returns the path.
     """
     plt = _plt()
     if not isinstance(results, (list, tuple)):
@@ -35,6 +36,9 @@ def plot_lobes(
     fig, ax = plt.subplots(figsize=(8, 4.8))
     colours = ["C0", "C3", "C2", "C1", "C4"]
     top = 0.0
+    if band is not None:  # 5–95 % of the limiting depth from the joints' parameter covariance
+        ax.fill_between(band.spindle_speed_rpm, band.depth_m[0] * scale, band.depth_m[2] * scale, color="C0",
+                        alpha=0.25, lw=0, label=f"5–95 % band ({band.samples} sampled joints)")
     for i, res in enumerate(results):
         c = colours[i % len(colours)]
         label = labels[i] if labels else res.method

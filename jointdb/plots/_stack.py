@@ -16,7 +16,7 @@ __all__ = ["save_tip_comparison", "save_joint_distances"]
 
 
 def save_tip_comparison(path, prediction, *, title: str | None = None,
-                        extra: Sequence[tuple[str, object]] = ()) -> Path:
+                        extra: Sequence[tuple[str, object]] = (), band=None) -> Path:
     """Tool-tip receptance magnitude, real and imaginary parts: with joints vs rigid joints.
 
     Parameters
@@ -27,6 +27,8 @@ def save_tip_comparison(path, prediction, *, title: str | None = None,
         :class:`jointdb.stack.Prediction`.
     extra
         Further ``(label, FRF)`` curves on the same tip DOFs (e.g. a measurement).
+    band
+        Optional :class:`jointdb.stack._band.TipBand`: its 5–95 % |H| band is shaded.
 
     Returns
     -------
@@ -48,6 +50,9 @@ def save_tip_comparison(path, prediction, *, title: str | None = None,
             ax_m.semilogy(frf.freq, np.abs(h), style, color=colour, lw=1.3, label=label)
             ax_c.plot(frf.freq, h.real * 1e6, style, color=colour, lw=1.0, label=f"Re, {label}")
             ax_c.plot(frf.freq, h.imag * 1e6, style, color=colour, lw=1.0, alpha=0.5)
+        if band is not None and d in band.magnitude:  # 5–95 % from the joints' parameter covariance
+            ax_m.fill_between(band.freq, band.magnitude[d][0], band.magnitude[d][2], color="C0", alpha=0.25,
+                              lw=0, label=f"5–95 % band ({band.samples} sampled joints)")
         ax_m.set_ylabel(f"|H_{d}{d}| [m/N]")
         ax_m.set_title(f"tool tip, {d} direction")
         ax_m.grid(True, which="both", alpha=0.3)
