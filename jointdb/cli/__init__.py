@@ -26,7 +26,7 @@ import typer
 from jointdb.errors import JointdbError
 
 #: The command modules, in the order they register (which is the order of ``jointdb --help``).
-MODULES = ("_models", "_coupling", "_store", "_db", "_predict", "_stability", "_diagnose", "_demo")
+MODULES = ("_models", "_coupling", "_store", "_db", "_predict", "_stability", "_diagnose", "_demo", "_plan")
 
 #: Every top-level command as ``jointdb --help`` lists it: the module that registers it and
 #: the first paragraph of its help.
@@ -49,6 +49,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "diagnose": ("_diagnose", "Locate where a model and recordings disagree, name the missing physics, refit."),
     "diagnose-bench": ("_diagnose", "Run the concealed-effect benchmark: generate, diagnose, score per effect."),
     "demo": ("_demo", "Run the main job end to end on the bundled data (SQLite, bundled fixtures)."),
+    "plan": ("_plan", "Rank candidate tap points by the expected joint-parameter variance (Fisher information)."),
     "joints": ("_store", "List, inspect, label, deprecate, diff, export and import catalogued joints."),
     "keys": ("_store", "Ed25519 keys to sign exported bundles and verify imported ones."),
     "db": ("_db", "Database administration: migrations, integrity check, garbage collection."),
