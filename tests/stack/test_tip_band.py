@@ -62,6 +62,8 @@ def catalogued_with_covariance(tmp_path_factory):
         repo.catalogue("th-u", "tool-holder", spring_damper_joint(f, [3e7, 5e5], [300, 3], ["3x", "3ry"]),
                        Conditions(("tungsten-carbide", "steel"), torque_nm=80.0), "spring-damper-planar",
                        Provenance(method="output-error-planar", parameters={"uncertainty": record()}))
+        repo.catalogue("th-v", "tool-holder", spring_damper_joint(f, [2e7, 3e5], [300, 3], ["3x", "3ry"]),
+                       Conditions(("tungsten-carbide", "steel"), torque_nm=40.0), "spring-damper-planar")
     doc = json.loads(STACK.read_text())
     doc["interfaces"]["tool-holder"] = {"query": {"joint_type": "tool-holder", "torque_nm": 80}}
     doc["frequency"] = {"min": 20, "max": 3000, "step": 10}
@@ -87,6 +89,10 @@ def test_predict_json_and_plot_carry_the_band(catalogued_with_covariance):
     assert len(mag["p05"]) == len(band["frequency_hz"]) and np.all(np.array(mag["p05"]) <= np.array(mag["p95"]))
     assert "band (200 sampled joints of tool-holder): tip peak x" in r.stderr
     assert plot.stat().st_size > 10_000
+    # how much the choice of joint matters: the next candidate (a softer joint) moves the tip peak
+    alt = [row for row in rep["joint_choice_sensitivity"] if row["direction"] == "x"]
+    assert alt and alt[0]["alternative"] == "th-v@1" and abs(alt[0]["peak_change"]) > 0.01
+    assert "with the next candidate th-v@1" in r.stderr
 
 
 def test_lobe_band_brackets_the_nominal_critical_depth(catalogued_with_covariance):
