@@ -238,8 +238,11 @@ def run_main_job(
         io.write_uff58(out / "tip.uff", pred.tip, round_freq=True)
         io.write_frf_csv(out / "tip.csv", pred.tip)
         result.files += [out / "tip.uff", out / "tip.csv"]
+        from jointdb._journey_band import journey_bands
+
+        tip_band, lobe_band, band_summary = journey_bands(spec, resolutions, grid, say)
         result.files.append(save_tip_comparison(out / "tip-vs-rigid.png", pred, title=spec.name, extra=extra,
-                                                label=joints_legend(resolutions)))
+                                                label=joints_legend(resolutions), band=tip_band))
 
         # 4. lobes ---------------------------------------------------------------------
         cut = MillingCut(**DEMO_CUT)
@@ -257,6 +260,7 @@ def run_main_job(
                              speeds)
         lobes_rigid = refine_lobes(
             lambda s: milling_lobes_zoa(lob.rigid, cut, cross_terms=cross, spindle_speed_rpm=s), speeds)
+        lobe_band = lobe_band(cut, speeds) if lobe_band is not None else None
         best = int(np.nanargmax(np.where(np.isfinite(lobes.depth_m), lobes.depth_m, -np.inf)))
         result.lobes = {
             "method": lobes.method,
@@ -274,7 +278,12 @@ def run_main_job(
         result.files.append(_write_csv(out / "lobes.csv", lobes.table()))
         result.files.append(plot_lobes([lobes, lobes_rigid], out / "lobes.png",
                                        labels=["with catalogued joints", "rigid joints"],
-                                       title=f"Stability lobes: {spec.name}"))
+                                       title=f"Stability lobes: {spec.name}", band=lobe_band))
+        if lobe_band is not None:
+            band_summary["lobes"] = lobe_band.to_json()
+            lo, mid, hi = lobe_band.critical_depth_m * 1e3
+            say(f"      critical depth 5–95 %: {lo:.3f} – {hi:.3f} mm (median {mid:.3f} mm, "
+                f"{lobe_band.samples} sampled joints)")
         summary = {
             "database": url,
             "catalogued": result.catalogued,
@@ -286,6 +295,7 @@ def run_main_job(
             "interfaces": {j["interface"]: {"joint": j["joint"], "distance": j["distance"],
                                             "extrapolating": j["extrapolating"]} for j in result.joints},
             "planes": ["x", "y"],
+            "band": band_summary or None,
         }
         result.files.append(_write_json(out / "summary.json", summary))
     say(f"done: {len(result.files)} files in {out}")

@@ -159,6 +159,7 @@ class JointResolution:
     candidates: tuple[tuple[str, int, float], ...] = ()
     warnings: tuple[str, ...] = ()
     description: str = ""
+    uncertainty: Mapping[str, Any] | None = None  # the version's parameter covariance, if it was fitted with one
 
     def row(self) -> dict[str, Any]:
         """A flat row for tables / JSON."""
@@ -179,6 +180,13 @@ def _open_repo(repo_or_url):
     if repo_or_url is None or isinstance(repo_or_url, (str, Path)):
         return Repository(repo_or_url), True
     return repo_or_url, False
+
+
+def _uncertainty_of(version) -> Mapping[str, Any] | None:
+    """The parameter covariance a catalogued version carries in its provenance (None if it has none)."""
+    params = getattr(getattr(version, "provenance", None), "parameters", None) or {}
+    unc = params.get("uncertainty") if isinstance(params, Mapping) else None
+    return unc if isinstance(unc, Mapping) else None
 
 
 def resolve_joints(spec: StackSpec, repo=None) -> dict[str, JointResolution]:
@@ -219,7 +227,8 @@ def resolve_joints(spec: StackSpec, repo=None) -> dict[str, JointResolution]:
                 if jv.state != "active":
                     notes = (f"{jv.name}@{jv.version} is {jv.state}",)
                 out[name] = JointResolution(name, "catalogued", handle.load_frf(jv), jv.name, jv.version, 0.0,
-                                            warnings=notes, description=choice.reference)
+                                            warnings=notes, description=choice.reference,
+                                            uncertainty=_uncertainty_of(jv))
                 continue
             conditions = Conditions.from_dict(dict(choice.conditions or {}))
             with warnings.catch_warnings(record=True) as caught:
@@ -241,7 +250,7 @@ def resolve_joints(spec: StackSpec, repo=None) -> dict[str, JointResolution]:
             out[name] = JointResolution(
                 name, "query", handle.load_frf(best.version), best.version.name, best.version.version,
                 float(best.distance), dict(best.per_condition), bool(best.extrapolating),
-                tuple(best.outside_range), cands, texts, choice.reference,
+                tuple(best.outside_range), cands, texts, choice.reference, _uncertainty_of(best.version),
             )
     finally:
         if owned and handle is not None:
@@ -367,8 +376,8 @@ def catalogue_campaign(repo, path: Path | str, author: str | None = None) -> Cat
         if outcome.validation is not None:
             quality["validation_error"] = float(outcome.validation["identified_joint_error_mean"])
         prov = Provenance(
-            method=f"irc-{camp.joint_model}",
-            parameters={k: attrs[k] for k in ("settings", "interface", "campaign")},
+            method=str(attrs.get("method", f"irc-{camp.joint_model}")),
+            parameters={k: attrs[k] for k in ("settings", "interface", "campaign", "uncertainty") if k in attrs},
             input_files=_campaign_files(camp),
             software_version=str(software_version),
         )

@@ -51,7 +51,7 @@ _TOP_KEYS = {
     "format", "name", "joint_type", "conditions", "joint_model", "substructures", "interface", "measurements",
     "band", "planar", "n_point", "matrix", "options", "validation", "couple", "description",
 }
-_OPTION_KEYS = {"smoothing", "smoothing_order", "regularisation", "fit_band", "symmetrize", "diagonal"}
+_OPTION_KEYS = {"smoothing", "smoothing_order", "regularisation", "fit_band", "symmetrize", "diagonal", "method"}
 
 
 @dataclass(frozen=True)

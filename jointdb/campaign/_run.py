@@ -41,6 +41,8 @@ class IdentifyOutcome:
     rigid: FRF
     kc: KCFit | None
     validation: Mapping[str, Any] | None
+    output_error: Any = None  # OutputErrorResult of the output-error fit (None for method irc)
+    quality: Mapping[str, Any] | None = None  # peak errors and verdict lines
 
     def report(self) -> dict:
         c = self.campaign
@@ -62,6 +64,12 @@ class IdentifyOutcome:
             ]
         if self.validation is not None:
             rep["validation"] = {k: v for k, v in self.validation.items() if not isinstance(v, FRF)}
+        if self.output_error is not None:
+            from jointdb.campaign._oe import fit_report
+
+            rep["output_error"] = fit_report(self.output_error)
+        if self.quality is not None:
+            rep.update(self.quality)
         rep["settings"] = {k: (v if not isinstance(v, tuple) else list(v)) for k, v in self.result.settings.items()}
         return rep
 
@@ -132,14 +140,35 @@ def identify_campaign(c: Campaign) -> IdentifyOutcome:
                                         symmetrize=bool(o.get("symmetrize", True)), **common)
     except InputError as exc:
         raise InputError(f"campaign {c.path.name}: {exc}") from None
-    joint = _joint_for_couple(res)
-    reconstructed = _couple_like(c, subs, joint, measured)
-    rigid = _couple_like(c, subs, None, measured)
+    from jointdb.campaign._oe import (
+        METHODS,
+        entry_peaks,
+        fit_output_error,
+        joint_from_fit,
+        kc_of_fit,
+        method_of,
+        verdict,
+    )
+
+    method = method_of(c)
+    if method not in METHODS:
+        raise _err(c.path, "options.method", f"{method!r}: use one of {', '.join(METHODS)}")
     kc = None
     if c.joint_model != "matrix":
         band = o.get("fit_band")
         band = (float(band[0]), float(band[1])) if band else None
         kc = fit_constant_kc(res.joint, band, mask=~res.unreliable)
+    oe = None
+    irc_reconstructed = None
+    if method == "output-error":
+        oe = fit_output_error(c, measured, subs, res, kc)
+        if kc is not None and oe.log_parameters and oe.model.order == 0:
+            kc = kc_of_fit(oe, res.joint, kc)
+        irc_reconstructed = _couple_like(c, subs, _joint_for_couple(res), measured)
+        res = joint_from_fit(c, oe, freq, res)
+    joint = _joint_for_couple(res)
+    reconstructed = _couple_like(c, subs, joint, measured)
+    rigid = _couple_like(c, subs, None, measured)
     validation = None
     if c.validation is not None:
         vmeas = merge_measurements(c.path, "validation.measurements", c.validation["measurements"], c.band)
@@ -154,8 +183,16 @@ def identify_campaign(c: Campaign) -> IdentifyOutcome:
             "identified_joint_error_mean": _mean_rel(pred, vmeas),
             "rigid_joint_error_mean": _mean_rel(vrig, vmeas),
             "measured": vmeas, "predicted": pred, "rigid": vrig,
+            "peaks": entry_peaks(pred, vmeas),
         }
-    return IdentifyOutcome(c, res, measured, reconstructed, rigid, kc, validation)
+    peaks = entry_peaks(reconstructed, measured)
+    quality: dict[str, Any] = {"method": method, "peaks": peaks}
+    if irc_reconstructed is not None:
+        quality["peaks_irc_joint"] = entry_peaks(irc_reconstructed, measured)
+    quality["verdict"] = verdict(oe, peaks, _mean_rel(reconstructed, measured),
+                                 None if validation is None else validation["peaks"],
+                                 None if validation is None else validation["identified_joint_error_mean"])
+    return IdentifyOutcome(c, res, measured, reconstructed, rigid, kc, validation, oe, quality)
 
 
 def joint_attrs(out: IdentifyOutcome) -> dict:
@@ -163,7 +200,8 @@ def joint_attrs(out: IdentifyOutcome) -> dict:
     from jointdb._output import to_jsonable
 
     rep = to_jsonable(out.report())
-    return {
+    method = (out.quality or {}).get("method", "irc")
+    attrs = {
         "kind": "joint",
         "joint_model": out.result.model,
         "campaign": out.campaign.name,
@@ -175,8 +213,15 @@ def joint_attrs(out: IdentifyOutcome) -> dict:
         },
         "quality": {k: v for k, v in rep.items() if k not in ("settings", "conditions", "campaign")},
         "settings": rep["settings"],
-        "provenance": {"method": f"IRC {out.result.model} (jointdb.coupling)", "input_sha256": file_hashes(out.campaign)},
+        "provenance": {"method": f"{method} {out.result.model} (jointdb.coupling)",
+                       "input_sha256": file_hashes(out.campaign)},
+        "method": f"{method}-{out.result.model}",
     }
+    if out.output_error is not None:
+        from jointdb.campaign._oe import uncertainty_record
+
+        attrs["uncertainty"] = uncertainty_record(out.output_error)
+    return attrs
 
 
 def load_joint_file(path: Path) -> tuple[FRF, str]:
@@ -246,6 +291,13 @@ def couple_campaign(c: Campaign, joint_override: Path | None = None) -> dict:
     ) and np.array_equal(measured.freq, g.freq):
         res["measured"] = measured
         res["error_mean"] = _mean_rel(g, measured)
+        from jointdb.campaign._oe import entry_peaks
+        from jointdb.coupling._quality import peak_verdicts
+
+        res["peaks"] = entry_peaks(g, measured)
+        res["verdict"] = peak_verdicts(res["peaks"], "coupled vs measured", res["error_mean"]) or [
+            "OK: dominant peaks within {:.1%} in amplitude of the measurement".format(
+                max(abs(p["amplitude_ratio"] - 1) for p in res["peaks"]))]
     return res
 
 

@@ -26,7 +26,7 @@ import typer
 from jointdb.errors import JointdbError
 
 #: The command modules, in the order they register (which is the order of ``jointdb --help``).
-MODULES = ("_models", "_coupling", "_store", "_db", "_predict", "_stability", "_diagnose", "_demo", "_campaign")
+MODULES = ("_models", "_coupling", "_store", "_db", "_predict", "_stability", "_diagnose", "_demo", "_campaign", "_plan")
 
 #: Every top-level command as ``jointdb --help`` lists it: the module that registers it and
 #: the first paragraph of its help.
@@ -53,6 +53,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "_campaign",
         "Rotational receptances at a contact point from translational measurements, with noise amplification.",
     ),
+    "plan": ("_plan", "Rank candidate tap points by the expected joint-parameter variance (Fisher information)."),
     "joints": ("_store", "List, inspect, label, deprecate, diff, export and import catalogued joints."),
     "keys": ("_store", "Ed25519 keys to sign exported bundles and verify imported ones."),
     "db": ("_db", "Database administration: migrations, integrity check, garbage collection."),

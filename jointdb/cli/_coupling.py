@@ -78,14 +78,26 @@ def register(app: typer.Typer) -> None:
             flat = {k: v for k, v in rep.items() if not isinstance(v, (dict, list))}
             from jointdb.frf import Dof
 
+            oe = rep.get("output_error")
             for row in rep.get("constant_fit", []):
-                rot = Dof.parse(row["dof"]).is_rotation
-                flat[f"k {row['dof']} [{'N·m/rad' if rot else 'N/m'}]"] = row["k"]
-                flat[f"c {row['dof']} [{'N·m·s/rad' if rot else 'N·s/m'}]"] = row["c"]
-                flat[f"fit error {row['dof']}"] = row["error"]
+                if oe is None:
+                    rot = Dof.parse(row["dof"]).is_rotation
+                    flat[f"k {row['dof']} [{'N·m/rad' if rot else 'N/m'}]"] = row["k"]
+                    flat[f"c {row['dof']} [{'N·m·s/rad' if rot else 'N·s/m'}]"] = row["c"]
+                flat[f"{'IRC ' if oe else ''}fit error {row['dof']}"] = row["error"]
+            if oe is not None and oe["theta_is_log"]:
+                for row in oe["parameters"]:
+                    flat[row["parameter"]] = f"{row['value']:.6g} ± {row['std_error']:.2g}"
             for k, v in rep.get("validation", {}).items():
-                flat[f"validation {k}"] = v
+                if not isinstance(v, (dict, list)):
+                    flat[f"validation {k}"] = v
+            for name, peaks in (("peak", rep.get("peaks", [])), ("validation peak", rep.get("validation", {}).get("peaks", []))):
+                for p in peaks[:1]:
+                    flat[f"{name} {p['f_measured_hz']:g} Hz"] = (
+                        f"amplitude ×{p['amplitude_ratio']:.3f}, frequency {p['frequency_error']:+.2%}")
             emit(flat, title=f"joint identified from {c.name}")
+            for line in rep.get("verdict", []):
+                typer.echo(f"verdict: {line}")
 
     @app.command("couple")
     def couple_cmd(
@@ -143,7 +155,12 @@ def register(app: typer.Typer) -> None:
         }
         if "error_mean" in res:
             summary["mean_relative_deviation_from_measurement"] = res["error_mean"]
+        if "peaks" in res and as_json:
+            summary["peaks"], summary["verdict"] = res["peaks"], res["verdict"]
         emit(summary, as_json=as_json, title="coupled assembly")
+        if "verdict" in res and not as_json:
+            for line in res["verdict"]:
+                typer.echo(f"verdict: {line}")
 
 
 def _identify_plots(directory: Path, result) -> list[str]:
@@ -152,7 +169,7 @@ def _identify_plots(directory: Path, result) -> list[str]:
     directory.mkdir(parents=True, exist_ok=True)
     written = []
     if result.result.model != "matrix":
-        p = save_kc_plot(directory / "joint_kc.png", result.result.joint, result.kc,
+        p = save_kc_plot(directory / "joint_kc.png", result.result.extra.get("irc_joint", result.result.joint), result.kc,
                          title=f"{result.campaign.name}: identified joint", flagged=result.result.unreliable)
         written.append(str(p))
     p = save_comparison_plot(

@@ -89,6 +89,10 @@ def register(app: typer.Typer) -> None:
                     message(f"warning: {res.interface}: {w}")
         for note in pred.notes:
             message(f"note: {note}")
+        from jointdb.cli._predict_band import band_for, choice_sensitivity
+
+        tip_band = band_for(result)
+        choice = choice_sensitivity(result, db, pred.tip.freq)
         files = {}
         if out is not None:
             application.write_frf_file(out, pred.tip)
@@ -98,14 +102,15 @@ def register(app: typer.Typer) -> None:
             from jointdb.plots._stack import joints_legend, save_tip_comparison
 
             plot = save_tip_comparison(plot_file(plot, "tip-vs-rigid.png"), pred, title=spec.name,
-                                       label=joints_legend(result.joints))
+                                       label=joints_legend(result.joints), band=tip_band)
             files["plot"] = str(plot)
             message(f"wrote {plot}")
         joints = [r.row() for r in result.joints.values()]
         if as_json:
             emit({"stack": spec.name, "joints": joints, "prediction": pred.summary(), "notes": list(pred.notes),
                   "frequency_hz": [float(pred.tip.freq[0]), float(pred.tip.freq[-1]), int(pred.tip.n_freq)],
-                  "files": files}, as_json=True)
+                  "files": files, "band": None if tip_band is None else tip_band.to_json(),
+                  "joint_choice_sensitivity": choice}, as_json=True)
             return
         emit([{"interface": j["interface"], "joint": j["joint"] if j["kind"] != "explicit" else "explicit k, c",
                "distance": j["distance"], "extrapolating": j["extrapolating"]} for j in joints],

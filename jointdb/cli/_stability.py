@@ -293,12 +293,21 @@ def register(app: typer.Typer) -> None:
         plot = plots_dir(plots, plot, one_file=True)
         check_out(out, LOBE_FORMATS)
         speeds = np.linspace(rpm_min, rpm_max, n_speeds)
-        frf = _node_select(read_frf_file(frf_file), node)
+        from jointdb.cli._tip_inputs import coefficient_warnings, read_tool_tip, turning_frf
+
+        frf, notes = read_tool_tip(frf_file)
+        frf = _node_select(frf, node)
         frf2 = _node_select(read_frf_file(frf_y), node) if frf_y is not None else None
+        notes += coefficient_warnings(kf=kf, kt=kt, kr=kr)
         if op_l == "turning":
             if kf is None:
                 raise InputError("turning needs --kf (cutting coefficient in N/m²)")
             frf = _translational(frf, frf_file)
+            frf, more = turning_frf(frf, frf2, frf_y)
+            notes += more
+            if orientation is None and len(frf.outputs) > 1:
+                notes.append(f"note: turning with {len(frf.outputs)} driving points and no --orientation: "
+                             "each weighted 1 (give --orientation for the cut's directional factors)")
             mu = _floats(orientation, "--orientation")
             res = stability.refine_lobes(lambda s: stability.turning_lobes(frf, kf, mu, spindle_speed_rpm=s),
                                          speeds, rounds=refine)
@@ -308,6 +317,8 @@ def register(app: typer.Typer) -> None:
                 raise InputError("milling needs --kt and --kr (cutting coefficients in N/m²)")
             cut = stability.MillingCut(teeth, kt, kr, immersion, not up)
             mode_txt = "up" if up else "down"
+            if cross_terms and notes and "cross terms taken as zero" in notes[0]:
+                notes.append("note: --cross-terms asked, but the file has none: they are zero")
             if method_l == "zoa":
                 res = stability.refine_lobes(lambda s: stability.milling_lobes_zoa(
                     frf, cut, frf2, cross_terms=cross_terms, spindle_speed_rpm=s), speeds, rounds=refine)
@@ -317,6 +328,8 @@ def register(app: typer.Typer) -> None:
                                              speeds, rounds=refine)
             title = f"Milling lobes ({method_l.upper()}), {teeth} teeth, a/D = {immersion:g}, {mode_txt}-milling"
         summary = lobe_summary(res, n_speeds)
+        for line in notes:
+            message(line)
         if plot is not None:
             from jointdb.plots._lobes import plot_lobes
 
@@ -326,7 +339,8 @@ def register(app: typer.Typer) -> None:
                                                              "summary": summary})
             message(f"wrote {out} ({len(res.spindle_speed_rpm)} rows)")
         if as_json:
-            emit({"method": res.method, "info": res.info, "summary": summary, "rows": res.table()}, as_json=True)
+            emit({"method": res.method, "info": res.info, "summary": summary, "rows": res.table(), "notes": notes},
+                 as_json=True)
             return
         if table:
             emit(lobe_rows_mm(res), columns=["spindle_speed_rpm", "depth_mm", "chatter_freq_hz", "lobe", "kind"],

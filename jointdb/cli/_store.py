@@ -198,7 +198,7 @@ def register(app: typer.Typer) -> None:
             raise InputError(f"{joint_file}: the file does not say its joint type; give --type")
         q = _numeric_metrics(meta.get("quality"))
         q.update(_pairs(quality, "--quality"))
-        params = {k: meta[k] for k in ("settings", "interface", "campaign") if k in meta}
+        params = {k: meta[k] for k in ("settings", "interface", "campaign", "uncertainty") if k in meta}
         file_method = meta.get("method") or (f"irc-{meta['joint_model']}" if meta.get("joint_model") else None)
         prov = Provenance(
             method=method or str(file_method or "imported-file"),

@@ -16,6 +16,12 @@ Identification (IRC, theory.md §2), each returning an :class:`IdentificationRes
 - :class:`Regularisation` — truncated-SVD / Tikhonov pseudo-inverses.
 - :func:`equivalent_stiffness_damping`, :func:`fit_constant_kc` — k(ω), c(ω), constant (k, c).
 
+Output-error identification (all lines at once, weighted by the measurement's
+uncertainty, started from the IRC estimate; parameters with standard errors and
+correlation, an :class:`OutputErrorResult`): :func:`fit_planar_joint`,
+:func:`fit_n_point_joints`, :func:`fit_joint_matrix`; weights from
+:func:`sigma_from_coherence` or :func:`mean_and_sigma_of_repeats`.
+
 Rotational receptances at a contact point (theory.md §3):
 :func:`rotations_by_extension`, :func:`rotations_by_finite_difference`.
 
@@ -36,6 +42,14 @@ from jointdb.coupling.irc import (
     identify_n_point_joints,
     identify_planar_joint,
 )
+from jointdb.coupling._output_error import (
+    OutputErrorResult,
+    fit_joint_matrix,
+    fit_n_point_joints,
+    fit_planar_joint,
+    mean_and_sigma_of_repeats,
+    sigma_from_coherence,
+)
 from jointdb.coupling.rc import Interface, JointSubstructure, couple, spring_damper_joint
 from jointdb.coupling.rotational import rotations_by_extension, rotations_by_finite_difference
 
@@ -52,6 +66,12 @@ __all__ = [
     "equivalent_stiffness_damping",
     "fit_constant_kc",
     "KCFit",
+    "OutputErrorResult",
+    "fit_planar_joint",
+    "fit_n_point_joints",
+    "fit_joint_matrix",
+    "sigma_from_coherence",
+    "mean_and_sigma_of_repeats",
     "rotations_by_extension",
     "rotations_by_finite_difference",
 ]

@@ -26,7 +26,7 @@ def plot_lobes(results, path, **kwargs) -> Path:
 
 def lobes_figure(
     results, *, title: str | None = None, depth_unit: str = "mm", labels: Sequence[str] | None = None,
-    show_lobes: bool = True, depth_max: float | None = None, shade: bool = True,
+    show_lobes: bool = True, depth_max: float | None = None, shade: bool = True, band=None,
 ):
     """Stability lobe diagram: limiting depth against spindle speed, the stable region shaded.
 
@@ -36,7 +36,9 @@ def lobes_figure(
     boundaries with a real multiplier +1, not chatter limits) and non-finite
     depths are not drawn: the line breaks there and the legend counts them.
     Individual lobes (turning/ZOA) are drawn thin behind the envelope when
-    ``show_lobes``. Returns the matplotlib figure.
+    ``show_lobes``; ``band`` (a :class:`jointdb.stability._band.LobeBand`, the
+    5–95 % limiting depth from the joints' parameter covariance) is shaded.
+    Returns the matplotlib figure.
     """
     from jointdb.stability import plottable_depth
 
@@ -47,6 +49,9 @@ def lobes_figure(
     fig, ax = plt.subplots(figsize=(8, 4.8))
     colours = ["C0", "C3", "C2", "C1", "C4"]
     top = 0.0
+    if band is not None:  # 5–95 % of the limiting depth from the joints' parameter covariance
+        ax.fill_between(band.spindle_speed_rpm, band.depth_m[0] * scale, band.depth_m[2] * scale, color="C0",
+                        alpha=0.25, lw=0, label=f"5–95 % band ({band.samples} sampled joints)")
     for i, res in enumerate(results):
         c = colours[i % len(colours)]
         label = labels[i] if labels else res.method

@@ -34,7 +34,8 @@ def joints_legend(resolutions) -> str:
 
 
 def save_tip_comparison(path, prediction, *, title: str | None = None,
-                        extra: Sequence[tuple[str, object]] = (), label: str = "with catalogued joints") -> Path:
+                        extra: Sequence[tuple[str, object]] = (), label: str = "with catalogued joints",
+                        band=None) -> Path:
     """Tool-tip receptance magnitude, real and imaginary parts: with joints vs rigid joints.
 
     Parameters
@@ -48,6 +49,8 @@ def save_tip_comparison(path, prediction, *, title: str | None = None,
     label
         Legend of the prediction: name the joint versions (and interpolation
         weights), e.g. with :func:`joints_legend`.
+    band
+        Optional :class:`jointdb.stack._band.TipBand`: its 5–95 % |H| band is shaded.
 
     Returns
     -------
@@ -62,13 +65,16 @@ def save_tip_comparison(path, prediction, *, title: str | None = None,
     for col, d in enumerate(directions):
         dof = f"1{d}"
         curves = [(label, tip, "C0", "-"), ("rigid joints", rigid, "C3", "--")]
-        curves += [(label, frf, f"C{2 + i}", ":") for i, (label, frf) in enumerate(extra)]
+        curves += [(name, frf, f"C{2 + i}", ":") for i, (name, frf) in enumerate(extra)]
         ax_m, ax_c = axes[0, col], axes[1, col]
-        for label, frf, colour, style in curves:
+        for name, frf, colour, style in curves:
             h = frf.entry(dof, dof)
-            ax_m.semilogy(frf.freq, np.abs(h), style, color=colour, lw=1.3, label=label)
-            ax_c.plot(frf.freq, h.real * 1e6, style, color=colour, lw=1.0, label=f"Re, {label}")
+            ax_m.semilogy(frf.freq, np.abs(h), style, color=colour, lw=1.3, label=name)
+            ax_c.plot(frf.freq, h.real * 1e6, style, color=colour, lw=1.0, label=f"Re, {name}")
             ax_c.plot(frf.freq, h.imag * 1e6, style, color=colour, lw=1.0, alpha=0.5)
+        if band is not None and d in band.magnitude:  # 5–95 % from the joints' parameter covariance
+            ax_m.fill_between(band.freq, band.magnitude[d][0], band.magnitude[d][2], color="C0", alpha=0.25,
+                              lw=0, label=f"5–95 % band ({band.samples} sampled joints)")
         ax_m.set_ylabel(f"|H_{d}{d}| [m/N]")
         ax_m.set_title(f"tool tip, {d} direction")
         ax_m.grid(True, which="both", alpha=0.3)

@@ -1,0 +1,37 @@
+"""The main job's bands: tool-tip and lobe percentiles from the chosen joints' covariance (issue 13)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+N_TIP_SAMPLES = 200
+N_LOBE_SAMPLES = 100
+
+
+def journey_bands(spec, resolutions, grid, say: Callable[[str], None]):
+    """``(TipBand | None, make_lobe_band | None, summary dict)`` for the stack's queried/pinned joints.
+
+    ``make_lobe_band(cut, speeds)`` computes the lobe band from the first ``N_LOBE_SAMPLES``
+    sampled tips (ZOA per sample).
+    """
+    from jointdb.stability._band import milling_lobes_band
+    from jointdb.stack._band import tip_band
+
+    unc = {n: r.uncertainty for n, r in resolutions.items()
+           if getattr(r, "uncertainty", None) is not None and r.kind in ("catalogued", "query")}
+    if not unc:
+        say("      no band: the chosen joints carry no parameter covariance")
+        return None, None, {}
+    b = tip_band(spec, {n: r.frf for n, r in resolutions.items() if r.frf is not None}, unc, grid,
+                 n=N_TIP_SAMPLES)
+    for row in b.summary():
+        say(f"      5–95 % band ({b.samples} joints sampled from {', '.join(b.interfaces)}): tip peak "
+            f"{row['direction']} {row['peak_m_per_n_p05']:.3e} – {row['peak_m_per_n_p95']:.3e} m/N, "
+            f"{row['peak_hz_p05']:.0f} – {row['peak_hz_p95']:.0f} Hz")
+    summary = {"tip": b.summary()}
+
+    def make(cut, speeds):
+        xs, ys = b.tip_frfs("x")[:N_LOBE_SAMPLES], b.tip_frfs("y")[:N_LOBE_SAMPLES]
+        return milling_lobes_band(xs, ys, cut, speeds)
+
+    return b, make, summary
