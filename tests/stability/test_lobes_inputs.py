@@ -33,7 +33,7 @@ def files(tmp_path_factory):
 
 
 def lobes(*args):
-    r = runner.invoke(app, ["lobes", *map(str, args), "--json"])
+    r = runner.invoke(app, ["lobes", *map(str, args), "--refine", "0", "--json"])
     return r
 
 
