@@ -19,6 +19,7 @@ from jointdb.errors import ConflictError, InputError, NotFoundError
 from jointdb.frf import FRF
 from jointdb.store import _db
 from jointdb.store._blobs import BlobStore
+from jointdb.store._index import refresh_joints
 from jointdb.store._labels import LabelsAndStates
 from jointdb.store._reports import CheckReport, VersionDiff, _is_transient, _is_unique_violation
 from jointdb.store._models import AuditRow, JointRow, LabelRow, StateRow, VersionRow, utcnow
@@ -253,6 +254,8 @@ class Repository(LabelsAndStates):
             if label is not None:
                 self._move_label(session, joint, name, number, label, actor, now)
                 labels = (label,)
+            session.flush()
+            refresh_joints(session, [joint.id])  # the query index, in the same transaction
             return to_version(joint, row, labels=labels)
 
         return self._retrying(write)
@@ -419,11 +422,15 @@ class Repository(LabelsAndStates):
 
     @_db.with_db_errors
     def nearest(self, joint_type: str, conditions: Conditions | Mapping[str, Any], k: int = 3,
-                at: datetime | str | None = None):
-        """The ``k`` closest current versions of ``joint_type``; see :mod:`jointdb.store._query`."""
+                at: datetime | str | None = None, *, label: str | None = None, all_versions: bool = False,
+                include_deprecated: bool = False):
+        """The ``k`` versions of ``joint_type`` closest to ``conditions``: by default each joint's
+        newest version that is not deprecated; ``label`` (only versions carrying it),
+        ``all_versions``, ``include_deprecated`` widen or narrow that; see :mod:`jointdb.store._query`."""
         from jointdb.store._query import nearest
 
-        return nearest(self, joint_type, conditions, k, as_utc(at))
+        return nearest(self, joint_type, conditions, k, as_utc(at), label=label, all_versions=all_versions,
+                       include_deprecated=include_deprecated)
 
     @_db.with_db_errors
     def interpolate(self, matches, conditions: Conditions | Mapping[str, Any] | None = None):
