@@ -161,6 +161,7 @@ class LabelRow(Base):
     __tablename__ = "labels"
     __table_args__ = (
         UniqueConstraint("joint_id", "label"),
+        Index("ix_labels_label", "label"),  # migration 0004: the query's --label
         ForeignKeyConstraint(
             ["joint_id", "version"], ["joint_versions.joint_id", "joint_versions.version"], ondelete="RESTRICT"
         ),
