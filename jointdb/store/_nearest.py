@@ -96,21 +96,25 @@ class Candidates:
     geometry: dict[str, np.ndarray] = field(default_factory=dict)
 
     @classmethod
-    def from_rows(cls, rows: list[tuple]) -> "Candidates":
-        """From ``(version_id, joint_id, number, torque, preload, materials)`` rows (NULL as :data:`_NULL`)."""
+    def from_rows(cls, rows: list[tuple], geometry_keys: list[str] = ()) -> "Candidates":
+        """From ``(version_id, joint_id, number, torque, preload, materials, *geometry)`` rows
+        (NULL as :data:`_NULL`)."""
         if not rows:
             e = np.zeros(0)
-            return cls(e.astype(np.int64), e.astype(np.int64), e.astype(np.int64), e, e, [], e.astype(np.intp))
-        vid, jid, num, tq, pl, mats = zip(*rows)
+            return cls(e.astype(np.int64), e.astype(np.int64), e.astype(np.int64), e, e, [], e.astype(np.intp),
+                       {g: e for g in geometry_keys})
+        vid, jid, num, tq, pl, mats, *geo = zip(*rows)
         order = np.argsort(np.array(vid, dtype=np.int64), kind="stable")
         keys: dict[str, int] = {}
         idx = np.array([keys.setdefault(m, len(keys)) for m in mats], dtype=np.intp)
+
         def nums(col):
             a = np.array(col, dtype=float)[order]
             a[a < 0] = np.nan
             return a
         return cls(np.array(vid, dtype=np.int64)[order], np.array(jid, dtype=np.int64)[order],
-                   np.array(num, dtype=np.int64)[order], nums(tq), nums(pl), list(keys), idx[order])
+                   np.array(num, dtype=np.int64)[order], nums(tq), nums(pl), list(keys), idx[order],
+                   {g: nums(col) for g, col in zip(geometry_keys, geo)})
 
     def align(self, pairs: list[tuple]) -> np.ndarray:
         """A float column from ``(version_id, value)`` pairs (NaN for candidates without one)."""
@@ -162,12 +166,17 @@ class Reader:
 _cache: dict[tuple, tuple[tuple, Candidates]] = {}
 
 
-def _fetch(reader: Reader, sel: Selection) -> Candidates:
+def _fetch(reader: Reader, sel: Selection, geometry_keys: list[str]) -> Candidates:
+    """The candidates of ``sel`` with the given geometry keys, in one SELECT."""
     join, where, params = sel.where()
+    geo_cols = "".join(f", COALESCE(g{i}.value, {_NULL})" for i in range(len(geometry_keys)))
+    geo_join = "".join(f" LEFT JOIN query_geometry g{i} ON g{i}.key = ? AND g{i}.version_id = q.version_id"
+                       for i in range(len(geometry_keys)))
     rows = reader.rows(
         f"SELECT q.version_id, q.joint_id, q.version, COALESCE(q.torque_nm, {_NULL}), "
-        f"COALESCE(q.preload_n, {_NULL}), q.materials FROM query_versions q{join} WHERE {where}", params)
-    return Candidates.from_rows(rows)
+        f"COALESCE(q.preload_n, {_NULL}), q.materials{geo_cols} FROM query_versions q{join}{geo_join} WHERE {where}",
+        [*params[:-1], *geometry_keys, params[-1]])
+    return Candidates.from_rows(rows, geometry_keys)
 
 
 def _fetch_geometry(reader: Reader, sel: Selection, key: str, cand: Candidates) -> np.ndarray:
@@ -179,19 +188,30 @@ def _fetch_geometry(reader: Reader, sel: Selection, key: str, cand: Candidates) 
 
 
 def current_candidates(reader: Reader, db_key: str, sel: Selection, geometry_keys) -> Candidates:
-    """The candidates of ``sel`` now, from the cache while the stamp is unchanged (call in a snapshot)."""
+    """The candidates of ``sel`` now (call in a snapshot): from this process's cache, else from
+    the on-disk cache (:mod:`jointdb.store._qcache`), else from the index, while the stamp is
+    unchanged."""
+    from jointdb.store import _qcache
+
     stamp = tuple(reader.rows("SELECT token, generation FROM query_stamp WHERE id = 1")[0])
     key = (db_key, sel)
     hit = _cache.get(key)
+    keys = list(geometry_keys)
     if hit is None or hit[0] != stamp:
         if len(_cache) >= _CACHE_MAX:
             _cache.clear()
-        hit = (stamp, _fetch(reader, sel))
+        cand = _qcache.load(db_key, stamp, sel)
+        if cand is None:
+            cand = _fetch(reader, sel, keys)
+            _qcache.save(db_key, stamp, sel, cand)
+        hit = (stamp, cand)
         _cache[key] = hit
     cand = hit[1]
-    for g in geometry_keys:
-        if g not in cand.geometry:
-            cand.geometry[g] = _fetch_geometry(reader, sel, g, cand)
+    missing = [g for g in keys if g not in cand.geometry]
+    for g in missing:
+        cand.geometry[g] = _fetch_geometry(reader, sel, g, cand)
+    if missing:
+        _qcache.save(db_key, stamp, sel, cand)
     return cand
 
 

@@ -92,3 +92,31 @@ def test_query_on_sqlite_imports_neither_sqlalchemy_nor_alembic(db):
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert out.returncode == 0, out.stderr
     assert "LOADED []" in out.stdout and "A" in out.stdout
+
+
+def test_disk_cache_is_used_only_while_exactly_current(db, tmp_path, monkeypatch):
+    from jointdb.store import _nearest
+
+    monkeypatch.setenv("JOINTDB_QUERY_CACHE", str(tmp_path / "cache"))
+    req = planar_conditions(torque=24.0, materials=())
+
+    def fresh_process_query(**kw):
+        _nearest._cache.clear()  # what a new process starts with
+        with Repository(db) as repo:
+            return [(m.version.name, m.version.version, m.distance) for m in repo.nearest("tool-holder", req, k=9, **kw)]
+
+    first = fresh_process_query()
+    files = list((tmp_path / "cache").glob("*.npz"))
+    assert len(files) == 1
+    assert fresh_process_query() == first  # served from the file
+    with Repository(db) as repo:  # another writer: the stamp's generation goes up
+        repo.catalogue("D", "tool-holder", spring_joint(), planar_conditions(torque=24.0), "spring-damper-planar")
+    after = fresh_process_query()
+    assert after[0][:2] == ("D", 1) and after[0][2] == 0.0
+    assert [p.name for p in (tmp_path / "cache").glob("*.npz")] != [f.name for f in files]  # replaced
+    for p in (tmp_path / "cache").glob("*.npz"):
+        p.write_bytes(b"garbage")  # a damaged cache file is ignored, never trusted
+    assert fresh_process_query() == after
+    monkeypatch.setenv("JOINTDB_QUERY_CACHE", "off")
+    assert fresh_process_query() == after
+    assert fresh_process_query(all_versions=True)[0][:2] == ("D", 1)
