@@ -22,6 +22,7 @@ of migrations ``0002``/``0003`` do not apply to them; :func:`index_problems`
 from __future__ import annotations
 
 import json
+import struct
 import uuid
 from collections.abc import Iterable, Sequence
 from typing import Any
@@ -71,13 +72,28 @@ def standing(versions: Sequence[tuple[int, int]], states: Iterable[tuple[Any, in
     return {vid: (deprecated[vid], n == newest, n == newest_active) for vid, n in versions}
 
 
+#: ``query_versions.packed``: the numbers a ranking needs as little-endian bytes (NULL as -1.0;
+#: stored conditions are >= 0), so that SQLite can hand over all candidates in one string.
+PACKED = struct.Struct("<qqqdd")
+
+
+def pack_row(version_id: int, joint_id: int, number: int, torque, preload) -> bytes:
+    return PACKED.pack(version_id, joint_id, number, -1.0 if torque is None else float(torque),
+                       -1.0 if preload is None else float(preload))
+
+
+def geometry_row(key: str, version_id: int, value: float) -> dict:
+    return {"key": key, "version_id": version_id, "value": value, "bits": struct.pack("<d", value)}
+
+
 def index_values(version_id: int, joint_id: int, joint_type: str, number: int, materials, torque, preload,
                  geometry: dict, flags: tuple[bool, bool, bool]) -> tuple[dict, list[dict]]:
     """The ``query_versions`` row and ``query_geometry`` rows of one version."""
     row = {"version_id": version_id, "joint_id": joint_id, "joint_type": joint_type, "version": number,
            "deprecated": flags[0], "newest": flags[1], "newest_active": flags[2],
-           "torque_nm": torque, "preload_n": preload, "materials": materials_key(materials)}
-    geo = [{"key": str(k), "version_id": version_id, "value": float(x)} for k, x in (geometry or {}).items()]
+           "torque_nm": torque, "preload_n": preload, "materials": materials_key(materials),
+           "packed": pack_row(version_id, joint_id, number, torque, preload)}
+    geo = [geometry_row(str(k), version_id, float(x)) for k, x in (geometry or {}).items()]
     return row, geo
 
 
@@ -178,7 +194,7 @@ def rebuild(conn: Connection) -> int:
     ordered = [rows[k] for k in sorted(rows)]
     for i in range(0, len(ordered), 5000):
         conn.execute(insert(QueryVersionRow), ordered[i:i + 5000])
-    g = [{"key": k, "version_id": v, "value": x} for k, v, x in sorted(geo)]
+    g = [geometry_row(k, v, x) for k, v, x in sorted(geo)]
     for i in range(0, len(g), 5000):
         conn.execute(insert(QueryGeometryRow), g[i:i + 5000])
     if conn.execute(select(QueryStampRow.id)).first() is None:

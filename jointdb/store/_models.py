@@ -35,6 +35,7 @@ from sqlalchemy import (
     ForeignKeyConstraint,
     Index,
     Integer,
+    LargeBinary,
     MetaData,
     String,
     Text,
@@ -215,7 +216,8 @@ class QueryVersionRow(Base):
 
     __tablename__ = "query_versions"
     __table_args__ = (
-        Index("ix_query_versions_type_newest_active", "joint_type", "newest_active"),
+        Index("ix_query_versions_type_newest_active", "joint_type", "newest_active", "version_id", "packed",
+              "materials"),  # covering for the default query
         Index("ix_query_versions_joint_id", "joint_id"),
     )
 
@@ -229,16 +231,19 @@ class QueryVersionRow(Base):
     torque_nm: Mapped[float | None] = mapped_column(Float)
     preload_n: Mapped[float | None] = mapped_column(Float)
     materials: Mapped[str] = mapped_column(Text)  # JSON text of the sorted material list
+    packed: Mapped[bytes] = mapped_column(LargeBinary)  # version_id, joint_id, version, torque, preload (_index)
 
 
 class QueryGeometryRow(Base):
     """The geometry numbers of a version, one row per key (derived, with :class:`QueryVersionRow`)."""
 
     __tablename__ = "query_geometry"
+    __table_args__ = {"sqlite_with_rowid": False}
 
     key: Mapped[str] = mapped_column(String(100), primary_key=True)
     version_id: Mapped[int] = mapped_column(ForeignKey("joint_versions.id", ondelete="RESTRICT"), primary_key=True)
     value: Mapped[float] = mapped_column(Float)
+    bits: Mapped[bytes] = mapped_column(LargeBinary)  # value as little-endian float64
 
 
 class QueryStampRow(Base):

@@ -10,10 +10,13 @@ without the deprecated ones unless ``include_deprecated``, only those carrying
 ``label`` if given; then, unless ``all_versions``, of each joint only the
 newest of those left. The default is therefore each joint's newest version that
 is not deprecated. Each such set is one SELECT on ``query_versions`` (see
-:mod:`jointdb.store._index`), fetched whole into numpy arrays.
+:mod:`jointdb.store._index`) with the requested geometry keys joined in, fetched
+whole into numpy arrays (on SQLite as one row of concatenated packed columns,
+so that no Python object is made per candidate).
 
-Cache: the arrays of a selection are kept per process (not per Repository),
-keyed by database and selection, and reused while the index's stamp
+Cache: the arrays of a selection are kept per process (not per Repository)
+and in a per-user cache file (:mod:`jointdb.store._qcache`), keyed by database
+and selection, and reused while the index's stamp
 ``(token, generation)`` — one single-row SELECT — is unchanged. Stamp, arrays,
 geometry and the winners' records are read in one read transaction (SQLite:
 one snapshot; PostgreSQL: ``REPEATABLE READ``).
@@ -34,7 +37,7 @@ from typing import Any
 
 import numpy as np
 
-from jointdb.errors import InputError, NotFoundError
+from jointdb.errors import InputError, IntegrityError, NotFoundError
 from jointdb.store._records import to_version
 from jointdb.store._types import Conditions, Match, as_conditions, check_joint_type, check_label
 
@@ -166,8 +169,50 @@ class Reader:
 _cache: dict[tuple, tuple[tuple, Candidates]] = {}
 
 
+#: ``query_versions.packed`` (see :data:`jointdb.store._index.PACKED`) and -1.0 as float64 bytes
+_PACKED = np.dtype([("version_id", "<i8"), ("joint_id", "<i8"), ("number", "<i8"), ("torque", "<f8"),
+                    ("preload", "<f8")])
+_NULL_BITS = "000000000000F0BF"
+
+
+def _fetch_packed(reader: Reader, sel: Selection, geometry_keys: list[str]) -> Candidates:
+    """SQLite: the candidates as one row of concatenated hex strings (no Python object per row).
+
+    All ``group_concat`` aggregates of one SELECT visit the rows in the same order.
+    """
+    join, where, params = sel.where()
+    geo_cols = "".join(f", group_concat(CASE WHEN g{i}.bits IS NULL THEN '{_NULL_BITS}' ELSE hex(g{i}.bits) END, '')"
+                       for i in range(len(geometry_keys)))
+    geo_join = "".join(f" LEFT JOIN query_geometry g{i} ON g{i}.key = ? AND g{i}.version_id = q.version_id"
+                       for i in range(len(geometry_keys)))
+    row = reader.rows(
+        f"SELECT count(*), group_concat(hex(q.packed), ''), group_concat(q.materials, char(30)){geo_cols} "
+        f"FROM query_versions q{join}{geo_join} WHERE {where}", [*params[:-1], *geometry_keys, params[-1]])[0]
+    n = int(row[0])
+    if n == 0:
+        return Candidates.from_rows([], geometry_keys)
+    rec = np.frombuffer(bytes.fromhex(row[1]), dtype=_PACKED)
+    mats = row[2].split("\x1e")  # JSON text escapes control characters: no material contains one
+    geo_bits = [bytes.fromhex(text) for text in row[3:]]
+    if rec.size != n or len(mats) != n or any(len(b) != 8 * n for b in geo_bits):
+        raise IntegrityError("query index: packed candidate columns do not line up; run `jointdb db check`")
+    order = np.argsort(rec["version_id"], kind="stable")
+    keys: dict[str, int] = {}
+    idx = np.array([keys.setdefault(m, len(keys)) for m in mats], dtype=np.intp)
+
+    def nums(a):
+        a = np.array(a[order], dtype=float)
+        a[a < 0] = np.nan
+        return a
+    geometry = {g: nums(np.frombuffer(b, dtype="<f8")) for g, b in zip(geometry_keys, geo_bits)}
+    return Candidates(rec["version_id"][order].copy(), rec["joint_id"][order].copy(), rec["number"][order].copy(),
+                      nums(rec["torque"]), nums(rec["preload"]), list(keys), idx[order], geometry)
+
+
 def _fetch(reader: Reader, sel: Selection, geometry_keys: list[str]) -> Candidates:
     """The candidates of ``sel`` with the given geometry keys, in one SELECT."""
+    if reader.dialect == "sqlite":
+        return _fetch_packed(reader, sel, geometry_keys)
     join, where, params = sel.where()
     geo_cols = "".join(f", COALESCE(g{i}.value, {_NULL})" for i in range(len(geometry_keys)))
     geo_join = "".join(f" LEFT JOIN query_geometry g{i} ON g{i}.key = ? AND g{i}.version_id = q.version_id"

@@ -37,20 +37,25 @@ def upgrade() -> None:
         sa.Column("torque_nm", sa.Float(), nullable=True),
         sa.Column("preload_n", sa.Float(), nullable=True),
         sa.Column("materials", sa.Text(), nullable=False),
+        sa.Column("packed", sa.LargeBinary(), nullable=False),
         sa.ForeignKeyConstraint(["version_id"], ["joint_versions.id"], ondelete="RESTRICT",
                                 name=op.f("fk_query_versions_version_id_joint_versions")),
         sa.PrimaryKeyConstraint("version_id", name=op.f("pk_query_versions")),
     )
-    op.create_index("ix_query_versions_type_newest_active", "query_versions", ["joint_type", "newest_active"])
+    # covering: a default query reads the index alone (SQLite), in version order
+    op.create_index("ix_query_versions_type_newest_active", "query_versions",
+                    ["joint_type", "newest_active", "version_id", "packed", "materials"])
     op.create_index("ix_query_versions_joint_id", "query_versions", ["joint_id"])
     op.create_table(
         "query_geometry",
         sa.Column("key", sa.String(length=100), nullable=False),
         sa.Column("version_id", sa.Integer(), nullable=False),
         sa.Column("value", sa.Float(), nullable=False),
+        sa.Column("bits", sa.LargeBinary(), nullable=False),
         sa.ForeignKeyConstraint(["version_id"], ["joint_versions.id"], ondelete="RESTRICT",
                                 name=op.f("fk_query_geometry_version_id_joint_versions")),
         sa.PrimaryKeyConstraint("key", "version_id", name=op.f("pk_query_geometry")),
+        sqlite_with_rowid=False,  # clustered on (key, version_id): one B-tree search per lookup
     )
     op.create_table(
         "query_stamp",
