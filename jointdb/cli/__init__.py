@@ -95,14 +95,18 @@ def _new_app() -> typer.Typer:
     return app_
 
 
-def _app_with(modules) -> typer.Typer:
-    """An app with the commands of the given modules registered."""
+def _app_with(modules, only: str | None = None) -> typer.Typer:
+    """An app with the commands of the given modules registered (``only``: just that command,
+    so that Typer builds one Click command, not every command of its module)."""
     import importlib
 
     app_ = _new_app()
     for name in MODULES:
         if name in modules:
             importlib.import_module(f"jointdb.cli.{name}").register(app_)
+    if only is not None:
+        app_.registered_commands = [c for c in app_.registered_commands if c.name == only]
+        app_.registered_groups = [g for g in app_.registered_groups if g.name == only]
     return app_
 
 
@@ -157,7 +161,7 @@ def main() -> None:
     first = next((a for a in args if not (a in ("--verbose", "--quiet") or (a[:1] == "-" and a[1:2] != "-"
                                                                              and set(a[1:]) <= {"v", "q"}))), None)
     if first in COMMANDS:
-        cli = _app_with({COMMANDS[first][0]})
+        cli = _app_with({COMMANDS[first][0]}, only=first)
     elif first is None or first in ("--help", "--version"):
         cli = _summary_app()
     else:  # anything else (an unknown command, ...): the full app, for Click's own messages

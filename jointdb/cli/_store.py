@@ -233,6 +233,9 @@ def register(app: typer.Typer) -> None:
         geometry: Annotated[Optional[list[str]], typer.Option("--geometry", help="Geometry key=value in SI (repeat).")] = None,
         k: Annotated[int, typer.Option("-k", help="Number of nearest versions.")] = 3,
         at: Annotated[Optional[str], typer.Option("--at", help="Query the catalogue as it was at this ISO time.")] = None,
+        label: Annotated[Optional[str], typer.Option("--label", help="Only versions carrying this label, e.g. released.")] = None,
+        all_versions: Annotated[bool, typer.Option("--all-versions", help="Rank every version, not only the newest of each joint.")] = False,
+        include_deprecated: Annotated[bool, typer.Option("--include-deprecated", help="Also rank deprecated versions (excluded by default).")] = False,
         interpolate: Annotated[Optional[Path], typer.Option("--interpolate", help="Also write the interpolated joint FRF (dynamic stiffness) to this HDF5 file.")] = None,
         out: Annotated[Optional[Path], typer.Option("--out", help="Write the matches (one row each) to .csv, .json or .h5.")] = None,
         db: DbOpt = None,
@@ -241,17 +244,25 @@ def register(app: typer.Typer) -> None:
     ) -> None:
         """Find the k catalogued joints closest to given conditions (distance per condition).
 
-        Example: jointdb query --type tool-holder --material carbide+steel --torque 35 -k 3
+        By default each joint's newest version that is not deprecated ranks.
+        Example: jointdb query --type tool-holder --material carbide+steel --torque 35 -k 3 --label released
         """
         from jointdb.cli._options import check_out
 
         _check_output(interpolate)
         check_out(out, (".csv", ".json", ".h5", ".hdf5"))
-        repo = _repo(db, blobs)
         req = _conditions(material, preload, torque, geometry)
+        selection = {"label": label, "all_versions": all_versions, "include_deprecated": include_deprecated}
+        from jointdb.store._light import nearest_in_file, sqlite_target
+
+        light = sqlite_target(db) if interpolate is None and at is None else None
+        repo = None if light is not None else _repo(db, blobs)
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
-            matches = repo.nearest(joint_type, req, k=k, at=at)
+            if repo is None:  # a SQLite file: rank without loading SQLAlchemy (fast start)
+                matches = nearest_in_file(light, joint_type, req, k=k, **selection)
+            else:
+                matches = repo.nearest(joint_type, req, k=k, at=at, **selection)
         for w in caught:
             message(f"warning: {w.message}")
         rows = []
@@ -260,7 +271,8 @@ def register(app: typer.Typer) -> None:
             row.update({f"d_{key}": val for key, val in m.per_condition.items()})
             c = m.version.conditions
             row.update({"materials": "+".join(c.materials) or None, "torque_nm": c.torque_nm,
-                        "preload_n": c.preload_n, "extrapolating": m.extrapolating})
+                        "preload_n": c.preload_n, "extrapolating": m.extrapolating,
+                        "state": m.version.state, "labels": ", ".join(m.version.labels) or None})
             rows.append(row)
         result: Any = rows
         if out is not None:
@@ -280,7 +292,8 @@ def register(app: typer.Typer) -> None:
                           "neighbours": [{"name": n, "version": v, "weight": w} for n, v, w in ij.neighbours]}}
         d_cols = [c for c in (rows[0] if rows else {}) if c.startswith("d_")]
         emit(result, as_json=as_json, title=f"nearest {joint_type} joints (distance = sqrt(sum d_i^2))",
-             columns=["name", "version", "distance", *d_cols, "torque_nm"])
+             columns=["name", "version", *(["state"] if include_deprecated else []), "distance", *d_cols,
+                      "torque_nm"])
 
     # ------------------------------------------------------------- joints ...
     @joints.command("list")

@@ -56,9 +56,7 @@ Blob format and canonical hash: :mod:`jointdb.store._blobs`; bundle format:
 
 from __future__ import annotations
 
-from jointdb.store._blobs import BlobStore, file_sha256, frf_sha256, read_frf_file, write_frf_file
-from jointdb.store._query import OutsideCatalogueWarning
-from jointdb.store._repository import CheckReport, Repository, VersionDiff
+from jointdb.store._nearest import OutsideCatalogueWarning
 from jointdb.store._types import (
     KNOWN_MATERIALS,
     MODEL_KINDS,
@@ -95,6 +93,23 @@ __all__ = [
     "current_revision",
     "head_revision",
 ]
+
+#: Loaded on first use (SQLAlchemy, h5py): ``jointdb query`` needs neither of them to rank.
+_LAZY = {
+    "Repository": "_repository", "CheckReport": "_reports", "VersionDiff": "_reports",
+    "BlobStore": "_blobs", "file_sha256": "_blobs", "frf_sha256": "_blobs", "read_frf_file": "_blobs",
+    "write_frf_file": "_blobs",
+}
+
+
+def __getattr__(name: str):
+    if name in _LAZY:
+        import importlib
+
+        value = getattr(importlib.import_module(f"jointdb.store.{_LAZY[name]}"), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'jointdb.store' has no attribute {name!r}")
 
 
 def _migrate(step: str, url: str | None, revision: str) -> str | None:

@@ -238,6 +238,20 @@ class BlobStore:
         ------
         IntegrityError
             If the read-back does not verify.
+        InputError
+            The blob directory refuses the write.
+        """
+        return self.put_pending(frf).wait()
+
+    def put_pending(self, frf: FRF) -> "PendingPut":
+        """Start storing an FRF: written and verified now, made durable in the background.
+
+        The FRF is written to a temporary file and read back and verified here;
+        the flush to disk (fsync), the rename into place and the directory fsync
+        run in a thread, so that a caller can prepare its database transaction
+        meanwhile. :meth:`PendingPut.wait` returns the digest once the blob is
+        durable (and raises what the thread met); call it before committing
+        anything that references the blob, and always (it also joins the thread).
         """
         digest = frf_sha256(frf)
         final = self.path(digest)
@@ -250,7 +264,7 @@ class BlobStore:
         else:
             try:
                 self.get(digest)
-                return digest
+                return PendingPut(digest)
             except (IntegrityError, NotFoundError):
                 pass  # corrupt or collected meanwhile: rewrite it atomically below
         new_dir = not final.parent.is_dir()
@@ -258,22 +272,32 @@ class BlobStore:
         try:
             final.parent.mkdir(parents=True, exist_ok=True)
             write_frf_file(tmp, frf)
-            fd = os.open(tmp, os.O_RDONLY)
-            try:
-                os.fsync(fd)
-            finally:
-                os.close(fd)
-            os.replace(tmp, final)
+            _verify_file(tmp, digest)  # read back and verify before it can be referenced
         except OSError as exc:  # read-only or full blob directory: one line for the user, nothing kept
+            tmp.unlink(missing_ok=True)
             raise InputError(f"cannot write to the blob store {self.root}: {exc.strerror or exc}") from None
-        finally:
-            if tmp.exists():
-                tmp.unlink()
-        _fsync_dir(final.parent)  # the rename is durable
-        if new_dir:
-            _fsync_dir(self.root)  # and so is the new shard directory
-        self.get(digest)  # read back and verify
-        return digest
+        except BaseException:
+            tmp.unlink(missing_ok=True)
+            raise
+
+        def finish() -> None:
+            try:
+                fd = os.open(tmp, os.O_RDONLY)
+                try:
+                    os.fsync(fd)
+                finally:
+                    os.close(fd)
+                os.replace(tmp, final)
+            except OSError as exc:
+                raise InputError(f"cannot write to the blob store {self.root}: {exc.strerror or exc}") from None
+            finally:
+                if tmp.exists():
+                    tmp.unlink()
+            _fsync_dir(final.parent)  # the rename is durable
+            if new_dir:
+                _fsync_dir(self.root)  # and so is the new shard directory
+
+        return PendingPut(digest, finish)
 
     # ------------------------------------------------------------------- read
     def get(self, digest: str) -> FRF:
@@ -388,3 +412,53 @@ class BlobStore:
             return time.time() - path.stat().st_mtime
         except OSError:
             return 0.0
+
+
+def _verify_file(path: Path, digest: str) -> None:
+    """Refuse a freshly written blob file that does not read back to ``digest``."""
+    try:
+        check_file_checksum(path)
+        frf = read_frf_file(path, verify=False)
+    except InputError as exc:
+        raise IntegrityError(f"blob {digest} did not read back: {exc}") from None
+    actual = frf_sha256(frf)
+    if actual != digest:
+        raise IntegrityError(f"blob {digest} read back with content hash {actual} ({path})")
+
+
+class PendingPut:
+    """A blob being made durable by a thread (:meth:`BlobStore.put_pending`)."""
+
+    def __init__(self, digest: str, finish=None):
+        import threading
+
+        self.digest = digest
+        self._error: BaseException | None = None
+        self._thread = None
+        if finish is not None:
+            def run() -> None:
+                try:
+                    finish()
+                except BaseException as exc:  # noqa: BLE001 - handed to wait()
+                    self._error = exc
+
+            self._thread = threading.Thread(target=run, name=f"jointdb-blob-{digest[:8]}", daemon=False)
+            self._thread.start()
+
+    def join(self) -> None:
+        """Wait for the thread, without raising what it met."""
+        if self._thread is not None:
+            self._thread.join()
+
+    def wait(self) -> str:
+        """The digest once the blob is durable in place.
+
+        Raises
+        ------
+        InputError
+            The blob directory refused the write (nothing is left behind).
+        """
+        self.join()
+        if self._error is not None:
+            raise self._error
+        return self.digest

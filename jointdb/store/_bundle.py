@@ -43,6 +43,7 @@ from jointdb.errors import ConflictError, InputError, IntegrityError
 from jointdb.io._atomic import atomic_path
 from jointdb.store._blobs import write_frf_group
 from jointdb.store._bundle_read import FORMAT, FORMAT_VERSION, Bundle, manifest_sha256, read_bundle
+from jointdb.store._index import refresh_joints
 from jointdb.store._models import AuditRow, JointRow, LabelRow, StateRow, VersionRow, utcnow
 from jointdb.store._records import check_record, current_actor, record_dict, row_from_record
 
@@ -189,6 +190,7 @@ def import_bundle(repo: "Repository", bundle: "Bundle | str | os.PathLike", auth
         summary["new_versions"] = summary["unchanged_versions"] = 0
         summary["labels_skipped"] = []
         now = utcnow()
+        touched: list[int] = []
         for j, new in _plan(s, joints):
             row = s.scalar(select(JointRow).where(JointRow.name == j["name"]))
             if row is None:
@@ -199,6 +201,7 @@ def import_bundle(repo: "Repository", bundle: "Bundle | str | os.PathLike", auth
             for v in new:
                 s.add(row_from_record(v["record"], row.id))
             s.flush()
+            touched.append(row.id)
             summary["new_versions"] += len(new)
             summary["unchanged_versions"] += len(j["versions"]) - len(new)
             have_labels = {lab.label: lab.version for lab in s.scalars(select(LabelRow).where(LabelRow.joint_id == row.id))}
@@ -222,6 +225,8 @@ def import_bundle(repo: "Repository", bundle: "Bundle | str | os.PathLike", auth
                                details={"bundle": os.fspath(path), "bundle_sha256": bundle.digest,
                                         "signed_by": bundle.signer if bundle.signature_verified else None,
                                         "versions": [v["record"]["version"] for v in new]}))
+        s.flush()
+        refresh_joints(s, touched)  # the query index, in the same transaction
 
     repo._retrying(write)
     return summary

@@ -42,6 +42,17 @@ from sqlalchemy.exc import ArgumentError
 
 from jointdb.errors import InputError, NotFoundError
 from jointdb.store._dberrors import db_errors, safe_url, translate_error, with_db_errors
+from jointdb.store._sqlitefile import (  # noqa: F401 - part of this module's interface
+    BUSY_TIMEOUT_S,
+    SCHEMA_TABLES,
+    SQLITE_MAGIC,
+    HEAD_REVISION,
+    check_jointdb_sqlite,
+    check_sqlite_file,
+    default_sqlite_path,
+    schema_mismatch,
+    sqlite_tables,
+)
 
 __all_errors__ = (db_errors, safe_url, translate_error, with_db_errors)  # re-exported: callers use _db.db_errors etc.
 
@@ -61,16 +72,7 @@ __all__ = [
     "BUSY_TIMEOUT_S",
 ]
 
-BUSY_TIMEOUT_S = 30.0
 PG_CONNECT_TIMEOUT_S = 10
-SQLITE_MAGIC = b"SQLite format 3\x00"
-#: Tables of the jointdb schema (besides ``alembic_version``).
-SCHEMA_TABLES = frozenset({"joints", "joint_versions", "joint_states", "labels", "audit_log"})
-
-
-def default_sqlite_path() -> Path:
-    base = os.environ.get("XDG_DATA_HOME") or str(Path.home() / ".local" / "share")
-    return Path(base) / "jointdb" / "jointdb.sqlite"
 
 
 def resolve_url(url: str | os.PathLike | None = None) -> str:
@@ -124,72 +126,7 @@ def blob_dir(url: str, blobs: str | os.PathLike | None = None) -> Path:
 
 
 # --------------------------------------------------------------------------- SQLite files
-def check_sqlite_file(path: Path) -> bool:
-    """Whether a SQLite database file exists at ``path`` (False: nothing there).
-
-    Raises
-    ------
-    InputError
-        ``path`` is a directory or not a regular file, is empty (0 bytes) or is
-        not a SQLite file.
-    """
-    try:
-        if path.is_dir():
-            raise InputError(f"database {path} is a directory; give a database file such as {path / 'jointdb.sqlite'}")
-        if not path.exists():
-            return False
-        if not path.is_file():
-            raise InputError(f"database {path} is not a regular file")
-        size = path.stat().st_size
-        if size == 0:
-            wal = Path(str(path) + "-wal")
-            if wal.is_file() and wal.stat().st_size > 0:
-                return True  # a database whose pages are still in its write-ahead log
-            raise InputError(f"database {path} is an empty file (0 bytes), not a jointdb database; refusing to "
-                             "use it (restore it from a backup, or remove it to start a new database)")
-        with open(path, "rb") as fh:
-            head = fh.read(len(SQLITE_MAGIC))
-    except OSError as exc:
-        raise InputError(f"cannot read database {path}: {exc.strerror or exc}") from None
-    if head != SQLITE_MAGIC:
-        raise InputError(f"{path} is not a SQLite database (it does not start with the SQLite header); "
-                         "give a jointdb database file")
-    return True
-
-
-def sqlite_tables(path: Path) -> set[str]:
-    """Table names of an existing SQLite file, read through a read-only connection
-    (no pragma is run, so a foreign file is not changed by looking at it).
-
-    Raises
-    ------
-    IntegrityError
-        The file has the SQLite header but cannot be read (damaged).
-    """
-    import sqlite3
-
-    try:
-        conn = sqlite3.connect(f"{path.as_uri()}?mode=ro", uri=True, timeout=BUSY_TIMEOUT_S)
-    except sqlite3.Error as exc:
-        raise InputError(f"cannot open database {path}: {exc}") from None
-    try:
-        return {r[0] for r in conn.execute("SELECT name FROM sqlite_master WHERE type = 'table'")}
-    except sqlite3.DatabaseError as exc:
-        raise translate_error(exc, f"sqlite:///{path}") from None
-    finally:
-        conn.close()
-
-
-def check_jointdb_sqlite(path: Path) -> None:
-    """Refuse a SQLite database that is not a jointdb database (no ``alembic_version``, other tables)."""
-    tables = sqlite_tables(path)
-    if "alembic_version" not in tables:
-        what = f"tables: {', '.join(sorted(tables)[:5])}" if tables else "no tables"
-        raise InputError(f"{path} is a SQLite database but not a jointdb database ({what}); refusing to touch it")
-    foreign = tables - SCHEMA_TABLES - {"alembic_version"}
-    if foreign:
-        raise InputError(f"{path} has tables jointdb does not know ({', '.join(sorted(foreign)[:5])}); "
-                         "refusing to touch it")
+# check_sqlite_file, sqlite_tables, check_jointdb_sqlite: in _sqlitefile (no SQLAlchemy; `jointdb query` uses them)
 
 
 def create_sqlite_database(path: Path, revision: str = "head") -> None:
@@ -371,6 +308,7 @@ DOWNGRADE_DROPS = {
     "0001": "every table and all data",
     "0002": "the triggers that refuse UPDATE and DELETE of history rows",
     "0003": "the guards against REPLACE/UPSERT, TRUNCATE and dropping the triggers",
+    "0004": "the query index (derived from history; upgrading rebuilds it)",
 }
 
 
@@ -414,19 +352,28 @@ def downgrade_plan(current: str | None, target: str) -> tuple[str | None, list[s
 def ensure_schema(read_engine: Engine, write_engine: Engine, auto_create: bool) -> None:
     """Refuse a database without the current schema, with advice.
 
+    The check is one SELECT of ``alembic_version`` compared with
+    :data:`jointdb.store._sqlitefile.HEAD_REVISION` (a test keeps that equal to the
+    newest migration script); Alembic is imported only when they differ.
     SQLite files are created (atomically, with their schema) before this is
     called, so here a SQLite database must already be a jointdb one. A
     PostgreSQL database without any schema is migrated when ``auto_create``
     (under the write transaction, so concurrent first users migrate once).
     """
+    from sqlalchemy.exc import DBAPIError
+
+    head = HEAD_REVISION
+    with read_engine.connect() as conn:
+        try:
+            current = conn.exec_driver_sql("SELECT version_num FROM alembic_version").scalar()
+        except DBAPIError:  # no alembic_version table: no jointdb schema
+            conn.rollback()
+            current = None
+        if current == head:
+            return
+        tables = set(inspect(conn).get_table_names())
     from alembic.runtime.migration import MigrationContext
 
-    head = head_revision()
-    with read_engine.connect() as conn:
-        current = MigrationContext.configure(conn).get_current_revision()
-        tables = set(inspect(conn).get_table_names())
-    if current == head:
-        return
     if current is None:
         if not auto_create or read_engine.dialect.name == "sqlite":
             raise InputError(
@@ -442,10 +389,4 @@ def ensure_schema(read_engine: Engine, write_engine: Engine, auto_create: bool) 
                 cfg.attributes["connection"] = conn
                 command.upgrade(cfg, "head")
         return
-    known = {r.revision for r in _script().walk_revisions()}
-    if current not in known:
-        raise InputError(f"database schema is at revision {current}, which this jointdb ({head}) does not know; "
-                         "use a newer jointdb")
-    raise InputError(
-        f"database schema is at revision {current}, this jointdb needs {head}; run `jointdb db upgrade`"
-    )
+    raise schema_mismatch(current, {r.revision for r in _script().walk_revisions()})

@@ -12,6 +12,7 @@ from sqlalchemy import select
 from sqlalchemy.orm import Session
 
 from jointdb.store import _db
+from jointdb.store._index import bump, refresh_joints
 from jointdb.store._models import AuditRow, JointRow, LabelRow, StateRow, utcnow
 from jointdb.store._records import current_actor
 from jointdb.store._types import JointVersion, check_label
@@ -34,6 +35,7 @@ class LabelsAndStates:
 
         def write(s: Session) -> None:
             self._move_label(s, self._joint(s, name), name, int(version), label, actor, utcnow())
+            bump(s)  # labels are read live by the query; only its stamp changes
 
         self._retrying(write)
         return self.get(name, version)
@@ -74,6 +76,8 @@ class LabelsAndStates:
             s.add(StateRow(joint_id=joint.id, version=version, state=state, reason=str(reason), author=actor, at=now))
             s.add(AuditRow(at=now, actor=actor, action="undeprecate" if undo else "deprecate", joint_name=name,
                            version=version, details={"reason": str(reason)}))
+            s.flush()
+            refresh_joints(s, [joint.id])  # the query index, in the same transaction
 
         self._retrying(write)
         return self.history(name)

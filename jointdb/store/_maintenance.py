@@ -36,17 +36,20 @@ def check(repo: "Repository", verify_blobs: bool = True) -> "CheckReport":
 
     Problems reported: a row whose blob is missing or corrupt, a row whose
     record hash does not match its content, gaps or duplicates in a joint's
-    version numbers, a missing or disabled immutability guard (trigger).
+    version numbers, a missing or disabled immutability guard (trigger), a query-index
+    row that differs from the history it is derived from.
     Orphan blobs and left-over temporary files are listed but are not problems
     (``jointdb db gc`` removes them); ``notes`` says what the backend cannot guard.
     """
     from jointdb.store._guards import missing_guards
+    from jointdb.store._index import index_problems
     from jointdb.store._repository import CheckReport
 
     problems: list[str] = []
     n_rows = 0
     with repo.read_engine.connect() as conn:
         problems, notes = missing_guards(conn)
+        problems += index_problems(conn)  # the derived query index against the history it comes from
     with repo._read() as s:
         joints = {j.id: j for j in s.scalars(select(JointRow))}
         numbers: dict[int, list[int]] = {}

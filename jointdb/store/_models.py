@@ -10,6 +10,9 @@ Tables
                     joint or one of its versions; the latest row wins.
 ``labels``          mutable named pointers (``released``, ``default``) to versions.
 ``audit_log``       append-only: who did what, when.
+``query_*``         derived (migration ``0004``): the ranking conditions and current
+                    standing of every version, for the nearest query; rebuilt from
+                    the tables above in the transactions that change them.
 
 Immutability is enforced twice: here (a ``before_flush`` hook refuses updates
 and deletes of immutable rows) and in the database (triggers created by the
@@ -23,6 +26,8 @@ from typing import Any
 
 from sqlalchemy import (
     JSON,
+    BigInteger,
+    Boolean,
     CheckConstraint,
     DateTime,
     Float,
@@ -30,6 +35,7 @@ from sqlalchemy import (
     ForeignKeyConstraint,
     Index,
     Integer,
+    LargeBinary,
     MetaData,
     String,
     Text,
@@ -156,6 +162,7 @@ class LabelRow(Base):
     __tablename__ = "labels"
     __table_args__ = (
         UniqueConstraint("joint_id", "label"),
+        Index("ix_labels_label", "label"),  # migration 0004: the query's --label
         ForeignKeyConstraint(
             ["joint_id", "version"], ["joint_versions.joint_id", "joint_versions.version"], ondelete="RESTRICT"
         ),
@@ -198,3 +205,53 @@ def _refuse_changes_to_immutable_rows(session: Session, flush_context, instances
             raise ConflictError(
                 f"{obj.__tablename__} rows are immutable; catalogue a new version instead of editing one"
             )
+
+
+# --------------------------------------------------------------------------- derived: the query index
+class QueryVersionRow(Base):
+    """One row per catalogued version: its ranking conditions as typed columns and its current
+    standing (deprecated; newest of its joint; newest not deprecated). Derived from the history
+    tables, rewritten in the same transaction as every change to them (migration ``0004``;
+    :mod:`jointdb.store._index`); not a history table, so UPDATE is allowed."""
+
+    __tablename__ = "query_versions"
+    __table_args__ = (
+        Index("ix_query_versions_type_newest_active", "joint_type", "newest_active", "version_id", "packed",
+              "materials"),  # covering for the default query
+        Index("ix_query_versions_joint_id", "joint_id"),
+    )
+
+    version_id: Mapped[int] = mapped_column(ForeignKey("joint_versions.id", ondelete="RESTRICT"), primary_key=True)
+    joint_id: Mapped[int] = mapped_column(Integer)
+    joint_type: Mapped[str] = mapped_column(String(100))
+    version: Mapped[int] = mapped_column(Integer)
+    deprecated: Mapped[bool] = mapped_column(Boolean)
+    newest: Mapped[bool] = mapped_column(Boolean)
+    newest_active: Mapped[bool] = mapped_column(Boolean)
+    torque_nm: Mapped[float | None] = mapped_column(Float)
+    preload_n: Mapped[float | None] = mapped_column(Float)
+    materials: Mapped[str] = mapped_column(Text)  # JSON text of the sorted material list
+    packed: Mapped[bytes] = mapped_column(LargeBinary)  # version_id, joint_id, version, torque, preload (_index)
+
+
+class QueryGeometryRow(Base):
+    """The geometry numbers of a version, one row per key (derived, with :class:`QueryVersionRow`)."""
+
+    __tablename__ = "query_geometry"
+    __table_args__ = {"sqlite_with_rowid": False}
+
+    key: Mapped[str] = mapped_column(String(100), primary_key=True)
+    version_id: Mapped[int] = mapped_column(ForeignKey("joint_versions.id", ondelete="RESTRICT"), primary_key=True)
+    value: Mapped[float] = mapped_column(Float)
+    bits: Mapped[bytes] = mapped_column(LargeBinary)  # value as little-endian float64
+
+
+class QueryStampRow(Base):
+    """One row: a token fixed when the index is built and a generation counter increased by
+    every transaction that changes what a query can return (versions, states, labels)."""
+
+    __tablename__ = "query_stamp"
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    token: Mapped[str] = mapped_column(String(36))
+    generation: Mapped[int] = mapped_column(BigInteger)

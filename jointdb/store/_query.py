@@ -2,10 +2,15 @@
 
 Candidates
 ----------
-Only joints of the requested joint type (types are never mixed), and of each
-joint only its *current* version: the latest version not deprecated (as of
-``at``, default now); deprecated joints are skipped. Ranking reads condition
-columns only; FRF blobs are never loaded to rank.
+Only versions of the requested joint type (types are never mixed). By default,
+of each joint only its *current* version: the newest version not deprecated (as
+of ``at``, default now); deprecated joints are skipped. Options: ``label``
+(only versions carrying that label now), ``include_deprecated`` (deprecated
+versions are kept), ``all_versions`` (every version ranks, not only the newest
+of its joint); see :class:`jointdb.store._nearest.Selection`. Ranking reads the
+query index (typed condition columns, :mod:`jointdb.store._index`); FRF blobs
+are never loaded to rank. Queries at a past time ``at`` rank over the history
+tables instead (:func:`candidates_from_history`), with the same distance.
 
 Distance
 --------
@@ -36,145 +41,82 @@ joints ``Z = k + iωc``, so this interpolates stiffness and damping linearly
 
 from __future__ import annotations
 
-import json
-import math
-import warnings
-from collections import Counter
 from collections.abc import Mapping, Sequence
 from datetime import datetime
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from sqlalchemy import Text, and_, cast, func, select
+from sqlalchemy import select
 
-from jointdb.errors import InputError, NotFoundError, NumericalError
+from jointdb.errors import InputError, NumericalError
 from jointdb.frf import FRF
+from jointdb.store._dberrors import translate_error
+from jointdb.store._index import materials_key, standing
 from jointdb.store._models import JointRow, LabelRow, StateRow, VersionRow
-from jointdb.store._records import state_of, to_version
-from jointdb.store._types import Conditions, InterpolatedJoint, Match, as_conditions, check_joint_type
+from jointdb.store._nearest import (
+    _NULL,
+    Candidates,
+    OutsideCatalogueWarning,
+    Reader,
+    Selection,
+    check_request,
+    matches,
+    nearest_now,
+    not_found,
+)
+from jointdb.store._types import Conditions, InterpolatedJoint, Match, as_conditions
 
 if TYPE_CHECKING:  # pragma: no cover
     from jointdb.store._repository import Repository
 
-MISSING_PENALTY = 1.0
-MIN_LOG_SPREAD = math.log(2.0)
+__all__ = ["OutsideCatalogueWarning", "nearest", "interpolate", "candidates_from_history"]
 
 
-class OutsideCatalogueWarning(UserWarning):
-    """A nearest-joint request lies outside the catalogued range of some condition."""
+def candidates_from_history(repo: "Repository", sel: Selection, at: datetime | None,
+                            geometry_keys: Sequence[str]) -> tuple[Candidates, dict[int, str]]:
+    """The candidates of ``sel`` as of ``at`` (None: now), computed from the history tables.
 
-
-def _candidates(repo: "Repository", joint_type: str, at: datetime | None, geometry_keys: Sequence[str]) -> list[tuple]:
-    """Current versions of a type: ``(version_id, joint_id, version, materials_json_text,
-    preload, torque, *geometry values)``.
-
-    Plain SQL columns only: materials come back as JSON text (decoded once per
-    distinct value by the caller) and geometry numbers are extracted by the
-    database (``json_extract`` / ``->>``), so ranking stays cheap at 10^5 rows.
+    Straightforward: every version of the type catalogued by ``at`` and every state
+    row written by ``at`` are read, each joint's standing is worked out in Python
+    and the selection applied. Labels are the current ones. Returns the candidates
+    and ``{version_id: state}`` at that time.
     """
-    cols = [
-        VersionRow.id,
-        VersionRow.joint_id,
-        VersionRow.version,
-        cast(VersionRow.materials, Text),
-        VersionRow.preload_n,
-        VersionRow.torque_nm,
-        *[VersionRow.geometry[key].as_float() for key in geometry_keys],
-    ]
-    with repo.read_engine.connect() as conn:
-        inner = (
-            select(VersionRow.joint_id, func.max(VersionRow.version).label("mv"))
-            .join(JointRow, JointRow.id == VersionRow.joint_id)
-            .where(JointRow.joint_type == joint_type)
-        )
+    with repo._read() as s:
+        vq = (select(VersionRow.id, VersionRow.joint_id, VersionRow.version, VersionRow.materials,
+                     VersionRow.torque_nm, VersionRow.preload_n, VersionRow.geometry)
+              .join(JointRow, JointRow.id == VersionRow.joint_id).where(JointRow.joint_type == sel.joint_type))
+        sq = (select(StateRow.at, StateRow.id, StateRow.joint_id, StateRow.version, StateRow.state)
+              .join(JointRow, JointRow.id == StateRow.joint_id).where(JointRow.joint_type == sel.joint_type))
         if at is not None:
-            inner = inner.where(VersionRow.created_at <= at)
-        inner = inner.group_by(VersionRow.joint_id).subquery()
-        rows = {
-            r[1]: tuple(r)
-            for r in conn.execute(
-                select(*cols).join(inner, and_(VersionRow.joint_id == inner.c.joint_id, VersionRow.version == inner.c.mv))
-            )
-        }
-        sq = select(StateRow).join(JointRow, JointRow.id == StateRow.joint_id).where(JointRow.joint_type == joint_type)
-        if at is not None:
+            vq = vq.where(VersionRow.created_at <= at)
             sq = sq.where(StateRow.at <= at)
+        per_joint: dict[int, list] = {}
+        for row in s.execute(vq):
+            per_joint.setdefault(row[1], []).append(tuple(row))
         states: dict[int, list] = {}
-        for st in conn.execute(sq):
-            states.setdefault(st.joint_id, []).append(st)
-        for joint_id, sts in states.items():
-            rows.pop(joint_id, None)
-            q = select(*cols).where(VersionRow.joint_id == joint_id)
-            if at is not None:
-                q = q.where(VersionRow.created_at <= at)
-            for r in conn.execute(q.order_by(VersionRow.version.desc())):
-                if state_of(r[2], sts) == "active":
-                    rows[joint_id] = tuple(r)
-                    break
-    return list(rows.values())
-
-
-def _catalogue_stamp(repo: "Repository") -> tuple[int, int]:
-    """Row counts of the two append-only tables that decide the candidates.
-
-    Rows are never updated or deleted (migration 0002), so any committed
-    catalogue, import or state change increases one of the counts.
-    """
-    with repo.read_engine.connect() as conn:
-        n_versions = conn.execute(select(func.count()).select_from(VersionRow)).scalar_one()
-        n_states = conn.execute(select(func.count()).select_from(StateRow)).scalar_one()
-    return int(n_versions), int(n_states)
-
-
-def _cached_candidates(repo: "Repository", joint_type: str, at: datetime | None, geometry_keys: Sequence[str]):
-    """Candidates as rows, columns and a float-column accessor, cached per repository.
-
-    The cache entry is reused only while :func:`_catalogue_stamp` is unchanged;
-    point-in-time queries (``at``) are not cached.
-    """
-    key = (joint_type, tuple(geometry_keys))
-    cache = repo.__dict__.setdefault("_nearest_cache", {})
-    stamp = _catalogue_stamp(repo) if at is None else None
-    if stamp is not None and key in cache and cache[key][0] == stamp:
-        return cache[key][1]
-    rows = _candidates(repo, joint_type, at, geometry_keys)
-    columns = list(zip(*rows)) if rows else []
-    floats: dict[int, np.ndarray] = {}
-
-    def numeric(col: int) -> np.ndarray:
-        if col not in floats:
-            floats[col] = np.array([np.nan if x is None else x for x in columns[col]], dtype=float)
-        return floats[col]
-
-    value = (rows, columns, numeric)
-    if stamp is not None:
-        if len(cache) > 16:
-            cache.clear()
-        cache[key] = (stamp, value)
-    return value
-
-
-def _jaccard(a: tuple[str, ...], b: tuple[str, ...]) -> float:
-    ca, cb = Counter(a), Counter(b)
-    union = sum((ca | cb).values())
-    return 0.0 if union == 0 else 1.0 - sum((ca & cb).values()) / union
-
-
-def _log_term(values: np.ndarray, request: float, name: str, terms: dict, outside: list) -> None:
-    have = np.isfinite(values)
-    if not have.any():
-        terms[name] = np.full(values.shape, MISSING_PENALTY)
-        outside.append(name)
-        return
-    delta = 1e-9 * max(1.0, float(np.nanmax(values)))
-    logs = np.log(values[have] + delta)
-    spread = max(float(logs.max() - logs.min()), MIN_LOG_SPREAD)
-    term = np.full(values.shape, MISSING_PENALTY)
-    term[have] = np.abs(logs - math.log(request + delta)) / spread
-    terms[name] = term
-    lo, hi = float(np.nanmin(values)), float(np.nanmax(values))
-    if request < lo or request > hi:
-        outside.append(name)
+        for at_, sid, jid, number, state in s.execute(sq):
+            states.setdefault(jid, []).append((at_, sid, number, state))
+        labelled = None
+        if sel.label is not None:
+            labelled = {tuple(r) for r in s.execute(select(LabelRow.joint_id, LabelRow.version)
+                                                    .where(LabelRow.label == sel.label))}
+    rows, geometry, state_of = [], [], {}
+    for jid, versions in per_joint.items():
+        flags = standing([(v[0], v[2]) for v in versions], states.get(jid, ()))
+        kept = [v for v in versions
+                if (sel.include_deprecated or not flags[v[0]][0])
+                and (labelled is None or (jid, v[2]) in labelled)]
+        if not sel.all_versions and kept:
+            kept = [max(kept, key=lambda v: v[2])]
+        for vid, _, number, mats, torque, preload, geo in kept:
+            rows.append((vid, jid, number, _NULL if torque is None else torque,
+                         _NULL if preload is None else preload, materials_key(mats)))
+            geometry.append((vid, geo or {}))
+            state_of[vid] = "deprecated" if flags[vid][0] else "active"
+    cand = Candidates.from_rows(rows)
+    for key in geometry_keys:
+        cand.geometry[key] = cand.align([(vid, g[key]) for vid, g in geometry if key in g])
+    return cand, state_of
 
 
 def nearest(
@@ -183,90 +125,40 @@ def nearest(
     conditions: Conditions | Mapping[str, Any],
     k: int = 3,
     at: datetime | None = None,
+    *,
+    label: str | None = None,
+    all_versions: bool = False,
+    include_deprecated: bool = False,
 ) -> list[Match]:
-    """The ``k`` current versions of ``joint_type`` closest to ``conditions`` (module docstring).
+    """The ``k`` versions of ``joint_type`` closest to ``conditions`` (module docstring).
 
     Raises
     ------
     InputError
-        ``k < 1`` or bad conditions.
+        ``k < 1``, bad conditions or label, or ``label`` with ``at`` (labels point now).
     NotFoundError
-        No catalogued joint of that type.
+        No catalogued version of that type in the selection.
     """
-    joint_type = check_joint_type(joint_type)
-    req = as_conditions(conditions)
-    if isinstance(k, bool) or int(k) < 1:
-        raise InputError(f"k must be >= 1, got {k!r}")
-    geometry_keys = list(req.geometry)
-    rows, columns, numeric = _cached_candidates(repo, joint_type, at, geometry_keys)
-    if not rows:
-        with repo._read() as s:
-            types = sorted(set(s.scalars(select(JointRow.joint_type))))
-        raise NotFoundError(
-            f"no current catalogued joint of type {joint_type!r}; types in the catalogue: {', '.join(types) or 'none'}"
-            " (joint types are never mixed)"
-        )
-    n = len(rows)
-    terms: dict[str, np.ndarray] = {}
-    outside: list[str] = []
-    if req.torque_nm is not None:
-        _log_term(numeric(5), req.torque_nm, "torque_nm", terms, outside)
-    if req.preload_n is not None:
-        _log_term(numeric(4), req.preload_n, "preload_n", terms, outside)
-    if req.materials:
-        want = tuple(sorted(req.materials))
-        cache: dict[str, float] = {}
-        for text in set(columns[3]):
-            mats = tuple(sorted(json.loads(text) if text else ()))
-            cache[text] = _jaccard(want, mats) if mats else MISSING_PENALTY
-        terms["materials"] = np.array([cache[text] for text in columns[3]])
-        if not any(value == 0.0 for value in cache.values()):
-            outside.append("materials")
-    for g, (key, r_val) in enumerate(req.geometry.items()):
-        vals = numeric(6 + g)
-        have = np.isfinite(vals)
-        denom = np.maximum(np.abs(vals), abs(r_val))
-        with np.errstate(invalid="ignore"):
-            rel = np.where(denom > 0, np.abs(vals - r_val) / np.where(denom > 0, denom, 1.0), 0.0)
-        terms[f"geometry.{key}"] = np.where(have, rel, MISSING_PENALTY)
-        if not have.any() or r_val < np.nanmin(vals) or r_val > np.nanmax(vals):
-            outside.append(f"geometry.{key}")
-    total = np.sqrt(sum((t**2 for t in terms.values()), np.zeros(n)))
-    # deterministic order: distance (to 1e-12), then joint id, then version
-    joint_ids = np.array(columns[1])
-    numbers = np.array(columns[2])
-    order = np.lexsort((numbers, joint_ids, np.round(total, 12)))[: int(k)]
-    if outside:
-        warnings.warn(
-            f"request lies outside the catalogued range of {joint_type} joints for: {', '.join(outside)}; "
-            "the nearest joints are extrapolations",
-            OutsideCatalogueWarning,
-            stacklevel=3,
-        )
-    out: list[Match] = []
-    ids = [rows[i][0] for i in order]
-    with repo._read() as s:
-        found = {
-            v.id: (v, j)
-            for v, j in s.execute(
-                select(VersionRow, JointRow).join(JointRow, JointRow.id == VersionRow.joint_id).where(VersionRow.id.in_(ids))
-            )
-        }
-        labels: dict[tuple[int, int], list[str]] = {}
-        for lab in s.scalars(select(LabelRow).where(LabelRow.joint_id.in_({j.id for _, j in found.values()}))):
-            labels.setdefault((lab.joint_id, lab.version), []).append(lab.label)
-    for i in order:
-        vrow, joint = found[rows[i][0]]
-        out.append(
-            Match(
-                version=to_version(joint, vrow, "active", labels.get((joint.id, vrow.version), ())),
-                distance=float(total[i]),
-                per_condition={name: float(t[i]) for name, t in terms.items()},
-                extrapolating=bool(outside),
-                outside_range=tuple(outside),
-            )
-        )
-    return out
+    if at is not None and label is not None:
+        raise InputError("a label names one version now; do not combine --label with --at")
+    joint_type, req, k, label = check_request(joint_type, conditions, k, label)
+    engine = repo.read_engine
+    raw = engine.raw_connection()
+    try:
+        reader = Reader(raw, engine.dialect.name)
+        if at is None:
+            return nearest_now(reader, repo.url, joint_type, req, k, label=label, all_versions=all_versions,
+                               include_deprecated=include_deprecated, stacklevel=5)
+        sel = Selection(joint_type, None, bool(all_versions), bool(include_deprecated))
+        cand, states = candidates_from_history(repo, sel, at, list(req.geometry))
+        with reader.snapshot():
+            if cand.version_id.size == 0:
+                raise not_found(reader, sel)
+            return matches(reader, cand, req, k, sel, states, stacklevel=5)
+    except engine.dialect.dbapi.Error as exc:
+        raise translate_error(exc, repo.url) from None
+    finally:
+        raw.close()
 
 
 def _weights(distances: Sequence[float]) -> np.ndarray:

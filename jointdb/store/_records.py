@@ -8,11 +8,13 @@ import json
 import os
 from collections.abc import Iterable, Mapping
 from datetime import datetime, timezone
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from jointdb.errors import InputError, IntegrityError
-from jointdb.store._models import JointRow, StateRow, VersionRow
 from jointdb.store._types import Conditions, JointVersion, Provenance
+
+if TYPE_CHECKING:  # pragma: no cover - the models import SQLAlchemy, which the query path avoids
+    from jointdb.store._models import JointRow, StateRow, VersionRow
 
 
 def current_actor(author: str | None = None) -> str:
@@ -47,7 +49,7 @@ def as_utc(at: datetime | str | None) -> datetime | None:
     return at.astimezone(timezone.utc)
 
 
-def record_dict(joint_name: str, joint_type: str, row: VersionRow) -> dict[str, Any]:
+def record_dict(joint_name: str, joint_type: str, row: "VersionRow") -> dict[str, Any]:
     """Everything that identifies a version's content (hashed into ``record_sha256``)."""
     return {
         "name": joint_name,
@@ -87,7 +89,7 @@ def record_sha256(record: Mapping[str, Any]) -> str:
     return hashlib.sha256(text.encode()).hexdigest()
 
 
-def check_record(joint_name: str, joint_type: str, row: VersionRow) -> None:
+def check_record(joint_name: str, joint_type: str, row: "VersionRow") -> None:
     """Refuse a version row whose content no longer hashes to its ``record_sha256``.
 
     Raises
@@ -107,8 +109,10 @@ def check_record(joint_name: str, joint_type: str, row: VersionRow) -> None:
         )
 
 
-def row_from_record(record: Mapping[str, Any], joint_id: int) -> VersionRow:
+def row_from_record(record: Mapping[str, Any], joint_id: int) -> "VersionRow":
     """A new VersionRow from a record dict (bundle import)."""
+    from jointdb.store._models import VersionRow
+
     c = record["conditions"]
     p = record["provenance"]
     return VersionRow(
@@ -140,7 +144,7 @@ def row_from_record(record: Mapping[str, Any], joint_id: int) -> VersionRow:
     )
 
 
-def state_of(version: int, states: Iterable[StateRow]) -> str:
+def state_of(version: int, states: Iterable["StateRow"]) -> str:
     """State of one version given the joint's state rows (already filtered by time)."""
     best: tuple[datetime, int] | None = None
     state = "active"
@@ -153,7 +157,7 @@ def state_of(version: int, states: Iterable[StateRow]) -> str:
     return state
 
 
-def to_version(joint: JointRow, row: VersionRow, state: str = "active", labels: Iterable[str] = ()) -> JointVersion:
+def to_version(joint: "JointRow", row: "VersionRow", state: str = "active", labels: Iterable[str] = ()) -> JointVersion:
     """The public value of a row, after :func:`check_record` (every read verifies the record hash)."""
     check_record(joint.name, joint.joint_type, row)
     conditions = Conditions.__new__(Conditions)  # stored data was validated on the way in

@@ -19,6 +19,7 @@ from jointdb.errors import ConflictError, InputError, NotFoundError
 from jointdb.frf import FRF
 from jointdb.store import _db
 from jointdb.store._blobs import BlobStore
+from jointdb.store._index import add_version
 from jointdb.store._labels import LabelsAndStates
 from jointdb.store._reports import CheckReport, VersionDiff, _is_transient, _is_unique_violation
 from jointdb.store._models import AuditRow, JointRow, LabelRow, StateRow, VersionRow, utcnow
@@ -155,7 +156,8 @@ class Repository(LabelsAndStates):
     ) -> JointVersion:
         """Store a joint FRF as a new joint (version 1) or a new version of one.
 
-        The blob is written durably first; the row is committed afterwards in one
+        The blob is written and verified first and made durable while the row is
+        prepared; the row is committed after the blob is durable, in one
         write transaction in which the next version number is taken (behind
         ``UNIQUE(joint_id, version)``; retried after rollback on a conflict).
 
@@ -188,8 +190,20 @@ class Repository(LabelsAndStates):
         label = check_label(label) if label is not None else None
 
         self._precheck_catalogue(name, joint_type, parent)  # refuse conflicts before writing any blob
-        blob = self.blobs.put(frf)  # durable before the row exists
-        raw_blobs = {str(k): self.blobs.put(v) for k, v in sorted(raw.items())}
+        # written and verified now, made durable (fsync, rename, directory fsync) while the row is
+        # prepared; the transaction commits only after pending.wait(): never a row without its blob
+        pending = self.blobs.put_pending(frf)
+        try:
+            blob = pending.digest
+            raw_blobs = {str(k): self.blobs.put(v) for k, v in sorted(raw.items())}
+            return self._catalogue_row(name, joint_type, frf, cond, kind, prov, qual, parent, actor, label,
+                                       blob, raw_blobs, pending)
+        finally:
+            pending.join()
+
+    def _catalogue_row(self, name, joint_type, frf, cond, kind, prov, qual, parent, actor, label, blob,
+                       raw_blobs, pending) -> JointVersion:
+        """The write transaction of :meth:`catalogue` (retried on conflicts)."""
 
         def write(session: Session) -> JointVersion:
             # FOR UPDATE serialises writers of one joint on PostgreSQL (SQLite: BEGIN IMMEDIATE
@@ -253,6 +267,9 @@ class Repository(LabelsAndStates):
             if label is not None:
                 self._move_label(session, joint, name, number, label, actor, now)
                 labels = (label,)
+            session.flush()
+            add_version(session, joint_type, row)  # the query index, in the same transaction
+            pending.wait()  # the blob is durable before the row that references it commits
             return to_version(joint, row, labels=labels)
 
         return self._retrying(write)
@@ -419,11 +436,15 @@ class Repository(LabelsAndStates):
 
     @_db.with_db_errors
     def nearest(self, joint_type: str, conditions: Conditions | Mapping[str, Any], k: int = 3,
-                at: datetime | str | None = None):
-        """The ``k`` closest current versions of ``joint_type``; see :mod:`jointdb.store._query`."""
+                at: datetime | str | None = None, *, label: str | None = None, all_versions: bool = False,
+                include_deprecated: bool = False):
+        """The ``k`` versions of ``joint_type`` closest to ``conditions``: by default each joint's
+        newest version that is not deprecated; ``label`` (only versions carrying it),
+        ``all_versions``, ``include_deprecated`` widen or narrow that; see :mod:`jointdb.store._query`."""
         from jointdb.store._query import nearest
 
-        return nearest(self, joint_type, conditions, k, as_utc(at))
+        return nearest(self, joint_type, conditions, k, as_utc(at), label=label, all_versions=all_versions,
+                       include_deprecated=include_deprecated)
 
     @_db.with_db_errors
     def interpolate(self, matches, conditions: Conditions | Mapping[str, Any] | None = None):

@@ -1,0 +1,228 @@
+"""The query index: derived rows that let the nearest query rank without touching history.
+
+Tables (migration ``0004``; models in :mod:`jointdb.store._models`):
+
+``query_versions``  per version: joint, type, number, torque, preload, materials (JSON
+                    text of the sorted list) and three flags of its current standing:
+                    ``deprecated`` (the latest state row that applies to it says so),
+                    ``newest`` (highest number of its joint), ``newest_active`` (highest
+                    number among the joint's versions that are not deprecated).
+``query_geometry``  per version and geometry key: the number.
+``query_stamp``     one row ``(token, generation)``; ``generation`` goes up in every
+                    transaction that changes versions, states or labels, so a reader
+                    can tell with one SELECT whether arrays it holds are still current.
+
+The rows are written inside the same write transaction as the history rows they
+derive from (:func:`refresh_joints`, :func:`bump`), so a reader never sees one
+without the other. They are derived state, not history: the immutability guards
+of migrations ``0002``/``0003`` do not apply to them; :func:`index_problems`
+(``jointdb db check``) recomputes them from history and reports any difference.
+"""
+
+from __future__ import annotations
+
+import json
+import struct
+import uuid
+from collections.abc import Iterable, Sequence
+from typing import Any
+
+from sqlalchemy import Connection, delete, insert, select, update
+from sqlalchemy.orm import Session
+
+from jointdb.store._models import (
+    JointRow,
+    QueryGeometryRow,
+    QueryStampRow,
+    QueryVersionRow,
+    StateRow,
+    VersionRow,
+)
+
+
+def materials_key(materials: Iterable[str]) -> str:
+    """Canonical text of a material multiset (the JSON of the sorted list)."""
+    return json.dumps(sorted(str(m) for m in materials or ()))
+
+
+def standing(versions: Sequence[tuple[int, int]], states: Iterable[tuple[Any, int, int | None, str]]
+             ) -> dict[int, tuple[bool, bool, bool]]:
+    """``{version_id: (deprecated, newest, newest_active)}`` of one joint's versions.
+
+    ``versions``: ``(version_id, number)``; ``states``: ``(at, state_id, version or None,
+    state)``. A version's state is that of the latest row, by ``(at, id)``, that names it
+    or the whole joint (as :func:`jointdb.store._records.state_of`); default active.
+    """
+    joint_wide = None
+    per_version: dict[int, tuple] = {}
+    for at, sid, number, state in states:
+        key = (at, sid, state)
+        if number is None:
+            if joint_wide is None or key[:2] > joint_wide[:2]:
+                joint_wide = key
+        elif number not in per_version or key[:2] > per_version[number][:2]:
+            per_version[number] = key
+    deprecated: dict[int, bool] = {}
+    for vid, number in versions:
+        rows = [r for r in (joint_wide, per_version.get(number)) if r is not None]
+        deprecated[vid] = bool(rows) and max(rows, key=lambda r: r[:2])[2] == "deprecated"
+    newest = max((n for _, n in versions), default=None)
+    active = [n for vid, n in versions if not deprecated[vid]]
+    newest_active = max(active, default=None)
+    return {vid: (deprecated[vid], n == newest, n == newest_active) for vid, n in versions}
+
+
+#: ``query_versions.packed``: the numbers a ranking needs as little-endian bytes (NULL as -1.0;
+#: stored conditions are >= 0), so that SQLite can hand over all candidates in one string.
+PACKED = struct.Struct("<qqqdd")
+
+
+def pack_row(version_id: int, joint_id: int, number: int, torque, preload) -> bytes:
+    return PACKED.pack(version_id, joint_id, number, -1.0 if torque is None else float(torque),
+                       -1.0 if preload is None else float(preload))
+
+
+def geometry_row(key: str, version_id: int, value: float) -> dict:
+    return {"key": key, "version_id": version_id, "value": value, "bits": struct.pack("<d", value)}
+
+
+def index_values(version_id: int, joint_id: int, joint_type: str, number: int, materials, torque, preload,
+                 geometry: dict, flags: tuple[bool, bool, bool]) -> tuple[dict, list[dict]]:
+    """The ``query_versions`` row and ``query_geometry`` rows of one version."""
+    row = {"version_id": version_id, "joint_id": joint_id, "joint_type": joint_type, "version": number,
+           "deprecated": flags[0], "newest": flags[1], "newest_active": flags[2],
+           "torque_nm": torque, "preload_n": preload, "materials": materials_key(materials),
+           "packed": pack_row(version_id, joint_id, number, torque, preload)}
+    geo = [geometry_row(str(k), version_id, float(x)) for k, x in (geometry or {}).items()]
+    return row, geo
+
+
+def bump(session: Session | Connection) -> None:
+    """Increase the query stamp's generation (in the caller's write transaction)."""
+    t = QueryStampRow.__table__
+    session.execute(update(t).where(t.c.id == 1).values(generation=t.c.generation + 1))
+
+
+def refresh_joints(session: Session, joint_ids: Iterable[int]) -> None:
+    """Bring the index rows of these joints up to date with their history, and :func:`bump`.
+
+    Rows of versions not yet indexed are inserted; the standing flags of all the
+    joints' versions are recomputed and the changed ones updated. Call after the
+    history rows were added and flushed, in the same transaction.
+    """
+    for joint_id in sorted(set(joint_ids)):
+        joint_type = session.scalar(select(JointRow.joint_type).where(JointRow.id == joint_id))
+        versions = [tuple(r) for r in session.execute(select(VersionRow.id, VersionRow.version)
+                                                      .where(VersionRow.joint_id == joint_id))]
+        states = [tuple(r) for r in session.execute(select(StateRow.at, StateRow.id, StateRow.version, StateRow.state)
+                                                    .where(StateRow.joint_id == joint_id))]
+        flags = standing(versions, states)
+        have = {vid: (bool(d), bool(n), bool(a)) for vid, d, n, a in session.execute(
+            select(QueryVersionRow.version_id, QueryVersionRow.deprecated, QueryVersionRow.newest,
+                   QueryVersionRow.newest_active).where(QueryVersionRow.joint_id == joint_id))}
+        missing = [vid for vid, _ in versions if vid not in have]
+        if missing:
+            new_rows, new_geo = [], []
+            for vid, number, mats, torque, preload, geometry in session.execute(
+                    select(VersionRow.id, VersionRow.version, VersionRow.materials, VersionRow.torque_nm,
+                           VersionRow.preload_n, VersionRow.geometry).where(VersionRow.id.in_(missing))):
+                row, geo = index_values(vid, joint_id, joint_type, number, mats, torque, preload, geometry, flags[vid])
+                new_rows.append(row)
+                new_geo.extend(geo)
+            session.execute(insert(QueryVersionRow), new_rows)
+            if new_geo:
+                session.execute(insert(QueryGeometryRow), new_geo)
+        for vid, f in flags.items():
+            if vid in have and have[vid] != f:
+                session.execute(update(QueryVersionRow).where(QueryVersionRow.version_id == vid)
+                                .values(deprecated=f[0], newest=f[1], newest_active=f[2]))
+    bump(session)
+
+
+def add_version(session: Session, joint_type: str, row: VersionRow) -> None:
+    """Index a version just added (flushed) as the newest of its joint, and :func:`bump`.
+
+    What :func:`refresh_joints` would do, in fewer statements: the new version is the
+    newest; it is deprecated if the latest state row naming it or the whole joint says
+    so; if it is not, it takes ``newest_active`` over from the joint's other versions.
+    """
+    state = session.scalar(
+        select(StateRow.state).where(StateRow.joint_id == row.joint_id,
+                                     (StateRow.version.is_(None)) | (StateRow.version == row.version))
+        .order_by(StateRow.at.desc(), StateRow.id.desc()).limit(1))
+    deprecated = state == "deprecated"
+    q = QueryVersionRow.__table__  # Core statements: no ORM bookkeeping on the catalogue path
+    flags = q.c.newest | q.c.newest_active if not deprecated else q.c.newest
+    session.execute(update(q).where(q.c.joint_id == row.joint_id, flags)
+                    .values(newest=False, newest_active=q.c.newest_active & deprecated))
+    values, geo = index_values(row.id, row.joint_id, joint_type, row.version, row.materials, row.torque_nm,
+                               row.preload_n, row.geometry, (deprecated, True, not deprecated))
+    session.execute(insert(q), [values])
+    if geo:
+        session.execute(insert(QueryGeometryRow.__table__), geo)
+    bump(session)
+
+
+def _expected(conn: Connection) -> tuple[dict[int, dict], set[tuple[str, int, float]]]:
+    """Every index row as recomputed from the history tables."""
+    types = {r[0]: r[1] for r in conn.execute(select(JointRow.id, JointRow.joint_type))}
+    per_joint: dict[int, list] = {}
+    for vid, jid, number, mats, torque, preload, geometry in conn.execute(
+            select(VersionRow.id, VersionRow.joint_id, VersionRow.version, VersionRow.materials,
+                   VersionRow.torque_nm, VersionRow.preload_n, VersionRow.geometry)):
+        per_joint.setdefault(jid, []).append((vid, number, mats, torque, preload, geometry))
+    states: dict[int, list] = {}
+    for at, sid, jid, number, state in conn.execute(
+            select(StateRow.at, StateRow.id, StateRow.joint_id, StateRow.version, StateRow.state)):
+        states.setdefault(jid, []).append((at, sid, number, state))
+    rows: dict[int, dict] = {}
+    geo: set[tuple[str, int, float]] = set()
+    for jid, vs in per_joint.items():
+        flags = standing([(v[0], v[1]) for v in vs], states.get(jid, ()))
+        for vid, number, mats, torque, preload, geometry in vs:
+            row, g = index_values(vid, jid, types[jid], number, mats, torque, preload, geometry, flags[vid])
+            rows[vid] = row
+            geo.update((x["key"], x["version_id"], x["value"]) for x in g)
+    return rows, geo
+
+
+def rebuild(conn: Connection) -> int:
+    """Rewrite the whole index from history (migration ``0004``); returns the number of versions."""
+    rows, geo = _expected(conn)
+    conn.execute(delete(QueryGeometryRow))
+    conn.execute(delete(QueryVersionRow))
+    ordered = [rows[k] for k in sorted(rows)]
+    for i in range(0, len(ordered), 5000):
+        conn.execute(insert(QueryVersionRow), ordered[i:i + 5000])
+    g = [geometry_row(k, v, x) for k, v, x in sorted(geo)]
+    for i in range(0, len(g), 5000):
+        conn.execute(insert(QueryGeometryRow), g[i:i + 5000])
+    if conn.execute(select(QueryStampRow.id)).first() is None:
+        conn.execute(insert(QueryStampRow), [{"id": 1, "token": str(uuid.uuid4()), "generation": 0}])
+    else:
+        bump(conn)
+    return len(rows)
+
+
+def index_problems(conn: Connection) -> list[str]:
+    """Differences between the query index and the history it derives from (``db check``)."""
+    rows, geo = _expected(conn)
+    cols = [c.name for c in QueryVersionRow.__table__.columns]
+    have = {r.version_id: {c: getattr(r, c) for c in cols} for r in conn.execute(select(QueryVersionRow))}
+    problems: list[str] = []
+    if conn.execute(select(QueryStampRow.id).where(QueryStampRow.id == 1)).first() is None:
+        problems.append("query index: the query_stamp row is missing")
+    for vid in sorted(set(rows) | set(have)):
+        want, got = rows.get(vid), have.get(vid)
+        if got is not None:
+            got = {k: (bool(v) if k in ("deprecated", "newest", "newest_active") else v) for k, v in got.items()}
+        if want != got:
+            problems.append(f"query index: row of version id {vid} differs from history "
+                            f"(expected {want}, found {got})")
+            if len(problems) >= 10:
+                break
+    have_geo = {tuple(r) for r in conn.execute(select(QueryGeometryRow.key, QueryGeometryRow.version_id,
+                                                      QueryGeometryRow.value))}
+    if have_geo != geo:
+        problems.append(f"query index: {len(geo ^ have_geo)} geometry rows differ from history")
+    return problems

@@ -1,0 +1,427 @@
+"""Nearest-joint ranking over the query index, on a plain DB-API connection.
+
+No SQLAlchemy here: ``jointdb query`` on a SQLite file runs this on a
+``sqlite3`` connection (fast start), :meth:`Repository.nearest` on a raw
+connection of its engine (SQLite or PostgreSQL). The distance is defined in
+:mod:`jointdb.store._query`.
+
+Which versions rank (:class:`Selection`): the versions of the joint type,
+without the deprecated ones unless ``include_deprecated``, only those carrying
+``label`` if given; then, unless ``all_versions``, of each joint only the
+newest of those left. The default is therefore each joint's newest version that
+is not deprecated. Each such set is one SELECT on ``query_versions`` (see
+:mod:`jointdb.store._index`) with the requested geometry keys joined in, fetched
+whole into numpy arrays (on SQLite as one row of concatenated packed columns,
+so that no Python object is made per candidate).
+
+Cache: the arrays of a selection are kept per process (not per Repository)
+and in a per-user cache file (:mod:`jointdb.store._qcache`), keyed by database
+and selection, and reused while the index's stamp
+``(token, generation)`` — one single-row SELECT — is unchanged. Stamp, arrays,
+geometry and the winners' records are read in one read transaction (SQLite:
+one snapshot; PostgreSQL: ``REPEATABLE READ``).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import math
+import warnings
+from collections import Counter
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from datetime import datetime, timezone
+from types import SimpleNamespace
+from typing import Any
+
+import numpy as np
+
+from jointdb.errors import InputError, IntegrityError, NotFoundError
+from jointdb.store._records import to_version
+from jointdb.store._types import Conditions, Match, as_conditions, check_joint_type, check_label
+
+MISSING_PENALTY = 1.0
+MIN_LOG_SPREAD = math.log(2.0)
+#: stands for SQL NULL in fetched numeric columns (every stored condition number is >= 0)
+_NULL = -1.0
+_CACHE_MAX = 32
+
+
+class OutsideCatalogueWarning(UserWarning):
+    """A nearest-joint request lies outside the catalogued range of some condition."""
+
+
+@dataclass(frozen=True)
+class Selection:
+    """Which versions of ``joint_type`` rank (module docstring)."""
+
+    joint_type: str
+    label: str | None = None
+    all_versions: bool = False
+    include_deprecated: bool = False
+
+    def where(self) -> tuple[str, str, list[Any]]:
+        """``(join, where, params)`` on ``query_versions q`` (``?`` placeholders)."""
+        join, conds, params = "", ["q.joint_type = ?"], [self.joint_type]
+        if self.label is not None:
+            join = " JOIN labels l ON l.joint_id = q.joint_id AND l.version = q.version AND l.label = ?"
+            params.insert(0, self.label)
+            if not self.include_deprecated:
+                conds.append("NOT q.deprecated")
+        elif self.all_versions:
+            if not self.include_deprecated:
+                conds.append("NOT q.deprecated")
+        else:
+            conds.append("q.newest" if self.include_deprecated else "q.newest_active")
+        return join, " AND ".join(conds), params
+
+    def describe(self) -> str:
+        what = "versions" if self.all_versions else "newest versions"
+        parts = [f"{what} of {self.joint_type} joints"]
+        if self.label is not None:
+            parts.append(f"labelled {self.label!r}")
+        parts.append("including deprecated ones" if self.include_deprecated else "not deprecated")
+        return ", ".join(parts)
+
+
+@dataclass
+class Candidates:
+    """The ranked set as arrays, ordered by version id (floats: NaN where the value is missing)."""
+
+    version_id: np.ndarray
+    joint_id: np.ndarray
+    number: np.ndarray
+    torque: np.ndarray
+    preload: np.ndarray
+    materials: list[str]  # distinct JSON texts of sorted material lists
+    materials_index: np.ndarray  # per candidate, index into ``materials``
+    geometry: dict[str, np.ndarray] = field(default_factory=dict)
+
+    @classmethod
+    def from_rows(cls, rows: list[tuple], geometry_keys: list[str] = ()) -> "Candidates":
+        """From ``(version_id, joint_id, number, torque, preload, materials, *geometry)`` rows
+        (NULL as :data:`_NULL`)."""
+        if not rows:
+            e = np.zeros(0)
+            return cls(e.astype(np.int64), e.astype(np.int64), e.astype(np.int64), e, e, [], e.astype(np.intp),
+                       {g: e for g in geometry_keys})
+        vid, jid, num, tq, pl, mats, *geo = zip(*rows)
+        order = np.argsort(np.array(vid, dtype=np.int64), kind="stable")
+        keys: dict[str, int] = {}
+        idx = np.array([keys.setdefault(m, len(keys)) for m in mats], dtype=np.intp)
+
+        def nums(col):
+            a = np.array(col, dtype=float)[order]
+            a[a < 0] = np.nan
+            return a
+        return cls(np.array(vid, dtype=np.int64)[order], np.array(jid, dtype=np.int64)[order],
+                   np.array(num, dtype=np.int64)[order], nums(tq), nums(pl), list(keys), idx[order],
+                   {g: nums(col) for g, col in zip(geometry_keys, geo)})
+
+    def align(self, pairs: list[tuple]) -> np.ndarray:
+        """A float column from ``(version_id, value)`` pairs (NaN for candidates without one)."""
+        out = np.full(self.version_id.size, np.nan)
+        if pairs and self.version_id.size:
+            ids, vals = zip(*pairs)
+            ids = np.array(ids, dtype=np.int64)
+            pos = np.searchsorted(self.version_id, ids).clip(0, self.version_id.size - 1)
+            hit = self.version_id[pos] == ids
+            out[pos[hit]] = np.array(vals, dtype=float)[hit]
+        return out
+
+
+# ----------------------------------------------------------------------------- connection
+class Reader:
+    """A DB-API connection (``sqlite3`` or psycopg) with ``?`` placeholders and a read transaction."""
+
+    def __init__(self, dbapi_conn, dialect: str):
+        self.conn = dbapi_conn
+        self.dialect = dialect
+
+    def rows(self, sql: str, params=()) -> list[tuple]:
+        if self.dialect != "sqlite":
+            sql = sql.replace("?", "%s")
+        cur = self.conn.cursor()
+        try:
+            cur.execute(sql, tuple(params))
+            return cur.fetchall() if cur.description is not None else []
+        finally:
+            cur.close()
+
+    @contextlib.contextmanager
+    def snapshot(self):
+        """One read transaction (SQLite: deferred BEGIN; PostgreSQL: REPEATABLE READ, read only)."""
+        if self.dialect == "sqlite":
+            self.rows("BEGIN")
+        else:
+            self.conn.rollback()  # a fresh transaction: SET TRANSACTION must come first in it
+            self.rows("SET TRANSACTION ISOLATION LEVEL REPEATABLE READ READ ONLY")
+        try:
+            yield self
+        finally:
+            if self.dialect == "sqlite":
+                self.rows("COMMIT")
+            else:
+                self.conn.rollback()
+
+
+_cache: dict[tuple, tuple[tuple, Candidates]] = {}
+
+
+#: ``query_versions.packed`` (see :data:`jointdb.store._index.PACKED`) and -1.0 as float64 bytes
+_PACKED = np.dtype([("version_id", "<i8"), ("joint_id", "<i8"), ("number", "<i8"), ("torque", "<f8"),
+                    ("preload", "<f8")])
+_NULL_BITS = "000000000000F0BF"
+
+
+def _fetch_packed(reader: Reader, sel: Selection, geometry_keys: list[str]) -> Candidates:
+    """SQLite: the candidates as one row of concatenated hex strings (no Python object per row).
+
+    All ``group_concat`` aggregates of one SELECT visit the rows in the same order.
+    """
+    join, where, params = sel.where()
+    geo_cols = "".join(f", group_concat(CASE WHEN g{i}.bits IS NULL THEN '{_NULL_BITS}' ELSE hex(g{i}.bits) END, '')"
+                       for i in range(len(geometry_keys)))
+    geo_join = "".join(f" LEFT JOIN query_geometry g{i} ON g{i}.key = ? AND g{i}.version_id = q.version_id"
+                       for i in range(len(geometry_keys)))
+    row = reader.rows(
+        f"SELECT count(*), group_concat(hex(q.packed), ''), group_concat(q.materials, char(30)){geo_cols} "
+        f"FROM query_versions q{join}{geo_join} WHERE {where}", [*params[:-1], *geometry_keys, params[-1]])[0]
+    n = int(row[0])
+    if n == 0:
+        return Candidates.from_rows([], geometry_keys)
+    rec = np.frombuffer(bytes.fromhex(row[1]), dtype=_PACKED)
+    mats = row[2].split("\x1e")  # JSON text escapes control characters: no material contains one
+    geo_bits = [bytes.fromhex(text) for text in row[3:]]
+    if rec.size != n or len(mats) != n or any(len(b) != 8 * n for b in geo_bits):
+        raise IntegrityError("query index: packed candidate columns do not line up; run `jointdb db check`")
+    order = np.argsort(rec["version_id"], kind="stable")
+    keys: dict[str, int] = {}
+    idx = np.array([keys.setdefault(m, len(keys)) for m in mats], dtype=np.intp)
+
+    def nums(a):
+        a = np.array(a[order], dtype=float)
+        a[a < 0] = np.nan
+        return a
+    geometry = {g: nums(np.frombuffer(b, dtype="<f8")) for g, b in zip(geometry_keys, geo_bits)}
+    return Candidates(rec["version_id"][order].copy(), rec["joint_id"][order].copy(), rec["number"][order].copy(),
+                      nums(rec["torque"]), nums(rec["preload"]), list(keys), idx[order], geometry)
+
+
+def _fetch(reader: Reader, sel: Selection, geometry_keys: list[str]) -> Candidates:
+    """The candidates of ``sel`` with the given geometry keys, in one SELECT."""
+    if reader.dialect == "sqlite":
+        return _fetch_packed(reader, sel, geometry_keys)
+    join, where, params = sel.where()
+    geo_cols = "".join(f", COALESCE(g{i}.value, {_NULL})" for i in range(len(geometry_keys)))
+    geo_join = "".join(f" LEFT JOIN query_geometry g{i} ON g{i}.key = ? AND g{i}.version_id = q.version_id"
+                       for i in range(len(geometry_keys)))
+    rows = reader.rows(
+        f"SELECT q.version_id, q.joint_id, q.version, COALESCE(q.torque_nm, {_NULL}), "
+        f"COALESCE(q.preload_n, {_NULL}), q.materials{geo_cols} FROM query_versions q{join}{geo_join} WHERE {where}",
+        [*params[:-1], *geometry_keys, params[-1]])
+    return Candidates.from_rows(rows, geometry_keys)
+
+
+def _fetch_geometry(reader: Reader, sel: Selection, key: str, cand: Candidates) -> np.ndarray:
+    join, where, params = sel.where()
+    pairs = reader.rows(f"SELECT g.version_id, g.value FROM query_geometry g JOIN query_versions q "
+                        f"ON q.version_id = g.version_id{join} WHERE g.key = ? AND {where}",
+                        [*params[:-1], key, params[-1]] if join else [key, *params])
+    return cand.align(pairs)
+
+
+def current_candidates(reader: Reader, db_key: str, sel: Selection, geometry_keys) -> Candidates:
+    """The candidates of ``sel`` now (call in a snapshot): from this process's cache, else from
+    the on-disk cache (:mod:`jointdb.store._qcache`), else from the index, while the stamp is
+    unchanged."""
+    from jointdb.store import _qcache
+
+    stamp = tuple(reader.rows("SELECT token, generation FROM query_stamp WHERE id = 1")[0])
+    key = (db_key, sel)
+    hit = _cache.get(key)
+    keys = list(geometry_keys)
+    if hit is None or hit[0] != stamp:
+        if len(_cache) >= _CACHE_MAX:
+            _cache.clear()
+        cand = _qcache.load(db_key, stamp, sel)
+        if cand is None:
+            cand = _fetch(reader, sel, keys)
+            _qcache.save(db_key, stamp, sel, cand)
+        hit = (stamp, cand)
+        _cache[key] = hit
+    cand = hit[1]
+    missing = [g for g in keys if g not in cand.geometry]
+    for g in missing:
+        cand.geometry[g] = _fetch_geometry(reader, sel, g, cand)
+    if missing:
+        _qcache.save(db_key, stamp, sel, cand)
+    return cand
+
+
+# ----------------------------------------------------------------------------- ranking
+def _jaccard(a: tuple[str, ...], b: tuple[str, ...]) -> float:
+    ca, cb = Counter(a), Counter(b)
+    union = sum((ca | cb).values())
+    return 0.0 if union == 0 else 1.0 - sum((ca & cb).values()) / union
+
+
+def _log_term(values: np.ndarray, request: float, name: str, terms: dict, outside: list) -> None:
+    have = np.isfinite(values)
+    if not have.any():
+        terms[name] = np.full(values.shape, MISSING_PENALTY)
+        outside.append(name)
+        return
+    delta = 1e-9 * max(1.0, float(np.nanmax(values)))
+    logs = np.log(values[have] + delta)
+    spread = max(float(logs.max() - logs.min()), MIN_LOG_SPREAD)
+    term = np.full(values.shape, MISSING_PENALTY)
+    term[have] = np.abs(logs - math.log(request + delta)) / spread
+    terms[name] = term
+    lo, hi = float(np.nanmin(values)), float(np.nanmax(values))
+    if request < lo or request > hi:
+        outside.append(name)
+
+
+def rank(cand: Candidates, req: Conditions, k: int) -> tuple[np.ndarray, np.ndarray, dict, list[str]]:
+    """``(order, total, terms, outside)``: the ``k`` best candidate positions, best first.
+
+    Order: distance rounded to 1e-12, then joint id, then version number.
+    """
+    n = cand.version_id.size
+    terms: dict[str, np.ndarray] = {}
+    outside: list[str] = []
+    if req.torque_nm is not None:
+        _log_term(cand.torque, req.torque_nm, "torque_nm", terms, outside)
+    if req.preload_n is not None:
+        _log_term(cand.preload, req.preload_n, "preload_n", terms, outside)
+    if req.materials:
+        want = tuple(sorted(req.materials))
+        per_key = np.array([_jaccard(want, tuple(m)) if m else MISSING_PENALTY
+                            for m in (json.loads(t) for t in cand.materials)])
+        terms["materials"] = per_key[cand.materials_index]
+        if not np.any(per_key == 0.0):
+            outside.append("materials")
+    for key, r_val in req.geometry.items():
+        vals = cand.geometry[key]
+        have = np.isfinite(vals)
+        denom = np.maximum(np.abs(vals), abs(r_val))
+        with np.errstate(invalid="ignore"):
+            rel = np.where(denom > 0, np.abs(vals - r_val) / np.where(denom > 0, denom, 1.0), 0.0)
+        terms[f"geometry.{key}"] = np.where(have, rel, MISSING_PENALTY)
+        if not have.any() or r_val < np.nanmin(vals) or r_val > np.nanmax(vals):
+            outside.append(f"geometry.{key}")
+    total = np.sqrt(sum((t**2 for t in terms.values()), np.zeros(n)))
+    rounded = np.round(total, 12)
+    pool = np.arange(n)
+    if n > 4 * k:  # the k best by the same key, without sorting all of them
+        kth = np.partition(rounded, k - 1)[k - 1]
+        pool = np.flatnonzero(rounded <= kth)
+    order = pool[np.lexsort((cand.number[pool], cand.joint_id[pool], rounded[pool]))][:k]
+    return order, total, terms, outside
+
+
+# ----------------------------------------------------------------------------- records
+_JSON_COLUMNS = ("materials", "geometry", "extra", "dofs", "raw_blobs", "input_files", "method_params", "quality")
+_VERSION_COLUMNS = ("id", "joint_id", "version", "uuid", "created_at", "author", "materials", "preload_n",
+                    "torque_nm", "geometry", "extra", "model_kind", "dofs", "quantity", "n_freq", "freq_min_hz",
+                    "freq_max_hz", "blob_sha256", "raw_blobs", "input_files", "method", "method_params",
+                    "software_version", "parent_version", "quality", "record_sha256")
+
+
+def _utc(value) -> datetime:
+    if isinstance(value, str):  # SQLite: naive UTC text
+        value = datetime.fromisoformat(value)
+    return value.replace(tzinfo=timezone.utc) if value.tzinfo is None else value.astimezone(timezone.utc)
+
+
+def fetch_versions(reader: Reader, version_ids: list[int], states: Mapping[int, str] | None = None) -> dict:
+    """``{version_id: JointVersion}`` (record hash verified), with labels and the current state
+    from the index unless ``states`` gives them."""
+    if not version_ids:
+        return {}
+    marks = ", ".join("?" for _ in version_ids)
+    cols = ", ".join(f"v.{c}" for c in _VERSION_COLUMNS)
+    rows = reader.rows(f"SELECT j.name, j.joint_type, q.deprecated, {cols} FROM joint_versions v "
+                       f"JOIN joints j ON j.id = v.joint_id LEFT JOIN query_versions q ON q.version_id = v.id "
+                       f"WHERE v.id IN ({marks})", version_ids)
+    labels: dict[tuple[int, int], list[str]] = {}
+    joint_ids = sorted({r[4] for r in rows})  # v.joint_id
+    if joint_ids:
+        for jid, number, label in reader.rows(
+                f"SELECT joint_id, version, label FROM labels WHERE joint_id IN ({', '.join('?' for _ in joint_ids)})",
+                joint_ids):
+            labels.setdefault((jid, number), []).append(label)
+    out = {}
+    for name, joint_type, deprecated, *values in rows:
+        row = SimpleNamespace(**dict(zip(_VERSION_COLUMNS, values)))
+        for c in _JSON_COLUMNS:
+            if isinstance(getattr(row, c), str):
+                setattr(row, c, json.loads(getattr(row, c)))
+        row.created_at = _utc(row.created_at)
+        joint = SimpleNamespace(name=name, joint_type=joint_type, id=row.joint_id)
+        state = states[row.id] if states is not None else ("deprecated" if deprecated else "active")
+        out[row.id] = to_version(joint, row, state, labels.get((row.joint_id, row.version), ()))
+    return out
+
+
+def matches(reader: Reader, cand: Candidates, req: Conditions, k: int, sel: Selection,
+            states: Mapping[int, str] | None = None, stacklevel: int = 3) -> list[Match]:
+    """Rank ``cand`` and build the :class:`Match` list (warns when extrapolating)."""
+    order, total, terms, outside = rank(cand, req, k)
+    if outside:
+        warnings.warn(
+            f"request lies outside the catalogued range of {sel.joint_type} joints for: {', '.join(outside)}; "
+            "the nearest joints are extrapolations",
+            OutsideCatalogueWarning,
+            stacklevel=stacklevel,
+        )
+    found = fetch_versions(reader, [int(cand.version_id[i]) for i in order], states)
+    return [Match(version=found[int(cand.version_id[i])], distance=float(total[i]),
+                  per_condition={name: float(t[i]) for name, t in terms.items()},
+                  extrapolating=bool(outside), outside_range=tuple(outside)) for i in order]
+
+
+def check_request(joint_type: str, conditions, k: int, label: str | None) -> tuple[str, Conditions, int, str | None]:
+    """Validated ``(joint_type, conditions, k, label)``.
+
+    Raises
+    ------
+    InputError
+        ``k < 1``, bad conditions, type or label.
+    """
+    joint_type = check_joint_type(joint_type)
+    req = as_conditions(conditions)
+    if isinstance(k, bool) or int(k) < 1:
+        raise InputError(f"k must be >= 1, got {k!r}")
+    return joint_type, req, int(k), (check_label(label) if label is not None else None)
+
+
+def not_found(reader: Reader, sel: Selection) -> NotFoundError:
+    types = sorted({r[0] for r in reader.rows("SELECT DISTINCT joint_type FROM joints")})
+    among = "" if sel == Selection(sel.joint_type) else f" among the {sel.describe()}"
+    return NotFoundError(f"no current catalogued joint of type {sel.joint_type!r}{among}; types in the catalogue: "
+                         f"{', '.join(types) or 'none'} (joint types are never mixed)")
+
+
+def nearest_now(reader: Reader, db_key: str, joint_type: str, conditions, k: int = 3, *, label: str | None = None,
+                all_versions: bool = False, include_deprecated: bool = False, stacklevel: int = 3) -> list[Match]:
+    """The ``k`` versions of the selection closest to ``conditions``, as the catalogue is now.
+
+    Raises
+    ------
+    InputError
+        Bad request (:func:`check_request`).
+    NotFoundError
+        Nothing in the selection.
+    """
+    joint_type, req, k, label = check_request(joint_type, conditions, k, label)
+    sel = Selection(joint_type, label, bool(all_versions), bool(include_deprecated))
+    with reader.snapshot():
+        cand = current_candidates(reader, db_key, sel, list(req.geometry))
+        if cand.version_id.size == 0:
+            raise not_found(reader, sel)
+        return matches(reader, cand, req, k, sel, stacklevel=stacklevel + 1)
+
+
