@@ -26,7 +26,7 @@ import typer
 from jointdb.errors import JointdbError
 
 #: The command modules, in the order they register (which is the order of ``jointdb --help``).
-MODULES = ("_models", "_coupling", "_store", "_db", "_predict", "_stability", "_diagnose", "_demo")
+MODULES = ("_models", "_coupling", "_store", "_db", "_predict", "_stability", "_diagnose", "_demo", "_serve")
 
 #: Every top-level command as ``jointdb --help`` lists it: the module that registers it and
 #: the first paragraph of its help.
@@ -52,6 +52,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "joints": ("_store", "List, inspect, label, deprecate, diff, export and import catalogued joints."),
     "keys": ("_store", "Ed25519 keys to sign exported bundles and verify imported ones."),
     "db": ("_db", "Database administration: migrations, integrity check, garbage collection."),
+    "serve": ("_serve", "Run the HTTP API and web catalogue (FastAPI + uvicorn) over the joint database."),
+    "tokens": ("_serve", "API tokens of the HTTP service: create, list, revoke."),
 }
 
 

@@ -15,13 +15,7 @@ from typing import Annotated, Any, Optional
 import typer
 
 from jointdb._output import emit, message
-from jointdb.cli._joint_files import (
-    _JOINT_MODEL_KINDS,
-    _numeric_metrics,
-    _read_joint_file,
-    _write_joint_file,
-    merge_conditions,
-)
+from jointdb.cli._joint_files import _write_joint_file
 from jointdb.errors import InputError, NotFoundError
 
 DbOpt = Annotated[
@@ -187,40 +181,20 @@ def register(app: typer.Typer) -> None:
         Example: jointdb catalogue joint.h5 --name T1-HSK63 --type tool-holder
         --material carbide --material steel --torque 40 --geometry diameter_m=0.02
         """
-        from jointdb.store import Provenance
+        from jointdb.cli._joint_files import catalogue_inputs
+        from jointdb.store._types import check_label, check_name
 
-        frf, meta, hashes, raw = _read_joint_file(joint_file)
-        kind = model_kind or meta.get("model_kind") or _JOINT_MODEL_KINDS.get(str(meta.get("joint_model")))
-        if not kind:
-            raise InputError(f"{joint_file}: the file does not say its joint model; give --model-kind")
-        jtype = joint_type or meta.get("joint_type")
-        if not jtype:
-            raise InputError(f"{joint_file}: the file does not say its joint type; give --type")
-        q = _numeric_metrics(meta.get("quality"))
-        q.update(_pairs(quality, "--quality"))
-        params = {k: meta[k] for k in ("settings", "interface", "campaign") if k in meta}
-        file_method = meta.get("method") or (f"irc-{meta['joint_model']}" if meta.get("joint_model") else None)
-        prov = Provenance(
-            method=method or str(file_method or "imported-file"),
-            parameters=json.loads(json.dumps(params, default=str)),
-            input_files=hashes,
-            author=author or "",
-        )
-        conditions = merge_conditions(joint_file, meta.get("conditions"),
-                                      _conditions(material, preload, torque, geometry, extra), override)
+        args = catalogue_inputs(joint_file, _conditions(material, preload, torque, geometry, extra),
+                                joint_type=joint_type, model_kind=model_kind, method=method,
+                                quality=_pairs(quality, "--quality"), author=author, override=override)
         # everything the library would refuse is refused before the database is opened (or created)
-        from jointdb.store._types import check_joint_type, check_label, check_model_kind, check_name
-
         check_name(name)
-        jtype = check_joint_type(jtype)
-        kind = check_model_kind(kind, frf)
         if label is not None:
             label = check_label(label)
         if parent is not None and parent < 1:
             raise InputError(f"--parent must be a version number >= 1, got {parent}")
         repo = _repo(db, blobs, create=True)
-        jv = repo.catalogue(name, jtype, frf, conditions, kind, prov, q, parent, raw_frfs=raw, author=author,
-                            label=label)
+        jv = repo.catalogue(name, parent=parent, author=author, label=label, **args)
         message(f"catalogued {jv.name} v{jv.version} ({jv.blob_sha256[:12]})")
         emit(_version_detail(jv), as_json=as_json, title=f"{jv.name} v{jv.version}")
 

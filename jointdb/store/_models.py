@@ -181,6 +181,28 @@ class AuditRow(Base):
     details: Mapped[dict[str, Any]] = mapped_column(JSON)
 
 
+class TokenRow(Base):
+    """An API token of the HTTP service (migration 0005): only its SHA-256 is stored.
+
+    ``name`` is the owner the audit log records for the token's writes; ``token_id``
+    is the public part shown by ``jointdb tokens list``. Revoking sets ``revoked_at``
+    (the row stays, so the audit trail keeps its owner).
+    """
+
+    __tablename__ = "api_tokens"
+    __table_args__ = (CheckConstraint("role IN ('reader', 'writer', 'admin')", name="role_known"),)
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    token_id: Mapped[str] = mapped_column(String(32), unique=True)
+    sha256: Mapped[str] = mapped_column(String(64), unique=True)
+    name: Mapped[str] = mapped_column(String(200))
+    role: Mapped[str] = mapped_column(String(20))
+    created_at: Mapped[datetime] = mapped_column(UTCDateTime())
+    created_by: Mapped[str] = mapped_column(String(200))
+    expires_at: Mapped[datetime | None] = mapped_column(UTCDateTime())
+    revoked_at: Mapped[datetime | None] = mapped_column(UTCDateTime())
+
+
 IMMUTABLE = (JointRow, VersionRow, StateRow, AuditRow)
 #: Tables the database itself protects with UPDATE/DELETE triggers (migration 0002).
 IMMUTABLE_TABLES = ("joints", "joint_versions", "joint_states", "audit_log")

@@ -1,0 +1,81 @@
+"""Write routes (writer token): catalogue an uploaded joint file, label, deprecate.
+
+Every write is made under the token's owner: the audit log's actor and the
+version's author are the owner's name, whatever the request body says.
+"""
+
+from __future__ import annotations
+
+import base64
+import binascii
+import tempfile
+from pathlib import Path as FsPath
+from typing import Any
+
+from fastapi import APIRouter, Depends
+
+from jointdb.errors import InputError, JointdbError
+from jointdb.server._deps import repo, version_json, writer
+from jointdb.server._schemas import CatalogueIn, DeprecateIn, LabelIn
+from jointdb.server.routes_joints import Name, joint_name
+
+router = APIRouter(tags=["writes"])
+
+UPLOAD_SUFFIXES = (".h5", ".hdf5")
+
+
+def upload_name(filename: str) -> str:
+    """A plain file name (kept in the provenance): no directories, no '..', an HDF5 suffix."""
+    name = str(filename)
+    if not name or "/" in name or "\\" in name or name in (".", "..") or name.startswith(".") \
+            or not name.isprintable() or "\x00" in name:
+        raise InputError(f"filename {name[:60]!r} must be a plain file name without directories")
+    if not name.lower().endswith(UPLOAD_SUFFIXES):
+        raise InputError(f"filename {name[:60]!r}: upload the identified joint as an HDF5 file (.h5); "
+                         "campaign archives are not accepted by this server yet")
+    return name
+
+
+def catalogue_upload(r, body: CatalogueIn, owner: str):
+    """Decode, read and catalogue an uploaded joint file (shared by the API and the web form)."""
+    from jointdb.cli._joint_files import catalogue_inputs
+    from jointdb.store._types import check_label
+
+    name = joint_name(body.name)
+    fname = upload_name(body.filename)
+    label = check_label(body.label) if body.label is not None else None
+    try:
+        data = base64.b64decode(body.file_b64, validate=True)
+    except (binascii.Error, ValueError):
+        raise InputError("file_b64 is not valid base64") from None
+    if not data:
+        raise InputError("file_b64 is empty")
+    with tempfile.TemporaryDirectory(prefix="jointdb-upload-") as tmp:
+        path = FsPath(tmp) / fname
+        path.write_bytes(data)
+        try:
+            args = catalogue_inputs(path, body.conditions.to_conditions(), joint_type=body.joint_type,
+                                    model_kind=body.model_kind, method=body.method, quality=dict(body.quality),
+                                    author=owner, override=body.override_conditions)
+        except JointdbError as exc:  # name the upload, not the server's temporary directory
+            raise type(exc)(str(exc).replace(f"{tmp}/", "")) from None
+    return r.catalogue(name, parent=body.parent, author=owner, label=label, **args)
+
+
+@router.post("/catalogue", status_code=201, summary="Catalogue an identified joint file as a new version")
+def catalogue(body: CatalogueIn, r=Depends(repo), who=writer) -> dict[str, Any]:
+    """Upload the HDF5 file of `jointdb identify` (base64) with conditions; the conditions
+    recorded in the file are completed by those given (a contradiction is refused unless
+    ``override_conditions``). The version and its label are written together or not at all."""
+    return version_json(catalogue_upload(r, body, who.name))
+
+
+@router.post("/joints/{name}/labels", summary="Point a label at a version (create or move it)")
+def label(name: Name, body: LabelIn, r=Depends(repo), who=writer) -> dict[str, Any]:
+    return version_json(r.label(joint_name(name), body.version, body.label, author=who.name))
+
+
+@router.post("/joints/{name}/deprecate", summary="Deprecate (or undo) a joint or one version")
+def deprecate(name: Name, body: DeprecateIn, r=Depends(repo), who=writer) -> dict[str, Any]:
+    hist = r.deprecate(joint_name(name), body.version, reason=body.reason, author=who.name, undo=body.undo)
+    return {"items": [version_json(v) for v in hist]}
