@@ -55,7 +55,7 @@ def register(app: typer.Typer) -> None:
         if db is not None:
             env["JOINTDB_URL"] = db
         if blobs is not None:
-            env["JOINTDB_BLOBS"] = str(Path(blobs).resolve())
+            env["JOINTDB_BLOBS"] = "database" if str(blobs) == "database" else str(Path(blobs).resolve())
         os.environ.update(env)  # every worker reads its settings from the environment
         from jointdb.server._logging import log_config
 

@@ -24,7 +24,7 @@ DbOpt = Annotated[
 ]
 JsonOpt = Annotated[bool, typer.Option("--json", help="Write JSON to stdout instead of a table.")]
 BlobsOpt = Annotated[
-    Optional[Path], typer.Option("--blobs", help="Blob directory (default: $JOINTDB_BLOBS or beside the SQLite file).")
+    Optional[Path], typer.Option("--blobs", help="Blob directory, or 'database' to keep blobs in the database (default: $JOINTDB_BLOBS or beside the SQLite file).")
 ]
 
 

@@ -65,7 +65,7 @@ BUSY_TIMEOUT_S = 30.0
 PG_CONNECT_TIMEOUT_S = 10
 SQLITE_MAGIC = b"SQLite format 3\x00"
 #: Tables of the jointdb schema (besides ``alembic_version``).
-SCHEMA_TABLES = frozenset({"joints", "joint_versions", "joint_states", "labels", "audit_log", "api_tokens"})
+SCHEMA_TABLES = frozenset({"joints", "joint_versions", "joint_states", "labels", "audit_log", "api_tokens", "frf_blobs"})
 
 
 def default_sqlite_path() -> Path:
@@ -371,7 +371,7 @@ DOWNGRADE_DROPS = {
     "0001": "every table and all data",
     "0002": "the triggers that refuse UPDATE and DELETE of history rows",
     "0003": "the guards against REPLACE/UPSERT, TRUNCATE and dropping the triggers",
-    "0005": "the API tokens of the HTTP service (every token stops working)",
+    "0005": "the API tokens of the HTTP service (every token stops working) and the blobs kept in the database",
 }
 
 

@@ -30,6 +30,7 @@ from sqlalchemy import (
     ForeignKeyConstraint,
     Index,
     Integer,
+    LargeBinary,
     MetaData,
     String,
     Text,
@@ -201,6 +202,24 @@ class TokenRow(Base):
     created_by: Mapped[str] = mapped_column(String(200))
     expires_at: Mapped[datetime | None] = mapped_column(UTCDateTime())
     revoked_at: Mapped[datetime | None] = mapped_column(UTCDateTime())
+
+
+class BlobRow(Base):
+    """A content-addressed FRF blob kept in the database (migration 0005; ``blobs="database"``).
+
+    ``data`` holds exactly the bytes of a blob file (:mod:`jointdb.store._blobs`: user block
+    with the whole-file SHA-256, then HDF5), so reads verify the same three ways as files.
+    ``touched_at`` is refreshed by every put, so ``gc`` spares a blob a writer is about to
+    reference.
+    """
+
+    __tablename__ = "frf_blobs"
+
+    sha256: Mapped[str] = mapped_column(String(64), primary_key=True)
+    data: Mapped[bytes] = mapped_column(LargeBinary)
+    size: Mapped[int] = mapped_column(Integer)
+    created_at: Mapped[datetime] = mapped_column(UTCDateTime())
+    touched_at: Mapped[datetime] = mapped_column(UTCDateTime())
 
 
 IMMUTABLE = (JointRow, VersionRow, StateRow, AuditRow)

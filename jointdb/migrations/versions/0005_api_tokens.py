@@ -1,5 +1,7 @@
 """API tokens of the HTTP service (``jointdb serve``): owner name, role, SHA-256 of the
 token, creation, optional expiry and revocation time. The token itself is never stored.
+And ``frf_blobs``: FRF blobs kept in the database itself (``JOINTDB_BLOBS=database``), so
+several API hosts need nothing but the database.
 
 Revision ID: 0005
 Revises: 0003
@@ -35,7 +37,17 @@ def upgrade() -> None:
         sa.UniqueConstraint("token_id", name=op.f("uq_api_tokens_token_id")),
         sa.UniqueConstraint("sha256", name=op.f("uq_api_tokens_sha256")),
     )
+    op.create_table(
+        "frf_blobs",
+        sa.Column("sha256", sa.String(length=64), nullable=False),
+        sa.Column("data", sa.LargeBinary(), nullable=False),
+        sa.Column("size", sa.Integer(), nullable=False),
+        sa.Column("created_at", sa.DateTime(timezone=True), nullable=False),
+        sa.Column("touched_at", sa.DateTime(timezone=True), nullable=False),
+        sa.PrimaryKeyConstraint("sha256", name=op.f("pk_frf_blobs")),
+    )
 
 
 def downgrade() -> None:
+    op.drop_table("frf_blobs")
     op.drop_table("api_tokens")
