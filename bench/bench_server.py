@@ -15,7 +15,6 @@
 from __future__ import annotations
 
 import argparse
-import concurrent.futures as cf
 import random
 import sys
 import tempfile
@@ -26,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "server"))
-from server_helpers import joint_upload, make_tokens, spring_joint, start_server, stop_server  # noqa: E402
+from server_helpers import make_tokens, run_load, spring_joint, start_server, stop_server  # noqa: E402
 
 
 def fresh_db(base: str, tmp: Path) -> tuple[str, object]:
@@ -44,39 +43,6 @@ def fresh_db(base: str, tmp: Path) -> tuple[str, object]:
         url, schema, engine = f"sqlite:///{tmp / 'bench.sqlite'}", None, None
     upgrade(url)
     return url, (engine, schema)
-
-
-def load(server, clients: int, writes: int, tmp: Path) -> dict:
-    body = joint_upload(tmp, "template")
-
-    def client(i: int) -> list[tuple[str, int]]:
-        done = []
-        with server.client("writer") as c:
-            for j in range(writes):
-                name = f"L{i % 4}-{j % 5}"  # 20 joints shared by the clients: concurrent new versions
-                r = c.post("/api/v1/catalogue", json={**body, "name": name,
-                                                      "conditions": {"torque_nm": 10.0 + i + j / 100},
-                                                      "override_conditions": True})
-                if r.status_code != 201:
-                    raise RuntimeError(f"{r.status_code} {r.text[:200]}")
-                v = r.json()["version"]
-                got = c.get(f"/api/v1/joints/{name}/versions/{v}")
-                if got.status_code != 200 or got.json()["conditions"]["torque_nm"] != 10.0 + i + j / 100:
-                    raise RuntimeError(f"read-back of {name} v{v} failed: {got.status_code}")
-                done.append((name, v))
-        return done
-
-    t0 = time.perf_counter()
-    with cf.ThreadPoolExecutor(clients) as pool:
-        acked = [x for part in pool.map(client, range(clients)) for x in part]
-    elapsed = time.perf_counter() - t0
-    repo = server.repo()
-    stored = [(v.name, v.version) for j in repo.list_joints() for v in repo.history(j.name)]
-    report = repo.check()
-    return {"acknowledged": len(acked), "distinct_acknowledged": len(set(acked)), "stored": len(stored),
-            "lost": len(set(acked) - set(stored)), "duplicated": len(acked) - len(set(acked)),
-            "extra_in_db": len(set(stored) - set(acked)), "check_ok": report.ok, "seconds": round(elapsed, 1),
-            "writes_per_s": round(len(acked) / elapsed, 1)}
 
 
 def seed(server, n: int) -> None:
@@ -118,20 +84,23 @@ def latencies(server, samples: int) -> dict:
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--db", required=True, help="PostgreSQL base URL (a fresh schema is made) or 'sqlite'.")
+    ap.add_argument("--seed-only-above", type=int, default=0, help=argparse.SUPPRESS)
     ap.add_argument("--clients", type=int, default=16)
     ap.add_argument("--writes", type=int, default=50)
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--versions", type=int, default=10000)
     ap.add_argument("--samples", type=int, default=200)
+    ap.add_argument("--blobs", default="database", help="'database' (blobs in the database) or 'files'.")
     args = ap.parse_args()
     with tempfile.TemporaryDirectory() as tmp_:
         tmp = Path(tmp_)
         url, (engine, schema) = fresh_db(args.db, tmp)
-        tokens = make_tokens(url, tmp / "blobs")
-        server = start_server(url, tmp / "blobs", tmp / "server.log", workers=args.workers)
+        blobs = "database" if args.blobs == "database" else tmp / "blobs"
+        tokens = make_tokens(url, blobs)
+        server = start_server(url, blobs, tmp / "server.log", workers=args.workers)
         server.tokens = tokens
         try:
-            print("load:", load(server, args.clients, args.writes, tmp), flush=True)
+            print("load:", run_load(server, args.clients, args.writes, tmp), flush=True)
             if args.versions:
                 t0 = time.perf_counter()
                 seed(server, args.versions)
@@ -140,7 +109,6 @@ def main() -> None:
         finally:
             stop_server(server)
             if engine is not None:
-                sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "store"))
                 from server_helpers import drop_pg_schema
 
                 drop_pg_schema(engine, schema)

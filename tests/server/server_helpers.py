@@ -132,3 +132,72 @@ def joint_upload(tmp: Path, name: str, torque: float = 40.0, k: float = 2e6, **e
     body = {"name": name, "filename": "joint.h5", "file_b64": base64.b64encode(path.read_bytes()).decode()}
     body.update(extra)
     return body
+
+
+class _Tolerant:
+    """An httpx client whose transport errors become a 599 response (a killed worker)."""
+
+    def __init__(self, client, failed: list):
+        self.client, self.failed = client, failed
+
+    def _call(self, method, *a, **kw):
+        try:
+            return getattr(self.client, method)(*a, **kw)
+        except httpx.HTTPError:
+            return httpx.Response(599, text="transport error")
+
+    def post(self, *a, **kw):
+        return self._call("post", *a, **kw)
+
+    def get(self, *a, **kw):
+        return self._call("get", *a, **kw)
+
+
+def run_load(server, clients: int, writes: int, tmp: Path, tolerate_errors: bool = False) -> dict:
+    """``clients`` threads x ``writes`` catalogue uploads (20 shared joint names, so versions
+    of one joint race), each read back; then what the database holds against what was
+    acknowledged. With ``tolerate_errors`` a failed request (e.g. a killed worker) is
+    counted, not raised."""
+    import concurrent.futures as cf
+
+    body = joint_upload(tmp, "template")
+
+    def client(i: int) -> list[tuple[str, int]]:
+        done = []
+        with server.client("writer") as c:
+            c = _Tolerant(c, failed) if tolerate_errors else c
+            for j in range(writes):
+                name = f"L{i % 4}-{j % 5}"  # 20 joints shared by the clients: concurrent new versions
+                r = c.post("/api/v1/catalogue", json={**body, "name": name,
+                                                      "conditions": {"torque_nm": 10.0 + i + j / 100},
+                                                      "override_conditions": True})
+                if r.status_code != 201:
+                    if tolerate_errors:
+                        failed.append(r.status_code)
+                        continue
+                    raise RuntimeError(f"{r.status_code} {r.text[:200]}")
+                v = r.json()["version"]
+                got = c.get(f"/api/v1/joints/{name}/versions/{v}")
+                for _ in range(20 if tolerate_errors else 0):  # a killed worker: the next one answers
+                    if got.status_code != 599:
+                        break
+                    time.sleep(0.25)
+                    got = c.get(f"/api/v1/joints/{name}/versions/{v}")
+                if got.status_code != 200 or got.json()["conditions"]["torque_nm"] != 10.0 + i + j / 100:
+                    raise RuntimeError(f"read-back of {name} v{v} failed: {got.status_code}")
+                done.append((name, v))
+        return done
+
+    failed: list = []
+    t0 = time.perf_counter()
+    with cf.ThreadPoolExecutor(clients) as pool:
+        acked = [x for part in pool.map(client, range(clients)) for x in part]
+    elapsed = time.perf_counter() - t0
+    repo = server.repo()
+    stored = [(v.name, v.version) for j in repo.list_joints() for v in repo.history(j.name)]
+    report = repo.check()
+    return {"acknowledged": len(acked), "distinct_acknowledged": len(set(acked)), "stored": len(stored),
+            "lost": len(set(acked) - set(stored)), "duplicated": len(acked) - len(set(acked)),
+            "extra_in_db": len(set(stored) - set(acked)), "check_ok": report.ok, "check_problems": list(report.problems)[:3],
+            "failed_requests": len(failed), "seconds": round(elapsed, 1),
+            "writes_per_s": round(len(acked) / elapsed, 1)}
