@@ -84,7 +84,6 @@ def latencies(server, samples: int) -> dict:
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--db", required=True, help="PostgreSQL base URL (a fresh schema is made) or 'sqlite'.")
-    ap.add_argument("--seed-only-above", type=int, default=0, help=argparse.SUPPRESS)
     ap.add_argument("--clients", type=int, default=16)
     ap.add_argument("--writes", type=int, default=50)
     ap.add_argument("--workers", type=int, default=2)

@@ -68,9 +68,17 @@ def _new_app() -> typer.Typer:
     )
 
     @app_.callback()
-    def _root() -> None:
+    def _root(
+        server: str = typer.Option(None, "--server", metavar="URL",
+                                   help="Use a jointdb server instead of a database (or $JOINTDB_SERVER; "
+                                        "token from $JOINTDB_TOKEN)."),
+    ) -> None:
         """jointdb: joint identification (IRC), a versioned joint database, tool-tip
         prediction (RC), chatter stability lobes and model/measurement diagnosis."""
+        if server:
+            import os
+
+            os.environ["JOINTDB_SERVER"] = server
 
     return app_
 
@@ -130,7 +138,9 @@ def main() -> None:
     """
     args = sys.argv[1:]
     first = args[0] if args else None
-    if first in COMMANDS:
+    if first == "--server" and len(args) > 2 and args[2] in COMMANDS:
+        cli = _app_with({COMMANDS[args[2]][0]})
+    elif first in COMMANDS:
         cli = _app_with({COMMANDS[first][0]})
     elif first is None or (first == "--help" and len(args) == 1):
         cli = _summary_app()

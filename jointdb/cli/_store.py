@@ -59,7 +59,17 @@ def check_db_target(db: str | None, create: bool = False) -> None:
 
 
 def _repo(db: str | None, blobs: Path | None = None, *, create: bool = False):
-    """The repository of ``--db``; only writing commands (``create``) may create a new SQLite file."""
+    """The repository of ``--db``; only writing commands (``create``) may create a new SQLite file.
+
+    Without ``--db``, a server named by ``jointdb --server URL`` / ``$JOINTDB_SERVER`` is used
+    instead (token from ``$JOINTDB_TOKEN``): :class:`jointdb.client.RemoteRepository`.
+    """
+    import os
+
+    if db is None and os.environ.get("JOINTDB_SERVER"):
+        from jointdb.client import RemoteRepository
+
+        return RemoteRepository(os.environ["JOINTDB_SERVER"], os.environ.get("JOINTDB_TOKEN") or None)
     from jointdb.store import Repository
 
     check_db_target(db, create)

@@ -35,8 +35,13 @@ class NearestIn(Strict):
 
 class CatalogueIn(Strict):
     name: str = Field(..., max_length=200, description="Joint name (new joint, or a new version of it).")
-    filename: str = Field(..., max_length=200, description="Name of the uploaded file (.h5), kept in provenance.")
-    file_b64: str = Field(..., description="The identified joint file (HDF5 from `jointdb identify`), base64.")
+    filename: Optional[str] = Field(None, max_length=200, description="Name of the uploaded file (.h5), kept in "
+                                    "provenance.")
+    file_b64: Optional[str] = Field(None, description="The identified joint file (HDF5 from `jointdb identify`), "
+                                    "base64. Or give `frf` (JSON) with joint_type and model_kind.")
+    frf: Optional["FrfIn"] = Field(None, description="The joint FRF as JSON (instead of a file).")
+    input_files: dict[str, str] = Field(default_factory=dict, description="With `frf`: file name -> SHA-256.")
+    parameters: dict[str, Any] = Field(default_factory=dict, description="With `frf`: method parameters.")
     joint_type: Optional[str] = Field(None, max_length=100)
     model_kind: Optional[str] = Field(None, max_length=50)
     method: Optional[str] = Field(None, max_length=200)
@@ -98,3 +103,6 @@ class TokenIn(Strict):
 class GcIn(Strict):
     min_age_s: float = Field(3600.0, ge=0)
     dry_run: bool = True
+
+
+CatalogueIn.model_rebuild()

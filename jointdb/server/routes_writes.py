@@ -42,8 +42,12 @@ def catalogue_upload(r, body: CatalogueIn, owner: str):
     from jointdb.store._types import check_label
 
     name = joint_name(body.name)
-    fname = upload_name(body.filename)
     label = check_label(body.label) if body.label is not None else None
+    if (body.frf is None) == (body.file_b64 is None):
+        raise InputError("give either file_b64 with filename (an identified joint file) or frf (JSON)")
+    if body.frf is not None:
+        return _catalogue_frf(r, body, name, label, owner)
+    fname = upload_name(body.filename or "")
     try:
         data = base64.b64decode(body.file_b64, validate=True)
     except (binascii.Error, ValueError):
@@ -60,6 +64,19 @@ def catalogue_upload(r, body: CatalogueIn, owner: str):
         except JointdbError as exc:  # name the upload, not the server's temporary directory
             raise type(exc)(str(exc).replace(f"{tmp}/", "")) from None
     return r.catalogue(name, parent=body.parent, author=owner, label=label, **args)
+
+
+def _catalogue_frf(r, body: CatalogueIn, name: str, label: str | None, owner: str):
+    """Catalogue an FRF sent as JSON (``jointdb --server URL catalogue`` reads the file locally)."""
+    from jointdb.server._deps import frf_from_json
+    from jointdb.store import Provenance
+
+    if not body.joint_type or not body.model_kind:
+        raise InputError("an frf sent as JSON needs joint_type and model_kind")
+    prov = Provenance(method=body.method or "imported-file", parameters=dict(body.parameters),
+                      input_files=dict(body.input_files), author=owner)
+    return r.catalogue(name, body.joint_type, frf_from_json(body.frf.model_dump()), body.conditions.to_conditions(),
+                       body.model_kind, prov, dict(body.quality), body.parent, author=owner, label=label)
 
 
 @router.post("/catalogue", status_code=201, summary="Catalogue an identified joint file as a new version")
