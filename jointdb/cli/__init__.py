@@ -49,10 +49,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "diagnose": ("_diagnose", "Locate where a model and recordings disagree, name the missing physics, refit."),
     "diagnose-bench": ("_diagnose", "Run the concealed-effect benchmark: generate, diagnose, score per effect."),
     "demo": ("_demo", "Run the main job end to end on the bundled data (SQLite, bundled fixtures)."),
+    "serve": ("_serve", "Run the HTTP API and web catalogue (FastAPI + uvicorn) over the joint database."),
     "joints": ("_store", "List, inspect, label, deprecate, diff, export and import catalogued joints."),
     "keys": ("_store", "Ed25519 keys to sign exported bundles and verify imported ones."),
     "db": ("_db", "Database administration: migrations, integrity check, garbage collection."),
-    "serve": ("_serve", "Run the HTTP API and web catalogue (FastAPI + uvicorn) over the joint database."),
     "tokens": ("_serve", "API tokens of the HTTP service: create, list, revoke."),
 }
 
@@ -120,12 +120,13 @@ def __getattr__(name: str):
 
 
 def _click_errors():
-    """Click's usage-error, error and abort classes (Typer vendors Click in recent releases)."""
+    """Click's usage-error, error and abort classes (Typer vendors Click in recent releases;
+    a separately installed Click, e.g. uvicorn's, is then not the one Typer raises)."""
     try:
-        from click import Abort, ClickException, UsageError
-    except ImportError:
         from typer import Abort
         from typer._click.exceptions import ClickException, UsageError
+    except ImportError:
+        from click import Abort, ClickException, UsageError
     return UsageError, ClickException, Abort
 
 
