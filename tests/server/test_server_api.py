@@ -103,7 +103,7 @@ def test_bad_requests_are_4xx_with_one_line(catalogued, tmp_path):
         _one_line_4xx(c.get("/api/v1/joints/TH-0/versions/99"), 404)
         _one_line_4xx(c.get("/api/v1/joints/TH-0/versions/1/frf", params={"format": "xlsx"}), 422)
         _one_line_4xx(c.post("/api/v1/joints/NOPE/deprecate", json={}), 404)
-        for bad in ("../etc/passwd", "a/b.h5", "..", ".hidden.h5", "C:\\x.h5", "joint.json"):
+        for bad in ("../etc/passwd", "a/b.h5", "..", ".hidden.h5", "C:\\x.h5", "joint.json", "x.tar"):
             body = joint_upload(tmp_path, "PATHY", filename=bad)
             assert "file" in _one_line_4xx(c.post("/api/v1/catalogue", json=body), 422)
         _one_line_4xx(c.get("/api/v1/joints/..%5C..%5Cx"))
@@ -115,3 +115,31 @@ def test_bad_requests_are_4xx_with_one_line(catalogued, tmp_path):
     text = catalogued.log_text()
     assert "Traceback" not in text
     assert all(json.loads(line)["status"] < 500 for line in text.splitlines() if line.startswith('{"event": "request"'))
+
+
+def test_campaign_archive_is_identified_by_the_server(catalogued, tmp_path):
+    import base64
+    import io as bytesio
+    import zipfile
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[2] / "fixtures" / "campaigns" / "th-steel-30nm"
+    buf = bytesio.BytesIO()
+    with zipfile.ZipFile(buf, "w") as zf:
+        for p in sorted(root.iterdir()):
+            zf.write(p, p.name)
+    body = {"name": "CAMP-1", "filename": "th-steel-30nm.zip", "file_b64": base64.b64encode(buf.getvalue()).decode()}
+    with catalogued.client("writer") as c:
+        r = c.post("/api/v1/catalogue", json=body)
+        assert r.status_code == 201, r.text
+        v = r.json()
+        assert v["conditions"]["torque_nm"] == 30.0 and v["provenance"]["method"].startswith("irc")
+        assert "campaign.json" in v["provenance"]["input_files"] and v["provenance"]["author"] == "writer-owner"
+        evil = bytesio.BytesIO()
+        with zipfile.ZipFile(evil, "w") as zf:
+            zf.writestr("../escape.json", "{}")
+        r = c.post("/api/v1/catalogue", json={**body, "file_b64": base64.b64encode(evil.getvalue()).decode()})
+        assert r.status_code == 422 and "plain file name" in r.json()["error"]
+        r = c.post("/api/v1/catalogue", json={**body, "file_b64": base64.b64encode(b"not a zip").decode()})
+        assert r.status_code == 422 and "not a zip" in r.json()["error"]
+    assert not (tmp_path.parent / "escape.json").exists()
