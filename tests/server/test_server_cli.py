@@ -50,3 +50,24 @@ def test_cli_over_http_matches_the_database(server, tmp_path):
     assert r.returncode == 2 and "writer" in r.stderr and server.tokens["reader"] not in r.stderr
     r = _jointdb("joints", "list", env={"JOINTDB_SERVER": server.url, "JOINTDB_TOKEN": ""}, ok=False)
     assert r.returncode == 2 and "token" in r.stderr and len(r.stderr.strip().splitlines()) == 1
+
+
+def test_tokens_commands(tmp_path):
+    db = tmp_path / "t.sqlite"
+    _jointdb("db", "upgrade", "--db", db)
+    created = json.loads(_jointdb("tokens", "create", "--name", "alice", "--role", "writer", "--expires", "30d",
+                                  "--json", "--db", db).stdout)
+    token, tid = created["token"], created["token_id"]
+    assert token.startswith(f"jdb_{tid}_") and created["status"] == "active" and created["expires_at"]
+    listed = _jointdb("tokens", "list", "--json", "--db", db).stdout
+    stored = b"".join(p.read_bytes() for p in tmp_path.glob("t.sqlite*"))  # with the WAL
+    assert tid in listed and token not in listed and token[16:].encode() not in stored
+    assert json.loads(_jointdb("tokens", "revoke", tid, "--json", "--db", db).stdout)["status"] == "revoked"
+    assert json.loads(_jointdb("tokens", "list", "--json", "--db", db).stdout)[0]["status"] == "revoked"
+    for args, code, text in ((["create", "--name", "bob", "--role", "root"], 2, "role"),
+                             (["create", "--name", "bob", "--role", "reader", "--expires", "2000-01-01"], 2, "past"),
+                             (["create", "--name", "b/ob", "--role", "reader"], 2, "owner"),
+                             (["revoke", "0123456789ab"], 3, "no token"),
+                             (["revoke", "zz"], 2, "12 hex")):
+        r = _jointdb("tokens", *args, "--db", db, ok=False)
+        assert r.returncode == code and text in r.stderr and len(r.stderr.strip().splitlines()) == 1, r.stderr
