@@ -20,8 +20,7 @@ log = logging.getLogger("jointdb.server.access")
 def _json_response(status: int, message: str, request_id: str) -> tuple[dict, dict]:
     body = json.dumps({"error": message, "request_id": request_id}).encode()
     start = {"type": "http.response.start", "status": status,
-             "headers": [(b"content-type", b"application/json"), (b"content-length", str(len(body)).encode()),
-                         (b"x-request-id", request_id.encode())]}
+             "headers": [(b"content-type", b"application/json"), (b"content-length", str(len(body)).encode())]}
     return start, {"type": "http.response.body", "body": body}
 
 
