@@ -90,16 +90,24 @@ def main() -> None:
     ap.add_argument("--versions", type=int, default=10000)
     ap.add_argument("--samples", type=int, default=200)
     ap.add_argument("--blobs", default="database", help="'database' (blobs in the database) or 'files'.")
+    ap.add_argument("--schema", default=None, help="Reuse this PostgreSQL schema (already seeded): latency only.")
     args = ap.parse_args()
     with tempfile.TemporaryDirectory() as tmp_:
         tmp = Path(tmp_)
-        url, (engine, schema) = fresh_db(args.db, tmp)
+        if args.schema:
+            import sqlalchemy as sa
+
+            url = f"{args.db}{'&' if '?' in args.db else '?'}options=-csearch_path%3D{args.schema}"
+            engine, schema, args.clients = sa.create_engine(args.db), args.schema, 0
+        else:
+            url, (engine, schema) = fresh_db(args.db, tmp)
         blobs = "database" if args.blobs == "database" else tmp / "blobs"
         tokens = make_tokens(url, blobs)
         server = start_server(url, blobs, tmp / "server.log", workers=args.workers)
         server.tokens = tokens
         try:
-            print("load:", run_load(server, args.clients, args.writes, tmp), flush=True)
+            if args.clients:
+                print("load:", run_load(server, args.clients, args.writes, tmp), flush=True)
             if args.versions:
                 t0 = time.perf_counter()
                 seed(server, args.versions)
