@@ -14,9 +14,6 @@ import uuid
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import pytest
-
-
 import httpx
 
 
