@@ -45,15 +45,24 @@ def fresh_db(base: str, tmp: Path) -> tuple[str, object]:
     return url, (engine, schema)
 
 
-def seed(server, n: int) -> None:
+def seed(server, n: int, threads: int = 4) -> None:
+    """Catalogue versions directly through the Repository until the database holds ``n``
+    (500 joints; ``threads`` writers, each on its own joints)."""
+    import concurrent.futures as cf
+
     repo = server.repo()
     have = sum(len(repo.history(j.name)) for j in repo.list_joints())
-    rng = random.Random(1)
     frf = spring_joint()
-    for i in range(have, n):
-        repo.catalogue(f"S{i % 500:03d}", "tool-holder", frf,
-                       {"materials": ["tungsten-carbide", "steel"], "torque_nm": rng.uniform(10, 100)},
-                       "spring-damper-planar", author="bench")
+
+    def writer(t: int) -> None:
+        rng = random.Random(t)
+        for i in range(have + t, n, threads):
+            repo.catalogue(f"S{i % 500:03d}", "tool-holder", frf,
+                           {"materials": ["tungsten-carbide", "steel"], "torque_nm": rng.uniform(10, 100)},
+                           "spring-damper-planar", author="bench")
+
+    with cf.ThreadPoolExecutor(threads) as pool:
+        list(pool.map(writer, range(threads)))
 
 
 def latencies(server, samples: int) -> dict:
