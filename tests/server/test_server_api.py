@@ -143,3 +143,35 @@ def test_campaign_archive_is_identified_by_the_server(catalogued, tmp_path):
         r = c.post("/api/v1/catalogue", json={**body, "file_b64": base64.b64encode(b"not a zip").decode()})
         assert r.status_code == 422 and "not a zip" in r.json()["error"]
     assert not (tmp_path.parent / "escape.json").exists()
+
+
+def test_predict_and_lobes(catalogued):
+    from pathlib import Path
+
+    from jointdb import app as application
+    from jointdb.stack import stack_from_dict
+
+    stacks = Path(__file__).resolve().parents[2] / "fixtures" / "stacks"
+    stack = json.loads((stacks / "endmill-catalogued-joint.json").read_text())
+    stack["spindle"]["model"] = json.loads((stacks / stack["spindle"]["model"]).read_text())  # inline
+    stack["interfaces"]["tool-holder"] = "rigid"
+    stack["frequency"] = {"min": 100.0, "max": 3000.0, "step": 20.0}
+    with catalogued.client("reader") as c:
+        r = c.post("/api/v1/predict", json={"stack": stack})
+        assert r.status_code == 200, r.text
+        out = r.json()
+        expected = application.predict_stack(stack_from_dict(stack), None).prediction.summary()
+        assert [row["peak_hz"] for row in out["prediction"]] == [row["peak_hz"] for row in expected]
+        tip = out["tip_frf"]
+        assert tip["units"][0][0] == "m/N" and len(tip["freq_hz"]) == 146
+        x = dict(tip)  # the JSON form of an FRF is accepted back as is
+        lobes = c.post("/api/v1/lobes", json={"frf": x, "teeth": 4, "kt": 6e8, "kr": 2e8, "immersion": 0.5,
+                                              "n_speeds": 40})
+        assert lobes.status_code == 200, lobes.text
+        rows = lobes.json()["rows"]
+        assert len(rows) == 40 and all(r["depth_m"] is None or r["depth_m"] > 0 for r in rows)
+        stack["spindle"]["model"] = "parts/spindle-two-bearings.json"
+        r = c.post("/api/v1/predict", json={"stack": stack})
+        assert r.status_code == 422 and "inline" in r.json()["error"]
+        r = c.post("/api/v1/lobes", json={"frf": x, "kt": 6e8})
+        assert r.status_code == 422 and "kr" in r.json()["error"]
