@@ -26,7 +26,8 @@ import typer
 from jointdb.errors import JointdbError
 
 #: The command modules, in the order they register (which is the order of ``jointdb --help``).
-MODULES = ("_models", "_coupling", "_store", "_db", "_predict", "_stability", "_diagnose", "_demo", "_campaign", "_plan")
+MODULES = ("_models", "_coupling", "_store", "_db", "_predict", "_stability", "_diagnose", "_demo", "_campaign", "_plan",
+           "_serve")
 
 #: Every top-level command as ``jointdb --help`` lists it: the module that registers it and
 #: the first paragraph of its help.
@@ -58,6 +59,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "keys": ("_store", "Ed25519 keys to sign exported bundles and verify imported ones."),
     "db": ("_db", "Database administration: migrations, integrity check, garbage collection."),
     "campaign": ("_campaign", "Scaffold a measurement campaign from a folder of files, or check one."),
+    "serve": ("_serve", "Run the HTTP API and web catalogue (FastAPI + uvicorn) over the joint database."),
+    "tokens": ("_serve", "API tokens of the HTTP service: create, list, revoke."),
 }
 
 
@@ -85,12 +88,19 @@ def _new_app() -> typer.Typer:
         quiet: bool = typer.Option(False, "-q", "--quiet", help="Only warnings and errors on stderr; no progress."),
         version: bool = typer.Option(False, "--version", is_eager=True, callback=_show_version,
                                      help="Print the jointdb version and exit."),
+        server: str = typer.Option(None, "--server", metavar="URL",
+                                   help="Use a jointdb server instead of a database (or $JOINTDB_SERVER; "
+                                        "token from $JOINTDB_TOKEN)."),
     ) -> None:
         """jointdb: joint identification (IRC), a versioned joint database, tool-tip
         prediction (RC), chatter stability lobes and model/measurement diagnosis."""
         from jointdb._output import configure_logging
 
         configure_logging(verbose, quiet)
+        if server:
+            import os
+
+            os.environ["JOINTDB_SERVER"] = server
 
     return app_
 
@@ -136,8 +146,9 @@ def __getattr__(name: str):
 
 
 def _click_errors():
-    """Click's usage-error, error and abort classes (Typer vendors Click in recent releases)."""
-    try:  # the Click that Typer runs on: its vendored copy when it has one, else the click package
+    """Click's usage-error, error and abort classes (Typer vendors Click in recent releases;
+    a separately installed Click, e.g. uvicorn's, is then not the one Typer raises)."""
+    try:
         from typer import Abort
         from typer._click.exceptions import ClickException, UsageError
     except ImportError:
@@ -157,9 +168,18 @@ def main() -> None:
     upto = args.index("--") if "--" in args else len(args)
     is_global = [a in ("-q", "--quiet", "--verbose") or (a[:2] == "-v" and set(a[1:]) == {"v"}) for a in args[:upto]]
     args = [a for a, g in zip(args, is_global) if g] + [a for a, g in zip(args, is_global) if not g] + args[upto:]
-    # the first word that is not a global option (-v/-vv/-q/--verbose/--quiet) names the command
-    first = next((a for a in args if not (a in ("--verbose", "--quiet") or (a[:1] == "-" and a[1:2] != "-"
-                                                                             and set(a[1:]) <= {"v", "q"}))), None)
+    # the first word that is not a root option (-v/-vv/-q/--verbose/--quiet, --server URL) names the command
+    first, i = None, 0
+    while i < len(args):
+        a = args[i]
+        if a == "--server":
+            i += 2
+        elif a.startswith("--server=") or a in ("--verbose", "--quiet") or (
+                a[:1] == "-" and a[1:2] != "-" and set(a[1:]) <= {"v", "q"}):
+            i += 1
+        else:
+            first = a
+            break
     if first in COMMANDS:
         cli = _app_with({COMMANDS[first][0]}, only=first)
     elif first is None or first in ("--help", "--version"):

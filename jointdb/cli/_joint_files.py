@@ -136,3 +136,45 @@ def merge_conditions(path: Path, recorded: Any, given, override: bool):
         geometry={**dict(stored.geometry), **dict(given.geometry)},
         extra={**dict(stored.extra), **dict(given.extra)},
     )
+
+
+def catalogue_inputs(joint_file: Path, given, *, joint_type: str | None = None, model_kind: str | None = None,
+                     method: str | None = None, quality: dict[str, float] | None = None,
+                     author: str | None = None, override: bool = False) -> dict[str, Any]:
+    """What ``jointdb catalogue`` (and the HTTP service's catalogue route) stores from a joint file.
+
+    Reads the file, takes model kind, joint type, method, quality and conditions from it,
+    completed by the given options (``given`` conditions are merged by
+    :func:`merge_conditions`). Returns the keyword arguments of
+    :meth:`jointdb.store.Repository.catalogue` except ``name``, ``parent``, ``label``.
+
+    Raises
+    ------
+    InputError
+        A file without joint type or model kind (and none given), a conflict of
+        conditions, or any value the catalogue would refuse.
+    """
+    from jointdb.store import Provenance
+    from jointdb.store._types import check_joint_type, check_model_kind
+
+    frf, meta, hashes, raw = _read_joint_file(joint_file)
+    kind = model_kind or meta.get("model_kind") or _JOINT_MODEL_KINDS.get(str(meta.get("joint_model")))
+    if not kind:
+        raise InputError(f"{joint_file}: the file does not say its joint model; give --model-kind")
+    jtype = joint_type or meta.get("joint_type")
+    if not jtype:
+        raise InputError(f"{joint_file}: the file does not say its joint type; give --type")
+    q = _numeric_metrics(meta.get("quality"))
+    q.update(quality or {})
+    params = {k: meta[k] for k in ("settings", "interface", "campaign", "uncertainty") if k in meta}
+    file_method = meta.get("method") or (f"irc-{meta['joint_model']}" if meta.get("joint_model") else None)
+    prov = Provenance(
+        method=method or str(file_method or "imported-file"),
+        parameters=json.loads(json.dumps(params, default=str)),
+        input_files=hashes,
+        author=author or "",
+    )
+    conditions = merge_conditions(joint_file, meta.get("conditions"), given, override)
+    return {"joint_type": check_joint_type(jtype), "frf": frf, "conditions": conditions,
+            "model_kind": check_model_kind(kind, frf), "provenance": prov, "quality": q, "raw_frfs": raw}
+

@@ -15,13 +15,7 @@ from typing import Annotated, Any, Optional
 import typer
 
 from jointdb._output import emit, message
-from jointdb.cli._joint_files import (
-    _JOINT_MODEL_KINDS,
-    _numeric_metrics,
-    _read_joint_file,
-    _write_joint_file,
-    merge_conditions,
-)
+from jointdb.cli._joint_files import _write_joint_file
 from jointdb.errors import InputError, NotFoundError
 
 DbOpt = Annotated[
@@ -30,7 +24,7 @@ DbOpt = Annotated[
 ]
 JsonOpt = Annotated[bool, typer.Option("--json", help="Write JSON to stdout instead of a table.")]
 BlobsOpt = Annotated[
-    Optional[Path], typer.Option("--blobs", help="Blob directory (default: $JOINTDB_BLOBS or beside the SQLite file).")
+    Optional[Path], typer.Option("--blobs", help="Blob directory, or 'database' to keep blobs in the database (default: $JOINTDB_BLOBS or beside the SQLite file).")
 ]
 
 
@@ -65,7 +59,17 @@ def check_db_target(db: str | None, create: bool = False) -> None:
 
 
 def _repo(db: str | None, blobs: Path | None = None, *, create: bool = False):
-    """The repository of ``--db``; only writing commands (``create``) may create a new SQLite file."""
+    """The repository of ``--db``; only writing commands (``create``) may create a new SQLite file.
+
+    Without ``--db``, a server named by ``jointdb --server URL`` / ``$JOINTDB_SERVER`` is used
+    instead (token from ``$JOINTDB_TOKEN``): :class:`jointdb.client.RemoteRepository`.
+    """
+    import os
+
+    if db is None and os.environ.get("JOINTDB_SERVER"):
+        from jointdb.client import RemoteRepository
+
+        return RemoteRepository(os.environ["JOINTDB_SERVER"], os.environ.get("JOINTDB_TOKEN") or None)
     from jointdb.store import Repository
 
     check_db_target(db, create)
@@ -187,40 +191,20 @@ def register(app: typer.Typer) -> None:
         Example: jointdb catalogue joint.h5 --name T1-HSK63 --type tool-holder
         --material carbide --material steel --torque 40 --geometry diameter_m=0.02
         """
-        from jointdb.store import Provenance
+        from jointdb.cli._joint_files import catalogue_inputs
+        from jointdb.store._types import check_label, check_name
 
-        frf, meta, hashes, raw = _read_joint_file(joint_file)
-        kind = model_kind or meta.get("model_kind") or _JOINT_MODEL_KINDS.get(str(meta.get("joint_model")))
-        if not kind:
-            raise InputError(f"{joint_file}: the file does not say its joint model; give --model-kind")
-        jtype = joint_type or meta.get("joint_type")
-        if not jtype:
-            raise InputError(f"{joint_file}: the file does not say its joint type; give --type")
-        q = _numeric_metrics(meta.get("quality"))
-        q.update(_pairs(quality, "--quality"))
-        params = {k: meta[k] for k in ("settings", "interface", "campaign", "uncertainty") if k in meta}
-        file_method = meta.get("method") or (f"irc-{meta['joint_model']}" if meta.get("joint_model") else None)
-        prov = Provenance(
-            method=method or str(file_method or "imported-file"),
-            parameters=json.loads(json.dumps(params, default=str)),
-            input_files=hashes,
-            author=author or "",
-        )
-        conditions = merge_conditions(joint_file, meta.get("conditions"),
-                                      _conditions(material, preload, torque, geometry, extra), override)
+        args = catalogue_inputs(joint_file, _conditions(material, preload, torque, geometry, extra),
+                                joint_type=joint_type, model_kind=model_kind, method=method,
+                                quality=_pairs(quality, "--quality"), author=author, override=override)
         # everything the library would refuse is refused before the database is opened (or created)
-        from jointdb.store._types import check_joint_type, check_label, check_model_kind, check_name
-
         check_name(name)
-        jtype = check_joint_type(jtype)
-        kind = check_model_kind(kind, frf)
         if label is not None:
             label = check_label(label)
         if parent is not None and parent < 1:
             raise InputError(f"--parent must be a version number >= 1, got {parent}")
         repo = _repo(db, blobs, create=True)
-        jv = repo.catalogue(name, jtype, frf, conditions, kind, prov, q, parent, raw_frfs=raw, author=author,
-                            label=label)
+        jv = repo.catalogue(name, parent=parent, author=author, label=label, **args)
         message(f"catalogued {jv.name} v{jv.version} ({jv.blob_sha256[:12]})")
         emit(_version_detail(jv), as_json=as_json, title=f"{jv.name} v{jv.version}")
 

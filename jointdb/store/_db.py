@@ -23,9 +23,10 @@ SQLite connections run with WAL, ``foreign_keys=ON``, ``synchronous=FULL`` and a
 Database errors that a user can cause or meet (no server, no driver, a damaged
 file) are turned into jointdb errors by :func:`translate_error`.
 
-Migrations are the Alembic scripts in ``jointdb/migrations`` (shipped in the
-wheel); the Alembic configuration is built in code from the package path, so
-no ``alembic.ini`` is needed at run time.
+Migrations are the Alembic scripts in the repository's top-level ``migrations/``
+(shipped in the wheel as ``jointdb/migrations`` through a package-dir mapping in
+setup.py); the Alembic configuration is built in code from that path, so no
+``alembic.ini`` is needed at run time.
 """
 
 from __future__ import annotations
@@ -251,7 +252,13 @@ def make_engines(url: str) -> tuple[Engine, Engine]:
 
 # --------------------------------------------------------------------------- alembic
 def migrations_dir() -> Path:
-    return Path(__file__).resolve().parent.parent / "migrations"
+    """The Alembic environment: ``jointdb/migrations`` in an installed package (the wheel maps
+    the repository's top-level ``migrations/`` there, see setup.py), else the top-level
+    ``migrations/`` of the source tree."""
+    package = Path(__file__).resolve().parent.parent
+    if (package / "migrations" / "env.py").is_file():
+        return package / "migrations"
+    return package.parent / "migrations"
 
 
 def alembic_config(url: str | None = None):
@@ -309,6 +316,7 @@ DOWNGRADE_DROPS = {
     "0002": "the triggers that refuse UPDATE and DELETE of history rows",
     "0003": "the guards against REPLACE/UPSERT, TRUNCATE and dropping the triggers",
     "0004": "the query index (derived from history; upgrading rebuilds it)",
+    "0005": "the API tokens of the HTTP service (every token stops working) and the blobs kept in the database",
 }
 
 

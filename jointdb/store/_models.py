@@ -188,6 +188,46 @@ class AuditRow(Base):
     details: Mapped[dict[str, Any]] = mapped_column(JSON)
 
 
+class TokenRow(Base):
+    """An API token of the HTTP service (migration 0005): only its SHA-256 is stored.
+
+    ``name`` is the owner the audit log records for the token's writes; ``token_id``
+    is the public part shown by ``jointdb tokens list``. Revoking sets ``revoked_at``
+    (the row stays, so the audit trail keeps its owner).
+    """
+
+    __tablename__ = "api_tokens"
+    __table_args__ = (CheckConstraint("role IN ('reader', 'writer', 'admin')", name="role_known"),)
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    token_id: Mapped[str] = mapped_column(String(32), unique=True)
+    sha256: Mapped[str] = mapped_column(String(64), unique=True)
+    name: Mapped[str] = mapped_column(String(200))
+    role: Mapped[str] = mapped_column(String(20))
+    created_at: Mapped[datetime] = mapped_column(UTCDateTime())
+    created_by: Mapped[str] = mapped_column(String(200))
+    expires_at: Mapped[datetime | None] = mapped_column(UTCDateTime())
+    revoked_at: Mapped[datetime | None] = mapped_column(UTCDateTime())
+
+
+class BlobRow(Base):
+    """A content-addressed FRF blob kept in the database (migration 0005; ``blobs="database"``).
+
+    ``data`` holds exactly the bytes of a blob file (:mod:`jointdb.store._blobs`: user block
+    with the whole-file SHA-256, then HDF5), so reads verify the same three ways as files.
+    ``touched_at`` is refreshed by every put, so ``gc`` spares a blob a writer is about to
+    reference.
+    """
+
+    __tablename__ = "frf_blobs"
+
+    sha256: Mapped[str] = mapped_column(String(64), primary_key=True)
+    data: Mapped[bytes] = mapped_column(LargeBinary)
+    size: Mapped[int] = mapped_column(Integer)
+    created_at: Mapped[datetime] = mapped_column(UTCDateTime())
+    touched_at: Mapped[datetime] = mapped_column(UTCDateTime())
+
+
 IMMUTABLE = (JointRow, VersionRow, StateRow, AuditRow)
 #: Tables the database itself protects with UPDATE/DELETE triggers (migration 0002).
 IMMUTABLE_TABLES = ("joints", "joint_versions", "joint_states", "audit_log")

@@ -18,7 +18,6 @@ from sqlalchemy.orm import Session
 from jointdb.errors import ConflictError, InputError, NotFoundError
 from jointdb.frf import FRF
 from jointdb.store import _db
-from jointdb.store._blobs import BlobStore
 from jointdb.store._index import add_version
 from jointdb.store._labels import LabelsAndStates
 from jointdb.store._reports import CheckReport, VersionDiff, _is_transient, _is_unique_violation
@@ -58,7 +57,9 @@ class Repository(LabelsAndStates):
         Database URL or SQLite path; default ``JOINTDB_URL`` or the per-user
         SQLite file (see :mod:`jointdb.store._db`).
     blobs
-        Blob directory; default ``JOINTDB_BLOBS`` or ``<sqlite file>.blobs``.
+        Blob directory; default ``JOINTDB_BLOBS`` or ``<sqlite file>.blobs``. The value
+        ``"database"`` keeps the blobs in the database itself (table ``frf_blobs``,
+        :mod:`jointdb.store._dbblobs`), so that several hosts need only the database.
     auto_create
         Create a missing SQLite file (atomically, with the schema), or migrate
         an empty PostgreSQL schema. Default: True for SQLite, False for
@@ -92,7 +93,9 @@ class Repository(LabelsAndStates):
             _db.open_sqlite_target(self.url, create=auto and check_schema)
         self.read_engine, self.write_engine = _db.make_engines(self.url)  # a missing driver first
         try:
-            self.blobs = BlobStore(_db.blob_dir(self.url, blobs))
+            from jointdb.store._dbblobs import open_blob_store
+
+            self.blobs = open_blob_store(self.url, blobs, self.write_engine)  # a directory, or "database"
             with _db.db_errors(self.url):
                 if check_schema:
                     _db.ensure_schema(self.read_engine, self.write_engine, auto)

@@ -13,7 +13,7 @@ from typer.testing import CliRunner
 
 from jointdb.cli import app
 from jointdb.errors import ConflictError, InputError, NotFoundError
-from jointdb.store import write_frf_file
+from jointdb.store import head_revision, write_frf_file
 
 runner = CliRunner()
 
@@ -158,14 +158,17 @@ def test_exchange_file_from_identify_is_read_with_its_metadata(db, tmp_path):
 
 def test_db_upgrade_downgrade_commands(tmp_path):
     url = tmp_path / "m.sqlite"
-    assert run_json("db", "upgrade", "--db", url)["revision"] == "0004"
-    assert run_json("db", "downgrade", "--yes", "--db", url)["revision"] == "0003"
+    assert run_json("db", "upgrade", "--db", url)["revision"] == head_revision()
+    from jointdb.store._db import _script
+
+    below_head = _script().get_revision(head_revision()).down_revision
+    assert run_json("db", "downgrade", "--yes", "--db", url)["revision"] == below_head
     r = run("db", "downgrade", "--to", "base", "--db", url, ok=False)
     assert isinstance(r.exception, InputError) and "--yes" in str(r.exception)
     assert run_json("db", "downgrade", "--to", "base", "--yes", "--db", url)["revision"] is None
-    assert run_json("db", "upgrade", "--db", url)["revision"] == "0004"
+    assert run_json("db", "upgrade", "--db", url)["revision"] == head_revision()
     info = run_json("db", "info", "--db", url)
-    assert info["revision"] == info["head"] == "0004"
+    assert info["revision"] == info["head"] == head_revision()
 
 
 def test_exit_codes_and_one_line_errors(tmp_path):

@@ -1,0 +1,126 @@
+"""Shared pieces of the routes: the repository of the running app, who is asking
+(token -> owner and role), pagination, and the JSON form of versions and FRFs."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from fastapi import Depends, HTTPException, Query, Request
+
+from jointdb.store._tokens import TokenInfo, authenticate
+
+SESSION_COOKIE = "jointdb_session"
+
+
+def repo(request: Request):
+    """The app's :class:`jointdb.store.Repository` (one per worker process)."""
+    return request.app.state.repo
+
+
+def settings(request: Request):
+    return request.app.state.settings
+
+
+def bearer(request: Request) -> str | None:
+    """The token of an ``Authorization: Bearer`` header (API) — never read from a URL."""
+    header = request.headers.get("authorization")
+    if not header:
+        return None
+    scheme, _, value = header.partition(" ")
+    if scheme.lower() != "bearer" or not value.strip():
+        raise HTTPException(401, "the Authorization header must be 'Bearer <token>'",
+                            headers={"WWW-Authenticate": "Bearer"})
+    return value.strip()
+
+
+def identify(request: Request, token: str | None) -> TokenInfo | None:
+    """The active token's info (and the request's actor for the log), or None."""
+    if token is None:
+        return None
+    info = authenticate(request.app.state.repo, token)
+    if info is None:
+        raise HTTPException(401, "token not accepted (unknown, revoked or expired)",
+                            headers={"WWW-Authenticate": "Bearer"})
+    request.state.actor = info.name
+    return info
+
+
+def need(role: str):
+    """A dependency: the caller's token must have ``role`` (reads: none when the server has open reads)."""
+
+    def dependency(request: Request) -> TokenInfo | None:
+        info = identify(request, bearer(request))
+        if info is None:
+            if role == "reader" and request.app.state.settings.open_reads:
+                return None
+            raise HTTPException(401, f"this request needs a {role} token (Authorization: Bearer <token>)",
+                                headers={"WWW-Authenticate": "Bearer"})
+        if not info.allows(role):
+            raise HTTPException(403, f"the token of {info.name} has role {info.role}; this request needs {role}")
+        return info
+
+    return dependency
+
+
+reader = Depends(need("reader"))
+writer = Depends(need("writer"))
+admin = Depends(need("admin"))
+
+
+class Page:
+    """``offset``/``limit`` query parameters of every list (limit 1..500, default 50)."""
+
+    def __init__(self, offset: int = Query(0, ge=0, le=10**9), limit: int = Query(50, ge=1, le=500)):
+        self.offset, self.limit = offset, limit
+
+    def of(self, items: list) -> dict[str, Any]:
+        part = items[self.offset:self.offset + self.limit]
+        end = self.offset + len(part)
+        return {"items": part, "total": len(items), "offset": self.offset, "limit": self.limit,
+                "next_offset": end if end < len(items) else None}
+
+
+def version_json(v) -> dict[str, Any]:
+    """Everything of a :class:`jointdb.store.JointVersion` as JSON."""
+    p = v.provenance
+    return {
+        "name": v.name, "joint_type": v.joint_type, "version": v.version, "uuid": v.uuid,
+        "created_at": v.created_at.isoformat(), "state": v.state, "labels": list(v.labels),
+        "conditions": v.conditions.to_dict(), "model_kind": v.model_kind, "dofs": list(v.dofs),
+        "quantity": v.quantity, "n_freq": v.n_freq, "freq_min_hz": v.freq_min_hz, "freq_max_hz": v.freq_max_hz,
+        "blob_sha256": v.blob_sha256, "record_sha256": v.record_sha256, "parent_version": v.parent_version,
+        "provenance": {"method": p.method, "parameters": dict(p.parameters), "input_files": dict(p.input_files),
+                       "software_version": p.software_version, "author": p.author},
+        "quality": dict(v.quality), "raw_measurements": sorted(v.raw_blobs),
+    }
+
+
+def frf_json(frf) -> dict[str, Any]:
+    """An FRF as JSON: frequencies in Hz, entries as real and imaginary parts in SI units."""
+    from jointdb.io import unit_label
+
+    return {
+        "quantity": frf.quantity.value,
+        "freq_hz": frf.freq.tolist(),
+        "outputs": [str(d) for d in frf.outputs],
+        "inputs": [str(d) for d in frf.inputs],
+        "units": [[unit_label(frf.quantity, o, i) for i in frf.inputs] for o in frf.outputs],
+        "real": np.ascontiguousarray(frf.values.real).tolist(),
+        "imag": np.ascontiguousarray(frf.values.imag).tolist(),
+    }
+
+
+def frf_from_json(data: dict[str, Any]):
+    """The inverse of :func:`frf_json` (InputError naming the field on bad input)."""
+    from jointdb.errors import InputError
+    from jointdb.frf import FRF
+
+    try:
+        re_, im = np.asarray(data["real"], dtype=float), np.asarray(data["imag"], dtype=float)
+        return FRF(np.asarray(data["freq_hz"], dtype=float), re_ + 1j * im, tuple(data["outputs"]),
+                   tuple(data["inputs"]), data.get("quantity", "receptance"))
+    except KeyError as exc:
+        raise InputError(f"frf: missing field {exc.args[0]!r} (freq_hz, outputs, inputs, real, imag)") from None
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"frf: {' '.join(str(exc).split())}") from None

@@ -1,0 +1,100 @@
+"""One ASGI middleware: request id, upload-size limit, request time limit and one
+structured (JSON) log line per request.
+
+The log line holds method, path (never the query string or any header, so a
+token can never reach it), status, duration, body size, the token owner and a
+request id (also sent back as ``X-Request-ID``).
+"""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import logging
+import time
+import uuid
+
+log = logging.getLogger("jointdb.server.access")
+
+
+def _json_response(status: int, message: str, request_id: str) -> tuple[dict, dict]:
+    body = json.dumps({"error": message, "request_id": request_id}).encode()
+    start = {"type": "http.response.start", "status": status,
+             "headers": [(b"content-type", b"application/json"), (b"content-length", str(len(body)).encode())]}
+    return start, {"type": "http.response.body", "body": body}
+
+
+class ServiceMiddleware:
+    def __init__(self, app, max_upload_bytes: int, request_timeout_s: float):
+        self.app = app
+        self.max_upload = int(max_upload_bytes)
+        self.timeout = float(request_timeout_s)
+
+    async def __call__(self, scope, receive, send):
+        if scope["type"] != "http":
+            await self.app(scope, receive, send)
+            return
+        request_id = uuid.uuid4().hex[:16]
+        scope.setdefault("state", {})["request_id"] = request_id
+        t0 = time.perf_counter()
+        status = {"code": 0, "started": False}
+        received = {"n": 0}
+        limit = self.max_upload
+
+        async def send_wrapped(message):
+            if message["type"] == "http.response.start":
+                status["code"] = message["status"]
+                status["started"] = True
+                message.setdefault("headers", [])
+                message["headers"] = list(message["headers"]) + [(b"x-request-id", request_id.encode())]
+            await send(message)
+
+        async def read_body() -> list[dict] | None:
+            """The whole request body (at most ``limit`` bytes), or None when it is larger."""
+            messages = []
+            while True:
+                message = await receive()
+                messages.append(message)
+                if message["type"] != "http.request":
+                    return messages
+                received["n"] += len(message.get("body", b""))
+                if received["n"] > limit:
+                    return None
+                if not message.get("more_body", False):
+                    return messages
+
+        async def refuse(code: int, text: str):
+            if not status["started"]:
+                start, body = _json_response(code, text, request_id)
+                await send_wrapped(start)
+                await send(body)
+
+        headers = dict(scope.get("headers") or [])
+        try:
+            declared = int(headers.get(b"content-length", b"0"))
+        except ValueError:
+            declared = -1
+        try:
+            if declared < 0:
+                await refuse(400, "Content-Length is not a number")
+            elif declared > limit:
+                await refuse(413, f"request body of {declared} bytes exceeds the limit of {limit} bytes")
+            else:
+                buffered = await asyncio.wait_for(read_body(), self.timeout)
+                if buffered is None:
+                    await refuse(413, f"request body exceeds the limit of {limit} bytes")
+                else:
+                    async def replay():
+                        return buffered.pop(0) if buffered else await receive()
+
+                    await asyncio.wait_for(self.app(scope, replay, send_wrapped), self.timeout)
+        except asyncio.TimeoutError:
+            await refuse(503, f"request took longer than {self.timeout:g} s; try again or narrow the request")
+        finally:
+            state = scope.get("state", {})
+            log.info(json.dumps({
+                "event": "request", "request_id": request_id, "method": scope.get("method"),
+                "path": scope.get("path"), "status": status["code"],
+                "duration_ms": round((time.perf_counter() - t0) * 1e3, 2), "bytes_in": received["n"],
+                "actor": state.get("actor"), "client": (scope.get("client") or [None])[0],
+            }))

@@ -1,0 +1,108 @@
+"""Request bodies (pydantic): types are checked before anything reaches the repository,
+whose own rules (materials, names, labels, model kinds) are then applied unchanged."""
+
+from __future__ import annotations
+
+from typing import Any, Literal, Optional
+
+from pydantic import BaseModel, ConfigDict, Field
+
+
+class Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+
+class ConditionsIn(Strict):
+    materials: list[str] = Field(default_factory=list, max_length=10, description="Interface materials.")
+    preload_n: Optional[float] = Field(None, description="Preload [N].")
+    torque_nm: Optional[float] = Field(None, description="Tightening torque [N·m].")
+    geometry: dict[str, float] = Field(default_factory=dict, description="Geometry numbers in SI, e.g. diameter_m.")
+    extra: dict[str, Any] = Field(default_factory=dict, description="Free-form details (not ranked).")
+
+    def to_conditions(self):
+        from jointdb.store import Conditions
+
+        return Conditions(tuple(self.materials), self.preload_n, self.torque_nm, dict(self.geometry),
+                          dict(self.extra))
+
+
+class NearestIn(Strict):
+    joint_type: str = Field(..., max_length=100, description="Joint type (types are never mixed).")
+    conditions: ConditionsIn = Field(default_factory=ConditionsIn)
+    k: int = Field(3, ge=1, le=50, description="Number of nearest versions.")
+    at: Optional[str] = Field(None, max_length=40, description="Query the catalogue as it was at this ISO time.")
+
+
+class CatalogueIn(Strict):
+    name: str = Field(..., max_length=200, description="Joint name (new joint, or a new version of it).")
+    filename: Optional[str] = Field(None, max_length=200, description="Name of the uploaded file (.h5), kept in "
+                                    "provenance.")
+    file_b64: Optional[str] = Field(None, description="The identified joint file (HDF5 from `jointdb identify`), "
+                                    "base64. Or give `frf` (JSON) with joint_type and model_kind.")
+    frf: Optional["FrfIn"] = Field(None, description="The joint FRF as JSON (instead of a file).")
+    input_files: dict[str, str] = Field(default_factory=dict, description="With `frf`: file name -> SHA-256.")
+    parameters: dict[str, Any] = Field(default_factory=dict, description="With `frf`: method parameters.")
+    joint_type: Optional[str] = Field(None, max_length=100)
+    model_kind: Optional[str] = Field(None, max_length=50)
+    method: Optional[str] = Field(None, max_length=200)
+    conditions: ConditionsIn = Field(default_factory=ConditionsIn)
+    quality: dict[str, float] = Field(default_factory=dict)
+    parent: Optional[int] = Field(None, ge=1)
+    label: Optional[str] = Field(None, max_length=100)
+    override_conditions: bool = False
+
+
+class LabelIn(Strict):
+    version: int = Field(..., ge=1, le=2**31 - 1)
+    label: str = Field(..., max_length=100)
+
+
+class DeprecateIn(Strict):
+    version: Optional[int] = Field(None, ge=1, le=2**31 - 1, description="Only this version (default: the joint).")
+    reason: str = Field("", max_length=2000)
+    undo: bool = False
+
+
+class PredictIn(Strict):
+    stack: dict[str, Any] = Field(..., description="A stack description (format jointdb-stack/1) with its "
+                                  "spindle model inline.")
+
+
+class FrfIn(Strict):
+    freq_hz: list[float]
+    outputs: list[str]
+    inputs: list[str]
+    real: list[list[list[float]]]
+    imag: list[list[list[float]]]
+    quantity: str = "receptance"
+    units: Optional[list[list[str]]] = None
+
+
+class LobesIn(Strict):
+    frf: Optional[FrfIn] = Field(None, description="Tool-tip FRF as JSON (as the download's JSON format).")
+    joint: Optional[str] = Field(None, max_length=200, description="Or: a catalogued version's FRF, name ...")
+    version: Optional[int] = Field(None, ge=1, description="... and version.")
+    op: Literal["milling", "turning"] = "milling"
+    teeth: int = Field(2, ge=1, le=64)
+    kt: Optional[float] = Field(None, gt=0, description="Milling: tangential coefficient [N/m²].")
+    kr: Optional[float] = Field(None, ge=0, description="Milling: radial coefficient [N/m²].")
+    kf: Optional[float] = Field(None, gt=0, description="Turning: cutting coefficient [N/m²].")
+    immersion: float = Field(1.0, gt=0, le=1)
+    up: bool = False
+    rpm_min: float = Field(2000.0, gt=0)
+    rpm_max: float = Field(20000.0, gt=0)
+    n_speeds: int = Field(300, ge=2, le=5000)
+
+
+class TokenIn(Strict):
+    name: str = Field(..., max_length=100, description="Owner: recorded in the audit log for the token's writes.")
+    role: Literal["reader", "writer", "admin"]
+    expires: Optional[str] = Field(None, max_length=40, description="ISO time or a lifetime like 30d, 12h.")
+
+
+class GcIn(Strict):
+    min_age_s: float = Field(3600.0, ge=0)
+    dry_run: bool = True
+
+
+CatalogueIn.model_rebuild()

@@ -1,0 +1,65 @@
+"""Settings of the HTTP service, from arguments or the environment (so that every
+uvicorn worker process builds the same app)."""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+
+from jointdb.errors import InputError
+
+
+def _env_bool(name: str, default: bool) -> bool:
+    text = os.environ.get(name)
+    if text is None or text == "":
+        return default
+    if text.lower() in ("1", "true", "yes", "on"):
+        return True
+    if text.lower() in ("0", "false", "no", "off"):
+        return False
+    raise InputError(f"${name} must be true or false, got {text!r}")
+
+
+def _env_float(name: str, default: float) -> float:
+    text = os.environ.get(name)
+    if text is None or text == "":
+        return default
+    try:
+        value = float(text)
+    except ValueError:
+        raise InputError(f"${name} must be a number, got {text!r}") from None
+    if not value > 0:
+        raise InputError(f"${name} must be > 0, got {text!r}")
+    return value
+
+
+@dataclass(frozen=True)
+class Settings:
+    """What ``jointdb serve`` runs with.
+
+    ``url``/``blobs``: the repository (as :class:`jointdb.store.Repository`);
+    ``open_reads``: reads without a token (default: every request needs one);
+    ``max_upload_bytes``: largest request body; ``request_timeout_s``: longest
+    time a request may take before the client gets 503 (the work itself is not
+    interrupted: a write either commits whole or not at all).
+    """
+
+    url: str | None = None
+    blobs: str | None = None
+    open_reads: bool = False
+    max_upload_bytes: int = 64 * 2**20
+    request_timeout_s: float = 60.0
+    secure_cookies: bool = False
+
+    @classmethod
+    def from_env(cls) -> "Settings":
+        """``JOINTDB_URL``, ``JOINTDB_BLOBS``, ``JOINTDB_OPEN_READS``, ``JOINTDB_MAX_UPLOAD_MB``,
+        ``JOINTDB_REQUEST_TIMEOUT_S``, ``JOINTDB_SECURE_COOKIES``."""
+        return cls(
+            url=os.environ.get("JOINTDB_URL") or None,
+            blobs=os.environ.get("JOINTDB_BLOBS") or None,
+            open_reads=_env_bool("JOINTDB_OPEN_READS", False),
+            max_upload_bytes=int(_env_float("JOINTDB_MAX_UPLOAD_MB", 64.0) * 2**20),
+            request_timeout_s=_env_float("JOINTDB_REQUEST_TIMEOUT_S", 60.0),
+            secure_cookies=_env_bool("JOINTDB_SECURE_COOKIES", False),
+        )

@@ -1,0 +1,92 @@
+"""Computing routes (reader): nearest query, interpolation, stack prediction, stability lobes."""
+
+from __future__ import annotations
+
+import warnings
+from typing import Any
+
+import numpy as np
+from fastapi import APIRouter, Depends
+
+from jointdb.errors import InputError
+from jointdb.server._deps import frf_from_json, frf_json, reader, repo, version_json
+from jointdb.server._schemas import LobesIn, NearestIn, PredictIn
+
+router = APIRouter(tags=["query"])
+
+
+def run_nearest(r, body: NearestIn):
+    """Matches and warnings of :meth:`Repository.nearest` (shared by the API and the web form)."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        matches = r.nearest(body.joint_type, body.conditions.to_conditions(), k=body.k, at=body.at)
+    return matches, [" ".join(str(w.message).split()) for w in caught]
+
+
+def match_json(m) -> dict[str, Any]:
+    return {"name": m.version.name, "version": m.version.version, "distance": m.distance,
+            "per_condition": dict(m.per_condition), "extrapolating": m.extrapolating,
+            "outside_range": list(m.outside_range), "joint": version_json(m.version)}
+
+
+@router.post("/query/nearest", summary="The k catalogued versions nearest to given conditions")
+def nearest(body: NearestIn, r=Depends(repo), _who=reader) -> dict[str, Any]:
+    """Ranked by distance = sqrt(sum of the per-condition terms squared); the first is the
+    answer, the others are the runners-up."""
+    matches, notes = run_nearest(r, body)
+    return {"matches": [match_json(m) for m in matches], "warnings": notes}
+
+
+@router.post("/query/interpolate", summary="A joint FRF interpolated between the nearest versions")
+def interpolate(body: NearestIn, r=Depends(repo), _who=reader) -> dict[str, Any]:
+    """Inverse-distance weighting of the neighbours' dynamic stiffness (NOT a catalogued joint)."""
+    matches, notes = run_nearest(r, body)
+    ij = r.interpolate(matches, body.conditions.to_conditions())
+    return {"label": ij.label, "description": ij.describe(), "joint_type": ij.joint_type,
+            "neighbours": [{"name": n, "version": v, "weight": w} for n, v, w in ij.neighbours],
+            "warnings": notes, "frf": frf_json(ij.frf)}
+
+
+@router.post("/predict", summary="Tool-tip FRF of a tool / holder / spindle stack")
+def predict(body: PredictIn, r=Depends(repo), _who=reader) -> dict[str, Any]:
+    """Joints from the catalogue (pinned, nearest or explicit); the stack must carry its
+    spindle model inline (a server reads no client files)."""
+    from jointdb import app as application
+    from jointdb.stack import MeasuredSpindle, ModelledSpindle, stack_from_dict
+
+    spec = stack_from_dict(body.stack)
+    sp = spec.spindle
+    if isinstance(sp, MeasuredSpindle) or (isinstance(sp, ModelledSpindle) and isinstance(sp.model, str)):
+        raise InputError("stack.spindle: refers to a file; send the spindle model inline (the server reads "
+                         "no client files)")
+    result = application.predict_stack(spec, r)
+    pred = result.prediction
+    return {"stack": spec.name, "joints": [j.row() for j in result.joints.values()], "prediction": pred.summary(),
+            "notes": list(pred.notes), "tip_frf": frf_json(pred.tip)}
+
+
+@router.post("/lobes", summary="Stability lobes from a tool-tip FRF (milling ZOA or turning)")
+def lobes(body: LobesIn, r=Depends(repo), _who=reader) -> dict[str, Any]:
+    from jointdb import stability
+
+    if (body.frf is None) == (body.joint is None):
+        raise InputError("give either frf (JSON) or joint and version")
+    if body.frf is not None:
+        frf = frf_from_json(body.frf.model_dump())
+    else:
+        frf = r.load_frf(r.get(body.joint, body.version))
+    if not (np.isfinite(body.rpm_max) and body.rpm_min < body.rpm_max):
+        raise InputError("need finite 0 < rpm_min < rpm_max")
+    speeds = np.linspace(body.rpm_min, body.rpm_max, body.n_speeds)
+    if body.op == "turning":
+        if body.kf is None:
+            raise InputError("turning needs kf (cutting coefficient in N/m²)")
+        res = stability.turning_lobes(frf, body.kf, None, spindle_speed_rpm=speeds)
+    else:
+        if body.kt is None or body.kr is None:
+            raise InputError("milling needs kt and kr (cutting coefficients in N/m²)")
+        cut = stability.MillingCut(body.teeth, body.kt, body.kr, body.immersion, not body.up)
+        res = stability.milling_lobes_zoa(frf, cut, spindle_speed_rpm=speeds)
+    rows = [{k: (None if isinstance(v, float) and not np.isfinite(v) else v) for k, v in row.items()}
+            for row in res.table()]
+    return {"method": res.method, "rows": rows}

@@ -1,0 +1,138 @@
+"""Write routes (writer token): catalogue an uploaded joint file, label, deprecate.
+
+Every write is made under the token's owner: the audit log's actor and the
+version's author are the owner's name, whatever the request body says.
+"""
+
+from __future__ import annotations
+
+import base64
+import binascii
+import tempfile
+from pathlib import Path as FsPath
+from typing import Any
+
+from fastapi import APIRouter, Depends
+
+from jointdb.errors import InputError, JointdbError
+from jointdb.server._deps import repo, version_json, writer
+from jointdb.server._schemas import CatalogueIn, DeprecateIn, LabelIn
+from jointdb.server.routes_joints import Name, joint_name
+
+router = APIRouter(tags=["writes"])
+
+UPLOAD_SUFFIXES = (".h5", ".hdf5", ".zip")
+MAX_ARCHIVE_FILES = 200
+MAX_ARCHIVE_BYTES = 256 * 2**20
+
+
+def upload_name(filename: str) -> str:
+    """A plain file name (kept in the provenance): no directories, no '..', an HDF5 suffix."""
+    name = str(filename)
+    if not name or "/" in name or "\\" in name or name in (".", "..") or name.startswith(".") \
+            or not name.isprintable() or "\x00" in name:
+        raise InputError(f"filename {name[:60]!r} must be a plain file name without directories")
+    if not name.lower().endswith(UPLOAD_SUFFIXES):
+        raise InputError(f"filename {name[:60]!r}: upload an identified joint (.h5) or a campaign archive (.zip)")
+    return name
+
+
+def catalogue_upload(r, body: CatalogueIn, owner: str):
+    """Decode, read and catalogue an uploaded joint file (shared by the API and the web form)."""
+    from jointdb.cli._joint_files import catalogue_inputs
+    from jointdb.store._types import check_label
+
+    name = joint_name(body.name)
+    label = check_label(body.label) if body.label is not None else None
+    if (body.frf is None) == (body.file_b64 is None):
+        raise InputError("give either file_b64 with filename (an identified joint file) or frf (JSON)")
+    if body.frf is not None:
+        return _catalogue_frf(r, body, name, label, owner)
+    fname = upload_name(body.filename or "")
+    try:
+        data = base64.b64decode(body.file_b64, validate=True)
+    except (binascii.Error, ValueError):
+        raise InputError("file_b64 is not valid base64") from None
+    if not data:
+        raise InputError("file_b64 is empty")
+    with tempfile.TemporaryDirectory(prefix="jointdb-upload-") as tmp:
+        path = FsPath(tmp) / fname
+        path.write_bytes(data)
+        if fname.lower().endswith(".zip"):
+            path = _campaign_from_archive(path, FsPath(tmp) / "campaign")
+        try:
+            args = catalogue_inputs(path, body.conditions.to_conditions(), joint_type=body.joint_type,
+                                    model_kind=body.model_kind, method=body.method, quality=dict(body.quality),
+                                    author=owner, override=body.override_conditions)
+        except JointdbError as exc:  # name the upload, not the server's temporary directory
+            raise type(exc)(str(exc).replace(f"{tmp}/", "")) from None
+    return r.catalogue(name, parent=body.parent, author=owner, label=label, **args)
+
+
+def _catalogue_frf(r, body: CatalogueIn, name: str, label: str | None, owner: str):
+    """Catalogue an FRF sent as JSON (``jointdb --server URL catalogue`` reads the file locally)."""
+    from jointdb.server._deps import frf_from_json
+    from jointdb.store import Provenance
+
+    if not body.joint_type or not body.model_kind:
+        raise InputError("an frf sent as JSON needs joint_type and model_kind")
+    prov = Provenance(method=body.method or "imported-file", parameters=dict(body.parameters),
+                      input_files=dict(body.input_files), author=owner)
+    return r.catalogue(name, body.joint_type, frf_from_json(body.frf.model_dump()), body.conditions.to_conditions(),
+                       body.model_kind, prov, dict(body.quality), body.parent, author=owner, label=label)
+
+
+def _campaign_from_archive(archive: FsPath, into: FsPath) -> FsPath:
+    """Unpack a campaign archive (a .zip of one campaign JSON file and the files it names, flat)
+    safely, and return the campaign file: member names must be plain file names, and the
+    total size and count are limited (no path traversal, no zip bomb)."""
+    import zipfile
+
+    try:
+        zf = zipfile.ZipFile(archive)
+    except zipfile.BadZipFile:
+        raise InputError(f"{archive.name}: not a zip archive") from None
+    with zf:
+        members = [m for m in zf.infolist() if not m.is_dir()]
+        if len(members) > MAX_ARCHIVE_FILES:
+            raise InputError(f"{archive.name}: more than {MAX_ARCHIVE_FILES} files")
+        if sum(m.file_size for m in members) > MAX_ARCHIVE_BYTES:
+            raise InputError(f"{archive.name}: unpacks to more than {MAX_ARCHIVE_BYTES // 2**20} MiB")
+        into.mkdir()
+        for m in members:
+            base = m.filename
+            if "/" in base or "\\" in base or base in (".", "..") or base.startswith(".") or not base.isprintable():
+                raise InputError(f"{archive.name}: member {base[:60]!r} must be a plain file name (a flat archive)")
+            (into / base).write_bytes(zf.read(m))
+    campaigns = []
+    for p in sorted(into.glob("*.json")):
+        try:
+            import json
+
+            if json.loads(p.read_text(encoding="utf-8")).get("format", "").startswith("jointdb-campaign"):
+                campaigns.append(p)
+        except (ValueError, UnicodeDecodeError, AttributeError):
+            continue
+    if len(campaigns) != 1:
+        raise InputError(f"{archive.name}: needs exactly one campaign file (format jointdb-campaign/1), "
+                         f"found {len(campaigns)}")
+    return campaigns[0]
+
+
+@router.post("/catalogue", status_code=201, summary="Catalogue an identified joint file as a new version")
+def catalogue(body: CatalogueIn, r=Depends(repo), who=writer) -> dict[str, Any]:
+    """Upload the HDF5 file of `jointdb identify` (base64) with conditions; the conditions
+    recorded in the file are completed by those given (a contradiction is refused unless
+    ``override_conditions``). The version and its label are written together or not at all."""
+    return version_json(catalogue_upload(r, body, who.name))
+
+
+@router.post("/joints/{name}/labels", summary="Point a label at a version (create or move it)")
+def label(name: Name, body: LabelIn, r=Depends(repo), who=writer) -> dict[str, Any]:
+    return version_json(r.label(joint_name(name), body.version, body.label, author=who.name))
+
+
+@router.post("/joints/{name}/deprecate", summary="Deprecate (or undo) a joint or one version")
+def deprecate(name: Name, body: DeprecateIn, r=Depends(repo), who=writer) -> dict[str, Any]:
+    hist = r.deprecate(joint_name(name), body.version, reason=body.reason, author=who.name, undo=body.undo)
+    return {"items": [version_json(v) for v in hist]}

@@ -1,0 +1,184 @@
+"""FRF blobs kept in the database itself (table ``frf_blobs``), selected with
+``blobs="database"`` (or ``JOINTDB_BLOBS=database``): several API hosts then need nothing
+but the database.
+
+Same guarantees as the file store (:class:`jointdb.store._blobs.BlobStore`), same bytes:
+a row's ``data`` is exactly a blob file (user block with the whole-file SHA-256, then the
+HDF5 layout with fletcher32 chunks), so every read checks the whole-file hash, the chunk
+checksums and that the decoded FRF hashes to the row's key. ``put`` is idempotent
+(``INSERT ... ON CONFLICT DO UPDATE touched_at``), committed before it returns and read
+back. ``collect`` (gc) locks the row (``FOR UPDATE`` on PostgreSQL, the write lock on
+SQLite), re-reads its age and asks the database whether a row references it, all in one
+transaction; a concurrent ``put`` of the same blob waits for that transaction and then
+writes it again, so a writer can never reference a collected blob.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import io
+from collections.abc import Iterator
+from datetime import datetime, timezone
+
+from sqlalchemy import Engine, delete, select
+from sqlalchemy.orm import Session
+
+from jointdb.errors import IntegrityError, NotFoundError
+from jointdb.frf import FRF
+from jointdb.store._blobs import _HEX64, USERBLOCK, BlobInfo, _userblock, frf_sha256, read_frf_group, write_frf_file
+from jointdb.store._models import BlobRow
+
+#: the value of ``blobs=`` / ``JOINTDB_BLOBS`` that selects this store
+DATABASE = "database"
+
+
+def _now() -> datetime:
+    return datetime.now(timezone.utc)
+
+
+class DatabaseBlobStore:
+    """Content-addressed FRF blobs in the ``frf_blobs`` table of the repository's database."""
+
+    def __init__(self, engine: Engine, where: str = "database"):
+        self.engine = engine
+        self.root = f"{where} (table frf_blobs)"  # shown by `jointdb db info`; not a directory
+
+    def __repr__(self) -> str:
+        return f"DatabaseBlobStore({self.root!r})"
+
+    @staticmethod
+    def _key(digest: str) -> str:
+        if not isinstance(digest, str) or not _HEX64.fullmatch(digest):
+            raise IntegrityError(f"blob digest {str(digest)[:80]!r} is not a SHA-256 hex digest; refusing to use it")
+        return digest
+
+    def _upsert(self, session: Session, digest: str, data: bytes, now: datetime) -> None:
+        dialect = self.engine.dialect.name
+        if dialect == "postgresql":
+            from sqlalchemy.dialects.postgresql import insert
+        else:
+            from sqlalchemy.dialects.sqlite import insert
+        stmt = insert(BlobRow).values(sha256=digest, data=data, size=len(data), created_at=now, touched_at=now)
+        session.execute(stmt.on_conflict_do_update(index_elements=["sha256"], set_={"touched_at": now}))
+
+    # ------------------------------------------------------------------ write
+    def put(self, frf: FRF) -> str:
+        """Store an FRF durably (committed); return its SHA-256. Idempotent; read back and verified."""
+        import tempfile
+        from pathlib import Path
+
+        digest = frf_sha256(frf)
+        with tempfile.TemporaryDirectory(prefix="jointdb-blob-") as tmp:
+            path = Path(tmp) / "blob.h5"
+            write_frf_file(path, frf)
+            data = path.read_bytes()
+        with Session(self.engine) as s, s.begin():
+            existing = s.get(BlobRow, digest)
+            if existing is not None and self._check(digest, existing.data) is not None:
+                existing.data, existing.size = data, len(data)  # corrupt copy: replace it
+            self._upsert(s, digest, data, _now())
+        self.get(digest)
+        return digest
+
+    # ------------------------------------------------------------------- read
+    @staticmethod
+    def _decode(digest: str, data: bytes) -> FRF:
+        import h5py
+
+        block, body = data[:USERBLOCK], data[USERBLOCK:]
+        recorded = block[25:89].decode("ascii", "replace") if len(block) == USERBLOCK else ""
+        if len(block) != USERBLOCK or block != _userblock(recorded):
+            raise IntegrityError(f"blob {digest} is corrupt: file checksum header is damaged")
+        if hashlib.sha256(body).hexdigest() != recorded:
+            raise IntegrityError(f"blob {digest} is corrupt: bytes do not match their recorded SHA-256")
+        try:
+            with h5py.File(io.BytesIO(data), "r", locking=False) as f:
+                frf, _ = read_frf_group(f, f"blob {digest}")
+        except (OSError, KeyError, ValueError) as exc:
+            raise IntegrityError(f"blob {digest} is corrupt: {exc}") from None
+        actual = frf_sha256(frf)
+        if actual != digest:
+            raise IntegrityError(f"blob {digest} is corrupt: its content hashes to {actual}")
+        return frf
+
+    def _check(self, digest: str, data: bytes) -> str | None:
+        try:
+            self._decode(digest, data)
+        except IntegrityError as exc:
+            return str(exc)
+        return None
+
+    def get(self, digest: str) -> FRF:
+        """Read and verify a blob (NotFoundError when missing, IntegrityError when corrupt)."""
+        key = self._key(digest)
+        with Session(self.engine) as s:
+            data = s.scalar(select(BlobRow.data).where(BlobRow.sha256 == key))
+        if data is None:
+            raise NotFoundError(f"blob {digest} is missing (table frf_blobs)")
+        return self._decode(key, bytes(data))
+
+    def exists(self, digest: str) -> bool:
+        key = self._key(digest)
+        with Session(self.engine) as s:
+            return s.scalar(select(BlobRow.sha256).where(BlobRow.sha256 == key)) is not None
+
+    def verify(self, digest: str) -> str | None:
+        try:
+            self.get(digest)
+        except (NotFoundError, IntegrityError) as exc:
+            return str(exc)
+        return None
+
+    # ------------------------------------------------------------------ walk / gc
+    def walk(self) -> Iterator[BlobInfo]:
+        """All blobs; ``path`` is the digest (what :meth:`age_seconds` takes)."""
+        with Session(self.engine) as s:
+            rows = list(s.execute(select(BlobRow.sha256, BlobRow.size, BlobRow.touched_at).order_by(BlobRow.sha256)))
+        for digest, size, touched in rows:
+            yield BlobInfo(digest, digest, size, touched.timestamp())
+
+    def temporaries(self) -> list:
+        """None: a database write leaves no temporary behind."""
+        return []
+
+    def restore_set_aside(self, is_referenced) -> list[str]:
+        return []
+
+    def age_seconds(self, digest) -> float:
+        with Session(self.engine) as s:
+            touched = s.scalar(select(BlobRow.touched_at).where(BlobRow.sha256 == str(digest)))
+        return 0.0 if touched is None else (_now() - touched).total_seconds()
+
+    def remove(self, digest: str) -> None:
+        """Delete one blob unconditionally (tests and repairs; ``gc`` uses :meth:`collect`)."""
+        with Session(self.engine) as s, s.begin():
+            s.execute(delete(BlobRow).where(BlobRow.sha256 == self._key(digest)))
+
+    def collect(self, digest: str, min_age_s: float, still_referenced) -> bool:
+        """Delete an unreferenced blob old enough, in one transaction holding its row lock."""
+        key = self._key(digest)
+        engine = self.engine
+        if engine.dialect.name == "sqlite":
+            engine = engine.execution_options(sqlite_begin="IMMEDIATE")
+        with Session(engine) as s, s.begin():
+            touched = s.scalar(select(BlobRow.touched_at).where(BlobRow.sha256 == key).with_for_update())
+            if touched is None:
+                return False
+            if (_now() - touched).total_seconds() < min_age_s or still_referenced(key):
+                return False
+            s.execute(delete(BlobRow).where(BlobRow.sha256 == key))
+        return True
+
+
+def open_blob_store(url: str, blobs, engine: Engine):
+    """The blob store of a repository: the ``frf_blobs`` table when ``blobs`` (or
+    ``JOINTDB_BLOBS``) is ``"database"``, else the blob directory (:func:`jointdb.store._db.blob_dir`)."""
+    import os
+
+    from jointdb.store import _db
+    from jointdb.store._blobs import BlobStore
+
+    chosen = str(blobs) if blobs is not None else os.environ.get("JOINTDB_BLOBS", "")
+    if chosen == DATABASE:
+        return DatabaseBlobStore(engine, _db.safe_url(url))
+    return BlobStore(_db.blob_dir(url, blobs))
