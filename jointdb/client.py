@@ -123,12 +123,15 @@ class RemoteRepository:
         params = {"limit": min(int(limit), 500), **({"joint": name} if name else {})}
         return self._call("GET", "/audit", params=params)["items"]
 
-    def nearest(self, joint_type: str, conditions, k: int = 3, at=None) -> list:
+    def nearest(self, joint_type: str, conditions, k: int = 3, at=None, *, label: str | None = None,
+                all_versions: bool = False, include_deprecated: bool = False) -> list:
         from jointdb.store._query import OutsideCatalogueWarning
         from jointdb.store._types import Match, as_conditions
 
         cond = as_conditions(conditions).to_dict()
-        body = {"joint_type": joint_type, "conditions": cond, "k": int(k), **({"at": str(at)} if at else {})}
+        body = {"joint_type": joint_type, "conditions": cond, "k": int(k), **({"at": str(at)} if at else {}),
+                **({"label": label} if label else {}), "all_versions": bool(all_versions),
+                "include_deprecated": bool(include_deprecated)}
         out = self._call("POST", "/query/nearest", json=body)
         for w in out["warnings"]:
             warnings.warn(w, OutsideCatalogueWarning, stacklevel=2)

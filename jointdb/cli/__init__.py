@@ -55,11 +55,11 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "Rotational receptances at a contact point from translational measurements, with noise amplification.",
     ),
     "plan": ("_plan", "Rank candidate tap points by the expected joint-parameter variance (Fisher information)."),
+    "serve": ("_serve", "Run the HTTP API and web catalogue (FastAPI + uvicorn) over the joint database."),
     "joints": ("_store", "List, inspect, label, deprecate, diff, export and import catalogued joints."),
     "keys": ("_store", "Ed25519 keys to sign exported bundles and verify imported ones."),
     "db": ("_db", "Database administration: migrations, integrity check, garbage collection."),
     "campaign": ("_campaign", "Scaffold a measurement campaign from a folder of files, or check one."),
-    "serve": ("_serve", "Run the HTTP API and web catalogue (FastAPI + uvicorn) over the joint database."),
     "tokens": ("_serve", "API tokens of the HTTP service: create, list, revoke."),
 }
 

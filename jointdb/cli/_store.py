@@ -239,7 +239,8 @@ def register(app: typer.Typer) -> None:
         selection = {"label": label, "all_versions": all_versions, "include_deprecated": include_deprecated}
         from jointdb.store._light import nearest_in_file, sqlite_target
 
-        light = sqlite_target(db) if interpolate is None and at is None else None
+        remote = db is None and bool(__import__("os").environ.get("JOINTDB_SERVER"))
+        light = sqlite_target(db) if interpolate is None and at is None and not remote else None
         repo = None if light is not None else _repo(db, blobs)
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")

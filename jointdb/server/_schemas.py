@@ -31,6 +31,9 @@ class NearestIn(Strict):
     conditions: ConditionsIn = Field(default_factory=ConditionsIn)
     k: int = Field(3, ge=1, le=50, description="Number of nearest versions.")
     at: Optional[str] = Field(None, max_length=40, description="Query the catalogue as it was at this ISO time.")
+    label: Optional[str] = Field(None, max_length=100, description="Only versions carrying this label.")
+    all_versions: bool = Field(False, description="Rank every version, not only the newest of each joint.")
+    include_deprecated: bool = Field(False, description="Also rank deprecated versions (excluded by default).")
 
 
 class CatalogueIn(Strict):

@@ -19,7 +19,8 @@ def run_nearest(r, body: NearestIn):
     """Matches and warnings of :meth:`Repository.nearest` (shared by the API and the web form)."""
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        matches = r.nearest(body.joint_type, body.conditions.to_conditions(), k=body.k, at=body.at)
+        matches = r.nearest(body.joint_type, body.conditions.to_conditions(), k=body.k, at=body.at, label=body.label,
+                            all_versions=body.all_versions, include_deprecated=body.include_deprecated)
     return matches, [" ".join(str(w.message).split()) for w in caught]
 
 

@@ -80,6 +80,13 @@ class DatabaseBlobStore:
         self.get(digest)
         return digest
 
+    def put_pending(self, frf: FRF):
+        """:meth:`put` done now (committed in its own transaction), as the file store's
+        :meth:`~jointdb.store._blobs.BlobStore.put_pending` interface: nothing left to wait for."""
+        from jointdb.store._blobs import PendingPut
+
+        return PendingPut(self.put(frf))
+
     # ------------------------------------------------------------------- read
     @staticmethod
     def _decode(digest: str, data: bytes) -> FRF:
