@@ -147,7 +147,7 @@ def run_main_job(
             say(f"      {row['joint']:<26} {row['materials']:<23} {row['torque_nm']:>4g} N·m  "
                 f"k_x={row['k_x_n_per_m']:.3e} N/m  k_θ={row['k_theta_nm_per_rad']:.3e} N·m/rad  "
                 f"c_x={row['c_x_ns_per_m']:.0f} N·s/m{vs_truth}  "
-                f"{'new version' if row['new'] else 'already catalogued'}")
+                f"{'new version' if row['new'] else 'identical to v' + str(outcome.version.version) + ', nothing written'}")
         result.files.append(_write_csv(out / "catalogue.csv", result.catalogued))
 
         # 2. query ---------------------------------------------------------------------

@@ -181,6 +181,30 @@ def _open_repo(repo_or_url):
     return repo_or_url, False
 
 
+def identical_version(repo, name: str, joint_type: str, frf: FRF, conditions, model_kind: str):
+    """The joint's current version when it already holds exactly this record, else ``None``.
+
+    Identical means the same joint FRF (blob hash), the same conditions, joint type
+    and model kind: cataloguing it again would add a version that says nothing
+    new, so ``jointdb catalogue`` (unless ``--allow-identical``) and ``jointdb demo``
+    report "identical to vN" and write nothing.
+    """
+    from jointdb.store import Conditions, frf_sha256
+
+    try:
+        latest = repo.get(name)
+    except NotFoundError:
+        return None
+    if not isinstance(conditions, Conditions):
+        conditions = Conditions.from_dict(dict(conditions or {}))
+    def key(c):
+        return (sorted(c.materials), c.preload_n, c.torque_nm, dict(c.geometry), dict(c.extra))
+
+    same = (latest.blob_sha256 == frf_sha256(frf) and key(latest.conditions) == key(conditions)
+            and latest.joint_type == joint_type and latest.model_kind == model_kind)
+    return latest if same else None
+
+
 def resolve_joints(spec: StackSpec, repo=None) -> dict[str, JointResolution]:
     """Resolve every interface of a stack against the joint database.
 
@@ -280,7 +304,7 @@ class CatalogueOutcome:
     ``identified`` is the :class:`jointdb.campaign._run.IdentifyOutcome`
     (campaign, IRC result, re-coupled and rigid assemblies, constant (k, c) fit);
     ``version`` the stored :class:`jointdb.store.JointVersion`; ``reused`` is
-    True when the latest version already held this exact joint FRF.
+    True when the latest version already held this exact record (:func:`identical_version`).
     """
 
     identified: Any
@@ -329,8 +353,9 @@ def catalogue_campaign(repo, path: Path | str, author: str | None = None) -> Cat
     joint receptance; the joint name is the campaign's ``name``; provenance
     records the SHA-256 of the campaign and every file it references and the
     method's settings; quality the re-coupling and constant-(k, c) errors. If
-    the latest version of that joint already holds the same FRF (same blob
-    hash) nothing is written and that version is returned.
+    the latest version of that joint already holds the same record (same FRF
+    blob hash, conditions, type and model kind; :func:`identical_version`)
+    nothing is written and that version is returned.
 
     Raises
     ------
@@ -341,7 +366,7 @@ def catalogue_campaign(repo, path: Path | str, author: str | None = None) -> Cat
     from jointdb._output import to_jsonable
     from jointdb.campaign import load_campaign
     from jointdb.campaign import identify_campaign, joint_attrs
-    from jointdb.store import Conditions, Provenance, frf_sha256
+    from jointdb.store import Conditions, Provenance
 
     camp = load_campaign(path)
     outcome = identify_campaign(camp)
@@ -349,12 +374,10 @@ def catalogue_campaign(repo, path: Path | str, author: str | None = None) -> Cat
     kinds = {"planar": "spring-damper-planar", "n-point": "n-point-translational", "matrix": "full-matrix"}
     handle, owned = _open_repo(repo)
     try:
-        try:
-            latest = handle.get(camp.name)
-        except NotFoundError:
-            latest = None
-        if latest is not None and latest.blob_sha256 == frf_sha256(joint):
-            return CatalogueOutcome(outcome, latest, True)
+        same = identical_version(handle, camp.name, camp.joint_type, joint, Conditions.from_dict(camp.conditions),
+                                 kinds[camp.joint_model])
+        if same is not None:
+            return CatalogueOutcome(outcome, same, True)
         attrs = to_jsonable(joint_attrs(outcome))
         quality = {
             "identification_residual": float(np.median(outcome.result.residual)),

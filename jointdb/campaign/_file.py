@@ -151,6 +151,14 @@ def _conditions(cpath: Path, raw: Any) -> dict[str, Any]:
     mats = raw.get("materials")
     if mats is not None and not (isinstance(mats, list) and all(isinstance(m, str) and m.strip() for m in mats)):
         raise _err(cpath, "conditions.materials", f"must be a list of material names, got {mats!r}")
+    if mats is not None:
+        from jointdb.store._types import normalise_material  # the catalogue's list (extensible)
+
+        for k, m in enumerate(mats):
+            try:
+                normalise_material(m)
+            except InputError as exc:
+                raise _err(cpath, f"conditions.materials[{k}]", str(exc)) from None
     return dict(raw)
 
 
