@@ -26,7 +26,7 @@ import typer
 from jointdb.errors import JointdbError
 
 #: The command modules, in the order they register (which is the order of ``jointdb --help``).
-MODULES = ("_models", "_coupling", "_store", "_db", "_predict", "_stability", "_diagnose", "_demo")
+MODULES = ("_models", "_coupling", "_store", "_db", "_predict", "_stability", "_diagnose", "_demo", "_examples")
 
 #: Every top-level command as ``jointdb --help`` lists it: the module that registers it and
 #: the first paragraph of its help.
@@ -49,6 +49,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "diagnose": ("_diagnose", "Locate where a model and recordings disagree, name the missing physics, refit."),
     "diagnose-bench": ("_diagnose", "Run the concealed-effect benchmark: generate, diagnose, score per effect."),
     "demo": ("_demo", "Run the main job end to end on the bundled data (SQLite, bundled fixtures)."),
+    "examples": ("_examples", "Copy the bundled example models, campaigns and stacks into a new directory."),
     "joints": ("_store", "List, inspect, label, deprecate, diff, export and import catalogued joints."),
     "keys": ("_store", "Ed25519 keys to sign exported bundles and verify imported ones."),
     "db": ("_db", "Database administration: migrations, integrity check, garbage collection."),
@@ -111,11 +112,11 @@ def __getattr__(name: str):
 
 def _click_errors():
     """Click's usage-error, error and abort classes (Typer vendors Click in recent releases)."""
-    try:
-        from click import Abort, ClickException, UsageError
-    except ImportError:
+    try:  # the Click that Typer runs on: its vendored copy when it has one (a separate `click` may be installed too)
         from typer import Abort
         from typer._click.exceptions import ClickException, UsageError
+    except ImportError:
+        from click import Abort, ClickException, UsageError
     return UsageError, ClickException, Abort
 
 
