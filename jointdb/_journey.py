@@ -3,15 +3,15 @@
 :func:`run_main_job` is what ``jointdb demo`` runs. It
 
 1. identifies the tool–holder joint of every bundled measurement campaign
-   (IRC, theory §2a; six campaigns: clamping torque 40 / 80 / 120 N·m × carbide
+   (IRC, docs/theory.md §2a; six campaigns: clamping torque 40 / 80 / 120 N·m × carbide
    or steel tool in a steel holder) and catalogues each as a joint version;
 2. reads the bundled new stack (a fluted carbide end mill at 100 N·m) and asks
    the database for the nearest tool–holder joint, reporting the chosen
    version, its distance, the other candidates and any extrapolation;
-3. predicts the tool-tip FRF (three-component RC, theory §4) with that joint,
+3. predicts the tool-tip FRF (three-component RC, docs/theory.md §4) with that joint,
    with rigid joints and, as a cross-check, with a joint interpolated between
    the nearest neighbours; writes it (UFF58, CSV) and a comparison plot;
-4. computes milling stability lobes (zero-order approximation, theory §5)
+4. computes milling stability lobes (zero-order approximation, docs/theory.md §5)
    from both predictions and plots them;
 
 printing what it does through ``say`` and writing everything into ``out_dir``.
@@ -132,7 +132,7 @@ def run_main_job(
 
         # 1. catalogue ---------------------------------------------------------------
         campaigns = sorted((cat / "campaigns").glob("*/campaign.json"))
-        say(f"[1/4] identify and catalogue {len(campaigns)} tool–holder campaigns (IRC, theory §2a)")
+        say(f"[1/4] identify and catalogue {len(campaigns)} tool–holder campaigns (IRC, docs/theory.md §2a)")
         for path in campaigns:
             outcome = app.catalogue_campaign(repo, path)
             row = outcome.row()
@@ -174,7 +174,7 @@ def run_main_job(
         result.files.append(save_joint_distances(out / "joint-choice.png", resolutions))
 
         # 3. predict -------------------------------------------------------------------
-        say("[3/4] predict the tool-tip FRF (three-component receptance coupling, theory §4)")
+        say("[3/4] predict the tool-tip FRF (three-component receptance coupling, docs/theory.md §4)")
         from jointdb.stack import predict_tool_tip, prediction_grid
 
         grid = prediction_grid(spec)
@@ -212,7 +212,7 @@ def run_main_job(
         # 4. lobes ---------------------------------------------------------------------
         cut = MillingCut(**DEMO_CUT)
         speeds = np.linspace(*speed_range_rpm, n_speeds)
-        say(f"[4/4] milling stability lobes (zero-order approximation, theory §5): {cut.n_teeth} teeth, "
+        say(f"[4/4] milling stability lobes (zero-order approximation, docs/theory.md §5): {cut.n_teeth} teeth, "
             f"K_t={cut.kt:.3g} N/m², K_r={cut.kr:.3g} N/m², a_e/D={cut.radial_immersion:g}, "
             f"{'down' if cut.down_milling else 'up'}-milling, {n_speeds} speeds")
         lobes = milling_lobes_zoa(pred.tip, cut, spindle_speed_rpm=speeds)

@@ -1,4 +1,4 @@
-"""Use cases that span layers: files → numerics → database, called by the CLI (and an HTTP API).
+"""Use cases that span layers: files → numerics → database, called by the CLI (and any other front end).
 
 - :func:`load_stack` — read a stack file, load a referenced spindle FRF / model file.
 - :func:`resolve_joints` — fetch each interface's joint from the database
@@ -6,7 +6,7 @@
   reporting the chosen version, its distance and extrapolation warnings.
 - :func:`predict_stack` — resolve, then :func:`jointdb.stack.predict_tool_tip`.
 - :func:`catalogue_campaign` — identify a joint from a measurement campaign
-  (IRC, theory §2; the project's ``jointdb-campaign/1`` file, read by
+  (IRC, docs/theory.md §2; the project's ``jointdb-campaign/1`` file, read by
   :mod:`jointdb.campaign._file`) and catalogue it.
 
 """
@@ -283,7 +283,7 @@ class StackPrediction:
 
 
 def predict_stack(spec: StackSpec | Path | str, repo=None, freq=None) -> StackPrediction:
-    """Resolve a stack's joints from the database, then predict its tool-tip FRF (theory §4).
+    """Resolve a stack's joints from the database, then predict its tool-tip FRF (docs/theory.md §4).
 
     ``spec`` may be a path to a stack file. See :func:`resolve_joints` for ``repo``.
     """

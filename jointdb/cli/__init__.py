@@ -3,8 +3,7 @@
 Each command group lives in its own module (``_models``, ``_coupling``,
 ``_store``, ``_db``, ``_stability``, ``_predict``, ``_diagnose``, ``_demo``) and
 registers itself on a Typer app; this keeps every file readable in one sitting
-(design.md puts the CLI in one ``cli.py``; we split it along the command groups
-for that reason). Output goes through :mod:`jointdb._output`.
+(one module per command group rather than one ``cli.py``, for that reason). Output goes through :mod:`jointdb._output`.
 
 User errors (:class:`jointdb.errors.JointdbError`) become one line on stderr
 and the error class's exit code, with no traceback.
