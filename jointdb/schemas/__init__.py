@@ -90,10 +90,22 @@ def _loc(loc: tuple[Any, ...]) -> str:
 
 _TEXT = {
     "extra_forbidden": "unknown field",
-    "missing": "required field is missing",
+    "missing": "is required",
     "string_pattern_mismatch": "is not in the expected form",
     "finite_number": "must be a finite number",
+    "float_type": "must be a number",
+    "float_parsing": "must be a number",
+    "int_type": "must be an integer",
+    "int_parsing": "must be an integer",
+    "int_from_float": "must be an integer",
+    "bool_type": "must be true or false",
+    "string_type": "must be a string",
+    "dict_type": "must be an object",
+    "model_type": "must be an object",
+    "model_attributes_type": "must be an object",
+    "list_type": "must be a list",
 }
+_BOUNDS = {"greater_than": ">", "greater_than_equal": ">=", "less_than": "<", "less_than_equal": "<="}
 
 
 def _message(err: dict[str, Any]) -> str:
@@ -102,7 +114,18 @@ def _message(err: dict[str, Any]) -> str:
         return _TEXT[kind]
     value = err.get("input")
     shown = json.dumps(value)[:60] if isinstance(value, (int, float, str, bool)) or value is None else type(value).__name__
-    text = _TEXT.get(kind) or err.get("msg", "invalid").splitlines()[0]
+    ctx = err.get("ctx") or {}
+    if kind in _BOUNDS:
+        bound = next(iter(ctx.values()), "?")
+        text = f"must be {_BOUNDS[kind]} {bound:g}" if isinstance(bound, (int, float)) else f"must be {_BOUNDS[kind]} {bound}"
+    elif kind == "literal_error":
+        text = f"must be one of {ctx.get('expected', '?')}"
+    elif kind == "too_short":
+        text = f"needs at least {ctx.get('min_length', '?')} item(s)"
+    elif kind == "too_long":
+        text = f"allows at most {ctx.get('max_length', '?')} item(s)"
+    else:
+        text = _TEXT.get(kind) or err.get("msg", "invalid").splitlines()[0]
     return f"{text}, got {shown}"
 
 
@@ -129,14 +152,15 @@ def validate(kind: str, data: Any, where: str = "") -> Any:
         depth = [loc.count(".") + loc.count("[") if loc != "top level" else -1 for loc in locs]
         specific = [e.get("type") not in ("missing", "extra_forbidden") for e in errors]
         best = max(range(len(errors)), key=lambda k: (depth[k], specific[k], -k))
-        same = [k for k in range(len(errors)) if locs[k] == locs[best]]
+        # several union branches failing on the value itself: none of the forms fits
+        same = [k for k in range(len(errors)) if locs[k] == locs[best] and specific[k]]
         prefix = f"{where}: " if where else ""
-        if len(same) > 1 and errors[best].get("type") not in ("extra_forbidden", "missing"):
+        if len(same) > 1:
             value = errors[best].get("input")
             shown = json.dumps(value)[:60] if isinstance(value, (int, float, str, bool)) or value is None \
                 else type(value).__name__
-            raise InputError(f"{prefix}{locs[best]}: fits none of the allowed forms ({_message(errors[same[0]])}; "
-                             f"see the {SCHEMA_FILES[kind]} schema), got {shown}") from None
+            raise InputError(f"{prefix}{locs[best]}: fits none of the allowed forms (see docs/schemas/"
+                             f"{SCHEMA_FILES[kind]}), got {shown}") from None
         raise InputError(f"{prefix}{locs[best]}: {_message(errors[best])}") from None
 
 
