@@ -152,9 +152,11 @@ def read_frf_csv(path: str | os.PathLike) -> FRF:
     if data.shape[0] == 0:
         raise InputError(f"{p}: no data rows")
     scale = np.asarray(factors)
-    values = ((data[:, 1::2] + 1j * data[:, 2::2]) * scale).reshape(-1, len(outputs), len(inputs))
+    with np.errstate(invalid="ignore", over="ignore"):  # a non-finite value is refused by FRF below, naming it
+        values = ((data[:, 1::2] + 1j * data[:, 2::2]) * scale).reshape(-1, len(outputs), len(inputs))
+        freq = data[:, 0] * f_factor
     try:
-        return FRF(data[:, 0] * f_factor, values, tuple(outputs), tuple(inputs), Quantity.parse(quantities.pop()))
+        return FRF(freq, values, tuple(outputs), tuple(inputs), Quantity.parse(quantities.pop()))
     except InputError as exc:
         raise InputError(f"{p}: {exc}") from None
 
