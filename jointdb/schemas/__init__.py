@@ -112,6 +112,8 @@ def _message(err: dict[str, Any]) -> str:
     kind = err.get("type", "")
     if kind in ("extra_forbidden", "missing"):
         return _TEXT[kind]
+    if kind == "value_error":  # a rule of the model itself, already in words
+        return str(err.get("msg", "invalid")).removeprefix("Value error, ")
     value = err.get("input")
     shown = json.dumps(value)[:60] if isinstance(value, (int, float, str, bool)) or value is None else type(value).__name__
     ctx = err.get("ctx") or {}

@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
-from typing import Annotated, Any, Literal, Union
+from typing import Annotated, Any, Literal
 
-from pydantic import Field
+from pydantic import ConfigDict, Field, model_validator
 
 from jointdb.schemas._base import DofLabel, Finite, Name, NonNeg, Strict
 
@@ -13,17 +13,21 @@ __all__ = ["CampaignFile"]
 FilePath = Annotated[str, Field(min_length=1, description="path relative to the campaign file")]
 
 
-class ModelSubstructure(Strict):
-    model: FilePath = Field(description="beam model file (jointdb-beam-model/1)")
+class Substructure(Strict):
+    """A substructure: a beam model file or a UFF58 file of its FRFs (exactly one of the two)."""
+
+    model_config = ConfigDict(json_schema_extra={"oneOf": [{"required": ["model"]}, {"required": ["uff58"]}]})
+
+    model: FilePath | None = Field(default=None, description="beam model file (jointdb-beam-model/1)")
+    uff58: FilePath | None = Field(default=None,
+                                   description="UFF58 file with the substructure's FRFs (rotations included)")
     dofs: list[DofLabel] | None = None
 
-
-class MeasuredSubstructure(Strict):
-    uff58: FilePath = Field(description="UFF58 file with the substructure's FRFs (rotations included)")
-    dofs: list[DofLabel] | None = None
-
-
-Substructure = Union[ModelSubstructure, MeasuredSubstructure]
+    @model_validator(mode="after")
+    def _one_source(self):
+        if (self.model is None) == (self.uff58 is None):
+            raise ValueError('give exactly one of "model" (beam model JSON) or "uff58" (FRF file)')
+        return self
 
 
 class Interface(Strict):
