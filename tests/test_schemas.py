@@ -145,3 +145,25 @@ def test_bundle_metadata_conforms(tmp_path):
                 validate("bundle-record", json.loads(vg.attrs["record"]), "b.h5")
                 n += 1
     assert n == 2
+
+
+@pytest.mark.parametrize("change, needle", [
+    (lambda d: d["options"].update(smoothing="21"), "options.smoothing: must be an integer"),
+    (lambda d: d["planar"].update(b_tip="1"), "planar.b_tip: must be an integer"),
+    (lambda d: d["substructures"]["holder"].update(model="tool.json"), 'substructures.holder: give exactly one of'),
+    (lambda d: d["interface"].update(side="left"), "interface.side: unknown field"),
+])
+def test_the_campaign_reader_checks_structure_by_the_schema(change, needle, tmp_path):
+    from jointdb.campaign import load_campaign
+
+    src = REPO / "fixtures" / "campaigns" / "th-steel-30nm"
+    if not src.is_dir():
+        pytest.skip("fixtures/ not next to the tests")
+    for f in src.iterdir():
+        (tmp_path / f.name).write_bytes(f.read_bytes())
+    doc = json.loads((src / "campaign.json").read_text())
+    change(doc)
+    (tmp_path / "campaign.json").write_text(json.dumps(doc))
+    with pytest.raises(InputError) as exc:
+        load_campaign(tmp_path / "campaign.json")
+    assert str(exc.value).startswith("campaign campaign.json: ") and needle in str(exc.value)
