@@ -2,7 +2,7 @@
 
 :func:`run_main_job` is what ``jointdb demo`` runs. It
 
-1. identifies the joint of every bundled measurement campaign (IRC, theory
+1. identifies the joint of every bundled measurement campaign (IRC, docs/theory.md
    §2a) and catalogues each as a joint version: six tool–holder campaigns
    (clamping torque 40 / 80 / 120 N·m × carbide or steel tool in a steel
    holder) and six holder–spindle campaigns (HSK-A63 or BT40 taper × three
@@ -11,10 +11,10 @@
    HSK-A63 spindle at 20 kN, whose bearings are softer in y than in x) and asks
    the database for the nearest joint at each of its two interfaces, reporting
    the chosen version, its distance, the other candidates and any extrapolation;
-3. predicts the tool-tip FRF (three-component RC, theory §4) with that joint,
+3. predicts the tool-tip FRF (three-component RC, docs/theory.md §4) with that joint,
    with rigid joints and, as a cross-check, with a joint interpolated between
    the nearest neighbours; writes it (UFF58, CSV) and a comparison plot;
-4. computes milling stability lobes (zero-order approximation, theory §5)
+4. computes milling stability lobes (zero-order approximation, docs/theory.md §5)
    from both predictions (x and y bending planes) and plots them;
 
 printing what it does through ``say`` and writing everything into ``out_dir``.
@@ -162,7 +162,7 @@ def run_main_job(
         campaigns = sorted((cat / "campaigns").glob("*/campaign.json"))
         kinds = _joint_types(campaigns)
         say(f"[1/4] identify and catalogue {len(campaigns)} campaigns "
-            f"({', '.join(f'{n} {t}' for t, n in kinds.items())}; IRC, theory §2a)")
+            f"({', '.join(f'{n} {t}' for t, n in kinds.items())}; IRC, docs/theory.md §2a)")
         for path in campaigns:
             outcome = app.catalogue_campaign(repo, path)
             row = {"joint_type": outcome.campaign.joint_type, **outcome.row(),
@@ -178,7 +178,7 @@ def run_main_job(
             say(f"      {row['joint']:<26} {row['condition']:<34} "
                 f"k_x={row['k_x_n_per_m']:.3e} N/m  k_θ={row['k_theta_nm_per_rad']:.3e} N·m/rad  "
                 f"c_x={row['c_x_ns_per_m']:.0f} N·s/m{vs_truth}  "
-                f"{'new version' if row['new'] else 'already catalogued'}")
+                f"{'new version' if row['new'] else 'identical to v' + str(outcome.version.version) + ', nothing written'}")
         result.files.append(_write_csv(out / "catalogue.csv", result.catalogued))
 
         # 2. query ---------------------------------------------------------------------
@@ -205,7 +205,7 @@ def run_main_job(
         result.files.append(save_joint_distances(out / "joint-choice.png", resolutions))
 
         # 3. predict -------------------------------------------------------------------
-        say("[3/4] predict the tool-tip FRF (three-component receptance coupling, theory §4)")
+        say("[3/4] predict the tool-tip FRF (three-component receptance coupling, docs/theory.md §4)")
         from jointdb.stack import predict_tool_tip, prediction_grid
 
         grid = prediction_grid(spec)
@@ -247,7 +247,7 @@ def run_main_job(
         # 4. lobes ---------------------------------------------------------------------
         cut = MillingCut(**DEMO_CUT)
         speeds = np.linspace(*speed_range_rpm, n_speeds)
-        say(f"[4/4] milling stability lobes (zero-order approximation, theory §5): {cut.n_teeth} teeth, "
+        say(f"[4/4] milling stability lobes (zero-order approximation, docs/theory.md §5): {cut.n_teeth} teeth, "
             f"K_t={cut.kt:.3g} N/m², K_r={cut.kr:.3g} N/m², a_e/D={cut.radial_immersion:g}, "
             f"{'down' if cut.down_milling else 'up'}-milling, {n_speeds} speeds, refined near the minima and pockets")
         cross = bool(np.any(pred.tip.values[:, 0, 1]))  # planes coupled by the spindle: use H[x,y], H[y,x]

@@ -1,4 +1,4 @@
-"""Use cases that span layers: files → numerics → database, called by the CLI (and an HTTP API).
+"""Use cases that span layers: files → numerics → database, called by the CLI (and any other front end).
 
 - :func:`load_stack` — read a stack file, load a referenced spindle FRF / model file.
 - :func:`resolve_joints` — fetch each interface's joint from the database
@@ -6,7 +6,7 @@
   reporting the chosen version, its distance and extrapolation warnings.
 - :func:`predict_stack` — resolve, then :func:`jointdb.stack.predict_tool_tip`.
 - :func:`catalogue_campaign` — identify a joint from a measurement campaign
-  (IRC, theory §2; the project's ``jointdb-campaign/1`` file, read by
+  (IRC, docs/theory.md §2; the project's ``jointdb-campaign/1`` file, read by
   :mod:`jointdb.campaign._file`) and catalogue it.
 
 """
@@ -189,6 +189,30 @@ def _uncertainty_of(version) -> Mapping[str, Any] | None:
     return unc if isinstance(unc, Mapping) else None
 
 
+def identical_version(repo, name: str, joint_type: str, frf: FRF, conditions, model_kind: str):
+    """The joint's current version when it already holds exactly this record, else ``None``.
+
+    Identical means the same joint FRF (blob hash), the same conditions, joint type
+    and model kind: cataloguing it again would add a version that says nothing
+    new, so ``jointdb catalogue`` (unless ``--allow-identical``) and ``jointdb demo``
+    report "identical to vN" and write nothing.
+    """
+    from jointdb.store import Conditions, frf_sha256
+
+    try:
+        latest = repo.get(name)
+    except NotFoundError:
+        return None
+    if not isinstance(conditions, Conditions):
+        conditions = Conditions.from_dict(dict(conditions or {}))
+    def key(c):
+        return (sorted(c.materials), c.preload_n, c.torque_nm, dict(c.geometry), dict(c.extra))
+
+    same = (latest.blob_sha256 == frf_sha256(frf) and key(latest.conditions) == key(conditions)
+            and latest.joint_type == joint_type and latest.model_kind == model_kind)
+    return latest if same else None
+
+
 def resolve_joints(spec: StackSpec, repo=None) -> dict[str, JointResolution]:
     """Resolve every interface of a stack against the joint database.
 
@@ -268,7 +292,7 @@ class StackPrediction:
 
 
 def predict_stack(spec: StackSpec | Path | str, repo=None, freq=None) -> StackPrediction:
-    """Resolve a stack's joints from the database, then predict its tool-tip FRF (theory §4).
+    """Resolve a stack's joints from the database, then predict its tool-tip FRF (docs/theory.md §4).
 
     ``spec`` may be a path to a stack file. See :func:`resolve_joints` for ``repo``.
     """
@@ -289,7 +313,7 @@ class CatalogueOutcome:
     ``identified`` is the :class:`jointdb.campaign._run.IdentifyOutcome`
     (campaign, IRC result, re-coupled and rigid assemblies, constant (k, c) fit);
     ``version`` the stored :class:`jointdb.store.JointVersion`; ``reused`` is
-    True when the latest version already held this exact joint FRF.
+    True when the latest version already held this exact record (:func:`identical_version`).
     """
 
     identified: Any
@@ -338,8 +362,9 @@ def catalogue_campaign(repo, path: Path | str, author: str | None = None) -> Cat
     joint receptance; the joint name is the campaign's ``name``; provenance
     records the SHA-256 of the campaign and every file it references and the
     method's settings; quality the re-coupling and constant-(k, c) errors. If
-    the latest version of that joint already holds the same FRF (same blob
-    hash) nothing is written and that version is returned.
+    the latest version of that joint already holds the same record (same FRF
+    blob hash, conditions, type and model kind; :func:`identical_version`)
+    nothing is written and that version is returned.
 
     Raises
     ------
@@ -350,7 +375,7 @@ def catalogue_campaign(repo, path: Path | str, author: str | None = None) -> Cat
     from jointdb._output import to_jsonable
     from jointdb.campaign import load_campaign
     from jointdb.campaign import identify_campaign, joint_attrs
-    from jointdb.store import Conditions, Provenance, frf_sha256
+    from jointdb.store import Conditions, Provenance
 
     camp = load_campaign(path)
     outcome = identify_campaign(camp)
@@ -358,12 +383,10 @@ def catalogue_campaign(repo, path: Path | str, author: str | None = None) -> Cat
     kinds = {"planar": "spring-damper-planar", "n-point": "n-point-translational", "matrix": "full-matrix"}
     handle, owned = _open_repo(repo)
     try:
-        try:
-            latest = handle.get(camp.name)
-        except NotFoundError:
-            latest = None
-        if latest is not None and latest.blob_sha256 == frf_sha256(joint):
-            return CatalogueOutcome(outcome, latest, True)
+        same = identical_version(handle, camp.name, camp.joint_type, joint, Conditions.from_dict(camp.conditions),
+                                 kinds[camp.joint_model])
+        if same is not None:
+            return CatalogueOutcome(outcome, same, True)
         attrs = to_jsonable(joint_attrs(outcome))
         quality = {
             "identification_residual": float(np.median(outcome.result.residual)),

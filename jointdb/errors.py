@@ -1,8 +1,8 @@
 """The one small exception hierarchy of jointdb.
 
 Every error a user can cause derives from :class:`JointdbError`. The CLI maps
-each class to an exit code and one line on stderr; the HTTP API maps them to
-status codes. Input errors are also ``ValueError`` so that library users can
+each class to an exit code and one line on stderr; another front end maps them
+its own way (e.g. to status codes). Input errors are also ``ValueError`` so that library users can
 catch them the ordinary way.
 """
 

@@ -1,12 +1,12 @@
 """FRF container, DOF labels and exact quantity conversions.
 
-Contract (design.md, "FRF container"): frequencies in Hz, float64, strictly
+Contract: frequencies in Hz, float64, strictly
 increasing; values complex128 of shape ``(n_freq, n_out, n_in)``; outputs and
 inputs labelled by :class:`Dof` ``(node, direction)`` with the UFF58 direction
 codes ``x y z rx ry rz`` (1..6); the quantity (receptance, mobility,
 accelerance) is explicit and converted exactly.
 
-Harmonic convention ``x(t) = X exp(+iωt)`` (theory.md §0), so mobility
+Harmonic convention ``x(t) = X exp(+iωt)`` (docs/theory.md §0), so mobility
 ``Y = iω H`` and accelerance ``A = −ω² H``.
 """
 

@@ -1,4 +1,4 @@
-"""The numerical core must not pull in I/O or UI libraries (design.md, "Layers")."""
+"""The numerical core must not pull in I/O or UI libraries (README, "Layout")."""
 
 import subprocess
 import sys

@@ -3,8 +3,7 @@
 Each command group lives in its own module (``_models``, ``_coupling``,
 ``_store``, ``_db``, ``_stability``, ``_predict``, ``_diagnose``, ``_demo``) and
 registers itself on a Typer app; this keeps every file readable in one sitting
-(design.md puts the CLI in one ``cli.py``; we split it along the command groups
-for that reason). Output goes through :mod:`jointdb._output`.
+(one module per command group rather than one ``cli.py``, for that reason). Output goes through :mod:`jointdb._output`.
 
 User errors (:class:`jointdb.errors.JointdbError`) become one line on stderr
 and the error class's exit code, with no traceback.
@@ -26,8 +25,8 @@ import typer
 from jointdb.errors import JointdbError
 
 #: The command modules, in the order they register (which is the order of ``jointdb --help``).
-MODULES = ("_models", "_coupling", "_store", "_db", "_predict", "_stability", "_diagnose", "_demo", "_campaign", "_plan",
-           "_serve")
+MODULES = ("_models", "_coupling", "_store", "_db", "_predict", "_stability", "_diagnose", "_demo", "_examples",
+           "_campaign", "_plan", "_serve")
 
 #: Every top-level command as ``jointdb --help`` lists it: the module that registers it and
 #: the first paragraph of its help.
@@ -50,6 +49,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "diagnose": ("_diagnose", "Locate where a model and recordings disagree, name the missing physics, refit."),
     "diagnose-bench": ("_diagnose", "Run the concealed-effect benchmark: generate, diagnose, score per effect."),
     "demo": ("_demo", "Run the main job end to end on the bundled data (SQLite, bundled fixtures)."),
+    "examples": ("_examples", "Copy the bundled example models, campaigns and stacks into a new directory."),
     "rotations": (
         "_campaign",
         "Rotational receptances at a contact point from translational measurements, with noise amplification.",

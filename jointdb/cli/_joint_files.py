@@ -1,6 +1,6 @@
 """Joint files for the store commands: read what `jointdb identify` wrote, write what
 `jointdb couple --joint` reads, and merge the conditions a file records with those
-given as options (a conflict is refused unless ``--override-conditions``).
+given as options (a conflict is refused unless ``--force``).
 """
 
 from __future__ import annotations
@@ -92,16 +92,16 @@ def _differs(a: Any, b: Any) -> bool:
     return a != b
 
 
-def merge_conditions(path: Path, recorded: Any, given, override: bool):
+def merge_conditions(path: Path, recorded: Any, given, force: bool):
     """The conditions to catalogue: those the joint file records, completed by the options.
 
     An option that contradicts a value the file records is refused (one line
-    naming both values) unless ``override``; then the option wins.
+    naming both values) unless ``force``; then the option wins.
 
     Raises
     ------
     InputError
-        A conflict without ``override``, or invalid conditions in the file.
+        A conflict without ``force``, or invalid conditions in the file.
     """
     from jointdb.store import Conditions
 
@@ -126,9 +126,9 @@ def merge_conditions(path: Path, recorded: Any, given, override: bool):
         for key in sorted(set(a_map) & set(b_map)):
             if _differs(a_map[key], b_map[key]):
                 clash(f"{part}.{key}", option, a_map[key], b_map[key])
-    if conflicts and not override:
+    if conflicts and not force:
         raise InputError(f"{path} records {'; '.join(conflicts)}: leave the option out to keep the file's value, "
-                         "or add --override-conditions to store the option's value")
+                         "or add --force to store the option's value")
     return Conditions(
         materials=given.materials or stored.materials,
         preload_n=given.preload_n if given.preload_n is not None else stored.preload_n,
@@ -140,7 +140,7 @@ def merge_conditions(path: Path, recorded: Any, given, override: bool):
 
 def catalogue_inputs(joint_file: Path, given, *, joint_type: str | None = None, model_kind: str | None = None,
                      method: str | None = None, quality: dict[str, float] | None = None,
-                     author: str | None = None, override: bool = False) -> dict[str, Any]:
+                     author: str | None = None, force: bool = False) -> dict[str, Any]:
     """What ``jointdb catalogue`` (and the HTTP service's catalogue route) stores from a joint file.
 
     Reads the file, takes model kind, joint type, method, quality and conditions from it,
@@ -174,7 +174,7 @@ def catalogue_inputs(joint_file: Path, given, *, joint_type: str | None = None, 
         input_files=hashes,
         author=author or "",
     )
-    conditions = merge_conditions(joint_file, meta.get("conditions"), given, override)
+    conditions = merge_conditions(joint_file, meta.get("conditions"), given, force)
     return {"joint_type": check_joint_type(jtype), "frf": frf, "conditions": conditions,
             "model_kind": check_model_kind(kind, frf), "provenance": prov, "quality": q, "raw_frfs": raw}
 

@@ -178,15 +178,18 @@ def register(app: typer.Typer) -> None:
         parent: Annotated[Optional[int], typer.Option("--parent", help="Version this one corrects (default: latest).")] = None,
         author: Annotated[Optional[str], typer.Option("--author", help="Author (default: $JOINTDB_AUTHOR or login).")] = None,
         label: Annotated[Optional[str], typer.Option("--label", help="Also point this label at the new version.")] = None,
-        override: Annotated[bool, typer.Option("--override-conditions", help="Store the options' conditions even where the file records other values.")] = False,
+        force: Annotated[bool, typer.Option("--force", help="Store the options' conditions even where they contradict the values the file records.")] = False,
+        allow_identical: Annotated[bool, typer.Option("--allow-identical", help="Add a version even when the latest one already holds the same FRF and conditions.")] = False,
         db: DbOpt = None,
         blobs: BlobsOpt = None,
         as_json: JsonOpt = False,
     ) -> None:
         """Catalogue an identified joint FRF as a new immutable version.
 
-        Conditions given as options complete those recorded in the file; an option
-        that contradicts the file is refused unless --override-conditions.
+        The conditions the file records are kept; options fill in what it does not
+        record, and an option that contradicts the file is refused unless --force.
+        A file identical to the joint's latest version (same FRF and conditions) is
+        reported as "identical to vN" and nothing is written, unless --allow-identical.
         The version and its --label are written together or not at all.
         Example: jointdb catalogue joint.h5 --name T1-HSK63 --type tool-holder
         --material carbide --material steel --torque 40 --geometry diameter_m=0.02
@@ -196,7 +199,7 @@ def register(app: typer.Typer) -> None:
 
         args = catalogue_inputs(joint_file, _conditions(material, preload, torque, geometry, extra),
                                 joint_type=joint_type, model_kind=model_kind, method=method,
-                                quality=_pairs(quality, "--quality"), author=author, override=override)
+                                quality=_pairs(quality, "--quality"), author=author, force=force)
         # everything the library would refuse is refused before the database is opened (or created)
         check_name(name)
         if label is not None:
@@ -204,6 +207,19 @@ def register(app: typer.Typer) -> None:
         if parent is not None and parent < 1:
             raise InputError(f"--parent must be a version number >= 1, got {parent}")
         repo = _repo(db, blobs, create=True)
+        if not allow_identical:
+            from jointdb.app import identical_version
+
+            same = identical_version(repo, name, args["joint_type"], args["frf"], args["conditions"],
+                                     args["model_kind"])
+            if same is not None:
+                message(f"{same.name}: identical to v{same.version} (same FRF and conditions); nothing written "
+                        "(--allow-identical adds a version anyway)")
+                if label is not None:
+                    message(f"--label not applied; `jointdb joints label {same.name} {same.version} {label}` "
+                            "points it at that version")
+                emit(_version_detail(same), as_json=as_json, title=f"{same.name} v{same.version}")
+                return
         jv = repo.catalogue(name, parent=parent, author=author, label=label, **args)
         message(f"catalogued {jv.name} v{jv.version} ({jv.blob_sha256[:12]})")
         emit(_version_detail(jv), as_json=as_json, title=f"{jv.name} v{jv.version}")

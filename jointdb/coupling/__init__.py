@@ -1,13 +1,13 @@
 """Receptance coupling (RC) and joint identification (IRC).
 
-Forward coupling (theory.md §1):
+Forward coupling (docs/theory.md §1):
 
 - :func:`couple` — LM-FBS with rigid, massless (``H_J(ω)``) or inertial joints,
   any number of substructures and interfaces, only the requested outputs.
 - :class:`Interface`, :class:`JointSubstructure` — interface descriptions.
 - :func:`spring_damper_joint` — diagonal receptance ``1/(k + iωc)``.
 
-Identification (IRC, theory.md §2), each returning an :class:`IdentificationResult`
+Identification (IRC, docs/theory.md §2), each returning an :class:`IdentificationResult`
 (joint FRF + residual, condition number per line, flags):
 
 - :func:`identify_planar_joint` — planar spring–damper from two translational FRFs (§2a).
@@ -22,7 +22,7 @@ correlation, an :class:`OutputErrorResult`): :func:`fit_planar_joint`,
 :func:`fit_n_point_joints`, :func:`fit_joint_matrix`; weights from
 :func:`sigma_from_coherence` or :func:`mean_and_sigma_of_repeats`.
 
-Rotational receptances at a contact point (theory.md §3):
+Rotational receptances at a contact point (docs/theory.md §3):
 :func:`rotations_by_extension`, :func:`rotations_by_finite_difference`.
 
 Notes on the contract (api-contracts.md): outputs/inputs are

@@ -14,7 +14,7 @@ __all__ = ["equivalent_stiffness_damping", "fit_constant_kc", "KCFit"]
 
 
 def equivalent_stiffness_damping(joint_frf: FRF, full: bool = False) -> tuple[np.ndarray, np.ndarray]:
-    """Frequency-dependent ``k(ω)`` and ``c(ω)`` with ``k + iωc = 1/h`` (theory.md §2a).
+    """Frequency-dependent ``k(ω)`` and ``c(ω)`` with ``k + iωc = 1/h`` (docs/theory.md §2a).
 
     Parameters
     ----------

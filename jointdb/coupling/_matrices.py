@@ -1,7 +1,7 @@
 """Receptances of small discrete models from (K, M, C) matrices.
 
 Used for monolithic reference models, synthetic campaigns and benchmarks:
-``H(ω) = (K + iωC − ω²M)⁻¹`` (theory.md §0), batched over frequency.
+``H(ω) = (K + iωC − ω²M)⁻¹`` (docs/theory.md §0), batched over frequency.
 """
 
 from __future__ import annotations

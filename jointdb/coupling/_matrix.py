@@ -1,4 +1,4 @@
-"""Full joint matrix with inertia by inverse receptance coupling (theory.md §2c, thesis ch. 6).
+"""Full joint matrix with inertia by inverse receptance coupling (docs/theory.md §2c, thesis ch. 6).
 
 Computed block by block: a DOF measured on body A sees the joint only through
 A's contact DOFs, so ``H_IC = diag(H_{I_a C_a}, H_{I_b C_b})`` and
@@ -59,7 +59,7 @@ def identify_joint_matrix(
     symmetrize: bool = True,
     condition_limit: float = 1e8,
 ) -> IdentificationResult:
-    """Identify the full receptance matrix of a joint with inertia (theory.md §2c, thesis eq. 6.1–6.15).
+    """Identify the full receptance matrix of a joint with inertia (docs/theory.md §2c, thesis eq. 6.1–6.15).
 
     With the joint a body ``J`` rigidly attached to A's ``a_dofs`` and B's
     ``b_dofs`` (``C = [a_dofs; b_dofs]``, nc DOFs) and L measured DOFs ``I``

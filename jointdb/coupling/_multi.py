@@ -1,4 +1,4 @@
-"""Multi-DOF joint identification: n translational joints (theory.md §2b, thesis ch. 5),
+"""Multi-DOF joint identification: n translational joints (docs/theory.md §2b, thesis ch. 5),
 and the least-squares helpers shared with the full joint matrix (``_matrix``)."""
 
 from __future__ import annotations
@@ -81,7 +81,7 @@ def identify_n_point_joints(
     symmetrize: bool = True,
     condition_limit: float = 1e8,
 ) -> IdentificationResult:
-    """Identify n translational joints between two bodies (theory.md §2b, thesis eq. 5.1–5.10).
+    """Identify n translational joints between two bodies (docs/theory.md §2b, thesis eq. 5.1–5.10).
 
     ``G = h_II − H_Ia B⁻¹ H_aI`` with ``B = H_aa + H_bb + H_J``: with m
     measured internal DOFs of A and n connection DOFs (m ≥ n),

@@ -1,4 +1,4 @@
-"""Planar spring–damper joint from two translational assembly FRFs (theory.md §2a, thesis §4.2)."""
+"""Planar spring–damper joint from two translational assembly FRFs (docs/theory.md §2a, thesis §4.2)."""
 
 from __future__ import annotations
 
@@ -53,7 +53,7 @@ def identify_planar_joint(
     condition_limit: float = 1e8,
     consistency_tol: float = 1e-6,
 ) -> IdentificationResult:
-    """Identify a planar spring–damper joint ``diag(h_t, h_r)`` (theory.md §2a, thesis eq. 4.12–4.13).
+    """Identify a planar spring–damper joint ``diag(h_t, h_r)`` (docs/theory.md §2a, thesis eq. 4.12–4.13).
 
     Substructure A (e.g. machine + holder; only its contact-point block
     ``H_33`` incl. rotations is needed) is joined at point ``a_point`` to

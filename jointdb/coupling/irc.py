@@ -1,4 +1,4 @@
-"""Inverse receptance coupling (IRC): joint identification (theory.md §2).
+"""Inverse receptance coupling (IRC): joint identification (docs/theory.md §2).
 
 The three joint models live in private modules split along their seams:
 planar spring–damper (§2a, ``_planar``), n translational joints (§2b,

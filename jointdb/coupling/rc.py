@@ -1,6 +1,6 @@
 """Forward receptance coupling (RC): LM-FBS with flexible interfaces.
 
-theory.md §1a/§1b. Any number of substructures (FRF containers) are joined
+docs/theory.md §1a/§1b. Any number of substructures (FRF containers) are joined
 through any number of interfaces. An interface pairs contact DOFs of two
 substructures and is
 
@@ -39,7 +39,7 @@ __all__ = ["Interface", "JointSubstructure", "couple", "spring_damper_joint"]
 
 @dataclass(frozen=True)
 class JointSubstructure:
-    """A joint body with inertia (theory.md §1b).
+    """A joint body with inertia (docs/theory.md §1b).
 
     Parameters
     ----------
@@ -138,7 +138,7 @@ def spring_damper_joint(
     Returns
     -------
     FRF
-        Receptance ``(n_freq, n, n)``, diagonal, theory.md §1a.
+        Receptance ``(n_freq, n, n)``, diagonal, docs/theory.md §1a.
 
     Raises
     ------
@@ -244,7 +244,7 @@ def couple(
 ) -> FRF:
     """Assembled receptances of substructures joined through interfaces.
 
-    LM-FBS with flexible interfaces (theory.md §1a, §1b; thesis eq. 4.1–4.8):
+    LM-FBS with flexible interfaces (docs/theory.md §1a, §1b; thesis eq. 4.1–4.8):
 
         G_oi = H_oi − H_oC Bᵀ (B H_CC Bᵀ + H_J)⁻¹ B H_Ci
 

@@ -1,4 +1,4 @@
-"""Rotational receptances at a contact point from translational measurements (theory.md §3).
+"""Rotational receptances at a contact point from translational measurements (docs/theory.md §3).
 
 Two estimates of the 2×2 block ``H_33 = [[h, l], [n, p]]`` of substructure A
 at point 3 (``h = x/f``, ``l = x/M``, ``n = θ/f``, ``p = θ/M``):
@@ -37,7 +37,7 @@ def rotations_by_extension(
     translation: str = "x",
     rotation: str = "ry",
 ) -> tuple[FRF, np.ndarray]:
-    """Full 2×2 receptance of A at its contact point by the extension method (theory.md §3).
+    """Full 2×2 receptance of A at its contact point by the extension method (docs/theory.md §3).
 
     Parameters
     ----------
@@ -112,7 +112,7 @@ def rotations_by_finite_difference(
     translation: str = "x",
     rotation: str = "ry",
 ) -> FRF:
-    """2×2 receptance at ``point`` from translations at ``point`` and ``inner`` (theory.md §3).
+    """2×2 receptance at ``point`` from translations at ``point`` and ``inner`` (docs/theory.md §3).
 
     Parameters
     ----------

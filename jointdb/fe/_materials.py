@@ -55,13 +55,12 @@ class Material:
         return self.E / (2.0 * (1.0 + self.nu))
 
 
-#: Material library. Values from the reference thesis (line numbers of
-#: ``joint-dynamics-thesis.txt``): tool-holder steel 210 GPa / 7800 kg/m^3
-#: (§5, l. 5267-5271); carbide tools 550 GPa / 15630 kg/m^3 (§5, l. 5265);
-#: tungsten-carbide test shanks 405 GPa / 14800 kg/m^3 (§4.4, l. 4893);
-#: SCM440 tool steel 205 GPa / 7800 kg/m^3 (§4.4, l. 4905); simulation steel
-#: 200 GPa / 7850 kg/m^3 (§4.3, l. 4651); Al6061 68.9 GPa, ν 0.3, 2712 kg/m^3
-#: (§6, l. 9119); cast iron 89 GPa, ν 0.25, 7250 kg/m^3 (l. 3425).
+#: Material library. Values from the reference thesis (Mehrpouya 2014, see
+#: docs/theory.md, References): tool-holder steel 210 GPa / 7800 kg/m^3 and
+#: carbide tools 550 GPa / 15630 kg/m^3 (ch. 5); tungsten-carbide test shanks
+#: 405 GPa / 14800 kg/m^3 and SCM440 tool steel 205 GPa / 7800 kg/m^3 (§4.4);
+#: simulation steel 200 GPa / 7850 kg/m^3 (§4.3); Al6061 68.9 GPa, ν 0.3,
+#: 2712 kg/m^3 (ch. 6); cast iron 89 GPa, ν 0.25, 7250 kg/m^3 (§3.6).
 #: The thesis gives no Poisson's ratio for steel or carbide; 0.3 (steel) and
 #: 0.22 (cemented tungsten carbide, a typical handbook value) are assumed.
 MATERIALS: dict[str, Material] = {

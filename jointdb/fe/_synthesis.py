@@ -1,6 +1,6 @@
 """Natural modes and FRF synthesis (direct, batched over frequency; modal superposition).
 
-Harmonic convention ``x = X e^{iωt}`` (theory.md §0): the dynamic stiffness is
+Harmonic convention ``x = X e^{iωt}`` (docs/theory.md §0): the dynamic stiffness is
 ``D(ω) = K + i K_loss + iω C − ω² M`` and the receptance ``H = D⁻¹``.
 """
 

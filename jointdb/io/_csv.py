@@ -11,6 +11,12 @@ Columns after the frequency come in (Re, Im) pairs, one pair per entry
 ``H[output, input]``, outputs outer and inputs inner. The header names the
 response DOF, the excitation DOF, the quantity and the SI unit; the harmonic
 convention is ``x(t) = Re{X exp(+iωt)}``.
+
+Reading honours the units the header states, through the same unit table as
+UFF58 import (:mod:`jointdb.io._units`): ``freq [kHz]``, ``[mm/N]``,
+``[um/N]``, ``[g/N]``, ``[m/s^2/lbf]``, ``[rad/(N*m)]`` ... are converted to
+SI (Hz, m/N, m/s²/N, rad/(N·m)); a label it does not know is refused with the
+known list. A column without a ``[unit]`` is taken as SI.
 """
 
 from __future__ import annotations
@@ -25,8 +31,10 @@ import numpy as np
 from jointdb.errors import InputError, NotFoundError
 from jointdb.frf import FRF, Dof, Quantity
 from jointdb.io._atomic import atomic_path
+from jointdb.io import _units as U
 from jointdb.io._units import unit_label
 
+_FREQ_COL = re.compile(r"^\s*freq\w*\s*(?:\[(.*)\])?\s*$", re.I)
 _COL = re.compile(r"^\s*(Re|Im)\s+(\S+)/(\S+)\s+(receptance|mobility|accelerance)\s*(?:\[(.*)\])?\s*$", re.I)
 
 
@@ -90,9 +98,14 @@ def read_frf_csv(path: str | os.PathLike) -> FRF:
     header = rows[0]
     if not header or not header[0].strip().lower().startswith("freq"):
         raise InputError(f"{p}: the first column must be the frequency ('freq [Hz]'), got {header[:1]!r}")
+    fm = _FREQ_COL.match(header[0])
+    if not fm:
+        raise InputError(f"{p}: column 1 header {header[0]!r} is not 'freq [unit]'")
+    f_factor = U.frequency_factor(fm.group(1) or "", f"{p}: column 1")
     if len(header) < 3 or len(header) % 2 == 0:
         raise InputError(f"{p}: expected a frequency column and (Re, Im) column pairs, got {len(header)} columns")
     pairs: list[tuple[Dof, Dof]] = []
+    factors: list[float] = []
     quantities = set()
     for k in range(1, len(header), 2):
         cols = []
@@ -110,6 +123,10 @@ def read_frf_csv(path: str | os.PathLike) -> FRF:
             raise InputError(f"{p}: columns {header[k]!r} and {header[k + 1]!r} do not name the same entry")
         pairs.append((cols[0][0], cols[0][1]))
         quantities.add(cols[0][2])
+        units = {_COL.match(header[k]).group(5), _COL.match(header[k + 1]).group(5)}
+        if len(units) > 1:
+            raise InputError(f"{p}: columns {header[k]!r} and {header[k + 1]!r} state different units")
+        factors.append(_entry_factor(units.pop(), cols[0], f"{p}: column {k + 1} {header[k]!r}"))
     if len(quantities) > 1:
         raise InputError(f"{p}: columns mix quantities {sorted(quantities)}")
     outputs = list(dict.fromkeys(o for o, _ in pairs))
@@ -134,8 +151,24 @@ def read_frf_csv(path: str | os.PathLike) -> FRF:
             raise InputError(f"{p}: line {ln} holds a field that is not a number") from None
     if data.shape[0] == 0:
         raise InputError(f"{p}: no data rows")
-    values = (data[:, 1::2] + 1j * data[:, 2::2]).reshape(-1, len(outputs), len(inputs))
+    scale = np.asarray(factors)
+    with np.errstate(invalid="ignore", over="ignore"):  # a non-finite value is refused by FRF below, naming it
+        values = ((data[:, 1::2] + 1j * data[:, 2::2]) * scale).reshape(-1, len(outputs), len(inputs))
+        freq = data[:, 0] * f_factor
     try:
-        return FRF(data[:, 0], values, tuple(outputs), tuple(inputs), Quantity.parse(quantities.pop()))
+        return FRF(freq, values, tuple(outputs), tuple(inputs), Quantity.parse(quantities.pop()))
     except InputError as exc:
         raise InputError(f"{p}: {exc}") from None
+
+
+def _entry_factor(label: str | None, entry: tuple[Dof, Dof, str], where: str) -> float:
+    """Factor to SI of one entry's ``[response/excitation]`` unit (1 when absent)."""
+    if label is None or not label.strip():
+        return 1.0
+    split = U.split_frf_label(label)
+    if split is None:
+        raise InputError(f"{where}: unit [{label}] is not <response>/<excitation> (e.g. m/N, mm/N, m/s^2/N, "
+                         f"rad/(N*m)); excitation units known: {U.known_excitation_units()}")
+    out, inp, quantity = entry
+    q = Quantity.parse(quantity)
+    return U.response_factor(split[0], q, out, where) / U.excitation_factor(split[1], inp, where)

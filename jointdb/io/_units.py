@@ -58,6 +58,20 @@ _TIME_SUFFIXES = (("/sec^2", 2), ("/sec2", 2), ("/s^2", 2), ("/s2", 2), ("/s/s",
 _FREQ = {"hz": 1.0, "1/s": 1.0, "khz": 1e3, "rad/s": 1.0 / (2.0 * math.pi), "cpm": 1.0 / 60.0}
 
 
+_FREQ_NAMES = ("Hz", "1/s", "kHz", "rad/s", "cpm")
+
+
+def known_response_units() -> str:
+    """The response unit labels the parsers accept, as one line for error messages."""
+    return (f"lengths {', '.join(_LENGTH)}; angles {', '.join(_ANGLE)}; each optionally followed by /s or /s^2 "
+            "(velocity, acceleration); g for an acceleration")
+
+
+def known_excitation_units() -> str:
+    """The excitation unit labels the parsers accept, as one line for error messages."""
+    return f"forces {', '.join(('N', 'kN', 'mN', 'lbf', 'lb', 'kgf'))}; moments {', '.join(('N*m', 'N*mm', 'kN*m', 'lbf*in', 'lbf*ft'))}"
+
+
 def is_none_label(label: str | None) -> bool:
     """True for an absent unit label (``None``, empty, ``"NONE"``)."""
     return label is None or str(label).strip().lower() in _NONE_LABELS
@@ -112,9 +126,7 @@ def response_factor(label: str, quantity: Quantity, dof: Dof, where: str) -> flo
     elif s in _ANGLE:
         kind, factor = "rotational", _ANGLE[s]
     else:
-        raise InputError(
-            f"{where}: unknown response unit label {label!r}; expected e.g. m, mm/s, m/s^2, g, rad/s"
-        )
+        raise InputError(f"{where}: unknown response unit label {label!r}; known: {known_response_units()}")
     if (kind == "rotational") != dof.is_rotation:
         raise InputError(f"{where}: response unit {label!r} is {kind} but DOF {dof} is not")
     if power != quantity.power:
@@ -141,7 +153,7 @@ def excitation_factor(label: str, dof: Dof, where: str) -> float:
     elif s in _MOMENT:
         kind, factor = "a moment", _MOMENT[s]
     else:
-        raise InputError(f"{where}: unknown excitation unit label {label!r}; expected e.g. N, kN, lbf, N*m")
+        raise InputError(f"{where}: unknown excitation unit label {label!r}; known: {known_excitation_units()}")
     if (kind == "a moment") != dof.is_rotation:
         raise InputError(f"{where}: excitation unit {label!r} is {kind}, which does not fit DOF {dof}")
     return factor
@@ -179,5 +191,5 @@ def frequency_factor(label: str, where: str) -> float:
         return 1.0
     s = _norm(label)
     if s not in _FREQ:
-        raise InputError(f"{where}: abscissa unit {label!r} is not a frequency unit (Hz, kHz, rad/s, cpm)")
+        raise InputError(f"{where}: abscissa unit {label!r} is not a frequency unit; known: {', '.join(_FREQ_NAMES)}")
     return _FREQ[s]

@@ -1,6 +1,6 @@
 """The modal model: poles and residues, FRF re-synthesis, state space, modal mass.
 
-Receptance model (harmonic convention ``x = X e^{iωt}``, theory.md §0)::
+Receptance model (harmonic convention ``x = X e^{iωt}``, docs/theory.md §0)::
 
     H(ω) = Σ_r [ R_r / (iω − λ_r) + R_r* / (iω − λ_r*) ] + U + L / (iω)²
 

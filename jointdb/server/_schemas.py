@@ -52,7 +52,7 @@ class CatalogueIn(Strict):
     quality: dict[str, float] = Field(default_factory=dict)
     parent: Optional[int] = Field(None, ge=1)
     label: Optional[str] = Field(None, max_length=100)
-    override_conditions: bool = False
+    force: bool = Field(False, description="Store the given conditions even where they contradict the values the file records.")
 
 
 class LabelIn(Strict):

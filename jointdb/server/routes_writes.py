@@ -63,7 +63,7 @@ def catalogue_upload(r, body: CatalogueIn, owner: str):
         try:
             args = catalogue_inputs(path, body.conditions.to_conditions(), joint_type=body.joint_type,
                                     model_kind=body.model_kind, method=body.method, quality=dict(body.quality),
-                                    author=owner, override=body.override_conditions)
+                                    author=owner, force=body.force)
         except JointdbError as exc:  # name the upload, not the server's temporary directory
             raise type(exc)(str(exc).replace(f"{tmp}/", "")) from None
     return r.catalogue(name, parent=body.parent, author=owner, label=label, **args)
@@ -123,7 +123,7 @@ def _campaign_from_archive(archive: FsPath, into: FsPath) -> FsPath:
 def catalogue(body: CatalogueIn, r=Depends(repo), who=writer) -> dict[str, Any]:
     """Upload the HDF5 file of `jointdb identify` (base64) with conditions; the conditions
     recorded in the file are completed by those given (a contradiction is refused unless
-    ``override_conditions``). The version and its label are written together or not at all."""
+    ``force``). The version and its label are written together or not at all."""
     return version_json(catalogue_upload(r, body, who.name))
 
 

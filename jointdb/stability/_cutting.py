@@ -104,7 +104,7 @@ def mean_directional_matrix(cut: MillingCut) -> np.ndarray:
     """Tooth-period mean ``H̄ = (N/2π) ∫_{φst}^{φex} H dφ`` (N/m²), shape (2, 2).
 
     Equals ``−(N K_t/4π)[α₀]`` of Altintas & Budak (1995); for slotting
-    ``H̄_xx = N K_r/4`` (theory.md §5).
+    ``H̄_xx = N K_r/4`` (docs/theory.md §5).
 
     Parameters
     ----------

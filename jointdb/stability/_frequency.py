@@ -1,6 +1,6 @@
 """Frequency-domain stability: turning (Tlusty) and milling zero-order approximation.
 
-Both work straight from a measured or predicted FRF (theory.md §5).
+Both work straight from a measured or predicted FRF (docs/theory.md §5).
 """
 
 from __future__ import annotations
@@ -24,7 +24,7 @@ def _receptance(frf: FRF) -> FRF:
 
 
 def oriented_frf(frf: FRF, orientation: Sequence[float] | np.ndarray | None = None) -> np.ndarray:
-    """Oriented receptance ``G_o(ω) = Σ_ij μ_ij H_ij(ω)`` (theory.md §5), shape ``(n_freq,)``.
+    """Oriented receptance ``G_o(ω) = Σ_ij μ_ij H_ij(ω)`` (docs/theory.md §5), shape ``(n_freq,)``.
 
     Parameters
     ----------
@@ -90,7 +90,7 @@ def tlusty_limit(frf: FRF, kf: float, orientation=None) -> tuple[float, float]:
 
     Returns ``(depth_m, chatter_freq_hz)``; the minimum of ``Re G_o`` is refined by
     a parabola through the three lowest lines. For one mode this is
-    ``2kζ(1+ζ)/K_f`` at ``f_n√(1+2ζ)`` (theory.md §5).
+    ``2kζ(1+ζ)/K_f`` at ``f_n√(1+2ζ)`` (docs/theory.md §5).
 
     Parameters
     ----------

@@ -129,7 +129,7 @@ def lobes_from_transfer(
     The characteristic equation ``1 + a (1 − e^{−iωT}) g(ω) = 0`` (turning:
     ``g = K_f G_o``; milling ZOA: ``g`` an eigenvalue of ``H̄ Φ(iω)``) has, for real
     depth ``a``, the solution ``a = −1 / (2 Re g)`` on lines with ``Re g < 0`` and
-    ``ωT = ε + 2kπ`` with ``ε = (2 arg g − π) mod 2π`` (theory.md §5; equivalent to
+    ``ωT = ε + 2kπ`` with ``ε = (2 arg g − π) mod 2π`` (docs/theory.md §5; equivalent to
     Altintas's ``ε = 3π + 2ψ`` and ``ε = π − 2 tan⁻¹κ``). Spindle speed
     ``n = 60 / (N T)`` rpm.
     """

@@ -156,7 +156,7 @@ def _step_matrices(sys: SDSystem, depth: float, h: np.ndarray, dt: float):
 
 
 def monodromy(sys: SDSystem, spindle_speed_rpm: float, depth: float, n_intervals: int = 40) -> np.ndarray:
-    """Floquet transition matrix over one tooth period (Insperger & Stépán 2004; theory.md §5).
+    """Floquet transition matrix over one tooth period (Insperger & Stépán 2004; docs/theory.md §5).
 
     Parameters
     ----------

@@ -1,4 +1,4 @@
-"""Three-component receptance coupling chain (theory.md §4, §1a).
+"""Three-component receptance coupling chain (docs/theory.md §4, §1a).
 
 Each step joins a substructure A (internal point i, contact point c) to the
 driving-point receptance ``G_cc`` of everything behind it, through a massless
@@ -34,7 +34,7 @@ def attach(h_ii, h_ic, h_ci, h_cc, g_cc_behind, h_joint=None) -> np.ndarray:
     Returns
     -------
     ndarray ``(n_freq, n, n)``
-        ``G_ii = H_ii − H_ic (H_cc + G_cc + H_J)⁻¹ H_ci`` (theory.md §1a, §4).
+        ``G_ii = H_ii − H_ic (H_cc + G_cc + H_J)⁻¹ H_ci`` (docs/theory.md §1a, §4).
 
     Raises
     ------
@@ -55,7 +55,7 @@ def attach(h_ii, h_ic, h_ci, h_cc, g_cc_behind, h_joint=None) -> np.ndarray:
 
 
 def tool_tip_chain(tool, holder, spindle, joint_th=None, joint_hs=None) -> np.ndarray:
-    """Tool-tip 2×2 receptance of tool + holder + spindle (theory.md §4).
+    """Tool-tip 2×2 receptance of tool + holder + spindle (docs/theory.md §4).
 
     Parameters
     ----------

@@ -120,7 +120,7 @@ def holder_model(spec: StackSpec, max_element_length: float = 0.005) -> BeamMode
 
     Points: ``nose`` (node 3, at the holder face), ``base`` (node 4, spindle side).
     Over the insertion length each section is the composite of
-    :func:`composite_material` (Schmitz & Duncan 2005; theory.md §4).
+    :func:`composite_material` (Schmitz & Duncan 2005; docs/theory.md §4).
 
     Parameters
     ----------

@@ -1,4 +1,4 @@
-"""Tool-tip FRF prediction of a stack from its parts and resolved joints (theory.md §4).
+"""Tool-tip FRF prediction of a stack from its parts and resolved joints (docs/theory.md §4).
 
 Pure numerics: the joints of catalogued / queried interfaces arrive already
 resolved as FRFs (the application layer, :mod:`jointdb.app`, fetches them from
@@ -233,7 +233,7 @@ def _joint_planes(name: str, spec: StackSpec, resolved: Mapping[str, FRF], f: np
 
 
 def predict_tool_tip(spec: StackSpec, resolved_joints: Mapping[str, FRF] | None = None, freq=None) -> Prediction:
-    """Predict the tool-tip receptance of a stack (three-component RC, theory.md §4).
+    """Predict the tool-tip receptance of a stack (three-component RC, docs/theory.md §4).
 
     Parameters
     ----------

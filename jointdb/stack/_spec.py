@@ -128,7 +128,7 @@ class MeasuredSpindle:
         relative to it by the application layer).
     node
         Node number of the connection point in that file. The x plane needs
-        ``node x`` and ``node ry`` (e.g. from the extension method, theory §3);
+        ``node x`` and ``node ry`` (e.g. from the extension method, docs/theory.md §3);
         if ``node y`` and ``node rx`` are there too, the y plane is predicted
         from them, otherwise it is taken equal to the x plane (axisymmetric).
     frf

@@ -36,7 +36,7 @@ Weights ``w_i ∝ 1/d_i`` (exact matches, ``d = 0``, share all the weight); the
 neighbours' receptances are inverted to dynamic stiffness ``Z_i = H_i⁻¹`` (per
 line, batched), averaged ``Z = Σ w_i Z_i`` and inverted back. For spring–damper
 joints ``Z = k + iωc``, so this interpolates stiffness and damping linearly
-(theory.md §1a), which interpolating receptances would not.
+(docs/theory.md §1a), which interpolating receptances would not.
 """
 
 from __future__ import annotations

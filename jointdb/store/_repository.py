@@ -1,4 +1,4 @@
-"""The versioned joint repository (design.md, "Versioned records")."""
+"""The versioned joint repository: immutable joint versions, labels, states and an audit log."""
 
 from __future__ import annotations
 

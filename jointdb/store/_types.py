@@ -2,7 +2,7 @@
 
 Everything here is a small frozen dataclass validated on construction; the
 validation is what guarantees that bad input never reaches the database
-(design.md, "Errors": bad input never writes anything).
+(bad input never writes anything).
 """
 
 from __future__ import annotations
@@ -149,7 +149,7 @@ def _finite_nonneg(value: Any, what: str) -> float | None:
 
 @dataclass(frozen=True)
 class Conditions:
-    """The conditions a joint was identified under (design.md, "Joint record").
+    """The conditions a joint was identified under (part of every joint record).
 
     Parameters
     ----------
@@ -258,13 +258,13 @@ class Provenance:
 
 
 # --------------------------------------------------------------------------- model kinds
-#: Joint model kinds (design.md "Joint record"; theory.md §1a, §2a-2c) and the
+#: Joint model kinds (docs/theory.md §1a, §2a-2c) and the
 #: DOF structure each requires of the joint FRF (always a square receptance with
 #: outputs == inputs):
 #:
-#: - ``spring-damper-planar``: DOFs with directions ``x`` and ``ry`` only (theory §2a);
-#: - ``n-point-translational``: translational DOFs only (theory §2b, one spring per point);
-#: - ``full-matrix``: exactly two nodes with the same direction set each (theory §2c).
+#: - ``spring-damper-planar``: DOFs with directions ``x`` and ``ry`` only (docs/theory.md §2a);
+#: - ``n-point-translational``: translational DOFs only (docs/theory.md §2b, one spring per point);
+#: - ``full-matrix``: exactly two nodes with the same direction set each (docs/theory.md §2c).
 MODEL_KINDS: tuple[str, ...] = ("spring-damper-planar", "n-point-translational", "full-matrix")
 
 

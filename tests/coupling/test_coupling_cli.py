@@ -76,7 +76,7 @@ BAD = [
     ("missing file", lambda d: d["substructures"]["tool"].update(model="nope.json"),
      "substructures.tool.model: file 'nope.json' not found"),
     ("unknown substructure", lambda d: d["interface"].update(a="holdr"), "interface.a: unknown substructure 'holdr'"),
-    ("unknown field", lambda d: d.update(measurment=["x.uff"]), "unknown field(s) measurment"),
+    ("unknown field", lambda d: d.update(measurment=["x.uff"]), "measurment: unknown field"),
     ("bad joint model", lambda d: d.update(joint_model="magic"), "joint_model: must be one of"),
     ("bad dof", lambda d: d["interface"].update(b_dofs=["2x", "2q"]), "interface.b_dofs"),
     ("missing dof in file", lambda d: d["substructures"]["holder"].update(dofs=["3x", "3ry", "9x"]),

@@ -1,4 +1,4 @@
-"""Forward coupling of jointdb.fe beam models against monolithic FE models (theory.md §1)."""
+"""Forward coupling of jointdb.fe beam models against monolithic FE models (docs/theory.md §1)."""
 
 import numpy as np
 import pytest

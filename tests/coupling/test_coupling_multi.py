@@ -1,4 +1,4 @@
-"""n-point (theory.md §2b, thesis §5.2) and full-matrix (§2c, thesis §6.2) joint identification."""
+"""n-point (docs/theory.md §2b, thesis §5.2) and full-matrix (§2c, thesis §6.2) joint identification."""
 
 import numpy as np
 import pytest

@@ -1,4 +1,4 @@
-"""Planar spring–damper joint identification (theory.md §2a; thesis §4.3 first simulation, Table 4.1)."""
+"""Planar spring–damper joint identification (docs/theory.md §2a; thesis §4.3 first simulation, Table 4.1)."""
 
 import numpy as np
 import pytest

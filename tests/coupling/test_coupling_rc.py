@@ -1,4 +1,4 @@
-"""Forward coupling (theory.md §1) against monolithic spring–mass models."""
+"""Forward coupling (docs/theory.md §1) against monolithic spring–mass models."""
 
 import numpy as np
 import pytest

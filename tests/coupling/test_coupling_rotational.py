@@ -1,4 +1,4 @@
-"""Rotational receptances from translational tests (theory.md §3): extension method vs finite difference."""
+"""Rotational receptances from translational tests (docs/theory.md §3): extension method vs finite difference."""
 
 import numpy as np
 import pytest

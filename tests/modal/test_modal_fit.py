@@ -17,7 +17,7 @@ ZETA_TOL_NOISE_FREE = 1e-4
 RESIDUE_TOL_NOISE_FREE = 1e-4
 FREQ_TOL_NOISY = 5e-3  # 0.5 % with 1 % (of peak) complex Gaussian noise
 ZETA_TOL_NOISY = 0.15  # 15 %
-REAL_FILE = Path("/work/shared/data/measured-accelerance-3refs.uff")
+REAL_FILE = Path(__file__).resolve().parents[1] / "data" / "measured-accelerance-3refs.uff"
 
 
 def three_dof_system():

@@ -167,7 +167,7 @@ def run_load(server, clients: int, writes: int, tmp: Path, tolerate_errors: bool
                 name = f"L{i % 4}-{j % 5}"  # 20 joints shared by the clients: concurrent new versions
                 r = c.post("/api/v1/catalogue", json={**body, "name": name,
                                                       "conditions": {"torque_nm": 10.0 + i + j / 100},
-                                                      "override_conditions": True})
+                                                      "force": True})
                 if r.status_code != 201:
                     if tolerate_errors:
                         failed.append(r.status_code)

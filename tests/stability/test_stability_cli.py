@@ -11,7 +11,7 @@ from jointdb.cli import app
 from jointdb.io import write_frf_hdf5, write_uff58
 from jointdb.modal import ModalModel
 
-REAL_FILE = Path("/work/shared/data/measured-accelerance-3refs.uff")
+REAL_FILE = Path(__file__).resolve().parents[1] / "data" / "measured-accelerance-3refs.uff"
 runner = CliRunner()
 
 

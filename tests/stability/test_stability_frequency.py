@@ -1,4 +1,4 @@
-"""Turning (Tlusty) and milling zero-order (Altintas–Budak) lobes against known answers (theory.md §5)."""
+"""Turning (Tlusty) and milling zero-order (Altintas–Budak) lobes against known answers (docs/theory.md §5)."""
 
 import numpy as np
 import pytest

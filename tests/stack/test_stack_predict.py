@@ -1,4 +1,4 @@
-"""Tool-tip prediction (theory.md §4) against single FE models of the whole stack."""
+"""Tool-tip prediction (docs/theory.md §4) against single FE models of the whole stack."""
 
 from __future__ import annotations
 

@@ -35,7 +35,7 @@ def _spec(gauge, kt, kr, ct, cr, eta, holder_spindle=None):
 def test_tip_receptance_of_a_passive_stack_is_passive(gauge, kt, kr, ct, cr, eta):
     pred = predict_tool_tip(_spec(gauge, kt, kr, ct, cr, eta), freq=FREQ)
     h = pred.tip.entry("1x", "1x")
-    assert np.all(h.imag <= 1e-9 * np.abs(h)), "a passive driving-point receptance has Im H <= 0 (theory §0)"
+    assert np.all(h.imag <= 1e-9 * np.abs(h)), "a passive driving-point receptance has Im H <= 0 (docs/theory.md §0)"
 
 
 def test_very_stiff_joints_approach_the_rigid_prediction():

@@ -10,7 +10,7 @@ from jointdb.frf import FRF
 
 
 def spring_joint(k=(2e6, 8e4), c=(100.0, 80.0), dofs=("3x", "3ry"), freq=None, n=64):
-    """Diagonal spring-damper joint receptance diag(1/(k + iωc)) (theory.md §1a)."""
+    """Diagonal spring-damper joint receptance diag(1/(k + iωc)) (docs/theory.md §1a)."""
     f = np.linspace(10.0, 2000.0, n) if freq is None else np.asarray(freq, float)
     w = 2 * np.pi * f
     h = np.zeros((f.size, len(dofs), len(dofs)), complex)

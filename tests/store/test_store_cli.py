@@ -145,9 +145,9 @@ def test_exchange_file_from_identify_is_read_with_its_metadata(db, tmp_path):
     })
     r = run("catalogue", path, "--name", "TH-id", "--torque", 35, "--db", db, ok=False)
     assert isinstance(r.exception, InputError)  # the option contradicts the file: refused, naming both values
-    assert "torque_nm = 30 but --torque gives 35" in str(r.exception) and "--override-conditions" in str(r.exception)
+    assert "torque_nm = 30 but --torque gives 35" in str(r.exception) and "--force" in str(r.exception)
     assert run_json("joints", "list", "--db", db) == []
-    out = run_json("catalogue", path, "--name", "TH-id", "--torque", 35, "--override-conditions", "--db", db)
+    out = run_json("catalogue", path, "--name", "TH-id", "--torque", 35, "--force", "--db", db)
     assert out["joint_type"] == "tool-holder" and out["model_kind"] == "spring-damper-planar"
     assert out["torque_nm"] == 35.0  # the option overrides the file when asked
     assert out["materials"] == "steel + tungsten-carbide" and json.loads(out["geometry"]) == {"d_m": 0.012}
