@@ -20,7 +20,7 @@ def register(app: typer.Typer) -> None:
     ) -> None:
         """Copy the bundled example models, campaigns and stacks into a new directory.
 
-        DIR/models (beam models), DIR/campaigns (six tool-holder test campaigns with their
+        DIR/models (beam models), DIR/campaigns (the bundled tool-holder and holder-spindle test campaigns with their
         measured FRFs), DIR/stacks (a tool / holder / spindle stack). Works from any
         installation (the files are package data).
         Example: jointdb examples ex ; jointdb identify ex/campaigns/th-er32-steel-040nm/campaign.json --out joint.h5

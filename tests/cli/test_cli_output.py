@@ -231,7 +231,7 @@ def test_library_code_does_not_print():
     bad = []
     for p in root.rglob("*.py"):
         rel = p.relative_to(root).as_posix()
-        if rel.startswith(("cli/", "migrations/")) or rel in ("_output.py", "__main__.py"):
+        if rel.startswith(("cli/", "migrations/")) or rel == "_output.py" or rel.endswith("__main__.py"):
             continue
         for n, line in enumerate(p.read_text(encoding="utf-8").splitlines(), 1):
             code = line.split("#")[0]
