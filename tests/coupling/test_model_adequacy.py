@@ -44,8 +44,9 @@ def _frequency_dependent_assembly(mc, slope):
         v[:, 1, 1] = 1 / (joint.kr * s + 1j * w * joint.cr)
         a = [Dof(3, "x"), Dof(3, "ry")]
         j = FRF(f, v, a, a, "receptance")
-        return couple({"holder": holder, "tool": tool}, [Interface("holder", a, "tool", [Dof(2, "x"), Dof(2, "ry")], j)],
-                      [("tool", Dof(1, "x"))], [("tool", Dof.parse(d)) for d in inputs])
+        interface = Interface("holder", a, "tool", [Dof(2, "x"), Dof(2, "ry")], j)
+        return couple({"holder": holder, "tool": tool}, [interface], [("tool", Dof(1, "x"))],
+                      [("tool", Dof.parse(d)) for d in inputs])
 
     return assembly
 
