@@ -325,22 +325,28 @@ OUTSIDE = [
 REFERENCE_HS = "hs-hsk-a63-18kn"  # the reference machine of the tool–holder campaigns
 
 
+def _adequacy(out) -> dict:
+    """Which joint the identification kept (constant output-error k, c or the per-line IRC joint) and why."""
+    a = (out.identified.quality or {}).get("model_adequacy") or {}
+    return {"kept": a.get("catalogued_joint"), "misfit_to_noise": a.get("misfit_to_noise")}
+
+
 def build_catalogue(workdir: Path, repo, say=print) -> list[dict]:
     """Write and catalogue every campaign (holder–spindle first: the tool–holder campaigns' A needs the
-    reference machine's taper joint). Returns one row per campaign (joint, constant k, residual)."""
+    reference machine's taper joint). Returns one row per campaign (joint, constant k, residual, joint kept)."""
     from jointdb import app
 
     rows = []
     for case in HS_CAMPAIGNS:
         out = app.catalogue_campaign(repo, write_hs_campaign(workdir / case.name, case))
-        rows.append(out.row() | {"type": "holder-spindle", "case": case.name})
+        rows.append(out.row() | {"type": "holder-spindle", "case": case.name} | _adequacy(out))
         say(f"  catalogued {rows[-1]['joint']}: k_x={rows[-1]['k_x_n_per_m']:.3e} N/m, "
             f"k_θ={rows[-1]['k_theta_nm_per_rad']:.3e} N·m/rad")
     ref = repo.get(REFERENCE_HS)
     hs_joint = repo.load_frf(ref)
     for case in TH_CAMPAIGNS:
         out = app.catalogue_campaign(repo, write_th_campaign(workdir / case.name, case, hs_joint))
-        rows.append(out.row() | {"type": "tool-holder", "case": case.name})
+        rows.append(out.row() | {"type": "tool-holder", "case": case.name} | _adequacy(out))
         say(f"  catalogued {rows[-1]['joint']}: k_x={rows[-1]['k_x_n_per_m']:.3e} N/m, "
             f"k_θ={rows[-1]['k_theta_nm_per_rad']:.3e} N·m/rad")
     return rows

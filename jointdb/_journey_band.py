@@ -15,10 +15,11 @@ def journey_bands(spec, resolutions, grid, say: Callable[[str], None]):
     sampled tips (ZOA per sample).
     """
     from jointdb.stability._band import milling_lobes_band
-    from jointdb.stack._band import tip_band
+    from jointdb.stack._band import sampleable_uncertainties, tip_band
 
-    unc = {n: r.uncertainty for n, r in resolutions.items()
-           if getattr(r, "uncertainty", None) is not None and r.kind in ("catalogued", "query")}
+    unc, notes = sampleable_uncertainties(resolutions)
+    for note in notes:
+        say(f"      note: {note}")
     if not unc:
         say("      no band: the chosen joints carry no parameter covariance")
         return None, None, {}

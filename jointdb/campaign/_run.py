@@ -160,14 +160,29 @@ def identify_campaign(c: Campaign) -> IdentifyOutcome:
         kc = fit_constant_kc(res.joint, band, mask=~res.unreliable)
     oe = None
     irc_reconstructed = None
+    adequacy = None
     if method == "output-error":
         oe = fit_output_error(c, measured, subs, res, kc)
+        kc_irc = kc
         if kc is not None and oe.log_parameters and oe.model.order == 0:
             kc = kc_of_fit(oe, res.joint, kc)
         irc_reconstructed = _couple_like(c, subs, _joint_for_couple(res), measured)
+        irc_res = res
         res = joint_from_fit(c, oe, freq, res)
     joint = _joint_for_couple(res)
     reconstructed = _couple_like(c, subs, joint, measured)
+    if oe is not None and oe.log_parameters:  # spring–dampers: is constant k, c adequate? (else keep per-line)
+        from jointdb.campaign._adequacy import assess_constant_model
+
+        fb = o.get("fit_band")
+        use = np.ones(freq.size, bool) if not fb else (freq >= float(fb[0])) & (freq <= float(fb[1]))
+        adequacy = assess_constant_model(measured.values[use], reconstructed.values[use],
+                                         entry_peaks(reconstructed, measured), entry_peaks(irc_reconstructed, measured))
+        if adequacy.keep_per_line:
+            from dataclasses import replace as _replace
+
+            res = _replace(irc_res, settings={**irc_res.settings, "method": "irc (constant k, c rejected)"})
+            joint, reconstructed, kc = _joint_for_couple(res), irc_reconstructed, kc_irc  # kc: of the kept joint
     rigid = _couple_like(c, subs, None, measured)
     validation = None
     if c.validation is not None:
@@ -189,9 +204,14 @@ def identify_campaign(c: Campaign) -> IdentifyOutcome:
     quality: dict[str, Any] = {"method": method, "peaks": peaks}
     if irc_reconstructed is not None:
         quality["peaks_irc_joint"] = entry_peaks(irc_reconstructed, measured)
-    quality["verdict"] = verdict(oe, peaks, _mean_rel(reconstructed, measured),
-                                 None if validation is None else validation["peaks"],
-                                 None if validation is None else validation["identified_joint_error_mean"])
+    lines = []
+    if adequacy is not None:
+        quality["model_adequacy"] = adequacy.as_dict()
+        lines = [adequacy.verdict()] if adequacy.verdict() else []
+    kept_fit = None if adequacy is not None and adequacy.keep_per_line else oe
+    quality["verdict"] = lines + verdict(kept_fit, peaks, _mean_rel(reconstructed, measured),
+                                         None if validation is None else validation["peaks"],
+                                         None if validation is None else validation["identified_joint_error_mean"])
     return IdentifyOutcome(c, res, measured, reconstructed, rigid, kc, validation, oe, quality)
 
 
@@ -201,6 +221,9 @@ def joint_attrs(out: IdentifyOutcome) -> dict:
 
     rep = to_jsonable(out.report())
     method = (out.quality or {}).get("method", "irc")
+    per_line = _per_line_kept(out)
+    if per_line:
+        method = "irc"
     attrs = {
         "kind": "joint",
         "joint_model": out.result.model,
@@ -221,7 +244,15 @@ def joint_attrs(out: IdentifyOutcome) -> dict:
         from jointdb.campaign._oe import uncertainty_record
 
         attrs["uncertainty"] = uncertainty_record(out.output_error)
+        if per_line:  # information only: the catalogued FRF is the per-line joint, not this constant one
+            attrs["uncertainty"]["describes_catalogued_joint"] = False
+            attrs["provenance"]["method"] += " (output-error constant k, c rejected by the adequacy check)"
     return attrs
+
+
+def _per_line_kept(out: IdentifyOutcome) -> bool:
+    """True when the output-error constant joint was rejected and the per-line IRC joint is catalogued."""
+    return ((out.quality or {}).get("model_adequacy") or {}).get("catalogued_joint") == "per-line"
 
 
 def load_joint_file(path: Path) -> tuple[FRF, str]:

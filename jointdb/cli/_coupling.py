@@ -86,8 +86,10 @@ def register(app: typer.Typer) -> None:
                     flat[f"c {row['dof']} [{'N·m·s/rad' if rot else 'N·s/m'}]"] = row["c"]
                 flat[f"{'IRC ' if oe else ''}fit error {row['dof']}"] = row["error"]
             if oe is not None and oe["theta_is_log"]:
+                kept = (rep.get("model_adequacy") or {}).get("catalogued_joint", "constant")
+                tag = "" if kept == "constant" else " (constant fit, not kept)"
                 for row in oe["parameters"]:
-                    flat[row["parameter"]] = f"{row['value']:.6g} ± {row['std_error']:.2g}"
+                    flat[row["parameter"] + tag] = f"{row['value']:.6g} ± {row['std_error']:.2g}"
             for k, v in rep.get("validation", {}).items():
                 if not isinstance(v, (dict, list)):
                     flat[f"validation {k}"] = v

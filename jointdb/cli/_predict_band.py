@@ -10,8 +10,11 @@ def band_for(result, n: int = 200, seed: int = 0):
     from jointdb.errors import InputError
     from jointdb.stack._band import tip_band
 
-    unc = {name: r.uncertainty for name, r in result.joints.items()
-           if getattr(r, "uncertainty", None) is not None and r.kind in ("catalogued", "query")}
+    from jointdb.stack._band import sampleable_uncertainties
+
+    unc, notes = sampleable_uncertainties(result.joints)
+    for note in notes:
+        message(f"note: {note}")
     if not unc:
         return None
     resolved = {name: r.frf for name, r in result.joints.items() if r.frf is not None}

@@ -21,7 +21,7 @@ from jointdb.stack._parts import NODES
 from jointdb.stack._predict import _joint_planes, _planes, prediction_grid, stack_parts
 from jointdb.stack._spec import INTERFACE_NAMES, MeasuredSpindle, StackSpec
 
-__all__ = ["TipBand", "tip_band"]
+__all__ = ["TipBand", "tip_band", "sampleable_uncertainties"]
 
 QUANTILES = (0.05, 0.5, 0.95)
 
@@ -61,8 +61,36 @@ class TipBand:
         return [FRF(self.freq, h[:, None, None], [dof], [dof], "receptance") for h in self.tips[direction]]
 
 
+def describes_catalogued_joint(record: Mapping) -> bool:
+    """False for a record kept as information only: the catalogued joint is the per-line IRC joint because
+    constant k, c could not represent it, so sampling the constant model would describe another joint."""
+    return record.get("describes_catalogued_joint", True) is not False
+
+
+def sampleable_uncertainties(resolutions: Mapping) -> tuple[dict, list[str]]:
+    """``(interface → uncertainty record, notes)`` of the resolved joints a band may sample.
+
+    ``resolutions``: interface → :class:`jointdb.app.JointResolution`. Joints whose record does not
+    describe their catalogued FRF keep their nominal FRF in the band, with a note saying so.
+    """
+    unc, notes = {}, []
+    for name, r in resolutions.items():
+        rec = getattr(r, "uncertainty", None)
+        if rec is None or r.kind not in ("catalogued", "query"):
+            continue
+        if describes_catalogued_joint(rec):
+            unc[name] = rec
+        else:
+            notes.append(f"{name}: joint {r.name}@{r.version} is not sampled in the band — constant k, c could not "
+                         "represent it, so its catalogued FRF is the per-line joint and carries no covariance")
+    return unc, notes
+
+
 def _sampled_planes(record: Mapping, f: np.ndarray, n: int, seed: int, what: str) -> np.ndarray:
     """(n, nf, 2, 2) joint receptance samples over (x, θ) from a spring–damper record with x and ry DOFs."""
+    if not describes_catalogued_joint(record):
+        raise InputError(f"{what}: the joint's covariance belongs to a constant k, c that was rejected for it "
+                         "(its catalogued FRF is the per-line joint); it cannot be sampled")
     dirs = [Dof.parse(d).direction for d in record.get("dofs", [])]
     if sorted(dirs) != ["ry", "x"]:
         raise InputError(f"{what}: the joint's uncertainty is over {dirs}; a planar joint over x and ry is needed")
