@@ -240,7 +240,9 @@ def run_main_job(
         result.files += [out / "tip.uff", out / "tip.csv"]
         from jointdb._journey_band import journey_bands
 
-        tip_band, lobe_band, band_summary = journey_bands(spec, resolutions, grid, say)
+        # the lobes (step 4) use 4x finer lines; their band is sampled on those lines too
+        fine = np.linspace(grid[0], grid[-1], 4 * (grid.size - 1) + 1)
+        tip_band, lobe_band, band_summary = journey_bands(spec, resolutions, grid, say, lobe_grid=fine)
         result.files.append(save_tip_comparison(out / "tip-vs-rigid.png", pred, title=spec.name, extra=extra,
                                                 label=joints_legend(resolutions), band=tip_band))
 
@@ -254,13 +256,13 @@ def run_main_job(
         # more speeds near the envelope's minima and pockets (equal to the plain grid at its speeds)
         # the lobes from the same prediction on 4x finer lines: ZOA draws each lobe through the FRF's lines,
         # and at high speeds (low lobe numbers) 20 Hz lines are far apart in speed
-        fine = np.linspace(grid[0], grid[-1], 4 * (grid.size - 1) + 1)
         lob = predict_tool_tip(spec, {n: r.frf for n, r in resolutions.items() if r.frf is not None}, fine)
         lobes = refine_lobes(lambda s: milling_lobes_zoa(lob.tip, cut, cross_terms=cross, spindle_speed_rpm=s),
                              speeds)
         lobes_rigid = refine_lobes(
             lambda s: milling_lobes_zoa(lob.rigid, cut, cross_terms=cross, spindle_speed_rpm=s), speeds)
-        lobe_band = lobe_band(cut, speeds) if lobe_band is not None else None
+        # on the nominal lobes' (refined) speeds, so that band and nominal limit are computed alike
+        lobe_band = lobe_band(cut, lobes.spindle_speed_rpm) if lobe_band is not None else None
         best = int(np.nanargmax(np.where(np.isfinite(lobes.depth_m), lobes.depth_m, -np.inf)))
         result.lobes = {
             "method": lobes.method,

@@ -8,11 +8,13 @@ N_TIP_SAMPLES = 200
 N_LOBE_SAMPLES = 100
 
 
-def journey_bands(spec, resolutions, grid, say: Callable[[str], None]):
+def journey_bands(spec, resolutions, grid, say: Callable[[str], None], lobe_grid=None):
     """``(TipBand | None, make_lobe_band | None, summary dict)`` for the stack's queried/pinned joints.
 
-    ``make_lobe_band(cut, speeds)`` computes the lobe band from the first ``N_LOBE_SAMPLES``
-    sampled tips (ZOA per sample).
+    The tip band is sampled on ``grid`` (the nominal prediction's lines).
+    ``make_lobe_band(cut, speeds)`` computes the lobe band from ``N_LOBE_SAMPLES`` sampled
+    tips (ZOA per sample) on ``lobe_grid`` (default ``grid``): give it the lines and speeds the
+    nominal lobes use, so that band and nominal limit are computed alike.
     """
     from jointdb.stability._band import milling_lobes_band
     from jointdb.stack._band import sampleable_uncertainties, tip_band
@@ -32,7 +34,9 @@ def journey_bands(spec, resolutions, grid, say: Callable[[str], None]):
     summary = {"tip": b.summary()}
 
     def make(cut, speeds):
-        xs, ys = b.tip_frfs("x")[:N_LOBE_SAMPLES], b.tip_frfs("y")[:N_LOBE_SAMPLES]
+        lb = b if lobe_grid is None else tip_band(
+            spec, {n: r.frf for n, r in resolutions.items() if r.frf is not None}, unc, lobe_grid, n=N_LOBE_SAMPLES)
+        xs, ys = lb.tip_frfs("x")[:N_LOBE_SAMPLES], lb.tip_frfs("y")[:N_LOBE_SAMPLES]
         return milling_lobes_band(xs, ys, cut, speeds)
 
     return b, make, summary

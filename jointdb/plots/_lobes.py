@@ -76,7 +76,9 @@ def lobes_figure(
     ax.set_ylim(0, depth_max * scale if depth_max else top * 1.1 if top > 0 else 1)
     ax.set_xlabel("spindle speed [rpm]")
     ax.set_ylabel(f"limiting depth of cut [{depth_unit}]")
-    ax.set_title(title or "Stability lobes")
+    import textwrap
+
+    ax.set_title("\n".join(textwrap.wrap(title or "Stability lobes", 90)), fontsize=10)
     ax.grid(True, alpha=0.3)
     ax.legend(loc="upper left", fontsize=8)
     fig.tight_layout()

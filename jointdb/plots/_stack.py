@@ -61,7 +61,7 @@ def save_tip_comparison(path, prediction, *, title: str | None = None,
     directions = ["x"]
     if not np.allclose(tip.entry("1y", "1y"), tip.entry("1x", "1x")):
         directions.append("y")
-    fig, axes = plt.subplots(2, len(directions), figsize=(7.5 * len(directions), 6.5), sharex=True, squeeze=False)
+    fig, axes = plt.subplots(2, len(directions), figsize=(7.5 * len(directions), 7.5), sharex=True, squeeze=False)
     for col, d in enumerate(directions):
         dof = f"1{d}"
         curves = [(label, tip, "C0", "-"), ("rigid joints", rigid, "C3", "--")]
@@ -78,14 +78,19 @@ def save_tip_comparison(path, prediction, *, title: str | None = None,
         ax_m.set_ylabel(f"|H_{d}{d}| [m/N]")
         ax_m.set_title(f"tool tip, {d} direction")
         ax_m.grid(True, which="both", alpha=0.3)
-        lo, hi = ax_m.get_ylim()
-        ax_m.set_ylim(lo, hi * 10)  # a decade of headroom: the legend does not cover a peak
-        ax_m.legend(fontsize=7, loc="upper left")
         ax_c.set_ylabel("Re (dark), Im (light) [µm/N]")
         ax_c.set_xlabel("frequency [Hz]")
         ax_c.grid(True, alpha=0.3)
-    fig.suptitle(title or "Predicted tool-tip FRF")
-    fig.tight_layout()
+    # one legend for all panels, below them: its labels name joint versions and weights and are long
+    import textwrap
+
+    handles, names = axes[0, 0].get_legend_handles_labels()
+    names = ["\n".join(textwrap.wrap(n, 110)) for n in names]
+    leg = fig.legend(handles, names, loc="lower center", fontsize=7.5, ncol=1, frameon=False)
+    fig.suptitle("\n".join(textwrap.wrap(title or "Predicted tool-tip FRF", 100)))
+    fig.canvas.draw()
+    legend_h = leg.get_window_extent().height / fig.dpi / fig.get_figheight()
+    fig.tight_layout(rect=(0, min(0.45, legend_h + 0.02), 1, 1))
     return save_figure(fig, path, dpi=120)
 
 
