@@ -294,7 +294,9 @@ def register(app: typer.Typer) -> None:
         d_cols = [c for c in (rows[0] if rows else {}) if c.startswith("d_")]
         emit(result, as_json=as_json, title=f"nearest {joint_type} joints (distance = sqrt(sum d_i^2))",
              columns=["name", "version", *(["state"] if include_deprecated else []), "distance", *d_cols,
-                      "torque_nm"])
+                      *[c for c in ("materials", "torque_nm", "preload_n", "labels")
+                        if any(r.get(c) is not None for r in rows)],
+                      *(["extrapolating"] if any(r.get("extrapolating") for r in rows) else [])])
 
     # ------------------------------------------------------------- joints ...
     @joints.command("list")
