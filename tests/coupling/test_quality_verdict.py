@@ -1,17 +1,11 @@
 """Honest quality (issue 13): dominant-peak errors and verdict lines in `identify` and `couple`."""
 
 import json
-import shutil
-import sys
-from pathlib import Path
 
 import numpy as np
-import pytest
 
-from jointdb.cli import main
 from jointdb.coupling._quality import dominant_peaks, parameter_verdicts, peak_errors
-
-FIXTURE = Path(__file__).resolve().parents[2] / "fixtures" / "campaigns" / "th-steel-30nm"
+from test_coupling_cli import campaign, run  # noqa: F401 - the CLI runner and the campaign fixture
 
 
 def sdof(freq, fn, zeta, k):
@@ -47,24 +41,6 @@ def test_parameter_verdicts_name_the_weak_parameter_and_correlations():
     assert any("c a is poorly determined" in s and "40%" in s for s in lines)
     assert any("k a and k b are correlated +0.97" in s for s in lines)
     assert parameter_verdicts(["k"], np.array([0.01]), np.eye(1)) == []
-
-
-def run(monkeypatch, capsys, *args):
-    monkeypatch.setattr(sys, "argv", ["jointdb", *map(str, args)])
-    code = 0
-    try:
-        main()
-    except SystemExit as exc:
-        code = exc.code or 0
-    out = capsys.readouterr()
-    return code, out.out, out.err
-
-
-@pytest.fixture
-def campaign(tmp_path):
-    d = tmp_path / "camp"
-    shutil.copytree(FIXTURE, d)
-    return d
 
 
 def test_bundled_campaign_verdicts(monkeypatch, capsys, campaign, tmp_path):
