@@ -8,24 +8,9 @@ import json
 
 import pytest
 from store_helpers import spring_joint
-from typer.testing import CliRunner
+from test_store_cli import run, run_json
 
-from jointdb.cli import app
 from jointdb.errors import InputError, NotFoundError
-
-runner = CliRunner()
-
-
-def run(*args, ok=True):
-    result = runner.invoke(app, [str(a) for a in args])
-    if ok:
-        assert result.exit_code == 0, (result.output, result.exception)
-    return result
-
-
-def run_json(*args):
-    return json.loads(run(*args, "--json").stdout)
-
 
 @pytest.fixture
 def joint_file(tmp_path):
