@@ -252,7 +252,9 @@ def register(app: typer.Typer) -> None:
         max_order: int = typer.Option(30, "--max-order", help="SD: highest pLSCF order."),
         frf_y: Optional[Path] = typer.Option(None, "--frf-y", help="Separate file with the y-direction tool-tip FRF."),
         node: Optional[int] = typer.Option(None, "--node", help="Use only the DOFs of this node (tool tip)."),
-        cross_terms: bool = typer.Option(False, "--cross-terms", help="ZOA: use the measured cross FRFs xy/yx."),
+        cross_terms: Optional[bool] = typer.Option(
+            None, "--cross-terms/--no-cross-terms",
+            help="ZOA: use the x–y cross FRFs of the tip file (default: when the file has non-zero ones)."),
         refine: int = typer.Option(3, "--refine", help="Rounds of extra speeds near the minima and pockets "
                                    "of the lobes (0: only the --n-speeds grid)."),
         plots: PlotsOpt = None,
@@ -293,7 +295,7 @@ def register(app: typer.Typer) -> None:
         plot = plots_dir(plots, plot, one_file=True)
         check_out(out, LOBE_FORMATS)
         speeds = np.linspace(rpm_min, rpm_max, n_speeds)
-        from jointdb.cli._tip_inputs import coefficient_warnings, read_tool_tip, turning_frf
+        from jointdb.cli._tip_inputs import coefficient_warnings, has_cross_terms, read_tool_tip, turning_frf
 
         frf, notes = read_tool_tip(frf_file)
         frf = _node_select(frf, node)
@@ -317,8 +319,18 @@ def register(app: typer.Typer) -> None:
                 raise InputError("milling needs --kt and --kr (cutting coefficients in N/m²)")
             cut = stability.MillingCut(teeth, kt, kr, immersion, not up)
             mode_txt = "up" if up else "down"
-            if cross_terms and notes and "cross terms taken as zero" in notes[0]:
+            present = has_cross_terms(frf)
+            if cross_terms is None:
+                cross_terms = present and method_l == "zoa"
+                if present:
+                    notes.append("note: the tip file's x–y cross terms are used (--no-cross-terms drops them)"
+                                 if method_l == "zoa" else
+                                 "note: SD fits the x and y planes separately; the tip file's x–y cross terms "
+                                 "are not used")
+            elif cross_terms and not present:
                 notes.append("note: --cross-terms asked, but the file has none: they are zero")
+            elif cross_terms and method_l == "sd":
+                notes.append("note: SD fits the x and y planes separately; --cross-terms is not used")
             if method_l == "zoa":
                 res = stability.refine_lobes(lambda s: stability.milling_lobes_zoa(
                     frf, cut, frf2, cross_terms=cross_terms, spindle_speed_rpm=s), speeds, rounds=refine)

@@ -69,6 +69,18 @@ def read_tool_tip(path: Path) -> tuple[FRF, list[str]]:
     return FRF(freq, values, tuple(labels), tuple(labels), q), [note]
 
 
+def has_cross_terms(frf: FRF) -> bool:
+    """Whether ``frf`` has an x and a y driving point and a non-zero x–y cross entry between them."""
+
+    def driving(direction: str):
+        return next((d for d in frf.outputs if d.direction == direction and d in frf.inputs), None)
+
+    dx, dy = driving("x"), driving("y")
+    if dx is None or dy is None:
+        return False
+    return bool(np.any(frf.entry(dx, dy) != 0) or np.any(frf.entry(dy, dx) != 0))
+
+
 def turning_frf(frf: FRF, frf_y: FRF | None, path_y: Path | None) -> tuple[FRF, list[str]]:
     """The turning FRF: ``frf``'s translational entries, plus the y driving point of ``--frf-y``.
 

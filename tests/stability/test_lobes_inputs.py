@@ -99,3 +99,33 @@ def test_cutting_coefficients_in_the_wrong_unit_warn(files, args, expect):
         assert ("7.96e+08" in notes) or ("2e+09" in notes)
     r = lobes(d / "x.h5", "--op", "milling", "--teeth", "2", "--kt", "6e8", "--kr", "2e8", "--n-speeds", "20")
     assert rows(r)[0]["notes"] == []
+
+
+def coupled_tip(freq):
+    """A 2×2 tip receptance whose two modes move along skewed directions: non-zero H[x,y]."""
+    om = 2 * np.pi * freq
+    h = np.zeros((freq.size, 2, 2), complex)
+    for fn, zeta, k, angle in ((850.0, 0.02, 3e7, 0.5), (1100.0, 0.015, 4e7, 2.2)):
+        wn = 2 * np.pi * fn
+        phi = np.array([np.cos(angle), np.sin(angle)])
+        h += np.outer(phi, phi)[None] / (k * (1 - (om / wn) ** 2 + 2j * zeta * om / wn))[:, None, None]
+    from jointdb.frf import FRF
+    return FRF(freq, h, ("1x", "1y"), ("1x", "1y"), "receptance")
+
+
+def test_cross_terms_in_the_tip_file_are_used_by_default(tmp_path):
+    tip = coupled_tip(FREQ)
+    write_frf_hdf5(tmp_path / "tip.h5", tip)
+    cut = MillingCut(2, 6e8, 2e8, 0.5, True)
+    speeds = np.linspace(5000, 20000, 120)
+    args = [tmp_path / "tip.h5", "--op", "milling", "--teeth", "2", "--kt", "6e8", "--kr", "2e8",
+            "--immersion", "0.5", "--rpm-min", "5000", "--rpm-max", "20000", "--n-speeds", "120"]
+    with_cross = milling_lobes_zoa(tip, cut, cross_terms=True, spindle_speed_rpm=speeds).depth_m
+    without = milling_lobes_zoa(tip, cut, cross_terms=False, spindle_speed_rpm=speeds).depth_m
+    assert not np.allclose(with_cross, without, rtol=1e-3, equal_nan=True)  # the case tells the two apart
+    data, depth = rows(lobes(*args))
+    assert np.allclose(depth, with_cross, rtol=1e-9, equal_nan=True)
+    assert any("cross terms are used" in n for n in data["notes"])
+    data, depth = rows(lobes(*args, "--no-cross-terms"))
+    assert np.allclose(depth, without, rtol=1e-9, equal_nan=True)
+    assert np.allclose(rows(lobes(*args, "--cross-terms"))[1], with_cross, rtol=1e-9, equal_nan=True)
