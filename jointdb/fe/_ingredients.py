@@ -294,4 +294,7 @@ class ModalDamping(Ingredient):
         Cf = (mp * (2.0 * zeta * omega)) @ mp.T
         C = matrices.C.copy()
         C[np.ix_(free, free)] += 0.5 * (Cf + Cf.T)
-        return dataclasses.replace(matrices, C=C)
+        # K and M are unchanged: keep their eigen-solution for the spectral FRF synthesis
+        lam.flags.writeable = phi.flags.writeable = False  # shared with every later user
+        eigen = (matrices.K, matrices.M, matrices.fixed, lam, phi, n_rb)
+        return dataclasses.replace(matrices, C=C, eigen_solution=eigen)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -109,6 +109,10 @@ class FEMatrices:
     dof_labels: tuple[Dof, ...]
     node_positions: np.ndarray
     fixed: np.ndarray
+    #: the full eigen-solution of the constrained (K, M) problem when an ingredient already
+    #: computed it (modal damping does), with the arrays it belongs to; reused only while
+    #: ``K``, ``M`` and ``fixed`` are those very arrays (see ``jointdb.fe._synthesis.eigen_free``)
+    eigen_solution: tuple | None = field(default=None, repr=False)
 
     @property
     def free(self) -> np.ndarray:

@@ -80,6 +80,10 @@ def eigen_free(matrices, n: int | None, max_value: float | None = None):
     n_rb : int
         Number of rigid-body modes (the first ``n_rb`` columns).
     """
+    cached = getattr(matrices, "eigen_solution", None)
+    if (cached is not None and n is None and max_value is None and cached[0] is matrices.K
+            and cached[1] is matrices.M and cached[2] is matrices.fixed):
+        return cached[3], cached[4], cached[5]  # the same problem, already solved (modal damping)
     free = ~matrices.fixed
     Kf = matrices.K[np.ix_(free, free)]
     Mf = matrices.M[np.ix_(free, free)]

@@ -326,3 +326,27 @@ def test_spectral_sum_refuses_a_line_exactly_on_an_undamped_resonance():
         frf_direct(mats, np.array([10.0, 50.0, 90.0]), [0], algorithm="spectral")
     ok = frf_direct(mats, np.array([10.0, 49.0]), [0], algorithm="spectral")
     assert np.allclose(ok[:, 0, 0], 1.0 / (lam - (2 * np.pi * np.array([10.0, 49.0])) ** 2), rtol=1e-14)
+
+
+def test_modal_damping_eigen_solution_is_reused_only_for_the_same_matrices():
+    """Modal damping solves K φ = λ M φ; the spectral synthesis reuses it (no second eigh) only
+    while K, M and the constraints are the very arrays it was computed for."""
+    import dataclasses
+
+    from jointdb.fe._synthesis import eigen_free
+
+    mats = shaft((Clamp(0.0), ModalDamping(0.02))).assemble()
+    assert mats.eigen_solution is not None
+    freq = np.linspace(50.0, 20000.0, 400)
+    idx = [0, 1, mats.K.shape[0] - 2]
+    fresh = dataclasses.replace(mats, eigen_solution=None)
+    assert np.array_equal(frf_direct(mats, freq, idx, algorithm="spectral"),
+                          frf_direct(fresh, freq, idx, algorithm="spectral"))  # the same eigh, bit for bit
+    lam_cached = eigen_free(mats, None)[0]
+    assert lam_cached is mats.eigen_solution[3]
+    # a stiffer K carried with the stale solution: it is not reused
+    stiff = dataclasses.replace(mats, K=1.21 * mats.K)
+    lam_stiff = eigen_free(stiff, None)[0]
+    assert lam_stiff is not lam_cached
+    elastic = lam_cached > 0
+    assert np.allclose(lam_stiff[elastic], 1.21 * lam_cached[elastic], rtol=1e-9)
