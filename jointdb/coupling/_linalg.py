@@ -20,7 +20,17 @@ import numpy as np
 
 from jointdb.errors import InputError
 
-__all__ = ["Regularisation", "pinv", "condition", "pinv_condition", "equilibrated_pinv", "inverse", "frobenius", "savgol_smooth"]
+__all__ = [
+    "Regularisation",
+    "pinv",
+    "condition",
+    "pinv_condition",
+    "equilibrated_pinv",
+    "equilibrated_pinvs",
+    "inverse",
+    "frobenius",
+    "savgol_smooth",
+]
 
 
 @dataclass(frozen=True)
@@ -132,70 +142,119 @@ def equilibrated_pinv(
     block, else through the normal equations with the Gram matrix
     ``G_s = a_sᴴ a_s`` (tall) or ``a_s a_sᴴ`` (wide):
     ``pinv(a_s) = (G_s + μ²I)⁻¹ a_sᴴ`` or ``a_sᴴ (G_s + μ²I)⁻¹``. The
-    eigenvalues of the Gram matrices give the condition number (the singular
-    values of a block-diagonal matrix are those of its blocks), with relative
-    round-off ~ eps·cond², below 2e-10 there. Elsewhere one SVD of the whole
-    ``a_s`` gives both, as :func:`pinv_condition`.
+    extreme eigenvalues of the Gram matrices give the condition number (the
+    singular values of a block-diagonal matrix are those of its blocks), with
+    relative round-off ~ eps·cond², below 2e-10 there. Elsewhere one SVD of
+    the whole ``a_s`` gives both, as :func:`pinv_condition`. The eigenvalues
+    and the Gram inverses come from the batched kernels of
+    ``jointdb.coupling._smallmat`` (one call for all blocks).
     """
-    nf = blocks[0].shape[0]
-    lam_max = np.zeros(nf)
-    lam_min = np.full(nf, np.inf)
-    parts = []
-    for ab in blocks:
-        abh = np.conj(np.swapaxes(ab, 1, 2))
-        gram = ab @ abh if wide else abh @ ab  # its diagonal holds the squared row/column norms
-        sb = np.sqrt(np.einsum("fii->fi", gram).real)
-        sb = np.where(sb > 0, sb, 1.0)
-        gram /= sb[:, :, None] * sb[:, None, :]  # Gram matrix of the equilibrated block
-        if (ab.shape[2] if wide else ab.shape[1]) < (ab.shape[1] if wide else ab.shape[2]):
-            lam_min[:] = 0.0  # fewer equations than unknowns: rank deficient at every line
-        else:
-            lam = np.linalg.eigvalsh(gram)
-            lam_max = np.maximum(lam_max, lam[:, -1])
-            lam_min = np.minimum(lam_min, lam[:, 0])
-        parts.append((ab, abh, sb, gram))
-    with np.errstate(divide="ignore", invalid="ignore"):
-        cond = np.where(lam_min > 0, np.sqrt(lam_max / np.where(lam_min > 0, lam_min, 1.0)), np.inf)
-    fast = cond < NORMAL_EQUATIONS_MAX_COND
-    if reg.method == "tsvd" and reg.rel > 0:
-        fast &= cond * reg.rel < 1.0  # no singular value below the truncation threshold
+    return equilibrated_pinvs([(blocks, wide)], reg)[0]
+
+
+def equilibrated_pinvs(
+    sides: "list[tuple[list[np.ndarray], bool]]", reg: Regularisation = Regularisation()
+) -> list[tuple[list[np.ndarray], np.ndarray]]:
+    """:func:`equilibrated_pinv` of several block-diagonal matrices ``[(blocks, wide), ...]`` at once.
+
+    The Gram matrices of all blocks go through one eigenvalue kernel call and
+    one inverse kernel call (per block size), which is what costs.
+    """
+    from jointdb.coupling._smallmat import hermitian_extremes, hpd_inverse, to_first
+
+    parts = []  # per side, per block: [ab, abh, sb, gram (n, n, nf) equilibrated, frequency-last]
+    for blocks, wide in sides:
+        side = []
+        for ab in blocks:
+            abh = np.conj(np.swapaxes(ab, 1, 2))
+            gram = ab @ abh if wide else abh @ ab  # its diagonal holds the squared row/column norms
+            sb = np.sqrt(np.einsum("fii->fi", gram).real)
+            sb = np.where(sb > 0, sb, 1.0)
+            gram /= sb[:, :, None] * sb[:, None, :]  # Gram matrix of the equilibrated block
+            side.append([ab, abh, sb, np.moveaxis(gram, 0, -1)])
+        parts.append(side)
+    nf = sides[0][0][0].shape[0]
+    # extreme eigenvalues of every Gram matrix (fewer equations than unknowns: rank deficient, λmin = 0)
+    full = [(k, j) for k, side in enumerate(parts) for j, (ab, _, _, _) in enumerate(side)
+            if (ab.shape[2] if sides[k][1] else ab.shape[1]) >= (ab.shape[1] if sides[k][1] else ab.shape[2])]
+    extremes = {}
+    for n in sorted({parts[k][j][3].shape[0] for k, j in full}):
+        group = [(k, j) for k, j in full if parts[k][j][3].shape[0] == n]
+        lmin, lmax = hermitian_extremes(np.concatenate([parts[k][j][3] for k, j in group], axis=2))
+        for i, kj in enumerate(group):
+            extremes[kj] = (lmin[i * nf : (i + 1) * nf], lmax[i * nf : (i + 1) * nf])
     tikhonov = reg.method == "tikhonov" and reg.rel > 0
-    out = []
-    for ab, abh, sb, gram in parts:
-        n = gram.shape[1]
-        if not fast.any():
-            out.append(np.zeros(abh.shape, dtype=complex))
-            continue
-        if ab.shape[1] == ab.shape[2] and not tikhonov:  # square: a solve, no normal equations
-            a_s = ab / (sb[:, :, None] if wide else sb[:, None, :])
-            a_s[~fast] = np.eye(n)  # those lines are solved by SVD below
-            x = np.linalg.inv(a_s)
-            out.append(x / (sb[:, None, :] if wide else sb[:, :, None]))
-            continue
-        if tikhonov:
-            gram = gram + (reg.rel**2 * lam_max)[:, None, None] * np.eye(n)
-        gram[~fast] = np.eye(n)  # those lines are solved by SVD below
-        gi = np.linalg.inv(gram) / (sb[:, :, None] * sb[:, None, :])  # S⁻¹ G_s⁻¹ S⁻¹
-        out.append(abh @ gi if wide else gi @ abh)
-    slow = np.flatnonzero(~fast)
-    if slow.size:
-        rows = np.cumsum([0] + [ab.shape[1] for ab in blocks])
-        cols = np.cumsum([0] + [ab.shape[2] for ab in blocks])
-        whole = np.zeros((slow.size, rows[-1], cols[-1]), dtype=complex)
-        scale = np.ones((slow.size, rows[-1] if wide else cols[-1]))
-        for k, (ab, _, sb, _) in enumerate(parts):
-            whole[:, rows[k] : rows[k + 1], cols[k] : cols[k + 1]] = ab[slow]
-            span = slice(rows[k], rows[k + 1]) if wide else slice(cols[k], cols[k + 1])
-            scale[:, span] = sb[slow]
-        if wide:
-            ps, cond[slow] = pinv_condition(whole / scale[:, :, None], reg)
-            ps /= scale[:, None, :]
-        else:
-            ps, cond[slow] = pinv_condition(whole / scale[:, None, :], reg)
-            ps /= scale[:, :, None]
-        for k, pk in enumerate(out):
-            pk[slow] = ps[:, cols[k] : cols[k + 1], rows[k] : rows[k + 1]]
-    return out, cond
+    conds, fasts, lam_maxs = [], [], []
+    for k, side in enumerate(parts):
+        lam_max = np.zeros(nf)
+        lam_min = np.full(nf, np.inf)
+        for j in range(len(side)):
+            lo, hi = extremes.get((k, j), (np.zeros(nf), np.zeros(nf)))
+            lam_max = np.maximum(lam_max, hi)
+            lam_min = np.minimum(lam_min, lo)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            cond = np.where(lam_min > 0, np.sqrt(lam_max / np.where(lam_min > 0, lam_min, 1.0)), np.inf)
+        fast = cond < NORMAL_EQUATIONS_MAX_COND
+        if reg.method == "tsvd" and reg.rel > 0:
+            fast &= cond * reg.rel < 1.0  # no singular value below the truncation threshold
+        conds.append(cond)
+        fasts.append(fast)
+        lam_maxs.append(lam_max)
+    # normal equations: (G_s + μ²I)⁻¹ for the non-square blocks, identity on the lines left to the SVD
+    grams = {}
+    for k, side in enumerate(parts):
+        for j, (ab, _, _, gram) in enumerate(side):
+            if fasts[k].any() and (ab.shape[1] != ab.shape[2] or tikhonov):
+                n = gram.shape[0]
+                diag = np.einsum("iif->if", gram)
+                if tikhonov:
+                    diag += (reg.rel**2 * lam_maxs[k]).real
+                gram[:, :, ~fasts[k]] = np.eye(n)[:, :, None]
+                grams[k, j] = gram
+    inverses = {}
+    for n in sorted({g.shape[0] for g in grams.values()}):
+        group = [kj for kj, g in grams.items() if g.shape[0] == n]
+        inv_all = to_first(hpd_inverse(np.concatenate([grams[kj] for kj in group], axis=2)))
+        for i, kj in enumerate(group):
+            inverses[kj] = inv_all[i * nf : (i + 1) * nf]
+    out_sides = []
+    for k, side in enumerate(parts):
+        wide, fast, cond = sides[k][1], fasts[k], conds[k]
+        out = []
+        for j, (ab, abh, sb, gram) in enumerate(side):
+            if not fast.any():
+                out.append(np.zeros(abh.shape, dtype=complex))
+            elif (k, j) in inverses:
+                gi = inverses[k, j]
+                gi /= sb[:, :, None] * sb[:, None, :]  # S⁻¹ G_s⁻¹ S⁻¹
+                out.append(abh @ gi if wide else gi @ abh)
+            else:  # square: a solve, no normal equations
+                n = ab.shape[1]
+                a_s = ab / (sb[:, :, None] if wide else sb[:, None, :])
+                a_s[~fast] = np.eye(n)  # those lines are solved by SVD below
+                x = np.linalg.inv(a_s)
+                out.append(x / (sb[:, None, :] if wide else sb[:, :, None]))
+        slow = np.flatnonzero(~fast)
+        if slow.size:
+            blocks = [p[0] for p in side]
+            rows = np.cumsum([0] + [ab.shape[1] for ab in blocks])
+            cols = np.cumsum([0] + [ab.shape[2] for ab in blocks])
+            whole = np.zeros((slow.size, rows[-1], cols[-1]), dtype=complex)
+            scale = np.ones((slow.size, rows[-1] if wide else cols[-1]))
+            for b, (ab, _, sb, _) in enumerate(side):
+                whole[:, rows[b] : rows[b + 1], cols[b] : cols[b + 1]] = ab[slow]
+                span = slice(rows[b], rows[b + 1]) if wide else slice(cols[b], cols[b + 1])
+                scale[:, span] = sb[slow]
+            if wide:
+                ps, cond[slow] = pinv_condition(whole / scale[:, :, None], reg)
+                ps /= scale[:, None, :]
+            else:
+                ps, cond[slow] = pinv_condition(whole / scale[:, None, :], reg)
+                ps /= scale[:, :, None]
+            for b, pk in enumerate(out):
+                pk[slow] = ps[:, cols[b] : cols[b + 1], rows[b] : rows[b + 1]]
+        out_sides.append((out, cond))
+    return out_sides
 
 
 def frobenius(x: np.ndarray) -> np.ndarray:

@@ -11,7 +11,7 @@ from jointdb.coupling._common import IdentificationResult, LazyExtra, as_recepta
 from jointdb.coupling._linalg import (
     Regularisation,
     condition,
-    equilibrated_pinv,
+    equilibrated_pinvs,
     frobenius,
     inverse,
     savgol_smooth,
@@ -51,10 +51,10 @@ def _pinv_pair(
     cond_left, cond_right : ``(n_freq,)``
         Condition numbers of the equilibrated ``h_left`` and ``h_right``.
     """
-    left, cond_l = equilibrated_pinv(h_left, reg)
     if all(np.array_equal(r, np.swapaxes(lb, 1, 2)) for lb, r in zip(h_left, h_right)):
+        ((left, cond_l),) = equilibrated_pinvs([(h_left, False)], reg)
         return left, [np.swapaxes(x, 1, 2) for x in left], cond_l, cond_l
-    right, cond_r = equilibrated_pinv(h_right, reg, wide=True)
+    (left, cond_l), (right, cond_r) = equilibrated_pinvs([(h_left, False), (h_right, True)], reg)
     return left, right, cond_l, cond_r
 
 
