@@ -162,34 +162,46 @@ def equilibrated_pinvs(
     """
     from jointdb.coupling._smallmat import hermitian_extremes, hpd_inverse, to_first
 
-    parts = []  # per side, per block: [ab, abh, sb, gram (n, n, nf) equilibrated, frequency-last]
-    for blocks, wide in sides:
-        side = []
-        for ab in blocks:
-            abh = np.conj(np.swapaxes(ab, 1, 2))
-            gram = ab @ abh if wide else abh @ ab  # its diagonal holds the squared row/column norms
-            sb = np.sqrt(np.einsum("fii->fi", gram).real)
-            sb = np.where(sb > 0, sb, 1.0)
-            gram /= sb[:, :, None] * sb[:, None, :]  # Gram matrix of the equilibrated block
-            side.append([ab, abh, sb, np.moveaxis(gram, 0, -1)])
-        parts.append(side)
     nf = sides[0][0][0].shape[0]
-    # extreme eigenvalues of every Gram matrix (fewer equations than unknowns: rank deficient, λmin = 0)
-    full = [(k, j) for k, side in enumerate(parts) for j, (ab, _, _, _) in enumerate(side)
-            if (ab.shape[2] if sides[k][1] else ab.shape[1]) >= (ab.shape[1] if sides[k][1] else ab.shape[2])]
+    # Per block: [ab, abh, gram (n, n, nf) frequency-last, equilibrated; scale sb (n, nf)]. The Gram
+    # matrices of equal size share one buffer (one kernel call each); elementwise work is done there,
+    # frequency-last, where every operation runs over long contiguous rows.
+    parts = [[None] * len(blocks) for blocks, _ in sides]
+    sizes = {}
+    for k, (blocks, wide) in enumerate(sides):
+        for j, ab in enumerate(blocks):
+            sizes.setdefault(ab.shape[1] if wide else ab.shape[2], []).append((k, j))
+    buffers = {}
+    for n, members in sizes.items():
+        buf = np.empty((n, n, nf * len(members)), dtype=complex)
+        for i, (k, j) in enumerate(members):
+            ab, wide = sides[k][0][j], sides[k][1]
+            abh = np.conj(np.swapaxes(ab, 1, 2))
+            gram = buf[:, :, i * nf : (i + 1) * nf]
+            gram[...] = np.moveaxis(ab @ abh if wide else abh @ ab, 0, -1)
+            parts[k][j] = [ab, abh, gram, None]
+        sb = np.sqrt(np.einsum("iif->if", buf).real)  # the squared row/column norms are on the diagonal
+        sb[sb == 0] = 1.0
+        buf /= sb[:, None, :] * sb[None, :, :]  # Gram matrices of the equilibrated blocks
+        for i, (k, j) in enumerate(members):
+            parts[k][j][3] = sb[:, i * nf : (i + 1) * nf]
+        buffers[n] = (buf, sb, members)
+    # extreme eigenvalues of the Gram matrices (fewer equations than unknowns: rank deficient, λmin = 0)
     extremes = {}
-    for n in sorted({parts[k][j][3].shape[0] for k, j in full}):
-        group = [(k, j) for k, j in full if parts[k][j][3].shape[0] == n]
-        lmin, lmax = hermitian_extremes(np.concatenate([parts[k][j][3] for k, j in group], axis=2))
-        for i, kj in enumerate(group):
-            extremes[kj] = (lmin[i * nf : (i + 1) * nf], lmax[i * nf : (i + 1) * nf])
+    for n, (buf, _, members) in buffers.items():
+        lmin, lmax = hermitian_extremes(buf)
+        for i, (k, j) in enumerate(members):
+            ab, wide = sides[k][0][j], sides[k][1]
+            deficient = (ab.shape[2] if wide else ab.shape[1]) < (ab.shape[1] if wide else ab.shape[2])
+            lo = np.zeros(nf) if deficient else lmin[i * nf : (i + 1) * nf]
+            extremes[k, j] = (lo, lmax[i * nf : (i + 1) * nf])
     tikhonov = reg.method == "tikhonov" and reg.rel > 0
     conds, fasts, lam_maxs = [], [], []
     for k, side in enumerate(parts):
         lam_max = np.zeros(nf)
         lam_min = np.full(nf, np.inf)
         for j in range(len(side)):
-            lo, hi = extremes.get((k, j), (np.zeros(nf), np.zeros(nf)))
+            lo, hi = extremes[k, j]
             lam_max = np.maximum(lam_max, hi)
             lam_min = np.minimum(lam_min, lo)
         with np.errstate(divide="ignore", invalid="ignore"):
@@ -200,33 +212,38 @@ def equilibrated_pinvs(
         conds.append(cond)
         fasts.append(fast)
         lam_maxs.append(lam_max)
-    # normal equations: (G_s + μ²I)⁻¹ for the non-square blocks, identity on the lines left to the SVD
-    grams = {}
-    for k, side in enumerate(parts):
-        for j, (ab, _, _, gram) in enumerate(side):
-            if fasts[k].any() and (ab.shape[1] != ab.shape[2] or tikhonov):
-                n = gram.shape[0]
-                diag = np.einsum("iif->if", gram)
-                if tikhonov:
-                    diag += (reg.rel**2 * lam_maxs[k]).real
-                gram[:, :, ~fasts[k]] = np.eye(n)[:, :, None]
-                grams[k, j] = gram
+    # normal equations: S⁻¹ (G_s + μ²I)⁻¹ S⁻¹ for the non-square blocks, identity on the lines left to the SVD
     inverses = {}
-    for n in sorted({g.shape[0] for g in grams.values()}):
-        group = [kj for kj, g in grams.items() if g.shape[0] == n]
-        inv_all = to_first(hpd_inverse(np.concatenate([grams[kj] for kj in group], axis=2)))
-        for i, kj in enumerate(group):
-            inverses[kj] = inv_all[i * nf : (i + 1) * nf]
+    for n, (buf, sb, members) in buffers.items():
+        use = [(i, k, j) for i, (k, j) in enumerate(members)
+               if fasts[k].any() and (sides[k][0][j].shape[1] != sides[k][0][j].shape[2] or tikhonov)]
+        if not use:
+            continue
+        inv = np.empty((n, n, nf * len(use)), dtype=complex)
+        scale = np.empty((n, nf * len(use)))
+        for u, (i, k, j) in enumerate(use):
+            part = inv[:, :, u * nf : (u + 1) * nf]
+            part[...] = buf[:, :, i * nf : (i + 1) * nf]
+            if tikhonov:
+                np.einsum("iif->if", part)[...] += reg.rel**2 * lam_maxs[k]
+            slow = np.flatnonzero(~fasts[k])
+            if slow.size:
+                part[:, :, slow] = np.eye(n)[:, :, None]
+            scale[:, u * nf : (u + 1) * nf] = sb[:, i * nf : (i + 1) * nf]
+        hpd_inverse(inv)
+        inv /= scale[:, None, :] * scale[None, :, :]
+        for u, (i, k, j) in enumerate(use):
+            inverses[k, j] = to_first(inv[:, :, u * nf : (u + 1) * nf])
     out_sides = []
     for k, side in enumerate(parts):
         wide, fast, cond = sides[k][1], fasts[k], conds[k]
         out = []
-        for j, (ab, abh, sb, gram) in enumerate(side):
+        for j, (ab, abh, _, sb) in enumerate(side):
+            sb = sb.T
             if not fast.any():
                 out.append(np.zeros(abh.shape, dtype=complex))
             elif (k, j) in inverses:
                 gi = inverses[k, j]
-                gi /= sb[:, :, None] * sb[:, None, :]  # S⁻¹ G_s⁻¹ S⁻¹
                 out.append(abh @ gi if wide else gi @ abh)
             else:  # square: a solve, no normal equations
                 n = ab.shape[1]
@@ -241,10 +258,10 @@ def equilibrated_pinvs(
             cols = np.cumsum([0] + [ab.shape[2] for ab in blocks])
             whole = np.zeros((slow.size, rows[-1], cols[-1]), dtype=complex)
             scale = np.ones((slow.size, rows[-1] if wide else cols[-1]))
-            for b, (ab, _, sb, _) in enumerate(side):
+            for b, (ab, _, _, sb) in enumerate(side):
                 whole[:, rows[b] : rows[b + 1], cols[b] : cols[b + 1]] = ab[slow]
                 span = slice(rows[b], rows[b + 1]) if wide else slice(cols[b], cols[b + 1])
-                scale[:, span] = sb[slow]
+                scale[:, span] = sb.T[slow]
             if wide:
                 ps, cond[slow] = pinv_condition(whole / scale[:, :, None], reg)
                 ps /= scale[:, None, :]
@@ -265,21 +282,63 @@ def frobenius(x: np.ndarray) -> np.ndarray:
 def inverse(p: np.ndarray) -> np.ndarray:
     """Batched inverse of square ``(n_freq, n, n)``; the SVD pseudo-inverse on numerically singular lines.
 
+    For n >= 4 the inverse is first formed by 2 × 2 block elimination (Schur
+    complement, the two diagonal blocks inverted by the Gauss–Jordan kernel of
+    ``jointdb.coupling._smallmat``, no pivoting) and kept on the lines where
+    its residual is that of a backward-stable inverse,
+    ``‖p x − I‖_F <= 10·n·eps·‖p‖_F‖x‖_F``; the other lines (a nearly singular
+    leading block) are inverted by LAPACK (LU with partial pivoting).
     ``inv`` and ``pinv`` agree to round-off unless ``cond₂ > 1/(n·eps)``, where
     ``pinv`` drops singular values. ``‖p‖_F‖p⁻¹‖_F >= cond₂`` flags those
     lines (with a factor 100 to spare), which are then pseudo-inverted.
     """
-    n = p.shape[-1]
-    try:
-        x = np.linalg.inv(p)
-        with np.errstate(over="ignore", invalid="ignore"):
-            est = frobenius(p) * frobenius(x)
-        bad = ~(est < 0.01 / (n * np.finfo(float).eps))  # also NaN
-    except np.linalg.LinAlgError:  # exactly singular at some line
-        x = np.empty_like(p)
-        bad = np.ones(p.shape[0], dtype=bool)
+    nf, n = p.shape[0], p.shape[-1]
+    eps = np.finfo(float).eps
+    x = None
+    norm_p = frobenius(p)
+    if n >= 4 and nf:
+        x = _block_inverse(p)
+        with np.errstate(all="ignore"):
+            r = p @ x
+            r[:, np.arange(n), np.arange(n)] -= 1.0
+            redo = np.flatnonzero(~(frobenius(r) <= 10.0 * n * eps * norm_p * frobenius(x)))  # also NaN
+    else:
+        redo = np.arange(nf)
+    if redo.size:
+        sub = p if redo.size == nf else p[redo]
+        try:
+            xr = np.linalg.inv(sub)
+        except np.linalg.LinAlgError:  # exactly singular at some line
+            xr = np.full(sub.shape, np.nan, dtype=np.result_type(sub, 1.0))
+        if x is None:
+            x = xr
+        else:
+            x[redo] = xr
+    with np.errstate(over="ignore", invalid="ignore"):
+        est = norm_p * frobenius(x)
+    bad = ~(est < 0.01 / (n * eps))  # also NaN
     if bad.any():
         x[bad] = pinv(p[bad])
+    return x
+
+
+def _block_inverse(p: np.ndarray) -> np.ndarray:
+    """``p⁻¹`` by 2 × 2 block elimination without pivoting (unchecked; see :func:`inverse`)."""
+    from jointdb.coupling._smallmat import gauss_jordan_inverse, to_first, to_last
+
+    h = p.shape[-1] // 2
+    a, b, c, d = p[:, :h, :h], p[:, :h, h:], p[:, h:, :h], p[:, h:, h:]
+    x = np.empty(p.shape, dtype=np.result_type(p, 1j))
+    with np.errstate(all="ignore"):
+        ai = to_first(gauss_jordan_inverse(to_last(a).astype(x.dtype, copy=False)))
+        aib = ai @ b
+        si = to_first(gauss_jordan_inverse(to_last(d - c @ aib).astype(x.dtype, copy=False)))  # Schur complement
+        x[:, h:, h:] = si
+        np.matmul(si, c @ ai, out=x[:, h:, :h])
+        np.negative(x[:, h:, :h], out=x[:, h:, :h])  # −S⁻¹ C A⁻¹
+        np.matmul(aib, si, out=x[:, :h, h:])
+        np.negative(x[:, :h, h:], out=x[:, :h, h:])  # −A⁻¹ B S⁻¹
+        np.subtract(ai, aib @ x[:, h:, :h], out=x[:, :h, :h])  # A⁻¹ + A⁻¹ B S⁻¹ C A⁻¹
     return x
 
 

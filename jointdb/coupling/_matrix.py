@@ -23,25 +23,75 @@ from jointdb.frf import FRF, Dof, Quantity, dofs
 __all__ = ["identify_joint_matrix"]
 
 
-def _measured_blocks(
-    G: FRF, meas: "list[list[Dof]]", smoothing: int | None, order: int, symmetrize: bool
-) -> dict[tuple[int, int], np.ndarray]:
-    """Blocks ``G[I_x, I_y]`` of the measured assembly FRFs (smoothed, symmetrised as asked)."""
+#: Frequency lines per pass: every array of a pass stays in the processor's cache.
+_LINES = 2048
+
+
+def _measured_blocks(G: FRF, meas: "list[list[Dof]]", smoothing: int | None, order: int) -> dict:
+    """Blocks ``G[I_x, I_y]`` of the measured assembly FRFs (smoothed as asked; views where possible)."""
     sides = [k for k, m in enumerate(meas) if m]
     g = {}
     for x in sides:
         for y in sides:
             blk = fetch("assembly", G, meas[x], meas[y], "the measured DOFs, directly or by reciprocity", view=True)
             g[x, y] = savgol_smooth(blk, int(smoothing), order) if smoothing else blk
-    if symmetrize:
-        for x in sides:
-            for y in sides:
-                if x < y:
-                    g[x, y] = 0.5 * (g[x, y] + np.swapaxes(g[y, x], 1, 2))
-                    g[y, x] = np.swapaxes(g[x, y], 1, 2)
-                elif x == y:
-                    g[x, x] = _sym(g[x, x])
     return g
+
+
+def _symmetrised(g: dict) -> dict:
+    """The measured blocks averaged with their transposes (reciprocity)."""
+    out = {}
+    for (x, y), gxy in g.items():
+        if x < y:
+            out[x, y] = 0.5 * (gxy + np.swapaxes(g[y, x], 1, 2))
+            out[y, x] = np.swapaxes(out[x, y], 1, 2)
+        elif x == y:
+            out[x, x] = _sym(gxy)
+    return out
+
+
+def _pass(h_ii, h_ic, h_ci, h_cc, g, reg: Regularisation, symmetrize: bool, span) -> tuple:
+    """Identify the joint on one pass of lines: ``(hj, p, cond, num², den²)`` of the residual."""
+    if symmetrize:
+        g = _symmetrised(g)
+    # D = H_II − G_II: its off-diagonal blocks are −G_xy (the sign is applied to the small products)
+    d = {(x, y): (h_ii[x] - g[x, y] if x == y else g[x, y]) for x, y in g}
+    left, right, cond_ic, cond_ci = _pinv_pair(h_ic, h_ci, reg)
+    nf, nc = h_ic[0].shape[0], span[1].stop
+    p = np.zeros((nf, nc, nc), dtype=complex)
+    for (x, y), dxy in d.items():
+        pxy = p[:, span[x], span[y]]
+        np.matmul(left[x] @ dxy, right[y], out=pxy)
+        if x != y:
+            np.negative(pxy, out=pxy)
+    if symmetrize:
+        p = _sym(p)
+    hj = inverse(p)
+    for x in (0, 1):
+        hj[:, span[x], span[x]] -= h_cc[x]
+    if symmetrize:
+        hj = _sym(hj)
+    # Re-coupled measurement: G_rec − G = D − H_IC (H_CC + H^J)⁻¹ H_CI, block by block. H_CC + H^J
+    # is the inverse of P exactly without symmetrisation and, with it, when H_CC is symmetric:
+    # then (H_CC + H^J)⁻¹ = P to round-off and no further inverse is needed.
+    if symmetrize and not all(np.array_equal(c, np.swapaxes(c, 1, 2)) for c in h_cc):
+        joined = hj.copy()
+        for x in (0, 1):
+            joined[:, span[x], span[x]] += h_cc[x]
+        q = np.linalg.inv(joined)
+    else:
+        q = p
+    num = np.zeros(nf)
+    den = np.zeros(nf)
+    for (x, y), dxy in d.items():
+        rec = h_ic[x] @ q[:, span[x], span[y]] @ h_ci[y]
+        if x == y:
+            np.subtract(dxy, rec, out=rec)
+        else:  # off the diagonal D_xy = −G_xy
+            np.add(dxy, rec, out=rec)
+        num += frobenius(rec) ** 2
+        den += frobenius(g[x, y]) ** 2
+    return hj, p, cond_ic * cond_ci, num, den
 
 
 def identify_joint_matrix(
@@ -140,50 +190,25 @@ def identify_joint_matrix(
         h_ic.append(blk[:, :m, m:])
         h_ci.append(blk[:, m:, :m])
         h_cc.append(blk[:, m:, m:])
-    g = _measured_blocks(G, meas, smoothing, smoothing_order, symmetrize)
-    # D = H_II − G_II: its off-diagonal blocks are −G_xy (the sign is applied to the small products)
-    d = {(x, y): (h_ii[x] - g[x, y] if x == y else g[x, y]) for x, y in g}
+    g = _measured_blocks(G, meas, smoothing, smoothing_order)
+    span = [slice(0, len(ad)), slice(len(ad), nc)]
 
-    left, right, cond_ic, cond_ci = _pinv_pair(h_ic, h_ci, reg)
-    cond = cond_ic * cond_ci
+    hj = np.empty((nf, nc, nc), dtype=complex)
+    cond, num, den = np.empty(nf), np.empty(nf), np.empty(nf)
+    ps = []  # P per pass, for extra["condition_p"]
+    for start in range(0, nf, _LINES):
+        s = slice(start, start + _LINES)
+        out = _pass([h[s] for h in h_ii], [h[s] for h in h_ic], [h[s] for h in h_ci], [h[s] for h in h_cc],
+                    {k: v[s] for k, v in g.items()}, reg, symmetrize, span)
+        hj[s], p_s, cond[s], num[s], den[s] = out
+        ps.append(p_s)
     if np.all(cond > condition_limit):
         raise NumericalError(
             f"H_IC (measured DOFs × contact DOFs) is singular at every line (condition > {condition_limit:g}); "
             f"the {L} measured DOFs do not determine the {nc}×{nc} joint — measure other DOFs"
         )
-    span = [slice(0, len(ad)), slice(len(ad), nc)]
-    p = np.zeros((nf, nc, nc), dtype=complex)
-    for (x, y), dxy in d.items():
-        pxy = p[:, span[x], span[y]]
-        np.matmul(left[x] @ dxy, right[y], out=pxy)
-        if x != y:
-            np.negative(pxy, out=pxy)
-    if symmetrize:
-        p = _sym(p)
-    hj = inverse(p)
-    for x in (0, 1):
-        hj[:, span[x], span[x]] -= h_cc[x]
-    if symmetrize:
-        hj = _sym(hj)
     if not np.all(np.isfinite(hj)):
         raise NumericalError("the identified joint matrix is not finite at some line; check the measured FRFs")
-
-    # Re-coupled measurement: G_rec − G = D − H_IC (H_CC + H^J)⁻¹ H_CI, block by block. H_CC + H^J
-    # is the inverse of P exactly without symmetrisation and, with it, when H_CC is symmetric:
-    # then (H_CC + H^J)⁻¹ = P to round-off and no further inverse is needed.
-    if symmetrize and not all(np.array_equal(c, np.swapaxes(c, 1, 2)) for c in h_cc):
-        joined = hj.copy()
-        for x in (0, 1):
-            joined[:, span[x], span[x]] += h_cc[x]
-        q = np.linalg.inv(joined)
-    else:
-        q = p
-    num = np.zeros(nf)
-    den = np.zeros(nf)
-    for (x, y), dxy in d.items():
-        rec = h_ic[x] @ q[:, span[x], span[y]] @ h_ci[y]
-        num += frobenius(dxy - rec if x == y else dxy + rec) ** 2  # off the diagonal D_xy = −G_xy
-        den += frobenius(g[x, y]) ** 2
     residual = np.sqrt(num) / np.maximum(np.sqrt(den), 1e-300)
 
     ill = cond > condition_limit
@@ -194,7 +219,7 @@ def identify_joint_matrix(
         condition=cond,
         unreliable=ill,
         flags={"ill_conditioned": ill},
-        extra=LazyExtra({"n_measured": L, "nc": nc}, {"condition_p": lambda: condition(p)}),
+        extra=LazyExtra({"n_measured": L, "nc": nc}, {"condition_p": lambda: condition(np.concatenate(ps))}),
         settings={
             "measured": [f"{n}:{d}" for n, d in pairs],
             "a": a,
