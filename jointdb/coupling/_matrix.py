@@ -27,53 +27,41 @@ __all__ = ["identify_joint_matrix"]
 _LINES = 2048
 
 
-def _measured_blocks(G: FRF, meas: "list[list[Dof]]", smoothing: int | None, order: int) -> dict:
-    """Blocks ``G[I_x, I_y]`` of the measured assembly FRFs (smoothed as asked; views where possible)."""
-    sides = [k for k, m in enumerate(meas) if m]
-    g = {}
-    for x in sides:
-        for y in sides:
-            blk = fetch("assembly", G, meas[x], meas[y], "the measured DOFs, directly or by reciprocity", view=True)
-            g[x, y] = savgol_smooth(blk, int(smoothing), order) if smoothing else blk
-    return g
+def _p_pass(h_ii, h_ic, h_ci, g, rows, span, reg: Regularisation, symmetrize: bool) -> tuple:
+    """``P = H_IC⁺ D H_CI⁺`` on one pass of lines: ``(p, cond, g)`` (``g`` symmetrised as asked).
 
-
-def _symmetrised(g: dict) -> dict:
-    """The measured blocks averaged with their transposes (reciprocity)."""
-    out = {}
-    for (x, y), gxy in g.items():
-        if x < y:
-            out[x, y] = 0.5 * (gxy + np.swapaxes(g[y, x], 1, 2))
-            out[y, x] = np.swapaxes(out[x, y], 1, 2)
-        elif x == y:
-            out[x, x] = _sym(gxy)
-    return out
-
-
-def _pass(h_ii, h_ic, h_ci, h_cc, g, reg: Regularisation, symmetrize: bool, span) -> tuple:
-    """Identify the joint on one pass of lines: ``(hj, p, cond, num², den²)`` of the residual."""
-    if symmetrize:
-        g = _symmetrised(g)
-    # D = H_II − G_II: its off-diagonal blocks are −G_xy (the sign is applied to the small products)
-    d = {(x, y): (h_ii[x] - g[x, y] if x == y else g[x, y]) for x, y in g}
+    ``g``: the measured assembly FRFs ``(w, L, L)``, measured DOFs ordered by
+    body (``rows[x]`` on body x); ``span[x]``: body x's contact DOFs in the joint.
+    """
+    g = _sym(g) if symmetrize else np.ascontiguousarray(g)
     left, right, cond_ic, cond_ci = _pinv_pair(h_ic, h_ci, reg)
-    nf, nc = h_ic[0].shape[0], span[1].stop
-    p = np.zeros((nf, nc, nc), dtype=complex)
-    for (x, y), dxy in d.items():
-        pxy = p[:, span[x], span[y]]
-        np.matmul(left[x] @ dxy, right[y], out=pxy)
-        if x != y:
-            np.negative(pxy, out=pxy)
+    w, nl, nc = g.shape[0], g.shape[1], span[1].stop
+    # N = H_IC⁺ D with D = H_II − G (H_II block diagonal): N_x = −L_x G[I_x, :], plus L_x H_{I_x I_x} on I_x
+    n = np.empty((w, nc, nl), dtype=complex)
+    for x in (0, 1):
+        np.matmul(np.negative(left[x]), g[:, rows[x], :], out=n[:, span[x], :])
+        n[:, span[x], rows[x]] += left[x] @ h_ii[x]
+    # P = N H_CI⁺
+    p = np.empty((w, nc, nc), dtype=complex)
+    for y in (0, 1):
+        np.matmul(n[:, :, rows[y]], right[y], out=p[:, :, span[y]])
     if symmetrize:
         p = _sym(p)
+    return p, cond_ic * cond_ci, g
+
+
+def _pass(h_ii, h_ic, h_ci, h_cc, g, rows, span, reg: Regularisation, symmetrize: bool) -> tuple:
+    """Identify the joint on one pass of lines: ``(hj, cond, num², den²)`` of the residual (see :func:`_p_pass`)."""
+    p, cond, g = _p_pass(h_ii, h_ic, h_ci, g, rows, span, reg, symmetrize)
+    w, nl, nc = g.shape[0], g.shape[1], span[1].stop
     hj = inverse(p)
     for x in (0, 1):
         hj[:, span[x], span[x]] -= h_cc[x]
     if symmetrize:
         hj = _sym(hj)
-    # Re-coupled measurement: G_rec − G = D − H_IC (H_CC + H^J)⁻¹ H_CI, block by block. H_CC + H^J
-    # is the inverse of P exactly without symmetrisation and, with it, when H_CC is symmetric:
-    # then (H_CC + H^J)⁻¹ = P to round-off and no further inverse is needed.
+    # Re-coupled measurement: G_rec − G = D − H_IC (H_CC + H^J)⁻¹ H_CI. H_CC + H^J is the inverse of
+    # P exactly without symmetrisation and, with it, when H_CC is symmetric: then (H_CC + H^J)⁻¹ = P
+    # to round-off and no further inverse is needed.
     if symmetrize and not all(np.array_equal(c, np.swapaxes(c, 1, 2)) for c in h_cc):
         joined = hj.copy()
         for x in (0, 1):
@@ -81,17 +69,16 @@ def _pass(h_ii, h_ic, h_ci, h_cc, g, reg: Regularisation, symmetrize: bool, span
         q = np.linalg.inv(joined)
     else:
         q = p
-    num = np.zeros(nf)
-    den = np.zeros(nf)
-    for (x, y), dxy in d.items():
-        rec = h_ic[x] @ q[:, span[x], span[y]] @ h_ci[y]
-        if x == y:
-            np.subtract(dxy, rec, out=rec)
-        else:  # off the diagonal D_xy = −G_xy
-            np.add(dxy, rec, out=rec)
-        num += frobenius(rec) ** 2
-        den += frobenius(g[x, y]) ** 2
-    return hj, p, cond_ic * cond_ci, num, den
+    y_ = np.empty((w, nl, nc), dtype=complex)  # H_IC q
+    for x in (0, 1):
+        np.matmul(h_ic[x], q[:, span[x], :], out=y_[:, rows[x], :])
+    rec = np.empty((w, nl, nl), dtype=complex)  # H_IC q H_CI
+    for y in (0, 1):
+        np.matmul(y_[:, :, span[y]], h_ci[y], out=rec[:, :, rows[y]])
+    rec += g  # G_rec − G up to the sign: H_IC q H_CI − D = H_IC q H_CI + G − H_II
+    for x in (0, 1):
+        rec[:, rows[x], rows[x]] -= h_ii[x]
+    return hj, cond, frobenius(rec) ** 2, frobenius(g) ** 2
 
 
 def identify_joint_matrix(
@@ -190,18 +177,28 @@ def identify_joint_matrix(
         h_ic.append(blk[:, :m, m:])
         h_ci.append(blk[:, m:, :m])
         h_cc.append(blk[:, m:, m:])
-    g = _measured_blocks(G, meas, smoothing, smoothing_order)
+    order = meas[0] + meas[1]
+    g = fetch("assembly", G, order, order, "the measured DOFs, directly or by reciprocity", view=True)
+    if smoothing:
+        g = savgol_smooth(g, int(smoothing), smoothing_order)
+    rows = [slice(0, len(meas[0])), slice(len(meas[0]), L)]
     span = [slice(0, len(ad)), slice(len(ad), nc)]
 
     hj = np.empty((nf, nc, nc), dtype=complex)
     cond, num, den = np.empty(nf), np.empty(nf), np.empty(nf)
-    ps = []  # P per pass, for extra["condition_p"]
-    for start in range(0, nf, _LINES):
-        s = slice(start, start + _LINES)
-        out = _pass([h[s] for h in h_ii], [h[s] for h in h_ic], [h[s] for h in h_ci], [h[s] for h in h_cc],
-                    {k: v[s] for k, v in g.items()}, reg, symmetrize, span)
-        hj[s], p_s, cond[s], num[s], den[s] = out
-        ps.append(p_s)
+    passes = [slice(start, start + _LINES) for start in range(0, nf, _LINES)]
+    for s in passes:
+        hj[s], cond[s], num[s], den[s] = _pass(
+            [h[s] for h in h_ii], [h[s] for h in h_ic], [h[s] for h in h_ci], [h[s] for h in h_cc],
+            g[s], rows, span, reg, symmetrize,
+        )
+
+    def condition_p() -> np.ndarray:  # P again (the same operations, so the same numbers), when first asked for
+        return np.concatenate([
+            condition(_p_pass([h[s] for h in h_ii], [h[s] for h in h_ic], [h[s] for h in h_ci], g[s], rows, span,
+                              reg, symmetrize)[0])
+            for s in passes
+        ])
     if np.all(cond > condition_limit):
         raise NumericalError(
             f"H_IC (measured DOFs × contact DOFs) is singular at every line (condition > {condition_limit:g}); "
@@ -219,7 +216,7 @@ def identify_joint_matrix(
         condition=cond,
         unreliable=ill,
         flags={"ill_conditioned": ill},
-        extra=LazyExtra({"n_measured": L, "nc": nc}, {"condition_p": lambda: condition(np.concatenate(ps))}),
+        extra=LazyExtra({"n_measured": L, "nc": nc}, {"condition_p": condition_p}),
         settings={
             "measured": [f"{n}:{d}" for n, d in pairs],
             "a": a,
