@@ -52,12 +52,12 @@ def _tridiagonalise(s: np.ndarray, d: np.ndarray, e2: np.ndarray, scratch: "tupl
     buffers from :func:`_tridiagonal_scratch` for at least nf lines.
     """
     n, _, nf = s.shape
-    r1, r2, r3, work, outer = (b[..., :nf] for b in (scratch or _tridiagonal_scratch(n, nf)))
+    r1, r2, r3, work, outer, outer2 = (b[..., :nf] for b in (scratch or _tridiagonal_scratch(n, nf)))
     for k in range(n - 2):
         m = n - k - 1
         x = s[k + 1 :, k]  # the column below the diagonal, reflected onto its first entry
         u, p, w = work[0, :m], work[1, :m], work[2, :m]
-        uw = outer[:m, :m]
+        uw, uw2 = outer[:m, :m], outer2
         d[k] = s[k, k].real
         nx2 = e2[k]
         np.multiply(x.real, x.real, out=u.real)
@@ -83,12 +83,13 @@ def _tridiagonalise(s: np.ndarray, d: np.ndarray, e2: np.ndarray, scratch: "tupl
         kk = (u.real * p.real + u.imag * p.imag).sum(0)  # uᴴ t u (real)
         np.multiply(u, kk, out=w)
         np.subtract(p, w, out=w)
+        np.conjugate(w, out=w)
+        w *= 2.0
         # (I − 2uuᴴ) t (I − 2uuᴴ) = t − 2 u wᴴ − 2 w uᴴ
-        np.multiply(u[:, None], np.conj(w)[None], out=uw)
+        np.multiply(u[:, None], w[None], out=uw)
         t -= uw
-        t -= np.conj(np.swapaxes(uw, 0, 1))
-        t -= uw
-        t -= np.conj(np.swapaxes(uw, 0, 1))
+        np.conjugate(np.swapaxes(uw, 0, 1), out=uw2[:m, :m])
+        t -= uw2[:m, :m]
     if n >= 2:
         d[n - 2] = s[n - 2, n - 2].real
         e2[n - 2] = s[n - 1, n - 2].real ** 2 + s[n - 1, n - 2].imag ** 2
@@ -97,7 +98,7 @@ def _tridiagonalise(s: np.ndarray, d: np.ndarray, e2: np.ndarray, scratch: "tupl
 
 def _tridiagonal_scratch(n: int, nf: int) -> tuple:
     return (np.empty(nf), np.empty(nf), np.empty(nf), np.empty((3, n, nf), dtype=complex),
-            np.empty((n, n, nf), dtype=complex))
+            np.empty((n, n, nf), dtype=complex), np.empty((n, n, nf), dtype=complex))
 
 
 def _sturm_count(d: np.ndarray, e2: np.ndarray, x: np.ndarray, pivmin: np.ndarray) -> np.ndarray:
@@ -118,36 +119,60 @@ def _laguerre(d: np.ndarray, e2: np.ndarray, x: np.ndarray, tol: np.ndarray) -> 
     ``T`` has diagonal ``d`` (n, nf) and squared off-diagonal ``e2`` (n − 1, nf),
     scaled so that its entries are at most about 1 (``p`` by the three-term
     recurrence cannot overflow). Lines stop once converged; the others are
-    iterated on their own.
+    iterated on their own. All arithmetic is in place, in eight buffers.
     """
     n = d.shape[0]
     x = x.copy()
     idx = np.arange(x.size)
-    dd, ee, xx, tt = d, e2, x, tol
+    dd, ee, xx, tt = d, e2, x.copy(), tol
     with np.errstate(all="ignore"):
         for _ in range(_MAX_LAGUERRE):
+            a, p0, p1, dp0, dp1, ddp0, ddp1, t = np.empty((8, xx.size))
             # p_i = (d_i − x) p_{i−1} − e2_{i−1} p_{i−2}, and its first two derivatives
-            a = dd[0] - xx
-            p0, p1 = np.ones_like(xx), a
-            dp0, dp1 = np.zeros_like(xx), np.full_like(xx, -1.0)
-            ddp0, ddp1 = np.zeros_like(xx), np.zeros_like(xx)
+            np.subtract(dd[0], xx, out=p1)
+            p0.fill(1.0)
+            dp0.fill(0.0)
+            dp1.fill(-1.0)
+            ddp0.fill(0.0)
+            ddp1.fill(0.0)
             for i in range(1, n):
-                a = dd[i] - xx
+                np.subtract(dd[i], xx, out=a)
                 e = ee[i - 1]
-                ddp0, ddp1 = ddp1, a * ddp1 - 2.0 * dp1 - e * ddp0
-                dp0, dp1 = dp1, a * dp1 - p1 - e * dp0
-                p0, p1 = p1, a * p1 - e * p0
-            g = dp1 / p1  # Σ 1/(x − λ)
-            h = g * g - ddp1 / p1  # Σ 1/(x − λ)²
-            disc = np.sqrt(np.maximum((n - 1) * (n * h - g * g), 0.0))
-            step = n / np.where(g >= 0, g + disc, g - disc)
+                np.multiply(e, ddp0, out=ddp0)  # p''_i = a p''_{i−1} − 2 p'_{i−1} − e p''_{i−2}
+                np.multiply(a, ddp1, out=t)
+                t -= ddp0
+                t -= dp1
+                t -= dp1
+                ddp0, ddp1, t = ddp1, t, ddp0
+                np.multiply(e, dp0, out=dp0)  # p'_i = a p'_{i−1} − p_{i−1} − e p'_{i−2}
+                np.multiply(a, dp1, out=t)
+                t -= p1
+                t -= dp0
+                dp0, dp1, t = dp1, t, dp0
+                np.multiply(e, p0, out=p0)  # p_i = a p_{i−1} − e p_{i−2}
+                np.multiply(a, p1, out=t)
+                t -= p0
+                p0, p1, t = p1, t, p0
+            g, h = dp0, ddp0  # reuse: g = p'/p = Σ 1/(x − λ), h = g² − p''/p = Σ 1/(x − λ)²
+            np.divide(dp1, p1, out=g)
+            np.divide(ddp1, p1, out=h)
+            np.multiply(g, g, out=a)
+            np.subtract(a, h, out=h)
+            np.multiply(h, n, out=t)  # (n − 1)(n h − g²) under the root
+            t -= a
+            t *= n - 1
+            np.maximum(t, 0.0, out=t)
+            np.sqrt(t, out=t)
+            np.copysign(t, g, out=t)
+            t += g
+            step = np.divide(n, t, out=t)
             step[~np.isfinite(step)] = 0.0  # x is a root (p = 0)
             xx -= step
             x[idx] = xx
             more = np.abs(step) > tt
             if not more.any():
                 break
-            if more.mean() < 0.5:  # go on with the lines not yet converged only
+            if more.mean() < 0.75:  # go on with the lines not yet converged only
                 idx, dd, ee, xx, tt = idx[more], dd[:, more], ee[:, more], xx[more], tt[more]
     return x
 
