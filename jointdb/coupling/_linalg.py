@@ -297,14 +297,18 @@ def inverse(p: np.ndarray) -> np.ndarray:
     """
     nf, n = p.shape[0], p.shape[-1]
     eps = np.finfo(float).eps
+    if nf == 0:
+        return np.empty(p.shape, dtype=np.result_type(p, 1.0))
     x = None
+    norm_x = None
     norm_p = frobenius(p)
-    if n >= 4 and nf:
+    if n >= 4:
         x = _block_inverse(p)
         with np.errstate(all="ignore"):
             r = p @ x
-            r[:, np.arange(n), np.arange(n)] -= 1.0
-            redo = np.flatnonzero(~(frobenius(r) <= 10.0 * n * eps * norm_p * frobenius(x)))  # also NaN
+            r.reshape(nf, -1)[:, :: n + 1] -= 1.0
+            norm_x = frobenius(x)
+            redo = np.flatnonzero(~(frobenius(r) <= 10.0 * n * eps * norm_p * norm_x))  # also NaN
     else:
         redo = np.arange(nf)
     if redo.size:
@@ -318,7 +322,7 @@ def inverse(p: np.ndarray) -> np.ndarray:
         else:
             x[redo] = xr
     with np.errstate(over="ignore", invalid="ignore"):
-        est = norm_p * frobenius(x)
+        est = norm_p * (frobenius(x) if redo.size or norm_x is None else norm_x)
     bad = ~(est < 0.01 / (n * eps))  # also NaN
     if bad.any():
         x[bad] = pinv(p[bad])
@@ -331,7 +335,7 @@ def _block_inverse(p: np.ndarray) -> np.ndarray:
 
     h = p.shape[-1] // 2
     a, b, c, d = p[:, :h, :h], p[:, :h, h:], p[:, h:, :h], p[:, h:, h:]
-    x = np.empty(p.shape, dtype=np.result_type(p, 1j))
+    x = np.empty(p.shape, dtype=np.result_type(p, 1.0))
     with np.errstate(all="ignore"):
         ai = to_first(gauss_jordan_inverse(to_last(a).astype(x.dtype, copy=False)))
         aib = ai @ b

@@ -16,7 +16,7 @@ import numpy as np
 
 from jointdb.coupling._common import IdentificationResult, LazyExtra, as_receptance, fetch, same_grid
 from jointdb.coupling._linalg import Regularisation, condition, frobenius, inverse, savgol_smooth
-from jointdb.coupling._multi import _pinv_pair, _sym
+from jointdb.coupling._multi import _pinv_pair, _sym, _transposed
 from jointdb.errors import InputError, NumericalError
 from jointdb.frf import FRF, Dof, Quantity, dofs
 
@@ -62,7 +62,7 @@ def _pass(h_ii, h_ic, h_ci, h_cc, g, rows, span, reg: Regularisation, symmetrize
     # Re-coupled measurement: G_rec − G = D − H_IC (H_CC + H^J)⁻¹ H_CI. H_CC + H^J is the inverse of
     # P exactly without symmetrisation and, with it, when H_CC is symmetric: then (H_CC + H^J)⁻¹ = P
     # to round-off and no further inverse is needed.
-    if symmetrize and not all(np.array_equal(c, np.swapaxes(c, 1, 2)) for c in h_cc):
+    if symmetrize and not all(_transposed(c, c) for c in h_cc):
         joined = hj.copy()
         for x in (0, 1):
             joined[:, span[x], span[x]] += h_cc[x]
