@@ -28,32 +28,38 @@ _LINES = 2048
 
 
 def _p_pass(h_ii, h_ic, h_ci, g, rows, span, reg: Regularisation, symmetrize: bool) -> tuple:
-    """``P = H_IC⁺ D H_CI⁺`` on one pass of lines: ``(p, cond, g)`` (``g`` symmetrised as asked).
+    """``P = H_IC⁺ D H_CI⁺`` on one pass of lines: ``(p, cond, d, ‖G‖²)`` with ``D = H_II − G``.
 
     ``g``: the measured assembly FRFs ``(w, L, L)``, measured DOFs ordered by
-    body (``rows[x]`` on body x); ``span[x]``: body x's contact DOFs in the joint.
+    body (``rows[x]`` on body x), symmetrised here if asked; ``span[x]``:
+    body x's contact DOFs in the joint.
     """
-    g = _sym(g) if symmetrize else np.ascontiguousarray(g)
-    left, right, cond_ic, cond_ci = _pinv_pair(h_ic, h_ci, reg)
     w, nl, nc = g.shape[0], g.shape[1], span[1].stop
-    # N = H_IC⁺ D with D = H_II − G (H_II block diagonal): N_x = −L_x G[I_x, :], plus L_x H_{I_x I_x} on I_x
-    n = np.empty((w, nc, nl), dtype=complex)
+    d = np.empty((w, nl, nl), dtype=complex)
+    if symmetrize:
+        np.add(g, np.swapaxes(g, 1, 2), out=d)
+        d *= -0.5
+    else:
+        np.negative(g, out=d)
+    den = frobenius(d) ** 2
+    for x in (0, 1):  # H_II is block diagonal
+        d[:, rows[x], rows[x]] += h_ii[x]
+    left, right, cond_ic, cond_ci = _pinv_pair(h_ic, h_ci, reg)
+    n = np.empty((w, nc, nl), dtype=complex)  # H_IC⁺ D
     for x in (0, 1):
-        np.matmul(np.negative(left[x]), g[:, rows[x], :], out=n[:, span[x], :])
-        n[:, span[x], rows[x]] += left[x] @ h_ii[x]
-    # P = N H_CI⁺
-    p = np.empty((w, nc, nc), dtype=complex)
+        np.matmul(left[x], d[:, rows[x], :], out=n[:, span[x], :])
+    p = np.empty((w, nc, nc), dtype=complex)  # H_IC⁺ D H_CI⁺
     for y in (0, 1):
         np.matmul(n[:, :, rows[y]], right[y], out=p[:, :, span[y]])
     if symmetrize:
         p = _sym(p)
-    return p, cond_ic * cond_ci, g
+    return p, cond_ic * cond_ci, d, den
 
 
 def _pass(h_ii, h_ic, h_ci, h_cc, g, rows, span, reg: Regularisation, symmetrize: bool) -> tuple:
     """Identify the joint on one pass of lines: ``(hj, cond, num², den²)`` of the residual (see :func:`_p_pass`)."""
-    p, cond, g = _p_pass(h_ii, h_ic, h_ci, g, rows, span, reg, symmetrize)
-    w, nl, nc = g.shape[0], g.shape[1], span[1].stop
+    p, cond, d, den = _p_pass(h_ii, h_ic, h_ci, g, rows, span, reg, symmetrize)
+    w, nl, nc = d.shape[0], d.shape[1], span[1].stop
     hj = inverse(p)
     for x in (0, 1):
         hj[:, span[x], span[x]] -= h_cc[x]
@@ -75,10 +81,8 @@ def _pass(h_ii, h_ic, h_ci, h_cc, g, rows, span, reg: Regularisation, symmetrize
     rec = np.empty((w, nl, nl), dtype=complex)  # H_IC q H_CI
     for y in (0, 1):
         np.matmul(y_[:, :, span[y]], h_ci[y], out=rec[:, :, rows[y]])
-    rec += g  # G_rec − G up to the sign: H_IC q H_CI − D = H_IC q H_CI + G − H_II
-    for x in (0, 1):
-        rec[:, rows[x], rows[x]] -= h_ii[x]
-    return hj, cond, frobenius(rec) ** 2, frobenius(g) ** 2
+    rec -= d  # G_rec − G up to the sign
+    return hj, cond, frobenius(rec) ** 2, den
 
 
 def identify_joint_matrix(
