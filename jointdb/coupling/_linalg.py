@@ -282,7 +282,7 @@ def frobenius(x: np.ndarray) -> np.ndarray:
     return np.sqrt(np.einsum("fij,fij->f", x.real, x.real) + np.einsum("fij,fij->f", x.imag, x.imag))
 
 
-def inverse(p: np.ndarray) -> np.ndarray:
+def inverse(p: np.ndarray, out: "np.ndarray | None" = None) -> np.ndarray:
     """Batched inverse of square ``(n_freq, n, n)``; the SVD pseudo-inverse on numerically singular lines.
 
     For n >= 4 the inverse is first formed by 2 × 2 block elimination (Schur
@@ -294,16 +294,17 @@ def inverse(p: np.ndarray) -> np.ndarray:
     ``inv`` and ``pinv`` agree to round-off unless ``cond₂ > 1/(n·eps)``, where
     ``pinv`` drops singular values. ``‖p‖_F‖p⁻¹‖_F >= cond₂`` flags those
     lines (with a factor 100 to spare), which are then pseudo-inverted.
+    ``out``: an array of p's shape to write the result into (returned).
     """
     nf, n = p.shape[0], p.shape[-1]
     eps = np.finfo(float).eps
     if nf == 0:
-        return np.empty(p.shape, dtype=np.result_type(p, 1.0))
+        return np.empty(p.shape, dtype=np.result_type(p, 1.0)) if out is None else out
     x = None
     norm_x = None
     norm_p = frobenius(p)
     if n >= 4:
-        x = _block_inverse(p)
+        x = _block_inverse(p, out)
         with np.errstate(all="ignore"):
             r = p @ x
             r.reshape(nf, -1)[:, :: n + 1] -= 1.0
@@ -317,8 +318,11 @@ def inverse(p: np.ndarray) -> np.ndarray:
             xr = np.linalg.inv(sub)
         except np.linalg.LinAlgError:  # exactly singular at some line
             xr = np.full(sub.shape, np.nan, dtype=np.result_type(sub, 1.0))
-        if x is None:
+        if x is None and out is None:
             x = xr
+        elif x is None:
+            x = out
+            x[...] = xr
         else:
             x[redo] = xr
     with np.errstate(over="ignore", invalid="ignore"):
@@ -329,23 +333,27 @@ def inverse(p: np.ndarray) -> np.ndarray:
     return x
 
 
-def _block_inverse(p: np.ndarray) -> np.ndarray:
-    """``p⁻¹`` by 2 × 2 block elimination without pivoting (unchecked; see :func:`inverse`)."""
+def _block_inverse(p: np.ndarray, out: "np.ndarray | None" = None) -> np.ndarray:
+    """``p⁻¹`` by 2 × 2 block elimination without pivoting (unchecked; see :func:`inverse`), into ``out``."""
     from jointdb.coupling._smallmat import gauss_jordan_inverse, to_first, to_last
 
     h = p.shape[-1] // 2
     a, b, c, d = p[:, :h, :h], p[:, :h, h:], p[:, h:, :h], p[:, h:, h:]
-    x = np.empty(p.shape, dtype=np.result_type(p, 1.0))
+    x = np.empty(p.shape, dtype=np.result_type(p, 1.0)) if out is None else out
     with np.errstate(all="ignore"):
         ai = to_first(gauss_jordan_inverse(to_last(a).astype(x.dtype, copy=False)))
-        aib = ai @ b
-        si = to_first(gauss_jordan_inverse(to_last(d - c @ aib).astype(x.dtype, copy=False)))  # Schur complement
-        x[:, h:, h:] = si
-        np.matmul(si, c @ ai, out=x[:, h:, :h])
-        np.negative(x[:, h:, :h], out=x[:, h:, :h])  # −S⁻¹ C A⁻¹
-        np.matmul(aib, si, out=x[:, :h, h:])
-        np.negative(x[:, :h, h:], out=x[:, :h, h:])  # −A⁻¹ B S⁻¹
-        np.subtract(ai, aib @ x[:, h:, :h], out=x[:, :h, :h])  # A⁻¹ + A⁻¹ B S⁻¹ C A⁻¹
+        naib = ai @ b
+        np.negative(naib, out=naib)  # −A⁻¹ B
+        s = c @ naib
+        s += d  # Schur complement S = D − C A⁻¹ B
+        np.copyto(x[:, h:, h:], np.moveaxis(gauss_jordan_inverse(to_last(s)), -1, 0))
+        si = x[:, h:, h:]
+        ncai = c @ ai
+        np.negative(ncai, out=ncai)  # −C A⁻¹
+        np.matmul(si, ncai, out=x[:, h:, :h])  # −S⁻¹ C A⁻¹
+        np.matmul(naib, si, out=x[:, :h, h:])  # −A⁻¹ B S⁻¹
+        np.matmul(naib, x[:, h:, :h], out=x[:, :h, :h])
+        x[:, :h, :h] += ai  # A⁻¹ + A⁻¹ B S⁻¹ C A⁻¹
     return x
 
 

@@ -56,15 +56,15 @@ def _p_pass(h_ii, h_ic, h_ci, g, rows, span, reg: Regularisation, symmetrize: bo
     return p, cond_ic * cond_ci, d, den
 
 
-def _pass(h_ii, h_ic, h_ci, h_cc, g, rows, span, reg: Regularisation, symmetrize: bool) -> tuple:
-    """Identify the joint on one pass of lines: ``(hj, cond, num², den²)`` of the residual (see :func:`_p_pass`)."""
+def _pass(h_ii, h_ic, h_ci, h_cc, g, rows, span, reg: Regularisation, symmetrize: bool, hj) -> tuple:
+    """Identify the joint on one pass of lines into ``hj``: ``(cond, num², den²)`` of the residual (see :func:`_p_pass`)."""
     p, cond, d, den = _p_pass(h_ii, h_ic, h_ci, g, rows, span, reg, symmetrize)
     w, nl, nc = d.shape[0], d.shape[1], span[1].stop
-    hj = inverse(p)
+    inverse(p, out=hj)
     for x in (0, 1):
         hj[:, span[x], span[x]] -= h_cc[x]
     if symmetrize:
-        hj = _sym(hj)
+        hj[...] = _sym(hj)
     # Re-coupled measurement: G_rec − G = D − H_IC (H_CC + H^J)⁻¹ H_CI. H_CC + H^J is the inverse of
     # P exactly without symmetrisation and, with it, when H_CC is symmetric: then (H_CC + H^J)⁻¹ = P
     # to round-off and no further inverse is needed.
@@ -82,7 +82,7 @@ def _pass(h_ii, h_ic, h_ci, h_cc, g, rows, span, reg: Regularisation, symmetrize
     for y in (0, 1):
         np.matmul(y_[:, :, span[y]], h_ci[y], out=rec[:, :, rows[y]])
     rec -= d  # G_rec − G up to the sign
-    return hj, cond, frobenius(rec) ** 2, den
+    return cond, frobenius(rec) ** 2, den
 
 
 def identify_joint_matrix(
@@ -192,9 +192,9 @@ def identify_joint_matrix(
     cond, num, den = np.empty(nf), np.empty(nf), np.empty(nf)
     passes = [slice(start, start + _LINES) for start in range(0, nf, _LINES)]
     for s in passes:
-        hj[s], cond[s], num[s], den[s] = _pass(
+        cond[s], num[s], den[s] = _pass(
             [h[s] for h in h_ii], [h[s] for h in h_ic], [h[s] for h in h_ci], [h[s] for h in h_cc],
-            g[s], rows, span, reg, symmetrize,
+            g[s], rows, span, reg, symmetrize, hj[s],
         )
 
     def condition_p() -> np.ndarray:  # P again (the same operations, so the same numbers), when first asked for
