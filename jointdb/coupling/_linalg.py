@@ -181,15 +181,14 @@ def equilibrated_pinvs(
             gram[...] = np.moveaxis(ab @ abh if wide else abh @ ab, 0, -1)
             parts[k][j] = [ab, abh, gram, None]
         sb = np.sqrt(np.einsum("iif->if", buf).real)  # the squared row/column norms are on the diagonal
-        sb[sb == 0] = 1.0
-        buf /= sb[:, None, :] * sb[None, :, :]  # Gram matrices of the equilibrated blocks
+        sb[sb == 0] = 1.0  # (the kernels equilibrate: S⁻¹ G S⁻¹, S = diag(sb))
         for i, (k, j) in enumerate(members):
             parts[k][j][3] = sb[:, i * nf : (i + 1) * nf]
         buffers[n] = (buf, sb, members)
     # extreme eigenvalues of the Gram matrices (fewer equations than unknowns: rank deficient, λmin = 0)
     extremes = {}
     for n, (buf, _, members) in buffers.items():
-        lmin, lmax = hermitian_extremes(buf)
+        lmin, lmax = hermitian_extremes(buf, sb)
         for i, (k, j) in enumerate(members):
             ab, wide = sides[k][0][j], sides[k][1]
             deficient = (ab.shape[2] if wide else ab.shape[1]) < (ab.shape[1] if wide else ab.shape[2])
@@ -219,20 +218,17 @@ def equilibrated_pinvs(
                if fasts[k].any() and (sides[k][0][j].shape[1] != sides[k][0][j].shape[2] or tikhonov)]
         if not use:
             continue
-        inv = np.empty((n, n, nf * len(use)), dtype=complex)
-        scale = np.empty((n, nf * len(use)))
-        for u, (i, k, j) in enumerate(use):
-            part = inv[:, :, u * nf : (u + 1) * nf]
-            part[...] = buf[:, :, i * nf : (i + 1) * nf]
-            if tikhonov:
-                np.einsum("iif->if", part)[...] += reg.rel**2 * lam_maxs[k]
-            slow = np.flatnonzero(~fasts[k])
-            if slow.size:
-                part[:, :, slow] = np.eye(n)[:, :, None]
-            scale[:, u * nf : (u + 1) * nf] = sb[:, i * nf : (i + 1) * nf]
-        hpd_inverse(inv)
-        inv /= scale[:, None, :] * scale[None, :, :]
-        for u, (i, k, j) in enumerate(use):
+        if len(use) == len(members):  # the Gram matrices are not needed any more: invert in place
+            inv, scale = buf, sb
+            where = [i for i, _, _ in use]
+        else:
+            inv = np.concatenate([buf[:, :, i * nf : (i + 1) * nf] for i, _, _ in use], axis=2)
+            scale = np.concatenate([sb[:, i * nf : (i + 1) * nf] for i, _, _ in use], axis=1)
+            where = list(range(len(use)))
+        skip = np.concatenate([~fasts[k] for _, k, _ in use])
+        shift = np.concatenate([reg.rel**2 * lam_maxs[k] for _, k, _ in use]) if tikhonov else None
+        hpd_inverse(inv, scale, shift, skip if skip.any() else None)
+        for u, (i, k, j) in zip(where, use):
             inverses[k, j] = to_first(inv[:, :, u * nf : (u + 1) * nf])
     out_sides = []
     for k, side in enumerate(parts):

@@ -177,13 +177,15 @@ def _laguerre(d: np.ndarray, e2: np.ndarray, x: np.ndarray, tol: np.ndarray) -> 
     return x
 
 
-def hermitian_extremes(g: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def hermitian_extremes(g: np.ndarray, scale: "np.ndarray | None" = None) -> tuple[np.ndarray, np.ndarray]:
     """Smallest and largest eigenvalue of each Hermitian matrix of ``g`` (n, n, n_freq).
 
-    Backward stable like LAPACK's ``eigvalsh`` (absolute error a small
-    multiple of ``n·eps·‖g‖`` per line); each result is certified by Sturm
-    counts, and lines that cannot be certified (none in practice) are
-    computed by ``numpy.linalg.eigvalsh``. ``g`` is not modified.
+    With ``scale`` (n, n_freq), those of ``diag(1/scale) g diag(1/scale)``
+    (scaled chunk by chunk, in cache). Backward stable like LAPACK's
+    ``eigvalsh`` (absolute error a small multiple of ``n·eps·‖g‖`` per line);
+    each result is certified by Sturm counts, and lines that cannot be
+    certified (none in practice) are computed by ``numpy.linalg.eigvalsh``.
+    ``g`` is not modified.
 
     Returns
     -------
@@ -191,7 +193,7 @@ def hermitian_extremes(g: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """
     n, _, nf = g.shape
     if n <= 2 or nf == 0:
-        lam = np.linalg.eigvalsh(to_first(g)) if nf else np.zeros((0, n))
+        lam = np.linalg.eigvalsh(to_first(_scaled(g, scale))) if nf else np.zeros((0, n))
         return lam[:, 0], lam[:, -1]
     d, e2 = np.empty((n, nf)), np.empty((n - 1, nf))
     size = min(nf, CHUNK)
@@ -201,43 +203,54 @@ def hermitian_extremes(g: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         part = slice(start, start + CHUNK)
         c = copy[:, :, : g[:, :, part].shape[2]]
         c[...] = g[:, :, part]
+        if scale is not None:
+            c /= scale[:, None, part] * scale[None, :, part]
         _tridiagonalise(c, d[:, part], e2[:, part], scratch)
     e = np.sqrt(e2)
     radius = np.zeros((n, nf))
     radius[:-1] += e
     radius[1:] += e
     lo, hi = (d - radius).min(0), (d + radius).max(0)  # Gershgorin: the spectrum lies in [lo, hi]
-    scale = np.maximum(np.abs(lo), np.abs(hi))
-    scale[scale == 0] = 1.0
-    ds, es = d / scale, e2 / scale**2
+    size = np.maximum(np.abs(lo), np.abs(hi))  # ‖T‖ within a factor of 2
+    size[size == 0] = 1.0
+    ds, es = d / size, e2 / size**2
     tol = 2.0 * EPS
     x = _laguerre(np.concatenate([ds, ds], 1), np.concatenate([es, es], 1),
-                  np.concatenate([lo / scale - tol, hi / scale + tol]), np.full(2 * nf, tol))
-    lam_min, lam_max = x[:nf] * scale, x[nf:] * scale
-    delta = 2.0 * n * EPS * scale
+                  np.concatenate([lo / size - tol, hi / size + tol]), np.full(2 * nf, tol))
+    lam_min, lam_max = x[:nf] * size, x[nf:] * size
+    delta = 2.0 * n * EPS * size
     pivmin = np.finfo(float).tiny * np.maximum(1.0, e2.max(0))
     counts = _sturm_count(d, e2, np.stack([lam_min - delta, lam_min + delta, lam_max - delta, lam_max + delta]), pivmin)
     ok = (counts[0] == 0) & (counts[1] >= 1) & (counts[2] <= n - 1) & (counts[3] == n)
     bad = np.flatnonzero(~ok)
     if bad.size:
-        lam = np.linalg.eigvalsh(to_first(g[:, :, bad]))
+        lam = np.linalg.eigvalsh(to_first(_scaled(g[:, :, bad], None if scale is None else scale[:, bad])))
         lam_min[bad], lam_max[bad] = lam[:, 0], lam[:, -1]
     return lam_min, lam_max
 
 
-def gauss_jordan_inverse(a: np.ndarray) -> np.ndarray:
+def _scaled(g: np.ndarray, scale: "np.ndarray | None") -> np.ndarray:
+    return g if scale is None else g / (scale[:, None] * scale[None, :])
+
+
+def gauss_jordan_inverse(a: np.ndarray, scale=None, shift=None, skip=None) -> np.ndarray:
     """Inverse of each matrix of ``a`` (n, n, n_freq) by Gauss–Jordan elimination without pivoting, in place.
 
     Stable for Hermitian positive definite matrices (see :func:`hpd_inverse`);
     for others the caller checks the result (small pivots make it grow).
-    Returns ``a``.
+    ``scale`` (n, n_freq), ``shift`` (n_freq,), ``skip`` (bool, n_freq): the
+    result is ``S⁻¹ (S⁻¹ a S⁻¹ + shift·I)⁻¹ S⁻¹`` with ``S = diag(scale)``,
+    and the identity on the lines to skip (all applied chunk by chunk, in
+    cache). Returns ``a``.
     """
     n, _, nf = a.shape
     size = min(nf, CHUNK)
     tmp_all = np.empty((n, n, size), dtype=a.dtype)  # scratch allocated once, reused by every chunk
     col_all = np.empty((n, size), dtype=a.dtype)
     piv_all = np.empty(size, dtype=a.dtype)
+    outer_all = np.empty((n, n, size)) if scale is not None else None
     buf = np.empty((n, n, size), dtype=a.dtype) if nf > CHUNK else None
+    eye = np.eye(n)[:, :, None]
     for start in range(0, nf, CHUNK):
         part = a[:, :, start : start + CHUNK]
         w = part.shape[2]
@@ -247,6 +260,17 @@ def gauss_jordan_inverse(a: np.ndarray) -> np.ndarray:
         else:  # a contiguous copy: the chunk's rows are then adjacent in memory
             c = buf[:, :, :w]
             c[...] = part
+        if scale is not None:
+            outer = outer_all[:, :, :w]
+            sc = scale[:, start : start + w]
+            np.multiply(sc[:, None], sc[None, :], out=outer)
+            c /= outer
+        if shift is not None:
+            np.einsum("iif->if", c)[...] += shift[start : start + w]
+        if skip is not None:
+            lines = np.flatnonzero(skip[start : start + w])
+            if lines.size:
+                c[:, :, lines] = eye
         for k in range(n):
             np.divide(1.0, c[k, k], out=piv)
             c[k] *= piv
@@ -257,17 +281,20 @@ def gauss_jordan_inverse(a: np.ndarray) -> np.ndarray:
             np.multiply(col, piv, out=c[:, k])
             np.negative(c[:, k], out=c[:, k])
             c[k, k] = piv
+        if scale is not None:
+            c /= outer
         if buf is not None:
             part[...] = c
     return a
 
 
-def hpd_inverse(a: np.ndarray) -> np.ndarray:
+def hpd_inverse(a: np.ndarray, scale=None, shift=None, skip=None) -> np.ndarray:
     """Inverse of each Hermitian positive definite matrix of ``a`` (n, n, n_freq), computed in place.
 
     Gauss–Jordan elimination without pivoting: for a positive definite
     matrix the pivots are the squared diagonal of its Cholesky factor, so
     nothing grows, and the error is that of an LU-based inverse,
-    ``O(n·eps·cond(a))`` relative. Returns ``a``.
+    ``O(n·eps·cond(a))`` relative. ``scale``, ``shift``, ``skip``: see
+    :func:`gauss_jordan_inverse`. Returns ``a``.
     """
-    return gauss_jordan_inverse(a)
+    return gauss_jordan_inverse(a, scale, shift, skip)

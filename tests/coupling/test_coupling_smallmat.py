@@ -110,3 +110,24 @@ def test_inverse_block_elimination_equals_lapack(dtype):
 def test_inverse_small_matrices_use_lapack():
     p = RNG.standard_normal((50, 3, 3)) + 1j * RNG.standard_normal((50, 3, 3))
     assert np.array_equal(inverse(p), np.linalg.inv(p))
+
+
+def test_scaled_shifted_kernels_equal_the_explicit_formula(monkeypatch):
+    """extremes of S⁻¹GS⁻¹ and S⁻¹(S⁻¹GS⁻¹ + μI)⁻¹S⁻¹ with skipped lines, in several chunks."""
+    monkeypatch.setattr(_smallmat, "CHUNK", 128)
+    g = gram(700, 8, 6) * np.logspace(-6, 6, 6)[None, :, None] * np.logspace(-6, 6, 6)[None, None, :]
+    scale = np.sqrt(np.einsum("fii->if", g).real)
+    gs = g / (scale.T[:, :, None] * scale.T[:, None, :])
+    ref = np.linalg.eigvalsh(gs)
+    lam_min, lam_max = hermitian_extremes(to_last(g), scale)
+    assert np.allclose(lam_min, ref[:, 0], rtol=0, atol=24 * 6 * EPS)
+    assert np.allclose(lam_max, ref[:, -1], rtol=0, atol=24 * 6 * EPS)
+    shift = 1e-3 * ref[:, -1]
+    skip = np.zeros(700, bool)
+    skip[::7] = True
+    out = to_first(hpd_inverse(to_last(g), scale, shift, skip))
+    want = np.linalg.inv(gs + shift[:, None, None] * np.eye(6)) / (scale.T[:, :, None] * scale.T[:, None, :])
+    keep = ~skip
+    err = np.linalg.norm(out[keep] - want[keep], axis=(1, 2)) / np.linalg.norm(want[keep], axis=(1, 2))
+    assert np.all(err <= 10 * 6 * EPS * np.linalg.cond(gs[keep]))
+    assert np.allclose(out[skip], 1 / (scale.T[skip][:, :, None] * scale.T[skip][:, None, :]) * np.eye(6))
