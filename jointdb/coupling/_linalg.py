@@ -188,7 +188,7 @@ def equilibrated_pinvs(
     # extreme eigenvalues of the Gram matrices (fewer equations than unknowns: rank deficient, λmin = 0)
     extremes = {}
     for n, (buf, _, members) in buffers.items():
-        lmin, lmax = hermitian_extremes(buf, sb)
+        lmin, lmax = hermitian_extremes(buf, sb, psd=True)
         for i, (k, j) in enumerate(members):
             ab, wide = sides[k][0][j], sides[k][1]
             deficient = (ab.shape[2] if wide else ab.shape[1]) < (ab.shape[1] if wide else ab.shape[2])

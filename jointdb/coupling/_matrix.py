@@ -24,7 +24,7 @@ __all__ = ["identify_joint_matrix"]
 
 
 #: Frequency lines per pass: every array of a pass stays in the processor's cache.
-_LINES = 2048
+_LINES = 1024
 
 
 def _p_pass(h_ii, h_ic, h_ci, g, rows, span, reg: Regularisation, symmetrize: bool) -> tuple:

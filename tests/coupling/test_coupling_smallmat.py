@@ -46,11 +46,13 @@ CASES = {
 }
 
 
+@pytest.mark.parametrize("psd", [False, True], ids=["any", "claimed psd"])
 @pytest.mark.parametrize("name", list(CASES))
-def test_hermitian_extremes_equal_eigvalsh(name):
+def test_hermitian_extremes_equal_eigvalsh(name, psd):
+    """Also with the positive semi-definite start claimed for every case (wrongly for "indefinite")."""
     g = CASES[name]()
     ref = np.linalg.eigvalsh(g)
-    lam_min, lam_max = hermitian_extremes(to_last(g))
+    lam_min, lam_max = hermitian_extremes(to_last(g), psd=psd)
     n = g.shape[-1]
     tol = 4 * n * EPS * np.abs(ref).max(axis=1)
     assert np.all(np.abs(lam_min - ref[:, 0]) <= tol)
