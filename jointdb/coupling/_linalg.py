@@ -2,14 +2,18 @@
 
 All functions take frequency-first stacks ``(n_freq, m, n)``.
 
-Least squares with model matrices (:func:`equilibrated_pinv`): per line, one
-small Hermitian eigenvalue problem of the equilibrated Gram matrix gives the
-condition number, and the pseudo-inverse follows from the Gram matrix by a
-solve (the normal equations) where that condition number is small enough for
+Least squares with model matrices (:func:`equilibrated_pinv`): per line, the
+extreme eigenvalues of the equilibrated Gram matrix give the exact 2-norm
+condition number, and the pseudo-inverse follows from the Gram matrix by an
+inverse (the normal equations) where that condition number is small enough for
 their round-off (``eps·cond²``) to stay below ``2e-10``; the other lines go
 through one SVD, reused for the pseudo-inverse and the condition number.
 Block-diagonal model matrices (each measured DOF sees only its own body's
-contacts) are handled block by block.
+contacts) are handled block by block. The eigenvalues and inverses of the
+small Gram matrices, and the 2 × 2 block inverse of :func:`inverse`, use the
+vectorised kernels of ``jointdb.coupling._smallmat`` (numpy's batched LAPACK
+pays a fixed cost per small matrix that dominates here); results are checked
+and lines the kernels cannot vouch for go to LAPACK.
 """
 
 from __future__ import annotations

@@ -5,7 +5,8 @@ A's contact DOFs, so ``H_IC = diag(H_{I_a C_a}, H_{I_b C_b})`` and
 ``H_CI = diag(H_{C_a I_a}, H_{C_b I_b})`` (after ordering the measured DOFs by
 body). Their pseudo-inverses are block diagonal too, and ``P = H_IC⁺ D H_CI⁺``
 is formed from the four blocks ``P_xy = H_{I_x C_x}⁺ D_xy H_{C_y I_y}⁺``; the
-zero blocks are never stored or multiplied.
+zero blocks are never stored or multiplied. The lines are processed in passes
+of ``_LINES`` so that every intermediate array stays in the processor's cache.
 """
 
 from __future__ import annotations
