@@ -1,5 +1,6 @@
-"""identify_joint_matrix / identify_n_point_joints (block-wise, normal equations where well conditioned,
-one SVD elsewhere, condition numbers from Gram eigenvalues, P⁻¹ by LU) against the straightforward
+"""identify_joint_matrix / identify_n_point_joints (block-wise, in passes of lines, normal equations where
+well conditioned, one SVD elsewhere, condition numbers from the extreme Gram eigenvalues by the batched
+kernels, P⁻¹ by checked 2 × 2 block elimination or LU) against the straightforward
 formulas on the whole matrices: SVD pseudo-inverses of the equilibrated H_IC and H_CI,
 ``H^J = pinv(P) − H_CC``, ``cond = cond₂(H_IC,s)·cond₂(H_CI,s)`` by SVD, and the residual of the
 re-coupled measurement by a solve with ``H_CC + H^J``.
