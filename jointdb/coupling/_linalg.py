@@ -215,7 +215,8 @@ def equilibrated_pinvs(
         conds.append(cond)
         fasts.append(fast)
         lam_maxs.append(lam_max)
-    # normal equations: S⁻¹ (G_s + μ²I)⁻¹ S⁻¹ for the non-square blocks, identity on the lines left to the SVD
+    # normal equations: S⁻¹ (G_s + μ²I)⁻¹ S⁻¹ = (G + μ²S²)⁻¹ for the non-square blocks (identity on the
+    # lines left to the SVD); no need to equilibrate: see hpd_inverse
     inverses = {}
     for n, (buf, sb, members) in buffers.items():
         use = [(i, k, j) for i, (k, j) in enumerate(members)
@@ -229,9 +230,12 @@ def equilibrated_pinvs(
             inv = np.concatenate([buf[:, :, i * nf : (i + 1) * nf] for i, _, _ in use], axis=2)
             scale = np.concatenate([sb[:, i * nf : (i + 1) * nf] for i, _, _ in use], axis=1)
             where = list(range(len(use)))
+        # (G_s + μ²I)⁻¹ unscaled: G + μ² S², with S² the Gram diagonal (μ² relative to the side's λmax)
         skip = np.concatenate([~fasts[k] for _, k, _ in use])
-        shift = np.concatenate([reg.rel**2 * lam_maxs[k] for _, k, _ in use]) if tikhonov else None
-        hpd_inverse(inv, scale, shift, skip if skip.any() else None)
+        shift = None
+        if tikhonov:
+            shift = np.concatenate([reg.rel**2 * lam_maxs[k] for _, k, _ in use]) * scale**2
+        hpd_inverse(inv, shift, skip if skip.any() else None)
         for u, (i, k, j) in zip(where, use):
             inverses[k, j] = to_first(inv[:, :, u * nf : (u + 1) * nf])
     out_sides = []

@@ -245,14 +245,13 @@ def _scaled(g: np.ndarray, scale: "np.ndarray | None") -> np.ndarray:
     return g if scale is None else g / (scale[:, None] * scale[None, :])
 
 
-def gauss_jordan_inverse(a: np.ndarray, scale=None, shift=None, skip=None) -> np.ndarray:
+def gauss_jordan_inverse(a: np.ndarray, shift=None, skip=None) -> np.ndarray:
     """Inverse of each matrix of ``a`` (n, n, n_freq) by Gauss–Jordan elimination without pivoting, in place.
 
     Stable for Hermitian positive definite matrices (see :func:`hpd_inverse`);
     for others the caller checks the result (small pivots make it grow).
-    ``scale`` (n, n_freq), ``shift`` (n_freq,), ``skip`` (bool, n_freq): the
-    result is ``S⁻¹ (S⁻¹ a S⁻¹ + shift·I)⁻¹ S⁻¹`` with ``S = diag(scale)``,
-    and the identity on the lines to skip (all applied chunk by chunk, in
+    ``shift`` (n, n_freq): added to the diagonal first; ``skip`` (bool,
+    n_freq): lines set to the identity first (all applied chunk by chunk, in
     cache). Returns ``a``.
     """
     n, _, nf = a.shape
@@ -260,7 +259,6 @@ def gauss_jordan_inverse(a: np.ndarray, scale=None, shift=None, skip=None) -> np
     tmp_all = np.empty((n, n, size), dtype=a.dtype)  # scratch allocated once, reused by every chunk
     col_all = np.empty((n, size), dtype=a.dtype)
     piv_all = np.empty(size, dtype=a.dtype)
-    outer_all = np.empty((n, n, size)) if scale is not None else None
     buf = np.empty((n, n, size), dtype=a.dtype) if nf > CHUNK else None
     eye = np.eye(n)[:, :, None]
     for start in range(0, nf, CHUNK):
@@ -268,15 +266,10 @@ def gauss_jordan_inverse(a: np.ndarray, scale=None, shift=None, skip=None) -> np
         w = part.shape[2]
         tmp, col, piv = tmp_all[:, :, :w], col_all[:, :w], piv_all[:w]
         c = part if buf is None else buf[:, :, :w]  # a contiguous copy: the chunk's rows adjacent in memory
-        if scale is not None:
-            outer = outer_all[:, :, :w]
-            sc = scale[:, start : start + w]
-            np.multiply(sc[:, None], sc[None, :], out=outer)
-            np.divide(part, outer, out=c)
-        elif buf is not None:
+        if buf is not None:
             c[...] = part
         if shift is not None:
-            np.einsum("iif->if", c)[...] += shift[start : start + w]
+            np.einsum("iif->if", c)[...] += shift[:, start : start + w]
         if skip is not None:
             lines = np.flatnonzero(skip[start : start + w])
             if lines.size:
@@ -291,20 +284,20 @@ def gauss_jordan_inverse(a: np.ndarray, scale=None, shift=None, skip=None) -> np
             np.multiply(col, piv, out=c[:, k])
             np.negative(c[:, k], out=c[:, k])
             c[k, k] = piv
-        if scale is not None:
-            c /= outer
         if buf is not None:
             part[...] = c
     return a
 
 
-def hpd_inverse(a: np.ndarray, scale=None, shift=None, skip=None) -> np.ndarray:
+def hpd_inverse(a: np.ndarray, shift=None, skip=None) -> np.ndarray:
     """Inverse of each Hermitian positive definite matrix of ``a`` (n, n, n_freq), computed in place.
 
     Gauss–Jordan elimination without pivoting: for a positive definite
     matrix the pivots are the squared diagonal of its Cholesky factor, so
     nothing grows, and the error is that of an LU-based inverse,
-    ``O(n·eps·cond(a))`` relative. ``scale``, ``shift``, ``skip``: see
-    :func:`gauss_jordan_inverse`. Returns ``a``.
+    ``O(n·eps·cond(S⁻¹aS⁻¹))`` relative for the best diagonal scaling S:
+    elimination without pivoting commutes with scaling by powers of two
+    (exact), so equilibrating first would change nothing. ``shift``,
+    ``skip``: see :func:`gauss_jordan_inverse`. Returns ``a``.
     """
-    return gauss_jordan_inverse(a, scale, shift, skip)
+    return gauss_jordan_inverse(a, shift, skip)
