@@ -73,7 +73,7 @@ def _pass(h_ii, h_ic, h_ci, h_cc, g, rows, span, reg: Regularisation, symmetrize
         joined = hj.copy()
         for x in (0, 1):
             joined[:, span[x], span[x]] += h_cc[x]
-        q = np.linalg.inv(joined)
+        q = inverse(joined)  # (pseudo-inverse on singular lines: those are flagged, or all are and it raises)
     else:
         q = p
     y_ = np.empty((w, nl, nc), dtype=complex)  # H_IC q

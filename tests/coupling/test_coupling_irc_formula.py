@@ -191,6 +191,25 @@ def test_square_block_equals_straightforward_formula(reg):
     compare(res, ref)
 
 
+@pytest.mark.parametrize("symmetrize", [True, False])
+def test_joint_matrix_with_no_measured_dof_on_one_body_raises(monkeypatch, symmetrize):
+    """All 15 measured DOFs on A: H_IC is singular at every line, in every pass (A's H_CC not exactly
+    symmetric, so the symmetrised residual inverts H_CC + H^J, exactly singular here with B's block
+    symmetric): the user's error, not a LinAlgError."""
+    from jointdb.errors import NumericalError
+
+    monkeypatch.setattr(_matrix, "_LINES", 100)
+    a_meas = [Dof(i + 1, "x") for i in range(15)]
+    a_c = [Dof(50, d) for d in DIRECTIONS]
+    b_c = [Dof(150, d) for d in DIRECTIONS]
+    ha, hb = modal(FREQ, 21, 1, skew=1e-9), modal(FREQ, 6, 2)
+    hb = 0.5 * (hb + np.swapaxes(hb, 1, 2))
+    subs = {"A": FRF(FREQ, ha, a_meas + a_c, a_meas + a_c), "B": FRF(FREQ, hb, b_c, b_c)}
+    assembly = FRF(FREQ, modal(FREQ, 15, 3), a_meas, a_meas)
+    with pytest.raises(NumericalError, match="singular at every line"):
+        identify_joint_matrix(assembly, subs, [("A", d) for d in a_meas], "A", a_c, "B", b_c, symmetrize=symmetrize)
+
+
 def test_n_point_equals_straightforward_formula():
     rng = np.random.default_rng(4)
     h = modal(FREQ, 9, 11)  # body A: 5 internal + 4 contact DOFs
