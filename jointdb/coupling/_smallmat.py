@@ -12,12 +12,14 @@ certify to LAPACK.
   Hermitian matrices: Householder reduction to real tridiagonal form, then
   Laguerre's iteration from outside the spectrum (monotone and cubically
   convergent for a polynomial with real roots) on the characteristic
-  polynomial evaluated by the Sturm recurrence, and a Sturm count on either
-  side of each result that certifies it is the extreme eigenvalue within
-  ``2·n·eps·‖T‖``.
+  polynomial, evaluated with its first two derivatives by the three-term
+  recurrence, and a Sturm count (LDLᵀ pivots) on either side of each result
+  that certifies it is the extreme eigenvalue within ``2·n·eps·‖T‖``.
 - :func:`hpd_inverse`: inverse of Hermitian positive definite matrices by
   Gauss–Jordan elimination without pivoting (the pivots of a positive
   definite matrix are those of its Cholesky factorisation: no growth).
+  :func:`gauss_jordan_inverse` is the same elimination for any matrix; its
+  callers check the result (``jointdb.coupling._linalg.inverse``).
 """
 
 from __future__ import annotations
