@@ -5,7 +5,8 @@ A's contact DOFs, so ``H_IC = diag(H_{I_a C_a}, H_{I_b C_b})`` and
 ``H_CI = diag(H_{C_a I_a}, H_{C_b I_b})`` (after ordering the measured DOFs by
 body). Their pseudo-inverses are block diagonal too, and ``P = H_IC⁺ D H_CI⁺``
 is formed from the four blocks ``P_xy = H_{I_x C_x}⁺ D_xy H_{C_y I_y}⁺``; the
-zero blocks are never stored or multiplied.
+zero blocks are never stored or multiplied. The lines are processed in passes
+of ``_LINES`` so that every intermediate array stays in the processor's cache.
 """
 
 from __future__ import annotations
@@ -16,32 +17,73 @@ import numpy as np
 
 from jointdb.coupling._common import IdentificationResult, LazyExtra, as_receptance, fetch, same_grid
 from jointdb.coupling._linalg import Regularisation, condition, frobenius, inverse, savgol_smooth
-from jointdb.coupling._multi import _pinv_pair, _sym
+from jointdb.coupling._multi import _pinv_pair, _sym, _transposed
 from jointdb.errors import InputError, NumericalError
 from jointdb.frf import FRF, Dof, Quantity, dofs
 
 __all__ = ["identify_joint_matrix"]
 
 
-def _measured_blocks(
-    G: FRF, meas: "list[list[Dof]]", smoothing: int | None, order: int, symmetrize: bool
-) -> dict[tuple[int, int], np.ndarray]:
-    """Blocks ``G[I_x, I_y]`` of the measured assembly FRFs (smoothed, symmetrised as asked)."""
-    sides = [k for k, m in enumerate(meas) if m]
-    g = {}
-    for x in sides:
-        for y in sides:
-            blk = fetch("assembly", G, meas[x], meas[y], "the measured DOFs, directly or by reciprocity", view=True)
-            g[x, y] = savgol_smooth(blk, int(smoothing), order) if smoothing else blk
+#: Frequency lines per pass: every array of a pass stays in the processor's cache.
+_LINES = 1024
+
+
+def _p_pass(h_ii, h_ic, h_ci, g, rows, span, reg: Regularisation, symmetrize: bool) -> tuple:
+    """``P = H_IC⁺ D H_CI⁺`` on one pass of lines: ``(p, cond, d, ‖G‖²)`` with ``D = H_II − G``.
+
+    ``g``: the measured assembly FRFs ``(w, L, L)``, measured DOFs ordered by
+    body (``rows[x]`` on body x), symmetrised here if asked; ``span[x]``:
+    body x's contact DOFs in the joint.
+    """
+    w, nl, nc = g.shape[0], g.shape[1], span[1].stop
+    d = np.empty((w, nl, nl), dtype=complex)
     if symmetrize:
-        for x in sides:
-            for y in sides:
-                if x < y:
-                    g[x, y] = 0.5 * (g[x, y] + np.swapaxes(g[y, x], 1, 2))
-                    g[y, x] = np.swapaxes(g[x, y], 1, 2)
-                elif x == y:
-                    g[x, x] = _sym(g[x, x])
-    return g
+        np.add(g, np.swapaxes(g, 1, 2), out=d)
+        d *= -0.5
+    else:
+        np.negative(g, out=d)
+    den = frobenius(d) ** 2
+    for x in (0, 1):  # H_II is block diagonal
+        d[:, rows[x], rows[x]] += h_ii[x]
+    left, right, cond_ic, cond_ci = _pinv_pair(h_ic, h_ci, reg)
+    n = np.empty((w, nc, nl), dtype=complex)  # H_IC⁺ D
+    for x in (0, 1):
+        np.matmul(left[x], d[:, rows[x], :], out=n[:, span[x], :])
+    p = np.empty((w, nc, nc), dtype=complex)  # H_IC⁺ D H_CI⁺
+    for y in (0, 1):
+        np.matmul(n[:, :, rows[y]], right[y], out=p[:, :, span[y]])
+    if symmetrize:
+        p = _sym(p)
+    return p, cond_ic * cond_ci, d, den
+
+
+def _pass(h_ii, h_ic, h_ci, h_cc, g, rows, span, reg: Regularisation, symmetrize: bool, hj) -> tuple:
+    """Identify the joint on one pass of lines into ``hj``: ``(cond, num², den²)`` of the residual (see :func:`_p_pass`)."""
+    p, cond, d, den = _p_pass(h_ii, h_ic, h_ci, g, rows, span, reg, symmetrize)
+    w, nl, nc = d.shape[0], d.shape[1], span[1].stop
+    inverse(p, out=hj)
+    for x in (0, 1):
+        hj[:, span[x], span[x]] -= h_cc[x]
+    if symmetrize:
+        hj[...] = _sym(hj)
+    # Re-coupled measurement: G_rec − G = D − H_IC (H_CC + H^J)⁻¹ H_CI. H_CC + H^J is the inverse of
+    # P exactly without symmetrisation and, with it, when H_CC is symmetric: then (H_CC + H^J)⁻¹ = P
+    # to round-off and no further inverse is needed.
+    if symmetrize and not all(_transposed(c, c) for c in h_cc):
+        joined = hj.copy()
+        for x in (0, 1):
+            joined[:, span[x], span[x]] += h_cc[x]
+        q = inverse(joined)  # (pseudo-inverse on singular lines: those are flagged, or all are and it raises)
+    else:
+        q = p
+    y_ = np.empty((w, nl, nc), dtype=complex)  # H_IC q
+    for x in (0, 1):
+        np.matmul(h_ic[x], q[:, span[x], :], out=y_[:, rows[x], :])
+    rec = np.empty((w, nl, nl), dtype=complex)  # H_IC q H_CI
+    for y in (0, 1):
+        np.matmul(y_[:, :, span[y]], h_ci[y], out=rec[:, :, rows[y]])
+    rec -= d  # G_rec − G up to the sign
+    return cond, frobenius(rec) ** 2, den
 
 
 def identify_joint_matrix(
@@ -140,50 +182,35 @@ def identify_joint_matrix(
         h_ic.append(blk[:, :m, m:])
         h_ci.append(blk[:, m:, :m])
         h_cc.append(blk[:, m:, m:])
-    g = _measured_blocks(G, meas, smoothing, smoothing_order, symmetrize)
-    # D = H_II − G_II: its off-diagonal blocks are −G_xy (the sign is applied to the small products)
-    d = {(x, y): (h_ii[x] - g[x, y] if x == y else g[x, y]) for x, y in g}
+    order = meas[0] + meas[1]
+    g = fetch("assembly", G, order, order, "the measured DOFs, directly or by reciprocity", view=True)
+    if smoothing:
+        g = savgol_smooth(g, int(smoothing), smoothing_order)
+    rows = [slice(0, len(meas[0])), slice(len(meas[0]), L)]
+    span = [slice(0, len(ad)), slice(len(ad), nc)]
 
-    left, right, cond_ic, cond_ci = _pinv_pair(h_ic, h_ci, reg)
-    cond = cond_ic * cond_ci
+    hj = np.empty((nf, nc, nc), dtype=complex)
+    cond, num, den = np.empty(nf), np.empty(nf), np.empty(nf)
+    passes = [slice(start, start + _LINES) for start in range(0, nf, _LINES)]
+    for s in passes:
+        cond[s], num[s], den[s] = _pass(
+            [h[s] for h in h_ii], [h[s] for h in h_ic], [h[s] for h in h_ci], [h[s] for h in h_cc],
+            g[s], rows, span, reg, symmetrize, hj[s],
+        )
+
+    def condition_p() -> np.ndarray:  # P again (the same operations, so the same numbers), when first asked for
+        return np.concatenate([
+            condition(_p_pass([h[s] for h in h_ii], [h[s] for h in h_ic], [h[s] for h in h_ci], g[s], rows, span,
+                              reg, symmetrize)[0])
+            for s in passes
+        ])
     if np.all(cond > condition_limit):
         raise NumericalError(
             f"H_IC (measured DOFs × contact DOFs) is singular at every line (condition > {condition_limit:g}); "
             f"the {L} measured DOFs do not determine the {nc}×{nc} joint — measure other DOFs"
         )
-    span = [slice(0, len(ad)), slice(len(ad), nc)]
-    p = np.zeros((nf, nc, nc), dtype=complex)
-    for (x, y), dxy in d.items():
-        pxy = p[:, span[x], span[y]]
-        np.matmul(left[x] @ dxy, right[y], out=pxy)
-        if x != y:
-            np.negative(pxy, out=pxy)
-    if symmetrize:
-        p = _sym(p)
-    hj = inverse(p)
-    for x in (0, 1):
-        hj[:, span[x], span[x]] -= h_cc[x]
-    if symmetrize:
-        hj = _sym(hj)
     if not np.all(np.isfinite(hj)):
         raise NumericalError("the identified joint matrix is not finite at some line; check the measured FRFs")
-
-    # Re-coupled measurement: G_rec − G = D − H_IC (H_CC + H^J)⁻¹ H_CI, block by block. H_CC + H^J
-    # is the inverse of P exactly without symmetrisation and, with it, when H_CC is symmetric:
-    # then (H_CC + H^J)⁻¹ = P to round-off and no further inverse is needed.
-    if symmetrize and not all(np.array_equal(c, np.swapaxes(c, 1, 2)) for c in h_cc):
-        joined = hj.copy()
-        for x in (0, 1):
-            joined[:, span[x], span[x]] += h_cc[x]
-        q = np.linalg.inv(joined)
-    else:
-        q = p
-    num = np.zeros(nf)
-    den = np.zeros(nf)
-    for (x, y), dxy in d.items():
-        rec = h_ic[x] @ q[:, span[x], span[y]] @ h_ci[y]
-        num += frobenius(dxy - rec if x == y else dxy + rec) ** 2  # off the diagonal D_xy = −G_xy
-        den += frobenius(g[x, y]) ** 2
     residual = np.sqrt(num) / np.maximum(np.sqrt(den), 1e-300)
 
     ill = cond > condition_limit
@@ -194,7 +221,7 @@ def identify_joint_matrix(
         condition=cond,
         unreliable=ill,
         flags={"ill_conditioned": ill},
-        extra=LazyExtra({"n_measured": L, "nc": nc}, {"condition_p": lambda: condition(p)}),
+        extra=LazyExtra({"n_measured": L, "nc": nc}, {"condition_p": condition_p}),
         settings={
             "measured": [f"{n}:{d}" for n, d in pairs],
             "a": a,

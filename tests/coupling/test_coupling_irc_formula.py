@@ -1,5 +1,6 @@
-"""identify_joint_matrix / identify_n_point_joints (block-wise, normal equations where well conditioned,
-one SVD elsewhere, condition numbers from Gram eigenvalues, P⁻¹ by LU) against the straightforward
+"""identify_joint_matrix / identify_n_point_joints (block-wise, in passes of lines, normal equations where
+well conditioned, one SVD elsewhere, condition numbers from the extreme Gram eigenvalues by the batched
+kernels, P⁻¹ by checked 2 × 2 block elimination or LU) against the straightforward
 formulas on the whole matrices: SVD pseudo-inverses of the equilibrated H_IC and H_CI,
 ``H^J = pinv(P) − H_CC``, ``cond = cond₂(H_IC,s)·cond₂(H_CI,s)`` by SVD, and the residual of the
 re-coupled measurement by a solve with ``H_CC + H^J``.
@@ -15,7 +16,7 @@ H_IC, H_CI and κ_P that of P:
 import numpy as np
 import pytest
 
-from jointdb.coupling import identify_joint_matrix, identify_n_point_joints
+from jointdb.coupling import _matrix, identify_joint_matrix, identify_n_point_joints
 from jointdb.coupling._linalg import NORMAL_EQUATIONS_MAX_COND
 from jointdb.frf import DIRECTIONS, FRF, Dof
 
@@ -47,33 +48,33 @@ def svd_pinv(a, method="none", rel=0.0):
     return np.conj(np.swapaxes(vh, 1, 2)) @ (f[:, :, None] * np.conj(np.swapaxes(u, 1, 2)))
 
 
-def case(skew=0.0, seed=0, weak=False):
-    """Two bodies: A with 8 measured + 6 contact DOFs, B with 7 + 6; measured DOFs interleaved."""
-    a_meas = [Dof(i + 1, "x") for i in range(8)]
-    b_meas = [Dof(i + 101, "x") for i in range(7)]
+def case(skew=0.0, seed=0, weak=False, na=8, freq=FREQ):
+    """Two bodies: A with ``na`` measured + 6 contact DOFs, B with 15 − na + 6; measured DOFs interleaved."""
+    a_meas = [Dof(i + 1, "x") for i in range(na)]
+    b_meas = [Dof(i + 101, "x") for i in range(15 - na)]
     a_c = [Dof(50, d) for d in DIRECTIONS]
     b_c = [Dof(150, d) for d in DIRECTIONS]
-    ha, hb = modal(FREQ, 14, seed + 1, skew), modal(FREQ, 13, seed + 2, skew)
+    ha, hb = modal(freq, na + 6, seed + 1, skew), modal(freq, 21 - na, seed + 2, skew)
     if weak:  # at some lines two contact columns of A nearly repeat: ill-conditioned H_IC there
         lines = slice(40, 80)
-        near = ha[lines, :8, 8] + 1e-5 * np.abs(ha[lines, :8, 8]) * np.random.default_rng(seed).standard_normal((40, 8))
-        ha[lines, :8, 9] = ha[lines, 9, :8] = near
+        near = ha[lines, :na, na] + 1e-5 * np.abs(ha[lines, :na, na]) * np.random.default_rng(seed).standard_normal((40, na))
+        ha[lines, :na, na + 1] = ha[lines, na + 1, :na] = near
     rng = np.random.default_rng(seed + 3)
-    g = modal(FREQ, 15, seed + 4) + 0.01 * (rng.standard_normal((FREQ.size, 15, 15)))
+    g = modal(freq, 15, seed + 4) + 0.01 * (rng.standard_normal((freq.size, 15, 15)))
     g = 0.5 * (g + np.swapaxes(g, 1, 2))
-    order = [0, 8, 1, 2, 9, 10, 3, 4, 5, 11, 12, 6, 13, 7, 14]  # a and b measured DOFs interleaved
+    order = list(np.random.default_rng(seed + 5).permutation(15))  # a and b measured DOFs interleaved
     meas_all = a_meas + b_meas
     labels = [meas_all[i] for i in order]
-    measured = [("A" if i < 8 else "B", meas_all[i]) for i in order]
-    assembly = FRF(FREQ, g[:, order][:, :, order], labels, labels)
-    subs = {"A": FRF(FREQ, ha, a_meas + a_c, a_meas + a_c), "B": FRF(FREQ, hb, b_meas + b_c, b_meas + b_c)}
+    measured = [("A" if i < na else "B", meas_all[i]) for i in order]
+    assembly = FRF(freq, g[:, order][:, :, order], labels, labels)
+    subs = {"A": FRF(freq, ha, a_meas + a_c, a_meas + a_c), "B": FRF(freq, hb, b_meas + b_c, b_meas + b_c)}
     return dict(assembly=assembly, subs=subs, measured=measured, a_c=a_c, b_c=b_c, ha=ha, hb=hb,
-                g=g[:, order][:, :, order], order=order)
+                g=g[:, order][:, :, order], order=order, na=na, freq=freq)
 
 
 def straightforward(c, method="none", rel=0.0, symmetrize=True):
     """The formula on whole, zero-padded matrices in the measured order (before this rewrite)."""
-    nf, L, nc = FREQ.size, 15, 12
+    nf, L, nc, na = c["freq"].size, 15, 12, c["na"]
     order = c["order"]
     h_ii = np.zeros((nf, L, L), complex)
     h_ic = np.zeros((nf, L, nc), complex)
@@ -81,14 +82,14 @@ def straightforward(c, method="none", rel=0.0, symmetrize=True):
     h_cc = np.zeros((nf, nc, nc), complex)
     for k, i in enumerate(order):
         for kk, j in enumerate(order):
-            if (i < 8) == (j < 8):
-                h_ii[:, k, kk] = c["ha"][:, i, j] if i < 8 else c["hb"][:, i - 8, j - 8]
+            if (i < na) == (j < na):
+                h_ii[:, k, kk] = c["ha"][:, i, j] if i < na else c["hb"][:, i - na, j - na]
         for q in range(6):
-            if i < 8:
-                h_ic[:, k, q], h_ci[:, q, k] = c["ha"][:, i, 8 + q], c["ha"][:, 8 + q, i]
+            if i < na:
+                h_ic[:, k, q], h_ci[:, q, k] = c["ha"][:, i, na + q], c["ha"][:, na + q, i]
             else:
-                h_ic[:, k, 6 + q], h_ci[:, 6 + q, k] = c["hb"][:, i - 8, 7 + q], c["hb"][:, 7 + q, i - 8]
-    h_cc[:, :6, :6], h_cc[:, 6:, 6:] = c["ha"][:, 8:, 8:], c["hb"][:, 7:, 7:]
+                h_ic[:, k, 6 + q], h_ci[:, 6 + q, k] = c["hb"][:, i - na, 15 - na + q], c["hb"][:, 15 - na + q, i - na]
+    h_cc[:, :6, :6], h_cc[:, 6:, 6:] = c["ha"][:, na:, na:], c["hb"][:, 15 - na :, 15 - na :]
     g = c["g"]
     if symmetrize:
         g = 0.5 * (g + np.swapaxes(g, 1, 2))
@@ -109,7 +110,7 @@ def straightforward(c, method="none", rel=0.0, symmetrize=True):
 
 
 def compare(res, ref, only=None):
-    sel = np.ones(FREQ.size, bool) if only is None else only
+    sel = np.ones(ref["hj"].shape[0], bool) if only is None else only
     k2 = ref["kl"] ** 2 + ref["kr"] ** 2
     err = np.linalg.norm(res.joint.values - ref["hj"], axis=(1, 2))
     bound = 100 * EPS * k2 * ref["kp"] * ref["pinv_norm"]
@@ -158,6 +159,55 @@ def test_ill_conditioned_lines_take_the_svd_and_agree():
     assert np.allclose(res.condition[slow], k[slow], rtol=1e-9)
     err = np.linalg.norm(res.joint.values - ref["hj"], axis=(1, 2)) / ref["pinv_norm"]
     assert np.all(err[slow] <= 100 * EPS * k[slow] * ref["kp"][slow])
+
+
+@pytest.mark.parametrize("skew", [0.0, 1e-3], ids=["reciprocal", "non-reciprocal"])
+@pytest.mark.parametrize("symmetrize", [True, False])
+def test_joint_matrix_in_several_passes_equals_straightforward_formula(monkeypatch, skew, symmetrize):
+    """Lines are processed in passes (and P recomputed for condition_p): passes of 50 lines, the last
+    one short, ill-conditioned lines (SVD) straddling a pass boundary."""
+    monkeypatch.setattr(_matrix, "_LINES", 50)
+    c = case(skew, seed=9, weak=True)
+    res = identify_joint_matrix(c["assembly"], c["subs"], c["measured"], "A", c["a_c"], "B", c["b_c"],
+                                symmetrize=symmetrize)
+    ref = straightforward(c, symmetrize=symmetrize)
+    slow = np.maximum(ref["kl"], ref["kr"]) >= NORMAL_EQUATIONS_MAX_COND
+    assert slow[45:55].all()
+    compare(res, ref, ~slow)
+    assert np.allclose(res.condition[slow], (ref["kl"] * ref["kr"])[slow], rtol=1e-9)
+    # cond(P) moves with P's relative error (as for the joint) times cond(P)
+    rel_p = np.abs(res.extra["condition_p"] - ref["kp"]) / ref["kp"]
+    k2 = np.where(slow, ref["kl"] * ref["kr"], ref["kl"] ** 2 + ref["kr"] ** 2)
+    assert np.all(rel_p <= 100 * EPS * k2 * ref["kp"])
+
+
+@pytest.mark.parametrize("reg", [None, "tikhonov:1e-2"])
+def test_square_block_equals_straightforward_formula(reg):
+    """Six measured DOFs on A: its block of H_IC is square (inverted, not through normal equations)."""
+    c = case(1e-3, seed=3, na=6)
+    res = identify_joint_matrix(c["assembly"], c["subs"], c["measured"], "A", c["a_c"], "B", c["b_c"],
+                                regularisation=reg)
+    ref = straightforward(c, *(reg.split(":")[0], float(reg.split(":")[1])) if reg else ())
+    compare(res, ref)
+
+
+@pytest.mark.parametrize("symmetrize", [True, False])
+def test_joint_matrix_with_no_measured_dof_on_one_body_raises(monkeypatch, symmetrize):
+    """All 15 measured DOFs on A: H_IC is singular at every line, in every pass (A's H_CC not exactly
+    symmetric, so the symmetrised residual inverts H_CC + H^J, exactly singular here with B's block
+    symmetric): the user's error, not a LinAlgError."""
+    from jointdb.errors import NumericalError
+
+    monkeypatch.setattr(_matrix, "_LINES", 100)
+    a_meas = [Dof(i + 1, "x") for i in range(15)]
+    a_c = [Dof(50, d) for d in DIRECTIONS]
+    b_c = [Dof(150, d) for d in DIRECTIONS]
+    ha, hb = modal(FREQ, 21, 1, skew=1e-9), modal(FREQ, 6, 2)
+    hb = 0.5 * (hb + np.swapaxes(hb, 1, 2))
+    subs = {"A": FRF(FREQ, ha, a_meas + a_c, a_meas + a_c), "B": FRF(FREQ, hb, b_c, b_c)}
+    assembly = FRF(FREQ, modal(FREQ, 15, 3), a_meas, a_meas)
+    with pytest.raises(NumericalError, match="singular at every line"):
+        identify_joint_matrix(assembly, subs, [("A", d) for d in a_meas], "A", a_c, "B", b_c, symmetrize=symmetrize)
 
 
 def test_n_point_equals_straightforward_formula():
