@@ -237,10 +237,11 @@ def test_unwritable_blob_store_is_one_line_and_writes_no_row(repo, monkeypatch):
     import jointdb.store._blobs as blobs_mod
     from jointdb.errors import InputError
 
-    def refuse(path, frf):
+    def refuse(path, data):  # the blob directory refuses the temporary file (as a read-only one would)
+        open(path, "wb").close()  # even after creating it: nothing may be left behind
         raise PermissionError(errno.EACCES, "Permission denied")
 
-    monkeypatch.setattr(blobs_mod, "write_frf_file", refuse)
+    monkeypatch.setattr(blobs_mod, "_write_tmp", refuse)
     with pytest.raises(InputError, match="cannot write to the blob store .*Permission denied"):
         repo.catalogue("T1", "tool-holder", spring_joint(), planar_conditions(), "spring-damper-planar")
     monkeypatch.undo()
