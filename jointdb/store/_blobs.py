@@ -127,13 +127,8 @@ class BlobStore:
             except (IntegrityError, NotFoundError):
                 pass  # corrupt or collected meanwhile: rewrite it atomically below
         _, data = blob_bytes(frf, digest)
-        try:  # verify before it can be referenced: the very bytes the file gets
-            decode_blob_bytes(data, f"blob {digest}", digest)
-        except IntegrityError as exc:
-            raise IntegrityError(f"blob {digest} did not read back: {exc}") from None
         new_dir = not final.parent.is_dir()
         tmp = final.parent / f"{_TMP_PREFIX}{uuid.uuid4().hex}.h5"
-        fd = None
         try:
             final.parent.mkdir(parents=True, exist_ok=True)
             fd = _write_tmp(tmp, data)
@@ -144,23 +139,34 @@ class BlobStore:
             tmp.unlink(missing_ok=True)
             raise
 
-        def finish() -> None:
+        def finish(verified) -> None:
+            """fsync the temporary file; once ``verified()`` says so rename it into place, fsync the directory."""
             try:
                 try:
                     os.fsync(fd)
                 finally:
                     os.close(fd)
-                os.replace(tmp, final)
+                if verified():
+                    os.replace(tmp, final)
             except OSError as exc:
                 raise InputError(f"cannot write to the blob store {self.root}: {exc.strerror or exc}") from None
             finally:
                 if tmp.exists():
                     tmp.unlink()
-            _fsync_dir(final.parent)  # the rename is durable
+            _fsync_dir(final.parent)  # the rename (or the removal) is durable
             if new_dir:
                 _fsync_dir(self.root)  # and so is the new shard directory
 
-        return PendingPut(digest, finish)
+        pending = PendingPut(digest, finish)  # the fsync runs while the bytes are verified
+        try:  # decoded again with every check of a read: nothing can reference a blob that does not
+            decode_blob_bytes(data, f"blob {digest}", digest)
+        except BaseException as exc:
+            pending.cancel()  # removes the temporary file
+            if isinstance(exc, IntegrityError):
+                raise IntegrityError(f"blob {digest} did not read back: {exc}") from None
+            raise
+        pending.release()
+        return pending
 
     # ------------------------------------------------------------------- read
     def get(self, digest: str) -> FRF:
@@ -297,7 +303,12 @@ def _write_tmp(path: Path, data: bytes) -> int:
 
 
 class PendingPut:
-    """A blob being made durable by a thread (:meth:`BlobStore.put_pending`)."""
+    """A blob being made durable by a thread (:meth:`BlobStore.put_pending`).
+
+    ``finish(verified)`` runs in the thread; ``verified()`` blocks until the creator
+    calls :meth:`release` (go on: put the blob in place) or :meth:`cancel` (drop it)
+    and returns which. The creator must call one of them.
+    """
 
     def __init__(self, digest: str, finish=None):
         import threading
@@ -305,15 +316,32 @@ class PendingPut:
         self.digest = digest
         self._error: BaseException | None = None
         self._thread = None
+        self._decided = threading.Event()
+        self._go = False
         if finish is not None:
             def run() -> None:
                 try:
-                    finish()
+                    finish(self._verified)
                 except BaseException as exc:  # noqa: BLE001 - handed to wait()
                     self._error = exc
 
             self._thread = threading.Thread(target=run, name=f"jointdb-blob-{digest[:8]}", daemon=False)
             self._thread.start()
+
+    def _verified(self) -> bool:
+        self._decided.wait()
+        return self._go
+
+    def release(self) -> None:
+        """The bytes verified: let the thread put the blob in place."""
+        self._go = True
+        self._decided.set()
+
+    def cancel(self) -> None:
+        """Drop the blob (the thread removes its temporary file) and wait for the thread."""
+        self._go = False
+        self._decided.set()
+        self.join()
 
     def join(self) -> None:
         """Wait for the thread, without raising what it met."""
