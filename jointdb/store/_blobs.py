@@ -302,12 +302,25 @@ def _write_tmp(path: Path, data: bytes) -> int:
     return fd
 
 
-class PendingPut:
-    """A blob being made durable by a thread (:meth:`BlobStore.put_pending`).
+_workers = None  # (pid, ThreadPoolExecutor): the threads that make blobs durable, started once per process
 
-    ``finish(verified)`` runs in the thread; ``verified()`` blocks until the creator
+
+def _executor():
+    global _workers
+    if _workers is None or _workers[0] != os.getpid():  # a forked child has none of its parent's threads
+        from concurrent.futures import ThreadPoolExecutor
+
+        _workers = (os.getpid(), ThreadPoolExecutor(max_workers=8, thread_name_prefix="jointdb-blob"))
+    return _workers[1]
+
+
+class PendingPut:
+    """A blob being made durable by a worker thread (:meth:`BlobStore.put_pending`).
+
+    ``finish(verified)`` runs in the worker; ``verified()`` blocks until the creator
     calls :meth:`release` (go on: put the blob in place) or :meth:`cancel` (drop it)
-    and returns which. The creator must call one of them.
+    and returns which. The creator must call one of them (a worker waits for no other
+    task, so a queued task always runs once a worker finishes its own).
     """
 
     def __init__(self, digest: str, finish=None):
@@ -315,7 +328,7 @@ class PendingPut:
 
         self.digest = digest
         self._error: BaseException | None = None
-        self._thread = None
+        self._thread = None  # the worker's Future
         self._decided = threading.Event()
         self._go = False
         if finish is not None:
@@ -325,8 +338,7 @@ class PendingPut:
                 except BaseException as exc:  # noqa: BLE001 - handed to wait()
                     self._error = exc
 
-            self._thread = threading.Thread(target=run, name=f"jointdb-blob-{digest[:8]}", daemon=False)
-            self._thread.start()
+            self._thread = _executor().submit(run)
 
     def _verified(self) -> bool:
         self._decided.wait()
@@ -344,9 +356,9 @@ class PendingPut:
         self.join()
 
     def join(self) -> None:
-        """Wait for the thread, without raising what it met."""
+        """Wait for the worker's task, without raising what it met."""
         if self._thread is not None:
-            self._thread.join()
+            self._thread.result()  # run() keeps what finish() raised for wait()
 
     def wait(self) -> str:
         """The digest once the blob is durable in place.
