@@ -101,16 +101,17 @@ class BlobStore:
         return self.put_pending(frf).wait()
 
     def put_pending(self, frf: FRF) -> "PendingPut":
-        """Start storing an FRF: encoded, verified and written now, made durable in the background.
+        """Start storing an FRF: encoded, written and verified now, made durable in the background.
 
-        The blob file's bytes are built in memory (:func:`blob_bytes`) and decoded
-        again with every check of a read (:func:`decode_blob_bytes`) before they are
-        written to a temporary file; the flush to disk (fsync), the rename into place
-        and the directory fsync run in a thread, so that a caller can prepare its
-        database transaction meanwhile. :meth:`PendingPut.wait` returns the digest
-        once the blob is durable (and raises what the thread met); call it before
-        committing anything that references the blob, and always (it also joins the
-        thread).
+        The blob file's bytes are built in memory (:func:`blob_bytes`) and written to a
+        temporary file, whose fsync runs on a worker thread while the bytes are decoded
+        again with every check of a read (:func:`decode_blob_bytes`); only when they
+        pass is the file renamed into place and the directory fsynced (on the worker),
+        so that a caller can prepare its database transaction meanwhile; when they do
+        not, the temporary file is removed and IntegrityError raised.
+        :meth:`PendingPut.wait` returns the digest once the blob is durable (and raises
+        what the worker met); call it before committing anything that references the
+        blob, and always (it also waits for the worker).
         """
         digest = frf_sha256(frf)
         final = self.path(digest)
@@ -157,7 +158,12 @@ class BlobStore:
             if new_dir:
                 _fsync_dir(self.root)  # and so is the new shard directory
 
-        pending = PendingPut(digest, finish)  # the fsync runs while the bytes are verified
+        try:
+            pending = PendingPut(digest, finish)  # the fsync runs while the bytes are verified
+        except BaseException:  # no worker (e.g. at interpreter shutdown): nothing left behind
+            os.close(fd)
+            tmp.unlink(missing_ok=True)
+            raise
         try:  # decoded again with every check of a read: nothing can reference a blob that does not
             decode_blob_bytes(data, f"blob {digest}", digest)
         except BaseException as exc:
