@@ -4,9 +4,9 @@ The blob file is ``<root>/<h[:2]>/<h>.h5``, where ``h`` is the SHA-256 of the FR
 canonical form; the file format (HDF5 layout, whole-file checksum in a user block)
 is described in :mod:`jointdb.store._blobformat`.
 
-A write builds the file's bytes in memory, decodes them again with every check
-of a read, writes them to a temporary file in the same directory, fsyncs it,
-renames it atomically into place and fsyncs the directory. Reads always verify
+A write builds the file's bytes in memory, writes them to a temporary file in
+the same directory and fsyncs it while it decodes them again with every check
+of a read, then renames the file atomically into place and fsyncs the directory. Reads always verify
 the whole-file checksum, the HDF5 chunk checksums and the content hash.
 """
 
