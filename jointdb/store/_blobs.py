@@ -6,8 +6,9 @@ is described in :mod:`jointdb.store._blobformat`.
 
 A write builds the file's bytes in memory, writes them to a temporary file in
 the same directory and fsyncs it while it decodes them again with every check
-of a read, then renames the file atomically into place and fsyncs the directory. Reads always verify
-the whole-file checksum, the HDF5 chunk checksums and the content hash.
+of a read, then renames the file atomically into place and fsyncs the
+directory. Reads always verify the whole-file checksum, the HDF5 chunk
+checksums and the content hash.
 """
 
 from __future__ import annotations
