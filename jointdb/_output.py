@@ -119,6 +119,12 @@ def emit(
     if as_json:
         sys.stdout.write(json.dumps(to_jsonable(data), indent=2) + "\n")
         return
+    if not isinstance(data, str) and not sys.stdout.isatty():  # the same Markdown table, without Rich if simple
+        data = data if isinstance(data, Mapping) else list(data)
+        text = _markdown_table(data, columns, title)
+        if text is not None:
+            sys.stdout.write(text)
+            return
     from rich.console import Console
     from rich.table import Table
 
@@ -152,6 +158,21 @@ def emit(
     for row in rows:
         table.add_row(*(_cell(_fmt(row.get(col)), not tty) for col in cols))
     console.print(table)
+
+
+def _markdown_table(data: Any, columns: Sequence[str] | None, title: str | None) -> str | None:
+    """What :func:`emit` prints for piped output via Rich, from :mod:`jointdb._mdtable` (None: ask Rich)."""
+    from jointdb._mdtable import render
+
+    def esc(text: str) -> str:
+        return text.replace("|", "\\|")
+
+    if isinstance(data, Mapping):
+        return render(title, ["field", "value"], [(esc(header(str(k))), esc(_fmt(v))) for k, v in data.items()])
+    if not data:
+        return "(no rows)\n"
+    cols = list(columns) if columns else list(data[0].keys())
+    return render(title, [esc(header(c)) for c in cols], [[esc(_fmt(r.get(c))) for c in cols] for r in data])
 
 
 def message(text: str) -> None:

@@ -187,8 +187,13 @@ def main() -> None:
     else:  # anything else (an unknown command, ...): the full app, for Click's own messages
         cli = __getattr__("app")
     UsageError, ClickException, Abort = _click_errors()
+    command = typer.main.get_command(cli)
+    if first in COMMANDS:  # plain option values converted without importing pydantic (start-up time)
+        from jointdb.cli._coerce import install
+
+        install(command)
     try:
-        rv = typer.main.get_command(cli).main(args=args, prog_name="jointdb", standalone_mode=False)
+        rv = command.main(args=args, prog_name="jointdb", standalone_mode=False)
     except JointdbError as exc:
         sys.stderr.write(f"error: {exc}\n")
         sys.exit(exc.exit_code)

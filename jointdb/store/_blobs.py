@@ -1,195 +1,53 @@
 """Content-addressed, durable, verified HDF5 blob store for FRFs.
 
-Canonical form (what the SHA-256 is computed over, format version 1), the
-concatenation of:
+The blob file is ``<root>/<h[:2]>/<h>.h5``, where ``h`` is the SHA-256 of the FRF's
+canonical form; the file format (HDF5 layout, whole-file checksum in a user block)
+is described in :mod:`jointdb.store._blobformat`.
 
-1. the ASCII bytes ``b"jointdb-frf-v1\\n"``;
-2. ``quantity`` (``receptance``/``mobility``/``accelerance``) in UTF-8, then ``b"\\n"``;
-3. the output DOF labels as text (``"3x,3ry"``) in UTF-8, then ``b"\\n"``;
-4. the input DOF labels likewise, then ``b"\\n"``;
-5. ``n_freq, n_out, n_in`` as three little-endian uint64;
-6. the frequencies as little-endian float64 (``<f8``), ``n_freq`` values;
-7. the values as little-endian complex128 (``<c16``: real then imaginary part
-   of each entry), C order of the ``(n_freq, n_out, n_in)`` array.
-
-So two FRFs hash equal exactly when labels, quantity and every bit of the
-numbers are equal. The blob file is ``<root>/<h[:2]>/<h>.h5``.
-
-HDF5 layout: dataset ``freq`` (float64, Hz) and dataset ``values`` (float64,
-shape ``(n_freq, n_out, n_in, 2)``, last axis = (real, imaginary)), both chunked
-along frequency with shuffle + gzip + fletcher32. Root attributes:
-``format = "jointdb-frf-blob"``, ``format_version = 1``, ``sha256``,
-``quantity``, ``outputs``, ``inputs``, ``complex_convention`` and
-``harmonic_convention = "x(t) = X exp(+i omega t)"``.
-
-Whole-file checksum: the file starts with a 512-byte HDF5 *user block*
-(ignored by HDF5 readers) holding ``b"jointdb-blob-file-sha256:" + <64 hex> +
-b"\n"`` followed by zero bytes; the digest is the SHA-256 of every byte after
-the user block. So every single byte of a blob file is covered: the user block
-must match exactly, the rest must hash to the recorded digest, the HDF5 chunks
-carry fletcher32 and the decoded FRF must hash to the blob's name.
-
-Writes go to a temporary file in the same directory, are fsynced, atomically
-renamed, the directory fsynced, then read back and verified. Reads always
-verify all of the above.
+A write builds the file's bytes in memory, writes them to a temporary file in
+the same directory and fsyncs it while it decodes them again with every check
+of a read, then renames the file atomically into place and fsyncs the
+directory. Reads always verify the whole-file checksum, the HDF5 chunk
+checksums and the content hash.
 """
 
 from __future__ import annotations
 
-import hashlib
 import os
-import re
 import time
 import uuid
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
-import numpy as np
-
 from jointdb.errors import InputError, IntegrityError, NotFoundError
-from jointdb.io._atomic import fsync_dir as _fsync_dir
 from jointdb.frf import FRF
+from jointdb.io._atomic import fsync_dir as _fsync_dir
+from jointdb.store._blobformat import (  # noqa: F401 - re-exported: the blob format's names live here too
+    _FILE_MAGIC,
+    _HEX64,
+    COMPLEX_CONVENTION,
+    FORMAT,
+    FORMAT_VERSION,
+    HARMONIC_CONVENTION,
+    USERBLOCK,
+    _userblock,
+    blob_bytes,
+    check_file_checksum,
+    decode_blob_bytes,
+    file_sha256,
+    frf_sha256,
+    read_frf_file,
+    read_frf_group,
+    write_frf_file,
+    write_frf_group,
+)
 
-__all__ = ["BlobStore", "frf_sha256", "file_sha256", "FORMAT_VERSION", "write_frf_file", "read_frf_file"]
+__all__ = ["BlobStore", "frf_sha256", "file_sha256", "FORMAT_VERSION", "write_frf_file", "read_frf_file", "blob_bytes",
+           "decode_blob_bytes"]
 
-FORMAT = "jointdb-frf-blob"
-FORMAT_VERSION = 1
-COMPLEX_CONVENTION = "values[..., 0] = real part, values[..., 1] = imaginary part"
-HARMONIC_CONVENTION = "x(t) = X exp(+i omega t)"
 _TMP_PREFIX = ".tmp-"
 _GC_PREFIX = _TMP_PREFIX + "gc-"  # a blob `gc` moved aside for its last check: ".tmp-gc-<sha>-<uuid>.h5"
-USERBLOCK = 512
-_FILE_MAGIC = b"jointdb-blob-file-sha256:"
-_HEX64 = re.compile(r"[0-9a-f]{64}")
-
-
-def frf_sha256(frf: FRF) -> str:
-    """SHA-256 (hex) of the canonical form of an FRF (module docstring)."""
-    h = hashlib.sha256()
-    h.update(b"jointdb-frf-v1\n")
-    h.update(frf.quantity.value.encode() + b"\n")
-    h.update(",".join(map(str, frf.outputs)).encode() + b"\n")
-    h.update(",".join(map(str, frf.inputs)).encode() + b"\n")
-    h.update(np.asarray(frf.values.shape, dtype="<u8").tobytes())
-    h.update(np.ascontiguousarray(frf.freq, dtype="<f8").tobytes())
-    h.update(np.ascontiguousarray(frf.values, dtype="<c16").tobytes())
-    return h.hexdigest()
-
-
-def file_sha256(path: str | os.PathLike) -> str:
-    """SHA-256 (hex) of a file's bytes (for provenance ``input_files``)."""
-    h = hashlib.sha256()
-    with open(path, "rb") as f:
-        for chunk in iter(lambda: f.read(1 << 20), b""):
-            h.update(chunk)
-    return h.hexdigest()
-
-
-def _chunk_rows(n_freq: int, n_entries: int) -> int:
-    # about 64 KiB per chunk, along frequency
-    return max(1, min(n_freq, (1 << 16) // max(1, 16 * n_entries)))
-
-
-def write_frf_group(group, frf: FRF, digest: str) -> None:
-    """Write an FRF into an open h5py group/file in the blob layout."""
-    n_freq, n_out, n_in = frf.values.shape
-    rows = _chunk_rows(n_freq, n_out * n_in)
-    opts = dict(shuffle=True, compression="gzip", compression_opts=4, fletcher32=True)
-    group.create_dataset("freq", data=np.asarray(frf.freq, dtype="<f8"), chunks=(rows,), **opts)
-    packed = np.stack([frf.values.real, frf.values.imag], axis=-1).astype("<f8")
-    group.create_dataset("values", data=packed, chunks=(rows, n_out, n_in, 2), **opts)
-    a = group.attrs
-    a["format"] = FORMAT
-    a["format_version"] = FORMAT_VERSION
-    a["sha256"] = digest
-    a["quantity"] = frf.quantity.value
-    a["outputs"] = ",".join(map(str, frf.outputs))
-    a["inputs"] = ",".join(map(str, frf.inputs))
-    a["complex_convention"] = COMPLEX_CONVENTION
-    a["harmonic_convention"] = HARMONIC_CONVENTION
-
-
-def read_frf_group(group, where: str) -> tuple[FRF, str]:
-    """Read an FRF from a group in the blob layout; returns ``(frf, stored_sha256)``."""
-    a = group.attrs
-    if str(a.get("format", "")) != FORMAT:
-        raise IntegrityError(f"{where}: not a jointdb FRF blob (format attribute {a.get('format')!r})")
-    version = int(a.get("format_version", 0))
-    if version > FORMAT_VERSION:
-        raise IntegrityError(f"{where}: blob format version {version} is newer than this jointdb ({FORMAT_VERSION})")
-    freq = np.asarray(group["freq"][...], dtype=np.float64)
-    packed = np.asarray(group["values"][...], dtype=np.float64)
-    values = packed[..., 0] + 1j * packed[..., 1]
-    outputs = [s for s in str(a["outputs"]).split(",") if s]
-    inputs = [s for s in str(a["inputs"]).split(",") if s]
-    frf = FRF(freq, values, outputs, inputs, str(a["quantity"]))
-    return frf, str(a.get("sha256", ""))
-
-
-def _userblock(file_digest: str) -> bytes:
-    head = _FILE_MAGIC + file_digest.encode() + b"\n"
-    return head + b"\0" * (USERBLOCK - len(head))
-
-
-def write_frf_file(path: str | os.PathLike, frf: FRF) -> str:
-    """Write one FRF to an HDF5 file in the blob layout (no atomicity); returns its content hash."""
-    import h5py
-
-    digest = frf_sha256(frf)
-    with h5py.File(path, "w", userblock_size=USERBLOCK, locking=False) as f:
-        write_frf_group(f, frf, digest)
-    with open(path, "r+b") as raw:
-        raw.seek(USERBLOCK)
-        h = hashlib.sha256()
-        for chunk in iter(lambda: raw.read(1 << 20), b""):
-            h.update(chunk)
-        raw.seek(0)
-        raw.write(_userblock(h.hexdigest()))
-    return digest
-
-
-def check_file_checksum(path: str | os.PathLike) -> None:
-    """Verify the whole-file checksum in the user block (module docstring).
-
-    Raises
-    ------
-    IntegrityError
-        If the user block is damaged or any later byte changed.
-    """
-    with open(path, "rb") as raw:
-        block = raw.read(USERBLOCK)
-        h = hashlib.sha256()
-        for chunk in iter(lambda: raw.read(1 << 20), b""):
-            h.update(chunk)
-    if len(block) != USERBLOCK or not block.startswith(_FILE_MAGIC):
-        raise IntegrityError(f"{path}: file checksum header is damaged or missing")
-    recorded = block[len(_FILE_MAGIC):len(_FILE_MAGIC) + 64].decode("ascii", "replace")
-    if block != _userblock(recorded):
-        raise IntegrityError(f"{path}: file checksum header is damaged")
-    if h.hexdigest() != recorded:
-        raise IntegrityError(f"{path}: file bytes do not match their recorded SHA-256 (corrupt file)")
-
-
-def read_frf_file(path: str | os.PathLike, verify: bool = True) -> FRF:
-    """Read a file written by :func:`write_frf_file` (file checksum and content hash verified)."""
-    import h5py
-
-    where = str(path)
-    if verify:
-        check_file_checksum(path)
-    try:
-        with h5py.File(path, "r", locking=False) as f:
-            frf, stored = read_frf_group(f, where)  # InputError (e.g. NaN values) propagates
-    except (OSError, KeyError) as exc:
-        raise IntegrityError(f"{where}: cannot read FRF blob ({exc})") from None
-    except ValueError as exc:
-        if isinstance(exc, InputError):
-            raise InputError(f"{where}: {exc}") from None
-        raise IntegrityError(f"{where}: cannot read FRF blob ({exc})") from None
-    if verify and frf_sha256(frf) != stored:
-        raise IntegrityError(f"{where}: content hash does not match the stored sha256 attribute")
-    return frf
 
 
 @dataclass(frozen=True)
@@ -244,14 +102,17 @@ class BlobStore:
         return self.put_pending(frf).wait()
 
     def put_pending(self, frf: FRF) -> "PendingPut":
-        """Start storing an FRF: written and verified now, made durable in the background.
+        """Start storing an FRF: encoded, written and verified now, made durable in the background.
 
-        The FRF is written to a temporary file and read back and verified here;
-        the flush to disk (fsync), the rename into place and the directory fsync
-        run in a thread, so that a caller can prepare its database transaction
-        meanwhile. :meth:`PendingPut.wait` returns the digest once the blob is
-        durable (and raises what the thread met); call it before committing
-        anything that references the blob, and always (it also joins the thread).
+        The blob file's bytes are built in memory (:func:`blob_bytes`) and written to a
+        temporary file, whose fsync runs on a worker thread while the bytes are decoded
+        again with every check of a read (:func:`decode_blob_bytes`); only when they
+        pass is the file renamed into place and the directory fsynced (on the worker),
+        so that a caller can prepare its database transaction meanwhile; when they do
+        not, the temporary file is removed and IntegrityError raised.
+        :meth:`PendingPut.wait` returns the digest once the blob is durable (and raises
+        what the worker met); call it before committing anything that references the
+        blob, and always (it also waits for the worker).
         """
         digest = frf_sha256(frf)
         final = self.path(digest)
@@ -267,12 +128,12 @@ class BlobStore:
                 return PendingPut(digest)
             except (IntegrityError, NotFoundError):
                 pass  # corrupt or collected meanwhile: rewrite it atomically below
+        _, data = blob_bytes(frf, digest)
         new_dir = not final.parent.is_dir()
         tmp = final.parent / f"{_TMP_PREFIX}{uuid.uuid4().hex}.h5"
         try:
             final.parent.mkdir(parents=True, exist_ok=True)
-            write_frf_file(tmp, frf)
-            _verify_file(tmp, digest)  # read back and verify before it can be referenced
+            fd = _write_tmp(tmp, data)
         except OSError as exc:  # read-only or full blob directory: one line for the user, nothing kept
             tmp.unlink(missing_ok=True)
             raise InputError(f"cannot write to the blob store {self.root}: {exc.strerror or exc}") from None
@@ -280,24 +141,39 @@ class BlobStore:
             tmp.unlink(missing_ok=True)
             raise
 
-        def finish() -> None:
+        def finish(verified) -> None:
+            """fsync the temporary file; once ``verified()`` says so rename it into place, fsync the directory."""
             try:
-                fd = os.open(tmp, os.O_RDONLY)
                 try:
                     os.fsync(fd)
                 finally:
                     os.close(fd)
-                os.replace(tmp, final)
+                if verified():
+                    os.replace(tmp, final)
             except OSError as exc:
                 raise InputError(f"cannot write to the blob store {self.root}: {exc.strerror or exc}") from None
             finally:
                 if tmp.exists():
                     tmp.unlink()
-            _fsync_dir(final.parent)  # the rename is durable
+            _fsync_dir(final.parent)  # the rename (or the removal) is durable
             if new_dir:
                 _fsync_dir(self.root)  # and so is the new shard directory
 
-        return PendingPut(digest, finish)
+        try:
+            pending = PendingPut(digest, finish)  # the fsync runs while the bytes are verified
+        except BaseException:  # no worker (e.g. at interpreter shutdown): nothing left behind
+            os.close(fd)
+            tmp.unlink(missing_ok=True)
+            raise
+        try:  # decoded again with every check of a read: nothing can reference a blob that does not
+            decode_blob_bytes(data, f"blob {digest}", digest)
+        except BaseException as exc:
+            pending.cancel()  # removes the temporary file
+            if isinstance(exc, IntegrityError):
+                raise IntegrityError(f"blob {digest} did not read back: {exc}") from None
+            raise
+        pending.release()
+        return pending
 
     # ------------------------------------------------------------------- read
     def get(self, digest: str) -> FRF:
@@ -414,41 +290,82 @@ class BlobStore:
             return 0.0
 
 
-def _verify_file(path: Path, digest: str) -> None:
-    """Refuse a freshly written blob file that does not read back to ``digest``."""
+def _write_tmp(path: Path, data: bytes) -> int:
+    """Create ``path`` (it must not exist) holding ``data``; returns the open descriptor to fsync.
+
+    Raises
+    ------
+    OSError
+        The directory refuses the file (the caller removes a partial one).
+    """
+    fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
     try:
-        check_file_checksum(path)
-        frf = read_frf_file(path, verify=False)
-    except InputError as exc:
-        raise IntegrityError(f"blob {digest} did not read back: {exc}") from None
-    actual = frf_sha256(frf)
-    if actual != digest:
-        raise IntegrityError(f"blob {digest} read back with content hash {actual} ({path})")
+        view = memoryview(data)
+        while view:
+            view = view[os.write(fd, view):]
+    except BaseException:
+        os.close(fd)
+        raise
+    return fd
+
+
+_workers = None  # (pid, ThreadPoolExecutor): the threads that make blobs durable, started once per process
+
+
+def _executor():
+    global _workers
+    if _workers is None or _workers[0] != os.getpid():  # a forked child has none of its parent's threads
+        from concurrent.futures import ThreadPoolExecutor
+
+        _workers = (os.getpid(), ThreadPoolExecutor(max_workers=8, thread_name_prefix="jointdb-blob"))
+    return _workers[1]
 
 
 class PendingPut:
-    """A blob being made durable by a thread (:meth:`BlobStore.put_pending`)."""
+    """A blob being made durable by a worker thread (:meth:`BlobStore.put_pending`).
+
+    ``finish(verified)`` runs in the worker; ``verified()`` blocks until the creator
+    calls :meth:`release` (go on: put the blob in place) or :meth:`cancel` (drop it)
+    and returns which. The creator must call one of them (a worker waits for no other
+    task, so a queued task always runs once a worker finishes its own).
+    """
 
     def __init__(self, digest: str, finish=None):
         import threading
 
         self.digest = digest
         self._error: BaseException | None = None
-        self._thread = None
+        self._thread = None  # the worker's Future
+        self._decided = threading.Event()
+        self._go = False
         if finish is not None:
             def run() -> None:
                 try:
-                    finish()
+                    finish(self._verified)
                 except BaseException as exc:  # noqa: BLE001 - handed to wait()
                     self._error = exc
 
-            self._thread = threading.Thread(target=run, name=f"jointdb-blob-{digest[:8]}", daemon=False)
-            self._thread.start()
+            self._thread = _executor().submit(run)
+
+    def _verified(self) -> bool:
+        self._decided.wait()
+        return self._go
+
+    def release(self) -> None:
+        """The bytes verified: let the thread put the blob in place."""
+        self._go = True
+        self._decided.set()
+
+    def cancel(self) -> None:
+        """Drop the blob (the thread removes its temporary file) and wait for the thread."""
+        self._go = False
+        self._decided.set()
+        self.join()
 
     def join(self) -> None:
-        """Wait for the thread, without raising what it met."""
+        """Wait for the worker's task, without raising what it met."""
         if self._thread is not None:
-            self._thread.join()
+            self._thread.result()  # run() keeps what finish() raised for wait()
 
     def wait(self) -> str:
         """The digest once the blob is durable in place.

@@ -41,7 +41,7 @@ from sqlalchemy import select
 
 from jointdb.errors import ConflictError, InputError, IntegrityError
 from jointdb.io._atomic import atomic_path
-from jointdb.store._blobs import write_frf_group
+from jointdb.store._blobformat import write_frf_group
 from jointdb.store._bundle_read import FORMAT, FORMAT_VERSION, Bundle, manifest_sha256, read_bundle
 from jointdb.store._index import refresh_joints
 from jointdb.store._models import AuditRow, JointRow, LabelRow, StateRow, VersionRow, utcnow

@@ -26,7 +26,7 @@ import numpy as np
 
 from jointdb.errors import InputError, IntegrityError, JointdbError, NotFoundError
 from jointdb.frf import FRF
-from jointdb.store._blobs import frf_sha256, read_frf_group
+from jointdb.store._blobformat import frf_sha256, read_frf_group
 from jointdb.store._records import record_sha256
 from jointdb.store._types import (
     Conditions,

@@ -15,8 +15,6 @@ writes it again, so a writer can never reference a collected blob.
 
 from __future__ import annotations
 
-import hashlib
-import io
 from collections.abc import Iterator
 from datetime import datetime, timezone
 
@@ -25,7 +23,8 @@ from sqlalchemy.orm import Session
 
 from jointdb.errors import IntegrityError, NotFoundError
 from jointdb.frf import FRF
-from jointdb.store._blobs import _HEX64, USERBLOCK, BlobInfo, _userblock, frf_sha256, read_frf_group, write_frf_file
+from jointdb.store._blobformat import _HEX64, blob_bytes, decode_blob_bytes
+from jointdb.store._blobs import BlobInfo
 from jointdb.store._models import BlobRow
 
 #: the value of ``blobs=`` / ``JOINTDB_BLOBS`` that selects this store
@@ -64,14 +63,7 @@ class DatabaseBlobStore:
     # ------------------------------------------------------------------ write
     def put(self, frf: FRF) -> str:
         """Store an FRF durably (committed); return its SHA-256. Idempotent; read back and verified."""
-        import tempfile
-        from pathlib import Path
-
-        digest = frf_sha256(frf)
-        with tempfile.TemporaryDirectory(prefix="jointdb-blob-") as tmp:
-            path = Path(tmp) / "blob.h5"
-            write_frf_file(path, frf)
-            data = path.read_bytes()
+        digest, data = blob_bytes(frf)
         with Session(self.engine) as s, s.begin():
             existing = s.get(BlobRow, digest)
             if existing is not None and self._check(digest, existing.data) is not None:
@@ -90,23 +82,8 @@ class DatabaseBlobStore:
     # ------------------------------------------------------------------- read
     @staticmethod
     def _decode(digest: str, data: bytes) -> FRF:
-        import h5py
-
-        block, body = data[:USERBLOCK], data[USERBLOCK:]
-        recorded = block[25:89].decode("ascii", "replace") if len(block) == USERBLOCK else ""
-        if len(block) != USERBLOCK or block != _userblock(recorded):
-            raise IntegrityError(f"blob {digest} is corrupt: file checksum header is damaged")
-        if hashlib.sha256(body).hexdigest() != recorded:
-            raise IntegrityError(f"blob {digest} is corrupt: bytes do not match their recorded SHA-256")
-        try:
-            with h5py.File(io.BytesIO(data), "r", locking=False) as f:
-                frf, _ = read_frf_group(f, f"blob {digest}")
-        except (OSError, KeyError, ValueError) as exc:
-            raise IntegrityError(f"blob {digest} is corrupt: {exc}") from None
-        actual = frf_sha256(frf)
-        if actual != digest:
-            raise IntegrityError(f"blob {digest} is corrupt: its content hashes to {actual}")
-        return frf
+        # header, whole-file hash, HDF5 chunk checksums, content hash = the stored attribute = the key
+        return decode_blob_bytes(data, f"blob {digest}", digest)
 
     def _check(self, digest: str, data: bytes) -> str | None:
         try:

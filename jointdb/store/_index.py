@@ -13,7 +13,8 @@ Tables (migration ``0004``; models in :mod:`jointdb.store._models`):
                     can tell with one SELECT whether arrays it holds are still current.
 
 The rows are written inside the same write transaction as the history rows they
-derive from (:func:`refresh_joints`, :func:`bump`), so a reader never sees one
+derive from (:func:`refresh_joints`, :func:`bump`; a new version:
+:mod:`jointdb.store._catalogue`), so a reader never sees one
 without the other. They are derived state, not history: the immutability guards
 of migrations ``0002``/``0003`` do not apply to them; :func:`index_problems`
 (``jointdb db check``) recomputes them from history and reports any difference.
@@ -136,30 +137,6 @@ def refresh_joints(session: Session, joint_ids: Iterable[int]) -> None:
             if vid in have and have[vid] != f:
                 session.execute(update(QueryVersionRow).where(QueryVersionRow.version_id == vid)
                                 .values(deprecated=f[0], newest=f[1], newest_active=f[2]))
-    bump(session)
-
-
-def add_version(session: Session, joint_type: str, row: VersionRow) -> None:
-    """Index a version just added (flushed) as the newest of its joint, and :func:`bump`.
-
-    What :func:`refresh_joints` would do, in fewer statements: the new version is the
-    newest; it is deprecated if the latest state row naming it or the whole joint says
-    so; if it is not, it takes ``newest_active`` over from the joint's other versions.
-    """
-    state = session.scalar(
-        select(StateRow.state).where(StateRow.joint_id == row.joint_id,
-                                     (StateRow.version.is_(None)) | (StateRow.version == row.version))
-        .order_by(StateRow.at.desc(), StateRow.id.desc()).limit(1))
-    deprecated = state == "deprecated"
-    q = QueryVersionRow.__table__  # Core statements: no ORM bookkeeping on the catalogue path
-    flags = q.c.newest | q.c.newest_active if not deprecated else q.c.newest
-    session.execute(update(q).where(q.c.joint_id == row.joint_id, flags)
-                    .values(newest=False, newest_active=q.c.newest_active & deprecated))
-    values, geo = index_values(row.id, row.joint_id, joint_type, row.version, row.materials, row.torque_nm,
-                               row.preload_n, row.geometry, (deprecated, True, not deprecated))
-    session.execute(insert(q), [values])
-    if geo:
-        session.execute(insert(QueryGeometryRow.__table__), geo)
     bump(session)
 
 

@@ -175,26 +175,42 @@ _PACKED = np.dtype([("version_id", "<i8"), ("joint_id", "<i8"), ("number", "<i8"
 _NULL_BITS = "000000000000F0BF"
 
 
-def _fetch_packed(reader: Reader, sel: Selection, geometry_keys: list[str]) -> Candidates:
-    """SQLite: the candidates as one row of concatenated hex strings (no Python object per row).
+def _packed_row(reader: Reader, sel: Selection, geometry_keys: list[str], raw: bool) -> tuple[int, list[bytes], str]:
+    """``(count, [packed bytes, geometry bytes per key], materials text)`` of ``sel`` in one SELECT.
 
-    All ``group_concat`` aggregates of one SELECT visit the rows in the same order.
+    ``raw``: the binary columns concatenated as they are (``group_concat`` treats a BLOB as
+    text of the same bytes in a UTF-8 database, embedded NULs included; the CAST hands the
+    result over as bytes); otherwise as hex text (any database encoding). All aggregates of
+    one SELECT visit the rows in the same order.
     """
     join, where, params = sel.where()
-    geo_cols = "".join(f", group_concat(CASE WHEN g{i}.bits IS NULL THEN '{_NULL_BITS}' ELSE hex(g{i}.bits) END, '')"
-                       for i in range(len(geometry_keys)))
+    if raw:
+        col = "CAST(group_concat({}, '') AS BLOB)"
+        packed, geo = col.format("q.packed"), [col.format(f"coalesce(g{i}.bits, x'{_NULL_BITS}')")
+                                               for i in range(len(geometry_keys))]
+    else:
+        packed = "group_concat(hex(q.packed), '')"
+        geo = [f"group_concat(CASE WHEN g{i}.bits IS NULL THEN '{_NULL_BITS}' ELSE hex(g{i}.bits) END, '')"
+               for i in range(len(geometry_keys))]
     geo_join = "".join(f" LEFT JOIN query_geometry g{i} ON g{i}.key = ? AND g{i}.version_id = q.version_id"
                        for i in range(len(geometry_keys)))
     row = reader.rows(
-        f"SELECT count(*), group_concat(hex(q.packed), ''), group_concat(q.materials, char(30)){geo_cols} "
+        f"SELECT count(*), {packed}, group_concat(q.materials, char(30)){''.join(', ' + g for g in geo)} "
         f"FROM query_versions q{join}{geo_join} WHERE {where}", [*params[:-1], *geometry_keys, params[-1]])[0]
-    n = int(row[0])
+    binary = [b if raw else bytes.fromhex(b) for b in (row[1], *row[3:])] if row[0] else []
+    return int(row[0]), binary, row[2]
+
+
+def _fetch_packed(reader: Reader, sel: Selection, geometry_keys: list[str]) -> Candidates:
+    """SQLite: the candidates as one row of concatenated binary columns (no Python object per row)."""
+    n, binary, materials = _packed_row(reader, sel, geometry_keys, raw=True)
+    if n and any(len(b) != size * n for b, size in zip(binary, [_PACKED.itemsize] + [8] * len(geometry_keys))):
+        n, binary, materials = _packed_row(reader, sel, geometry_keys, raw=False)  # e.g. a UTF-16 database
     if n == 0:
         return Candidates.from_rows([], geometry_keys)
-    rec = np.frombuffer(bytes.fromhex(row[1]), dtype=_PACKED)
-    mats = row[2].split("\x1e")  # JSON text escapes control characters: no material contains one
-    geo_bits = [bytes.fromhex(text) for text in row[3:]]
-    if rec.size != n or len(mats) != n or any(len(b) != 8 * n for b in geo_bits):
+    rec = np.frombuffer(binary[0], dtype=_PACKED) if len(binary[0]) == _PACKED.itemsize * n else None
+    mats = materials.split("\x1e")  # JSON text escapes control characters: no material contains one
+    if rec is None or len(mats) != n or any(len(b) != 8 * n for b in binary[1:]):
         raise IntegrityError("query index: packed candidate columns do not line up; run `jointdb db check`")
     order = np.argsort(rec["version_id"], kind="stable")
     keys: dict[str, int] = {}
@@ -204,7 +220,7 @@ def _fetch_packed(reader: Reader, sel: Selection, geometry_keys: list[str]) -> C
         a = np.array(a[order], dtype=float)
         a[a < 0] = np.nan
         return a
-    geometry = {g: nums(np.frombuffer(b, dtype="<f8")) for g, b in zip(geometry_keys, geo_bits)}
+    geometry = {g: nums(np.frombuffer(b, dtype="<f8")) for g, b in zip(geometry_keys, binary[1:])}
     return Candidates(rec["version_id"][order].copy(), rec["joint_id"][order].copy(), rec["number"][order].copy(),
                       nums(rec["torque"]), nums(rec["preload"]), list(keys), idx[order], geometry)
 

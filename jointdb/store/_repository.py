@@ -5,7 +5,6 @@ from __future__ import annotations
 import os
 import random
 import time
-import uuid as uuidlib
 from collections.abc import Iterable, Mapping
 from datetime import datetime
 from typing import Any
@@ -18,19 +17,11 @@ from sqlalchemy.orm import Session
 from jointdb.errors import ConflictError, InputError, NotFoundError
 from jointdb.frf import FRF
 from jointdb.store import _db
-from jointdb.store._index import add_version
+from jointdb.store._catalogue import precheck, write_version
 from jointdb.store._labels import LabelsAndStates
 from jointdb.store._reports import CheckReport, VersionDiff, _is_transient, _is_unique_violation
-from jointdb.store._models import AuditRow, JointRow, LabelRow, StateRow, VersionRow, utcnow
-from jointdb.store._records import (
-    as_utc,
-    current_actor,
-    record_dict,
-    record_sha256,
-    software_version,
-    state_of,
-    to_version,
-)
+from jointdb.store._models import JointRow, LabelRow, StateRow, VersionRow
+from jointdb.store._records import as_utc, current_actor, state_of, to_version
 from jointdb.store._types import (
     Conditions,
     JointVersion,
@@ -42,7 +33,6 @@ from jointdb.store._types import (
     check_label,
     check_model_kind,
     check_name,
-    dof_strings,
 )
 
 MAX_WRITE_ATTEMPTS = 60
@@ -159,10 +149,11 @@ class Repository(LabelsAndStates):
     ) -> JointVersion:
         """Store a joint FRF as a new joint (version 1) or a new version of one.
 
-        The blob is written and verified first and made durable while the row is
+        The blob is encoded and verified first and made durable while the row is
         prepared; the row is committed after the blob is durable, in one
         write transaction in which the next version number is taken (behind
-        ``UNIQUE(joint_id, version)``; retried after rollback on a conflict).
+        ``UNIQUE(joint_id, version)``; retried after rollback on a conflict;
+        :mod:`jointdb.store._catalogue`).
 
         ``label`` (optional) is pointed at the new version in the same
         transaction: both happen or neither.
@@ -192,110 +183,25 @@ class Repository(LabelsAndStates):
         actor = current_actor(author or prov.author or None)
         label = check_label(label) if label is not None else None
 
-        self._precheck_catalogue(name, joint_type, parent)  # refuse conflicts before writing any blob
-        # written and verified now, made durable (fsync, rename, directory fsync) while the row is
-        # prepared; the transaction commits only after pending.wait(): never a row without its blob
+        with self.read_engine.connect() as conn:  # refuse conflicts before writing any blob
+            precheck(conn, name, joint_type, parent)
+        # encoded, verified and written now, made durable (fsync, rename, directory fsync) while the
+        # row is prepared; the transaction commits only after pending.wait(): never a row without its blob
         pending = self.blobs.put_pending(frf)
         try:
             blob = pending.digest
             raw_blobs = {str(k): self.blobs.put(v) for k, v in sorted(raw.items())}
-            return self._catalogue_row(name, joint_type, frf, cond, kind, prov, qual, parent, actor, label,
-                                       blob, raw_blobs, pending)
+
+            def write(session: Session) -> JointVersion:
+                jv = write_version(session, name=name, joint_type=joint_type, frf=frf, cond=cond, kind=kind,
+                                   prov=prov, qual=qual, parent=parent, actor=actor, label=label, blob=blob,
+                                   raw_blobs=raw_blobs, move_label=self._move_label)
+                pending.wait()  # the blob is durable before the row that references it commits
+                return jv
+
+            return self._retrying(write)
         finally:
             pending.join()
-
-    def _catalogue_row(self, name, joint_type, frf, cond, kind, prov, qual, parent, actor, label, blob,
-                       raw_blobs, pending) -> JointVersion:
-        """The write transaction of :meth:`catalogue` (retried on conflicts)."""
-
-        def write(session: Session) -> JointVersion:
-            # FOR UPDATE serialises writers of one joint on PostgreSQL (SQLite: BEGIN IMMEDIATE
-            # already did); the unique constraint stays the safety net behind it.
-            joint = session.scalar(select(JointRow).where(JointRow.name == name).with_for_update())
-            now = utcnow()
-            if joint is None:
-                joint = JointRow(name=name, joint_type=joint_type, created_at=now, created_by=actor)
-                session.add(joint)
-                session.flush()
-            elif joint.joint_type != joint_type:
-                raise ConflictError(
-                    f"joint {name!r} is a {joint.joint_type} joint, not {joint_type}; use another name"
-                )
-            latest = session.scalar(select(func.max(VersionRow.version)).where(VersionRow.joint_id == joint.id))
-            number = (latest or 0) + 1
-            if parent is not None and (latest is None or parent > latest):
-                raise ConflictError(
-                    f"parent version {parent} of joint {name!r} does not exist (latest is {latest or 'none'})"
-                )
-            row = VersionRow(
-                joint_id=joint.id,
-                version=number,
-                uuid=str(uuidlib.uuid4()),
-                created_at=now,
-                author=actor,
-                materials=list(cond.materials),
-                preload_n=cond.preload_n,
-                torque_nm=cond.torque_nm,
-                geometry=dict(cond.geometry),
-                extra=dict(cond.extra),
-                model_kind=kind,
-                dofs=list(dof_strings(frf.outputs)),
-                quantity=frf.quantity.value,
-                n_freq=frf.n_freq,
-                freq_min_hz=float(frf.freq[0]),
-                freq_max_hz=float(frf.freq[-1]),
-                blob_sha256=blob,
-                raw_blobs=raw_blobs,
-                input_files=dict(prov.input_files),
-                method=prov.method,
-                method_params=dict(prov.parameters),
-                software_version=prov.software_version or software_version(),
-                parent_version=parent if parent is not None else latest,
-                quality=qual,
-            )
-            row.record_sha256 = record_sha256(record_dict(name, joint_type, row))
-            session.add(row)
-            session.add(
-                AuditRow(
-                    at=now,
-                    actor=actor,
-                    action="catalogue",
-                    joint_name=name,
-                    version=number,
-                    details={"blob_sha256": blob, "method": prov.method},
-                )
-            )
-            session.flush()
-            labels: tuple[str, ...] = ()
-            if label is not None:
-                self._move_label(session, joint, name, number, label, actor, now)
-                labels = (label,)
-            session.flush()
-            add_version(session, joint_type, row)  # the query index, in the same transaction
-            pending.wait()  # the blob is durable before the row that references it commits
-            return to_version(joint, row, labels=labels)
-
-        return self._retrying(write)
-
-    def _precheck_catalogue(self, name: str, joint_type: str, parent: int | None) -> None:
-        """The conflicts :meth:`catalogue` would raise, checked before any blob is written.
-
-        The write transaction checks them again (another writer may have come between).
-        """
-        with self._read() as s:
-            joint = s.scalar(select(JointRow).where(JointRow.name == name))
-            if joint is None:
-                latest = None
-            elif joint.joint_type != joint_type:
-                raise ConflictError(
-                    f"joint {name!r} is a {joint.joint_type} joint, not {joint_type}; use another name"
-                )
-            else:
-                latest = s.scalar(select(func.max(VersionRow.version)).where(VersionRow.joint_id == joint.id))
-        if parent is not None and (latest is None or parent > latest):
-            raise ConflictError(
-                f"parent version {parent} of joint {name!r} does not exist (latest is {latest or 'none'})"
-            )
 
     # ------------------------------------------------------------------ reads
     def _joint(self, session: Session, name: str) -> JointRow:

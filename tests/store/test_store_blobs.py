@@ -237,10 +237,11 @@ def test_unwritable_blob_store_is_one_line_and_writes_no_row(repo, monkeypatch):
     import jointdb.store._blobs as blobs_mod
     from jointdb.errors import InputError
 
-    def refuse(path, frf):
+    def refuse(path, data):  # the blob directory refuses the temporary file (as a read-only one would)
+        open(path, "wb").close()  # even after creating it: nothing may be left behind
         raise PermissionError(errno.EACCES, "Permission denied")
 
-    monkeypatch.setattr(blobs_mod, "write_frf_file", refuse)
+    monkeypatch.setattr(blobs_mod, "_write_tmp", refuse)
     with pytest.raises(InputError, match="cannot write to the blob store .*Permission denied"):
         repo.catalogue("T1", "tool-holder", spring_joint(), planar_conditions(), "spring-damper-planar")
     monkeypatch.undo()
@@ -272,3 +273,19 @@ def test_a_blob_collected_between_the_check_and_the_read_is_missing_and_put_rewr
     assert store.put(frf) == digest          # found, vanished while verified, rewritten
     monkeypatch.setattr(blobs_mod, "check_file_checksum", real)
     assert store.get(digest).allclose(frf, rtol=0)
+
+
+def test_a_blob_that_does_not_read_back_is_never_put_in_place(repo, monkeypatch):
+    """The bytes are verified while their temporary file is fsynced: a failed check drops the file."""
+    import jointdb.store._blobs as blobs_mod
+
+    def garbled(data, where, digest=None):
+        raise IntegrityError(f"{where} is corrupt: decoded to something else")
+
+    monkeypatch.setattr(blobs_mod, "decode_blob_bytes", garbled)
+    frf = spring_joint()
+    with pytest.raises(IntegrityError, match="did not read back"):
+        repo.catalogue("T1", "tool-holder", frf, planar_conditions(), "spring-damper-planar")
+    monkeypatch.undo()
+    assert repo.list_joints() == [] and not repo.blobs.temporaries()
+    assert not repo.blobs.exists(frf_sha256(frf)) and not list(repo.blobs.walk())

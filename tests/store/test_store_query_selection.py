@@ -182,3 +182,42 @@ def test_point_in_time_path_equals_the_index_after_the_last_write(catalogue, all
             later = repo.nearest("tool-holder", req, at="2100-01-01T00:00:00Z", **kw)
         assert [(m.version.name, m.version.version, m.version.state, m.distance) for m in now] == \
             [(m.version.name, m.version.version, m.version.state, m.distance) for m in later]
+
+
+@pytest.mark.parametrize("label, all_versions, include_deprecated", SELECTIONS)
+def test_raw_and_hex_fetches_give_the_same_candidates(catalogue, label, all_versions, include_deprecated, monkeypatch):
+    """SQLite hands the packed columns over as raw bytes (a BLOB concatenated as text); the hex
+    form (taken when the raw one does not line up, e.g. a UTF-16 database) gives the same arrays."""
+    import numpy as np
+
+    import jointdb.store._nearest as nearest
+
+    repo, _ = catalogue
+    if not repo.is_sqlite:
+        pytest.skip("the packed fetch is SQLite's")
+    sel = Selection("tool-holder", label, all_versions, include_deprecated)
+    keys = ["diameter_m", "length_m"]  # the second key no version has: all NULL
+    raw = repo.read_engine.raw_connection()
+    try:
+        reader = nearest.Reader(raw, "sqlite")
+        with reader.snapshot():
+            a = nearest._packed_row(reader, sel, keys, raw=True)
+            b = nearest._packed_row(reader, sel, keys, raw=False)
+            assert a[0] > 0 and a == b
+            want = nearest._fetch_packed(reader, sel, keys)
+            real = nearest._packed_row
+
+            def short_raw(reader_, sel_, keys_, raw):  # raw bytes cut short: the hex form is used
+                n, binary, mats = real(reader_, sel_, keys_, raw=raw)
+                return (n, [x[:-1] for x in binary], mats) if raw else (n, binary, mats)
+
+            monkeypatch.setattr(nearest, "_packed_row", short_raw)
+            got = nearest._fetch_packed(reader, sel, keys)
+    finally:
+        raw.close()
+    for field in ("version_id", "joint_id", "number", "torque", "preload", "materials_index"):
+        assert np.array_equal(getattr(got, field), getattr(want, field), equal_nan=field in ("torque", "preload"))
+    assert got.materials == want.materials
+    for key in keys:
+        assert np.array_equal(got.geometry[key], want.geometry[key], equal_nan=True)
+    assert np.isnan(want.geometry["length_m"]).all() and not np.isnan(want.geometry["diameter_m"]).all()

@@ -1,0 +1,228 @@
+"""The FRF blob format: canonical content hash, HDF5 layout, whole-file checksum; encode and decode.
+
+Canonical form (what the SHA-256 is computed over, format version 1), the
+concatenation of:
+
+1. the ASCII bytes ``b"jointdb-frf-v1\\n"``;
+2. ``quantity`` (``receptance``/``mobility``/``accelerance``) in UTF-8, then ``b"\\n"``;
+3. the output DOF labels as text (``"3x,3ry"``) in UTF-8, then ``b"\\n"``;
+4. the input DOF labels likewise, then ``b"\\n"``;
+5. ``n_freq, n_out, n_in`` as three little-endian uint64;
+6. the frequencies as little-endian float64 (``<f8``), ``n_freq`` values;
+7. the values as little-endian complex128 (``<c16``: real then imaginary part
+   of each entry), C order of the ``(n_freq, n_out, n_in)`` array.
+
+So two FRFs hash equal exactly when labels, quantity and every bit of the
+numbers are equal. The blob file is ``<root>/<h[:2]>/<h>.h5``.
+
+HDF5 layout: dataset ``freq`` (float64, Hz) and dataset ``values`` (float64,
+shape ``(n_freq, n_out, n_in, 2)``, last axis = (real, imaginary)), both chunked
+along frequency with shuffle + gzip + fletcher32. Root attributes:
+``format = "jointdb-frf-blob"``, ``format_version = 1``, ``sha256``,
+``quantity``, ``outputs``, ``inputs``, ``complex_convention`` and
+``harmonic_convention = "x(t) = X exp(+i omega t)"``.
+
+Whole-file checksum: the file starts with a 512-byte HDF5 *user block*
+(ignored by HDF5 readers) holding ``b"jointdb-blob-file-sha256:" + <64 hex> +
+b"\n"`` followed by zero bytes; the digest is the SHA-256 of every byte after
+the user block. So every single byte of a blob file is covered: the user block
+must match exactly, the rest must hash to the recorded digest, the HDF5 chunks
+carry fletcher32 and the decoded FRF must hash to the blob's name.
+
+A blob file's bytes are built in memory (:func:`blob_bytes`: HDF5's core driver,
+then the user block) and decoded with every check of a read
+(:func:`decode_blob_bytes`); :mod:`jointdb.store._blobs` stores them.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import re
+import uuid
+
+import numpy as np
+
+from jointdb.errors import InputError, IntegrityError
+from jointdb.frf import FRF
+
+FORMAT = "jointdb-frf-blob"
+FORMAT_VERSION = 1
+COMPLEX_CONVENTION = "values[..., 0] = real part, values[..., 1] = imaginary part"
+HARMONIC_CONVENTION = "x(t) = X exp(+i omega t)"
+USERBLOCK = 512
+_FILE_MAGIC = b"jointdb-blob-file-sha256:"
+_HEX64 = re.compile(r"[0-9a-f]{64}")
+
+
+def frf_sha256(frf: FRF) -> str:
+    """SHA-256 (hex) of the canonical form of an FRF (module docstring)."""
+    h = hashlib.sha256()
+    h.update(b"jointdb-frf-v1\n")
+    h.update(frf.quantity.value.encode() + b"\n")
+    h.update(",".join(map(str, frf.outputs)).encode() + b"\n")
+    h.update(",".join(map(str, frf.inputs)).encode() + b"\n")
+    h.update(np.asarray(frf.values.shape, dtype="<u8").tobytes())
+    h.update(np.ascontiguousarray(frf.freq, dtype="<f8").tobytes())
+    h.update(np.ascontiguousarray(frf.values, dtype="<c16").tobytes())
+    return h.hexdigest()
+
+
+def file_sha256(path: str | os.PathLike) -> str:
+    """SHA-256 (hex) of a file's bytes (for provenance ``input_files``)."""
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for chunk in iter(lambda: f.read(1 << 20), b""):
+            h.update(chunk)
+    return h.hexdigest()
+
+
+def _chunk_rows(n_freq: int, n_entries: int) -> int:
+    # about 64 KiB per chunk, along frequency
+    return max(1, min(n_freq, (1 << 16) // max(1, 16 * n_entries)))
+
+
+def write_frf_group(group, frf: FRF, digest: str) -> None:
+    """Write an FRF into an open h5py group/file in the blob layout."""
+    n_freq, n_out, n_in = frf.values.shape
+    rows = _chunk_rows(n_freq, n_out * n_in)
+    opts = dict(shuffle=True, compression="gzip", compression_opts=4, fletcher32=True)
+    group.create_dataset("freq", data=np.asarray(frf.freq, dtype="<f8"), chunks=(rows,), **opts)
+    packed = np.stack([frf.values.real, frf.values.imag], axis=-1).astype("<f8")
+    group.create_dataset("values", data=packed, chunks=(rows, n_out, n_in, 2), **opts)
+    a = group.attrs
+    a["format"] = FORMAT
+    a["format_version"] = FORMAT_VERSION
+    a["sha256"] = digest
+    a["quantity"] = frf.quantity.value
+    a["outputs"] = ",".join(map(str, frf.outputs))
+    a["inputs"] = ",".join(map(str, frf.inputs))
+    a["complex_convention"] = COMPLEX_CONVENTION
+    a["harmonic_convention"] = HARMONIC_CONVENTION
+
+
+def read_frf_group(group, where: str) -> tuple[FRF, str]:
+    """Read an FRF from a group in the blob layout; returns ``(frf, stored_sha256)``."""
+    a = group.attrs
+    if str(a.get("format", "")) != FORMAT:
+        raise IntegrityError(f"{where}: not a jointdb FRF blob (format attribute {a.get('format')!r})")
+    version = int(a.get("format_version", 0))
+    if version > FORMAT_VERSION:
+        raise IntegrityError(f"{where}: blob format version {version} is newer than this jointdb ({FORMAT_VERSION})")
+    freq = np.asarray(group["freq"][...], dtype=np.float64)
+    packed = np.asarray(group["values"][...], dtype=np.float64)
+    values = packed[..., 0] + 1j * packed[..., 1]
+    outputs = [s for s in str(a["outputs"]).split(",") if s]
+    inputs = [s for s in str(a["inputs"]).split(",") if s]
+    frf = FRF(freq, values, outputs, inputs, str(a["quantity"]))
+    return frf, str(a.get("sha256", ""))
+
+
+def _userblock(file_digest: str) -> bytes:
+    head = _FILE_MAGIC + file_digest.encode() + b"\n"
+    return head + b"\0" * (USERBLOCK - len(head))
+
+
+def blob_bytes(frf: FRF, digest: str | None = None) -> tuple[str, bytes]:
+    """``(content hash, bytes of the blob file)`` of an FRF, built in memory.
+
+    The HDF5 layout is written once, by HDF5's in-memory (core) driver, and its
+    image is hashed for the user block: exactly the bytes :func:`write_frf_file`
+    puts in a file, without writing, re-opening and re-reading one.
+    """
+    import h5py
+
+    digest = digest or frf_sha256(frf)
+    # a unique name: HDF5 refuses to create a file (even one without a backing store) that is open
+    with h5py.File(f"jointdb-blob-{uuid.uuid4().hex}", "w", driver="core", backing_store=False,
+                   userblock_size=USERBLOCK) as f:
+        write_frf_group(f, frf, digest)
+        f.flush()
+        body = f.id.get_file_image()  # the file after its user block
+    return digest, _userblock(hashlib.sha256(body).hexdigest()) + body
+
+
+def decode_blob_bytes(data: bytes, where: str, digest: str | None = None) -> FRF:
+    """The FRF in the bytes of a blob file, every check of a read applied (module docstring).
+
+    Raises
+    ------
+    IntegrityError
+        The user block is damaged, a byte differs from the whole-file hash, HDF5 cannot
+        read it (a chunk checksum fails) or the decoded FRF does not hash to its
+        ``sha256`` attribute (or to ``digest``, when given: the blob's name).
+    """
+    import h5py
+
+    block = data[:USERBLOCK]
+    recorded = block[len(_FILE_MAGIC):len(_FILE_MAGIC) + 64].decode("ascii", "replace")
+    if len(block) != USERBLOCK or not block.startswith(_FILE_MAGIC) or block != _userblock(recorded):
+        raise IntegrityError(f"{where} is corrupt: file checksum header is damaged")
+    if hashlib.sha256(memoryview(data)[USERBLOCK:]).hexdigest() != recorded:
+        raise IntegrityError(f"{where} is corrupt: file bytes do not match their recorded SHA-256")
+    try:
+        fapl = h5py.h5p.create(h5py.h5p.FILE_ACCESS)
+        fapl.set_fapl_core(backing_store=False)
+        fapl.set_file_image(data)
+        name = f"jointdb-blob-{uuid.uuid4().hex}".encode()
+        with h5py.File(h5py.h5f.open(name, h5py.h5f.ACC_RDONLY, fapl=fapl)) as f:
+            frf, stored = read_frf_group(f, where)
+    except (OSError, KeyError, ValueError) as exc:  # a stored blob that does not validate is corrupt too
+        raise IntegrityError(f"{where} is corrupt: {exc}") from None
+    actual = frf_sha256(frf)
+    if actual != stored:
+        raise IntegrityError(f"{where} is corrupt: content hash does not match the stored sha256 attribute")
+    if digest is not None and actual != digest:
+        raise IntegrityError(f"{where} is corrupt: its content hashes to {actual}")
+    return frf
+
+
+def write_frf_file(path: str | os.PathLike, frf: FRF) -> str:
+    """Write one FRF to an HDF5 file in the blob layout (no atomicity); returns its content hash."""
+    digest, data = blob_bytes(frf)
+    with open(path, "wb") as fh:
+        fh.write(data)
+    return digest
+
+
+def check_file_checksum(path: str | os.PathLike) -> None:
+    """Verify the whole-file checksum in the user block (module docstring).
+
+    Raises
+    ------
+    IntegrityError
+        If the user block is damaged or any later byte changed.
+    """
+    with open(path, "rb") as raw:
+        block = raw.read(USERBLOCK)
+        h = hashlib.sha256()
+        for chunk in iter(lambda: raw.read(1 << 20), b""):
+            h.update(chunk)
+    if len(block) != USERBLOCK or not block.startswith(_FILE_MAGIC):
+        raise IntegrityError(f"{path}: file checksum header is damaged or missing")
+    recorded = block[len(_FILE_MAGIC):len(_FILE_MAGIC) + 64].decode("ascii", "replace")
+    if block != _userblock(recorded):
+        raise IntegrityError(f"{path}: file checksum header is damaged")
+    if h.hexdigest() != recorded:
+        raise IntegrityError(f"{path}: file bytes do not match their recorded SHA-256 (corrupt file)")
+
+
+def read_frf_file(path: str | os.PathLike, verify: bool = True) -> FRF:
+    """Read a file written by :func:`write_frf_file` (file checksum and content hash verified)."""
+    import h5py
+
+    where = str(path)
+    if verify:
+        check_file_checksum(path)
+    try:
+        with h5py.File(path, "r", locking=False) as f:
+            frf, stored = read_frf_group(f, where)  # InputError (e.g. NaN values) propagates
+    except (OSError, KeyError) as exc:
+        raise IntegrityError(f"{where}: cannot read FRF blob ({exc})") from None
+    except ValueError as exc:
+        if isinstance(exc, InputError):
+            raise InputError(f"{where}: {exc}") from None
+        raise IntegrityError(f"{where}: cannot read FRF blob ({exc})") from None
+    if verify and frf_sha256(frf) != stored:
+        raise IntegrityError(f"{where}: content hash does not match the stored sha256 attribute")
+    return frf

@@ -1,0 +1,146 @@
+"""The write transaction of :meth:`jointdb.store.Repository.catalogue`, in a few Core statements.
+
+One new version is, inside the caller's write transaction:
+
+1. the joint row, locked (``FOR UPDATE`` on PostgreSQL; SQLite writers are already
+   serialised by ``BEGIN IMMEDIATE``), or a new joint row;
+2. for an existing joint, one SELECT of its latest version number and of the state
+   that applies to the next one (the latest state row naming the joint or that number);
+3. the version row with its record hash, and its audit row;
+4. the query index (:mod:`jointdb.store._index`): the joint's other versions lose the
+   ``newest`` (and, unless the new one is deprecated, ``newest_active``) flags, the new
+   version's index and geometry rows, and the stamp's generation is increased.
+
+The statements are built once per process and executed on the transaction's
+connection (no ORM unit of work: the rows are only inserted, never changed, so
+the immutability hook of the ORM has nothing to check). The rows are the ones
+the ORM path wrote before; ``jointdb db check`` recomputes the index from history.
+"""
+
+from __future__ import annotations
+
+import functools
+import uuid as uuidlib
+from types import SimpleNamespace
+
+from sqlalchemy import bindparam, func, insert, or_, select, update
+
+from jointdb.errors import ConflictError
+from jointdb.store._index import index_values
+from jointdb.store._models import (
+    AuditRow,
+    JointRow,
+    QueryGeometryRow,
+    QueryStampRow,
+    QueryVersionRow,
+    StateRow,
+    VersionRow,
+    utcnow,
+)
+from jointdb.store._records import record_dict, record_sha256, software_version, to_version
+from jointdb.store._types import JointVersion, dof_strings
+
+
+@functools.cache
+def _statements() -> SimpleNamespace:
+    j, v, s = JointRow.__table__, VersionRow.__table__, StateRow.__table__
+    q, stamp = QueryVersionRow.__table__, QueryStampRow.__table__
+    latest = select(func.max(v.c.version)).where(v.c.joint_id == bindparam("jid")).scalar_subquery()
+    state = (select(s.c.state)
+             .where(s.c.joint_id == bindparam("jid"),
+                    or_(s.c.version.is_(None), s.c.version == func.coalesce(latest, 0) + 1))
+             .order_by(s.c.at.desc(), s.c.id.desc()).limit(1).scalar_subquery())
+    latest_of_name = select(func.max(v.c.version)).where(v.c.joint_id == j.c.id).scalar_subquery()
+    return SimpleNamespace(
+        joint=select(j.c.id, j.c.joint_type).where(j.c.name == bindparam("name")).with_for_update(),
+        precheck=select(j.c.joint_type, latest_of_name).where(j.c.name == bindparam("name")),
+        latest_and_state=select(latest, state),
+        insert_joint=insert(j),
+        insert_version=insert(v),
+        insert_audit=insert(AuditRow.__table__),
+        # the joint's other versions are no longer the newest (nor the newest active one, unless
+        # the new version is deprecated: then the newest active version stays what it was)
+        clear_newest=update(q).where(q.c.joint_id == bindparam("jid"), q.c.newest).values(newest=False),
+        clear_both=(update(q).where(q.c.joint_id == bindparam("jid"), or_(q.c.newest, q.c.newest_active))
+                    .values(newest=False, newest_active=False)),
+        insert_index=insert(q),
+        insert_geometry=insert(QueryGeometryRow.__table__),
+        bump=update(stamp).where(stamp.c.id == 1).values(generation=stamp.c.generation + 1),
+    )
+
+
+def precheck(conn, name: str, joint_type: str, parent: int | None) -> None:
+    """The conflicts :func:`write_version` would raise, checked in one SELECT before any blob is
+    written (the write transaction checks them again: another writer may have come between).
+
+    Raises
+    ------
+    ConflictError
+        ``name`` exists with another joint type, or ``parent`` is not one of its versions.
+    """
+    row = conn.execute(_statements().precheck, {"name": name}).first()
+    latest = None
+    if row is not None:
+        if row[0] != joint_type:
+            raise ConflictError(f"joint {name!r} is a {row[0]} joint, not {joint_type}; use another name")
+        latest = row[1]
+    if parent is not None and (latest is None or parent > latest):
+        raise ConflictError(f"parent version {parent} of joint {name!r} does not exist (latest is {latest or 'none'})")
+
+
+def write_version(session, *, name, joint_type, frf, cond, kind, prov, qual, parent, actor, label, blob, raw_blobs,
+                  move_label) -> JointVersion:
+    """Insert one new version (module docstring) in ``session``'s write transaction.
+
+    ``move_label(session, joint, name, number, label, actor, now)`` points ``label`` at it
+    (when given). The caller commits after the blob the row names is durable.
+
+    Raises
+    ------
+    ConflictError
+        ``name`` exists with another joint type, or ``parent`` is not one of its versions.
+    """
+    st = _statements()
+    conn = session.connection()
+    now = utcnow()
+    found = conn.execute(st.joint, {"name": name}).first()
+    if found is None:
+        jid = conn.execute(st.insert_joint, {"name": name, "joint_type": joint_type, "created_at": now,
+                                             "created_by": actor}).inserted_primary_key[0]
+        latest, state = None, None
+    else:
+        jid, have_type = found
+        if have_type != joint_type:
+            raise ConflictError(f"joint {name!r} is a {have_type} joint, not {joint_type}; use another name")
+        latest, state = conn.execute(st.latest_and_state, {"jid": jid}).first()
+    if parent is not None and (latest is None or parent > latest):
+        raise ConflictError(f"parent version {parent} of joint {name!r} does not exist (latest is {latest or 'none'})")
+    number = (latest or 0) + 1
+    row = SimpleNamespace(
+        joint_id=jid, version=number, uuid=str(uuidlib.uuid4()), created_at=now, author=actor,
+        materials=list(cond.materials), preload_n=cond.preload_n, torque_nm=cond.torque_nm,
+        geometry=dict(cond.geometry), extra=dict(cond.extra), model_kind=kind, dofs=list(dof_strings(frf.outputs)),
+        quantity=frf.quantity.value, n_freq=frf.n_freq, freq_min_hz=float(frf.freq[0]),
+        freq_max_hz=float(frf.freq[-1]), blob_sha256=blob, raw_blobs=raw_blobs, input_files=dict(prov.input_files),
+        method=prov.method, method_params=dict(prov.parameters),
+        software_version=prov.software_version or software_version(),
+        parent_version=parent if parent is not None else latest, quality=qual)
+    row.record_sha256 = record_sha256(record_dict(name, joint_type, row))
+    row.id = conn.execute(st.insert_version, dict(vars(row))).inserted_primary_key[0]
+    conn.execute(st.insert_audit, {"at": now, "actor": actor, "action": "catalogue", "joint_name": name,
+                                   "version": number, "details": {"blob_sha256": blob, "method": prov.method}})
+    deprecated = state == "deprecated"
+    if found is not None:
+        conn.execute(st.clear_newest if deprecated else st.clear_both, {"jid": jid})
+    values, geometry = index_values(row.id, jid, joint_type, number, row.materials, row.torque_nm, row.preload_n,
+                                    row.geometry, (deprecated, True, not deprecated))
+    conn.execute(st.insert_index, values)
+    if geometry:
+        conn.execute(st.insert_geometry, geometry)
+    conn.execute(st.bump)
+    joint = SimpleNamespace(id=jid, name=name, joint_type=joint_type)
+    labels: tuple[str, ...] = ()
+    if label is not None:
+        move_label(session, joint, name, number, label, actor, now)
+        labels = (label,)
+    return to_version(joint, row, labels=labels)
