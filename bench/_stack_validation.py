@@ -361,14 +361,34 @@ def queries(case: Case, interpolate: bool = True) -> dict:
     }
 
 
-def _dominant(frf_values: np.ndarray) -> tuple[float, float]:
-    h = np.abs(frf_values)
-    k = int(np.argmax(h))
-    if 0 < k < h.size - 1:  # parabolic refinement of the peak on the 10 Hz grid
+def _refine(h: np.ndarray, k: int) -> tuple[float, float]:
+    """Frequency and |H| of the peak at line ``k``, by a parabola through log|H| on the 10 Hz grid."""
+    if 0 < k < h.size - 1:
         a, b, c = np.log(h[k - 1:k + 2])
         d = 0.5 * (a - c) / (a - 2 * b + c)
         return float(FREQ[k] + d * (FREQ[1] - FREQ[0])), float(np.exp(b - 0.25 * (a - c) * d))
     return float(FREQ[k]), float(h[k])
+
+
+def _dominant(frf_values: np.ndarray) -> tuple[float, float]:
+    h = np.abs(frf_values)
+    return _refine(h, int(np.argmax(h)))
+
+
+def _nearest_peak(frf_values: np.ndarray, f_hz: float) -> tuple[float, float]:
+    """The resonance (local maximum of |H|) nearest ``f_hz``: frequency and |H|, refined."""
+    h = np.abs(frf_values)
+    peaks = np.flatnonzero((h[1:-1] > h[:-2]) & (h[1:-1] >= h[2:])) + 1
+    k = int(peaks[np.argmin(np.abs(FREQ[peaks] - f_hz))]) if peaks.size else int(np.argmax(h))
+    return _refine(h, k)
+
+
+def second_peak_ratio(frf_values: np.ndarray) -> float:
+    """Height of the second-largest resonance / the largest (near 1: the dominant mode is ill-defined)."""
+    h = np.abs(frf_values)
+    peaks = np.flatnonzero((h[1:-1] > h[:-2]) & (h[1:-1] >= h[2:])) + 1
+    tops = np.sort(h[peaks])[::-1]
+    return float(tops[1] / tops[0]) if tops.size > 1 else 0.0
 
 
 def _floor(h: np.ndarray) -> float:
@@ -382,37 +402,66 @@ def _floor(h: np.ndarray) -> float:
                                    spindle_speed_rpm=np.linspace(3000, 30000, 200)).min_depth_m)
 
 
-def validate(case: Case, repo) -> dict:
-    """Predict ``case`` from the catalogue and with rigid joints; compare with its truth tip FRF."""
+def idw_joints(case: Case, repo) -> dict:
+    """The joints as resolved before the axis-aware interpolation: inverse-distance weights of the two
+    nearest (``method="idw"``), for the before/after comparison."""
+    import warnings
+
+    from jointdb.store import Conditions, OutsideCatalogueWarning
+
+    out = {}
+    for name, q in queries(case).items():
+        query = dict(q["query"])
+        jt = query.pop("joint_type")
+        query.pop("interpolate"), query.pop("neighbours")
+        cond = Conditions.from_dict(query)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", OutsideCatalogueWarning)
+            matches = repo.nearest(jt, cond, k=2)
+        out[name] = repo.interpolate(matches, cond, method="idw").frf
+    return out
+
+
+def validate(case: Case, repo, spindle=None, before: bool = False) -> dict:
+    """Predict ``case`` from the catalogue and with rigid joints; compare with its truth tip FRF.
+
+    ``spindle``: a spindle FRF (5x, 5ry) to predict with as well (e.g. estimated from noisy translations;
+    key ``cat_est_spindle``); ``before``: also the joints interpolated the old way (key ``cat_idw``).
+    Per variant: dominant-mode frequency / peak / lobe-floor errors, and the mode-matched comparison (the
+    predicted resonance nearest the truth's dominant one: ``near_freq_err``, ``near_peak_err``).
+    """
     from jointdb import app
-    from jointdb.stack import predict_tool_tip
+    from jointdb.stack import MeasuredSpindle, predict_tool_tip
 
     truth = truth_tip(case).values[:, 0, 0]
     spec = spec_for(case, queries(case))
     res = app.resolve_joints(spec, repo)
-    pred = predict_tool_tip(spec, {n: r.frf for n, r in res.items() if r.frf is not None}, FREQ)
-    cat, rigid = pred.tip.values[:, 0, 0], pred.rigid.values[:, 0, 0]
-    plain = cat
+    joints = {n: r.frf for n, r in res.items() if r.frf is not None}
+    pred = predict_tool_tip(spec, joints, FREQ)
+    variants = {"cat": pred.tip.values[:, 0, 0], "rigid": pred.rigid.values[:, 0, 0]}
     if case.fluted > 0:  # the same prediction without the fluted section's true mass (the default model)
         spec0 = spec_for(case, queries(case), fluted_mass=False)
-        plain = predict_tool_tip(spec0, {n: r.frf for n, r in res.items() if r.frf is not None}, FREQ).tip.values[:, 0, 0]
+        variants["cat_cylinder_mass"] = predict_tool_tip(spec0, joints, FREQ).tip.values[:, 0, 0]
+    if before:
+        variants["cat_idw"] = predict_tool_tip(spec, idw_joints(case, repo), FREQ).tip.values[:, 0, 0]
+    if spindle is not None:
+        spec_e = spec.replace(spindle=MeasuredSpindle("spindle.uff", 5, spindle))
+        variants["cat_est_spindle"] = predict_tool_tip(spec_e, joints, FREQ).tip.values[:, 0, 0]
     ft, at = _dominant(truth)
     lt = _floor(truth)
     row = {"case": case.name, "truth_hz": ft, "truth_peak": at, "truth_floor_mm": lt * 1e3,
+           "truth_second_peak_ratio": second_peak_ratio(truth),
            "extrapolating": any(r.extrapolating for r in res.values()),
            "warnings": [w for r in res.values() for w in r.warnings],
            "joints": {n: r.description if r.kind == "interpolated" else f"{r.name}@{r.version}"
                       for n, r in res.items()}}
-    for key, h in (("cat", cat), ("rigid", rigid), ("cat_cylinder_mass", plain)):
+    for key, h in variants.items():
         f, a = _dominant(h)
         row[f"{key}_hz"], row[f"{key}_peak"], row[f"{key}_floor_mm"] = f, a, _floor(h) * 1e3
         row[f"{key}_freq_err"] = f / ft - 1
         row[f"{key}_peak_err"] = a / at - 1
         row[f"{key}_floor_err"] = row[f"{key}_floor_mm"] / (lt * 1e3) - 1
-        # the predicted resonance nearest the truth's dominant one (tells a frequency miss from a swap of
-        # which of two similar peaks is the largest)
-        a = np.abs(h)
-        peaks = np.flatnonzero((a[1:-1] > a[:-2]) & (a[1:-1] >= a[2:])) + 1
-        near = peaks[np.argmin(np.abs(FREQ[peaks] - ft))] if peaks.size else int(np.argmax(a))
-        row[f"{key}_near_freq_err"] = float(FREQ[near] / ft - 1)
+        fn, an = _nearest_peak(h, ft)
+        row[f"{key}_near_freq_err"] = fn / ft - 1
+        row[f"{key}_near_peak_err"] = an / at - 1
     return row
