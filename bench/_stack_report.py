@@ -145,3 +145,27 @@ def failures(rows: list[dict]) -> list[str]:
                         f"it misses {', '.join(NAMES[k] for k in same)} too (the prediction path) and meets the rest"))
         out += ["", text + "."]
     return out
+
+
+def interpolation_findings(rows: list[dict]) -> list[str]:
+    """Stacks where the old inverse-distance interpolation missed a goal and the axis-aware one does not:
+    which joints each used, and the exact-condition campaigns' figures (the path's own error)."""
+    out = []
+    for r in rows:
+        old = [k for k, g in GOALS.items() if abs(r.get(f"cat_idw_{k}_err", 0.0)) > g]
+        new = [k for k, g in GOALS.items() if abs(r[f"cat_{k}_err"]) > g]
+        if not old or new:
+            continue
+        text = (f"*{r['case']}*: before, {pct(r['cat_idw_freq_err'])} / {pct(r['cat_idw_peak_err'])} / "
+                f"{pct(r['cat_idw_floor_err'])} with {r['idw_joints'].get('tool-holder', '?')}; now "
+                f"{pct(r['cat_freq_err'])} / {pct(r['cat_peak_err'])} / {pct(r['cat_floor_err'])} with "
+                f"{r['joints'].get('tool-holder', '?')}")
+        if "oracle_freq_err" in r:
+            still = [k for k in old if abs(r[f"oracle_{k}_err"]) > GOALS[k]]
+            text += f"; joints from campaigns at exactly its conditions give {_oracle(r)}" + (
+                ", so the old miss was the interpolation (neighbours that do not bracket its conditions), not the "
+                "prediction path" if not still else
+                f" (they miss the {', '.join(NAMES[k] for k in still)} goal too: this stack is sensitive to small "
+                "joint differences, and the prediction meets the goals here partly by luck)")
+        out += ["", text + "."]
+    return out

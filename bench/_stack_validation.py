@@ -404,7 +404,7 @@ def _floor(h: np.ndarray) -> float:
 
 def idw_joints(case: Case, repo) -> dict:
     """The joints as resolved before the axis-aware interpolation: inverse-distance weights of the two
-    nearest (``method="idw"``), for the before/after comparison."""
+    nearest (``method="idw"``), for the before/after comparison (interface → InterpolatedJoint)."""
     import warnings
 
     from jointdb.store import Conditions, OutsideCatalogueWarning
@@ -418,7 +418,7 @@ def idw_joints(case: Case, repo) -> dict:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", OutsideCatalogueWarning)
             matches = repo.nearest(jt, cond, k=2)
-        out[name] = repo.interpolate(matches, cond, method="idw").frf
+        out[name] = repo.interpolate(matches, cond, method="idw")
     return out
 
 
@@ -442,8 +442,9 @@ def validate(case: Case, repo, spindle=None, before: bool = False) -> dict:
     if case.fluted > 0:  # the same prediction without the fluted section's true mass (the default model)
         spec0 = spec_for(case, queries(case), fluted_mass=False)
         variants["cat_cylinder_mass"] = predict_tool_tip(spec0, joints, FREQ).tip.values[:, 0, 0]
+    idw = idw_joints(case, repo) if before else {}
     if before:
-        variants["cat_idw"] = predict_tool_tip(spec, idw_joints(case, repo), FREQ).tip.values[:, 0, 0]
+        variants["cat_idw"] = predict_tool_tip(spec, {n: j.frf for n, j in idw.items()}, FREQ).tip.values[:, 0, 0]
     if spindle is not None:
         spec_e = spec.replace(spindle=MeasuredSpindle("spindle.uff", 5, spindle))
         variants["cat_est_spindle"] = predict_tool_tip(spec_e, joints, FREQ).tip.values[:, 0, 0]
@@ -454,7 +455,8 @@ def validate(case: Case, repo, spindle=None, before: bool = False) -> dict:
            "extrapolating": any(r.extrapolating for r in res.values()),
            "warnings": [w for r in res.values() for w in r.warnings],
            "joints": {n: r.description if r.kind == "interpolated" else f"{r.name}@{r.version}"
-                      for n, r in res.items()}}
+                      for n, r in res.items()},
+           "idw_joints": {n: j.describe() for n, j in idw.items()}}
     for key, h in variants.items():
         f, a = _dominant(h)
         row[f"{key}_hz"], row[f"{key}_peak"], row[f"{key}_floor_mm"] = f, a, _floor(h) * 1e3

@@ -77,11 +77,15 @@ def axis_coordinates(request: Conditions, matches: Sequence[Match]) -> tuple[np.
             continue
         got = _log_axis([getattr(c, name) for c in conds], req, spread_scale=True)
         if got is not None:
-            cols.append(got[0]), r.append(got[1]), axes.append(name)
+            cols.append(got[0])
+            r.append(got[1])
+            axes.append(name)
     for key, req in request.geometry.items():
         got = _log_axis([(c.geometry or {}).get(key) for c in conds], float(req), spread_scale=False)
         if got is not None:
-            cols.append(got[0]), r.append(got[1]), axes.append(f"geometry.{key}")
+            cols.append(got[0])
+            r.append(got[1])
+            axes.append(f"geometry.{key}")
     x = np.column_stack(cols) if cols else np.zeros((len(matches), 0))
     return x, np.asarray(r, dtype=float), axes
 
