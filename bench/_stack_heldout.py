@@ -91,19 +91,20 @@ def spindle_by_extension(taper: str):
     return est.frf, est
 
 
-def oracle_joints(case: sv.Case, workdir, side_repo, hs_reference: FRF, cache: dict) -> dict:
+def oracle_joints(case: sv.Case, workdir, side_repo, hs_reference: dict, cache: dict) -> dict:
     """Joints identified by campaigns at exactly ``case``'s conditions (same campaign design as the
-    catalogue's: tool–holder on the reference machine with a 45 mm / 35 mm blank, holder–spindle with the
-    bonded Ø12 arbor), catalogued in ``side_repo``: the prediction path's error with no interpolation.
+    catalogue's: tool–holder on the reference machine of the stack's taper family with a 45 mm / 35 mm blank,
+    holder–spindle with the bonded Ø12 arbor), catalogued in ``side_repo``: the prediction path's error with
+    no interpolation. ``hs_reference``: taper → the reference machine's catalogued taper joint (FRF);
     ``cache`` maps a campaign's conditions to its joint FRF (campaigns shared between stacks)."""
     from jointdb import app
 
-    th_key = ("th", case.diameter, case.torque)
+    th_key = ("th", case.taper, case.diameter, case.torque)
     hs_key = ("hs", case.taper, case.drawbar)
     if th_key not in cache:
-        name = f"oracle-th-d{case.diameter * 1e3:.0f}-{case.torque:.0f}nm"
-        c = sv.Case(name, case.diameter, 0.045, 0.035, case.torque, "HSK-A63", 18e3)
-        out = app.catalogue_campaign(side_repo, sv.write_th_campaign(workdir / name, c, hs_reference))
+        name = f"oracle-th-{case.taper.lower()}-d{case.diameter * 1e3:.0f}-{case.torque:.0f}nm"
+        c = sv.Case(name, case.diameter, 0.045, 0.035, case.torque, case.taper, sv.TH_MACHINES[case.taper])
+        out = app.catalogue_campaign(side_repo, sv.write_th_campaign(workdir / name, c, hs_reference[case.taper]))
         cache[th_key] = side_repo.load_frf(side_repo.get(out.row()["joint"].split("@")[0]))
     if hs_key not in cache:
         name = f"oracle-hs-{case.taper.lower()}-{case.drawbar:.0f}n"

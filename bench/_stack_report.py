@@ -22,6 +22,11 @@ def _abs(rows, key):
     return np.array([abs(r[key]) for r in rows if key in r])
 
 
+def stack_misses(r: dict, prefix: str = "cat") -> list[str]:
+    """The goals a stack's ``prefix`` prediction misses."""
+    return [k for k, g in GOALS.items() if abs(r[f"{prefix}_{k}_err"]) > g]
+
+
 def med_worst(rows, key) -> str:
     a = _abs(rows, key)
     return "—" if a.size == 0 else f"{np.median(a):.1%} / {a.max():.1%}"
@@ -41,6 +46,7 @@ def summary_table(sets: list[tuple[str, list[dict]]]) -> list[str]:
     variants = [("cat", "catalogue"), ("cat_near", "catalogue, mode-matched (f, peak)"),
                 ("cat_est_spindle", "catalogue, spindle from noisy translations"),
                 ("cat_idw", "before: inverse-distance of the two nearest"),
+                ("cat_th_other_family", "tool–holder joints from the other taper family's machine"),
                 ("oracle", "campaigns at exactly the stack's conditions"), ("rigid", "rigid joints")]
     lines = ["| set | prediction | |f error| median / worst | |peak error| | |floor error| |"
              " meeting 3 % / 20 % / 20 % | all three |", "|---|---|---|---|---|---|---|"]
