@@ -30,9 +30,11 @@ HELDOUT_SIZE = 18
 EXTENSION = (0.040, 0.100, 0.050)
 
 
-def draw_heldout(n: int = HELDOUT_SIZE, seed: int = HELDOUT_SEED) -> list[sv.Case]:
-    """``n`` stacks drawn with ``seed`` inside the catalogued range (module docstring)."""
-    rng = np.random.default_rng(seed)
+def draw_heldout(n: int | None = None, seed: int | None = None) -> list[sv.Case]:
+    """``n`` stacks (default :data:`HELDOUT_SIZE`) drawn with ``seed`` (default :data:`HELDOUT_SEED`) inside
+    the catalogued range (module docstring)."""
+    n = HELDOUT_SIZE if n is None else n
+    rng = np.random.default_rng(HELDOUT_SEED if seed is None else seed)
     out = []
     for i in range(n):
         d = float(rng.integers(10, 17)) / 1e3
@@ -91,26 +93,26 @@ def spindle_by_extension(taper: str):
     return est.frf, est
 
 
-def oracle_joints(case: sv.Case, workdir, side_repo, hs_reference: dict, cache: dict) -> dict:
+def oracle_joints(case: sv.Case, workdir, side_repo, cache: dict) -> dict:
     """Joints identified by campaigns at exactly ``case``'s conditions (same campaign design as the
-    catalogue's: tool–holder on the reference machine of the stack's taper family with a 45 mm / 35 mm blank,
-    holder–spindle with the bonded Ø12 arbor), catalogued in ``side_repo``: the prediction path's error with
-    no interpolation. ``hs_reference``: taper → the reference machine's catalogued taper joint (FRF);
-    ``cache`` maps a campaign's conditions to its joint FRF (campaigns shared between stacks)."""
+    catalogue's): holder–spindle with the bonded Ø12 arbor at its taper and drawbar force, then tool–holder
+    with a 45 mm / 35 mm blank of its shank and torque on that machine (A through that taper joint); catalogued
+    in ``side_repo``: the prediction path's error with no interpolation. ``cache`` maps a campaign's
+    conditions to its joint FRF (campaigns shared between stacks)."""
     from jointdb import app
 
-    th_key = ("th", case.taper, case.diameter, case.torque)
     hs_key = ("hs", case.taper, case.drawbar)
-    if th_key not in cache:
-        name = f"oracle-th-{case.taper.lower()}-d{case.diameter * 1e3:.0f}-{case.torque:.0f}nm"
-        c = sv.Case(name, case.diameter, 0.045, 0.035, case.torque, case.taper, sv.TH_MACHINES[case.taper])
-        out = app.catalogue_campaign(side_repo, sv.write_th_campaign(workdir / name, c, hs_reference[case.taper]))
-        cache[th_key] = side_repo.load_frf(side_repo.get(out.row()["joint"].split("@")[0]))
+    th_key = ("th", case.taper, case.drawbar, case.diameter, case.torque)
     if hs_key not in cache:
         name = f"oracle-hs-{case.taper.lower()}-{case.drawbar:.0f}n"
         c = sv.Case(name, 0.012, 0.045, 0.035, 80.0, case.taper, case.drawbar)
         out = app.catalogue_campaign(side_repo, sv.write_hs_campaign(workdir / name, c))
         cache[hs_key] = side_repo.load_frf(side_repo.get(out.row()["joint"].split("@")[0]))
+    if th_key not in cache:
+        name = f"oracle-th-{case.taper.lower()}-{case.drawbar:.0f}n-d{case.diameter * 1e3:.0f}-{case.torque:.0f}nm"
+        c = sv.Case(name, case.diameter, 0.045, 0.035, case.torque, case.taper, case.drawbar)
+        out = app.catalogue_campaign(side_repo, sv.write_th_campaign(workdir / name, c, cache[hs_key]))
+        cache[th_key] = side_repo.load_frf(side_repo.get(out.row()["joint"].split("@")[0]))
     return {"tool-holder": cache[th_key], "holder-spindle": cache[hs_key]}
 
 

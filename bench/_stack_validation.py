@@ -25,10 +25,11 @@ The truth model here is ONE finite-element model of the whole stack with:
 
 Campaigns are "measured" on this truth (tip FRFs, 0.2 % noise, 6 digits):
 holder–spindle campaigns (spindle measured at its nose; B = holder with a
-bonded test arbor, model) and tool–holder campaigns on a reference machine of
-each taper family (HSK-A63 at 18 kN, BT40 at 12 kN; A = holder on spindle
-through the catalogued taper joint, B = blank test-tool overhang, model). Stacks never used to build the
-catalogue are then predicted and compared with their truth tip FRFs.
+bonded test arbor, model) and tool–holder campaigns on machines of each taper
+family at its lowest and highest drawbar force (A = holder on spindle through
+that machine's catalogued taper joint, B = blank test-tool overhang, model).
+Stacks never used to build the catalogue are then predicted and compared with
+their truth tip FRFs.
 
 Used by ``bench/bench_stack_prediction.py`` (the report) and by
 ``tests/stack/test_stack_validation.py``.
@@ -217,12 +218,13 @@ def spec_for(case: Case, joints: dict, fluted_mass: bool = True):
 
 
 def th_conditions(case: Case) -> dict:
-    """Tool–holder conditions; ``geometry.taper_diameter_m`` names the machine family (taper) the joint was
-    identified on: a per-line tool–holder joint carries what its campaign's substructure A (holder on that
-    spindle, through that taper's catalogued joint) could not represent, so it transfers within a taper family,
-    not across (see :data:`TH_MACHINES`)."""
+    """Tool–holder conditions. ``geometry.taper_diameter_m`` and ``preload_n`` name the machine the joint was
+    identified on (its taper and drawbar force): a per-line tool–holder joint carries what its campaign's
+    substructure A (holder on that spindle, through that machine's catalogued taper joint) could not
+    represent, so it transfers to stacks on a machine like that one, and is interpolated along the drawbar
+    force like the torque (see :data:`TH_MACHINES`). For a stack they are its spindle's taper and force."""
     mats = ["tungsten-carbide" if case.material == "carbide" else case.material, "steel"]
-    return {"materials": mats, "torque_nm": case.torque,
+    return {"materials": mats, "torque_nm": case.torque, "preload_n": case.drawbar,
             "geometry": {"shank_diameter_m": case.diameter, "taper_diameter_m": TAPERS[case.taper][0]}}
 
 
@@ -274,8 +276,9 @@ def write_hs_campaign(folder: Path, case: Case) -> Path:
 
 
 def write_th_campaign(folder: Path, case: Case, hs_joint: FRF) -> Path:
-    """Tool–holder campaign on the reference machine: A = holder on the spindle through the catalogued taper
-    joint ``hs_joint`` (a 2×2 receptance, as the prediction path couples it), B = blank overhang (model)."""
+    """Tool–holder campaign on the machine ``case.taper`` at ``case.drawbar``: A = holder on the spindle through
+    that machine's catalogued taper joint ``hs_joint`` (a 2×2 receptance, as the prediction path couples it),
+    B = blank overhang (model)."""
     folder.mkdir(parents=True, exist_ok=True)
     model, th, _ = truth_model(case)
     mesh = model.mesh()
@@ -304,15 +307,20 @@ def write_th_campaign(folder: Path, case: Case, hs_joint: FRF) -> Path:
     return folder / "campaign.json"
 
 
-#: Catalogued conditions: tapers × drawbar forces; tool–holder blanks (Ø, torque) on HSK-A63 at 18 kN.
-HS_CAMPAIGNS = [Case(f"hs-{t.lower()}-{int(f / 1e3):02d}kn", 0.012, 0.045, 0.035, 80.0, t, f)
+def hs_name(taper: str, drawbar: float) -> str:
+    """The name of the holder–spindle campaign (catalogued joint) of ``taper`` at ``drawbar`` [N]."""
+    return f"hs-{taper.lower()}-{int(round(drawbar / 1e3)):02d}kn"
+
+
+#: Catalogued holder–spindle conditions: tapers × drawbar forces.
+HS_CAMPAIGNS = [Case(hs_name(t, f), 0.012, 0.045, 0.035, 80.0, t, f)
                 for t, fs in (("HSK-A63", (12e3, 18e3, 24e3)), ("BT40", (8e3, 12e3, 16e3))) for f in fs]
-#: The reference machine of each taper family on which the tool–holder campaigns run (its catalogued taper
-#: joint gives their substructure A).
-TH_MACHINES = {"HSK-A63": 18e3, "BT40": 12e3}
-TH_CAMPAIGNS = [Case(f"th-{'hsk' if taper == 'HSK-A63' else 'bt40'}-d{int(d * 1e3):02d}-{int(t):03d}nm", d, 0.045,
-                     0.035, t, taper, force)
-                for taper, force in TH_MACHINES.items()
+#: The machines the tool–holder campaigns run on: each taper family at its lowest and highest catalogued
+#: drawbar force (their catalogued taper joints give the campaigns' substructure A).
+TH_MACHINES = {"HSK-A63": (12e3, 24e3), "BT40": (8e3, 16e3)}
+TH_CAMPAIGNS = [Case(f"th-{'hsk' if taper == 'HSK-A63' else 'bt40'}-{int(force / 1e3):02d}kn-d{int(d * 1e3):02d}-"
+                     f"{int(t):03d}nm", d, 0.045, 0.035, t, taper, force)
+                for taper, forces in TH_MACHINES.items() for force in forces
                 for d, ts in ((0.010, (40.0, 120.0)), (0.012, (40.0, 80.0, 120.0)), (0.016, (40.0, 120.0)))
                 for t in ts]
 #: Stacks the catalogue never saw (inside its range), and two outside it.
@@ -332,8 +340,6 @@ OUTSIDE = [
 
 
 # ------------------------------------------------------------------ catalogue and validation
-#: the catalogued taper joint of each reference machine of the tool–holder campaigns
-REFERENCE_HS = {taper: f"hs-{taper.lower()}-{int(force / 1e3):02d}kn" for taper, force in TH_MACHINES.items()}
 
 
 def _adequacy(out) -> dict:
@@ -355,9 +361,10 @@ def build_catalogue(workdir: Path, repo, say=print) -> list[dict]:
             f"k_θ={rows[-1]['k_theta_nm_per_rad']:.3e} N·m/rad")
     hs_joints = {}
     for case in TH_CAMPAIGNS:
-        if case.taper not in hs_joints:
-            hs_joints[case.taper] = repo.load_frf(repo.get(REFERENCE_HS[case.taper]))
-        out = app.catalogue_campaign(repo, write_th_campaign(workdir / case.name, case, hs_joints[case.taper]))
+        machine = hs_name(case.taper, case.drawbar)
+        if machine not in hs_joints:
+            hs_joints[machine] = repo.load_frf(repo.get(machine))
+        out = app.catalogue_campaign(repo, write_th_campaign(workdir / case.name, case, hs_joints[machine]))
         rows.append(out.row() | {"type": "tool-holder", "case": case.name} | _adequacy(out))
         say(f"  catalogued {rows[-1]['joint']}: k_x={rows[-1]['k_x_n_per_m']:.3e} N/m, "
             f"k_θ={rows[-1]['k_theta_nm_per_rad']:.3e} N·m/rad")
@@ -439,7 +446,8 @@ def validate(case: Case, repo, spindle=None, before: bool = False) -> dict:
 
     ``spindle``: a spindle FRF (5x, 5ry) to predict with as well (e.g. estimated from noisy translations;
     key ``cat_est_spindle``); ``before``: also the joints interpolated the old way (key ``cat_idw``) and the
-    tool–holder joints of the other taper family's reference machine (key ``cat_th_other_family``).
+    tool–holder joints of the other taper family's machines (key ``cat_th_other_family``) and of the
+    family's low-force machine only (key ``cat_th_one_machine``).
     Per variant: dominant-mode frequency / peak / lobe-floor errors, and the mode-matched comparison (the
     predicted resonance nearest the truth's dominant one: ``near_freq_err``, ``near_peak_err``).
     """
@@ -465,6 +473,12 @@ def validate(case: Case, repo, spindle=None, before: bool = False) -> dict:
                                                  "taper_diameter_m": TAPERS[other][0]}
         ores = app.resolve_joints(spec_for(case, q), repo)
         variants["cat_th_other_family"] = predict_tool_tip(
+            spec, {**joints, "tool-holder": ores["tool-holder"].frf}, FREQ).tip.values[:, 0, 0]
+        # the tool–holder joints of the family's low-force machine only (as if catalogued on one machine)
+        q = queries(case)
+        q["tool-holder"]["query"]["preload_n"] = min(TH_MACHINES[case.taper])
+        ores = app.resolve_joints(spec_for(case, q), repo)
+        variants["cat_th_one_machine"] = predict_tool_tip(
             spec, {**joints, "tool-holder": ores["tool-holder"].frf}, FREQ).tip.values[:, 0, 0]
     if spindle is not None:
         spec_e = spec.replace(spindle=MeasuredSpindle("spindle.uff", 5, spindle))
