@@ -53,7 +53,7 @@ __all__ = [
 
 #: How many nearest catalogued joints a stack's interpolated query ranks before the interpolation picks the
 #: ones that bracket the request along the condition axes (jointdb.store._interp).
-INTERPOLATION_POOL = 24
+INTERPOLATION_POOL = 64
 
 #: FRF file formats by suffix (reading and writing).
 FRF_SUFFIXES = {".uff": "uff58", ".unv": "uff58", ".uff58": "uff58", ".uf": "uff58", ".58": "uff58",

@@ -37,10 +37,10 @@ along the condition axes it gives — ``ln`` torque, ``ln`` preload, ``ln`` of e
 geometry number — with their barycentric weights (piecewise-linear interpolation
 on the Delaunay triangulation of the catalogued conditions; two joints along one
 axis, three on a triangle of a two-axis grid; outside the catalogued hull, its
-nearest point). See :mod:`jointdb.store._interp`. A stiffness that follows a power
-law in torque or force is linear in those coordinates. Without a numeric axis in
-the request, or with method ``"idw"``: ``w_i ∝ 1/d_i`` over all the given
-neighbours (exact matches, ``d = 0``, share all the weight).
+nearest point). See :mod:`jointdb.store._interp`. A stiffness linear in those
+coordinates is reproduced exactly, a power law in torque or force approximately.
+Without a numeric axis in the request, or with method ``"idw"``: ``w_i ∝ 1/d_i``
+over all the given neighbours (exact matches, ``d = 0``, share all the weight).
 
 The neighbours' receptances are inverted to dynamic stiffness ``Z_i = H_i⁻¹`` (per
 line, batched), averaged ``Z = Σ w_i Z_i`` and inverted back. For spring–damper
