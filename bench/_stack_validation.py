@@ -25,10 +25,11 @@ The truth model here is ONE finite-element model of the whole stack with:
 
 Campaigns are "measured" on this truth (tip FRFs, 0.2 % noise, 6 digits):
 holder–spindle campaigns (spindle measured at its nose; B = holder with a
-bonded test arbor, model) and tool–holder campaigns on a reference machine
-(HSK-A63 at 18 kN; A = holder on spindle through the catalogued taper joint,
-B = blank test-tool overhang, model). Stacks never used to build the
-catalogue are then predicted and compared with their truth tip FRFs.
+bonded test arbor, model) and tool–holder campaigns on machines of each taper
+family at its lowest and highest drawbar force (A = holder on spindle through
+that machine's catalogued taper joint, B = blank test-tool overhang, model).
+Stacks never used to build the catalogue are then predicted and compared with
+their truth tip FRFs.
 
 Used by ``bench/bench_stack_prediction.py`` (the report) and by
 ``tests/stack/test_stack_validation.py``.
@@ -217,8 +218,14 @@ def spec_for(case: Case, joints: dict, fluted_mass: bool = True):
 
 
 def th_conditions(case: Case) -> dict:
+    """Tool–holder conditions. ``geometry.taper_diameter_m`` and ``preload_n`` name the machine the joint was
+    identified on (its taper and drawbar force): a per-line tool–holder joint carries what its campaign's
+    substructure A (holder on that spindle, through that machine's catalogued taper joint) could not
+    represent, so it transfers to stacks on a machine like that one, and is interpolated along the drawbar
+    force like the torque (see :data:`TH_MACHINES`). For a stack they are its spindle's taper and force."""
     mats = ["tungsten-carbide" if case.material == "carbide" else case.material, "steel"]
-    return {"materials": mats, "torque_nm": case.torque, "geometry": {"shank_diameter_m": case.diameter}}
+    return {"materials": mats, "torque_nm": case.torque, "preload_n": case.drawbar,
+            "geometry": {"shank_diameter_m": case.diameter, "taper_diameter_m": TAPERS[case.taper][0]}}
 
 
 def hs_conditions(case: Case) -> dict:
@@ -269,8 +276,9 @@ def write_hs_campaign(folder: Path, case: Case) -> Path:
 
 
 def write_th_campaign(folder: Path, case: Case, hs_joint: FRF) -> Path:
-    """Tool–holder campaign on the reference machine: A = holder on the spindle through the catalogued taper
-    joint ``hs_joint`` (a 2×2 receptance, as the prediction path couples it), B = blank overhang (model)."""
+    """Tool–holder campaign on the machine ``case.taper`` at ``case.drawbar``: A = holder on the spindle through
+    that machine's catalogued taper joint ``hs_joint`` (a 2×2 receptance, as the prediction path couples it),
+    B = blank overhang (model)."""
     folder.mkdir(parents=True, exist_ok=True)
     model, th, _ = truth_model(case)
     mesh = model.mesh()
@@ -299,10 +307,20 @@ def write_th_campaign(folder: Path, case: Case, hs_joint: FRF) -> Path:
     return folder / "campaign.json"
 
 
-#: Catalogued conditions: tapers × drawbar forces; tool–holder blanks (Ø, torque) on HSK-A63 at 18 kN.
-HS_CAMPAIGNS = [Case(f"hs-{t.lower()}-{int(f / 1e3):02d}kn", 0.012, 0.045, 0.035, 80.0, t, f)
+def hs_name(taper: str, drawbar: float) -> str:
+    """The name of the holder–spindle campaign (catalogued joint) of ``taper`` at ``drawbar`` [N]."""
+    return f"hs-{taper.lower()}-{int(round(drawbar / 1e3)):02d}kn"
+
+
+#: Catalogued holder–spindle conditions: tapers × drawbar forces.
+HS_CAMPAIGNS = [Case(hs_name(t, f), 0.012, 0.045, 0.035, 80.0, t, f)
                 for t, fs in (("HSK-A63", (12e3, 18e3, 24e3)), ("BT40", (8e3, 12e3, 16e3))) for f in fs]
-TH_CAMPAIGNS = [Case(f"th-d{int(d * 1e3):02d}-{int(t):03d}nm", d, 0.045, 0.035, t, "HSK-A63", 18e3)
+#: The machines the tool–holder campaigns run on: each taper family at its lowest and highest catalogued
+#: drawbar force (their catalogued taper joints give the campaigns' substructure A).
+TH_MACHINES = {"HSK-A63": (12e3, 24e3), "BT40": (8e3, 16e3)}
+TH_CAMPAIGNS = [Case(f"th-{'hsk' if taper == 'HSK-A63' else 'bt40'}-{int(force / 1e3):02d}kn-d{int(d * 1e3):02d}-"
+                     f"{int(t):03d}nm", d, 0.045, 0.035, t, taper, force)
+                for taper, forces in TH_MACHINES.items() for force in forces
                 for d, ts in ((0.010, (40.0, 120.0)), (0.012, (40.0, 80.0, 120.0)), (0.016, (40.0, 120.0)))
                 for t in ts]
 #: Stacks the catalogue never saw (inside its range), and two outside it.
@@ -322,7 +340,6 @@ OUTSIDE = [
 
 
 # ------------------------------------------------------------------ catalogue and validation
-REFERENCE_HS = "hs-hsk-a63-18kn"  # the reference machine of the tool–holder campaigns
 
 
 def _adequacy(out) -> dict:
@@ -342,10 +359,12 @@ def build_catalogue(workdir: Path, repo, say=print) -> list[dict]:
         rows.append(out.row() | {"type": "holder-spindle", "case": case.name} | _adequacy(out))
         say(f"  catalogued {rows[-1]['joint']}: k_x={rows[-1]['k_x_n_per_m']:.3e} N/m, "
             f"k_θ={rows[-1]['k_theta_nm_per_rad']:.3e} N·m/rad")
-    ref = repo.get(REFERENCE_HS)
-    hs_joint = repo.load_frf(ref)
+    hs_joints = {}
     for case in TH_CAMPAIGNS:
-        out = app.catalogue_campaign(repo, write_th_campaign(workdir / case.name, case, hs_joint))
+        machine = hs_name(case.taper, case.drawbar)
+        if machine not in hs_joints:
+            hs_joints[machine] = repo.load_frf(repo.get(machine))
+        out = app.catalogue_campaign(repo, write_th_campaign(workdir / case.name, case, hs_joints[machine]))
         rows.append(out.row() | {"type": "tool-holder", "case": case.name} | _adequacy(out))
         say(f"  catalogued {rows[-1]['joint']}: k_x={rows[-1]['k_x_n_per_m']:.3e} N/m, "
             f"k_θ={rows[-1]['k_theta_nm_per_rad']:.3e} N·m/rad")
@@ -361,14 +380,34 @@ def queries(case: Case, interpolate: bool = True) -> dict:
     }
 
 
-def _dominant(frf_values: np.ndarray) -> tuple[float, float]:
-    h = np.abs(frf_values)
-    k = int(np.argmax(h))
-    if 0 < k < h.size - 1:  # parabolic refinement of the peak on the 10 Hz grid
+def _refine(h: np.ndarray, k: int) -> tuple[float, float]:
+    """Frequency and |H| of the peak at line ``k``, by a parabola through log|H| on the 10 Hz grid."""
+    if 0 < k < h.size - 1:
         a, b, c = np.log(h[k - 1:k + 2])
         d = 0.5 * (a - c) / (a - 2 * b + c)
         return float(FREQ[k] + d * (FREQ[1] - FREQ[0])), float(np.exp(b - 0.25 * (a - c) * d))
     return float(FREQ[k]), float(h[k])
+
+
+def _dominant(frf_values: np.ndarray) -> tuple[float, float]:
+    h = np.abs(frf_values)
+    return _refine(h, int(np.argmax(h)))
+
+
+def _nearest_peak(frf_values: np.ndarray, f_hz: float) -> tuple[float, float]:
+    """The resonance (local maximum of |H|) nearest ``f_hz``: frequency and |H|, refined."""
+    h = np.abs(frf_values)
+    peaks = np.flatnonzero((h[1:-1] > h[:-2]) & (h[1:-1] >= h[2:])) + 1
+    k = int(peaks[np.argmin(np.abs(FREQ[peaks] - f_hz))]) if peaks.size else int(np.argmax(h))
+    return _refine(h, k)
+
+
+def second_peak_ratio(frf_values: np.ndarray) -> float:
+    """Height of the second-largest resonance / the largest (near 1: the dominant mode is ill-defined)."""
+    h = np.abs(frf_values)
+    peaks = np.flatnonzero((h[1:-1] > h[:-2]) & (h[1:-1] >= h[2:])) + 1
+    tops = np.sort(h[peaks])[::-1]
+    return float(tops[1] / tops[0]) if tops.size > 1 else 0.0
 
 
 def _floor(h: np.ndarray) -> float:
@@ -382,37 +421,86 @@ def _floor(h: np.ndarray) -> float:
                                    spindle_speed_rpm=np.linspace(3000, 30000, 200)).min_depth_m)
 
 
-def validate(case: Case, repo) -> dict:
-    """Predict ``case`` from the catalogue and with rigid joints; compare with its truth tip FRF."""
+def idw_joints(case: Case, repo) -> dict:
+    """The joints as resolved before the axis-aware interpolation: inverse-distance weights of the two
+    nearest (``method="idw"``), for the before/after comparison (interface → InterpolatedJoint)."""
+    import warnings
+
+    from jointdb.store import Conditions, OutsideCatalogueWarning
+
+    out = {}
+    for name, q in queries(case).items():
+        query = dict(q["query"])
+        jt = query.pop("joint_type")
+        query.pop("interpolate"), query.pop("neighbours")
+        cond = Conditions.from_dict(query)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", OutsideCatalogueWarning)
+            matches = repo.nearest(jt, cond, k=2)
+        out[name] = repo.interpolate(matches, cond, method="idw")
+    return out
+
+
+def validate(case: Case, repo, spindle=None, before: bool = False) -> dict:
+    """Predict ``case`` from the catalogue and with rigid joints; compare with its truth tip FRF.
+
+    ``spindle``: a spindle FRF (5x, 5ry) to predict with as well (e.g. estimated from noisy translations;
+    key ``cat_est_spindle``); ``before``: also the joints interpolated the old way (key ``cat_idw``) and the
+    tool–holder joints of the other taper family's machines (key ``cat_th_other_family``) and of the
+    family's low-force machine only (key ``cat_th_one_machine``).
+    Per variant: dominant-mode frequency / peak / lobe-floor errors, and the mode-matched comparison (the
+    predicted resonance nearest the truth's dominant one: ``near_freq_err``, ``near_peak_err``).
+    """
     from jointdb import app
-    from jointdb.stack import predict_tool_tip
+    from jointdb.stack import MeasuredSpindle, predict_tool_tip
 
     truth = truth_tip(case).values[:, 0, 0]
     spec = spec_for(case, queries(case))
     res = app.resolve_joints(spec, repo)
-    pred = predict_tool_tip(spec, {n: r.frf for n, r in res.items() if r.frf is not None}, FREQ)
-    cat, rigid = pred.tip.values[:, 0, 0], pred.rigid.values[:, 0, 0]
-    plain = cat
+    joints = {n: r.frf for n, r in res.items() if r.frf is not None}
+    pred = predict_tool_tip(spec, joints, FREQ)
+    variants = {"cat": pred.tip.values[:, 0, 0], "rigid": pred.rigid.values[:, 0, 0]}
     if case.fluted > 0:  # the same prediction without the fluted section's true mass (the default model)
         spec0 = spec_for(case, queries(case), fluted_mass=False)
-        plain = predict_tool_tip(spec0, {n: r.frf for n, r in res.items() if r.frf is not None}, FREQ).tip.values[:, 0, 0]
+        variants["cat_cylinder_mass"] = predict_tool_tip(spec0, joints, FREQ).tip.values[:, 0, 0]
+    idw = idw_joints(case, repo) if before else {}
+    if before:
+        variants["cat_idw"] = predict_tool_tip(spec, {n: j.frf for n, j in idw.items()}, FREQ).tip.values[:, 0, 0]
+        # the tool–holder joints of the other taper family (identified on the other reference machine)
+        other = next(t for t in TH_MACHINES if t != case.taper)
+        q = queries(case)
+        q["tool-holder"]["query"]["geometry"] = {**q["tool-holder"]["query"]["geometry"],
+                                                 "taper_diameter_m": TAPERS[other][0]}
+        ores = app.resolve_joints(spec_for(case, q), repo)
+        variants["cat_th_other_family"] = predict_tool_tip(
+            spec, {**joints, "tool-holder": ores["tool-holder"].frf}, FREQ).tip.values[:, 0, 0]
+        # the tool–holder joints of the family's low-force machine only (as if catalogued on one machine)
+        q = queries(case)
+        q["tool-holder"]["query"]["preload_n"] = min(TH_MACHINES[case.taper])
+        ores = app.resolve_joints(spec_for(case, q), repo)
+        variants["cat_th_one_machine"] = predict_tool_tip(
+            spec, {**joints, "tool-holder": ores["tool-holder"].frf}, FREQ).tip.values[:, 0, 0]
+    if spindle is not None:
+        spec_e = spec.replace(spindle=MeasuredSpindle("spindle.uff", 5, spindle))
+        variants["cat_est_spindle"] = predict_tool_tip(spec_e, joints, FREQ).tip.values[:, 0, 0]
     ft, at = _dominant(truth)
     lt = _floor(truth)
     row = {"case": case.name, "truth_hz": ft, "truth_peak": at, "truth_floor_mm": lt * 1e3,
+           "truth_second_peak_ratio": second_peak_ratio(truth),
            "extrapolating": any(r.extrapolating for r in res.values()),
            "warnings": [w for r in res.values() for w in r.warnings],
            "joints": {n: r.description if r.kind == "interpolated" else f"{r.name}@{r.version}"
-                      for n, r in res.items()}}
-    for key, h in (("cat", cat), ("rigid", rigid), ("cat_cylinder_mass", plain)):
+                      for n, r in res.items()},
+           "idw_joints": {n: j.describe() for n, j in idw.items()}}
+    for key, h in variants.items():
         f, a = _dominant(h)
-        row[f"{key}_hz"], row[f"{key}_peak"], row[f"{key}_floor_mm"] = f, a, _floor(h) * 1e3
+        row[f"{key}_hz"], row[f"{key}_peak"] = f, a
         row[f"{key}_freq_err"] = f / ft - 1
         row[f"{key}_peak_err"] = a / at - 1
-        row[f"{key}_floor_err"] = row[f"{key}_floor_mm"] / (lt * 1e3) - 1
-        # the predicted resonance nearest the truth's dominant one (tells a frequency miss from a swap of
-        # which of two similar peaks is the largest)
-        a = np.abs(h)
-        peaks = np.flatnonzero((a[1:-1] > a[:-2]) & (a[1:-1] >= a[2:])) + 1
-        near = peaks[np.argmin(np.abs(FREQ[peaks] - ft))] if peaks.size else int(np.argmax(a))
-        row[f"{key}_near_freq_err"] = float(FREQ[near] / ft - 1)
+        if key != "cat_cylinder_mass":  # reported as frequency and peak only
+            row[f"{key}_floor_mm"] = _floor(h) * 1e3
+            row[f"{key}_floor_err"] = row[f"{key}_floor_mm"] / (lt * 1e3) - 1
+        fn, an = _nearest_peak(h, ft)
+        row[f"{key}_near_freq_err"] = fn / ft - 1
+        row[f"{key}_near_peak_err"] = an / at - 1
     return row

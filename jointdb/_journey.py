@@ -220,7 +220,7 @@ def run_main_job(
             say(f"      note: {note}")
         extra = []
         queried = {n for n, r in resolutions.items() if r.kind == "query" and len(r.candidates) > 1}
-        if queried:  # cross-check: the same stack with joints interpolated between the two nearest
+        if queried:  # cross-check: the same stack with joints interpolated between the catalogued conditions
             ispec = spec.replace(interfaces={
                 n: dataclasses.replace(c, interpolate=True, neighbours=2) if n in queried else c
                 for n, c in spec.interfaces.items()

@@ -51,6 +51,10 @@ __all__ = [
 # ------------------------------------------------------------------ files
 
 
+#: How many nearest catalogued joints a stack's interpolated query ranks before the interpolation picks the
+#: ones that bracket the request along the condition axes (jointdb.store._interp).
+INTERPOLATION_POOL = 64
+
 #: FRF file formats by suffix (reading and writing).
 FRF_SUFFIXES = {".uff": "uff58", ".unv": "uff58", ".uff58": "uff58", ".uf": "uff58", ".58": "uff58",
                 ".h5": "hdf5", ".hdf5": "hdf5", ".hdf": "hdf5", ".csv": "csv"}
@@ -257,12 +261,20 @@ def resolve_joints(spec: StackSpec, repo=None) -> dict[str, JointResolution]:
             conditions = Conditions.from_dict(dict(choice.conditions or {}))
             with warnings.catch_warnings(record=True) as caught:
                 warnings.simplefilter("always", OutsideCatalogueWarning)
-                matches = handle.nearest(choice.joint_type, conditions, k=choice.neighbours)
+                # interpolation picks the joints bracketing the request along the condition axes: it needs the
+                # catalogued grid around the request, not only the `neighbours` nearest
+                pool = max(choice.neighbours, INTERPOLATION_POOL) if choice.interpolate else choice.neighbours
+                matches = handle.nearest(choice.joint_type, conditions, k=pool)
+                if len(matches) > choice.neighbours:  # the pool beyond the nearest: joints it can be mixed with
+                    kind, dofs = matches[0].version.model_kind, tuple(matches[0].version.dofs)
+                    matches = matches[:choice.neighbours] + [
+                        m for m in matches[choice.neighbours:]
+                        if m.version.model_kind == kind and tuple(m.version.dofs) == dofs]
             texts = tuple(str(w.message) for w in caught if issubclass(w.category, OutsideCatalogueWarning))
             if not matches:
                 raise NotFoundError(f"interfaces.{name}: no catalogued joint of type {choice.joint_type!r}")
             best = matches[0]
-            cands = tuple((m.version.name, m.version.version, float(m.distance)) for m in matches)
+            cands = tuple((m.version.name, m.version.version, float(m.distance)) for m in matches[:choice.neighbours])
             if choice.interpolate and len(matches) > 1:
                 joint = handle.interpolate(matches, conditions)
                 out[name] = JointResolution(

@@ -40,7 +40,8 @@ def nearest(body: NearestIn, r=Depends(repo), _who=reader) -> dict[str, Any]:
 
 @router.post("/query/interpolate", summary="A joint FRF interpolated between the nearest versions")
 def interpolate(body: NearestIn, r=Depends(repo), _who=reader) -> dict[str, Any]:
-    """Inverse-distance weighting of the neighbours' dynamic stiffness (NOT a catalogued joint)."""
+    """The neighbours' dynamic stiffness weighted by the joints bracketing the request along the condition
+    axes, among the k nearest (NOT a catalogued joint)."""
     matches, notes = run_nearest(r, body)
     ij = r.interpolate(matches, body.conditions.to_conditions())
     return {"label": ij.label, "description": ij.describe(), "joint_type": ij.joint_type,

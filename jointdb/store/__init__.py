@@ -38,7 +38,9 @@ API (contract in /work/api-contracts.md; additions are keyword arguments or new 
   and Ed25519 signatures: :mod:`jointdb.store._bundle`, :mod:`jointdb.store._signing`)
 - ``.nearest(joint_type, conditions, k=3, at=None) -> list[Match]`` (distance defined in
   :mod:`jointdb.store._query`; warns :class:`OutsideCatalogueWarning`);
-  ``.interpolate(matches, conditions=None) -> InterpolatedJoint`` (``.frf``, ``.neighbours``)
+  ``.interpolate(matches, conditions=None, method="axes") -> InterpolatedJoint`` (``.frf``,
+  ``.neighbours``; weights of the matches bracketing the request along its condition axes,
+  :mod:`jointdb.store._interp`, or ``method="idw"`` inverse distance)
 - every read verifies the version's record hash (IntegrityError on a mismatch)
 - ``.check(verify_blobs=True) -> CheckReport`` (``.ok``, ``.problems``, ``.notes``; also
   missing immutability guards), ``.gc(min_age_s=3600, dry_run=False)``

@@ -32,8 +32,17 @@ or a material no candidate has, is reported in ``Match.outside_range``
 
 Interpolation
 -------------
-Weights ``w_i ∝ 1/d_i`` (exact matches, ``d = 0``, share all the weight); the
-neighbours' receptances are inverted to dynamic stiffness ``Z_i = H_i⁻¹`` (per
+Weights (method ``"axes"``, the default): the joints that bracket the request
+along the condition axes it gives — ``ln`` torque, ``ln`` preload, ``ln`` of each
+geometry number — with their barycentric weights (piecewise-linear interpolation
+on the Delaunay triangulation of the catalogued conditions; two joints along one
+axis, three on a triangle of a two-axis grid; outside the catalogued hull, its
+nearest point). See :mod:`jointdb.store._interp`. A stiffness linear in those
+coordinates is reproduced exactly, a power law in torque or force approximately.
+Without a numeric axis in the request, or with method ``"idw"``: ``w_i ∝ 1/d_i``
+over all the given neighbours (exact matches, ``d = 0``, share all the weight).
+
+The neighbours' receptances are inverted to dynamic stiffness ``Z_i = H_i⁻¹`` (per
 line, batched), averaged ``Z = Σ w_i Z_i`` and inverted back. For spring–damper
 joints ``Z = k + iωc``, so this interpolates stiffness and damping linearly
 (docs/theory.md §1a), which interpolating receptances would not.
@@ -51,6 +60,7 @@ from sqlalchemy import select
 from jointdb.errors import InputError, NumericalError
 from jointdb.frf import FRF
 from jointdb.store._dberrors import translate_error
+from jointdb.store._interp import bracketing_weights
 from jointdb.store._index import materials_key, standing
 from jointdb.store._models import JointRow, LabelRow, StateRow, VersionRow
 from jointdb.store._nearest import (
@@ -69,7 +79,12 @@ from jointdb.store._types import Conditions, InterpolatedJoint, Match, as_condit
 if TYPE_CHECKING:  # pragma: no cover
     from jointdb.store._repository import Repository
 
-__all__ = ["OutsideCatalogueWarning", "nearest", "interpolate", "candidates_from_history"]
+__all__ = ["OutsideCatalogueWarning", "nearest", "interpolate", "candidates_from_history", "INTERPOLATION_METHODS"]
+
+#: ``"axes"``: barycentric weights of the joints bracketing the request along the condition axes
+#: (:mod:`jointdb.store._interp`; inverse distance when the request has no numeric axis);
+#: ``"idw"``: inverse-distance weights of all the given neighbours.
+INTERPOLATION_METHODS = ("axes", "idw")
 
 
 def candidates_from_history(repo: "Repository", sel: Selection, at: datetime | None,
@@ -175,14 +190,31 @@ def interpolate(
     repo: "Repository",
     matches: Sequence[Match],
     conditions: Conditions | Mapping[str, Any] | None = None,
+    *,
+    method: str = "axes",
 ) -> InterpolatedJoint:
     """Interpolated joint FRF between neighbours, in dynamic stiffness (module docstring).
+
+    Parameters
+    ----------
+    matches
+        Candidates (e.g. from :func:`nearest`); the ``"axes"`` method uses only those bracketing the
+        request, so give it the catalogued grid around the request, not only the two nearest.
+    conditions
+        The request (None: inverse-distance weights).
+    method
+        ``"axes"`` or ``"idw"`` (:data:`INTERPOLATION_METHODS`).
+
+    Returns
+    -------
+    InterpolatedJoint
+        Receptance on the used neighbours' common band; ``neighbours`` lists those with weight > 0.
 
     Raises
     ------
     InputError
-        No matches, or neighbours of different type, model kind or DOFs, or
-        without a common frequency band.
+        No matches, an unknown method, neighbours of different type, model kind or DOFs, or
+        used neighbours without a common frequency band.
     NumericalError
         A neighbour's receptance is singular on some line.
     """
@@ -199,17 +231,22 @@ def interpolate(
                 f"cannot interpolate {first.name} v{first.version} ({first.model_kind}, {' '.join(first.dofs)}) "
                 f"with {v.name} v{v.version} ({v.model_kind}, {' '.join(v.dofs)}): model kind and DOFs must match"
             )
-    w = _weights([m.distance for m in matches])
-    frfs = [repo.load_frf(m.version) for m in matches]
+    if method not in INTERPOLATION_METHODS:
+        raise InputError(f"interpolation method must be one of {', '.join(INTERPOLATION_METHODS)}, got {method!r}")
+    w = None
+    if conditions is not None and method == "axes":
+        w = bracketing_weights(as_conditions(conditions), matches)
+    if w is None:
+        w = _weights([m.distance for m in matches])
+    used = [(float(wi), m) for wi, m in zip(w, matches) if wi > 0.0]
+    frfs = [repo.load_frf(m.version) for _, m in used]
     lo = max(f.freq[0] for f in frfs)
     hi = min(f.freq[-1] for f in frfs)
     if lo > hi:
         raise InputError("the neighbours' frequency ranges do not overlap; cannot interpolate")
     grid = frfs[0].band(lo, hi).freq
     z = np.zeros((grid.size, len(first.dofs), len(first.dofs)), dtype=np.complex128)
-    for weight, frf, m in zip(w, frfs, matches):
-        if weight == 0.0:
-            continue
+    for (weight, m), frf in zip(used, frfs):
         h = frf if (frf.n_freq == grid.size and np.array_equal(frf.freq, grid)) else frf.resample(grid)
         try:
             z += weight * np.linalg.inv(h.values)
@@ -223,7 +260,7 @@ def interpolate(
     except np.linalg.LinAlgError:
         raise NumericalError("interpolated dynamic stiffness is singular on some line") from None
     frf_out = FRF(grid, h_int, first.dofs, first.dofs, "receptance")
-    neighbours = tuple((m.version.name, m.version.version, float(wi)) for m, wi in zip(matches, w))
+    neighbours = tuple((m.version.name, m.version.version, wi) for wi, m in used)
     return InterpolatedJoint(
         frf=frf_out,
         joint_type=first.joint_type,

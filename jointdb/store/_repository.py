@@ -356,11 +356,13 @@ class Repository(LabelsAndStates):
                        include_deprecated=include_deprecated)
 
     @_db.with_db_errors
-    def interpolate(self, matches, conditions: Conditions | Mapping[str, Any] | None = None):
-        """An interpolated joint between matches (dynamic stiffness); see :mod:`jointdb.store._query`."""
+    def interpolate(self, matches, conditions: Conditions | Mapping[str, Any] | None = None, *,
+                    method: str = "axes"):
+        """An interpolated joint between matches (dynamic stiffness; ``method`` ``"axes"`` or ``"idw"``);
+        see :mod:`jointdb.store._query`."""
         from jointdb.store._query import interpolate
 
-        return interpolate(self, matches, conditions)
+        return interpolate(self, matches, conditions, method=method)
 
     @_db.with_db_errors
     def export(self, names: Iterable[str] | None, path: str | os.PathLike, *, sign_key=None) -> dict[str, Any]:

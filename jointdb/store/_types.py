@@ -389,9 +389,11 @@ class Match:
 class InterpolatedJoint:
     """A joint FRF interpolated between catalogued neighbours (NOT a catalogued joint).
 
-    ``frf`` is a receptance obtained by inverse-distance weighting of the
-    neighbours' dynamic stiffness ``Z = H⁻¹`` on their common frequency band;
-    ``neighbours`` lists ``(name, version, weight)``.
+    ``frf`` is a receptance obtained by weighting the neighbours' dynamic
+    stiffness ``Z = H⁻¹`` on their common frequency band (weights of the joints
+    bracketing the request along the condition axes, or inverse distance; see
+    :mod:`jointdb.store._query`); ``neighbours`` lists ``(name, version, weight)``
+    of those with weight > 0.
     """
 
     frf: FRF
