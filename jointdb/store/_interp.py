@@ -55,6 +55,8 @@ from jointdb.store._types import Conditions, Match
 __all__ = ["axis_coordinates", "bracketing_weights"]
 
 _MIN_LOG_SPREAD = math.log(2.0)
+#: weights and slacks below the LP solver's feasibility tolerance are round-off, not a choice
+_DROP = 1e-7
 
 
 def _log_axis(values: list[float | None], request: float, spread_scale: bool) -> tuple[np.ndarray, float] | None:
@@ -133,13 +135,63 @@ def bracketing_weights(request: Conditions, matches: Sequence[Match]) -> np.ndar
     a_eq[:d, n + d:] = -np.eye(d)
     a_eq[d, :n] = 1.0
     b_eq = np.append(r, 1.0)
-    res = linprog(c, A_eq=a_eq, b_eq=b_eq, bounds=[(0, None)] * (n + 2 * d), method="highs")
+    bounds = [(0, None)] * (n + 2 * d)
+    res = linprog(c, A_eq=a_eq, b_eq=b_eq, bounds=bounds, method="highs")
     if res.status != 0:  # pragma: no cover - the programme is always feasible (slacks) and bounded (w ≥ 0)
         return None
-    wg = np.clip(res.x[:n], 0.0, None)
-    wg[wg < 1e-9] = 0.0
+    z = _centre_of_optimal_face(res, c, a_eq, b_eq, bounds, n)
+    wg = _polished(z, a_eq[:, :n], r, n, d)
     w = np.zeros(len(matches))
     for weight, g in zip(wg, groups):
         w[g] = weight / len(g)
     return w / w.sum()
+
+
+def _polished(z: np.ndarray, a: np.ndarray, r: np.ndarray, n: int, d: int) -> np.ndarray:
+    """The weights of a solver's solution ``z`` made exact: weights below the solver's feasibility
+    tolerance dropped, then the smallest correction on the remaining support that satisfies
+    ``Σ w x = r − s`` and ``Σ w = 1`` to round-off (``s`` the slack, zero inside the hull)."""
+    w = np.clip(z[:n], 0.0, None)
+    w[w < _DROP] = 0.0
+    support = np.flatnonzero(w)
+    slack = z[n:n + d] - z[n + d:]
+    slack[np.abs(slack) < _DROP] = 0.0
+    target = np.append(r - slack, 1.0)
+    block = a[:, support]
+    w[support] += np.linalg.lstsq(block, target - block @ w[support], rcond=None)[0]
+    return np.clip(w, 0.0, None)
+
+
+def _centre_of_optimal_face(res, c, a_eq, b_eq, bounds, n: int) -> np.ndarray:
+    """One canonical optimum when the optimum is not unique (degenerate Delaunay cells).
+
+    Catalogues are planned on grids, and four corners of a grid cell lie on one circle: the
+    Delaunay triangulation of the cell is then not unique, every triangulation is optimal, and
+    the solver's vertex would pick one diagonal by the order of the candidates. Instead: the
+    candidates that can carry weight in some optimum are those with zero reduced cost; for each,
+    the optimum that gives it the most weight; their mean (itself optimal, since the optimal set
+    is convex) is returned. It does not depend on the candidates' order, is symmetric on a
+    symmetric cell (the centre of a rectangle: a quarter each) and, like every optimum,
+    reproduces quantities linear in the coordinates exactly. A unique optimum is returned as is.
+    """
+    try:
+        duals = np.asarray(res.eqlin.marginals, dtype=float)
+    except AttributeError:  # pragma: no cover - older SciPy without HiGHS marginals
+        return res.x
+    reduced = c[:n] - a_eq[:, :n].T @ duals
+    tol = 1e-9 * (1.0 + float(np.abs(c[:n]).max()))
+    face = np.flatnonzero(reduced <= tol)
+    if face.size <= int(np.count_nonzero(res.x[:n] > 1e-12)):
+        return res.x  # every candidate that can carry weight already does: the optimum is unique
+    from scipy.optimize import linprog
+
+    cap = float(res.fun) + tol
+    optima = []
+    for j in face:
+        obj = np.zeros_like(c)
+        obj[j] = -1.0
+        sub = linprog(obj, A_ub=c[None, :], b_ub=[cap], A_eq=a_eq, b_eq=b_eq, bounds=bounds, method="highs")
+        if sub.status == 0:
+            optima.append(sub.x)
+    return np.mean(optima, axis=0) if optima else res.x
 

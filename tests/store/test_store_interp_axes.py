@@ -97,3 +97,27 @@ def test_without_a_numeric_axis_inverse_distance_and_a_bad_method_is_refused(gri
     assert len(ij.neighbours) == 3 and all(w == pytest.approx(1 / 3) for _, _, w in ij.neighbours)
     with pytest.raises(InputError, match="interpolation method"):
         grid.interpolate(pool, req, method="nearest")
+
+
+def test_on_a_grid_cell_with_no_unique_triangulation_the_weights_do_not_depend_on_the_order(repo):
+    """Four catalogued corners of a rectangle (ln Ø × ln T) lie on one circle: either diagonal is a Delaunay
+    triangulation. The weights must not pick one by the order of the candidates: at the centre, a quarter each."""
+    corners = [(0.010, 40.0), (0.010, 160.0), (0.016, 40.0), (0.016, 160.0)]
+    for d, t in corners:
+        repo.catalogue(_name(d, t), "tool-holder", spring_joint(k=(_k(d, t), 8e4)),
+                       Conditions(MATS, torque_nm=t, geometry={"shank_diameter_m": d}), "spring-damper-planar")
+    centre = _request(math.sqrt(0.010 * 0.016), 80.0)  # the middle of the cell on the log axes
+    pool = repo.nearest("tool-holder", centre, k=4)
+    weights = []
+    for order in (pool, pool[::-1], pool[1:] + pool[:1]):
+        ij = repo.interpolate(order, centre)
+        weights.append({n: w for n, _, w in ij.neighbours})
+        assert np.allclose(_k_of(ij), _k(*[math.sqrt(0.010 * 0.016), 80.0]), rtol=1e-9)  # linear trend: exact
+    for w in weights:
+        assert len(w) == 4 and all(v == pytest.approx(0.25, abs=1e-9) for v in w.values())
+    # off-centre in the same cell: still independent of the order
+    off = _request(0.011, 60.0)
+    pool = repo.nearest("tool-holder", off, k=4)
+    a = {n: w for n, _, w in repo.interpolate(pool, off).neighbours}
+    b = {n: w for n, _, w in repo.interpolate(pool[::-1], off).neighbours}
+    assert a.keys() == b.keys() and all(a[k] == pytest.approx(b[k], abs=1e-9) for k in a)
