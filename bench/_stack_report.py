@@ -107,12 +107,17 @@ def named_table(rows: list[dict]) -> list[str]:
                if "cat_cylinder_mass_freq_err" in r else "(no flutes)")
         lines.append(
             f"| {r['case']} | {r['truth_hz']:.0f} / {r['truth_peak']:.2e} / {r['truth_floor_mm']:.3f} | "
-            f"{pct(r['cat_freq_err'])} / {pct(r['cat_peak_err'])} / {pct(r['cat_floor_err'])} | "
+            f"{_three(r, 'cat')} | "
             f"{pct(r['cat_near_freq_err'])} / {pct(r['cat_near_peak_err'])} | {cyl} | "
-            f"{pct(r['cat_idw_freq_err'])} / {pct(r['cat_idw_peak_err'])} / {pct(r['cat_idw_floor_err'])} | "
-            f"{_oracle(r)} | {pct(r['rigid_freq_err'])} / {pct(r['rigid_peak_err'])} / {pct(r['rigid_floor_err'])} | "
+            f"{_three(r, 'cat_idw')} | "
+            f"{_oracle(r)} | {_three(r, 'rigid')} | "
             f"{'yes' if r['extrapolating'] else 'no'} |")
     return lines
+
+
+def _three(r: dict, prefix: str) -> str:
+    """``f / peak / floor`` errors of one prediction, in per cent."""
+    return " / ".join(pct(r[f"{prefix}_{k}_err"]) for k in ("freq", "peak", "floor"))
 
 
 def heldout_table(rows: list[dict]) -> list[str]:
@@ -126,11 +131,10 @@ def heldout_table(rows: list[dict]) -> list[str]:
         lines.append(
             f"| {r['case']}{'' if ok else ' **(misses a goal)**'} | {r['truth_hz']:.0f} / {r['truth_peak']:.2e} / "
             f"{r['truth_floor_mm']:.3f} | {r['truth_second_peak_ratio']:.2f} | "
-            f"{pct(r['cat_freq_err'])} / {pct(r['cat_peak_err'])} / {pct(r['cat_floor_err'])} | "
+            f"{_three(r, 'cat')} | "
             f"{pct(r['cat_near_freq_err'])} / {pct(r['cat_near_peak_err'])} | "
-            f"{pct(r['cat_est_spindle_freq_err'])} / {pct(r['cat_est_spindle_peak_err'])} / "
-            f"{pct(r['cat_est_spindle_floor_err'])} | {orc} | "
-            f"{pct(r['rigid_freq_err'])} / {pct(r['rigid_peak_err'])} / {pct(r['rigid_floor_err'])} |")
+            f"{_three(r, 'cat_est_spindle')} | {orc} | "
+            f"{_three(r, 'rigid')} |")
     return lines
 
 
@@ -169,7 +173,7 @@ def interpolation_findings(rows: list[dict]) -> list[str]:
             continue
         text = (f"*{r['case']}*: before, {pct(r['cat_idw_freq_err'])} / {pct(r['cat_idw_peak_err'])} / "
                 f"{pct(r['cat_idw_floor_err'])} with {r['idw_joints'].get('tool-holder', '?')}; now "
-                f"{pct(r['cat_freq_err'])} / {pct(r['cat_peak_err'])} / {pct(r['cat_floor_err'])} with "
+                f"{_three(r, 'cat')} with "
                 f"{r['joints'].get('tool-holder', '?')}")
         if "oracle_freq_err" in r:
             still = [k for k in old if abs(r[f"oracle_{k}_err"]) > GOALS[k]]
