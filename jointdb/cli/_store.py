@@ -236,7 +236,7 @@ def register(app: typer.Typer) -> None:
         label: Annotated[Optional[str], typer.Option("--label", help="Only versions carrying this label, e.g. released.")] = None,
         all_versions: Annotated[bool, typer.Option("--all-versions", help="Rank every version, not only the newest of each joint.")] = False,
         include_deprecated: Annotated[bool, typer.Option("--include-deprecated", help="Also rank deprecated versions (excluded by default).")] = False,
-        interpolate: Annotated[Optional[Path], typer.Option("--interpolate", help="Also write the interpolated joint FRF (dynamic stiffness) to this HDF5 file.")] = None,
+        interpolate: Annotated[Optional[Path], typer.Option("--interpolate", help="Also write the joint interpolated between the matches that bracket the request along its conditions (dynamic stiffness, barycentric weights) to this HDF5 file.")] = None,
         out: Annotated[Optional[Path], typer.Option("--out", help="Write the matches (one row each) to .csv, .json or .h5.")] = None,
         db: DbOpt = None,
         blobs: BlobsOpt = None,
