@@ -229,8 +229,9 @@ def run_main_job(
             ipred = predict_tool_tip(ispec, {n: r.frf for n, r in ires.items() if r.frf is not None}, grid)
             irow = ipred.summary()[0]
             result.interpolated = {"joints": {n: ires[n].description for n in queried}, **irow}
+            say("      cross-check, both queried interfaces interpolated:" if len(queried) > 1 else "      cross-check:")
             for n in sorted(queried):
-                say(f"      cross-check, {ires[n].description}:")
+                say(f"          {ires[n].description}")
             say(f"          peak {irow['peak_m_per_n']:.3e} m/N at {irow['peak_hz']:.0f} Hz "
                 f"(nearest joint: {result.prediction[0]['peak_m_per_n']:.3e} m/N at "
                 f"{result.prediction[0]['peak_hz']:.0f} Hz)")
