@@ -1,10 +1,35 @@
-"""Suite-wide settings: the tests never write into the user's own cache directory."""
+"""Suite-wide settings: the tests never write into the user's own cache directory; one loader for the
+repository's scripts (fixture generators under fixtures/, validation helpers under bench/)."""
 
 from __future__ import annotations
 
+import importlib.util
 import os
+import sys
 import tempfile
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
 
 # The nearest-query cache (jointdb.store._qcache) goes to a directory of this test run, inherited by the
 # `python -m jointdb` subprocesses the CLI tests start; a test that sets its own value still wins.
 os.environ.setdefault("JOINTDB_QUERY_CACHE", tempfile.mkdtemp(prefix="jointdb-test-query-cache-"))
+
+
+def _load_script(relative: str):
+    """The repository script ``relative`` (e.g. ``fixtures/make_catalogue.py``) imported as a module under its
+    file name (registered in ``sys.modules``, so dataclasses and pickling inside it work)."""
+    path = ROOT / relative
+    spec = importlib.util.spec_from_file_location(path.stem, path)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[path.stem] = module
+    spec.loader.exec_module(module)
+    return module
+
+
+@pytest.fixture(scope="session")
+def load_script():
+    """``load_script("fixtures/make_catalogue.py")``: a repository script as a module (not an installed package)."""
+    return _load_script

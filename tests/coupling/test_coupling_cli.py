@@ -1,7 +1,6 @@
 """`jointdb identify` / `jointdb couple` on the fixture campaign; bad campaign files fail cleanly."""
 
 import filecmp
-import importlib.util
 import json
 import shutil
 import sys
@@ -119,11 +118,8 @@ def test_dead_channel_fails_clearly(monkeypatch, capsys, campaign, tmp_path):
     assert not (tmp_path / "j.h5").exists()
 
 
-def test_fixture_generator_is_byte_reproducible(tmp_path):
-    spec = importlib.util.spec_from_file_location("make_campaigns", ROOT / "fixtures" / "make_campaigns.py")
-    mc = importlib.util.module_from_spec(spec)
-    sys.modules["make_campaigns"] = mc
-    spec.loader.exec_module(mc)
+def test_fixture_generator_is_byte_reproducible(tmp_path, load_script):
+    mc = load_script("fixtures/make_campaigns.py")
     assert mc.main(["--out", str(tmp_path)]) == 0
     for name in mc.DEFAULT_CAMPAIGNS:
         committed = sorted(p.name for p in (ROOT / "fixtures" / "campaigns" / name).iterdir())

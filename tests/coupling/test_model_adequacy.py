@@ -5,10 +5,7 @@ rising 0.6× → 1.4× over the band), noise-free or under 0.5 % noise, keeps th
 says so. Campaigns are the fixture generator's (fine "truth" models, coarse identification models)
 with seeds (301..) not used by the committed fixture."""
 
-import importlib.util
 import json
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -19,16 +16,10 @@ from jointdb.coupling import Interface, couple
 from jointdb.errors import InputError
 from jointdb.frf import FRF, Dof
 
-ROOT = Path(__file__).resolve().parents[2]
-
 
 @pytest.fixture(scope="module")
-def mc():
-    spec = importlib.util.spec_from_file_location("make_campaigns", ROOT / "fixtures" / "make_campaigns.py")
-    module = importlib.util.module_from_spec(spec)
-    sys.modules["make_campaigns"] = module
-    spec.loader.exec_module(module)
-    return module
+def mc(load_script):
+    return load_script("fixtures/make_campaigns.py")
 
 
 def _frequency_dependent_assembly(mc, slope):

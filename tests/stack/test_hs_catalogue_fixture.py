@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import importlib.util
-import sys
 from pathlib import Path
 
 import pytest
@@ -14,12 +12,9 @@ ROOT = Path(__file__).resolve().parents[2]
 BUNDLED = ROOT / "jointdb" / "data" / "catalogue"
 
 
-def _generator():
-    spec = importlib.util.spec_from_file_location("make_hs_catalogue", ROOT / "fixtures" / "make_hs_catalogue.py")
-    module = importlib.util.module_from_spec(spec)
-    sys.modules["make_hs_catalogue"] = module
-    spec.loader.exec_module(module)
-    return module
+@pytest.fixture(scope="module")
+def generator(load_script):
+    return load_script("fixtures/make_hs_catalogue.py")
 
 
 def test_bundled_hs_campaigns_cover_two_tapers_and_three_drawbar_forces_each():
@@ -34,8 +29,8 @@ def test_bundled_hs_campaigns_cover_two_tapers_and_three_drawbar_forces_each():
     assert {(t, d) for t, d, _ in seen} == {("HSK-A63", 0.063), ("BT40", 0.04445)}
 
 
-def test_true_hs_joints_stiffen_with_drawbar_force_and_hsk_is_stiffer_than_bt40():
-    mc = _generator()
+def test_true_hs_joints_stiffen_with_drawbar_force_and_hsk_is_stiffer_than_bt40(generator):
+    mc = generator
     k12, _ = mc.true_joint(12e3, "HSK-A63")
     k24, _ = mc.true_joint(24e3, "HSK-A63")
     kb, cb = mc.true_joint(12e3, "BT40")
@@ -47,8 +42,8 @@ def test_true_hs_joints_stiffen_with_drawbar_force_and_hsk_is_stiffer_than_bt40(
 
 
 @pytest.mark.slow
-def test_make_hs_catalogue_regenerates_the_bundled_files_byte_for_byte(tmp_path):
-    written = _generator().write_hs_catalogue(tmp_path, only=("hs-bt40-12kn",))
+def test_make_hs_catalogue_regenerates_the_bundled_files_byte_for_byte(tmp_path, generator):
+    written = generator.write_hs_catalogue(tmp_path, only=("hs-bt40-12kn",))
     names = {p.relative_to(tmp_path).as_posix() for p in written}
     assert "campaigns/hs-bt40-12kn/assembly.uff" in names and len(names) == 5  # 2 models, 3 campaign files
     for rel in sorted(names):

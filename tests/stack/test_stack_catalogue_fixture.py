@@ -2,9 +2,7 @@
 
 from __future__ import annotations
 
-import importlib.util
 import json
-import sys
 from pathlib import Path
 
 import pytest
@@ -16,12 +14,9 @@ ROOT = Path(__file__).resolve().parents[2]
 BUNDLED = ROOT / "jointdb" / "data" / "catalogue"
 
 
-def _generator():
-    spec = importlib.util.spec_from_file_location("make_catalogue", ROOT / "fixtures" / "make_catalogue.py")
-    module = importlib.util.module_from_spec(spec)
-    sys.modules["make_catalogue"] = module
-    spec.loader.exec_module(module)
-    return module
+@pytest.fixture(scope="module")
+def generator(load_script):
+    return load_script("fixtures/make_catalogue.py")
 
 
 def test_bundled_campaigns_cover_three_torques_and_two_materials():
@@ -38,8 +33,8 @@ def test_bundled_campaigns_cover_three_torques_and_two_materials():
     assert demo.interfaces["holder-spindle"].kind == "query"
 
 
-def test_true_joints_follow_the_documented_trend():
-    mc = _generator()
+def test_true_joints_follow_the_documented_trend(generator):
+    mc = generator
     k40, _ = mc.true_joint(40.0, "carbide")
     k120, c120 = mc.true_joint(120.0, "carbide")
     ks, cs = mc.true_joint(120.0, "steel")
@@ -47,9 +42,9 @@ def test_true_joints_follow_the_documented_trend():
 
 
 @pytest.mark.slow
-def test_make_catalogue_regenerates_the_bundled_files_byte_for_byte(tmp_path):
+def test_make_catalogue_regenerates_the_bundled_files_byte_for_byte(tmp_path, generator):
     # one campaign (each has its own seed) + the models and the demo stack: byte-identical to the bundle
-    written = _generator().write_catalogue(tmp_path, only=("th-er32-steel-080nm",))
+    written = generator.write_catalogue(tmp_path, only=("th-er32-steel-080nm",))
     names = {p.relative_to(tmp_path).as_posix() for p in written}
     assert "campaigns/th-er32-steel-080nm/assembly.uff" in names and "demo-stack.json" in names
     assert len(names) == 8  # 4 models, 3 campaign files, the demo stack

@@ -6,31 +6,17 @@ held-out draw and the spindle estimated from noisy translations."""
 
 from __future__ import annotations
 
-import importlib.util
-import sys
-from pathlib import Path
-
 import pytest
 
-ROOT = Path(__file__).resolve().parents[2]
+
+@pytest.fixture(scope="module")
+def sv(load_script):
+    return load_script("bench/_stack_validation.py")
 
 
 @pytest.fixture(scope="module")
-def sv():
-    return _load("_stack_validation")
-
-
-def _load(name):
-    spec = importlib.util.spec_from_file_location(name, ROOT / "bench" / f"{name}.py")
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[name] = module
-    spec.loader.exec_module(module)
-    return module
-
-
-@pytest.fixture(scope="module")
-def ho(sv):
-    return _load("_stack_heldout")
+def ho(sv, load_script):
+    return load_script("bench/_stack_heldout.py")
 
 
 @pytest.fixture(scope="module")
