@@ -154,12 +154,7 @@ def decode_blob_bytes(data: bytes, where: str, digest: str | None = None) -> FRF
     """
     import h5py
 
-    block = data[:USERBLOCK]
-    recorded = block[len(_FILE_MAGIC):len(_FILE_MAGIC) + 64].decode("ascii", "replace")
-    if len(block) != USERBLOCK or not block.startswith(_FILE_MAGIC) or block != _userblock(recorded):
-        raise IntegrityError(f"{where} is corrupt: file checksum header is damaged")
-    if hashlib.sha256(memoryview(data)[USERBLOCK:]).hexdigest() != recorded:
-        raise IntegrityError(f"{where} is corrupt: file bytes do not match their recorded SHA-256")
+    _check_userblock(data[:USERBLOCK], hashlib.sha256(memoryview(data)[USERBLOCK:]).hexdigest(), f"{where} is corrupt")
     try:
         fapl = h5py.h5p.create(h5py.h5p.FILE_ACCESS)
         fapl.set_fapl_core(backing_store=False)
@@ -198,13 +193,16 @@ def check_file_checksum(path: str | os.PathLike) -> None:
         h = hashlib.sha256()
         for chunk in iter(lambda: raw.read(1 << 20), b""):
             h.update(chunk)
-    if len(block) != USERBLOCK or not block.startswith(_FILE_MAGIC):
-        raise IntegrityError(f"{path}: file checksum header is damaged or missing")
+    _check_userblock(block, h.hexdigest(), str(path))
+
+
+def _check_userblock(block: bytes, body_sha256: str, where: str) -> None:
+    """The user block is intact and records ``body_sha256``, the hash of the bytes after it (IntegrityError)."""
     recorded = block[len(_FILE_MAGIC):len(_FILE_MAGIC) + 64].decode("ascii", "replace")
-    if block != _userblock(recorded):
-        raise IntegrityError(f"{path}: file checksum header is damaged")
-    if h.hexdigest() != recorded:
-        raise IntegrityError(f"{path}: file bytes do not match their recorded SHA-256 (corrupt file)")
+    if len(block) != USERBLOCK or not block.startswith(_FILE_MAGIC) or block != _userblock(recorded):
+        raise IntegrityError(f"{where}: file checksum header is damaged or missing")
+    if body_sha256 != recorded:
+        raise IntegrityError(f"{where}: file bytes do not match their recorded SHA-256 (corrupt file)")
 
 
 def read_frf_file(path: str | os.PathLike, verify: bool = True) -> FRF:
