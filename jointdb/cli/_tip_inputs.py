@@ -70,15 +70,12 @@ def read_tool_tip(path: Path) -> tuple[FRF, list[str]]:
 
 
 def has_cross_terms(frf: FRF) -> bool:
-    """Whether ``frf`` has an x and a y driving point and a non-zero x–y cross entry between them."""
+    """Whether ``frf`` has an x and a y driving point and a non-zero x–y cross entry between them
+    (the entries :func:`jointdb.stability.tool_tip_matrix` would use)."""
+    from jointdb.stability import tool_tip_matrix
 
-    def driving(direction: str):
-        return next((d for d in frf.outputs if d.direction == direction and d in frf.inputs), None)
-
-    dx, dy = driving("x"), driving("y")
-    if dx is None or dy is None:
-        return False
-    return bool(np.any(frf.entry(dx, dy) != 0) or np.any(frf.entry(dy, dx) != 0))
+    _, phi, (has_x, has_y) = tool_tip_matrix(frf, cross_terms=True)
+    return has_x and has_y and bool(np.any(phi[:, 0, 1]) or np.any(phi[:, 1, 0]))
 
 
 def turning_frf(frf: FRF, frf_y: FRF | None, path_y: Path | None) -> tuple[FRF, list[str]]:
