@@ -91,6 +91,10 @@ def _new_app() -> typer.Typer:
         server: str = typer.Option(None, "--server", metavar="URL",
                                    help="Use a jointdb server instead of a database (or $JOINTDB_SERVER; "
                                         "token from $JOINTDB_TOKEN)."),
+        blas_threads: int = typer.Option(None, "--blas-threads", metavar="N", min=0,
+                                         help="BLAS/OpenMP threads for the linear algebra (default 1, or "
+                                              "$JOINTDB_BLAS_THREADS; 0: the library default). Set before "
+                                              "numpy loads; inherited by the service's workers."),
     ) -> None:
         """jointdb: joint identification (IRC), a versioned joint database, tool-tip
         prediction (RC), chatter stability lobes and model/measurement diagnosis."""
@@ -164,6 +168,13 @@ def main() -> None:
     becomes one line on stderr and the error class's exit code.
     """
     args = sys.argv[1:]
+    from jointdb.cli._threads import apply_thread_policy, requested_threads
+
+    try:  # before anything imports numpy: the thread variables are read when BLAS loads
+        apply_thread_policy(*requested_threads(args))
+    except ValueError as exc:
+        sys.stderr.write(f"error: {exc}\n")
+        sys.exit(2)
     # -v/-q may be written after the command too (`jointdb lobes ... -q`): they are the app's, moved to the front
     upto = args.index("--") if "--" in args else len(args)
     is_global = [a in ("-q", "--quiet", "--verbose") or (a[:2] == "-v" and set(a[1:]) == {"v"}) for a in args[:upto]]
@@ -172,9 +183,9 @@ def main() -> None:
     first, i = None, 0
     while i < len(args):
         a = args[i]
-        if a == "--server":
+        if a in ("--server", "--blas-threads"):
             i += 2
-        elif a.startswith("--server=") or a in ("--verbose", "--quiet") or (
+        elif a.startswith(("--server=", "--blas-threads=")) or a in ("--verbose", "--quiet") or (
                 a[:1] == "-" and a[1:2] != "-" and set(a[1:]) <= {"v", "q"}):
             i += 1
         else:
