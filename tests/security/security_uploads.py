@@ -75,13 +75,12 @@ def campaign_paths(target) -> list[Attack]:
     own = {"substructures.holder.uff58": d / "holder.uff", "substructures.tool.model": d / "tool.json",
            "measurements.0": d / "assembly.uff", "validation.measurements.0": d / "validation.uff",
            "validation.substructures.tool.model": d / "tool_short.json"}
-    paths = ["/etc/passwd", "/etc/hostname", "/proc/self/environ", "/proc/self/cmdline", "/proc/self/status",
-             "../../../../../../etc/passwd", "../campaign/holder.uff", "subdir/holder.uff", "\\etc\\passwd",
-             "file:///etc/passwd", "/nonexistent/x.uff", "~/.bashrc", "holder.uff\x00.json", "", "/", ".",
+    paths = ["/etc/passwd", "/proc/self/environ", "../../../../../../etc/passwd", "../campaign/holder.uff",
+             "subdir/holder.uff", "\\etc\\passwd", "file:///etc/passwd", "~/.bashrc", "holder.uff\x00.json", "",
              str(d / "truth.json")]
     out = []
-    for where in CAMPAIGN_FIELDS:
-        for p in [*paths, str(own[where])]:
+    for where in CAMPAIGN_FIELDS:  # the validation files are read last: only the server's own files there
+        for p in [*(paths if not where.startswith("validation") else paths[:1]), str(own[where])]:
             files, text = _campaign_with(target, where, p)
             out.append(_upload(f"campaign {where} = {p[:40]}", _zip(list(files.items())), echo=text,
                                cls="campaign paths"))
@@ -153,7 +152,7 @@ def _bombs_and_oddities(target, valid, echo) -> list[Attack]:
     out = []
     big, comp, crc = _bomb()
     bomb = _raw_deflated_member("bomb.uff", comp, big, crc)
-    out.append(_upload("zip bomb: 200 MiB of zeros in 200 KiB", _zip_with_raw(valid, [bomb]), echo=echo))
+    out.append(_upload("zip bomb: 100 MiB of zeros in 100 KiB", _zip_with_raw(valid, [bomb]), echo=echo))
     lie = _raw_deflated_member("bomb.uff", comp, 1000, crc)
     out.append(_upload("zip bomb with understated size", _zip_with_raw(valid, [lie]), echo=echo))
     out.append(_upload("5000 members", _zip(valid + [(f"f{i}.txt", b"") for i in range(5000)]), echo=echo))
@@ -192,8 +191,8 @@ def files_with(target, where: str, value) -> bytes:
 
 @functools.lru_cache(maxsize=1)
 def _bomb() -> tuple[int, bytes, int]:
-    """200 MiB of zeros, deflated to about 200 KiB (a ratio of about 1000), and their CRC (made once)."""
-    big, chunk = 200 * 2**20, b"\0" * 2**20
+    """100 MiB of zeros, deflated to about 100 KiB (a ratio of about 1000), and their CRC (made once)."""
+    big, chunk = 100 * 2**20, b"\0" * 2**20
     zeros, crc, parts = zlib.compressobj(9, zlib.DEFLATED, -15), 0, []
     for _ in range(big // 2**20):
         parts.append(zeros.compress(chunk))

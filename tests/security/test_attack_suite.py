@@ -114,7 +114,7 @@ def _normal(r: Result, *paths: str) -> tuple[int, str]:
         text = str(json.loads(r.body).get("error", ""))
     except (ValueError, AttributeError):
         text = r.body
-    for p in paths:
+    for p in sorted(paths, key=len, reverse=True):
         text = text.replace(p, "<P>")
     return r.status, re.sub(r"[0-9a-f]{16}", "<id>", text)
 
