@@ -122,7 +122,8 @@ def archives(target) -> list[Attack]:
                 "\u00f8.json", "x\r\n.json", "../holder.uff\x00"):
         placeholder = "Q" * len(bad.encode())  # zipfile itself cuts a name at NUL: write it byte by byte
         data = _zip(valid + [(placeholder, b"{}")]).replace(placeholder.encode(), bad.encode())
-        out.append(_upload(f"member named {bad[:30]!r}", data, echo=echo + bad))
+        harmless = bad in ("dir/", "campaign.json/", "\u00f8.json")  # a directory entry, a unicode name
+        out.append(_upload(f"member named {bad[:30]!r}", data, echo=echo + bad, expect="ok" if harmless else "4xx"))
     # the campaign itself under a path-like name
     out.append(_upload("campaign member ../campaign.json", _zip([("../campaign.json", files["campaign.json"])]
                                                                 + valid[1:]), echo=echo))
@@ -164,16 +165,17 @@ def _bombs_and_oddities(target, valid, echo) -> list[Attack]:
     raw_name = _zip(valid + [(cp437, b"{}")]).replace(b"x.json", b"\x81\xffjson")
     out.append(_upload("non-UTF-8 member name", raw_name, echo=echo, expect="ok"))
     z = _zip(valid)
+    out.append(_upload("huge comment", z[:-2] + struct.pack("<H", 65535) + b"c" * 65535, echo=echo, expect="ok"))
     for what, data in {"not a zip": b"this is not a zip", "empty": b"", "PK header only": b"PK\x03\x04",
                        "truncated": z[:-30], "first half": z[: len(z) // 2], "gzip": zlib.compress(z),
                        "HDF5 named .zip": target.h5, "zip in a zip": _zip([("inner.zip", z)]),
-                       "huge comment": z[:-2] + struct.pack("<H", 65535) + b"c" * 65535,
                        "end record only": b"PK\x05\x06" + b"\0" * 18}.items():
         out.append(_upload(what, data, echo=echo))
-    for fname in ("../../x.zip", "/etc/x.zip", "x.zip\x00.h5", "con.zip", "x" * 300 + ".zip", ".zip", "x.zip/",
-                  "x.exe", "x.h5.zip.sh"):
+    for fname in ("../../x.zip", "/etc/x.zip", "x.zip\x00.h5", "x" * 300 + ".zip", ".zip", "x.zip/", "x.exe",
+                  "x.h5.zip.sh"):
         out.append(_upload(f"filename {fname[:30]!r}", z, fname, echo=echo + fname, cls="file names and encodings"))
-    out.append(_upload("filename x.ZIP", z, "x.ZIP", echo=echo, cls="file names and encodings", expect="ok"))
+    for fname in ("x.ZIP", "con.zip"):
+        out.append(_upload(f"filename {fname}", z, fname, echo=echo, cls="file names and encodings", expect="ok"))
     for what, b64 in {"not base64": "@@@@", "urlsafe alphabet": base64.urlsafe_b64encode(b"\xfb\xff" * 30).decode(),
                       "missing padding": base64.b64encode(target.h5).decode().rstrip("="),
                       "data URI": "data:application/zip;base64," + base64.b64encode(z).decode(),
