@@ -62,7 +62,9 @@ def _secrets(db: str, tmp: Path, blobs: Path, schema: str | None, tokens: dict[s
         out["search_path"] = "search_path"
     for role, tok in tokens.items():
         out[f"{role} token"] = tok
-        out[f"{role} token secret"] = tok.rsplit("_", 1)[-1]
+        secret = tok.split("_", 2)[-1]  # jdb_<12 hex id>_<secret>; the secret may itself hold '_'
+        if len(secret) >= 16:
+            out[f"{role} token secret"] = secret
     return out
 
 

@@ -150,7 +150,7 @@ def leaks(text: str, secrets: dict[str, str], echo: str = "") -> list[str]:
     a token is a leak even when it was sent."""
     found = []
     for what, value in {**secrets, **GENERIC_MARKERS}.items():
-        if not value or value not in text:
+        if not value or len(value) < 6 or value not in text:
             continue
         if "token" not in what and value in echo:
             continue
