@@ -239,7 +239,7 @@ def auth(target) -> list[Attack]:
              ("DELETE", f"{API}/admin/tokens/000000000000", None), ("POST", f"{API}/admin/gc", {"dry_run": False}),
              ("GET", f"{API}/admin/check", None), ("GET", f"{API}/admin/migrations", None),
              ("POST", f"{API}/admin/migrations/upgrade", None)]
-    reader_id = target.tokens["reader"].rsplit("_", 1)[0]
+    reader_id = "_".join(target.tokens["reader"].split("_")[:2])  # jdb_<id>
     bad = {"no token": None, "empty bearer": "Bearer", "two spaces": "Bearer  x", "basic": "Basic dXNlcjpwYXNz",
            "unknown token": "Bearer jdb_000000000000_" + "A" * 40, "right id wrong secret": f"Bearer {reader_id}_wrong",
            "8k token": "Bearer " + "A" * 8000, "two tokens": f"Bearer {target.tokens['reader']} extra",
