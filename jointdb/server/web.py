@@ -103,9 +103,15 @@ def _reader(request: Request):
 
 
 def _same_origin(request: Request) -> None:
-    """Refuse a browser POST sent from another site (``Origin`` of another host, or ``null``)."""
+    """Refuse a browser POST sent from another site (``Origin`` of another host, or ``null``).
+
+    The host is the request's ``Host`` or, behind a proxy that rewrites it, the proxy's
+    ``X-Forwarded-Host`` (a cross-site form cannot set that header)."""
     origin = request.headers.get("origin")
-    if origin is not None and (origin == "null" or urlsplit(origin).netloc != request.headers.get("host")):
+    if origin is None:
+        return
+    hosts = {request.headers.get("host"), request.headers.get("x-forwarded-host", "").split(",")[0].strip()}
+    if origin == "null" or urlsplit(origin).netloc not in hosts - {None, ""}:
         raise PermissionError("this form was sent from another site; open the page on this server and try again")
 
 

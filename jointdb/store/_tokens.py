@@ -28,10 +28,8 @@ from dataclasses import dataclass
 from datetime import datetime, timedelta, timezone
 from typing import TYPE_CHECKING
 
-from sqlalchemy import select
+from sqlalchemy import delete, select, update
 from sqlalchemy.orm import Session
-
-from sqlalchemy import delete, update
 
 from jointdb.errors import InputError, NotFoundError, NotPermittedError
 from jointdb.store._models import AuditRow, JointRow, TokenRow, VersionRow, WebSessionRow, utcnow
