@@ -29,7 +29,7 @@ from fastapi.responses import HTMLResponse, RedirectResponse, Response
 from fastapi.staticfiles import StaticFiles
 from fastapi.templating import Jinja2Templates
 
-from jointdb.errors import InputError, JointdbError
+from jointdb.errors import InputError, JointdbError, NotPermittedError
 from jointdb.server._deps import SESSION_COOKIE, version_json
 from jointdb.store._tokens import check_may_change, close_session, open_session, session_user
 
@@ -247,14 +247,20 @@ async def joint(request: Request, name: str):
     from jointdb.server._svg import frf_svg
     from jointdb.server.routes_joints import joint_name
 
-    _reader(request)
+    who = _reader(request)
     r = request.app.state.repo
     version = request.query_params.get("version")
     jv = r.get(joint_name(name), int(version) if version and version.isdigit() else None)
     svg = frf_svg([(f"v{jv.version}", r.load_frf(jv))], f"{jv.name} v{jv.version} ({jv.quantity})")
+    refusal = None  # a writer who may not change this joint sees why instead of the forms
+    if who is not None and who.allows("writer"):
+        try:
+            check_may_change(r, who, jv.name, "label or deprecate")
+        except NotPermittedError as exc:
+            refusal = str(exc)
     return _page(request, "joint.html", title=jv.name, v=version_json(jv), svg=svg,
                  history=[version_json(h) for h in r.history(jv.name)], audit=r.audit(jv.name, limit=200),
-                 notice=request.query_params.get("notice"))
+                 notice=request.query_params.get("notice"), refusal=refusal)
 
 
 @router.get("/joints/{name}/overlay")
