@@ -49,3 +49,10 @@ class NumericalError(JointdbError, ArithmeticError):
 
     exit_code = 6
     http_status = 422
+
+
+class NotPermittedError(JointdbError, PermissionError):
+    """A valid token whose owner may not do this (e.g. label a joint another team catalogued)."""
+
+    exit_code = 2
+    http_status = 403

@@ -27,6 +27,9 @@ def register(app: typer.Typer) -> None:
         max_upload_mb: Annotated[float, typer.Option("--max-upload-mb", help="Largest request body [MiB].")] = 64.0,
         timeout: Annotated[float, typer.Option("--timeout", help="Longest request time [s] before 503.")] = 60.0,
         log_level: Annotated[str, typer.Option("--log-level", help="debug, info, warning, error.")] = "info",
+        secure_cookies: Annotated[Optional[bool], typer.Option(
+            "--secure-cookies/--insecure-cookies",
+            help="Force the web cookies' Secure flag on or off (default: on unless --host is loopback).")] = None,
         db: DbOpt = None,
         blobs: BlobsOpt = None,
     ) -> None:
@@ -51,7 +54,9 @@ def register(app: typer.Typer) -> None:
             raise InputError(f"--log-level must be debug, info, warning or error, got {log_level!r}")
         check_db_target(db)  # a missing SQLite file is refused here, never created by the server
         env = {"JOINTDB_OPEN_READS": "1" if open_reads else "0", "JOINTDB_MAX_UPLOAD_MB": str(max_upload_mb),
-               "JOINTDB_REQUEST_TIMEOUT_S": str(timeout)}
+               "JOINTDB_REQUEST_TIMEOUT_S": str(timeout), "JOINTDB_BIND_HOST": host}
+        if secure_cookies is not None:
+            env["JOINTDB_SECURE_COOKIES"] = "1" if secure_cookies else "0"
         if db is not None:
             env["JOINTDB_URL"] = db
         if blobs is not None:
@@ -69,16 +74,20 @@ def register(app: typer.Typer) -> None:
         name: Annotated[str, typer.Option("--name", help="Owner: the audit log names them for the token's writes.")],
         role: Annotated[str, typer.Option("--role", help="reader | writer | admin.")],
         expires: Annotated[Optional[str], typer.Option("--expires", help="ISO time or lifetime (30d, 12h, 90m).")] = None,
+        team: Annotated[Optional[str], typer.Option(
+            "--team", help="Team: its writers may label and deprecate each other's joints.")] = None,
         db: DbOpt = None, blobs: BlobsOpt = None, as_json: JsonOpt = False,
     ) -> None:
         """Create an API token; it is printed once and stored only as its SHA-256.
 
-        Example: jointdb tokens create --name alice --role writer --expires 90d
+        A writer may label and deprecate the joints they catalogued, or that a member of
+        their --team catalogued; an admin any joint.
+        Example: jointdb tokens create --name alice --role writer --team spindles --expires 90d
         """
-        from jointdb.store._tokens import check_owner, check_role, create_token, parse_expiry
+        from jointdb.store._tokens import check_owner, check_role, check_team, create_token, parse_expiry
 
-        check_owner(name), check_role(role), parse_expiry(expires)  # before the database is opened
-        token, info = create_token(_repo(db, blobs), name, role, expires)
+        check_owner(name), check_role(role), check_team(team), parse_expiry(expires)  # before the database is opened
+        token, info = create_token(_repo(db, blobs), name, role, expires, team=team)
         message("store this token now: it is not shown again")
         emit({"token": token, **info.to_dict()}, as_json=as_json)
 
@@ -88,7 +97,7 @@ def register(app: typer.Typer) -> None:
         from jointdb.store._tokens import list_tokens
 
         emit([t.to_dict() for t in list_tokens(_repo(db, blobs))], as_json=as_json, title="tokens",
-             columns=["token_id", "name", "role", "status", "created_at", "expires_at"])
+             columns=["token_id", "name", "role", "team", "status", "created_at", "expires_at"])
 
     @tokens.command("revoke")
     def revoke(

@@ -19,6 +19,7 @@ from starlette.exceptions import HTTPException as StarletteHTTPException
 
 from jointdb.errors import JointdbError
 from jointdb.server._middleware import ServiceMiddleware
+from jointdb.server._security import install as install_security_headers
 from jointdb.server._settings import Settings
 
 log = logging.getLogger("jointdb.server")
@@ -113,6 +114,7 @@ def create_app(settings: Settings | None = None, repo=None) -> FastAPI:
     for module in (routes_joints, routes_frf, routes_query, routes_writes, routes_admin):
         app.include_router(module.router, prefix="/api/v1")
     web.mount(app)
+    install_security_headers(app, settings)
 
     @app.get("/healthz", tags=["service"])
     def healthz() -> dict:

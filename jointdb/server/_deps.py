@@ -6,11 +6,15 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from fastapi import Depends, HTTPException, Query, Request
+from fastapi import Depends, HTTPException, Query, Request, Security
+from fastapi.security import HTTPBearer
 
-from jointdb.store._tokens import TokenInfo, authenticate
+from jointdb.store._tokens import TokenInfo, authenticate, check_may_change
 
 SESSION_COOKIE = "jointdb_session"
+#: The OpenAPI security scheme of the API (the header itself is read by :func:`bearer`).
+BEARER = HTTPBearer(auto_error=False, scheme_name="bearer", bearerFormat="jdb_<id>_<secret>",
+                    description="An API token (`jointdb tokens create`), sent as `Authorization: Bearer <token>`.")
 
 
 def repo(request: Request):
@@ -49,7 +53,7 @@ def identify(request: Request, token: str | None) -> TokenInfo | None:
 def need(role: str):
     """A dependency: the caller's token must have ``role`` (reads: none when the server has open reads)."""
 
-    def dependency(request: Request) -> TokenInfo | None:
+    def dependency(request: Request, _scheme=Security(BEARER)) -> TokenInfo | None:
         info = identify(request, bearer(request))
         if info is None:
             if role == "reader" and request.app.state.settings.open_reads:
@@ -61,6 +65,12 @@ def need(role: str):
         return info
 
     return dependency
+
+
+def may_change(r, who: TokenInfo, name: str, action: str) -> None:
+    """The ownership rule of labels and deprecations (403 otherwise): see
+    :func:`jointdb.store._tokens.check_may_change`."""
+    check_may_change(r, who, name, action)
 
 
 reader = Depends(need("reader"))

@@ -33,6 +33,16 @@ def _env_float(name: str, default: float) -> float:
     return value
 
 
+LOOPBACK_HOSTS = frozenset({"127.0.0.1", "::1", "localhost"})
+
+
+def _env_secure(name: str) -> bool | None:
+    text = os.environ.get(name)
+    if text is None or text.strip().lower() in ("", "auto"):
+        return None
+    return _env_bool(name, False)
+
+
 @dataclass(frozen=True)
 class Settings:
     """What ``jointdb serve`` runs with.
@@ -42,6 +52,13 @@ class Settings:
     ``max_upload_bytes``: largest request body; ``request_timeout_s``: longest
     time a request may take before the client gets 503 (the work itself is not
     interrupted: a write either commits whole or not at all).
+
+    Web catalogue: ``secure_cookies`` True/False forces the cookies' ``Secure``
+    flag (and HSTS); None (default, "auto") sets it unless ``bind_host`` is a
+    loopback address (``jointdb serve`` on 127.0.0.1 or ::1 without TLS); an
+    unknown ``bind_host`` counts as not loopback. ``session_idle_s`` and
+    ``session_lifetime_s``: a sign-in ends after this long without a page
+    view, and after this long at the latest.
     """
 
     url: str | None = None
@@ -49,17 +66,33 @@ class Settings:
     open_reads: bool = False
     max_upload_bytes: int = 64 * 2**20
     request_timeout_s: float = 60.0
-    secure_cookies: bool = False
+    secure_cookies: bool | None = None
+    bind_host: str | None = None
+    session_idle_s: float = 30 * 60.0
+    session_lifetime_s: float = 12 * 3600.0
+
+    @property
+    def cookie_secure(self) -> bool:
+        """Whether cookies carry ``Secure`` (and responses ``Strict-Transport-Security``)."""
+        if self.secure_cookies is not None:
+            return self.secure_cookies
+        host = (self.bind_host or "").strip().strip("[]").lower()
+        return host not in LOOPBACK_HOSTS
 
     @classmethod
     def from_env(cls) -> "Settings":
         """``JOINTDB_URL``, ``JOINTDB_BLOBS``, ``JOINTDB_OPEN_READS``, ``JOINTDB_MAX_UPLOAD_MB``,
-        ``JOINTDB_REQUEST_TIMEOUT_S``, ``JOINTDB_SECURE_COOKIES``."""
+        ``JOINTDB_REQUEST_TIMEOUT_S``, ``JOINTDB_SECURE_COOKIES`` (true, false or auto),
+        ``JOINTDB_BIND_HOST`` (set by ``jointdb serve``), ``JOINTDB_SESSION_IDLE_MIN`` (30),
+        ``JOINTDB_SESSION_HOURS`` (12)."""
         return cls(
             url=os.environ.get("JOINTDB_URL") or None,
             blobs=os.environ.get("JOINTDB_BLOBS") or None,
             open_reads=_env_bool("JOINTDB_OPEN_READS", False),
             max_upload_bytes=int(_env_float("JOINTDB_MAX_UPLOAD_MB", 64.0) * 2**20),
             request_timeout_s=_env_float("JOINTDB_REQUEST_TIMEOUT_S", 60.0),
-            secure_cookies=_env_bool("JOINTDB_SECURE_COOKIES", False),
+            secure_cookies=_env_secure("JOINTDB_SECURE_COOKIES"),
+            bind_host=os.environ.get("JOINTDB_BIND_HOST") or None,
+            session_idle_s=_env_float("JOINTDB_SESSION_IDLE_MIN", 30.0) * 60,
+            session_lifetime_s=_env_float("JOINTDB_SESSION_HOURS", 12.0) * 3600,
         )

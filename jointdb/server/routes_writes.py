@@ -129,10 +129,18 @@ def catalogue(body: CatalogueIn, r=Depends(repo), who=writer) -> dict[str, Any]:
 
 @router.post("/joints/{name}/labels", summary="Point a label at a version (create or move it)")
 def label(name: Name, body: LabelIn, r=Depends(repo), who=writer) -> dict[str, Any]:
+    """A writer may label the joints they or their team catalogued; an admin any (else 403)."""
+    from jointdb.server._deps import may_change
+
+    may_change(r, who, joint_name(name), "label")
     return version_json(r.label(joint_name(name), body.version, body.label, author=who.name))
 
 
 @router.post("/joints/{name}/deprecate", summary="Deprecate (or undo) a joint or one version")
 def deprecate(name: Name, body: DeprecateIn, r=Depends(repo), who=writer) -> dict[str, Any]:
+    """A writer may deprecate the joints they or their team catalogued; an admin any (else 403)."""
+    from jointdb.server._deps import may_change
+
+    may_change(r, who, joint_name(name), "deprecate")
     hist = r.deprecate(joint_name(name), body.version, reason=body.reason, author=who.name, undo=body.undo)
     return {"items": [version_json(v) for v in hist]}

@@ -1,46 +1,80 @@
 """The web catalogue under ``/ui``: server-rendered pages (Jinja2), SVG plots drawn on the
-server, CSS bundled in the package (works with no internet).
+server, CSS bundled in the package (works with no internet); and ``/docs``, Swagger UI served
+from the package (no CDN).
 
-Sign-in: the token is posted once from a form and kept in a cookie that is HttpOnly,
-SameSite=Strict and scoped to ``/ui`` (Secure when ``JOINTDB_SECURE_COOKIES``); it never
-appears in a URL. Every form that writes carries a CSRF token derived from the session
-(HMAC of the token's hash), checked before anything is done.
+Sign-in: the token is posted once from a form and exchanged for a server-side session
+(:func:`jointdb.store._tokens.open_session`): the cookie holds only a random session id
+(256 bits; the database keeps its SHA-256), never the token. Signing out revokes the
+session in the database; an unknown, revoked, idle or expired session (or one whose token
+was revoked) is signed out. Cookies are HttpOnly, SameSite=Strict, scoped to ``/ui`` and
+``Secure`` unless the server runs on loopback without TLS (:class:`Settings`).
+
+CSRF: every form carries a token checked before anything is done, and a browser POST
+whose ``Origin`` is another site (or ``null``) is refused. The sign-in form's token is bound
+to a pre-session cookie (double submit); the other forms' token to the session id
+(HMAC keyed with it), so neither can be forged without reading an HttpOnly cookie.
 """
 
 from __future__ import annotations
 
 import hashlib
 import hmac
+import secrets
 from pathlib import Path
 from typing import Any
-from urllib.parse import parse_qs, urlencode, quote
+from urllib.parse import parse_qs, quote, urlencode, urlsplit
 
 from fastapi import APIRouter, Request
 from fastapi.responses import HTMLResponse, RedirectResponse, Response
 from fastapi.staticfiles import StaticFiles
 from fastapi.templating import Jinja2Templates
 
-from jointdb.errors import InputError, JointdbError
+from jointdb.errors import InputError, JointdbError, NotPermittedError
 from jointdb.server._deps import SESSION_COOKIE, version_json
-from jointdb.store._tokens import authenticate, token_sha256
+from jointdb.store._tokens import check_may_change, close_session, open_session, session_user
 
 HERE = Path(__file__).parent
 templates = Jinja2Templates(directory=str(HERE / "templates"))
 router = APIRouter(prefix="/ui", include_in_schema=False)
+#: The pre-session cookie of the sign-in form (its CSRF double submit).
+SIGNIN_COOKIE = "jointdb_signin"
+_NONCE_CHARS = frozenset("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789-_")
 
 
-def _session(request: Request):
-    token = request.cookies.get(SESSION_COOKIE)
-    info = authenticate(request.app.state.repo, token) if token else None
+def _session(request: Request) -> tuple[str | None, Any]:
+    """``(session_id, token info)`` of the request's open session, or ``(None, None)``
+    (then a cookie that was sent is marked to be cleared)."""
+    cached = getattr(request.state, "web_session", None)
+    if cached is not None:
+        return cached
+    sid = request.cookies.get(SESSION_COOKIE)
+    settings = request.app.state.settings
+    info = session_user(request.app.state.repo, sid, settings.session_idle_s) if sid else None
     if info is not None:
         request.state.actor = info.name
-    return token if info else None, info
+    elif sid:
+        request.state.stale_session = True
+    request.state.web_session = (sid if info else None, info)
+    return request.state.web_session
 
 
-def _csrf(token: str | None) -> str:
-    if not token:
-        return ""
-    return hmac.new(token_sha256(token).encode(), b"jointdb-csrf", hashlib.sha256).hexdigest()
+def _mac(key: str, purpose: bytes) -> str:
+    return hmac.new(key.encode(), purpose, hashlib.sha256).hexdigest()
+
+
+def _csrf(session_id: str | None) -> str:
+    """The CSRF token of a session's forms (bound to the session id, which only the HttpOnly cookie holds)."""
+    return _mac(session_id, b"jointdb-csrf") if session_id else ""
+
+
+def _set_cookie(request: Request, resp: Response, name: str, value: str, max_age: int, path: str = "/ui") -> None:
+    resp.set_cookie(name, value, httponly=True, samesite="strict", path=path, max_age=max_age,
+                    secure=request.app.state.settings.cookie_secure)
+
+
+def _signin_nonce(request: Request) -> str | None:
+    nonce = request.cookies.get(SIGNIN_COOKIE) or ""
+    return nonce if len(nonce) == 43 and set(nonce) <= _NONCE_CHARS else None
 
 
 class _NeedSignIn(Exception):
@@ -48,29 +82,50 @@ class _NeedSignIn(Exception):
 
 
 def _page(request: Request, template: str, status: int = 200, **ctx: Any) -> HTMLResponse:
-    token, who = _session(request)
+    sid, who = _session(request)
     ctx.setdefault("title", template.split(".")[0])
-    return templates.TemplateResponse(request, template, {"who": who, "csrf": _csrf(token), **ctx},
+    nonce = None
+    if template == "signin.html":  # the sign-in form's CSRF token, bound to a pre-session cookie
+        nonce = _signin_nonce(request) or secrets.token_urlsafe(32)
+        ctx["signin_csrf"] = _mac(nonce, b"jointdb-signin")
+    resp = templates.TemplateResponse(request, template, {"who": who, "csrf": _csrf(sid), **ctx},
                                       status_code=status)
+    if nonce is not None and nonce != _signin_nonce(request):
+        _set_cookie(request, resp, SIGNIN_COOKIE, nonce, 3600, path="/ui/signin")
+    return resp
 
 
 def _reader(request: Request):
-    token, who = _session(request)
+    _, who = _session(request)
     if who is None and not request.app.state.settings.open_reads:
         raise _NeedSignIn()
     return who
 
 
+def _same_origin(request: Request) -> None:
+    """Refuse a browser POST sent from another site (``Origin`` of another host, or ``null``).
+
+    The host is the request's ``Host`` or, behind a proxy that rewrites it, the proxy's
+    ``X-Forwarded-Host`` (a cross-site form cannot set that header)."""
+    origin = request.headers.get("origin")
+    if origin is None:
+        return
+    hosts = {request.headers.get("host"), request.headers.get("x-forwarded-host", "").split(",")[0].strip()}
+    if origin == "null" or urlsplit(origin).netloc not in hosts - {None, ""}:
+        raise PermissionError("this form was sent from another site; open the page on this server and try again")
+
+
 async def _form(request: Request) -> dict[str, str]:
+    _same_origin(request)
     body = (await request.body()).decode("utf-8", "replace")
     return {k: v[-1] for k, v in parse_qs(body, keep_blank_values=True).items()}
 
 
 def _writer_form(request: Request, form: dict[str, str]):
-    token, who = _session(request)
+    sid, who = _session(request)
     if who is None:
         raise _NeedSignIn()
-    if not hmac.compare_digest(form.get("csrf", ""), _csrf(token)):
+    if not hmac.compare_digest(form.get("csrf", ""), _csrf(sid)):
         raise InputError("the form's CSRF token does not match your session; reload the page and try again")
     if not who.allows("writer"):
         raise PermissionError(f"the token of {who.name} has role {who.role}; this needs writer")
@@ -78,20 +133,25 @@ def _writer_form(request: Request, form: dict[str, str]):
 
 
 def _handle(fn):
-    """Map errors of a page to the page with a one-line message (or to the sign-in page)."""
+    """Map errors of a page to the page with a one-line message (or to the sign-in page), and
+    clear the cookie of a session that is no longer open."""
     import functools
 
     @functools.wraps(fn)
     async def wrapper(request: Request, *args, **kwargs):
         try:
-            return await fn(request, *args, **kwargs)
+            resp = await fn(request, *args, **kwargs)
         except _NeedSignIn:
-            return RedirectResponse("/ui/signin", status_code=303)
+            resp = RedirectResponse("/ui/signin", status_code=303)
         except PermissionError as exc:
-            return _page(request, "signin.html", 403, error=str(exc))
+            resp = _page(request, "base.html", 403, title="not allowed", error=str(exc))
         except JointdbError as exc:
             status = exc.http_status if exc.http_status < 500 else 500
-            return _page(request, "signin.html" if status == 401 else "base.html", status, error=str(exc))
+            resp = _page(request, "signin.html" if status == 401 else "base.html", status, error=str(exc))
+        if getattr(request.state, "stale_session", False):
+            resp.delete_cookie(SESSION_COOKIE, path="/ui", httponly=True, samesite="strict",
+                               secure=request.app.state.settings.cookie_secure)
+        return resp
 
     return wrapper
 
@@ -121,12 +181,27 @@ async def signin_page(request: Request):
 @_handle
 async def signin(request: Request):
     form = await _form(request)
-    token = form.get("token", "").strip()
-    if authenticate(request.app.state.repo, token) is None:
-        return _page(request, "signin.html", 401, error="token not accepted (unknown, revoked or expired)")
+    nonce = _signin_nonce(request)
+    if nonce is None:
+        return _page(request, "signin.html", 403, title="sign in", error=(
+            "the sign-in form's cookie did not come back; reload this page and sign in again (over plain HTTP "
+            "a Secure cookie is dropped: see JOINTDB_SECURE_COOKIES)"))
+    if not hmac.compare_digest(form.get("csrf", ""), _mac(nonce, b"jointdb-signin")):
+        raise InputError("the sign-in form's CSRF token does not match; reload the sign-in page and try again")
+    settings, r = request.app.state.settings, request.app.state.repo
+    opened = open_session(r, form.get("token", "").strip(), settings.session_lifetime_s)
+    if opened is None:
+        return _page(request, "signin.html", 401, title="sign in",
+                     error="token not accepted (unknown, revoked or expired)")
+    close_session(r, request.cookies.get(SESSION_COOKIE))  # a new sign-in never reuses a session id
+    request.state.stale_session = False
+    sid, session = opened
+    request.state.actor = session.token.name
     resp = RedirectResponse("/ui/joints", status_code=303)
-    resp.set_cookie(SESSION_COOKIE, token, httponly=True, samesite="strict", path="/ui",
-                    secure=request.app.state.settings.secure_cookies, max_age=12 * 3600)
+    lifetime = max(1, int((session.expires_at - session.created_at).total_seconds()))
+    _set_cookie(request, resp, SESSION_COOKIE, sid, lifetime)
+    resp.delete_cookie(SIGNIN_COOKIE, path="/ui/signin", httponly=True, samesite="strict",
+                       secure=settings.cookie_secure)
     return resp
 
 
@@ -134,11 +209,13 @@ async def signin(request: Request):
 @_handle
 async def signout(request: Request):
     form = await _form(request)
-    token, _ = _session(request)
-    if token and not hmac.compare_digest(form.get("csrf", ""), _csrf(token)):
+    sid, _ = _session(request)
+    if sid and not hmac.compare_digest(form.get("csrf", ""), _csrf(sid)):
         raise InputError("the form's CSRF token does not match your session")
+    close_session(request.app.state.repo, sid)
     resp = RedirectResponse("/ui/signin", status_code=303)
-    resp.delete_cookie(SESSION_COOKIE, path="/ui")
+    resp.delete_cookie(SESSION_COOKIE, path="/ui", httponly=True, samesite="strict",
+                       secure=request.app.state.settings.cookie_secure)
     return resp
 
 
@@ -170,14 +247,20 @@ async def joint(request: Request, name: str):
     from jointdb.server._svg import frf_svg
     from jointdb.server.routes_joints import joint_name
 
-    _reader(request)
+    who = _reader(request)
     r = request.app.state.repo
     version = request.query_params.get("version")
     jv = r.get(joint_name(name), int(version) if version and version.isdigit() else None)
     svg = frf_svg([(f"v{jv.version}", r.load_frf(jv))], f"{jv.name} v{jv.version} ({jv.quantity})")
+    refusal = None  # a writer who may not change this joint sees why instead of the forms
+    if who is not None and who.allows("writer"):
+        try:
+            check_may_change(r, who, jv.name, "label or deprecate")
+        except NotPermittedError as exc:
+            refusal = str(exc)
     return _page(request, "joint.html", title=jv.name, v=version_json(jv), svg=svg,
                  history=[version_json(h) for h in r.history(jv.name)], audit=r.audit(jv.name, limit=200),
-                 notice=request.query_params.get("notice"))
+                 notice=request.query_params.get("notice"), refusal=refusal)
 
 
 @router.get("/joints/{name}/overlay")
@@ -213,8 +296,11 @@ async def download(request: Request, name: str, version: int):
     jv = r.get(joint_name(name), version)
     media, suffix = FORMATS[fmt]
     safe = "".join(ch if ch.isalnum() or ch in "-_." else "_" for ch in jv.name)
+    # a signed-in download is not kept in the browser's cache (a shared computer would still
+    # have it after sign-out); open reads are public and never change: cached for a year
+    cache = "public, max-age=31536000, immutable" if request.app.state.settings.open_reads else "no-store"
     return Response(_cached(r, jv.name, version, jv.record_sha256, fmt), media_type=media,
-                    headers={"ETag": etag(jv.record_sha256, fmt), "Cache-Control": "private, max-age=31536000, immutable",
+                    headers={"ETag": etag(jv.record_sha256, fmt), "Cache-Control": cache,
                              "Content-Disposition": f'attachment; filename="{safe}-v{version}{suffix}"'})
 
 
@@ -230,14 +316,15 @@ async def write(request: Request, name: str, action: str):
     version = form.get("version", "").strip()
     if version and not version.isdigit():
         raise InputError(f"version {version[:20]!r} must be a number")
+    if action not in ("label", "deprecate"):
+        raise InputError(f"unknown action {action[:20]!r}")
+    check_may_change(r, who, name, action)
     if action == "label":
         r.label(name, int(version or 0), form.get("label", ""), author=who.name)
         notice = f"label {form.get('label')} now points at v{version}"
-    elif action == "deprecate":
+    else:
         r.deprecate(name, int(version) if version else None, reason=form.get("reason", ""), author=who.name)
         notice = f"deprecated {'v' + version if version else 'the joint'}"
-    else:
-        raise InputError(f"unknown action {action[:20]!r}")
     return RedirectResponse(f"/ui/joints/{quote(name, safe='')}?{urlencode({'notice': notice})}", status_code=303)
 
 
@@ -263,6 +350,16 @@ async def nearest(request: Request):
 
 
 def mount(app) -> None:
-    """Add the pages and the bundled static files to ``app``."""
+    """Add the pages, the bundled static files and ``/docs`` (Swagger UI from the package) to
+    ``app``. FastAPI's own ``/docs``, ``/docs/oauth2-redirect`` and ``/redoc`` pages load
+    their scripts from a CDN with inline code: they are replaced (``/docs``) or removed."""
     app.include_router(router)
     app.mount("/ui/static", StaticFiles(directory=str(HERE / "static")), name="static")
+    cdn_pages = {app.docs_url, app.redoc_url, app.swagger_ui_oauth2_redirect_url} - {None}
+    app.router.routes[:] = [rt for rt in app.router.routes if getattr(rt, "path", None) not in cdn_pages]
+    openapi_url = app.openapi_url or "/openapi.json"
+
+    @app.get("/docs", include_in_schema=False)
+    def docs(request: Request) -> HTMLResponse:
+        return templates.TemplateResponse(request, "docs.html", {"openapi_url": openapi_url,
+                                                                 "title": f"{app.title} API"})
