@@ -169,6 +169,18 @@ def test_bundled_campaign_zipped_with_its_models(server):
     _clean(server, r.text)
 
 
+def test_nul_in_label_is_a_422_without_the_database_url(server, tmp_path):
+    """On PostgreSQL this was a 500 whose body held the database URL."""
+    from server_helpers import joint_upload
+
+    with server.client("writer") as c:
+        assert c.post("/api/v1/catalogue", json=joint_upload(tmp_path, "NUL-1", k=2.7e6)).status_code == 201
+        for path in ("/api/v1/joints", "/api/v1/joints/NUL-1", "/api/v1/audit"):
+            r = c.get(path, params={"label": "\x00", "joint": "\x00"})
+            assert r.status_code == 422, (path, r.status_code, r.text[:300])
+            assert "'label'" in _refused(server, r, "control character") or path == "/api/v1/audit"
+
+
 def test_control_characters_in_parameters_are_a_422(server):
     with server.client("reader") as c:
         for path, params, where in (("/api/v1/joints", {"label": "\x00"}, "'label'"),
