@@ -23,7 +23,7 @@ from starlette.exceptions import HTTPException as StarletteHTTPException
 
 from jointdb.errors import IntegrityError, JointdbError
 from jointdb.server._middleware import ServiceMiddleware
-from jointdb.server._safety import ControlCharacterGuard, scrub_message
+from jointdb.server._safety import ControlCharacterGuard, client_error, scrub_message
 from jointdb.server._settings import Settings
 
 log = logging.getLogger("jointdb.server")
@@ -42,10 +42,14 @@ def _hidden_dirs(app) -> tuple[str, ...]:
         blobs = getattr(app.state.settings, "blobs", None)
         if blobs and blobs != "database":
             found += [str(blobs), os.path.realpath(blobs)]
+        repo = getattr(app.state, "repo", None)
+        root = getattr(getattr(repo, "blobs", None), "root", None)
+        if isinstance(root, (str, os.PathLike)) and os.path.isdir(root):
+            found += [str(root), os.path.realpath(root)]
         try:
             from sqlalchemy.engine import make_url
 
-            database = make_url(app.state.repo.url).database if hasattr(app.state, "repo") else None
+            database = make_url(repo.url).database if repo is not None else None
             if database and "/" in database:
                 found += [os.path.dirname(database), os.path.dirname(os.path.realpath(database))]
         except Exception:  # noqa: BLE001 - no URL to parse: nothing more to hide
@@ -60,12 +64,9 @@ def _error(request: Request, status: int, message: str, headers=None) -> JSONRes
     return JSONResponse({"error": text, "request_id": rid}, status_code=status, headers=headers)
 
 
-def _note_failure(request: Request, exc: BaseException) -> str | None:
-    """Put the failure on the request's log line (secrets are redacted by the log formatter);
-    the request id for the client's message."""
-    state = request.scope.setdefault("state", {})
-    state["error"] = f"{type(exc).__name__}: {_one_line(exc, 500)}"
-    return state.get("request_id")
+def _note_failure(request: Request, exc: BaseException) -> None:
+    """Put the failure on the request's log line (secrets are redacted by the log formatter)."""
+    request.scope.setdefault("state", {})["error"] = f"{type(exc).__name__}: {_one_line(exc, 500)}"
 
 
 def _validation_message(exc: RequestValidationError) -> str:
@@ -122,14 +123,11 @@ def create_app(settings: Settings | None = None, repo=None) -> FastAPI:
 
     @app.exception_handler(JointdbError)
     async def _jointdb_error(request: Request, exc: JointdbError):
-        status = int(exc.http_status)
-        if isinstance(exc, IntegrityError):  # damaged stored data: say so, never where it is stored
-            rid = _note_failure(request, exc)
-            return _error(request, status, f"stored data failed its integrity check: {exc} (request id {rid})")
-        if status >= 500:  # a database or server failure: its text (URL, SQL, driver) stays in the log
-            rid = _note_failure(request, exc)
-            return _error(request, 500, f"internal error (request id {rid}); the server log has the details")
-        return _error(request, status, str(exc))
+        rid = request.scope.get("state", {}).get("request_id")
+        status, text = client_error(exc, rid, _hidden_dirs(request.app))  # 5xx: no URL, SQL or path
+        if status >= 500 or isinstance(exc, IntegrityError):
+            _note_failure(request, exc)  # the full text goes to the request's log line
+        return _error(request, status, text)
 
     @app.exception_handler(RequestValidationError)
     async def _validation(request: Request, exc: RequestValidationError):

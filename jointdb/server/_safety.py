@@ -39,7 +39,8 @@ def _last_part(match: re.Match) -> str:
 
 def _known_dirs(extra: tuple[str, ...]) -> list[str]:
     dirs = {tempfile.gettempdir(), os.path.realpath(tempfile.gettempdir()), *extra}
-    return sorted((d.rstrip("/\\") for d in dirs if d and len(d) > 1), key=len, reverse=True)
+    dirs = {d.rstrip("/\\") for d in dirs if d and os.path.isabs(d)}
+    return sorted((d for d in dirs if len(d) > 1), key=len, reverse=True)
 
 
 def scrub_message(text: str, dirs: tuple[str, ...] = ()) -> str:
@@ -58,6 +59,26 @@ def scrub_message(text: str, dirs: tuple[str, ...] = ()) -> str:
     text = _URL.sub("<url>", text)
     text = _WINDOWS_PATH.sub(_last_part, text)
     return _POSIX_PATH.sub(_last_part, text)
+
+
+def client_error(exc: BaseException, request_id: str | None, dirs: tuple[str, ...] = ()) -> tuple[int, str]:
+    """Status and one-line message a client may see for a jointdb error (API and web pages).
+
+    Damaged stored data (:class:`~jointdb.errors.IntegrityError`) keeps its status and says
+    what failed; any other server-side error (status >= 500: database, driver) is only
+    "internal error" with the request id, its text staying in the log; a client error
+    (4xx) keeps its message. Every message is scrubbed (:func:`scrub_message`).
+    """
+    from jointdb.errors import IntegrityError, JointdbError
+
+    status = int(getattr(exc, "http_status", 500)) if isinstance(exc, JointdbError) else 500
+    if isinstance(exc, IntegrityError):
+        text = f"stored data failed its integrity check: {exc} (request id {request_id})"
+    elif status >= 500:
+        status, text = 500, f"internal error (request id {request_id}); the server log has the details"
+    else:
+        text = str(exc)
+    return status, " ".join(scrub_message(text, dirs).split())
 
 
 def redact_secrets(text: str) -> str:
