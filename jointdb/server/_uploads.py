@@ -22,6 +22,10 @@ member, never a server path:
 The campaign is then read confined to the unpacked folder
 (``load_campaign(..., root=...)``): a file it names outside the archive is
 refused before it is opened.
+
+An uploaded HDF5 joint file is checked likewise
+(:func:`check_hdf5_self_contained`): no external link, external raw storage or
+virtual dataset, each of which would make the server read a file it names.
 """
 
 from __future__ import annotations
@@ -195,6 +199,51 @@ def _find_campaign(archive: str, into: Path, files: list[Path]) -> Path:
         raise _refuse(archive, f"needs exactly one campaign file (format jointdb-campaign/1), found "
                                f"{len(campaigns)}{': ' + names if names else ''}")
     return campaigns[0]
+
+
+def check_hdf5_self_contained(path: Path, label: str) -> None:
+    """Refuse an uploaded HDF5 file that would make the server read another file: an external
+    link, a dataset with external raw storage, or a virtual dataset (all three name files of
+    the server). Anything that is not HDF5 is left to the reader's own message.
+
+    Raises
+    ------
+    InputError
+        One line naming the object and what it refers to (never the file it names).
+    """
+    import h5py
+
+    try:
+        f = h5py.File(path, "r", locking=False)
+    except OSError:
+        return
+    with f:
+        seen: set = set()
+        todo: list[tuple[str, h5py.Group]] = [("", f)]
+        while todo:
+            prefix, group = todo.pop()
+            for name in list(group):
+                where = f"{prefix}/{name}"
+                link = group.get(name, getlink=True)
+                if isinstance(link, h5py.ExternalLink):
+                    raise _refuse(label, f"{where[:80]} is an external link to another file; upload a file "
+                                         "that holds its data itself")
+                if isinstance(link, h5py.SoftLink):
+                    continue  # inside this file: its target is reached through its own hard link
+                obj = group[name]
+                info = h5py.h5o.get_info(obj.id)
+                key = (info.fileno, info.addr)  # an object hard-linked twice is visited once
+                if key in seen:
+                    continue
+                seen.add(key)
+                if len(seen) > 10_000:
+                    raise _refuse(label, "has more than 10000 HDF5 objects")
+                if isinstance(obj, h5py.Dataset):
+                    if obj.is_virtual or obj.external:
+                        raise _refuse(label, f"dataset {where[:80]} keeps its data in another file (external "
+                                             "or virtual storage); upload a file that holds its data itself")
+                elif isinstance(obj, h5py.Group):
+                    todo.append((where, obj))
 
 
 def unpack_campaign(archive: Path, into: Path) -> Path:

@@ -17,7 +17,7 @@ from fastapi import APIRouter, Depends
 from jointdb.errors import InputError, JointdbError
 from jointdb.server._deps import repo, version_json, writer
 from jointdb.server._schemas import CatalogueIn, DeprecateIn, LabelIn
-from jointdb.server._uploads import unpack_campaign
+from jointdb.server._uploads import check_hdf5_self_contained, unpack_campaign
 from jointdb.server.routes_joints import Name, joint_name
 
 router = APIRouter(tags=["writes"])
@@ -59,6 +59,8 @@ def catalogue_upload(r, body: CatalogueIn, owner: str):
         path.write_bytes(data)
         if fname.lower().endswith(".zip"):  # unpacked as data: see jointdb.server._uploads
             path = unpack_campaign(path, FsPath(tmp) / "campaign")
+        else:
+            check_hdf5_self_contained(path, fname)
         try:
             args = catalogue_inputs(path, body.conditions.to_conditions(), joint_type=body.joint_type,
                                     model_kind=body.model_kind, method=body.method, quality=dict(body.quality),

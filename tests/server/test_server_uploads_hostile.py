@@ -215,3 +215,43 @@ def test_corrupt_blob_error_has_no_server_path(server, tmp_path):
         r = c.get("/api/v1/joints/CORRUPT-1/versions/1/frf", params={"format": "json"})
         assert r.status_code >= 400 and "\n" not in r.json()["error"]
         _clean(server, r.text)
+
+
+def test_hdf5_upload_cannot_make_the_server_read_its_files(server, tmp_path):
+    """An identified joint file whose values live in a server file (external storage), or that
+    links to one (external link, virtual dataset), is refused: today the file's bytes are
+    catalogued as the FRF and anyone can download them."""
+    import h5py
+    import numpy as np
+    from server_helpers import joint_upload
+
+    body = joint_upload(tmp_path, "H5-EVIL")
+    src = tmp_path / "ok.h5"
+    src.write_bytes(base64.b64decode(body["file_b64"]))
+    secret = tmp_path / "server-secret.bin"  # a file on the server
+    secret.write_bytes(np.arange(2**12, dtype="<f8").tobytes())
+
+    def variant(kind: str) -> bytes:
+        out = tmp_path / f"{kind}.h5"
+        with h5py.File(src) as f, h5py.File(out, "w") as g:
+            for k, v in f.attrs.items():
+                g.attrs[k] = v
+            for n in f:
+                if n != "values" or kind == "link":
+                    f.copy(n, g)
+            shape = f["values"].shape
+            if kind == "external":
+                g.create_dataset("values", shape=shape, dtype="<f8", external=[(str(secret), 0, h5py.h5f.UNLIMITED)])
+            elif kind == "virtual":
+                layout = h5py.VirtualLayout(shape=shape, dtype="<f8")
+                layout[...] = h5py.VirtualSource(str(src), "values", shape=shape)
+                g.create_virtual_dataset("values", layout)
+            else:
+                g["extra"] = h5py.ExternalLink(str(src), "/values")
+        return out.read_bytes()
+
+    with server.client("writer") as c:
+        for kind in ("external", "virtual", "link"):
+            r = c.post("/api/v1/catalogue", json={**body, "file_b64": base64.b64encode(variant(kind)).decode()})
+            _refused(server, r, "another file")
+        assert c.get("/api/v1/joints/H5-EVIL").status_code == 404
