@@ -19,6 +19,7 @@ from contextlib import asynccontextmanager
 from fastapi import FastAPI, Request
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
+from sqlalchemy.exc import DataError
 from starlette.exceptions import HTTPException as StarletteHTTPException
 
 from jointdb.errors import IntegrityError, JointdbError
@@ -67,6 +68,22 @@ def _error(request: Request, status: int, message: str, headers=None) -> JSONRes
 def _note_failure(request: Request, exc: BaseException) -> None:
     """Put the failure on the request's log line (secrets are redacted by the log formatter)."""
     request.scope.setdefault("state", {})["error"] = f"{type(exc).__name__}: {_one_line(exc, 500)}"
+
+
+def _value_fault(exc: BaseException) -> str | None:
+    """A client's message when ``exc`` (or what it was translated from) is the database refusing
+    a value the request sent: an integer too large for SQLite, or a PostgreSQL "data exception"
+    (SQLSTATE class 22: a number out of range, NUL in text). None for anything else."""
+    seen: BaseException | None = exc
+    for _ in range(4):
+        if seen is None:
+            return None
+        if isinstance(seen, OverflowError):
+            return "a number in the request is too large for the database"
+        if isinstance(seen, DataError) or str(getattr(seen, "sqlstate", "") or "").startswith("22"):
+            return "a value in the request cannot be stored or compared (out of range or not valid text)"
+        seen = seen.__cause__ or seen.__context__
+    return None
 
 
 def _validation_message(exc: RequestValidationError) -> str:
@@ -124,10 +141,20 @@ def create_app(settings: Settings | None = None, repo=None) -> FastAPI:
     @app.exception_handler(JointdbError)
     async def _jointdb_error(request: Request, exc: JointdbError):
         rid = request.scope.get("state", {}).get("request_id")
+        if exc.http_status >= 500 and _value_fault(exc):  # the database refused a value of the request
+            return _error(request, 422, _value_fault(exc))
         status, text = client_error(exc, rid, _hidden_dirs(request.app))  # 5xx: no URL, SQL or path
         if status >= 500 or isinstance(exc, IntegrityError):
             _note_failure(request, exc)  # the full text goes to the request's log line
         return _error(request, status, text)
+
+    @app.exception_handler(OverflowError)
+    async def _overflow(request: Request, exc: OverflowError):
+        return _error(request, 422, _value_fault(exc) or "a number in the request is out of range")
+
+    @app.exception_handler(DataError)
+    async def _data_error(request: Request, exc: DataError):  # a database error no store method translated
+        return _error(request, 422, _value_fault(exc))
 
     @app.exception_handler(RequestValidationError)
     async def _validation(request: Request, exc: RequestValidationError):

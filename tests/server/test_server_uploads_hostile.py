@@ -179,6 +179,9 @@ def test_nul_in_label_is_a_422_without_the_database_url(server, tmp_path):
             r = c.get(path, params={"label": "\x00", "joint": "\x00"})
             assert r.status_code == 422, (path, r.status_code, r.text[:300])
             assert "'label'" in _refused(server, r, "control character") or path == "/api/v1/audit"
+        for v in (2**63, 10**20):  # a version beyond the database's integers: 4xx, not 500
+            _refused(server, c.get(f"/api/v1/joints/NUL-1/versions/{v}"))
+            _refused(server, c.get(f"/api/v1/joints/NUL-1/versions/{v}/frf"))
 
 
 def test_control_characters_in_parameters_are_a_422(server):
