@@ -33,6 +33,7 @@ and numerics); the CLI module stays thin.
 from __future__ import annotations
 
 import math
+import os
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -102,16 +103,43 @@ def _dof_list(cpath: Path, where: str, value: Any) -> tuple[Dof, ...]:
         raise _err(cpath, where, str(exc)) from None
 
 
-def _file(cpath: Path, where: str, value: Any) -> Path:
+def _file(cpath: Path, where: str, value: Any, root: Path | None = None) -> Path:
     if not isinstance(value, str) or not value:
         raise _err(cpath, where, "must be a file name")
+    if root is not None:
+        return _confined_file(cpath, where, value, root)
     p = (cpath.parent / value).resolve()
     if not p.is_file():
         raise _err(cpath, where, f"file '{value}' not found (looked in {cpath.parent})")
     return p
 
 
-def _substructures(cpath: Path, where: str, raw: Any) -> dict[str, Substructure]:
+def _inside(path: str, root: str) -> bool:
+    return path == root or path.startswith(root.rstrip(os.sep) + os.sep)
+
+
+def _confined_file(cpath: Path, where: str, value: str, root: Path) -> Path:
+    """A file the campaign names, which must lie inside ``root`` (an unpacked upload): no absolute
+    path, no '..' leading out of it, no symbolic link; messages never show where ``root`` is."""
+    from pathlib import PurePosixPath, PureWindowsPath
+
+    if (any(ord(ch) < 32 or ord(ch) == 127 for ch in value) or "\\" in value
+            or PurePosixPath(value).is_absolute() or PureWindowsPath(value).drive):
+        raise _err(cpath, where, "an absolute path (or one with a backslash or control character) is not "
+                                 "accepted; name a file inside the archive by its path relative to the campaign file")
+    top = os.path.realpath(root)
+    joined = os.path.normpath(os.path.join(os.path.realpath(cpath.parent), value))
+    if not _inside(joined, top):  # the value itself is not repeated: it may name a server path
+        raise _err(cpath, where, "the path leads outside the uploaded archive; put that file into the "
+                                 "archive at this path relative to the campaign file")
+    if os.path.realpath(joined) != joined:
+        raise _err(cpath, where, "the path goes through a symbolic link; put the file itself in the archive")
+    if not os.path.isfile(joined):
+        raise _err(cpath, where, f"file '{value[:80]}' is not in the uploaded archive")
+    return Path(joined)
+
+
+def _substructures(cpath: Path, where: str, raw: Any, root: Path | None = None) -> dict[str, Substructure]:
     if not isinstance(raw, dict) or not raw:
         raise _err(cpath, where, "must map substructure names to {\"model\": file} or {\"uff58\": file}")
     out = {}
@@ -126,7 +154,7 @@ def _substructures(cpath: Path, where: str, raw: Any) -> dict[str, Substructure]
             raise _err(cpath, w, "give exactly one of \"model\" (beam model JSON) or \"uff58\" (FRF file)")
         kind = "model" if "model" in spec else "uff58"
         d = _dof_list(cpath, f"{w}.dofs", spec["dofs"]) if "dofs" in spec else None
-        out[str(name)] = Substructure(str(name), kind, _file(cpath, f"{w}.{kind}", spec[kind]), d)
+        out[str(name)] = Substructure(str(name), kind, _file(cpath, f"{w}.{kind}", spec[kind], root), d)
     return out
 
 
@@ -157,8 +185,18 @@ def _conditions(cpath: Path, raw: Any) -> dict[str, Any]:
     return dict(raw)
 
 
-def load_campaign(path: "str | Path") -> Campaign:
+def load_campaign(path: "str | Path", *, root: "str | Path | None" = None) -> Campaign:
     """Read and check a campaign file (structure, names, DOFs, that files exist).
+
+    Parameters
+    ----------
+    path
+        The campaign file; the files it names are relative to it.
+    root
+        Confine the campaign to this folder (an unpacked upload, as the HTTP service
+        does): every file it names must lie inside ``root``, named by a relative path
+        without symbolic links; absolute paths and '..' leading out are refused before
+        anything is opened. Default: no confinement (the user's own files).
 
     Raises
     ------
@@ -168,6 +206,8 @@ def load_campaign(path: "str | Path") -> Campaign:
         Naming the exact field, e.g. ``campaign c.json: interface.a: unknown substructure 'holdr'``.
     """
     cpath = Path(path)
+    if root is not None and not _inside(os.path.realpath(cpath), os.path.realpath(root)):
+        raise InputError(f"campaign {cpath.name} is not inside the uploaded archive")
     raw = read_json_file(cpath, "campaign file")
     if not isinstance(raw, dict):
         raise InputError(f"campaign {cpath.name}: the top level must be a JSON object")
@@ -181,7 +221,7 @@ def load_campaign(path: "str | Path") -> Campaign:
     model = raw.get("joint_model")
     if model not in JOINT_MODELS:
         raise _err(cpath, "joint_model", f"must be one of {', '.join(JOINT_MODELS)}, got {model!r}")
-    subs = _substructures(cpath, "substructures", raw.get("substructures"))
+    subs = _substructures(cpath, "substructures", raw.get("substructures"), root)
     iface = raw["interface"]
     for side in ("a", "b"):
         if iface.get(side) not in subs:
@@ -192,7 +232,7 @@ def load_campaign(path: "str | Path") -> Campaign:
         raise _err(cpath, "interface", f"{len(a_dofs)} a_dofs but {len(b_dofs)} b_dofs; they are paired")
     interface = {"a": iface["a"], "a_dofs": a_dofs, "b": iface["b"], "b_dofs": b_dofs}
     meas_raw = raw.get("measurements", [])
-    meas = tuple(_file(cpath, f"measurements[{i}]", m) for i, m in enumerate(meas_raw))
+    meas = tuple(_file(cpath, f"measurements[{i}]", m, root) for i, m in enumerate(meas_raw))
     band = raw.get("band")
     if band is not None:
         if not (isinstance(band, list) and len(band) == 2
@@ -220,7 +260,7 @@ def load_campaign(path: "str | Path") -> Campaign:
     opts = raw.get("options") or {}
     validation = raw.get("validation")
     if validation is not None:
-        vsubs = _substructures(cpath, "validation.substructures", validation.get("substructures"))
+        vsubs = _substructures(cpath, "validation.substructures", validation.get("substructures"), root)
         for n in vsubs:
             if n not in subs:
                 raise _err(cpath, f"validation.substructures.{n}", "replaces no substructure of the campaign")
@@ -229,7 +269,7 @@ def load_campaign(path: "str | Path") -> Campaign:
             raise _err(cpath, "validation.measurements", "must be a non-empty list of UFF58 files")
         validation = {
             "substructures": vsubs,
-            "measurements": tuple(_file(cpath, f"validation.measurements[{i}]", m) for i, m in enumerate(vm)),
+            "measurements": tuple(_file(cpath, f"validation.measurements[{i}]", m, root) for i, m in enumerate(vm)),
         }
     couple = raw.get("couple") or {}
     conditions = _conditions(cpath, raw.get("conditions", {}))

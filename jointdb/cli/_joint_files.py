@@ -32,13 +32,14 @@ def _numeric_metrics(data: Any, prefix: str = "") -> dict[str, float]:
     return out
 
 
-def _read_joint_file(path: Path) -> tuple[Any, dict[str, Any], dict[str, str], dict[str, Any]]:
+def _read_joint_file(path: Path, root: Path | None = None) -> tuple[Any, dict[str, Any], dict[str, str], dict[str, Any]]:
     """FRF, metadata, input-file hashes and raw measurement FRFs from a joint or campaign file.
 
     Accepts the HDF5 exchange file of ``jointdb identify`` (``format = jointdb-frf``,
     metadata ``joint_model``, ``joint_type``, ``conditions``, ``quality``,
     ``settings``), a jointdb FRF blob file, or a campaign JSON file (identified
-    here first, as ``jointdb identify`` would).
+    here first, as ``jointdb identify`` would). With ``root`` a campaign may only
+    name files inside that folder (an unpacked upload; see :func:`load_campaign`).
     """
     import h5py
 
@@ -53,11 +54,17 @@ def _read_joint_file(path: Path) -> tuple[Any, dict[str, Any], dict[str, str], d
             from jointdb.campaign import identify_campaign, joint_attrs
         except ImportError:
             raise InputError(f"{path}: cataloguing straight from a campaign needs `jointdb identify`") from None
-        outcome = identify_campaign(load_campaign(path))
+        campaign = load_campaign(path, root=root)
+        outcome = identify_campaign(campaign)
         text = path.read_text(encoding="utf-8")
         for sibling in sorted(path.parent.iterdir()):
             if sibling.is_file() and sibling != path and f'"{sibling.name}"' in text:
                 hashes[sibling.name] = file_sha256(sibling)
+        if root is not None:  # the other files it names, by their place in the upload
+            top = Path(root).resolve()
+            for p in _campaign_files(campaign):
+                if p.parent != path.resolve().parent and p.is_relative_to(top):
+                    hashes[p.relative_to(top).as_posix()] = file_sha256(p)
         raw = {"measured": outcome.measured} if outcome.measured is not None else {}
         return outcome.result.joint, joint_attrs(outcome), hashes, raw
     try:
@@ -72,6 +79,14 @@ def _read_joint_file(path: Path) -> tuple[Any, dict[str, Any], dict[str, str], d
 
     frf, meta = read_frf_hdf5_full(path)
     return frf, dict(meta or {}), hashes, {}
+
+
+def _campaign_files(c) -> list[Path]:
+    """Every file a campaign names (substructures, measurements, validation), once each."""
+    paths = [s.path for s in c.substructures.values()] + list(c.measurements)
+    if c.validation is not None:
+        paths += [s.path for s in c.validation["substructures"].values()] + list(c.validation["measurements"])
+    return list(dict.fromkeys(Path(p).resolve() for p in paths))
 
 
 def _write_joint_file(path: Path, frf, meta: dict[str, Any]) -> None:
@@ -140,12 +155,13 @@ def merge_conditions(path: Path, recorded: Any, given, force: bool):
 
 def catalogue_inputs(joint_file: Path, given, *, joint_type: str | None = None, model_kind: str | None = None,
                      method: str | None = None, quality: dict[str, float] | None = None,
-                     author: str | None = None, force: bool = False) -> dict[str, Any]:
+                     author: str | None = None, force: bool = False, root: Path | None = None) -> dict[str, Any]:
     """What ``jointdb catalogue`` (and the HTTP service's catalogue route) stores from a joint file.
 
     Reads the file, takes model kind, joint type, method, quality and conditions from it,
     completed by the given options (``given`` conditions are merged by
-    :func:`merge_conditions`). Returns the keyword arguments of
+    :func:`merge_conditions`). With ``root`` (the HTTP service: an unpacked upload) a
+    campaign file may only name files inside that folder. Returns the keyword arguments of
     :meth:`jointdb.store.Repository.catalogue` except ``name``, ``parent``, ``label``.
 
     Raises
@@ -157,7 +173,7 @@ def catalogue_inputs(joint_file: Path, given, *, joint_type: str | None = None, 
     from jointdb.store import Provenance
     from jointdb.store._types import check_joint_type, check_model_kind
 
-    frf, meta, hashes, raw = _read_joint_file(joint_file)
+    frf, meta, hashes, raw = _read_joint_file(joint_file, root)
     kind = model_kind or meta.get("model_kind") or _JOINT_MODEL_KINDS.get(str(meta.get("joint_model")))
     if not kind:
         raise InputError(f"{joint_file}: the file does not say its joint model; give --model-kind")

@@ -62,9 +62,12 @@ def register(app: typer.Typer) -> None:
         if blobs is not None:
             env["JOINTDB_BLOBS"] = "database" if str(blobs) == "database" else str(Path(blobs).resolve())
         os.environ.update(env)  # every worker reads its settings from the environment
-        from jointdb.server._logging import log_config
+        import logging
 
-        message(f"jointdb serve on http://{host}:{port} ({workers} worker{'s' if workers > 1 else ''})")
+        from jointdb.server._logging import configure, event, log_config
+
+        configure(log_level.lower())  # from here on every line on stderr is JSON, uvicorn's too
+        event(logging.getLogger("jointdb.server"), "serve", url=f"http://{host}:{port}", workers=workers)
         uvicorn.run("jointdb.server:app_from_env", factory=True, host=host, port=port, workers=workers,
                     log_config=log_config(log_level.lower()), access_log=False, timeout_graceful_shutdown=30,
                     proxy_headers=False, server_header=False)

@@ -2,23 +2,29 @@
 
 Every error becomes a JSON body ``{"error": "<one line>", "request_id": ...}``:
 jointdb's own errors with their ``http_status`` (input 422, not found 404,
-conflict 409), request validation 422 naming the field, anything unexpected 500
-with only the request id (the traceback goes to the server log, never to the
-client).
+conflict 409), request validation 422 naming the field, a control character in a
+query or path parameter 422 naming it, damaged stored data (IntegrityError) its
+status with the message, any other server-side failure 500 with only the request
+id (the error goes to the server log, never to the client). Every message is
+scrubbed of URLs and server paths last (:func:`jointdb.server._safety.scrub_message`).
 """
 
 from __future__ import annotations
 
+import json
 import logging
+import os
 from contextlib import asynccontextmanager
 
 from fastapi import FastAPI, Request
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
+from sqlalchemy.exc import DataError
 from starlette.exceptions import HTTPException as StarletteHTTPException
 
-from jointdb.errors import JointdbError
+from jointdb.errors import IntegrityError, JointdbError
 from jointdb.server._middleware import ServiceMiddleware
+from jointdb.server._safety import ControlCharacterGuard, client_error, scrub_message
 from jointdb.server._security import install as install_security_headers
 from jointdb.server._settings import Settings
 
@@ -30,9 +36,55 @@ def _one_line(text: object, limit: int = 300) -> str:
     return line if len(line) <= limit else line[: limit - 3] + "..."
 
 
+def _hidden_dirs(app) -> tuple[str, ...]:
+    """Server folders no message may show: the blob folder and the SQLite file's folder."""
+    dirs = getattr(app.state, "hidden_dirs", None)
+    if dirs is None:
+        found = []
+        blobs = getattr(app.state.settings, "blobs", None)
+        if blobs and blobs != "database":
+            found += [str(blobs), os.path.realpath(blobs)]
+        repo = getattr(app.state, "repo", None)
+        root = getattr(getattr(repo, "blobs", None), "root", None)
+        if isinstance(root, (str, os.PathLike)) and os.path.isdir(root):
+            found += [str(root), os.path.realpath(root)]
+        try:
+            from sqlalchemy.engine import make_url
+
+            database = make_url(repo.url).database if repo is not None else None
+            if database and "/" in database:
+                found += [os.path.dirname(database), os.path.dirname(os.path.realpath(database))]
+        except Exception:  # noqa: BLE001 - no URL to parse: nothing more to hide
+            pass
+        dirs = app.state.hidden_dirs = tuple(d for d in found if len(d) > 1)
+    return dirs
+
+
 def _error(request: Request, status: int, message: str, headers=None) -> JSONResponse:
     rid = request.scope.get("state", {}).get("request_id")
-    return JSONResponse({"error": _one_line(message), "request_id": rid}, status_code=status, headers=headers)
+    text = _one_line(scrub_message(str(message), _hidden_dirs(request.app)))
+    return JSONResponse({"error": text, "request_id": rid}, status_code=status, headers=headers)
+
+
+def _note_failure(request: Request, exc: BaseException) -> None:
+    """Put the failure on the request's log line (secrets are redacted by the log formatter)."""
+    request.scope.setdefault("state", {})["error"] = f"{type(exc).__name__}: {_one_line(exc, 500)}"
+
+
+def _value_fault(exc: BaseException) -> str | None:
+    """A client's message when ``exc`` (or what it was translated from) is the database refusing
+    a value the request sent: an integer too large for SQLite, or a PostgreSQL "data exception"
+    (SQLSTATE class 22: a number out of range, NUL in text). None for anything else."""
+    seen: BaseException | None = exc
+    for _ in range(4):
+        if seen is None:
+            return None
+        if isinstance(seen, OverflowError):
+            return "a number in the request is too large for the database"
+        if isinstance(seen, DataError) or str(getattr(seen, "sqlstate", "") or "").startswith("22"):
+            return "a value in the request cannot be stored or compared (out of range or not valid text)"
+        seen = seen.__cause__ or seen.__context__
+    return None
 
 
 def _validation_message(exc: RequestValidationError) -> str:
@@ -69,13 +121,13 @@ def create_app(settings: Settings | None = None, repo=None) -> FastAPI:
             from jointdb.store import Repository
 
             app.state.repo = Repository(settings.url, blobs=settings.blobs, auto_create=False)
-        log.info('{"event": "startup", "database": "%s"}', _safe(app.state.repo.url))
+        log.info(json.dumps({"event": "startup", "database": _safe(app.state.repo.url)}))
         try:
             yield
         finally:
             if own:
                 app.state.repo.close()
-            log.info('{"event": "shutdown"}')
+            log.info(json.dumps({"event": "shutdown"}))
 
     app = FastAPI(
         title="jointdb",
@@ -89,11 +141,21 @@ def create_app(settings: Settings | None = None, repo=None) -> FastAPI:
 
     @app.exception_handler(JointdbError)
     async def _jointdb_error(request: Request, exc: JointdbError):
-        status = exc.http_status if exc.http_status != 500 else 500
-        if status >= 500:
-            log.error("request %s: %s: %s", request.scope.get("state", {}).get("request_id"),
-                      type(exc).__name__, _one_line(exc))
-        return _error(request, status, str(exc))
+        rid = request.scope.get("state", {}).get("request_id")
+        if exc.http_status >= 500 and _value_fault(exc):  # the database refused a value of the request
+            return _error(request, 422, _value_fault(exc))
+        status, text = client_error(exc, rid, _hidden_dirs(request.app))  # 5xx: no URL, SQL or path
+        if status >= 500 or isinstance(exc, IntegrityError):
+            _note_failure(request, exc)  # the full text goes to the request's log line
+        return _error(request, status, text)
+
+    @app.exception_handler(OverflowError)
+    async def _overflow(request: Request, exc: OverflowError):
+        return _error(request, 422, _value_fault(exc) or "a number in the request is out of range")
+
+    @app.exception_handler(DataError)
+    async def _data_error(request: Request, exc: DataError):  # a database error no store method translated
+        return _error(request, 422, _value_fault(exc))
 
     @app.exception_handler(RequestValidationError)
     async def _validation(request: Request, exc: RequestValidationError):
@@ -104,9 +166,10 @@ def create_app(settings: Settings | None = None, repo=None) -> FastAPI:
         return _error(request, exc.status_code, str(exc.detail), getattr(exc, "headers", None))
 
     @app.exception_handler(Exception)
-    async def _unexpected(request: Request, exc: Exception):
-        rid = request.scope.get("state", {}).get("request_id")
-        log.exception("request %s failed", rid)
+    async def _unexpected(request: Request, exc: Exception):  # only outside ServiceMiddleware, which
+        rid = request.scope.get("state", {}).get("request_id")  # answers every route's exception itself
+        log.error(json.dumps({"event": "error", "request_id": rid, "status": 500,
+                              "error": f"{type(exc).__name__}: {_one_line(exc, 500)}"}), exc_info=exc)
         return _error(request, 500, f"internal error (request id {rid}); the server log has the details")
 
     from jointdb.server import routes_admin, routes_frf, routes_joints, routes_query, routes_writes, web
@@ -136,6 +199,7 @@ def create_app(settings: Settings | None = None, repo=None) -> FastAPI:
             return _error(request, 503, f"database schema is at {current}, this jointdb needs {head}")
         return {"status": "ready", "revision": current}
 
+    app.add_middleware(ControlCharacterGuard, openapi=app.openapi)  # inside ServiceMiddleware: logged
     app.add_middleware(ServiceMiddleware, max_upload_bytes=settings.max_upload_bytes,
                        request_timeout_s=settings.request_timeout_s)
     return app
@@ -149,4 +213,5 @@ def _safe(url: str) -> str:
 
 def app_from_env() -> FastAPI:
     """Factory for ``uvicorn --factory jointdb.server:app_from_env`` (each worker builds one)."""
+    logging.captureWarnings(True)  # a warning is a JSON log line too, not free text on stderr
     return create_app(Settings.from_env())

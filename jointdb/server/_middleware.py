@@ -3,7 +3,10 @@ structured (JSON) log line per request.
 
 The log line holds method, path (never the query string or any header, so a
 token can never reach it), status, duration, body size, the token owner and a
-request id (also sent back as ``X-Request-ID``).
+request id (also sent back as ``X-Request-ID``); for a failure (status 500) also
+``error`` (one line) and, for an exception no route handled, ``traceback`` (one
+string). Such an exception is answered here with a 500 carrying only the request
+id, so it is logged once, with its status.
 """
 
 from __future__ import annotations
@@ -12,6 +15,7 @@ import asyncio
 import json
 import logging
 import time
+import traceback
 import uuid
 
 log = logging.getLogger("jointdb.server.access")
@@ -90,11 +94,19 @@ class ServiceMiddleware:
                     await asyncio.wait_for(self.app(scope, replay, send_wrapped), self.timeout)
         except asyncio.TimeoutError:
             await refuse(503, f"request took longer than {self.timeout:g} s; try again or narrow the request")
+        except Exception as exc:  # noqa: BLE001 - unhandled: one 500 and one log line with the traceback
+            state = scope.setdefault("state", {})
+            state["error"] = f"{type(exc).__name__}: {' '.join(str(exc).split())[:500]}"
+            state["traceback"] = "".join(traceback.format_exception(type(exc), exc, exc.__traceback__))
+            await refuse(500, f"internal error (request id {request_id}); the server log has the details")
+            status["code"] = max(status["code"], 500)  # also when a streamed response broke off
         finally:
             state = scope.get("state", {})
-            log.info(json.dumps({
+            line = {
                 "event": "request", "request_id": request_id, "method": scope.get("method"),
                 "path": scope.get("path"), "status": status["code"],
                 "duration_ms": round((time.perf_counter() - t0) * 1e3, 2), "bytes_in": received["n"],
                 "actor": state.get("actor"), "client": (scope.get("client") or [None])[0],
-            }))
+            }
+            line.update({k: state[k] for k in ("error", "traceback") if state.get(k)})
+            log.log(logging.ERROR if status["code"] >= 500 else logging.INFO, json.dumps(line))

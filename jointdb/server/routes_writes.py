@@ -17,13 +17,12 @@ from fastapi import APIRouter, Depends
 from jointdb.errors import InputError, JointdbError
 from jointdb.server._deps import repo, version_json, writer
 from jointdb.server._schemas import CatalogueIn, DeprecateIn, LabelIn
+from jointdb.server._uploads import check_hdf5_self_contained, unpack_campaign
 from jointdb.server.routes_joints import Name, joint_name
 
 router = APIRouter(tags=["writes"])
 
 UPLOAD_SUFFIXES = (".h5", ".hdf5", ".zip")
-MAX_ARCHIVE_FILES = 200
-MAX_ARCHIVE_BYTES = 256 * 2**20
 
 
 def upload_name(filename: str) -> str:
@@ -58,12 +57,14 @@ def catalogue_upload(r, body: CatalogueIn, owner: str):
     with tempfile.TemporaryDirectory(prefix="jointdb-upload-") as tmp:
         path = FsPath(tmp) / fname
         path.write_bytes(data)
-        if fname.lower().endswith(".zip"):
-            path = _campaign_from_archive(path, FsPath(tmp) / "campaign")
+        if fname.lower().endswith(".zip"):  # unpacked as data: see jointdb.server._uploads
+            path = unpack_campaign(path, FsPath(tmp) / "campaign")
+        else:
+            check_hdf5_self_contained(path, fname)
         try:
             args = catalogue_inputs(path, body.conditions.to_conditions(), joint_type=body.joint_type,
                                     model_kind=body.model_kind, method=body.method, quality=dict(body.quality),
-                                    author=owner, force=body.force)
+                                    author=owner, force=body.force, root=FsPath(tmp) / "campaign")
         except JointdbError as exc:  # name the upload, not the server's temporary directory
             raise type(exc)(str(exc).replace(f"{tmp}/", "")) from None
     return r.catalogue(name, parent=body.parent, author=owner, label=label, **args)
@@ -80,43 +81,6 @@ def _catalogue_frf(r, body: CatalogueIn, name: str, label: str | None, owner: st
                       input_files=dict(body.input_files), author=owner)
     return r.catalogue(name, body.joint_type, frf_from_json(body.frf.model_dump()), body.conditions.to_conditions(),
                        body.model_kind, prov, dict(body.quality), body.parent, author=owner, label=label)
-
-
-def _campaign_from_archive(archive: FsPath, into: FsPath) -> FsPath:
-    """Unpack a campaign archive (a .zip of one campaign JSON file and the files it names, flat)
-    safely, and return the campaign file: member names must be plain file names, and the
-    total size and count are limited (no path traversal, no zip bomb)."""
-    import zipfile
-
-    try:
-        zf = zipfile.ZipFile(archive)
-    except zipfile.BadZipFile:
-        raise InputError(f"{archive.name}: not a zip archive") from None
-    with zf:
-        members = [m for m in zf.infolist() if not m.is_dir()]
-        if len(members) > MAX_ARCHIVE_FILES:
-            raise InputError(f"{archive.name}: more than {MAX_ARCHIVE_FILES} files")
-        if sum(m.file_size for m in members) > MAX_ARCHIVE_BYTES:
-            raise InputError(f"{archive.name}: unpacks to more than {MAX_ARCHIVE_BYTES // 2**20} MiB")
-        into.mkdir()
-        for m in members:
-            base = m.filename
-            if "/" in base or "\\" in base or base in (".", "..") or base.startswith(".") or not base.isprintable():
-                raise InputError(f"{archive.name}: member {base[:60]!r} must be a plain file name (a flat archive)")
-            (into / base).write_bytes(zf.read(m))
-    campaigns = []
-    for p in sorted(into.glob("*.json")):
-        try:
-            import json
-
-            if json.loads(p.read_text(encoding="utf-8")).get("format", "").startswith("jointdb-campaign"):
-                campaigns.append(p)
-        except (ValueError, UnicodeDecodeError, AttributeError):
-            continue
-    if len(campaigns) != 1:
-        raise InputError(f"{archive.name}: needs exactly one campaign file (format jointdb-campaign/1), "
-                         f"found {len(campaigns)}")
-    return campaigns[0]
 
 
 @router.post("/catalogue", status_code=201, summary="Catalogue an identified joint file as a new version")
