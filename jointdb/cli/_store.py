@@ -272,7 +272,8 @@ def register(app: typer.Typer) -> None:
                 matches = nearest_in_file(light, joint_type, req, k=k, **selection)
             else:
                 matches = repo.nearest(joint_type, req, k=k, at=at, **selection)
-        for w in caught:
+        damaged = [w for w in caught if w.category.__name__ == "DamagedRecordWarning"]  # no store import here
+        for w in caught if not damaged else ():  # with damaged versions, one error line says it (below)
             message(f"warning: {w.message}")
         rows = []
         for m in matches:
@@ -305,6 +306,8 @@ def register(app: typer.Typer) -> None:
                       *[c for c in ("materials", "torque_nm", "preload_n", "labels")
                         if any(r.get(c) is not None for r in rows)],
                       *(["extrapolating"] if any(r.get("extrapolating") for r in rows) else [])])
+        if damaged:  # the matches shown are the intact ones; exit 5 naming what was skipped
+            raise IntegrityError(" ".join(str(damaged[0].message).split()))
 
     # ------------------------------------------------------------- joints ...
     @joints.command("list")
