@@ -372,14 +372,25 @@ class Repository(LabelsAndStates):
             The blob is corrupt; NotFoundError when it is missing.
         """
         jv = version if isinstance(version, JointVersion) else self.get(version, number)
-        return self.blobs.get(jv.blob_sha256)
+        return self._blob(jv, jv.blob_sha256, "FRF blob")
+
+    def _blob(self, jv: JointVersion, digest: str, what: str) -> FRF:
+        """A blob of ``jv``; a corrupt or missing one is named by its version, never by a server path."""
+        try:
+            return self.blobs.get(digest)
+        except IntegrityError:
+            raise IntegrityError(f"{jv.name} v{jv.version}: its {what} {digest} is corrupt or unreadable; refusing "
+                                 "to use it - run `jointdb db check`") from None
+        except NotFoundError:
+            raise NotFoundError(f"{jv.name} v{jv.version}: its {what} {digest} is missing from the blob store - "
+                                "run `jointdb db check`") from None
 
     @_db.with_db_errors
     def load_raw(self, version: JointVersion, key: str) -> FRF:
         """One raw measurement FRF stored with a version."""
         if key not in version.raw_blobs:
             raise NotFoundError(f"{version.name} v{version.version} has no raw measurement {key!r}")
-        return self.blobs.get(version.raw_blobs[key])
+        return self._blob(version, version.raw_blobs[key], f"raw measurement {key!r}")
 
     # -------------------------------------------------------------- diff, etc.
     @_db.with_db_errors

@@ -198,3 +198,23 @@ def test_a_damping_type_that_is_not_text_is_a_field_named_error(tmp_path, capsys
     path.write_text(json.dumps(model))
     code, _, err = run_main(capsys, "modes", path)
     assert code == 2 and "Traceback" not in err and "damping[0].type" in err
+
+
+def test_a_corrupt_blob_is_named_by_its_version_not_its_path(tmp_path):
+    from jointdb.store import Repository
+
+    repo = Repository(tmp_path / "j.sqlite")
+    jv = _catalogue(repo, "T1")
+    path = repo.blobs.path(jv.blob_sha256)
+    data = bytearray(path.read_bytes())
+    data[len(data) // 2] ^= 0x01
+    path.chmod(0o644)
+    path.write_bytes(bytes(data))
+    with pytest.raises(IntegrityError, match=r"^T1 v1: its FRF blob [0-9a-f]{64} is corrupt") as caught:
+        repo.load_frf(jv)
+    assert str(tmp_path) not in str(caught.value)
+    path.unlink()
+    with pytest.raises(Exception, match=r"^T1 v1: its FRF blob [0-9a-f]{64} is missing") as caught:
+        repo.load_frf(jv)
+    assert str(tmp_path) not in str(caught.value)
+    repo.close()
