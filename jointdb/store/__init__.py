@@ -61,7 +61,6 @@ Blob format and canonical hash: :mod:`jointdb.store._blobs`; bundle format:
 
 from __future__ import annotations
 
-from jointdb.store._listing import JointPage
 from jointdb.store._nearest import OutsideCatalogueWarning
 from jointdb.store._records import DamagedRecordWarning, DamagedVersion
 from jointdb.store._types import (
@@ -108,7 +107,7 @@ __all__ = [
 _LAZY = {
     "Repository": "_repository", "CheckReport": "_reports", "VersionDiff": "_reports",
     "BlobStore": "_blobs", "file_sha256": "_blobs", "frf_sha256": "_blobs", "read_frf_file": "_blobs",
-    "write_frf_file": "_blobs",
+    "write_frf_file": "_blobs", "JointPage": "_listing",
 }
 
 
