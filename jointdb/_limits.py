@@ -126,14 +126,7 @@ def check_json_numbers(value: Any, field: str = "") -> None:
         if isinstance(v, bool) or v is None or isinstance(v, str):
             continue
         if isinstance(v, (int, float)):
-            try:
-                ok = math.isfinite(v) and abs(v) <= MAX_JSON_NUMBER
-            except OverflowError:  # an int too large for a float
-                ok = False
-            if not ok:
-                shown = repr(v) if isinstance(v, float) else "an integer of {} digits".format(len(str(abs(v))))
-                raise _fail(where or "value", f"must be finite and of magnitude <= {MAX_JSON_NUMBER:g}, "
-                                              f"got {shown}")
+            _stored_number(v, where or "value")
         elif isinstance(v, dict):
             stack.extend((f"{where}.{k}" if where else str(k), item) for k, item in v.items())
         elif isinstance(v, list):
