@@ -218,3 +218,18 @@ def test_a_corrupt_blob_is_named_by_its_version_not_its_path(tmp_path):
         repo.load_frf(jv)
     assert str(tmp_path) not in str(caught.value)
     repo.close()
+
+
+def test_a_row_an_older_version_wrote_beyond_todays_limits_is_reported_not_served(repo, monkeypatch):
+    """Depth 300 was accepted before issue 20 (and then broke every list): read back, it is damaged."""
+    from jointdb import _limits
+
+    _catalogue(repo, "A")
+    with monkeypatch.context() as m:
+        m.setattr(_limits, "MAX_FIELD_DEPTH", 1000)  # as an older jointdb wrote it
+        _catalogue(repo, "B", extra=_nested(300))
+    page = repo.list_page()
+    assert [v.name for v in page.items] == ["A"]
+    assert [(d.name, d.version) for d in page.damaged] == [("B", 1)] and "nested more than 64" in page.damaged[0].reason
+    with pytest.raises(IntegrityError, match="^B v1: stored record is damaged"):
+        repo.get("B")
