@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 import random
+import re
 import time
 import warnings
 from collections.abc import Iterable, Mapping
@@ -47,6 +48,7 @@ from jointdb.store._types import (
 )
 
 MAX_WRITE_ATTEMPTS = 60
+_HEX64 = re.compile(r"[0-9a-f]{64}")
 
 
 def _report_damaged(found: list[DamagedVersion], into: list | None) -> None:
@@ -376,6 +378,9 @@ class Repository(LabelsAndStates):
 
     def _blob(self, jv: JointVersion, digest: str, what: str) -> FRF:
         """A blob of ``jv``; a corrupt or missing one is named by its version, never by a server path."""
+        if not isinstance(digest, str) or not _HEX64.fullmatch(digest):  # never echoed, never used in a path
+            raise IntegrityError(f"{jv.name} v{jv.version}: the digest of its {what} is not a SHA-256 hex digest; "
+                                 "refusing to use it - run `jointdb db check`")
         try:
             return self.blobs.get(digest)
         except IntegrityError:
