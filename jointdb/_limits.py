@@ -21,12 +21,23 @@ Limits (SI units)
   ``[1, 1e5]`` kg/m³.
 - Frequency grids built from options or files: at most :data:`MAX_FREQ_LINES`
   lines.
+- Stored catalogue records (checked before the write transaction, by
+  :func:`check_stored_json` and :func:`check_text`; bundle imports and the HTTP
+  API go through the same checks): free-form JSON fields (``conditions.extra``,
+  provenance parameters) at most :data:`MAX_FIELD_DEPTH` levels deep,
+  :data:`MAX_FIELD_BYTES` bytes encoded and :data:`MAX_FIELD_ENTRIES` keys and
+  entries; keys of at most :data:`MAX_KEY_CHARS` and texts of at most
+  :data:`MAX_TEXT_CHARS` characters; no NUL or other control characters (tab
+  and line breaks only inside free text); numbers finite. A row that breaks
+  these limits anyway (an older version, a damaged file) is reported as
+  damaged when read, never served.
 
 Plain standard library: the numerical core's file loaders may use it.
 """
 
 from __future__ import annotations
 
+import json
 import math
 import re
 from typing import Any
@@ -115,14 +126,7 @@ def check_json_numbers(value: Any, field: str = "") -> None:
         if isinstance(v, bool) or v is None or isinstance(v, str):
             continue
         if isinstance(v, (int, float)):
-            try:
-                ok = math.isfinite(v) and abs(v) <= MAX_JSON_NUMBER
-            except OverflowError:  # an int too large for a float
-                ok = False
-            if not ok:
-                shown = repr(v) if isinstance(v, float) else "an integer of {} digits".format(len(str(abs(v))))
-                raise _fail(where or "value", f"must be finite and of magnitude <= {MAX_JSON_NUMBER:g}, "
-                                              f"got {shown}")
+            _stored_number(v, where or "value")
         elif isinstance(v, dict):
             stack.extend((f"{where}.{k}" if where else str(k), item) for k, item in v.items())
         elif isinstance(v, list):
@@ -287,3 +291,116 @@ def check_lines(n: float, field: str) -> None:
     if not math.isfinite(n) or n > MAX_FREQ_LINES:
         shown = f"{n:.3g}" if math.isfinite(n) else "infinitely many"
         raise _fail(field, f"gives {shown} frequency lines; the limit is {MAX_FREQ_LINES} (use a coarser step)")
+
+
+# ------------------------------------------------------------------ stored records
+#: Deepest nesting of a free-form JSON field stored in the catalogue (conditions.extra,
+#: provenance parameters, ...): the same as for description files.
+MAX_FIELD_DEPTH = MAX_JSON_DEPTH
+#: Largest encoded size of one free-form JSON field of a stored record [bytes].
+MAX_FIELD_BYTES = 2 * 1024 * 1024
+#: Most keys and list entries, counted over all levels, of one stored JSON field.
+MAX_FIELD_ENTRIES = 100_000
+#: Longest key of a stored JSON object [characters].
+MAX_KEY_CHARS = 1000
+#: Longest string inside a stored JSON field, and longest free text (a deprecation reason) [characters].
+MAX_TEXT_CHARS = 10_000
+#: Most interface materials, geometry numbers, input files and quality metrics of one version.
+MAX_MATERIALS = 20
+MAX_GEOMETRY_KEYS = 100
+MAX_INPUT_FILES = 1000
+MAX_QUALITY_METRICS = 100
+
+#: Control characters a stored string may never hold (NUL included): everything of Unicode
+#: category Cc except tab, line feed and carriage return, plus lone surrogates (not UTF-8).
+_CONTROL = re.compile(r"[\x00-\x08\x0b\x0c\x0e-\x1f\x7f-\x9f\ud800-\udfff]")
+#: In names, keys and labels not even tab and line breaks are allowed.
+_CONTROL_STRICT = re.compile(r"[\x00-\x1f\x7f-\x9f\ud800-\udfff]")
+
+
+def control_character(text: str, strict: bool = True) -> str | None:
+    """The first control character in ``text`` as ``U+XXXX`` (None when there is none).
+
+    ``strict``: also tab, line feed and carriage return (names, keys, labels, query texts).
+    """
+    m = (_CONTROL_STRICT if strict else _CONTROL).search(text)
+    return None if m is None else f"U+{ord(m.group()):04X}"
+
+
+def check_text(value: Any, field: str, limit: int = MAX_TEXT_CHARS, strict: bool = False) -> str:
+    """Refuse a stored text that is not a string, too long, or holds control characters.
+
+    Raises
+    ------
+    InputError
+        ``reason: holds the control character U+0000; the limit allows none``.
+    """
+    if not isinstance(value, str):
+        raise _fail(field, f"must be text, got {type(value).__name__}")
+    if len(value) > limit:
+        raise _fail(field, f"{len(value)} characters; the limit is {limit}")
+    bad = control_character(value, strict)
+    if bad:
+        raise _fail(field, f"holds the control character {bad}; control characters are not allowed")
+    return value
+
+
+def _stored_number(v: Any, where: str) -> None:
+    try:
+        ok = math.isfinite(v) and abs(v) <= MAX_JSON_NUMBER
+    except OverflowError:  # an int too large for a float
+        ok = False
+    if not ok:
+        shown = repr(v) if isinstance(v, float) else f"an integer of {len(str(abs(v)))} digits"
+        raise _fail(where, f"must be finite and of magnitude <= {MAX_JSON_NUMBER:g}, got {shown}")
+
+
+def check_stored_json(value: Any, field: str, max_bytes: int = MAX_FIELD_BYTES, texts: bool = True) -> None:
+    """Refuse a value that the catalogue could store but not read back safely, before any write.
+
+    Walks the value without recursion: plain JSON types only (objects with text keys, lists,
+    text, finite numbers, booleans, null), at most :data:`MAX_FIELD_DEPTH` levels of nesting,
+    :data:`MAX_FIELD_ENTRIES` keys and entries, keys of at most :data:`MAX_KEY_CHARS` and
+    strings of at most :data:`MAX_TEXT_CHARS` characters, no control characters (none at all
+    in keys; tab and line breaks allowed in strings), and at most ``max_bytes`` encoded.
+    ``texts=False`` (reading back what is stored) skips the length and character checks of
+    keys and strings.
+
+    Raises
+    ------
+    InputError
+        Naming the field (with the path inside it) and the limit, e.g.
+        ``conditions.extra.a.a...: nested more than 64 levels deep; the limit is 64``.
+    """
+    stack = [(field, value, 0)]
+    entries = 0
+    while stack:
+        where, v, depth = stack.pop()
+        if v is None or isinstance(v, bool):
+            continue
+        if isinstance(v, str):
+            if texts:
+                check_text(v, where)
+        elif isinstance(v, (int, float)):
+            _stored_number(v, where)
+        elif isinstance(v, (dict, list, tuple)):
+            if depth >= MAX_FIELD_DEPTH:
+                raise _fail(field, f"nested more than {MAX_FIELD_DEPTH} levels deep; the limit is {MAX_FIELD_DEPTH}")
+            entries += len(v)
+            if entries > MAX_FIELD_ENTRIES:
+                raise _fail(field, f"more than {MAX_FIELD_ENTRIES} keys and entries; the limit is {MAX_FIELD_ENTRIES}")
+            if isinstance(v, dict):
+                for k, item in v.items():
+                    if not isinstance(k, str):
+                        raise _fail(where, f"key {str(k)[:40]!r} must be text, got {type(k).__name__}")
+                    if texts:
+                        check_text(k, f"{where} key {k[:40]!r}", MAX_KEY_CHARS, strict=True)
+                    stack.append((f"{where}.{k[:40]}", item, depth + 1))
+            else:
+                stack.extend((f"{where}[{i}]", item, depth + 1) for i, item in enumerate(v))
+        else:
+            raise _fail(where, f"must be JSON (object, list, text, number, true/false or null), "
+                               f"got {type(v).__name__}")
+    size = len(json.dumps(value, ensure_ascii=False, allow_nan=False).encode("utf-8", "surrogatepass"))
+    if size > max_bytes:
+        raise _fail(field, f"{size} bytes encoded; the limit is {max_bytes}")

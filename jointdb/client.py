@@ -69,11 +69,16 @@ class RemoteRepository:
     def _name(name: str) -> str:
         return quote(str(name), safe="")
 
-    def _all(self, path: str, **params) -> list[dict]:
+    def _all(self, path: str, damaged: list | None = None, **params) -> list[dict]:
         items, offset = [], 0
         while True:
             page = self._call("GET", path, params={**params, "offset": offset, "limit": 500})
             items.extend(page["items"])
+            if damaged is not None and page.get("damaged"):
+                from jointdb.store._records import DamagedVersion
+
+                damaged.extend(DamagedVersion(str(d["name"]), int(d["version"]), str(d["error"]))
+                               for d in page["damaged"])
             if page.get("next_offset") is None:
                 return items
             offset = page["next_offset"]
@@ -93,14 +98,17 @@ class RemoteRepository:
         params = {k: v for k, v in (("label", label), ("at", str(at) if at is not None else None)) if v is not None}
         return version_from_json(self._call("GET", f"/joints/{self._name(name)}", params=params))
 
-    def history(self, name: str) -> list:
-        return [version_from_json(v) for v in self._all(f"/joints/{self._name(name)}/history")]
+    def history(self, name: str, *, damaged: list | None = None) -> list:
+        return [version_from_json(v) for v in self._all(f"/joints/{self._name(name)}/history", damaged=damaged)]
 
-    def list_joints(self, joint_type: str | None = None, include_deprecated: bool = True) -> list:
+    def list_joints(self, joint_type: str | None = None, include_deprecated: bool = True, *,
+                    damaged: list | None = None) -> list:
+        """As :meth:`jointdb.store.Repository.list_joints`; versions the server reports damaged are
+        appended to ``damaged`` (when given) as ``DamagedVersion``."""
         params = {"include_deprecated": include_deprecated}
         if joint_type:
             params["type"] = joint_type
-        return [version_from_json(v) for v in self._all("/joints", **params)]
+        return [version_from_json(v) for v in self._all("/joints", damaged=damaged, **params)]
 
     def load_frf(self, version, number: int | None = None):
         from jointdb.server._deps import frf_from_json

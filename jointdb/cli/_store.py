@@ -16,7 +16,7 @@ import typer
 
 from jointdb._output import emit, message
 from jointdb.cli._joint_files import _write_joint_file
-from jointdb.errors import InputError, NotFoundError
+from jointdb.errors import InputError, IntegrityError, NotFoundError
 
 DbOpt = Annotated[
     Optional[str],
@@ -121,6 +121,14 @@ def _conditions(materials, preload, torque, geometry, extra=None):
 
 #: columns of version tables for people (``--json`` has every field)
 _TABLE = ["name", "version", "state", "labels", "materials", "torque_nm", "preload_n"]
+
+
+def _refuse_damaged(damaged: list) -> None:
+    """After a list was printed: exit 5 naming the versions it left out because their rows are damaged."""
+    if damaged:
+        names = ", ".join(f"{d.name} v{d.version}" for d in damaged[:10]) + (" ..." if len(damaged) > 10 else "")
+        raise IntegrityError(f"{len(damaged)} damaged version(s) left out of the list: {names} "
+                             f"({damaged[0].reason.split(';')[0]}); run `jointdb db check`")
 
 
 def _version_row(v) -> dict[str, Any]:
@@ -264,7 +272,8 @@ def register(app: typer.Typer) -> None:
                 matches = nearest_in_file(light, joint_type, req, k=k, **selection)
             else:
                 matches = repo.nearest(joint_type, req, k=k, at=at, **selection)
-        for w in caught:
+        damaged = [w for w in caught if w.category.__name__ == "DamagedRecordWarning"]  # no store import here
+        for w in caught if not damaged else ():  # with damaged versions, one error line says it (below)
             message(f"warning: {w.message}")
         rows = []
         for m in matches:
@@ -297,6 +306,8 @@ def register(app: typer.Typer) -> None:
                       *[c for c in ("materials", "torque_nm", "preload_n", "labels")
                         if any(r.get(c) is not None for r in rows)],
                       *(["extrapolating"] if any(r.get("extrapolating") for r in rows) else [])])
+        if damaged:  # the matches shown are the intact ones; exit 5 naming what was skipped
+            raise IntegrityError(" ".join(str(damaged[0].message).split()))
 
     # ------------------------------------------------------------- joints ...
     @joints.command("list")
@@ -305,8 +316,10 @@ def register(app: typer.Typer) -> None:
         db: DbOpt = None, blobs: BlobsOpt = None, as_json: JsonOpt = False,
     ) -> None:
         """List joints with their current version. Example: jointdb joints list --type tool-holder"""
-        emit([_version_row(v) for v in _repo(db, blobs).list_joints(joint_type)], as_json=as_json, title="joints",
-             columns=["name", "type", "version", "state", "materials", "torque_nm"])
+        damaged: list = []
+        emit([_version_row(v) for v in _repo(db, blobs).list_joints(joint_type, damaged=damaged)], as_json=as_json,
+             title="joints", columns=["name", "type", "version", "state", "materials", "torque_nm"])
+        _refuse_damaged(damaged)
 
     @joints.command("show")
     def show(
@@ -344,8 +357,10 @@ def register(app: typer.Typer) -> None:
     def history(name: Annotated[str, typer.Argument(help="Joint name.")],
                 db: DbOpt = None, blobs: BlobsOpt = None, as_json: JsonOpt = False) -> None:
         """All versions of a joint, oldest first. Example: jointdb joints history T1"""
-        emit([_version_row(v) for v in _repo(db, blobs).history(name)], as_json=as_json, title=f"history of {name}",
-             columns=_TABLE + ["created_at"])
+        damaged: list = []
+        emit([_version_row(v) for v in _repo(db, blobs).history(name, damaged=damaged)], as_json=as_json,
+             title=f"history of {name}", columns=_TABLE + ["created_at"])
+        _refuse_damaged(damaged)
 
     @joints.command("diff")
     def diff(

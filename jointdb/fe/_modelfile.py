@@ -230,7 +230,7 @@ def model_from_dict(data: Any) -> BeamModel:
         p = f"damping[{i}]"
         dm = _obj(dm, p)
         kind = dm.get("type")
-        if kind not in _DAMPING:
+        if not isinstance(kind, str) or kind not in _DAMPING:  # a list or object is not a name (and not hashable)
             raise _fail(f"{p}.type", f"must be one of {', '.join(_DAMPING)}, got {kind!r}")
         cls, fields = _DAMPING[kind]
         _keys(dm, p, fields | {"type"}, fields - {"alpha", "beta"})

@@ -4,14 +4,13 @@ from __future__ import annotations
 
 import dataclasses
 import json
-import math
 from typing import Annotated, Any, Optional
 
 from fastapi import APIRouter, Depends, Path, Query
 
-from jointdb.errors import InputError, NotFoundError
+from jointdb.errors import InputError
 from jointdb.server._deps import Page, reader, repo, version_json
-from jointdb.store._types import check_name, normalise_material
+from jointdb.store._types import check_name
 
 router = APIRouter(tags=["joints"])
 
@@ -26,38 +25,19 @@ def joint_name(name: str) -> str:
     return check_name(name)
 
 
-def _in_range(value: float | None, lo: float | None, hi: float | None) -> bool:
-    if lo is None and hi is None:
-        return True
-    if value is None:
-        return False
-    return (lo is None or value >= lo) and (hi is None or value <= hi)
-
-
 def filter_versions(r, joint_type=None, material=None, label=None, include_deprecated=True, torque_min=None,
                     torque_max=None, preload_min=None, preload_max=None, q=None) -> list:
-    """The current version of every joint that passes the filters (shared by the API and the web pages)."""
-    for name, lo, hi in (("torque", torque_min, torque_max), ("preload", preload_min, preload_max)):
-        for x in (lo, hi):
-            if x is not None and not math.isfinite(x):
-                raise InputError(f"{name} bounds must be finite numbers, got {x}")
-    mats = {normalise_material(m) for m in material or [] if m.strip()}
-    out = []
-    for v in r.list_joints(joint_type or None, include_deprecated=include_deprecated):
-        c = v.conditions
-        if mats and not mats <= set(c.materials):
-            continue
-        if not _in_range(c.torque_nm, torque_min, torque_max) or not _in_range(c.preload_n, preload_min, preload_max):
-            continue
-        if q and q.lower() not in v.name.lower():
-            continue
-        if label:
-            try:
-                v = r.get(v.name, label=label)
-            except NotFoundError:
-                continue
-        out.append(v)
-    return out
+    """The current version of every joint that passes the filters (shared by the API and the web pages):
+    :meth:`Repository.list_page` without a page limit (one SQL statement); damaged rows are left out."""
+    page = r.list_page(joint_type or None, materials=material or (), label=label or None,
+                       include_deprecated=include_deprecated, torque_min=torque_min, torque_max=torque_max,
+                       preload_min=preload_min, preload_max=preload_max, name_contains=q or None, limit=None)
+    return list(page.items)
+
+
+def damaged_json(damaged) -> list[dict[str, Any]]:
+    """Versions a list skipped because their stored rows are damaged: name, version, reason."""
+    return [{"name": d.name, "version": d.version, "error": d.reason} for d in damaged]
 
 
 @router.get("/joints", summary="List and filter joints (current version of each)")
@@ -67,16 +47,26 @@ def list_joints(
     material: Optional[list[str]] = Query(None, description="Interface material (repeat: all must be present)."),
     label: Optional[str] = Query(None, max_length=100, description="Only joints with this label (shows that version)."),
     include_deprecated: bool = Query(True, description="Also list deprecated joints."),
+    state: Optional[str] = Query(None, pattern="^(active|deprecated)$", description="Only listed versions in this state."),
     torque_min: Optional[float] = Query(None, description="Lowest torque [N·m]."),
     torque_max: Optional[float] = Query(None, description="Highest torque [N·m]."),
     preload_min: Optional[float] = Query(None, description="Lowest preload [N]."),
     preload_max: Optional[float] = Query(None, description="Highest preload [N]."),
     q: Optional[str] = Query(None, max_length=200, description="Part of the joint name."),
+    after: Optional[str] = Query(None, max_length=400, description="The `next` cursor of the previous page."),
     r=Depends(repo), _who=reader,
 ) -> dict[str, Any]:
-    found = filter_versions(r, joint_type, material, label, include_deprecated, torque_min, torque_max,
-                            preload_min, preload_max, q)
-    return page.of([version_json(v) for v in found])
+    """One page, by joint name, in one SQL statement. Continue with ``after=<next>`` (keyset) or
+    ``offset=<next_offset>``; ``damaged`` lists versions of this page whose stored rows are damaged
+    (left out of ``items``)."""
+    found = r.list_page(joint_type or None, materials=material or (), label=label or None,
+                        include_deprecated=include_deprecated, state=state, torque_min=torque_min,
+                        torque_max=torque_max, preload_min=preload_min, preload_max=preload_max,
+                        name_contains=q or None, after=after, offset=page.offset, limit=page.limit)
+    shown = len(found.items) + len(found.damaged)
+    return {"items": [version_json(v) for v in found.items], "total": found.total, "offset": page.offset,
+            "limit": page.limit, "next_offset": page.offset + shown if found.next else None, "next": found.next,
+            "damaged": damaged_json(found.damaged)}
 
 
 @router.get("/joints/{name}", summary="One version: current (default), by label or at a time")
@@ -94,7 +84,10 @@ def show_version(name: Name, version: Annotated[int, Path(ge=1, le=2**31 - 1)], 
 
 @router.get("/joints/{name}/history", summary="All versions of a joint, oldest first")
 def history(name: Name, page: Page = Depends(), r=Depends(repo), _who=reader) -> dict[str, Any]:
-    return page.of([version_json(v) for v in r.history(joint_name(name))])
+    damaged: list = []
+    out = page.of([version_json(v) for v in r.history(joint_name(name), damaged=damaged)])
+    out["damaged"] = damaged_json(damaged)
+    return out
 
 
 def _plain(value: Any) -> Any:

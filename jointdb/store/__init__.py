@@ -29,6 +29,9 @@ API (contract in /work/api-contracts.md; additions are keyword arguments or new 
   non-deprecated); ``.load_frf(jv)`` or ``.load_frf(name, number) -> FRF`` (verified);
   ``.load_raw(jv, key) -> FRF``
 - ``.history(name)``, ``.list_joints(joint_type=None, include_deprecated=True)``,
+  ``.list_page(joint_type=None, *, materials, label, state, torque_min, ..., after, limit) ->
+  JointPage`` (one SQL statement per page, ``next`` cursor; damaged rows are reported in
+  ``JointPage.damaged`` and by lists as :class:`DamagedRecordWarning`, never fatal to a list),
   ``.label(name, version, label)``, ``.deprecate(name, version=None, reason="", undo=False)``,
   ``.audit(name=None, limit=100)``
 - ``.diff(name, version_a, version_b=None, other=None) -> VersionDiff``
@@ -59,6 +62,7 @@ Blob format and canonical hash: :mod:`jointdb.store._blobs`; bundle format:
 from __future__ import annotations
 
 from jointdb.store._nearest import OutsideCatalogueWarning
+from jointdb.store._records import DamagedRecordWarning, DamagedVersion
 from jointdb.store._types import (
     KNOWN_MATERIALS,
     MODEL_KINDS,
@@ -82,6 +86,9 @@ __all__ = [
     "CheckReport",
     "BlobStore",
     "OutsideCatalogueWarning",
+    "DamagedRecordWarning",
+    "DamagedVersion",
+    "JointPage",
     "MODEL_KINDS",
     "KNOWN_MATERIALS",
     "known_materials",
@@ -100,7 +107,7 @@ __all__ = [
 _LAZY = {
     "Repository": "_repository", "CheckReport": "_reports", "VersionDiff": "_reports",
     "BlobStore": "_blobs", "file_sha256": "_blobs", "frf_sha256": "_blobs", "read_frf_file": "_blobs",
-    "write_frf_file": "_blobs",
+    "write_frf_file": "_blobs", "JointPage": "_listing",
 }
 
 

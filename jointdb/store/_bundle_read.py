@@ -24,6 +24,7 @@ from typing import Any
 
 import numpy as np
 
+from jointdb._limits import check_text
 from jointdb.errors import InputError, IntegrityError, JointdbError, NotFoundError
 from jointdb.frf import FRF
 from jointdb.store._blobformat import frf_sha256, read_frf_group
@@ -198,8 +199,7 @@ def _check_states(states: Any, n: int, where: str) -> list[dict[str, Any]]:
             _int(st["version"], f"{w}: version", 1, n)
         if st["state"] not in ("active", "deprecated"):
             raise InputError(f"{w}: state must be 'active' or 'deprecated', got {str(st['state'])[:40]!r}")
-        if not isinstance(st["reason"], str) or len(st["reason"]) > 10_000:
-            raise InputError(f"{w}: reason must be text of at most 10000 characters")
+        check_text(st["reason"], f"{w}: reason")  # text, at most 10000 characters, no control characters
         _text(st["author"], f"{w}: author")
         parse_time(st["at"], f"{w}: at")
     return states

@@ -11,6 +11,7 @@ from typing import Any
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
+from jointdb._limits import check_text
 from jointdb.store import _db
 from jointdb.store._index import bump, refresh_joints
 from jointdb.store._models import AuditRow, JointRow, LabelRow, StateRow, utcnow
@@ -66,6 +67,7 @@ class LabelsAndStates:
         is undone. Returns the joint's history afterwards.
         """
         actor = current_actor(author)
+        reason = check_text(str(reason), "reason")  # no NUL or control characters, at most 10000 characters
         if version is not None:
             self.get(name, version)
         state = "active" if undo else "deprecated"

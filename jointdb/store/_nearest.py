@@ -38,7 +38,7 @@ from typing import Any
 import numpy as np
 
 from jointdb.errors import InputError, IntegrityError, NotFoundError
-from jointdb.store._records import to_version
+from jointdb.store._records import DamagedRecordWarning, load_stored_json, to_version
 from jointdb.store._types import Conditions, Match, as_conditions, check_joint_type, check_label
 
 MISSING_PENALTY = 1.0
@@ -369,16 +369,22 @@ def fetch_versions(reader: Reader, version_ids: list[int], states: Mapping[int, 
                 f"SELECT joint_id, version, label FROM labels WHERE joint_id IN ({', '.join('?' for _ in joint_ids)})",
                 joint_ids):
             labels.setdefault((jid, number), []).append(label)
-    out = {}
+    out, damaged = {}, []
     for name, joint_type, deprecated, *values in rows:
         row = SimpleNamespace(**dict(zip(_VERSION_COLUMNS, values)))
         for c in _JSON_COLUMNS:
-            if isinstance(getattr(row, c), str):
-                setattr(row, c, json.loads(getattr(row, c)))
-        row.created_at = _utc(row.created_at)
+            if isinstance(getattr(row, c), (str, bytes)):
+                setattr(row, c, load_stored_json(getattr(row, c)))
         joint = SimpleNamespace(name=name, joint_type=joint_type, id=row.joint_id)
         state = states[row.id] if states is not None else ("deprecated" if deprecated else "active")
-        out[row.id] = to_version(joint, row, state, labels.get((row.joint_id, row.version), ()))
+        try:
+            row.created_at = _utc(row.created_at)
+            out[row.id] = to_version(joint, row, state, labels.get((row.joint_id, row.version), ()))
+        except (IntegrityError, TypeError, ValueError) as exc:  # a damaged row: skipped and named, not fatal
+            damaged.append(f"{name} v{row.version}: {str(exc).split(': ', 1)[-1]}")
+    if damaged:
+        warnings.warn("skipped damaged versions (run `jointdb db check`): " + "; ".join(damaged[:10]),
+                      DamagedRecordWarning, stacklevel=3)
     return out
 
 
@@ -396,7 +402,8 @@ def matches(reader: Reader, cand: Candidates, req: Conditions, k: int, sel: Sele
     found = fetch_versions(reader, [int(cand.version_id[i]) for i in order], states)
     return [Match(version=found[int(cand.version_id[i])], distance=float(total[i]),
                   per_condition={name: float(t[i]) for name, t in terms.items()},
-                  extrapolating=bool(outside), outside_range=tuple(outside)) for i in order]
+                  extrapolating=bool(outside), outside_range=tuple(outside)) for i in order
+            if int(cand.version_id[i]) in found]  # damaged versions are skipped (and warned about)
 
 
 def check_request(joint_type: str, conditions, k: int, label: str | None) -> tuple[str, Conditions, int, str | None]:

@@ -7,9 +7,11 @@ import hashlib
 import json
 import os
 from collections.abc import Iterable, Mapping
+from dataclasses import dataclass
 from datetime import datetime, timezone
 from typing import TYPE_CHECKING, Any
 
+from jointdb._limits import MAX_FIELD_BYTES, check_stored_json, check_text
 from jointdb.errors import InputError, IntegrityError
 from jointdb.store._types import Conditions, JointVersion, Provenance
 
@@ -17,13 +19,17 @@ if TYPE_CHECKING:  # pragma: no cover - the models import SQLAlchemy, which the 
     from jointdb.store._models import JointRow, StateRow, VersionRow
 
 
+#: Largest encoded stored JSON column read back (a write allows MAX_FIELD_BYTES per free-form field).
+MAX_RECORD_BYTES = 4 * MAX_FIELD_BYTES
+
+
 def current_actor(author: str | None = None) -> str:
     """Who is acting: the given author, ``JOINTDB_AUTHOR``, or the login name."""
     if author:
-        return str(author)[:200]
+        return check_text(str(author)[:200], "author", 200, strict=True)
     env = os.environ.get("JOINTDB_AUTHOR")
     if env:
-        return env[:200]
+        return check_text(env[:200], "JOINTDB_AUTHOR", 200, strict=True)
     try:
         return getpass.getuser()[:200]
     except (KeyError, OSError):  # no passwd entry in some containers
@@ -89,18 +95,93 @@ def record_sha256(record: Mapping[str, Any]) -> str:
     return hashlib.sha256(text.encode()).hexdigest()
 
 
+class DamagedJSON(dict):
+    """What a JSON column that cannot be decoded reads as (empty, so generic code goes on; every
+    record check then refuses the row, see :func:`stored_problem`)."""
+
+
+class DamagedRecordWarning(UserWarning):
+    """A list skipped versions whose stored rows are damaged (named in the message)."""
+
+
+@dataclass(frozen=True)
+class DamagedVersion:
+    """A version a listing skipped because its stored row cannot be used (``reason`` says why)."""
+
+    name: str
+    version: int
+    reason: str
+
+    def describe(self) -> str:
+        return f"{self.name} v{self.version}: {self.reason}"
+
+
+def load_stored_json(text: str | bytes) -> Any:
+    """Decode a JSON column; a :class:`DamagedJSON` instead of an exception for text that is not
+    JSON (a damaged file), too deep to decode, or not text at all (the engines' ``json_deserializer``)."""
+    try:
+        if isinstance(text, bytes):
+            text = text.decode("utf-8")
+        return json.loads(text)
+    except (ValueError, TypeError, RecursionError):  # JSONDecodeError and UnicodeDecodeError are ValueErrors
+        return DamagedJSON()
+
+
+#: Stored JSON columns and the shape each must have: (column, container, item check).
+_SHAPES = (("materials", list, "text"), ("geometry", dict, "number"), ("extra", dict, None),
+           ("dofs", list, "text"), ("raw_blobs", dict, "text"), ("input_files", dict, "text"),
+           ("method_params", dict, None), ("quality", dict, "number"))
+
+
+def _item_ok(value: Any, kind: str | None) -> bool:
+    if kind == "text":
+        return isinstance(value, str)
+    if kind == "number":
+        return isinstance(value, (int, float)) and not isinstance(value, bool)
+    return True
+
+
+def stored_problem(row: Any) -> str | None:
+    """Why a stored version row cannot be used (None when its fields have the catalogue's shapes and
+    limits): a JSON column that is not JSON, of the wrong shape, or beyond the record limits of
+    :mod:`jointdb._limits` (e.g. nested deeper than a write accepts today)."""
+    for column, container, kind in _SHAPES:
+        value = getattr(row, column, None)
+        if isinstance(value, DamagedJSON):
+            return f"column {column} is not readable JSON"
+        if not isinstance(value, container):
+            return f"column {column} is not a JSON {'list' if container is list else 'object'}"
+        items = value.values() if isinstance(value, dict) else value
+        if not all(_item_ok(x, kind) for x in items):
+            return f"column {column} holds values of the wrong kind"
+        try:
+            check_stored_json(value, column, max_bytes=MAX_RECORD_BYTES, texts=False)
+        except InputError as exc:
+            return f"column {exc}"
+    for column in ("uuid", "author", "model_kind", "quantity", "blob_sha256", "method", "software_version",
+                   "record_sha256"):
+        if not isinstance(getattr(row, column, None), str):
+            return f"column {column} is not text"
+    return None
+
+
 def check_record(joint_name: str, joint_type: str, row: "VersionRow") -> None:
-    """Refuse a version row whose content no longer hashes to its ``record_sha256``.
+    """Refuse a version row that is damaged (:func:`stored_problem`) or whose content no longer hashes
+    to its ``record_sha256``.
 
     Raises
     ------
     IntegrityError
-        The row (or the joint's name or type) was altered after it was written,
-        or the database file is damaged there.
+        Naming joint and version: the row (or the joint's name or type) was altered after it was
+        written, or the database file is damaged there.
     """
+    problem = stored_problem(row)
+    if problem:
+        raise IntegrityError(f"{joint_name} v{row.version}: stored record is damaged ({problem}); refusing to use "
+                             "it - run `jointdb db check`")
     try:
         ok = record_sha256(record_dict(joint_name, joint_type, row)) == row.record_sha256
-    except (TypeError, ValueError, AttributeError):  # a stored field of the wrong shape
+    except (TypeError, ValueError, AttributeError, RecursionError):  # a stored field of the wrong shape
         ok = False
     if not ok:
         raise IntegrityError(

@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import os
 import random
+import re
 import time
+import warnings
 from collections.abc import Iterable, Mapping
 from datetime import datetime
 from typing import Any
@@ -14,14 +16,24 @@ from sqlalchemy.exc import IntegrityError as DBIntegrityError
 from sqlalchemy.exc import OperationalError
 from sqlalchemy.orm import Session
 
-from jointdb.errors import ConflictError, InputError, NotFoundError
+from jointdb._limits import control_character
+from jointdb.errors import ConflictError, InputError, IntegrityError, NotFoundError
 from jointdb.frf import FRF
 from jointdb.store import _db
 from jointdb.store._catalogue import precheck, write_version
 from jointdb.store._labels import LabelsAndStates
 from jointdb.store._reports import CheckReport, VersionDiff, _is_transient, _is_unique_violation
 from jointdb.store._models import JointRow, LabelRow, StateRow, VersionRow
-from jointdb.store._records import as_utc, current_actor, state_of, to_version
+from jointdb.store._listing import JointPage, list_page
+from jointdb.store._records import (
+    DamagedRecordWarning,
+    DamagedVersion,
+    as_utc,
+    current_actor,
+    load_stored_json,
+    state_of,
+    to_version,
+)
 from jointdb.store._types import (
     Conditions,
     JointVersion,
@@ -36,6 +48,16 @@ from jointdb.store._types import (
 )
 
 MAX_WRITE_ATTEMPTS = 60
+_HEX64 = re.compile(r"[0-9a-f]{64}")
+
+
+def _report_damaged(found: list[DamagedVersion], into: list | None) -> None:
+    """Damaged versions a list skipped: into the caller's list, or as one warning naming them."""
+    if into is not None:
+        into.extend(found)
+    elif found:
+        warnings.warn("skipped damaged versions (run `jointdb db check`): "
+                      + "; ".join(d.describe() for d in found[:10]), DamagedRecordWarning, stacklevel=3)
 
 
 class Repository(LabelsAndStates):
@@ -82,6 +104,10 @@ class Repository(LabelsAndStates):
         if self.is_sqlite:  # refuse a directory, an empty or foreign file; create a missing one only if asked
             _db.open_sqlite_target(self.url, create=auto and check_schema)
         self.read_engine, self.write_engine = _db.make_engines(self.url)  # a missing driver first
+        # a JSON column that does not decode (a damaged file) reads as DamagedJSON instead of raising in the
+        # middle of a result: each read then refuses that one row by name (check_record). Set before the
+        # first connection: psycopg registers the loader on connect, SQLite's JSON type reads it per query.
+        self.read_engine.dialect._json_deserializer = load_stored_json
         try:
             from jointdb.store._dbblobs import open_blob_store
 
@@ -205,6 +231,8 @@ class Repository(LabelsAndStates):
 
     # ------------------------------------------------------------------ reads
     def _joint(self, session: Session, name: str) -> JointRow:
+        if not isinstance(name, str) or len(name) > 1000 or control_character(name):  # PostgreSQL refuses NUL
+            raise InputError(f"joint name {str(name)[:60]!r} must be text without control characters")
         joint = session.scalar(select(JointRow).where(JointRow.name == name))
         if joint is None:
             raise NotFoundError(f"no joint named {name!r} (see `jointdb joints list`)")
@@ -249,6 +277,7 @@ class Repository(LabelsAndStates):
             joint = self._joint(s, name)
             labels = self._labels(s, joint.id)
             if label is not None:
+                label = check_label(label)  # a NUL would reach PostgreSQL, which refuses it
                 lab = s.scalar(select(LabelRow).where(LabelRow.joint_id == joint.id, LabelRow.label == label))
                 if lab is None:
                     have = sorted({x for v in labels.values() for x in v})
@@ -278,25 +307,60 @@ class Repository(LabelsAndStates):
             return to_version(joint, row, "deprecated", labels.get(row.version, ()))
 
     @_db.with_db_errors
-    def history(self, name: str) -> list[JointVersion]:
-        """All versions of a joint, oldest first, with their current state and labels."""
+    def history(self, name: str, *, damaged: list | None = None) -> list[JointVersion]:
+        """All versions of a joint, oldest first, with their current state and labels.
+
+        A version whose stored row is damaged is left out and reported: appended to ``damaged``
+        (a list, as :class:`jointdb.store._records.DamagedVersion`) when given, else in a
+        :class:`DamagedRecordWarning`.
+        """
         with self._read() as s:
             joint = self._joint(s, name)
             labels = self._labels(s, joint.id)
             states = self._states(s, joint.id, None)
             rows = s.scalars(select(VersionRow).where(VersionRow.joint_id == joint.id).order_by(VersionRow.version))
-            return [to_version(joint, r, state_of(r.version, states), labels.get(r.version, ())) for r in rows]
+            out, bad = [], []
+            for r in rows:
+                try:
+                    out.append(to_version(joint, r, state_of(r.version, states), labels.get(r.version, ())))
+                except IntegrityError as exc:
+                    bad.append(DamagedVersion(joint.name, r.version, str(exc).split(": ", 1)[-1]))
+        _report_damaged(bad, damaged)
+        return out
 
     @_db.with_db_errors
-    def list_joints(self, joint_type: str | None = None, include_deprecated: bool = True) -> list[JointVersion]:
-        """The current version (as :meth:`get`) of every joint, by name."""
-        with self._read() as s:
-            q = select(JointRow.name).order_by(JointRow.name)
-            if joint_type:
-                q = q.where(JointRow.joint_type == check_joint_type(joint_type))
-            names = list(s.scalars(q))
-        out = [self.get(n) for n in names]
-        return [v for v in out if include_deprecated or v.state == "active"]
+    def list_page(self, joint_type: str | None = None, *, materials: Iterable[str] = (), label: str | None = None,
+                  include_deprecated: bool = True, state: str | None = None, torque_min: float | None = None,
+                  torque_max: float | None = None, preload_min: float | None = None,
+                  preload_max: float | None = None, name_contains: str | None = None, after: str | None = None,
+                  offset: int = 0, limit: int | None = 50) -> JointPage:
+        """One page of the catalogue: the current version of each joint that passes the filters,
+        by name, in one SQL statement (see :mod:`jointdb.store._listing`).
+
+        ``after`` is the ``next`` cursor of the previous page; ``limit=None`` lists all. Damaged
+        rows do not stop the list: they are in ``JointPage.damaged``.
+
+        Raises
+        ------
+        InputError
+            A bad filter (type, material, label, bounds, name part), cursor, offset or limit.
+        """
+        with self.read_engine.connect() as conn:
+            return list_page(conn, joint_type=joint_type, materials=materials, label=label,
+                             include_deprecated=include_deprecated, state=state, torque_min=torque_min,
+                             torque_max=torque_max, preload_min=preload_min, preload_max=preload_max,
+                             name_contains=name_contains, after=after, offset=offset, limit=limit)
+
+    @_db.with_db_errors
+    def list_joints(self, joint_type: str | None = None, include_deprecated: bool = True, *,
+                    damaged: list | None = None) -> list[JointVersion]:
+        """The current version (as :meth:`get`) of every joint, by name (one SQL statement).
+
+        Damaged rows are left out and reported as in :meth:`history`.
+        """
+        page = self.list_page(joint_type, include_deprecated=include_deprecated, limit=None)
+        _report_damaged(list(page.damaged), damaged)
+        return list(page.items)
 
     @_db.with_db_errors
     def load_frf(self, version: JointVersion | str, number: int | None = None) -> FRF:
@@ -310,14 +374,28 @@ class Repository(LabelsAndStates):
             The blob is corrupt; NotFoundError when it is missing.
         """
         jv = version if isinstance(version, JointVersion) else self.get(version, number)
-        return self.blobs.get(jv.blob_sha256)
+        return self._blob(jv, jv.blob_sha256, "FRF blob")
+
+    def _blob(self, jv: JointVersion, digest: str, what: str) -> FRF:
+        """A blob of ``jv``; a corrupt or missing one is named by its version, never by a server path."""
+        if not isinstance(digest, str) or not _HEX64.fullmatch(digest):  # never echoed, never used in a path
+            raise IntegrityError(f"{jv.name} v{jv.version}: the digest of its {what} is not a SHA-256 hex digest; "
+                                 "refusing to use it - run `jointdb db check`")
+        try:
+            return self.blobs.get(digest)
+        except IntegrityError:
+            raise IntegrityError(f"{jv.name} v{jv.version}: its {what} {digest} is corrupt or unreadable; refusing "
+                                 "to use it - run `jointdb db check`") from None
+        except NotFoundError:
+            raise NotFoundError(f"{jv.name} v{jv.version}: its {what} {digest} is missing from the blob store - "
+                                "run `jointdb db check`") from None
 
     @_db.with_db_errors
     def load_raw(self, version: JointVersion, key: str) -> FRF:
         """One raw measurement FRF stored with a version."""
         if key not in version.raw_blobs:
             raise NotFoundError(f"{version.name} v{version.version} has no raw measurement {key!r}")
-        return self.blobs.get(version.raw_blobs[key])
+        return self._blob(version, version.raw_blobs[key], f"raw measurement {key!r}")
 
     # -------------------------------------------------------------- diff, etc.
     @_db.with_db_errors

@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 from datetime import datetime
 from typing import Any
 
+from jointdb import _limits
 from jointdb.errors import InputError
 from jointdb.frf import FRF, Dof, Quantity
 
@@ -107,10 +108,10 @@ def check_joint_type(joint_type: str) -> str:
 
 def check_name(name: str) -> str:
     """Joint name: 1-200 printable characters, no leading/trailing spaces, no '/'."""
-    text = str(name or "")
+    text = name if isinstance(name, str) else ""
     if not text or text != text.strip() or len(text) > 200 or "/" in text or not text.isprintable():
         raise InputError(
-            f"joint name {name!r} must be 1-200 printable characters without '/' or surrounding spaces"
+            f"joint name {str(name)[:60]!r} must be 1-200 printable characters without '/' or surrounding spaces"
         )
     return text
 
@@ -187,18 +188,17 @@ class Conditions:
         geometry: dict[str, float] = {}
         for key, value in dict(self.geometry or {}).items():
             k = str(key).strip()
-            if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_.-]*", k):
+            if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_.-]*", k) or len(k) > _limits.MAX_KEY_CHARS:
                 raise InputError(f"geometry key {key!r} must be a simple name like 'diameter_m'")
             x = _finite_nonneg(value, f"geometry[{k!r}]")
             geometry[k] = x  # type: ignore[assignment]
         object.__setattr__(self, "geometry", dict(sorted(geometry.items())))
+        _limits.check_count(len(self.materials), "conditions.materials", _limits.MAX_MATERIALS, "materials")
+        _limits.check_count(len(geometry), "conditions.geometry", _limits.MAX_GEOMETRY_KEYS, "keys")
+        if not isinstance(self.extra or {}, Mapping):
+            raise InputError(f"conditions.extra must be a JSON object, got {type(self.extra).__name__}")
         extra = dict(self.extra or {})
-        try:
-            import json
-
-            json.dumps(extra, allow_nan=False, sort_keys=True)
-        except (TypeError, ValueError) as exc:
-            raise InputError(f"extra conditions must be JSON-serialisable and finite: {exc}") from None
+        _limits.check_stored_json(extra, "conditions.extra")  # depth, size, text, finite numbers
         object.__setattr__(self, "extra", extra)
 
     def to_dict(self) -> dict[str, Any]:
@@ -212,8 +212,16 @@ class Conditions:
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> "Conditions":
+        """Conditions from their dict form; InputError for a field of the wrong shape."""
+        mats = data.get("materials") or ()
+        if not isinstance(mats, (str, list, tuple)) or not all(isinstance(m, str) for m in
+                                                                 ([mats] if isinstance(mats, str) else mats)):
+            raise InputError("conditions.materials must be a list of material names")
+        for key in ("geometry", "extra"):
+            if not isinstance(data.get(key) or {}, Mapping):
+                raise InputError(f"conditions.{key} must be a JSON object, got {type(data.get(key)).__name__}")
         return cls(
-            materials=tuple(data.get("materials") or ()),
+            materials=tuple([mats] if isinstance(mats, str) else mats),
             preload_n=data.get("preload_n"),
             torque_nm=data.get("torque_nm"),
             geometry=dict(data.get("geometry") or {}),
@@ -238,22 +246,26 @@ class Provenance:
     author: str = ""
 
     def __post_init__(self) -> None:
-        import json
-
-        if not str(self.method).strip():
-            raise InputError("provenance method must not be empty")
-        try:
-            json.dumps(dict(self.parameters), allow_nan=False, sort_keys=True)
-        except (TypeError, ValueError) as exc:
-            raise InputError(f"provenance parameters must be JSON-serialisable and finite: {exc}") from None
+        if not isinstance(self.method, str) or not self.method.strip():
+            raise InputError("provenance method must be a non-empty text")
+        _limits.check_text(self.method.strip(), "provenance.method", 200, strict=True)
+        for attr, limit in (("software_version", 50), ("author", 200)):
+            if getattr(self, attr):
+                _limits.check_text(getattr(self, attr), f"provenance.{attr}", limit, strict=True)
+        for attr in ("parameters", "input_files"):
+            if not isinstance(getattr(self, attr) or {}, Mapping):
+                raise InputError(f"provenance.{attr} must be a JSON object, got {type(getattr(self, attr)).__name__}")
+        _limits.check_stored_json(dict(self.parameters or {}), "provenance.parameters")
         files = {}
-        for key, digest in dict(self.input_files).items():
+        _limits.check_count(len(self.input_files or {}), "provenance.input_files", _limits.MAX_INPUT_FILES, "files")
+        for key, digest in dict(self.input_files or {}).items():
+            _limits.check_text(key, "provenance.input_files key", _limits.MAX_KEY_CHARS, strict=True)
             d = str(digest).lower()
             if not re.fullmatch(r"[0-9a-f]{64}", d):
-                raise InputError(f"input file hash for {key!r} must be a SHA-256 hex digest, got {digest!r}")
+                raise InputError(f"input file hash for {key!r} must be a SHA-256 hex digest, got {str(digest)[:80]!r}")
             files[str(key)] = d
         object.__setattr__(self, "input_files", dict(sorted(files.items())))
-        object.__setattr__(self, "parameters", dict(self.parameters))
+        object.__setattr__(self, "parameters", dict(self.parameters or {}))
         object.__setattr__(self, "method", str(self.method).strip())
 
 
@@ -423,17 +435,31 @@ def as_provenance(value: "Provenance | Mapping[str, Any] | None") -> Provenance:
     if isinstance(value, Provenance):
         return value
     if isinstance(value, Mapping):
+        unknown = sorted(str(k)[:40] for k in value if k not in _PROVENANCE_FIELDS)
+        if unknown:
+            raise InputError(f"provenance has unknown fields {', '.join(unknown)}; "
+                             f"known: {', '.join(_PROVENANCE_FIELDS)}")
         return Provenance(**dict(value))
     raise InputError(f"provenance must be a Provenance or a mapping, got {type(value).__name__}")
 
 
+_PROVENANCE_FIELDS = ("method", "parameters", "input_files", "software_version", "author")
+
+
 def as_quality(value: Mapping[str, Any] | None) -> dict[str, float]:
+    """Quality metrics as ``{name: finite float}``; InputError naming the metric otherwise."""
+    if not isinstance(value or {}, Mapping):
+        raise InputError(f"quality must map metric names to numbers, got {type(value).__name__}")
+    _limits.check_count(len(value or {}), "quality", _limits.MAX_QUALITY_METRICS, "metrics")
     out: dict[str, float] = {}
     for key, v in dict(value or {}).items():
+        _limits.check_text(key, "quality metric name", _limits.MAX_KEY_CHARS, strict=True)
+        if isinstance(v, bool):
+            raise InputError(f"quality metric {key!r} must be a number, got {v!r}")
         try:
             x = float(v)
         except (TypeError, ValueError):
-            raise InputError(f"quality metric {key!r} must be a number, got {v!r}") from None
+            raise InputError(f"quality metric {key!r} must be a number, got {str(v)[:40]!r}") from None
         if not math.isfinite(x):
             raise InputError(f"quality metric {key!r} must be finite, got {v!r}")
         out[str(key)] = x

@@ -8,7 +8,7 @@ import pytest
 from store_helpers import alter_version_row, assert_one_line_error, planar_conditions, run_cli, spring_joint
 
 from jointdb.errors import IntegrityError
-from jointdb.store import Repository
+from jointdb.store import DamagedRecordWarning, Repository
 
 
 def _two_joints(repo):
@@ -22,12 +22,16 @@ def test_an_altered_row_is_refused_by_every_read(backend, tmp_path):
     _two_joints(repo)
     alter_version_row(backend.url, "UPDATE joint_versions SET torque_nm = 999 WHERE version = 1 AND "
                                    "joint_id = (SELECT id FROM joints WHERE name = 'T1')")
-    for read in (lambda: repo.get("T1"), lambda: repo.get("T1", 1), lambda: repo.history("T1"),
-                 lambda: repo.list_joints(), lambda: repo.load_frf("T1", 1),
-                 lambda: repo.nearest("tool-holder", planar_conditions(torque=999.0), k=2),
+    for read in (lambda: repo.get("T1"), lambda: repo.get("T1", 1), lambda: repo.load_frf("T1", 1),
                  lambda: repo.export(["T1"], tmp_path / "b.h5"), lambda: repo.diff("T1", 1, other="T2")):
         with pytest.raises(IntegrityError, match="T1 v1: stored record does not match its record hash"):
             read()
+    # lists leave the altered version out and name it (issue 20: the rest of a list still answers)
+    for read, rest in ((lambda: repo.history("T1"), []), (lambda: [v.name for v in repo.list_joints()], ["T2"]),
+                       (lambda: [m.version.name for m in
+                                 repo.nearest("tool-holder", planar_conditions(torque=999.0), k=2)], ["T2"])):
+        with pytest.warns(DamagedRecordWarning, match="T1 v1: stored record does not match its record hash"):
+            assert read() == rest
     assert repo.get("T2").conditions.torque_nm == 80.0  # an intact joint stays readable
     assert not (tmp_path / "b.h5").exists()
     env = {"JOINTDB_BLOBS": str(backend.blobs)}
@@ -35,7 +39,7 @@ def test_an_altered_row_is_refused_by_every_read(backend, tmp_path):
                  ["joints", "history", "T1"], ["joints", "list"]):
         result = run_cli(*args, "--db", backend.url, env=env)
         assert_one_line_error(result, IntegrityError.exit_code, "record hash")
-        assert "999" not in result[1]  # nothing printed
+        assert "999" not in result[1]  # the altered version is never printed (lists show the rest)
     assert not repo.check().ok
     repo.close()
 

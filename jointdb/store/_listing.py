@@ -1,0 +1,201 @@
+"""Listing the catalogue in SQL: one SELECT per page, filtered on the query index, keyset-paginated.
+
+Which version of a joint is listed
+----------------------------------
+By default each joint's *current* version, as :meth:`Repository.get` returns it: the newest
+version that is not deprecated, or the newest one when all are (the query index flags
+``newest_active`` and ``newest``, :mod:`jointdb.store._index`). ``include_deprecated=False``
+lists only joints with a version that is not deprecated; ``state`` keeps only active or only
+deprecated listed versions; ``label`` lists instead the version that carries that label.
+
+Filters work on the index's typed columns: joint type, materials (all given must be
+present), torque and preload ranges (a joint without the value is left out when a bound is
+given), part of the name (case-insensitive). Pages are ordered by name; ``after`` (the
+``next`` cursor of the previous page) continues after a name without counting rows again, and
+``offset`` skips rows. The page's rows, their labels and the total number of matches come
+back in one statement whatever the page size.
+
+A row that cannot be used (damaged JSON, a record hash that does not match, a stored field
+beyond today's limits) does not stop the list: it is reported in :attr:`JointPage.damaged`
+with the joint's name and version.
+"""
+
+from __future__ import annotations
+
+import base64
+import binascii
+import math
+from collections.abc import Iterable
+from dataclasses import dataclass
+from types import SimpleNamespace
+
+from sqlalchemy import and_, exists, false, func, literal, or_, select, true
+from sqlalchemy.orm import aliased
+
+from jointdb._limits import control_character
+from jointdb.errors import InputError, IntegrityError
+from jointdb.store._models import JointRow, LabelRow, QueryVersionRow, VersionRow
+from jointdb.store._records import DamagedVersion, to_version
+from jointdb.store._types import JointVersion, check_joint_type, check_label, normalise_material
+
+#: Largest page of a listing.
+MAX_PAGE = 10_000
+_VERSION_COLUMNS = [c.name for c in VersionRow.__table__.columns]
+
+
+@dataclass(frozen=True)
+class JointPage:
+    """One page of :meth:`jointdb.store.Repository.list_page`.
+
+    ``items``: the listed versions; ``damaged``: rows of this page that could not be read
+    (name, version, reason); ``total``: matches of the filters over the whole catalogue;
+    ``next``: the cursor of the next page (None on the last one).
+    """
+
+    items: tuple[JointVersion, ...]
+    damaged: tuple[DamagedVersion, ...]
+    total: int
+    next: str | None
+
+
+def encode_cursor(name: str) -> str:
+    """The opaque ``next`` cursor continuing after joint ``name``."""
+    return base64.urlsafe_b64encode(name.encode("utf-8")).decode("ascii").rstrip("=")
+
+
+def decode_cursor(cursor: str) -> str:
+    """The joint name a cursor continues after; InputError for text that is not a cursor."""
+    try:
+        text = str(cursor)
+        name = base64.urlsafe_b64decode(text + "=" * (-len(text) % 4)).decode("utf-8")
+    except (binascii.Error, UnicodeError, ValueError):
+        name = ""
+    if not name or len(name) > 200 or control_character(name):
+        raise InputError(f"cursor {str(cursor)[:60]!r} is not a cursor of this list (use the 'next' of a page)")
+    return name
+
+
+def _bounds(name: str, lo: float | None, hi: float | None) -> None:
+    for x in (lo, hi):
+        if x is not None and (isinstance(x, bool) or not math.isfinite(float(x))):
+            raise InputError(f"{name} bounds must be finite numbers, got {x}")
+
+
+def check_text_filter(text: str | None, what: str) -> str | None:
+    """A free-text filter (part of a name): at most 200 characters, no control characters (a NUL
+    would reach PostgreSQL, which refuses it)."""
+    if text is None or text == "":
+        return None
+    if not isinstance(text, str) or len(text) > 200 or control_character(text):
+        raise InputError(f"{what} must be at most 200 characters without control characters")
+    return text
+
+
+def _filters(qv, j, *, joint_type, materials, label, include_deprecated, state, torque, preload, name_contains):
+    """The WHERE terms of a listing, and the label join condition (or None)."""
+    terms = []
+    if joint_type:
+        terms.append(qv.joint_type == check_joint_type(joint_type))
+    for m in sorted({normalise_material(m) for m in materials or () if str(m).strip()}):
+        terms.append(qv.materials.contains(f'"{m}"', autoescape=True))  # JSON text of the sorted list
+    for col, (lo, hi) in ((qv.torque_nm, torque), (qv.preload_n, preload)):
+        if lo is not None:
+            terms.append(col >= float(lo))
+        if hi is not None:
+            terms.append(col <= float(hi))
+    if name_contains:
+        terms.append(func.lower(j.name).contains(name_contains.lower(), autoescape=True))
+    if state not in (None, "active", "deprecated"):
+        raise InputError(f"state must be 'active' or 'deprecated', got {str(state)[:40]!r}")
+    if state is not None:
+        terms.append(qv.deprecated == (state == "deprecated"))
+    if label is not None:
+        lab = aliased(LabelRow)
+        terms.append(exists().where(lab.joint_id == qv.joint_id, lab.version == qv.version, lab.label == label))
+        if not include_deprecated:
+            terms.append(qv.deprecated == false())
+    elif include_deprecated:
+        q2 = aliased(QueryVersionRow)
+        terms.append(or_(qv.newest_active == true(),
+                         and_(qv.newest == true(),
+                              ~exists().where(q2.joint_id == qv.joint_id, q2.newest_active == true()))))
+    else:
+        terms.append(qv.newest_active == true())
+    return terms
+
+
+def page_statement(dialect: str, *, after: str | None, offset: int, limit: int | None, **filters):
+    """The one SELECT of a page: version columns, joint name and type, standing, labels, total."""
+    qv, j, v, lab = QueryVersionRow, JointRow, VersionRow, aliased(LabelRow)
+    terms = _filters(qv, j, **filters)
+    agg = func.string_agg if dialect == "postgresql" else func.group_concat
+    labels = (select(agg(lab.label, literal(","))).where(lab.joint_id == qv.joint_id, lab.version == qv.version)
+              .scalar_subquery())
+    qv_c, j_c = aliased(QueryVersionRow), aliased(JointRow)
+    total = (select(func.count()).select_from(qv_c).join(j_c, j_c.id == qv_c.joint_id)
+             .where(*_filters(qv_c, j_c, **filters)).scalar_subquery())
+    stmt = (select(j.name, j.joint_type, qv.deprecated, labels.label("labels"), total.label("total"),
+                   *[getattr(v, c) for c in _VERSION_COLUMNS])
+            .select_from(qv).join(j, j.id == qv.joint_id).join(v, v.id == qv.version_id)
+            .where(*terms).order_by(j.name))
+    if after is not None:
+        stmt = stmt.where(j.name > after)
+    if offset:
+        stmt = stmt.offset(offset)
+    if limit is not None:
+        stmt = stmt.limit(limit + 1)  # one more: is there a next page?
+    return stmt
+
+
+def version_of(row) -> JointVersion:
+    """The JointVersion of one listed row (IntegrityError naming joint and version when damaged)."""
+    values = SimpleNamespace(**{c: getattr(row, c) for c in _VERSION_COLUMNS})
+    joint = SimpleNamespace(id=row.joint_id, name=row.name, joint_type=row.joint_type)
+    labels = [x for x in (row.labels or "").split(",") if x]
+    return to_version(joint, values, "deprecated" if row.deprecated else "active", labels)
+
+
+def read_rows(rows: Iterable) -> tuple[list[JointVersion], list[DamagedVersion]]:
+    """Listed rows as versions; damaged ones are reported apart instead of stopping the list."""
+    items, damaged = [], []
+    for row in rows:
+        try:
+            items.append(version_of(row))
+        except IntegrityError as exc:
+            damaged.append(DamagedVersion(row.name, int(row.version), str(exc).split(": ", 1)[-1]))
+    return items, damaged
+
+
+def list_page(conn, *, joint_type=None, materials=(), label=None, include_deprecated=True, state=None,
+              torque_min=None, torque_max=None, preload_min=None, preload_max=None, name_contains=None,
+              after=None, offset=0, limit=50) -> JointPage:
+    """One page of the catalogue listing (module docstring) in one statement on ``conn``.
+
+    Raises
+    ------
+    InputError
+        A bad filter, cursor, offset or limit.
+    """
+    _bounds("torque", torque_min, torque_max)
+    _bounds("preload", preload_min, preload_max)
+    if limit is not None and (isinstance(limit, bool) or not 1 <= int(limit) <= MAX_PAGE):
+        raise InputError(f"limit must be 1..{MAX_PAGE}, got {limit!r}")
+    if isinstance(offset, bool) or not 0 <= int(offset) <= 10**9:
+        raise InputError(f"offset must be 0..1000000000, got {offset!r}")
+    filters = dict(joint_type=joint_type, materials=materials,
+                   label=check_label(label) if label is not None else None,
+                   include_deprecated=bool(include_deprecated), state=state,
+                   torque=(torque_min, torque_max), preload=(preload_min, preload_max),
+                   name_contains=check_text_filter(name_contains, "name filter"))
+    start = decode_cursor(after) if after else None
+    rows = list(conn.execute(page_statement(conn.dialect.name, after=start, offset=int(offset),
+                                            limit=None if limit is None else int(limit), **filters)))
+    more = limit is not None and len(rows) > int(limit)
+    rows = rows[:int(limit)] if limit is not None else rows
+    total = int(rows[0].total) if rows else 0
+    if not rows and (start is not None or offset):  # past the end: the total is still asked for
+        total = conn.execute(select(func.count()).select_from(QueryVersionRow).join(
+            JointRow, JointRow.id == QueryVersionRow.joint_id)
+            .where(*_filters(QueryVersionRow, JointRow, **filters))).scalar_one()
+    items, damaged = read_rows(rows)
+    return JointPage(tuple(items), tuple(damaged), total, encode_cursor(rows[-1].name) if more else None)
