@@ -145,9 +145,11 @@ def _handle(fn):
             resp = RedirectResponse("/ui/signin", status_code=303)
         except PermissionError as exc:
             resp = _page(request, "base.html", 403, title="not allowed", error=str(exc))
-        except JointdbError as exc:
-            status = exc.http_status if exc.http_status < 500 else 500
-            resp = _page(request, "signin.html" if status == 401 else "base.html", status, error=str(exc))
+        except JointdbError as exc:  # the same one-line, scrubbed message the API would give
+            from jointdb.server._safety import client_error
+
+            status, text = client_error(exc, request.scope.get("state", {}).get("request_id"))
+            resp = _page(request, "signin.html" if status == 401 else "base.html", status, error=text)
         if getattr(request.state, "stale_session", False):
             resp.delete_cookie(SESSION_COOKIE, path="/ui", httponly=True, samesite="strict",
                                secure=request.app.state.settings.cookie_secure)
