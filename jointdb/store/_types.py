@@ -141,8 +141,8 @@ def _finite_nonneg(value: Any, what: str) -> float | None:
         x = float(value)
     except (TypeError, ValueError):
         raise InputError(f"{what} must be a number, got {value!r}") from None
-    if not math.isfinite(x):
-        raise InputError(f"{what} must be finite, got {value!r}")
+    if not math.isfinite(x) or abs(x) > _limits.MAX_JSON_NUMBER:  # what a stored record may hold
+        raise InputError(f"{what} must be finite and of magnitude <= {_limits.MAX_JSON_NUMBER:g}, got {value!r}")
     if x < 0:
         raise InputError(f"{what} must be >= 0, got {x:g}")
     return x
@@ -460,8 +460,9 @@ def as_quality(value: Mapping[str, Any] | None) -> dict[str, float]:
             x = float(v)
         except (TypeError, ValueError):
             raise InputError(f"quality metric {key!r} must be a number, got {str(v)[:40]!r}") from None
-        if not math.isfinite(x):
-            raise InputError(f"quality metric {key!r} must be finite, got {v!r}")
+        if not math.isfinite(x) or abs(x) > _limits.MAX_JSON_NUMBER:
+            raise InputError(f"quality metric {key!r} must be finite and of magnitude <= "
+                             f"{_limits.MAX_JSON_NUMBER:g}, got {v!r}")
         out[str(key)] = x
     return dict(sorted(out.items()))
 

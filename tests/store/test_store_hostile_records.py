@@ -43,6 +43,22 @@ def test_nesting_300_is_refused_before_anything_is_committed(repo):
     assert repo.get("T2").conditions.extra == _nested(64)
 
 
+def test_numbers_beyond_what_a_record_may_hold_are_refused_before_the_write(repo):
+    """1e308 is a finite float, but beyond the 1e300 a stored record may hold: accepting it at the
+    write made a version that every later read refused (found by tests/security)."""
+    before = count_rows(repo)
+    with pytest.raises(InputError, match=r"geometry\['diameter_m'\].*1e\+300"):
+        _catalogue(repo, "BIG", geometry={"diameter_m": 1e308})
+    with pytest.raises(InputError, match=r"torque_nm.*1e\+300"):
+        _catalogue(repo, "BIG", torque=1e308)
+    with pytest.raises(InputError, match=r"quality metric 'fit_error'.*1e\+300"):
+        repo.catalogue("BIG", "tool-holder", spring_joint(), {"materials": ["steel"]}, KIND,
+                       quality={"fit_error": 1e308})
+    assert count_rows(repo) == before
+    _catalogue(repo, "BIG", geometry={"diameter_m": 1e300})  # the limit itself reads back
+    assert repo.get("BIG").conditions.geometry["diameter_m"] == 1e300
+
+
 @pytest.mark.parametrize("field, value, message", [
     ("extra", {"k\x00": 1}, "control character U+0000"),
     ("extra", {"note": "a\x00b"}, "control character U+0000"),
