@@ -129,7 +129,11 @@ def _confined_file(cpath: Path, where: str, value: str, root: Path) -> Path:
                                  "accepted; name a file inside the archive by its path relative to the campaign file")
     top = os.path.realpath(root)
     joined = os.path.normpath(os.path.join(os.path.realpath(cpath.parent), value))
-    if not _inside(joined, top):  # the value itself is not repeated: it may name a server path
+    # lexically too: a path that climbs above the archive's top and comes back in (through the name
+    # of the folder it was unpacked into) names a place outside the archive all the same
+    inner = os.path.normpath(os.path.join(os.path.relpath(os.path.realpath(cpath.parent), top), value))
+    if not _inside(joined, top) or inner == ".." or inner.startswith(".." + os.sep):
+        # the value itself is not repeated: it may name a server path
         raise _err(cpath, where, "the path leads outside the uploaded archive; put that file into the "
                                  "archive at this path relative to the campaign file")
     if os.path.realpath(joined) != joined:

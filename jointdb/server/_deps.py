@@ -127,10 +127,25 @@ def frf_from_json(data: dict[str, Any]):
     from jointdb.frf import FRF
 
     try:
+        freq = np.asarray(data["freq_hz"], dtype=float)
         re_, im = np.asarray(data["real"], dtype=float), np.asarray(data["imag"], dtype=float)
-        return FRF(np.asarray(data["freq_hz"], dtype=float), re_ + 1j * im, tuple(data["outputs"]),
-                   tuple(data["inputs"]), data.get("quantity", "receptance"))
+        want = (freq.size, len(data["outputs"]), len(data["inputs"]))
+        for part, arr in (("real", re_), ("imag", im)):  # no broadcasting: every entry given
+            if arr.shape != want:
+                raise InputError(f"frf.{part}: shape {arr.shape} must be (n_freq, n_outputs, n_inputs) = {want}")
+        frf = FRF(freq, re_ + 1j * im, tuple(data["outputs"]), tuple(data["inputs"]),
+                  data.get("quantity", "receptance"))
     except KeyError as exc:
         raise InputError(f"frf: missing field {exc.args[0]!r} (freq_hz, outputs, inputs, real, imag)") from None
+    except InputError:
+        raise
     except (TypeError, ValueError) as exc:
         raise InputError(f"frf: {' '.join(str(exc).split())}") from None
+    if data.get("units") is not None:  # given: must be what the quantity and DOFs make them
+        from jointdb.io import unit_label
+
+        want_units = [[unit_label(frf.quantity, o, i) for i in frf.inputs] for o in frf.outputs]
+        if data["units"] != want_units:
+            raise InputError(f"frf.units: {str(data['units'])[:80]} do not match the quantity "
+                             f"{frf.quantity.value} and the DOFs, which give {want_units}")
+    return frf

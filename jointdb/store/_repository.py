@@ -285,7 +285,8 @@ class Repository(LabelsAndStates):
                 version = lab.version
             q = select(VersionRow).where(VersionRow.joint_id == joint.id)
             if version is not None:
-                row = s.scalar(q.where(VersionRow.version == int(version)))
+                # beyond the database's integers (PostgreSQL would refuse the query) no version exists
+                row = s.scalar(q.where(VersionRow.version == int(version))) if 0 < int(version) < 2**31 else None
                 if row is None:
                     n = s.scalar(select(func.max(VersionRow.version)).where(VersionRow.joint_id == joint.id))
                     raise NotFoundError(f"joint {name!r} has no version {version} (versions 1..{n or 0})")

@@ -122,7 +122,8 @@ def archives(target) -> list[Attack]:
                 "\u00f8.json", "x\r\n.json", "../holder.uff\x00"):
         placeholder = "Q" * len(bad.encode())  # zipfile itself cuts a name at NUL: write it byte by byte
         data = _zip(valid + [(placeholder, b"{}")]).replace(placeholder.encode(), bad.encode())
-        harmless = bad in ("dir/", "campaign.json/", "\u00f8.json")  # a directory entry, a unicode name
+        # a directory entry, a unicode name, a member in a folder (campaigns may keep their layout)
+        harmless = bad in ("dir/", "campaign.json/", "\u00f8.json", "a/b.json")
         out.append(_upload(f"member named {bad[:30]!r}", data, echo=echo + bad, expect="ok" if harmless else "4xx"))
     # the campaign itself under a path-like name
     out.append(_upload("campaign member ../campaign.json", _zip([("../campaign.json", files["campaign.json"])]

@@ -100,6 +100,9 @@ def test_campaign_path_climbing_out_of_the_archive_is_refused(server):
     _refused(server, _post(server, _zip(files)), "outside the uploaded archive")
     files = _campaign_files(tool={"model": "../../models/test-tool-carbide.json"})
     _refused(server, _post(server, _zip(files)), "outside the uploaded archive")
+    # out and back in through the name of the folder the server unpacked into: still outside
+    files = _campaign_files(holder={"uff58": "../campaign/holder.uff", "dofs": ["3x", "3ry"]})
+    _refused(server, _post(server, _zip(files)), "outside the uploaded archive")
 
 
 def test_symlink_member_is_refused(server):
