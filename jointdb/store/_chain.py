@@ -299,3 +299,21 @@ def read_checkpoint_file(path) -> Any:
         return json.loads(raw)
     except (UnicodeDecodeError, ValueError):
         raise IntegrityError(f"checkpoint {p.name} is not JSON") from None
+
+
+def signed_checkpoint(conn, private_key, since: dict | None = None) -> dict[str, Any]:
+    """Recompute the chain from the rows (in ``conn``'s snapshot) and sign its head.
+
+    ``since``: an earlier checkpoint the history must extend.
+
+    Raises
+    ------
+    IntegrityError
+        The rows, the stored chain or ``since`` disagree: nothing is signed (signing would
+        bless a rewritten history).
+    """
+    problems = chain_problems(conn, since)
+    if problems:
+        raise IntegrityError(f"history chain is broken, nothing signed: {problems[0]} (run `jointdb db check`)")
+    size, head = chain_head(conn)
+    return make_checkpoint(size, head, private_key)
