@@ -45,9 +45,13 @@ def register(app: typer.Typer) -> None:
         if create_role and not app_role:
             raise InputError("--create-role needs --app-role NAME")
         if app_role:
+            from jointdb.store._db import is_sqlite
             from jointdb.store._roles import check_role_name
 
             check_role_name(app_role)
+            if is_sqlite(resolve_url(db)):
+                raise InputError("--app-role is for PostgreSQL; a SQLite file has no roles (whoever can write "
+                                 "the file can rewrite it: docs/service.md, threat model)")
         check_db_target(db, create=True)
         rev = upgrade(db, to)
         out = {"database": safe_url(resolve_url(db)), "revision": rev}

@@ -317,3 +317,30 @@ def signed_checkpoint(conn, private_key, since: dict | None = None) -> dict[str,
         raise IntegrityError(f"history chain is broken, nothing signed: {problems[0]} (run `jointdb db check`)")
     size, head = chain_head(conn)
     return make_checkpoint(size, head, private_key)
+
+
+def check_serve_options(db, allow_owner: bool, key_path, interval_s: float) -> dict[str, str]:
+    """``jointdb serve``'s role and checkpoint options, checked before the server starts; returns
+    the environment the workers read them from.
+
+    Raises
+    ------
+    InputError
+        Connected as the tables' owner or a superuser without ``allow_owner``; an unusable key
+        or interval.
+    """
+    from pathlib import Path
+
+    from jointdb.store._db import resolve_url
+    from jointdb.store._roles import refuse_owner
+    from jointdb.store._signing import load_private_key
+
+    if not allow_owner:
+        refuse_owner(resolve_url(db))
+    env: dict[str, str] = {}
+    if key_path is not None:
+        load_private_key(key_path)  # refuse a bad key now, not at the first request
+        if not interval_s >= 1:
+            raise InputError(f"--checkpoint-interval must be >= 1 second, got {interval_s:g}")
+        env = {"JOINTDB_CHECKPOINT_KEY": str(Path(key_path).resolve()), "JOINTDB_CHECKPOINT_INTERVAL_S": str(interval_s)}
+    return env

@@ -28,7 +28,7 @@ HISTORY_TABLES = ("joints", "joint_versions", "joint_states", "audit_log", "hist
 APP_PRIVILEGES = {
     **{t: "SELECT, INSERT" for t in HISTORY_TABLES},
     "joints": "SELECT, INSERT, UPDATE (id)",
-    "labels": "SELECT, INSERT, UPDATE",
+    "labels": "SELECT, INSERT, UPDATE (version, updated_at, updated_by)",
     "query_versions": "SELECT, INSERT, UPDATE, DELETE",
     "query_geometry": "SELECT, INSERT, UPDATE, DELETE",
     "query_stamp": "SELECT, INSERT, UPDATE",
@@ -105,3 +105,26 @@ def owner_problem(conn) -> str | None:
     if row[1]:
         return "the database role owns the history tables (it could disable their triggers and rewrite them)"
     return None
+
+
+def refuse_owner(url: str) -> None:
+    """Refuse to serve over a PostgreSQL connection that could rewrite history (:func:`owner_problem`).
+
+    Raises
+    ------
+    InputError
+        Connected as a superuser or as the owner of the history tables (with how to set up the
+        two roles, and ``--allow-owner``).
+    """
+    from jointdb.store import _db
+
+    if _db.is_sqlite(url):
+        return
+    engine, _ = _db.make_engines(url)
+    try:
+        with _db.db_errors(url), engine.connect() as conn:
+            problem = owner_problem(conn)
+    finally:
+        engine.dispose()
+    if problem:
+        raise InputError(f"refusing to serve: {problem}; {SETUP_HINT}; or pass --allow-owner to serve anyway")
