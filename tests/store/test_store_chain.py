@@ -213,3 +213,13 @@ def test_the_migration_chains_an_existing_database(repo, backend):
         assert r.check(verify_blobs=False).ok
     finally:
         r.close()
+
+
+@pytest.mark.slow
+def test_100_checks_during_16_writers_raise_no_false_alarm(empty_backend, load_script):
+    """Item 4: index and history are read in one snapshot (figures: docs/validation/reliability.md)."""
+    if empty_backend.name != "postgresql":
+        pytest.skip("the false alarms were PostgreSQL's (READ COMMITTED statements see different snapshots)")
+    bench = load_script("bench/bench_check_consistency.py")
+    result = bench.run(empty_backend.url, empty_backend.blobs, writers=16, checks=100)
+    assert result["false_alarms"] == 0 and result["final_check_ok"], result
