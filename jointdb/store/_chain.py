@@ -110,23 +110,25 @@ def _lock(conn) -> None:
 
 
 def _append(conn, rows: list[tuple[str, int]]) -> None:
+    # the rows' content first (this transaction's own rows: no lock needed), then, under the lock
+    # held to commit, only the chain's head and the insert
+    todo = []
+    for kind in KINDS:
+        ids = sorted({i for k, i in rows if k == kind})
+        contents = _contents(conn, kind, ids) if ids else {}
+        for row_id in ids:
+            if row_id not in contents:
+                raise IntegrityError(f"history row {kind} {row_id} vanished before its chain entry was written")
+            todo.append((kind, row_id, contents[row_id]))
     _lock(conn)
     chain = ChainRow.__table__
     last = conn.execute(select(chain.c.seq, chain.c.head_sha256).order_by(chain.c.seq.desc()).limit(1)).first()
     seq, head = (int(last[0]), last[1]) if last else (0, ZERO)
     entries = []
-    for kind in KINDS:
-        ids = sorted({i for k, i in rows if k == kind})
-        if not ids:
-            continue
-        contents = _contents(conn, kind, ids)
-        for row_id in ids:
-            if row_id not in contents:
-                raise IntegrityError(f"history row {kind} {row_id} vanished before its chain entry was written")
-            seq += 1
-            head = next_head(head, seq, kind, row_id, contents[row_id])
-            entries.append({"seq": seq, "kind": kind, "row_id": row_id, "content_sha256": contents[row_id],
-                            "head_sha256": head})
+    for kind, row_id, content in todo:
+        seq += 1
+        head = next_head(head, seq, kind, row_id, content)
+        entries.append({"seq": seq, "kind": kind, "row_id": row_id, "content_sha256": content, "head_sha256": head})
     conn.execute(insert(chain), entries)
 
 
