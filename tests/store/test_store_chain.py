@@ -145,6 +145,18 @@ def test_a_deleted_audit_row_is_detected(signed):
     assert rc == 5 and f"(audit row {victim[0]}): the row is missing" in err, (out, err)
 
 
+def test_history_that_grew_after_the_checkpoint_extends_it(signed, backend):
+    repo = backend.repo()
+    try:
+        repo.catalogue("T3", "tool-holder", spring_joint(k=(5e6, 9e4)), planar_conditions(torque=70.0),
+                       "spring-damper-planar")
+        repo.label("T3", 1, "released")
+    finally:
+        repo.close()
+    rc, out, err = _check(signed)
+    assert rc == 0, err
+
+
 def test_a_forged_or_untrusted_checkpoint_is_refused(signed, tmp_path):
     data = json.loads(signed.cp.read_text())
     data["tree_size"] -= 1
