@@ -72,12 +72,22 @@ def _plain(value: Any) -> Any:
     return value
 
 
-def _columns(cls):
-    """The columns of a history table, JSON ones read as their stored text (never decoded)."""
-    from sqlalchemy import Text, cast
+def _columns(cls, dialect: str):
+    """The columns of a history table, JSON ones read as their stored text (never decoded; on SQLite
+    the times too), so that a damaged value is hashed as it is instead of failing to load."""
+    from sqlalchemy import Text, cast, type_coerce
 
-    table = cls.__table__
-    return [cast(c, Text).label(c.name) if isinstance(c.type, JSON) else c for c in table.columns]
+    from jointdb.store._models import UTCDateTime
+
+    out = []
+    for c in cls.__table__.columns:
+        if isinstance(c.type, JSON):
+            out.append(cast(c, Text).label(c.name))
+        elif dialect == "sqlite" and isinstance(c.type, UTCDateTime):
+            out.append(type_coerce(c, Text).label(c.name))
+        else:
+            out.append(c)
+    return out
 
 
 def content_hash(kind: str, row: Any) -> str:
@@ -96,7 +106,7 @@ def next_head(previous: str, seq: int, kind: str, row_id: int, content: str) -> 
 def _contents(conn, kind: str, ids: Iterable[int] | None = None) -> dict[int, str]:
     """``row id -> content hash`` of the rows of one kind (all, or the ``ids`` given)."""
     cls = KINDS[kind]
-    q = select(*_columns(cls))
+    q = select(*_columns(cls, conn.dialect.name))
     if ids is not None:
         q = q.where(cls.__table__.c.id.in_(sorted(set(ids))))
     return {r.id: content_hash(kind, r) for r in conn.execute(q)}

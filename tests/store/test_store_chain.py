@@ -235,3 +235,16 @@ def test_100_checks_during_16_writers_raise_no_false_alarm(empty_backend, load_s
     bench = load_script("bench/bench_check_consistency.py")
     result = bench.run(empty_backend.url, empty_backend.blobs, writers=16, checks=100)
     assert result["false_alarms"] == 0 and result["final_check_ok"], result
+
+
+def test_a_changed_audit_detail_is_named_even_when_unreadable(repo, backend):
+    """An audit row's JSON edited behind jointdb's back (on SQLite: a flipped byte, no longer JSON) is
+    reported by `db check` as the chain entry that differs (exit 5), not a traceback."""
+    _populate(repo)
+    repo.close()
+    new = "'{\"reason\": \"loose nut\"'" if backend.name == "sqlite" else "'{\"reason\": \"tight nut\"}'"
+    _as_owner(backend.url, "audit_log", "no_update",
+              lambda c: c.exec_driver_sql(f"UPDATE audit_log SET details = {new} WHERE action = 'deprecate'"))
+    rc, out, err = run_cli("db", "check", "--quick", env={"JOINTDB_URL": backend.url,
+                                                         "JOINTDB_BLOBS": str(backend.blobs)})
+    assert rc == 5 and "(audit row" in err and "rewritten" in err and "Traceback" not in err, err
