@@ -9,6 +9,8 @@ in commit order::
 
 The content hash is recomputed from the row as stored (every column; JSON columns as their
 stored text), so ``jointdb db check`` can recompute the whole chain from the rows alone.
+That canonical form (:func:`content_hash`, :func:`next_head`) is part of the stored data:
+changing it needs a migration that re-chains (and invalidates every checkpoint signed before).
 
 Appending is serialised: PostgreSQL takes a transaction-level advisory lock (per schema)
 before reading the chain's head, in the transaction of the rows it covers, and ``seq`` is
