@@ -7,6 +7,7 @@ and repository opening it shares.
 from __future__ import annotations
 
 import json
+from pathlib import Path
 from typing import Annotated, Optional
 
 import typer
@@ -27,16 +28,46 @@ def register(app: typer.Typer) -> None:
     @db_app.command("upgrade")
     def db_upgrade(
         to: Annotated[str, typer.Option("--to", help="Target revision.")] = "head",
+        app_role: Annotated[Optional[str], typer.Option(
+            "--app-role", help="PostgreSQL: grant this role the service's minimal privileges.")] = None,
+        create_role: Annotated[bool, typer.Option("--create-role", help="Create the --app-role (LOGIN) if missing.")] = False,
         db: DbOpt = None, as_json: JsonOpt = False,
     ) -> None:
         """Create or migrate the schema (Alembic). A missing SQLite file is created; an existing
-        file must be a jointdb database. Example: jointdb db upgrade --db postgresql+psycopg://host/jointdb"""
+        file must be a jointdb database. PostgreSQL: run it as the owner role, with --app-role for
+        the role the service connects as (SELECT/INSERT on history, nothing that rewrites it).
+
+        Example: jointdb db upgrade --db postgresql+psycopg://owner@host/jointdb --app-role jointdb_app --create-role
+        """
         from jointdb.store import upgrade
         from jointdb.store._db import resolve_url, safe_url
 
+        if create_role and not app_role:
+            raise InputError("--create-role needs --app-role NAME")
+        if app_role:
+            from jointdb.store._db import is_sqlite
+            from jointdb.store._roles import check_role_name
+
+            check_role_name(app_role)
+            if is_sqlite(resolve_url(db)):
+                raise InputError("--app-role is for PostgreSQL; a SQLite file has no roles (whoever can write "
+                                 "the file can rewrite it: docs/service.md, threat model)")
         check_db_target(db, create=True)
         rev = upgrade(db, to)
-        emit({"database": safe_url(resolve_url(db)), "revision": rev}, as_json=as_json)
+        out = {"database": safe_url(resolve_url(db)), "revision": rev}
+        if app_role:
+            from jointdb.store import _db
+            from jointdb.store._roles import grant_app_role
+
+            url = resolve_url(db)
+            _, write = _db.make_engines(url)
+            try:
+                with _db.db_errors(url), write.begin() as conn:
+                    grant_app_role(conn, app_role, create=create_role)
+            finally:
+                write.dispose()
+            out["app_role"] = app_role
+        emit(out, as_json=as_json)
 
     @db_app.command("downgrade")
     def db_downgrade(
@@ -63,13 +94,32 @@ def register(app: typer.Typer) -> None:
     @db_app.command("check")
     def db_check(
         quick: Annotated[bool, typer.Option("--quick", help="Only check blobs exist (do not read and hash them).")] = False,
+        checkpoint: Annotated[Optional[Path], typer.Option(
+            "--checkpoint", help="A signed checkpoint (`db checkpoint`, GET /api/v1/checkpoint) the history must extend.")] = None,
+        trust: Annotated[Optional[list[Path]], typer.Option(
+            "--trust", help="Public key (.pub) the checkpoint must be signed with (repeatable).")] = None,
         db: DbOpt = None, blobs: BlobsOpt = None, as_json: JsonOpt = False,
     ) -> None:
-        """Walk every row and blob; report missing or corrupt data (exit code 5 on problems).
+        """Walk every row, the history chain and every blob; report missing, corrupt or rewritten
+        data (exit code 5 on problems). With --checkpoint, the history recomputed from the rows
+        must extend the signed checkpoint (same head at its size).
 
-        Example: jointdb db check
+        Example: jointdb db check --checkpoint lab.checkpoint --trust lab.pub
         """
-        report = _repo(db, blobs).check(verify_blobs=not quick)
+        from jointdb.store._maintenance import check
+
+        verified = None
+        if trust and checkpoint is None:
+            raise InputError("--trust needs --checkpoint FILE")
+        if checkpoint is not None:
+            from jointdb.store._chain import parse_checkpoint, read_checkpoint_file
+            from jointdb.store._signing import load_public_key
+
+            keys = [load_public_key(k) for k in trust or ()]
+            verified, signer = parse_checkpoint(read_checkpoint_file(checkpoint), keys)
+            message(f"checkpoint: {verified['tree_size']} entries at {verified['time']}, signature verified "
+                    f"({'trusted key' if keys else 'key named in the checkpoint'} {signer})")
+        report = check(_repo(db, blobs), verify_blobs=not quick, checkpoint=verified)
         data = {"ok": report.ok, "versions_checked": report.versions_checked, "blobs_checked": report.blobs_checked,
                 "problems": list(report.problems), "orphan_blobs": len(report.orphan_blobs),
                 "temporaries": len(report.temporaries), "notes": list(report.notes)}
@@ -83,6 +133,34 @@ def register(app: typer.Typer) -> None:
                 message(f"note: {n}")
         if not report.ok:
             raise IntegrityError(f"db check found {len(report.problems)} problem(s)")
+
+    @db_app.command("checkpoint")
+    def db_checkpoint(
+        sign: Annotated[Path, typer.Option("--sign", help="Ed25519 private key (`jointdb keys create`).")],
+        out: Annotated[Optional[Path], typer.Option("--out", help="Write the checkpoint here (else stdout).")] = None,
+        db: DbOpt = None, blobs: BlobsOpt = None,
+    ) -> None:
+        """Sign a checkpoint of the history chain (tree size, head, time) after recomputing the chain
+        from the rows; keep it away from the database and verify later with `db check --checkpoint`.
+
+        Example: jointdb db checkpoint --sign lab.key --out /safe/place/jointdb.checkpoint
+        """
+        from jointdb.store._chain import signed_checkpoint
+        from jointdb.store._maintenance import snapshot
+        from jointdb.store._signing import load_private_key
+
+        key = load_private_key(sign)
+        with snapshot(_repo(db, blobs)) as s:
+            cp = signed_checkpoint(s.connection(), key)
+        text = json.dumps(cp, indent=1) + "\n"
+        if out is None:
+            typer.echo(text, nl=False)
+            return
+        from jointdb.io._atomic import atomic_path
+
+        with atomic_path(out) as tmp:
+            tmp.write_bytes(text.encode())
+        message(f"checkpoint of {cp['tree_size']} entries written to {out}")
 
     @db_app.command("gc")
     def db_gc(

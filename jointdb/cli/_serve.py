@@ -30,6 +30,9 @@ def register(app: typer.Typer) -> None:
         secure_cookies: Annotated[Optional[bool], typer.Option(
             "--secure-cookies/--insecure-cookies",
             help="Force the web cookies' Secure flag on or off (default: on unless --host is loopback).")] = None,
+        allow_owner: Annotated[bool, typer.Option("--allow-owner", help="Serve even as the tables' owner or a superuser (PostgreSQL).")] = False,
+        checkpoint_key: Annotated[Optional[Path], typer.Option("--checkpoint-key", help="Ed25519 key: sign history checkpoints (GET /api/v1/checkpoint).")] = None,
+        checkpoint_interval: Annotated[float, typer.Option("--checkpoint-interval", help="Sign a new checkpoint at most every N seconds.")] = 60.0,
         db: DbOpt = None,
         blobs: BlobsOpt = None,
     ) -> None:
@@ -53,8 +56,11 @@ def register(app: typer.Typer) -> None:
         if log_level.lower() not in ("debug", "info", "warning", "error"):
             raise InputError(f"--log-level must be debug, info, warning or error, got {log_level!r}")
         check_db_target(db)  # a missing SQLite file is refused here, never created by the server
-        env = {"JOINTDB_OPEN_READS": "1" if open_reads else "0", "JOINTDB_MAX_UPLOAD_MB": str(max_upload_mb),
-               "JOINTDB_REQUEST_TIMEOUT_S": str(timeout), "JOINTDB_BIND_HOST": host}
+        from jointdb.store._chain import check_serve_options
+
+        env = check_serve_options(db, allow_owner, checkpoint_key, checkpoint_interval)  # roles: docs/service.md
+        env |= {"JOINTDB_OPEN_READS": "1" if open_reads else "0", "JOINTDB_MAX_UPLOAD_MB": str(max_upload_mb),
+                "JOINTDB_REQUEST_TIMEOUT_S": str(timeout), "JOINTDB_BIND_HOST": host}
         if secure_cookies is not None:
             env["JOINTDB_SECURE_COOKIES"] = "1" if secure_cookies else "0"
         if db is not None:

@@ -177,6 +177,9 @@ def create_app(settings: Settings | None = None, repo=None) -> FastAPI:
     for module in (routes_joints, routes_frf, routes_query, routes_writes, routes_admin):
         app.include_router(module.router, prefix="/api/v1")
     web.mount(app)
+    from jointdb.server.routes_chain import install as install_checkpoints  # GET /api/v1/checkpoint
+
+    install_checkpoints(app)
     install_security_headers(app, settings)
 
     @app.get("/healthz", tags=["service"])

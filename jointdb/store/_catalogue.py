@@ -26,6 +26,7 @@ from types import SimpleNamespace
 from sqlalchemy import bindparam, func, insert, or_, select, update
 
 from jointdb.errors import ConflictError
+from jointdb.store._chain import append_chain
 from jointdb.store._index import index_values
 from jointdb.store._models import (
     AuditRow,
@@ -127,8 +128,10 @@ def write_version(session, *, name, joint_type, frf, cond, kind, prov, qual, par
         parent_version=parent if parent is not None else latest, quality=qual)
     row.record_sha256 = record_sha256(record_dict(name, joint_type, row))
     row.id = conn.execute(st.insert_version, dict(vars(row))).inserted_primary_key[0]
-    conn.execute(st.insert_audit, {"at": now, "actor": actor, "action": "catalogue", "joint_name": name,
-                                   "version": number, "details": {"blob_sha256": blob, "method": prov.method}})
+    audit_id = conn.execute(st.insert_audit, {"at": now, "actor": actor, "action": "catalogue", "joint_name": name,
+                                              "version": number, "details": {"blob_sha256": blob,
+                                                                             "method": prov.method}}).inserted_primary_key[0]
+    append_chain(session, [("joint", jid if found is None else None), ("version", row.id), ("audit", audit_id)])
     deprecated = state == "deprecated"
     if found is not None:
         conn.execute(st.clear_newest if deprecated else st.clear_both, {"jid": jid})

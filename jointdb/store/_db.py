@@ -317,6 +317,7 @@ DOWNGRADE_DROPS = {
     "0003": "the guards against REPLACE/UPSERT, TRUNCATE and dropping the triggers",
     "0004": "the query index (derived from history; upgrading rebuilds it)",
     "0005": "the API tokens of the HTTP service (every token stops working) and the blobs kept in the database",
+    "0006": "the history chain (tamper evidence; checkpoints signed before no longer verify)",
     "0008": "the web catalogue's sign-in sessions (everyone signs in again) and the teams of API tokens",
 }
 

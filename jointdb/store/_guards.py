@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from sqlalchemy import Connection, text
 
-HISTORY = ("joints", "joint_versions", "joint_states", "audit_log")
+HISTORY = ("joints", "joint_versions", "joint_states", "audit_log", "history_chain")  # history_chain: 0006
 TRUNCATE_GUARDED = HISTORY + ("labels",)
 
 

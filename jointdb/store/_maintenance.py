@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+import contextlib
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from sqlalchemy import select
+from sqlalchemy.orm import Session
 
 from jointdb.errors import IntegrityError, NotFoundError
 from jointdb.frf import FRF
@@ -17,40 +19,66 @@ if TYPE_CHECKING:  # pragma: no cover
     from jointdb.store._repository import CheckReport, Repository, VersionDiff
 
 
-def _referenced(repo: "Repository") -> dict[str, list[str]]:
-    """blob sha -> list of "name vN" rows referencing it."""
+def _references(s) -> dict[str, list[str]]:
+    """blob sha -> list of "name vN" rows referencing it (in the session's snapshot)."""
     refs: dict[str, list[str]] = {}
-    with repo._read() as s:
-        q = select(JointRow.name, VersionRow.version, VersionRow.blob_sha256, VersionRow.raw_blobs).join(
-            JointRow, JointRow.id == VersionRow.joint_id
-        )
-        for name, version, blob, raw in s.execute(q):
-            refs.setdefault(blob, []).append(f"{name} v{version}")
-            for key, digest in (raw or {}).items():
-                refs.setdefault(digest, []).append(f"{name} v{version} raw {key}")
+    q = select(JointRow.name, VersionRow.version, VersionRow.blob_sha256, VersionRow.raw_blobs).join(
+        JointRow, JointRow.id == VersionRow.joint_id
+    )
+    for name, version, blob, raw in s.execute(q):
+        refs.setdefault(blob, []).append(f"{name} v{version}")
+        for key, digest in (raw or {}).items():
+            refs.setdefault(digest, []).append(f"{name} v{version} raw {key}")
     return refs
 
 
-def check(repo: "Repository", verify_blobs: bool = True) -> "CheckReport":
+def _referenced(repo: "Repository") -> dict[str, list[str]]:
+    """blob sha -> list of "name vN" rows referencing it."""
+    with repo._read() as s:
+        return _references(s)
+
+
+@contextlib.contextmanager
+def snapshot(repo: "Repository"):
+    """One read-only transaction that sees a single snapshot of the whole database (PostgreSQL:
+    REPEATABLE READ, READ ONLY; SQLite: one deferred read transaction, which WAL keeps consistent)."""
+    conn = repo.read_engine.connect()
+    try:
+        if conn.dialect.name == "postgresql":
+            conn = conn.execution_options(isolation_level="REPEATABLE READ")
+        with conn.begin():
+            if conn.dialect.name == "postgresql":
+                conn.exec_driver_sql("SET TRANSACTION READ ONLY")
+            with Session(bind=conn) as s:
+                yield s
+    finally:
+        conn.close()
+
+
+def check(repo: "Repository", verify_blobs: bool = True, checkpoint: dict | None = None) -> "CheckReport":
     """Walk every version row and every blob (see :meth:`Repository.check`).
 
     Problems reported: a row whose blob is missing or corrupt, a row whose
     record hash does not match its content, gaps or duplicates in a joint's
     version numbers, a missing or disabled immutability guard (trigger), a query-index
-    row that differs from the history it is derived from.
-    Orphan blobs and left-over temporary files are listed but are not problems
+    row that differs from the history it is derived from, a history row that differs from
+    (or is missing in) the history chain, and, given a verified ``checkpoint``
+    (:func:`jointdb.store._chain.parse_checkpoint`), history that does not extend it.
+    Everything is read in one snapshot (:func:`snapshot`), so concurrent writers cause no
+    false alarms. Orphan blobs and left-over temporary files are listed but are not problems
     (``jointdb db gc`` removes them); ``notes`` says what the backend cannot guard.
     """
+    from jointdb.store._chain import chain_problems
     from jointdb.store._guards import missing_guards
     from jointdb.store._index import index_problems
     from jointdb.store._repository import CheckReport
 
-    problems: list[str] = []
     n_rows = 0
-    with repo.read_engine.connect() as conn:
+    with snapshot(repo) as s:
+        conn = s.connection()
         problems, notes = missing_guards(conn)
+        problems += chain_problems(conn, checkpoint)  # first: it names the first entry that differs
         problems += index_problems(conn)  # the derived query index against the history it comes from
-    with repo._read() as s:
         joints = {j.id: j for j in s.scalars(select(JointRow))}
         numbers: dict[int, list[int]] = {}
         for row in s.scalars(select(VersionRow).order_by(VersionRow.joint_id, VersionRow.version)):
@@ -61,10 +89,10 @@ def check(repo: "Repository", verify_blobs: bool = True) -> "CheckReport":
                 check_record(joint.name, joint.joint_type, row)
             except IntegrityError:
                 problems.append(f"{joint.name} v{row.version}: record hash mismatch (row content was altered)")
+        refs = _references(s)
     for joint_id, nums in numbers.items():
         if nums != list(range(1, len(nums) + 1)):
             problems.append(f"{joints[joint_id].name}: version numbers {nums} are not 1..{len(nums)}")
-    refs = _referenced(repo)
     n_blobs = 0
     for digest, users in sorted(refs.items()):
         n_blobs += 1

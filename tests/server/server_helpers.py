@@ -68,7 +68,8 @@ def start_server(db: str, blobs: Path, log: Path, *extra: str, workers: int = 1)
     env = {**os.environ, "OPENBLAS_NUM_THREADS": "1", "JOINTDB_AUTHOR": "server-process"}
     fh = open(log, "ab")
     proc = subprocess.Popen([sys.executable, "-m", "jointdb", "serve", "--db", db, "--blobs", str(blobs),
-                             "--port", str(port), "--workers", str(workers), *extra],
+                             "--port", str(port), "--workers", str(workers),
+                             *(["--allow-owner"] if db.startswith("postgresql") else []), *extra],
                             stdout=fh, stderr=subprocess.STDOUT, env=env)
     fh.close()
     url = f"http://127.0.0.1:{port}"

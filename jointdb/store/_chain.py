@@ -1,0 +1,360 @@
+"""Tamper-evident history: an append-only hash chain over every history row, and signed checkpoints.
+
+Every row of the history tables (joints, versions, state changes, audit rows) gets one
+entry of the table ``history_chain`` (migration ``0006``) in the transaction that writes it,
+in commit order::
+
+    entry_i = (seq, kind, row id, content hash of the row)
+    head_i  = SHA-256(head_{i-1} || "seq|kind|row id|content hash"),  head_0 = 32 zero bytes
+
+The content hash is recomputed from the row as stored (every column; JSON columns as their
+stored text), so ``jointdb db check`` can recompute the whole chain from the rows alone.
+That canonical form (:func:`content_hash`, :func:`next_head`) is part of the stored data:
+changing it needs a migration that re-chains (and invalidates every checkpoint signed before).
+
+Appending is serialised: PostgreSQL takes a transaction-level advisory lock (per schema)
+before reading the chain's head, in the transaction of the rows it covers, and ``seq`` is
+the primary key, so concurrent writers never fork the chain; SQLite writers are serialised
+by ``BEGIN IMMEDIATE``. The write paths need no call of their own for ORM rows: a
+``after_flush`` hook notes every new history row of a session and a ``before_commit`` hook
+appends them; rows inserted with Core statements are noted with :func:`append_chain`.
+
+Whoever owns the tables can rewrite a row *and* the chain after it. A signed checkpoint
+(tree size, head, time; Ed25519, :mod:`jointdb.store._signing`) kept elsewhere detects that:
+:func:`chain_problems` recomputes the chain from the rows and requires the history it sees
+to extend the checkpoint (same head at that size).
+"""
+
+from __future__ import annotations
+
+import base64
+import hashlib
+import json
+from datetime import datetime, timezone
+from typing import Any, Iterable
+
+from sqlalchemy import JSON, BigInteger, Integer, String, UniqueConstraint, event, insert, select, text
+from sqlalchemy.orm import Mapped, Session, mapped_column
+
+from jointdb.errors import InputError, IntegrityError
+from jointdb.store._models import AuditRow, Base, JointRow, StateRow, VersionRow
+
+ZERO = "0" * 64
+CHECKPOINT_FORMAT = "jointdb-checkpoint/1"
+SIGNED_PREFIX = b"jointdb-checkpoint-signature-v1\n"
+#: kind -> mapped class, in the order the rows of one transaction are appended
+KINDS = {"joint": JointRow, "version": VersionRow, "state": StateRow, "audit": AuditRow}
+_KIND_OF = {cls: kind for kind, cls in KINDS.items()}
+_PENDING = "jointdb_chain_pending"
+
+
+class ChainRow(Base):
+    """One entry of the history chain (migration ``0006``): append-only like the rows it covers."""
+
+    __tablename__ = "history_chain"
+    __table_args__ = (UniqueConstraint("kind", "row_id"),)
+
+    seq: Mapped[int] = mapped_column(BigInteger, primary_key=True, autoincrement=False)
+    kind: Mapped[str] = mapped_column(String(20))
+    row_id: Mapped[int] = mapped_column(Integer)
+    content_sha256: Mapped[str] = mapped_column(String(64))
+    head_sha256: Mapped[str] = mapped_column(String(64))
+
+
+# --------------------------------------------------------------------------- hashing
+def _plain(value: Any) -> Any:
+    if isinstance(value, datetime):
+        if value.tzinfo is not None:
+            value = value.astimezone(timezone.utc).replace(tzinfo=None)
+        return value.isoformat(timespec="microseconds")
+    if isinstance(value, (bytes, memoryview)):
+        return bytes(value).hex()
+    if isinstance(value, float):
+        return repr(value)
+    return value
+
+
+def _columns(cls, dialect: str):
+    """The columns of a history table, JSON ones read as their stored text (never decoded; on SQLite
+    the times too), so that a damaged value is hashed as it is instead of failing to load."""
+    from sqlalchemy import Text, cast, type_coerce
+
+    from jointdb.store._models import UTCDateTime
+
+    out = []
+    for c in cls.__table__.columns:
+        if isinstance(c.type, JSON):
+            out.append(cast(c, Text).label(c.name))
+        elif dialect == "sqlite" and isinstance(c.type, UTCDateTime):
+            out.append(type_coerce(c, Text).label(c.name))
+        else:
+            out.append(c)
+    return out
+
+
+def content_hash(kind: str, row: Any) -> str:
+    """SHA-256 of a row's canonical content: every column, by name (``row`` is a result row)."""
+    mapping = dict(row._mapping)
+    content = {"kind": kind, **{k: _plain(v) for k, v in mapping.items()}}
+    data = json.dumps(content, sort_keys=True, separators=(",", ":"), ensure_ascii=True, default=str)
+    return hashlib.sha256(data.encode()).hexdigest()
+
+
+def next_head(previous: str, seq: int, kind: str, row_id: int, content: str) -> str:
+    """``head_i = SHA-256(head_{i-1} || entry_i)`` (hex digests)."""
+    return hashlib.sha256(bytes.fromhex(previous) + f"{seq}|{kind}|{row_id}|{content}".encode()).hexdigest()
+
+
+def _contents(conn, kind: str, ids: Iterable[int] | None = None) -> dict[int, str]:
+    """``row id -> content hash`` of the rows of one kind (all, or the ``ids`` given)."""
+    cls = KINDS[kind]
+    q = select(*_columns(cls, conn.dialect.name))
+    if ids is not None:
+        q = q.where(cls.__table__.c.id.in_(sorted(set(ids))))
+    return {r.id: content_hash(kind, r) for r in conn.execute(q)}
+
+
+# --------------------------------------------------------------------------- appending
+def _lock(conn) -> None:
+    if conn.dialect.name == "postgresql":  # held to the end of the transaction: appends in commit order
+        conn.execute(text("SELECT pg_advisory_xact_lock(hashtext('jointdb_history_chain'), "
+                          "hashtext(current_schema()))"))
+
+
+def _append(conn, rows: list[tuple[str, int]]) -> None:
+    # the rows' content first (this transaction's own rows: no lock needed), then, under the lock
+    # held to commit, only the chain's head and the insert
+    todo = []
+    for kind in KINDS:
+        ids = sorted({i for k, i in rows if k == kind})
+        contents = _contents(conn, kind, ids) if ids else {}
+        for row_id in ids:
+            if row_id not in contents:
+                raise IntegrityError(f"history row {kind} {row_id} vanished before its chain entry was written")
+            todo.append((kind, row_id, contents[row_id]))
+    _lock(conn)
+    chain = ChainRow.__table__
+    last = conn.execute(select(chain.c.seq, chain.c.head_sha256).order_by(chain.c.seq.desc()).limit(1)).first()
+    seq, head = (int(last[0]), last[1]) if last else (0, ZERO)
+    entries = []
+    for kind, row_id, content in todo:
+        seq += 1
+        head = next_head(head, seq, kind, row_id, content)
+        entries.append({"seq": seq, "kind": kind, "row_id": row_id, "content_sha256": content, "head_sha256": head})
+    conn.execute(insert(chain), entries)
+
+
+def append_chain(session: Session, rows: Iterable[tuple[str, int]]) -> None:
+    """Note history rows inserted with Core statements (``(kind, id)``; kind in :data:`KINDS`); they
+    are appended to the chain when ``session`` commits, with the ORM rows of the transaction."""
+    pending = session.info.setdefault(_PENDING, [])
+    pending.extend((k, int(i)) for k, i in rows if i is not None)
+
+
+@event.listens_for(Session, "after_flush")
+def _note_new_rows(session: Session, flush_context) -> None:
+    for obj in session.new:
+        kind = _KIND_OF.get(type(obj))
+        if kind is not None:
+            session.info.setdefault(_PENDING, []).append((kind, obj.id))
+
+
+@event.listens_for(Session, "before_commit")
+def _append_pending(session: Session) -> None:
+    session.flush()
+    rows = session.info.pop(_PENDING, None)
+    if rows:
+        _append(session.connection(), rows)
+
+
+@event.listens_for(Session, "after_soft_rollback")
+def _forget_pending(session: Session, previous_transaction) -> None:
+    session.info.pop(_PENDING, None)
+
+
+def build_chain(conn) -> int:
+    """Append every history row not yet in the chain, kind by kind in id order (migration ``0006``
+    for existing databases). Returns the number of entries appended."""
+    chain = ChainRow.__table__
+    have = {(k, i) for k, i in conn.execute(select(chain.c.kind, chain.c.row_id))}
+    rows = [(kind, i) for kind, cls in KINDS.items()
+            for (i,) in conn.execute(select(cls.__table__.c.id).order_by(cls.__table__.c.id)) if (kind, i) not in have]
+    if rows:
+        _append(conn, rows)
+    return len(rows)
+
+
+# --------------------------------------------------------------------------- verifying
+def chain_head(conn) -> tuple[int, str]:
+    """``(tree size, head)`` as stored."""
+    chain = ChainRow.__table__
+    last = conn.execute(select(chain.c.seq, chain.c.head_sha256).order_by(chain.c.seq.desc()).limit(1)).first()
+    return (int(last[0]), last[1]) if last else (0, ZERO)
+
+
+def recompute(conn) -> tuple[list[str], list[str]]:
+    """``(heads, problems)``: the heads recomputed from the rows themselves (``heads[i]`` is the head
+    after entry ``i + 1``) and what differs from the stored chain (the first differing entry first)."""
+    chain = ChainRow.__table__
+    contents = {kind: _contents(conn, kind) for kind in KINDS}
+    problems: list[str] = []
+    heads: list[str] = []
+    head = stored = ZERO
+    seen: set[tuple[str, int]] = set()
+    for entry in conn.execute(select(chain).order_by(chain.c.seq)):
+        seq = len(heads) + 1
+        where = f"chain entry {entry.seq} ({entry.kind} row {entry.row_id})"
+        if entry.seq != seq:
+            problems.append(f"chain entry {seq} is missing (the next one is {entry.seq})")
+        row_content = contents.get(entry.kind, {}).get(entry.row_id)
+        if row_content is None:
+            problems.append(f"{where}: the row is missing (deleted)")
+            row_content = "missing"
+        elif row_content != entry.content_sha256:
+            problems.append(f"{where}: the row's content differs from when it was written (rewritten)")
+        head = next_head(head, seq, entry.kind, entry.row_id, row_content)
+        stored = next_head(stored, seq, entry.kind, entry.row_id, entry.content_sha256)
+        if stored != entry.head_sha256:
+            problems.append(f"{where}: the stored chain head does not follow from the entries before it "
+                            "(chain rewritten)")
+            stored = entry.head_sha256
+        heads.append(head)
+        seen.add((entry.kind, entry.row_id))
+    for kind, rows in contents.items():
+        for row_id in sorted(set(rows) - {i for k, i in seen if k == kind}):
+            problems.append(f"{kind} row {row_id} is not in the history chain (written around jointdb)")
+    return heads, problems
+
+
+def chain_problems(conn, checkpoint: dict | None = None) -> list[str]:
+    """What differs between the rows, the stored chain and (optionally) a verified checkpoint."""
+    heads, problems = recompute(conn)
+    if checkpoint is not None:
+        size, head = int(checkpoint["tree_size"]), checkpoint["head_sha256"]
+        if size > len(heads):
+            problems.insert(0, f"the history has {len(heads)} chain entries, fewer than the checkpoint's {size} "
+                               "(entries were removed)")
+        elif size and heads[size - 1] != head:
+            problems.insert(0, f"the history does not extend the checkpoint: the head recomputed from the rows "
+                               f"at entry {size} differs from the signed one (history up to entry {size} was "
+                               "rewritten)")
+    return problems
+
+
+# --------------------------------------------------------------------------- checkpoints
+def _signed_bytes(cp: dict) -> bytes:
+    return SIGNED_PREFIX + f"{cp['format']}|{int(cp['tree_size'])}|{cp['head_sha256']}|{cp['time']}".encode()
+
+
+def make_checkpoint(size: int, head: str, private_key) -> dict[str, Any]:
+    """A checkpoint of ``(size, head)`` now, signed with an Ed25519 private key."""
+    from jointdb.store._signing import fingerprint, public_raw
+
+    cp: dict[str, Any] = {"format": CHECKPOINT_FORMAT, "tree_size": int(size), "head_sha256": head,
+                          "time": datetime.now(timezone.utc).isoformat(timespec="seconds")}
+    raw = public_raw(private_key.public_key())
+    cp["public_key"] = base64.b64encode(raw).decode()
+    cp["key_fingerprint"] = fingerprint(raw)
+    cp["signature"] = base64.b64encode(private_key.sign(_signed_bytes(cp))).decode()
+    return cp
+
+
+def parse_checkpoint(data: Any, trusted=()) -> tuple[dict[str, Any], str]:
+    """``(checkpoint, fingerprint)`` of a checkpoint whose signature verifies.
+
+    ``trusted``: public keys (``load_public_key``); when given, the signer must be one of them,
+    else the key named in the checkpoint is used (it proves integrity, not who signed).
+
+    Raises
+    ------
+    IntegrityError
+        Malformed, or the signature does not verify (with a trusted key).
+    """
+    from cryptography.exceptions import InvalidSignature
+    from cryptography.hazmat.primitives.asymmetric import ed25519
+
+    from jointdb.store._signing import fingerprint, public_raw
+
+    try:
+        if data.get("format") != CHECKPOINT_FORMAT:
+            raise ValueError("unknown format")
+        size = int(data["tree_size"])
+        head = str(data["head_sha256"])
+        if size < 0 or len(head) != 64 or any(c not in "0123456789abcdef" for c in head):
+            raise ValueError("bad size or head")
+        signature = base64.b64decode(str(data["signature"]), validate=True)
+        keys = list(trusted) or [ed25519.Ed25519PublicKey.from_public_bytes(
+            base64.b64decode(str(data["public_key"]), validate=True))]
+        cp = {"format": data["format"], "tree_size": size, "head_sha256": head, "time": str(data["time"])}
+    except (AttributeError, KeyError, TypeError, ValueError):
+        raise IntegrityError("the checkpoint is malformed (expected a JSON object from `jointdb db checkpoint`)") from None
+    for key in keys:
+        try:
+            key.verify(signature, _signed_bytes(cp))
+            return cp, fingerprint(public_raw(key))
+        except InvalidSignature:
+            continue
+    who = "any trusted key" if trusted else "the key it names"
+    raise IntegrityError(f"the checkpoint's signature does not verify with {who} (checkpoint forged or altered)")
+
+
+def read_checkpoint_file(path) -> Any:
+    """The JSON of a checkpoint file (one line errors)."""
+    from pathlib import Path
+
+    p = Path(path)
+    try:
+        raw = p.read_bytes()
+    except OSError as exc:
+        raise InputError(f"cannot read checkpoint {p.name}: {exc.strerror or exc}") from None
+    if len(raw) > 64 * 1024:
+        raise InputError(f"checkpoint {p.name} is too large ({len(raw)} bytes) to be a checkpoint")
+    try:
+        return json.loads(raw)
+    except (UnicodeDecodeError, ValueError):
+        raise IntegrityError(f"checkpoint {p.name} is not JSON") from None
+
+
+def signed_checkpoint(conn, private_key, since: dict | None = None) -> dict[str, Any]:
+    """Recompute the chain from the rows (in ``conn``'s snapshot) and sign its head.
+
+    ``since``: an earlier checkpoint the history must extend.
+
+    Raises
+    ------
+    IntegrityError
+        The rows, the stored chain or ``since`` disagree: nothing is signed (signing would
+        bless a rewritten history).
+    """
+    problems = chain_problems(conn, since)
+    if problems:
+        raise IntegrityError(f"history chain is broken, nothing signed: {problems[0]} (run `jointdb db check`)")
+    size, head = chain_head(conn)
+    return make_checkpoint(size, head, private_key)
+
+
+def check_serve_options(db, allow_owner: bool, key_path, interval_s: float) -> dict[str, str]:
+    """``jointdb serve``'s role and checkpoint options, checked before the server starts; returns
+    the environment the workers read them from.
+
+    Raises
+    ------
+    InputError
+        Connected as the tables' owner or a superuser without ``allow_owner``; an unusable key
+        or interval.
+    """
+    from pathlib import Path
+
+    from jointdb.store._db import resolve_url
+    from jointdb.store._roles import refuse_owner
+    from jointdb.store._signing import load_private_key
+
+    if not allow_owner:
+        refuse_owner(resolve_url(db))
+    env: dict[str, str] = {}
+    if key_path is not None:
+        load_private_key(key_path)  # refuse a bad key now, not at the first request
+        if not interval_s >= 1:
+            raise InputError(f"--checkpoint-interval must be >= 1 second, got {interval_s:g}")
+        env = {"JOINTDB_CHECKPOINT_KEY": str(Path(key_path).resolve()), "JOINTDB_CHECKPOINT_INTERVAL_S": str(interval_s)}
+    return env
