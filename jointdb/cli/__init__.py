@@ -91,7 +91,7 @@ def _new_app() -> typer.Typer:
         server: str = typer.Option(None, "--server", metavar="URL",
                                    help="Use a jointdb server instead of a database (or $JOINTDB_SERVER; "
                                         "token from $JOINTDB_TOKEN)."),
-        blas_threads: int = typer.Option(None, "--blas-threads", metavar="N", min=0,
+        blas_threads: int = typer.Option(None, "--blas-threads", metavar="N",  # checked in main()
                                          help="BLAS/OpenMP threads for the linear algebra (default 1, or "
                                               "$JOINTDB_BLAS_THREADS; 0: the library default). Set before "
                                               "numpy loads; inherited by the service's workers."),
