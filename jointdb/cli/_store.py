@@ -437,9 +437,9 @@ def register(app: typer.Typer) -> None:
         keys = [load_public_key(p) for p in trust or []]
         check_db_target(db, create=True)  # a bad --db is reported before the bundle is read
         verified = read_bundle(bundle, keys, require_signature)
-        for note in verified.notes:
-            message(note)
         summary = _repo(db, blobs, create=True).import_(verified, author=author, force=force)
+        for note in verified.notes:  # after the import: a refusal stays one line
+            message(note)
         summary["labels_skipped"] = ", ".join(summary["labels_skipped"]) or None
         emit(summary, as_json=as_json)
 

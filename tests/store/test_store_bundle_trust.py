@@ -107,7 +107,7 @@ def test_a_signed_bundle_refuses_an_edit_with_every_hash_recomputed(lab, tmp_pat
     counts = lab.export(None, bundle, sign_key=load_private_key(key))
     assert len(counts["signed_by"]) == 16
     target = Repository(tmp_path / "t.sqlite")
-    summary = target.import_(bundle, trusted_keys=[load_public_key(pub)], require_signature=True)
+    summary = target.import_(bundle, trusted_keys=[load_public_key(pub)], require_signature=True, force=True)
     assert summary["new_versions"] == 2 and summary["signature_verified"] and summary["signed_by"] == counts["signed_by"]
     assert target.audit("T1", limit=1)[0]["details"]["signed_by"] == counts["signed_by"]
     target.close()
@@ -160,5 +160,5 @@ def test_cli_signed_round_trip_and_a_refused_bundle_creates_no_database(lab, tmp
     assert_one_line_error(run_main(capsys, "joints", "import", tmp_path / "nope.h5", "--db", target),
                           NotFoundError.exit_code, "does not exist")
     assert tree_state(tmp_path) == before and list(target.parent.iterdir()) == []
-    code, out, err = run_main(capsys, "joints", "import", bundle, "--db", target, "--json")
+    code, out, err = run_main(capsys, "joints", "import", bundle, "--db", target, "--force", "--json")
     assert code == 0 and "signature not checked" in err and json.loads(out)["signature_verified"] is False, err
