@@ -142,7 +142,8 @@ def run_killed_server(db: str, blobs: Path, log: Path, token: str, clients: int,
         return done
 
     def killer():
-        while state["ok"] < kill_after:
+        deadline = time.monotonic() + 120
+        while state["ok"] < kill_after and not state.get("clients_done") and time.monotonic() < deadline:
             time.sleep(0.01)
         state["proc"].send_signal(signal.SIGKILL)
         state["proc"].wait()
@@ -154,7 +155,8 @@ def run_killed_server(db: str, blobs: Path, log: Path, token: str, clients: int,
     with cf.ThreadPoolExecutor(clients + 1) as pool:
         kill = pool.submit(killer)
         outcomes = [x for part in pool.map(client, range(clients)) for x in part]
-        kill.result(timeout=120)
+        state["clients_done"] = True
+        kill.result(timeout=180)
     seconds = time.monotonic() - started
     state["proc"].send_signal(signal.SIGTERM)
     state["proc"].wait(timeout=30)
