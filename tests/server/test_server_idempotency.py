@@ -7,25 +7,10 @@ of the server nothing is lost and nothing duplicated."""
 from __future__ import annotations
 
 import concurrent.futures as cf
-import os
-import signal
-import subprocess
-import sys
-import time
 import uuid
-from pathlib import Path
 
-import httpx
 import pytest
-from server_helpers import (
-    _pg_schema,
-    drop_pg_schema,
-    free_port,
-    joint_upload,
-    make_tokens,
-    pg_base_url,
-    spring_joint,
-)
+from server_helpers import _pg_schema, drop_pg_schema, joint_upload, make_tokens, pg_base_url
 
 API = "/api/v1"
 
@@ -94,93 +79,11 @@ def test_idempotency_key_retry_returns_the_same_answer_and_a_reused_key_is_refus
 
 
 # ----------------------------------------------------------------- retries across a killed server
-def _serve(db: str, blobs: Path, log: Path, port: int) -> subprocess.Popen:
-    env = {**os.environ, "OPENBLAS_NUM_THREADS": "1", "JOINTDB_AUTHOR": "server-process"}
-    with open(log, "ab") as fh:
-        proc = subprocess.Popen([sys.executable, "-m", "jointdb", "serve", "--db", db, "--blobs", str(blobs),
-                                 "--port", str(port), "--workers", "1"], stdout=fh, stderr=subprocess.STDOUT, env=env)
-    deadline = time.monotonic() + 60
-    while time.monotonic() < deadline:
-        if proc.poll() is not None:
-            raise RuntimeError(f"jointdb serve exited with {proc.returncode}")
-        try:
-            if httpx.get(f"http://127.0.0.1:{port}/readyz", timeout=2).status_code == 200:
-                return proc
-        except httpx.HTTPError:
-            pass
-        time.sleep(0.1)
-    proc.kill()
-    raise RuntimeError("jointdb serve did not become ready")
-
-
-def run_killed_server(db: str, blobs: Path, log: Path, token: str, clients: int, requests: int,
-                      kill_after: int) -> dict:
-    """``clients`` x ``requests`` catalogue calls through :class:`jointdb.client.RemoteRepository`
-    (Idempotency-Key, retries), SIGKILL of the server after ``kill_after`` successes, restart on the
-    same port; then count lost and duplicated requests in the database (bench/bench_reliability.py
-    runs the same with 16 x 80)."""
-    from jointdb.client import RemoteRepository
-    from jointdb.store import Conditions, Repository
-
-    port = free_port()
-    state = {"proc": _serve(db, blobs, log, port), "ok": 0, "killed": False}
-    url = f"http://127.0.0.1:{port}"
-
-    def client(c: int) -> list[tuple[int, int, str]]:
-        done = []
-        with RemoteRepository(url, token, timeout=30) as remote:
-            for i in range(requests):
-                try:
-                    jv, created = remote.catalogue_outcome(
-                        f"rel-{c}", "tool-holder", spring_joint(k=(1e6 * (1 + i), 8e4)),
-                        Conditions(("steel",), torque_nm=40.0), "spring-damper-planar",
-                        {"method": "bench", "parameters": {"client": c, "seq": i}}, allow_identical=True)
-                    done.append((c, i, "ok"))
-                    state["ok"] += 1
-                except Exception as exc:  # counted: a request that never got an answer
-                    done.append((c, i, type(exc).__name__))
-        return done
-
-    def killer():
-        deadline = time.monotonic() + 120
-        while state["ok"] < kill_after and not state.get("clients_done") and time.monotonic() < deadline:
-            time.sleep(0.01)
-        state["proc"].send_signal(signal.SIGKILL)
-        state["proc"].wait()
-        state["killed"] = True
-        time.sleep(0.5)
-        state["proc"] = _serve(db, blobs, log, port)
-
-    started = time.monotonic()
-    with cf.ThreadPoolExecutor(clients + 1) as pool:
-        kill = pool.submit(killer)
-        outcomes = [x for part in pool.map(client, range(clients)) for x in part]
-        state["clients_done"] = True
-        kill.result(timeout=180)
-    seconds = time.monotonic() - started
-    state["proc"].send_signal(signal.SIGTERM)
-    state["proc"].wait(timeout=30)
-    counts: dict[tuple[int, int], int] = {}
-    with Repository(db, blobs=blobs, auto_create=False) as repo:
-        for c in range(clients):
-            try:
-                history = repo.history(f"rel-{c}")
-            except Exception:  # no version of this client at all
-                history = []
-            for v in history:
-                key = (v.provenance.parameters["client"], v.provenance.parameters["seq"])
-                counts[key] = counts.get(key, 0) + 1
-        check_ok = repo.check().ok
-    succeeded = [(c, i) for c, i, how in outcomes if how == "ok"]
-    return {"requests": len(outcomes), "succeeded": len(succeeded), "failed": len(outcomes) - len(succeeded),
-            "lost": sum(1 for k in succeeded if counts.get(k, 0) == 0),
-            "duplicated": sum(1 for n in counts.values() if n > 1), "versions": sum(counts.values()),
-            "killed": state["killed"], "db_check_ok": check_ok, "seconds": round(seconds, 1)}
-
-
 @pytest.mark.parametrize("backend", ["sqlite", "postgresql"])
-def test_retries_across_a_sigkill_lose_nothing_and_duplicate_nothing(backend, tmp_path):
+def test_retries_across_a_sigkill_lose_nothing_and_duplicate_nothing(backend, tmp_path, load_script):
     from jointdb.store import upgrade
+
+    run_killed_server = load_script("bench/bench_reliability.py").run_killed_server
 
     cleanup = None
     if backend == "sqlite":
