@@ -53,18 +53,28 @@ def run_killed_server(db: str, blobs: Path, log: Path, token: str, clients: int,
                       kill_after: int) -> dict:
     """``clients`` x ``requests`` catalogue calls through :class:`jointdb.client.RemoteRepository`
     (Idempotency-Key, retries), SIGKILL of the server after ``kill_after`` successes, restart on the
-    same port; then count lost and duplicated requests in the database (bench/bench_reliability.py
-    runs the same with 16 x 80)."""
+    same port; then count lost and duplicated requests in the database (``retries``: requests
+    resent after a transport error)."""
     from jointdb.client import RemoteRepository
     from jointdb.store import Conditions, Repository
 
     port = free_port()
-    state = {"proc": _serve(db, blobs, log, port), "ok": 0, "killed": False}
+    state = {"proc": _serve(db, blobs, log, port), "ok": 0, "killed": False, "retries": 0}
     url = f"http://127.0.0.1:{port}"
 
     def client(c: int) -> list[tuple[int, int, str]]:
         done = []
         with RemoteRepository(url, token, timeout=30) as remote:
+            post = remote._http.post
+
+            def counted(*a, **kw):  # each transport error is followed by a retry with the same key
+                try:
+                    return post(*a, **kw)
+                except httpx.TransportError:
+                    state["retries"] += 1
+                    raise
+
+            remote._http.post = counted
             for i in range(requests):
                 try:
                     jv, created = remote.catalogue_outcome(
@@ -111,7 +121,8 @@ def run_killed_server(db: str, blobs: Path, log: Path, token: str, clients: int,
     return {"requests": len(outcomes), "succeeded": len(succeeded), "failed": len(outcomes) - len(succeeded),
             "lost": sum(1 for k in succeeded if counts.get(k, 0) == 0),
             "duplicated": sum(1 for n in counts.values() if n > 1), "versions": sum(counts.values()),
-            "killed": state["killed"], "db_check_ok": check_ok, "seconds": round(seconds, 1)}
+            "killed": state["killed"], "retries": state["retries"], "db_check_ok": check_ok,
+            "seconds": round(seconds, 1)}
 
 
 
