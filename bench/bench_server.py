@@ -59,7 +59,7 @@ def seed(server, n: int, threads: int = 4) -> None:
         for i in range(have + t, n, threads):
             repo.catalogue(f"S{i % 500:03d}", "tool-holder", frf,
                            {"materials": ["tungsten-carbide", "steel"], "torque_nm": rng.uniform(10, 100)},
-                           "spring-damper-planar", author="bench")
+                           "spring-damper-planar", author="bench", force=True)
 
     with cf.ThreadPoolExecutor(threads) as pool:
         list(pool.map(writer, range(threads)))

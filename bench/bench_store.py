@@ -58,7 +58,7 @@ def bench_catalogue(root: Path, n: int) -> None:
     t0 = time.perf_counter()
     for i, frf in enumerate(frfs):
         repo.catalogue(f"J{i % 10}", "tool-holder", frf, Conditions(("steel",), torque_nm=10.0 + i),
-                       "spring-damper-planar", quality={"residual": 1e-3})
+                       "spring-damper-planar", quality={"residual": 1e-3}, force=True)
     t_cat = (time.perf_counter() - t0) / n
     ref_dir = root / "ref"
     ref_dir.mkdir()

@@ -44,7 +44,7 @@ def _child(url: str, blobs: str, seed: int, ready) -> None:
         repo.catalogue(f"crash-{i % 3}", "tool-holder", FRF(f, h, ["3x", "3ry"], ["3x", "3ry"]),
                        Conditions(("steel",), torque_nm=10.0 + i, extra={"seed": seed, "i": i}),
                        "spring-damper-planar", raw_frfs={"tip": FRF(f, 2 * h, ["1x", "1ry"], ["1x", "1ry"])},
-                       label="latest" if i % 2 else None)
+                       label="latest" if i % 2 else None, force=True)
         i += 1
 
 

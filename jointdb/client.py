@@ -18,6 +18,8 @@ from urllib.parse import quote
 
 from jointdb.errors import ConflictError, InputError, IntegrityError, JointdbError, NotFoundError
 
+#: how often a catalogue request is sent again (same Idempotency-Key) after a connection error or a 503
+RETRIES = 8
 _ERRORS = {404: NotFoundError, 409: ConflictError, 422: InputError, 400: InputError, 413: InputError}
 
 
@@ -54,6 +56,10 @@ class RemoteRepository:
             r = self._http.request(method, path, **kw)
         except self._httpx.HTTPError as exc:
             raise InputError(f"cannot reach the jointdb server {self.url}: {type(exc).__name__}") from None
+        return self._answer(r)
+
+    def _answer(self, r) -> Any:
+        """The JSON of a success, or the jointdb error of a failure (the server's one-line reason)."""
         if r.status_code < 300:
             return r.json()
         try:
@@ -161,8 +167,19 @@ class RemoteRepository:
 
     # ---------------------------------------------------------------- writes
     def catalogue(self, name, joint_type, frf, conditions, model_kind, provenance=None, quality=None, parent=None,
-                  *, raw_frfs=None, author=None, label=None):
+                  *, raw_frfs=None, author=None, label=None, force=False, allow_identical=False):
         """Catalogue on the server (the token's owner is the author; raw measurements stay local)."""
+        return self.catalogue_outcome(name, joint_type, frf, conditions, model_kind, provenance, quality, parent,
+                                      raw_frfs=raw_frfs, author=author, label=label, force=force,
+                                      allow_identical=allow_identical)[0]
+
+    def catalogue_outcome(self, name, joint_type, frf, conditions, model_kind, provenance=None, quality=None,
+                          parent=None, *, raw_frfs=None, author=None, label=None, force=False,
+                          allow_identical=False) -> tuple:
+        """:meth:`catalogue`, returning ``(version, created)`` (``created`` False: identical to the
+        latest version, nothing written). The request carries an ``Idempotency-Key`` and is
+        retried with the same key after a connection error or a 503, so a retry never makes a
+        second version."""
         from jointdb.server._deps import frf_json
         from jointdb.store._types import as_conditions, as_provenance
 
@@ -170,9 +187,33 @@ class RemoteRepository:
         body = {"name": name, "joint_type": joint_type, "model_kind": model_kind, "frf": frf_json(frf),
                 "conditions": as_conditions(conditions).to_dict(), "quality": dict(quality or {}),
                 "method": prov.method, "input_files": dict(prov.input_files), "parameters": dict(prov.parameters),
-                **({"parent": parent} if parent is not None else {}), **({"label": label} if label else {})}
+                **({"parent": parent} if parent is not None else {}), **({"label": label} if label else {}),
+                **({"force": True} if force else {}), **({"allow_identical": True} if allow_identical else {})}
         body["frf"].pop("units", None)
-        return version_from_json(self._call("POST", "/catalogue", json=body))
+        data, status = self._post_idempotent("/catalogue", body)
+        return version_from_json(data), status == 201
+
+    def _post_idempotent(self, path: str, body: dict) -> tuple[Any, int]:
+        """POST ``body`` with a fresh ``Idempotency-Key``; after a connection error or a 503 the
+        same request (same key) is sent again, up to :data:`RETRIES` times with a growing pause."""
+        import time
+        import uuid
+
+        headers = {"Idempotency-Key": uuid.uuid4().hex}
+        delay = 0.2
+        for attempt in range(RETRIES + 1):
+            try:
+                r = self._http.post(path, json=body, headers=headers)
+            except self._httpx.TransportError as exc:
+                if attempt == RETRIES:
+                    raise InputError(f"cannot reach the jointdb server {self.url}: {type(exc).__name__} "
+                                     f"(after {RETRIES} retries)") from None
+            else:
+                if r.status_code != 503 or attempt == RETRIES:
+                    return self._answer(r), r.status_code
+            time.sleep(delay)
+            delay = min(delay * 2, 5.0)
+        raise AssertionError("unreachable")  # pragma: no cover
 
     def label(self, name: str, version: int, label: str, author: str | None = None):
         return version_from_json(self._call("POST", f"/joints/{self._name(name)}/labels",

@@ -132,7 +132,7 @@ def test_bundle_metadata_conforms(tmp_path):
     with Repository(f"sqlite:///{tmp_path / 'j.sqlite'}") as repo:
         repo.catalogue("T1", "tool-holder", frf, {"materials": ["steel"], "torque_nm": 30}, "spring-damper-planar",
                        {"method": "irc-planar", "parameters": {}, "input_files": {}}, {"residual": 0.01})
-        repo.catalogue("T1", "tool-holder", frf, {"materials": ["steel"], "torque_nm": 40}, "spring-damper-planar")
+        repo.catalogue("T1", "tool-holder", frf, {"materials": ["steel"], "torque_nm": 40}, "spring-damper-planar", force=True)
         repo.label("T1", 2, "released")
         repo.deprecate("T1", 1, reason="loose nut")
         export_bundle(repo, ["T1"], tmp_path / "b.h5")

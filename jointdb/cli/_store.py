@@ -186,7 +186,7 @@ def register(app: typer.Typer) -> None:
         parent: Annotated[Optional[int], typer.Option("--parent", help="Version this one corrects (default: latest).")] = None,
         author: Annotated[Optional[str], typer.Option("--author", help="Author (default: $JOINTDB_AUTHOR or login).")] = None,
         label: Annotated[Optional[str], typer.Option("--label", help="Also point this label at the new version.")] = None,
-        force: Annotated[bool, typer.Option("--force", help="Store the options' conditions even where they contradict the values the file records.")] = False,
+        force: Annotated[bool, typer.Option("--force", help="Store the options' conditions even where they contradict the values the file records, or those of the joint's previous version (the audit log records the change).")] = False,
         allow_identical: Annotated[bool, typer.Option("--allow-identical", help="Add a version even when the latest one already holds the same FRF and conditions.")] = False,
         db: DbOpt = None,
         blobs: BlobsOpt = None,
@@ -196,6 +196,9 @@ def register(app: typer.Typer) -> None:
 
         The conditions the file records are kept; options fill in what it does not
         record, and an option that contradicts the file is refused unless --force.
+        A new version must be the same joint as the previous one: materials, preload,
+        torque, geometry, model kind and DOFs it recorded must not change (values it did
+        not record may be filled in); a change is refused unless --force.
         A file identical to the joint's latest version (same FRF and conditions) is
         reported as "identical to vN" and nothing is written, unless --allow-identical.
         The version and its --label are written together or not at all.
@@ -215,20 +218,16 @@ def register(app: typer.Typer) -> None:
         if parent is not None and parent < 1:
             raise InputError(f"--parent must be a version number >= 1, got {parent}")
         repo = _repo(db, blobs, create=True)
-        if not allow_identical:
-            from jointdb.app import identical_version
-
-            same = identical_version(repo, name, args["joint_type"], args["frf"], args["conditions"],
-                                     args["model_kind"])
-            if same is not None:
-                message(f"{same.name}: identical to v{same.version} (same FRF and conditions); nothing written "
-                        "(--allow-identical adds a version anyway)")
-                if label is not None:
-                    message(f"--label not applied; `jointdb joints label {same.name} {same.version} {label}` "
-                            "points it at that version")
-                emit(_version_detail(same), as_json=as_json, title=f"{same.name} v{same.version}")
-                return
-        jv = repo.catalogue(name, parent=parent, author=author, label=label, **args)
+        jv, created = repo.catalogue_outcome(name, parent=parent, author=author, label=label, force=force,
+                                             allow_identical=allow_identical, **args)
+        if not created:
+            message(f"{jv.name}: identical to v{jv.version} (same FRF and conditions); nothing written "
+                    "(--allow-identical adds a version anyway)")
+            if label is not None:
+                message(f"--label not applied; `jointdb joints label {jv.name} {jv.version} {label}` "
+                        "points it at that version")
+            emit(_version_detail(jv), as_json=as_json, title=f"{jv.name} v{jv.version}")
+            return
         message(f"catalogued {jv.name} v{jv.version} ({jv.blob_sha256[:12]})")
         emit(_version_detail(jv), as_json=as_json, title=f"{jv.name} v{jv.version}")
 
@@ -433,10 +432,15 @@ def register(app: typer.Typer) -> None:
         bundle: Annotated[Path, typer.Argument(help="Bundle file written by `jointdb joints export`.")],
         author: Annotated[Optional[str], typer.Option("--author")] = None,
         require_signature: Annotated[bool, typer.Option("--require-signature", help="Refuse a bundle not signed by a --trust key.")] = False,
-        trust: Annotated[Optional[list[Path]], typer.Option("--trust", help="Trusted Ed25519 public key (NAME.pub; repeat).")] = None,
+        trust: Annotated[Optional[list[Path]], typer.Option("--trust", help="Trusted Ed25519 public key (NAME.pub; repeat); the bundle must be signed by one of them.")] = None,
+        force: Annotated[bool, typer.Option("--force", help="Import versions that change a defining condition of the version before them (the audit log records the change).")] = False,
         db: DbOpt = None, blobs: BlobsOpt = None, as_json: JsonOpt = False,
     ) -> None:
         """Import a bundle: identical versions are no-ops, conflicting ones are refused.
+
+        Any --trust key means the signature is verified: an unsigned or badly signed bundle
+        is refused. Without --trust the signature is not checked and no signer is shown.
+        A new version that is not the same joint as the one before it is refused unless --force.
 
         The whole bundle (hashes, fields, labels, states, signature) is verified
         before the database is opened, so a refused bundle creates nothing.
@@ -448,9 +452,9 @@ def register(app: typer.Typer) -> None:
         keys = [load_public_key(p) for p in trust or []]
         check_db_target(db, create=True)  # a bad --db is reported before the bundle is read
         verified = read_bundle(bundle, keys, require_signature)
-        for note in verified.notes:
+        summary = _repo(db, blobs, create=True).import_(verified, author=author, force=force)
+        for note in verified.notes:  # after the import: a refusal stays one line
             message(note)
-        summary = _repo(db, blobs, create=True).import_(verified, author=author)
         summary["labels_skipped"] = ", ".join(summary["labels_skipped"]) or None
         emit(summary, as_json=as_json)
 

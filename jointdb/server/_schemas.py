@@ -52,7 +52,10 @@ class CatalogueIn(Strict):
     quality: dict[str, float] = Field(default_factory=dict)
     parent: Optional[int] = Field(None, ge=1)
     label: Optional[str] = Field(None, max_length=100)
-    force: bool = Field(False, description="Store the given conditions even where they contradict the values the file records.")
+    force: bool = Field(False, description="Store the given conditions even where they contradict the values the file "
+                        "records, or a defining condition of the joint's previous version (the audit log records it).")
+    allow_identical: bool = Field(False, description="Add a version even when the latest one already holds the same "
+                                  "FRF and conditions (default: nothing is written, 200 with that version).")
 
 
 class LabelIn(Strict):

@@ -8,11 +8,13 @@ from __future__ import annotations
 
 import base64
 import binascii
+import hashlib
+import json
 import tempfile
 from pathlib import Path as FsPath
-from typing import Any
+from typing import Any, Optional
 
-from fastapi import APIRouter, Depends
+from fastapi import APIRouter, Depends, Header, Response
 
 from jointdb.errors import InputError, JointdbError
 from jointdb.server._deps import repo, version_json, writer
@@ -83,12 +85,49 @@ def _catalogue_frf(r, body: CatalogueIn, name: str, label: str | None, owner: st
                        body.model_kind, prov, dict(body.quality), body.parent, author=owner, label=label)
 
 
-@router.post("/catalogue", status_code=201, summary="Catalogue an identified joint file as a new version")
-def catalogue(body: CatalogueIn, r=Depends(repo), who=writer) -> dict[str, Any]:
+@router.post("/catalogue", status_code=201, summary="Catalogue an identified joint file as a new version",
+             responses={200: {"description": "Identical to the joint's latest version: nothing written, that "
+                                             "version returned (\"identical\": true)"}})
+def catalogue(body: CatalogueIn, response: Response, r=Depends(repo), who=writer,
+              idempotency_key: Optional[str] = Header(None, max_length=200, description=(
+                  "Any unique text (e.g. a UUID) per logical request: a retry with the same key and body "
+                  "returns the same answer and never makes a second version; the same key with another "
+                  "body is refused (422). Keys are kept per token owner, in the database."))) -> dict[str, Any]:
     """Upload the HDF5 file of `jointdb identify` (base64) with conditions; the conditions
     recorded in the file are completed by those given (a contradiction is refused unless
-    ``force``). The version and its label are written together or not at all."""
-    return version_json(catalogue_upload(r, body, who.name))
+    ``force``). A new version must be the same joint as the previous one (materials, preload,
+    torque, geometry, model kind, DOFs; values it did not record may be filled in): a change is
+    refused (409) unless ``force``, and the audit entry then lists it. Content identical to the
+    latest version writes nothing: 200 with that version and ``"identical": true`` (201 and
+    ``"identical": false`` for a new version). The version, its label and its idempotency
+    record are written together or not at all."""
+    idem = None
+    if idempotency_key is not None:
+        key = idempotency_key.strip()
+        if not key or not key.isprintable():
+            raise InputError("the Idempotency-Key header must be printable text of 1..200 characters")
+        digest = hashlib.sha256(json.dumps(body.model_dump(mode="json"), sort_keys=True, separators=(",", ":"),
+                                           ensure_ascii=True).encode()).hexdigest()
+        idem = (who.name, key, digest)
+    outcome = r.idempotent_answer(idem)
+    if outcome is None:
+        writes = _OutcomeOf(r, force=body.force, allow_identical=body.allow_identical, idempotency=idem)
+        catalogue_upload(writes, body, who.name)
+        outcome = writes.outcome
+    response.status_code = 201 if outcome.created else 200
+    return {**version_json(outcome.version), "identical": not outcome.created}
+
+
+class _OutcomeOf:
+    """The repository as :func:`catalogue_upload` sees it: its ``catalogue`` call is made with
+    ``catalogue_outcome`` (force, identical content, idempotency key) and the outcome is kept."""
+
+    def __init__(self, repository, **options):
+        self._repository, self._options, self.outcome = repository, options, None
+
+    def catalogue(self, *args, **kw):
+        self.outcome = self._repository.catalogue_outcome(*args, **{**kw, **self._options})
+        return self.outcome.version
 
 
 @router.post("/joints/{name}/labels", summary="Point a label at a version (create or move it)")

@@ -24,7 +24,10 @@ the catalogue's own rules, the signature), then compares with the target
 database: a version that exists there with the same uuid and record hash is a
 no-op; a version number that exists with different content, a joint name with
 another joint type, or a gap in the numbering raises :class:`ConflictError`
-and nothing is written. Labels are imported only where the target has no such
+and nothing is written. Every new version must be the same joint as the version
+before it (the target's latest one, or the bundle's previous one): a contradiction of a
+defining condition (:mod:`jointdb.store._identity`) is refused unless ``force``, and
+the import's audit entry then lists each change. Labels are imported only where the target has no such
 label yet. Format version 1 bundles (no bundle hash) are still read, but their
 labels and states are covered by no hash.
 """
@@ -35,6 +38,7 @@ import json
 import os
 from collections.abc import Iterable
 from datetime import datetime
+from types import SimpleNamespace
 from typing import TYPE_CHECKING, Any
 
 from sqlalchemy import select
@@ -43,6 +47,7 @@ from jointdb.errors import ConflictError, InputError, IntegrityError
 from jointdb.io._atomic import atomic_path
 from jointdb.store._blobformat import write_frf_group
 from jointdb.store._bundle_read import FORMAT, FORMAT_VERSION, Bundle, manifest_sha256, read_bundle
+from jointdb.store._identity import describe, identity_changes
 from jointdb.store._index import refresh_joints
 from jointdb.store._models import AuditRow, JointRow, LabelRow, StateRow, VersionRow, utcnow
 from jointdb.store._records import check_record, current_actor, record_dict, row_from_record
@@ -126,8 +131,9 @@ def export_bundle(repo: "Repository", names: Iterable[str] | None, path: str | o
     return out
 
 
-def _plan(session, joints: list[dict[str, Any]]) -> list[tuple[dict, list[dict]]]:
-    """Which versions are new; ConflictError on any contradiction with the database."""
+def _plan(session, joints: list[dict[str, Any]], force: bool = False) -> list[tuple[dict, list[dict], list]]:
+    """Which versions are new, and the forced changes among them; ConflictError on any
+    contradiction with the database (or, without ``force``, of a defining condition)."""
     plan = []
     for j in joints:
         row = session.scalar(select(JointRow).where(JointRow.name == j["name"]))
@@ -158,12 +164,43 @@ def _plan(session, joints: list[dict[str, Any]]) -> list[tuple[dict, list[dict]]
                 f"joint {j['name']!r}: the bundle continues at version {new[0]['record']['version']} but this "
                 f"database has versions 1..{len(existing)} with other content"
             )
-        plan.append((j, new))
+        plan.append((j, new, _forced(j["name"], existing.get(len(existing)), new, force)))
     return plan
 
 
+def _as_identity(record: dict[str, Any]) -> SimpleNamespace:
+    c = record["conditions"]
+    return SimpleNamespace(version=record["version"], materials=c["materials"], preload_n=c["preload_n"],
+                           torque_nm=c["torque_nm"], geometry=c["geometry"], model_kind=record["model_kind"],
+                           dofs=record["dofs"])
+
+
+def _forced(name: str, latest: VersionRow | None, new: list[dict], force: bool) -> list[dict[str, Any]]:
+    """Each new version against the one before it (this database's latest, then the bundle's own).
+
+    Returns the changes a ``force`` lets through (for the audit entry).
+
+    Raises
+    ------
+    ConflictError
+        A defining condition changes and ``force`` is not given.
+    """
+    forced = []
+    prev = latest
+    for v in new:
+        rec = _as_identity(v["record"])
+        if prev is not None:
+            changes, _ = identity_changes(prev, vars(rec))
+            if changes and not force:
+                raise ConflictError(f"bundle: joint {name!r} v{rec.version} is not the same joint as v{prev.version} "
+                                    f"({describe(changes, prev.version)}); nothing imported (--force imports it)")
+            forced += [{**c, "version": rec.version, "of_version": prev.version} for c in changes]
+        prev = rec
+    return forced
+
+
 def import_bundle(repo: "Repository", bundle: "Bundle | str | os.PathLike", author: str | None = None,
-                  trusted_keys=(), require_signature: bool = False) -> dict[str, Any]:
+                  trusted_keys=(), require_signature: bool = False, force: bool = False) -> dict[str, Any]:
     """Import a bundle (module docstring); returns counts of new and unchanged versions.
 
     ``bundle``: a path, or a :class:`Bundle` already read with :func:`read_bundle`
@@ -176,8 +213,8 @@ def import_bundle(repo: "Repository", bundle: "Bundle | str | os.PathLike", auth
     joints = bundle.joints
     path = bundle.path
     with repo._read() as s:
-        plan = _plan(s, joints)  # refuse conflicts before touching anything
-    for _, new in plan:
+        plan = _plan(s, joints, force)  # refuse conflicts before touching anything
+    for _, new, _ in plan:
         for v in new:
             repo.blobs.put(v["frf"])
             for raw in v["raw"].values():
@@ -191,7 +228,7 @@ def import_bundle(repo: "Repository", bundle: "Bundle | str | os.PathLike", auth
         summary["labels_skipped"] = []
         now = utcnow()
         touched: list[int] = []
-        for j, new in _plan(s, joints):
+        for j, new, forced in _plan(s, joints, force):
             row = s.scalar(select(JointRow).where(JointRow.name == j["name"]))
             if row is None:
                 row = JointRow(name=j["name"], joint_type=j["joint_type"],
@@ -224,7 +261,8 @@ def import_bundle(repo: "Repository", bundle: "Bundle | str | os.PathLike", auth
                 s.add(AuditRow(at=now, actor=actor, action="import", joint_name=j["name"], version=None,
                                details={"bundle": os.fspath(path), "bundle_sha256": bundle.digest,
                                         "signed_by": bundle.signer if bundle.signature_verified else None,
-                                        "versions": [v["record"]["version"] for v in new]}))
+                                        "versions": [v["record"]["version"] for v in new],
+                                        **({"forced": forced} if forced else {})}))
         s.flush()
         refresh_joints(s, touched)  # the query index, in the same transaction
 

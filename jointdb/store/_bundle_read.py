@@ -5,8 +5,10 @@ label or state change must pass (names, types, conditions, provenance, quality,
 model kind against the FRF, label names, states, times parsed strictly as ISO
 8601 with a time zone), every record and FRF hash is recomputed, and the
 bundle hash (format version 2: over joints, labels, states and every record
-hash, see :func:`manifest_sha256`) is compared. A signature, when present or
-required, is verified against the trusted public keys. Any failure is one
+hash, see :func:`manifest_sha256`) is compared. When any trusted public key is
+given (or a signature is required) the bundle must carry a signature that
+verifies with one of them; without trusted keys the signature is not checked
+and no signer is reported. Any failure is one
 :class:`InputError` (malformed) or :class:`IntegrityError` (altered or
 damaged) line naming the bundle and the place; nothing has been written.
 """
@@ -54,7 +56,7 @@ class Bundle:
     path: str
     joints: list[dict[str, Any]]
     digest: str | None  # bundle hash (None for format version 1 bundles)
-    signer: str | None = None  # fingerprint of the key that signed it, if any
+    signer: str | None = None  # fingerprint of the trusted key whose signature verified (never unchecked)
     signature_verified: bool = False
     notes: list[str] = field(default_factory=list)
 
@@ -263,8 +265,6 @@ def read_bundle(path: str | os.PathLike, trusted_keys=(), require_signature: boo
     """
     import h5py
 
-    from jointdb.store import _signing
-
     where = os.fspath(path)
     if os.path.isdir(where):
         raise InputError(f"bundle {where} is a directory")
@@ -304,22 +304,43 @@ def read_bundle(path: str | os.PathLike, trusted_keys=(), require_signature: boo
     except (OSError, KeyError, TypeError, ValueError, AttributeError, RecursionError, UnicodeError) as exc:
         raise InputError(f"{where}: malformed bundle ({type(exc).__name__}: {str(exc).splitlines()[0][:200]})") from None
     bundle = Bundle(where, joints, digest)
-    if signature is not None:
-        if digest is None:
-            raise InputError(f"{where}: a signed bundle must be format version 2")
+    _verify_signature(bundle, signature, signer, trusted_keys, require_signature)
+    return bundle
+
+
+def _verify_signature(bundle: Bundle, signature, signer, trusted_keys, require_signature: bool) -> None:
+    """Check the signature: any trusted key (or ``require_signature``) means it must verify.
+
+    ``bundle.signer`` is set only from a verified signature (the key that verified it); the
+    unchecked ``signer_public_key`` attribute is never reported as the signer.
+
+    Raises
+    ------
+    IntegrityError
+        Trusted keys were given (or a signature is required) and the bundle is unsigned,
+        or its signature does not verify with any trusted key.
+    """
+    from jointdb.store import _signing
+
+    where = bundle.path
+    if signature is not None and bundle.digest is None:
+        raise InputError(f"{where}: a signed bundle must be format version 2")
+    if signature is not None and signer is not None:
         try:
-            bundle.signer = _signing.fingerprint(bytes.fromhex(str(signer)))
+            bytes.fromhex(str(signer))
         except ValueError:
             raise InputError(f"{where}: signer_public_key is not hex") from None
-        if trusted_keys:
-            key = _signing.verify_digest(trusted_keys, digest, str(signature))
-            if key is None:
-                raise IntegrityError(f"{where}: the signature does not verify with any trusted key (bundle altered, "
-                                     f"or signed by key {bundle.signer} which is not trusted)")
-            bundle.signature_verified = True
-            bundle.signer = _signing.fingerprint(_signing.public_raw(key))
-        else:
-            bundle.notes.append(f"signed by key {bundle.signer} (not verified: no --trust key given)")
-    if require_signature and not bundle.signature_verified:
-        raise IntegrityError(f"{where}: the bundle is not signed; --require-signature refuses it")
-    return bundle
+    if not trusted_keys:
+        if require_signature:
+            raise IntegrityError(f"{where}: the bundle is not signed; --require-signature refuses it")
+        bundle.notes.append("unsigned / signature not checked (give --trust KEY.pub to verify who exported it)")
+        return
+    if signature is None:
+        raise IntegrityError(f"{where}: the bundle is not signed, but trusted keys were given (--trust); refusing it")
+    key = _signing.verify_digest(trusted_keys, bundle.digest, str(signature))
+    if key is None:
+        raise IntegrityError(f"{where}: the signature does not verify with any trusted key (bundle altered, or "
+                             "signed by a key that is not trusted)")
+    bundle.signature_verified = True
+    bundle.signer = _signing.fingerprint(_signing.public_raw(key))
+    bundle.notes.append(f"signature verified: signed by trusted key {bundle.signer}")

@@ -11,6 +11,13 @@ One new version is, inside the caller's write transaction:
    ``newest`` (and, unless the new one is deprecated, ``newest_active``) flags, the new
    version's index and geometry rows, and the stamp's generation is increased.
 
+Before step 3, under the joint row's lock (so two concurrent writers cannot both pass):
+the new version must be the same joint as the latest one (:mod:`jointdb.store._identity`:
+a contradiction is refused unless forced), and content identical to the latest version
+writes nothing (the latest version is the answer). A request made with an idempotency key
+(``(owner, key, request_sha256)``) is answered from its ``idempotency_keys`` row when one
+exists; otherwise that row is written in this same transaction.
+
 The statements are built once per process and executed on the transaction's
 connection (no ORM unit of work: the rows are only inserted, never changed, so
 the immutability hook of the ORM has nothing to check). The rows are the ones
@@ -25,11 +32,13 @@ from types import SimpleNamespace
 
 from sqlalchemy import bindparam, func, insert, or_, select, update
 
-from jointdb.errors import ConflictError
+from jointdb.errors import ConflictError, InputError
 from jointdb.store._chain import append_chain
+from jointdb.store._identity import contradiction, identity_changes, same_content
 from jointdb.store._index import index_values
 from jointdb.store._models import (
     AuditRow,
+    IdempotencyRow,
     JointRow,
     QueryGeometryRow,
     QueryStampRow,
@@ -52,7 +61,15 @@ def _statements() -> SimpleNamespace:
                     or_(s.c.version.is_(None), s.c.version == func.coalesce(latest, 0) + 1))
              .order_by(s.c.at.desc(), s.c.id.desc()).limit(1).scalar_subquery())
     latest_of_name = select(func.max(v.c.version)).where(v.c.joint_id == j.c.id).scalar_subquery()
+    idem = IdempotencyRow.__table__
     return SimpleNamespace(
+        latest_row=(select(v.c.version, v.c.materials, v.c.preload_n, v.c.torque_nm, v.c.geometry, v.c.extra,
+                           v.c.model_kind, v.c.dofs, v.c.blob_sha256)
+                    .where(v.c.joint_id == bindparam("jid")).order_by(v.c.version.desc()).limit(1)),
+        latest_of_joint=select(j.c.id).where(j.c.name == bindparam("name")),
+        idempotency=select(idem.c.request_sha256, idem.c.joint_name, idem.c.version, idem.c.status)
+        .where(idem.c.owner == bindparam("owner"), idem.c.key == bindparam("key")),
+        insert_idempotency=insert(idem),
         joint=select(j.c.id, j.c.joint_type).where(j.c.name == bindparam("name")).with_for_update(),
         precheck=select(j.c.joint_type, latest_of_name).where(j.c.name == bindparam("name")),
         latest_and_state=select(latest, state),
@@ -70,16 +87,22 @@ def _statements() -> SimpleNamespace:
     )
 
 
-def precheck(conn, name: str, joint_type: str, parent: int | None) -> None:
-    """The conflicts :func:`write_version` would raise, checked in one SELECT before any blob is
-    written (the write transaction checks them again: another writer may have come between).
+def precheck(conn, name: str, joint_type: str, parent: int | None, new: dict | None = None,
+             force: bool = False) -> None:
+    """The conflicts :func:`write_version` would raise, checked before any blob is written
+    (the write transaction checks them again: another writer may have come between).
+
+    ``new``: the defining conditions of the version about to be written (see
+    :func:`identity_of`); checked against the latest version unless ``force``.
 
     Raises
     ------
     ConflictError
-        ``name`` exists with another joint type, or ``parent`` is not one of its versions.
+        ``name`` exists with another joint type, ``parent`` is not one of its versions, or
+        ``new`` contradicts the latest version.
     """
-    row = conn.execute(_statements().precheck, {"name": name}).first()
+    st = _statements()
+    row = conn.execute(st.precheck, {"name": name}).first()
     latest = None
     if row is not None:
         if row[0] != joint_type:
@@ -87,22 +110,69 @@ def precheck(conn, name: str, joint_type: str, parent: int | None) -> None:
         latest = row[1]
     if parent is not None and (latest is None or parent > latest):
         raise ConflictError(f"parent version {parent} of joint {name!r} does not exist (latest is {latest or 'none'})")
+    if latest is not None and new is not None and not force:
+        jid = conn.execute(st.latest_of_joint, {"name": name}).scalar()
+        prev = conn.execute(st.latest_row, {"jid": jid}).first()
+        if prev is not None:
+            changes, _ = identity_changes(prev, new)
+            if changes:
+                raise contradiction(name, prev.version, changes)
+
+
+def identity_of(frf, cond, kind: str, blob: str) -> dict:
+    """What :mod:`jointdb.store._identity` compares: the defining conditions and the content."""
+    return {"materials": list(cond.materials), "preload_n": cond.preload_n, "torque_nm": cond.torque_nm,
+            "geometry": dict(cond.geometry), "extra": dict(cond.extra), "model_kind": kind,
+            "dofs": list(dof_strings(frf.outputs)), "blob_sha256": blob}
+
+
+def idempotent_answer(conn, idempotency: tuple[str, str, str] | None) -> tuple[str, int, int] | None:
+    """The stored answer ``(joint name, version, HTTP status)`` to an idempotency key, or None.
+
+    Raises
+    ------
+    InputError
+        The key was used by the same owner for another request.
+    """
+    if idempotency is None:
+        return None
+    owner, key, digest = idempotency
+    row = conn.execute(_statements().idempotency, {"owner": owner, "key": key}).first()
+    if row is None:
+        return None
+    if row[0] != digest:
+        raise InputError(f"Idempotency-Key {key[:60]!r} was already used for another request (joint {row[1]!r} "
+                         f"v{row[2]}); send a new key with a new request")
+    return row[1], int(row[2]), int(row[3])
 
 
 def write_version(session, *, name, joint_type, frf, cond, kind, prov, qual, parent, actor, label, blob, raw_blobs,
-                  move_label) -> JointVersion:
+                  move_label, force=False, allow_identical=False, idempotency=None) -> SimpleNamespace:
     """Insert one new version (module docstring) in ``session``'s write transaction.
 
     ``move_label(session, joint, name, number, label, actor, now)`` points ``label`` at it
     (when given). The caller commits after the blob the row names is durable.
 
+    Returns
+    -------
+    SimpleNamespace
+        ``version`` (the new :class:`JointVersion`, or None when nothing was written),
+        ``number`` and ``created`` (False: identical to the latest version, or an
+        idempotency key's stored answer that was not a new version).
+
     Raises
     ------
     ConflictError
-        ``name`` exists with another joint type, or ``parent`` is not one of its versions.
+        ``name`` exists with another joint type, ``parent`` is not one of its versions, or the
+        version contradicts the latest one (not ``force``).
+    InputError
+        ``idempotency``'s key was used for another request.
     """
     st = _statements()
     conn = session.connection()
+    answer = idempotent_answer(conn, idempotency)
+    if answer is not None:
+        return SimpleNamespace(version=None, name=answer[0], number=answer[1], created=answer[2] == 201)
     now = utcnow()
     found = conn.execute(st.joint, {"name": name}).first()
     if found is None:
@@ -116,6 +186,12 @@ def write_version(session, *, name, joint_type, frf, cond, kind, prov, qual, par
         latest, state = conn.execute(st.latest_and_state, {"jid": jid}).first()
     if parent is not None and (latest is None or parent > latest):
         raise ConflictError(f"parent version {parent} of joint {name!r} does not exist (latest is {latest or 'none'})")
+    details = {"blob_sha256": blob, "method": prov.method}
+    if latest is not None:
+        same = _same_joint(conn, name, jid, identity_of(frf, cond, kind, blob), force, allow_identical, details)
+        if same is not None:
+            _remember(conn, idempotency, name, same, 200, now)
+            return SimpleNamespace(version=None, name=name, number=same, created=False)
     number = (latest or 0) + 1
     row = SimpleNamespace(
         joint_id=jid, version=number, uuid=str(uuidlib.uuid4()), created_at=now, author=actor,
@@ -129,9 +205,9 @@ def write_version(session, *, name, joint_type, frf, cond, kind, prov, qual, par
     row.record_sha256 = record_sha256(record_dict(name, joint_type, row))
     row.id = conn.execute(st.insert_version, dict(vars(row))).inserted_primary_key[0]
     audit_id = conn.execute(st.insert_audit, {"at": now, "actor": actor, "action": "catalogue", "joint_name": name,
-                                              "version": number, "details": {"blob_sha256": blob,
-                                                                             "method": prov.method}}).inserted_primary_key[0]
+                                              "version": number, "details": details}).inserted_primary_key[0]
     append_chain(session, [("joint", jid if found is None else None), ("version", row.id), ("audit", audit_id)])
+    _remember(conn, idempotency, name, number, 201, now)
     deprecated = state == "deprecated"
     if found is not None:
         conn.execute(st.clear_newest if deprecated else st.clear_both, {"jid": jid})
@@ -146,4 +222,40 @@ def write_version(session, *, name, joint_type, frf, cond, kind, prov, qual, par
     if label is not None:
         move_label(session, joint, name, number, label, actor, now)
         labels = (label,)
-    return to_version(joint, row, labels=labels)
+    return SimpleNamespace(version=to_version(joint, row, labels=labels), name=name, number=number, created=True)
+
+
+def _same_joint(conn, name: str, jid: int, new: dict, force: bool, allow_identical: bool,
+                details: dict) -> int | None:
+    """Check the new version against the joint's latest one (under the joint row's lock).
+
+    Returns the latest version's number when the content is identical (nothing to write),
+    else None; adds ``forced`` / ``filled_in`` to the audit ``details``.
+
+    Raises
+    ------
+    ConflictError
+        A defining condition contradicts the latest version and ``force`` is not given.
+    """
+    prev = conn.execute(_statements().latest_row, {"jid": jid}).first()
+    if prev is None:
+        return None
+    if not allow_identical and same_content(prev, new):
+        return int(prev.version)
+    changes, filled = identity_changes(prev, new)
+    if changes and not force:
+        raise contradiction(name, prev.version, changes)
+    if changes:
+        details["forced"] = [{**c, "of_version": int(prev.version)} for c in changes]
+    if filled:
+        details["filled_in"] = filled
+    return None
+
+
+def _remember(conn, idempotency, name: str, number: int, status: int, now) -> None:
+    """Store the answer to an idempotency key (in the transaction of the version it names)."""
+    if idempotency is not None:
+        owner, key, digest = idempotency
+        conn.execute(_statements().insert_idempotency, {"owner": owner, "key": key, "request_sha256": digest,
+                                                        "joint_name": name, "version": number, "status": status,
+                                                        "created_at": now})

@@ -318,6 +318,7 @@ DOWNGRADE_DROPS = {
     "0004": "the query index (derived from history; upgrading rebuilds it)",
     "0005": "the API tokens of the HTTP service (every token stops working) and the blobs kept in the database",
     "0006": "the history chain (tamper evidence; checkpoints signed before no longer verify)",
+    "0007": "the stored answers to idempotency keys (a retry after the downgrade may make a second version)",
     "0008": "the web catalogue's sign-in sessions (everyone signs in again) and the teams of API tokens",
 }
 

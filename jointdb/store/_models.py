@@ -246,6 +246,26 @@ class BlobRow(Base):
     touched_at: Mapped[datetime] = mapped_column(UTCDateTime())
 
 
+class IdempotencyRow(Base):
+    """The answer to one catalogue request made with an ``Idempotency-Key`` (migration 0007).
+
+    Unique per (token owner, key); ``request_sha256`` is the hash of the request body, so the
+    same key with another body is refused. Written in the transaction of the version it names.
+    """
+
+    __tablename__ = "idempotency_keys"
+    __table_args__ = (UniqueConstraint("owner", "key"),)
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    owner: Mapped[str] = mapped_column(String(200))
+    key: Mapped[str] = mapped_column(String(200))
+    request_sha256: Mapped[str] = mapped_column(String(64))
+    joint_name: Mapped[str] = mapped_column(String(200))
+    version: Mapped[int] = mapped_column(Integer)
+    status: Mapped[int] = mapped_column(Integer)
+    created_at: Mapped[datetime] = mapped_column(UTCDateTime())
+
+
 IMMUTABLE = (JointRow, VersionRow, StateRow, AuditRow)
 #: Tables the database itself protects with UPDATE/DELETE triggers (migration 0002).
 IMMUTABLE_TABLES = ("joints", "joint_versions", "joint_states", "audit_log")

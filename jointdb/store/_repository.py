@@ -9,7 +9,7 @@ import time
 import warnings
 from collections.abc import Iterable, Mapping
 from datetime import datetime
-from typing import Any
+from typing import Any, NamedTuple
 
 from sqlalchemy import func, select
 from sqlalchemy.exc import IntegrityError as DBIntegrityError
@@ -20,7 +20,8 @@ from jointdb._limits import control_character
 from jointdb.errors import ConflictError, InputError, IntegrityError, NotFoundError
 from jointdb.frf import FRF
 from jointdb.store import _db
-from jointdb.store._catalogue import precheck, write_version
+from jointdb.store._blobformat import frf_sha256
+from jointdb.store._catalogue import idempotent_answer, identity_of, precheck, write_version
 from jointdb.store._labels import LabelsAndStates
 from jointdb.store._reports import CheckReport, VersionDiff, _is_transient, _is_unique_violation
 from jointdb.store._models import JointRow, LabelRow, StateRow, VersionRow
@@ -58,6 +59,14 @@ def _report_damaged(found: list[DamagedVersion], into: list | None) -> None:
     elif found:
         warnings.warn("skipped damaged versions (run `jointdb db check`): "
                       + "; ".join(d.describe() for d in found[:10]), DamagedRecordWarning, stacklevel=3)
+
+
+class Catalogued(NamedTuple):
+    """What :meth:`Repository.catalogue_outcome` did: the version, and whether it was written now
+    (False: identical to the latest version, nothing written)."""
+
+    version: JointVersion
+    created: bool
 
 
 class Repository(LabelsAndStates):
@@ -172,6 +181,8 @@ class Repository(LabelsAndStates):
         raw_frfs: Mapping[str, FRF] | None = None,
         author: str | None = None,
         label: str | None = None,
+        force: bool = False,
+        allow_identical: bool = False,
     ) -> JointVersion:
         """Store a joint FRF as a new joint (version 1) or a new version of one.
 
@@ -180,6 +191,14 @@ class Repository(LabelsAndStates):
         write transaction in which the next version number is taken (behind
         ``UNIQUE(joint_id, version)``; retried after rollback on a conflict;
         :mod:`jointdb.store._catalogue`).
+
+        A new version is the same joint re-identified (:mod:`jointdb.store._identity`):
+        its materials, preload, torque, geometry, model kind and DOFs must match those
+        the latest version recorded (values it did not record may be filled in); a
+        contradiction is refused unless ``force`` (the audit entry then lists each change).
+        Content identical to the latest version (same FRF, conditions, model kind) writes
+        nothing and returns that version, unless ``allow_identical``
+        (:meth:`catalogue_outcome` says which happened).
 
         ``label`` (optional) is pointed at the new version in the same
         transaction: both happen or neither.
@@ -190,7 +209,26 @@ class Repository(LabelsAndStates):
             Bad name, type, conditions, model kind / DOF structure, provenance,
             quality or label; nothing is written.
         ConflictError
-            The name exists with another joint type; or ``parent`` does not exist.
+            The name exists with another joint type; ``parent`` does not exist; or the
+            conditions contradict the latest version (without ``force``).
+        """
+        return self.catalogue_outcome(name, joint_type, frf, conditions, model_kind, provenance, quality, parent,
+                                      raw_frfs=raw_frfs, author=author, label=label, force=force,
+                                      allow_identical=allow_identical).version
+
+    @_db.with_db_errors
+    def catalogue_outcome(self, name: str, joint_type: str, frf: FRF, conditions, model_kind: str,
+                          provenance=None, quality=None, parent: int | None = None, *, raw_frfs=None,
+                          author: str | None = None, label: str | None = None, force: bool = False,
+                          allow_identical: bool = False,
+                          idempotency: tuple[str, str, str] | None = None) -> Catalogued:
+        """:meth:`catalogue`, saying whether a version was written: ``Catalogued(version, created)``.
+
+        ``created`` is False when the content was identical to the latest version (nothing
+        written; ``version`` is that version). ``idempotency``: ``(owner, key, request_sha256)``
+        of a request made with an idempotency key: a key already answered returns its stored
+        answer (the same version; InputError when it answered another request), otherwise the
+        answer is stored in the version's own transaction.
         """
         name = check_name(name)
         joint_type = check_joint_type(joint_type)
@@ -208,9 +246,11 @@ class Repository(LabelsAndStates):
             raise InputError(f"parent version must be a version number >= 1, got {parent!r}")
         actor = current_actor(author or prov.author or None)
         label = check_label(label) if label is not None else None
-
+        known = self.idempotent_answer(idempotency)
+        if known is not None:
+            return known
         with self.read_engine.connect() as conn:  # refuse conflicts before writing any blob
-            precheck(conn, name, joint_type, parent)
+            precheck(conn, name, joint_type, parent, identity_of(frf, cond, kind, frf_sha256(frf)), force)
         # encoded, verified and written now, made durable (fsync, rename, directory fsync) while the
         # row is prepared; the transaction commits only after pending.wait(): never a row without its blob
         pending = self.blobs.put_pending(frf)
@@ -218,16 +258,35 @@ class Repository(LabelsAndStates):
             blob = pending.digest
             raw_blobs = {str(k): self.blobs.put(v) for k, v in sorted(raw.items())}
 
-            def write(session: Session) -> JointVersion:
-                jv = write_version(session, name=name, joint_type=joint_type, frf=frf, cond=cond, kind=kind,
-                                   prov=prov, qual=qual, parent=parent, actor=actor, label=label, blob=blob,
-                                   raw_blobs=raw_blobs, move_label=self._move_label)
+            def write(session: Session):
+                out = write_version(session, name=name, joint_type=joint_type, frf=frf, cond=cond, kind=kind,
+                                    prov=prov, qual=qual, parent=parent, actor=actor, label=label, blob=blob,
+                                    raw_blobs=raw_blobs, move_label=self._move_label, force=force,
+                                    allow_identical=allow_identical, idempotency=idempotency)
                 pending.wait()  # the blob is durable before the row that references it commits
-                return jv
+                return out
 
-            return self._retrying(write)
+            out = self._retrying(write)
         finally:
             pending.join()
+        return Catalogued(out.version or self.get(out.name, out.number), out.created)
+
+    @_db.with_db_errors
+    def idempotent_answer(self, idempotency: tuple[str, str, str] | None) -> Catalogued | None:
+        """The stored answer to ``(owner, key, request_sha256)``, or None when the key is new.
+
+        Raises
+        ------
+        InputError
+            The key was used by the same owner for another request.
+        """
+        if idempotency is None:
+            return None
+        with self.read_engine.connect() as conn:
+            answer = idempotent_answer(conn, idempotency)
+        if answer is None:
+            return None
+        return Catalogued(self.get(answer[0], answer[1]), answer[2] == 201)
 
     # ------------------------------------------------------------------ reads
     def _joint(self, session: Session, name: str) -> JointRow:
@@ -456,10 +515,11 @@ class Repository(LabelsAndStates):
 
     @_db.with_db_errors
     def import_(self, path, author: str | None = None, *, trusted_keys=(),
-                require_signature: bool = False) -> dict[str, Any]:
+                require_signature: bool = False, force: bool = False) -> dict[str, Any]:
         """Import a bundle (a path or a verified ``Bundle``); identical versions are no-ops,
-        conflicting ones raise ConflictError; ``require_signature`` refuses a bundle not
-        signed by one of ``trusted_keys`` (Ed25519 public keys)."""
+        conflicting ones raise ConflictError, and so does a new version that is not the same
+        joint as the one before it (unless ``force``); any ``trusted_keys`` (or
+        ``require_signature``) refuse a bundle not signed by one of them (Ed25519 public keys)."""
         from jointdb.store._bundle import import_bundle
 
-        return import_bundle(self, path, author, trusted_keys, require_signature)
+        return import_bundle(self, path, author, trusted_keys, require_signature, force)

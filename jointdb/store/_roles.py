@@ -34,6 +34,7 @@ APP_PRIVILEGES = {
     "query_stamp": "SELECT, INSERT, UPDATE",
     "api_tokens": "SELECT, INSERT, UPDATE (revoked_at)",
     "frf_blobs": "SELECT, INSERT, UPDATE (touched_at), DELETE",
+    "idempotency_keys": "SELECT, INSERT",  # the stored answers to retried catalogue requests
     "web_sessions": "SELECT, INSERT, UPDATE, DELETE",  # sign-ins: opened, seen, revoked, expired ones removed
     "alembic_version": "SELECT",
 }

@@ -18,7 +18,7 @@ SQLITE_MAGIC = b"SQLite format 3\x00"
 #: Tables of the jointdb schema (besides ``alembic_version``).
 SCHEMA_TABLES = frozenset({"joints", "joint_versions", "joint_states", "labels", "audit_log",
                            "query_versions", "query_geometry", "query_stamp", "api_tokens", "frf_blobs",
-                           "history_chain", "web_sessions"})
+                           "history_chain", "web_sessions", "idempotency_keys"})
 
 
 def check_sqlite_file(path: Path) -> bool:

@@ -27,7 +27,7 @@ def test_cli_over_http_matches_the_database(server, tmp_path):
                                              "conditions": {"materials": ["tungsten-carbide", "steel"]}})
     remote = {"JOINTDB_SERVER": server.url, "JOINTDB_TOKEN": server.tokens["writer"]}
     for torque in (25, 45):
-        out = json.loads(_jointdb("catalogue", path, "--name", "CLI-1", "--torque", torque, "--label", "latest",
+        out = json.loads(_jointdb("catalogue", path, "--name", "CLI-1", "--torque", torque, "--label", "latest", "--force",
                                   "--json", env=remote).stdout)
     assert out["version"] == 2 and out["author"] == "writer-owner"
     out = json.loads(_jointdb("--server", server.url, "catalogue", path, "--name", "CLI-2", "--torque", 60, "--json",

@@ -20,7 +20,7 @@ def source(tmp_path):
                        "spring-damper-planar",
                        Provenance(method="irc-planar", parameters={"i": i}, input_files={"tip.uff": f"{i:064x}"}),
                        {"identification_residual": 0.01 * (i + 1)}, author="lab",
-                       raw_frfs={"tip": spring_joint(k=(k * 10, 8e5), dofs=("1x", "1ry"))})
+                       raw_frfs={"tip": spring_joint(k=(k * 10, 8e5), dofs=("1x", "1ry"))}, force=True)
     repo.catalogue("H1", "holder-spindle", spring_joint(k=(9e7, 5e6)), planar_conditions(torque=100.0),
                    "spring-damper-planar")
     repo.label("T1", 2, "released")
@@ -33,7 +33,7 @@ def test_export_import_keeps_versions_and_provenance(source, repo, tmp_path):
     bundle = tmp_path / "lab.h5"
     counts = source.export(None, bundle)
     assert (counts["joints"], counts["versions"]) == (2, 4) and len(counts["bundle_sha256"]) == 64
-    summary = repo.import_(bundle, author="design")
+    summary = repo.import_(bundle, author="design", force=True)
     assert summary["new_versions"] == 4 and summary["unchanged_versions"] == 0
     for name in ("T1", "H1"):
         for a, b in zip(source.history(name), repo.history(name), strict=True):
@@ -54,11 +54,11 @@ def test_export_import_keeps_versions_and_provenance(source, repo, tmp_path):
 
 def test_import_appends_new_versions_of_a_shared_history(source, repo, tmp_path):
     source.export(["T1"], tmp_path / "a.h5")
-    repo.import_(tmp_path / "a.h5")
+    repo.import_(tmp_path / "a.h5", force=True)
     source.catalogue("T1", "tool-holder", spring_joint(k=(4e6, 8e4)), planar_conditions(torque=50.0),
-                     "spring-damper-planar")
+                     "spring-damper-planar", force=True)
     source.export(["T1"], tmp_path / "b.h5")
-    summary = repo.import_(tmp_path / "b.h5")
+    summary = repo.import_(tmp_path / "b.h5", force=True)
     assert summary["new_versions"] == 1 and summary["unchanged_versions"] == 3
     assert [v.uuid for v in repo.history("T1")] == [v.uuid for v in source.history("T1")]
 

@@ -53,7 +53,7 @@ def test_catalogue_query_and_joints_commands(db, files, tmp_path):
                        "--model-kind", "spring-damper-planar", "--quality", "residual=0.01", "--db", db)
         assert out["version"] == 1 and out["torque_nm"] == torque and out["author"] == "tester"
     again = run_json("catalogue", files[40], "--name", "TH-20", "--type", "tool-holder", "--material", "steel",
-                     "--torque", 25, "--model-kind", "spring-damper-planar", "--label", "released", "--db", db)
+                     "--torque", 25, "--model-kind", "spring-damper-planar", "--label", "released", "--force", "--db", db)
     assert again["version"] == 2 and again["labels"] == "released"
 
     listed = run_json("joints", "list", "--db", db)
@@ -91,7 +91,7 @@ def test_catalogue_query_and_joints_commands(db, files, tmp_path):
     assert {k: exported[k] for k in ("bundle", "joints", "versions")} == {"bundle": str(bundle), "joints": 2,
                                                                           "versions": 3}
     other = tmp_path / "other.sqlite"
-    imported = run_json("joints", "import", bundle, "--db", other, "--blobs", tmp_path / "other-blobs")
+    imported = run_json("joints", "import", bundle, "--force", "--db", other, "--blobs", tmp_path / "other-blobs")
     assert imported["new_versions"] == 3
     check = run_json("db", "check", "--db", db)
     assert check["ok"] and check["versions_checked"] == 4

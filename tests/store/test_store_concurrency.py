@@ -28,6 +28,7 @@ def _writer(url: str, blobs: str, proc: int, n: int, queue) -> None:
                 Conditions(("steel",), torque_nm=10.0 + j, extra={"writer": proc, "seq": j}),
                 "spring-damper-planar",
                 author=f"writer-{proc}",
+                force=True,
             )
         repo.close()
         queue.put((proc, None))

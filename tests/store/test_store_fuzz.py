@@ -151,7 +151,7 @@ def world(tmp_path_factory):
     repo = Repository(root / "db.sqlite")
     repo.catalogue("T1", "tool-holder", spring_joint(), planar_conditions(torque=30.0), "spring-damper-planar")
     repo.catalogue("T1", "tool-holder", spring_joint(k=(3e6, 8e4)), planar_conditions(torque=40.0),
-                   "spring-damper-planar", label="released")
+                   "spring-damper-planar", label="released", force=True)
     repo.deprecate("T1", 1, reason="loose nut")
     good = root / "good.h5"
     repo.export(None, good)

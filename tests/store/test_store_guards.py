@@ -21,7 +21,7 @@ HISTORY = ("joints", "joint_versions", "joint_states", "audit_log")
 def _populate(repo):
     repo.catalogue("T1", "tool-holder", spring_joint(), planar_conditions(torque=40.0), "spring-damper-planar")
     repo.catalogue("T1", "tool-holder", spring_joint(k=(3e6, 8e4)), planar_conditions(torque=50.0),
-                   "spring-damper-planar")
+                   "spring-damper-planar", force=True)
     repo.label("T1", 1, "released")
     repo.deprecate("T1", 1, reason="loose nut")
 

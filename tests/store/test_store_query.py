@@ -82,7 +82,7 @@ def test_only_current_versions_rank_and_time_pinning(catalogue):
     before = catalogue.get("TH-20").created_at
     catalogue.catalogue("TH-20", "tool-holder", spring_joint(k=(_k(21), 8e4)),
                         Conditions(("tungsten-carbide", "steel"), torque_nm=60.0, geometry={"diameter_m": 0.02}),
-                        "spring-damper-planar")
+                        "spring-damper-planar", force=True)
     m = catalogue.nearest("tool-holder", Conditions(torque_nm=20.0), k=5)
     names = [(x.version.name, x.version.version) for x in m]
     assert ("TH-20", 1) not in names and ("TH-20", 2) in names  # corrected version supersedes

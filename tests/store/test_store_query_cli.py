@@ -27,7 +27,7 @@ def db(tmp_path):
     repo = Repository(path)
     for name, torques in (("A", (10.0, 30.0)), ("B", (20.0,)), ("C", (40.0, 25.0, 60.0))):
         for t in torques:
-            repo.catalogue(name, "tool-holder", spring_joint(), planar_conditions(torque=t), "spring-damper-planar")
+            repo.catalogue(name, "tool-holder", spring_joint(), planar_conditions(torque=t), "spring-damper-planar", force=True)
     repo.label("A", 1, "released")
     repo.label("C", 2, "released")
     repo.deprecate("C", 3, reason="bad fit")  # C's current version is v2 (25 N·m)

@@ -40,7 +40,7 @@ def catalogue(repo):
             geometry = {"diameter_m": rnd.choice((0.02, 0.032))} if rnd.random() < 0.7 else {}
             repo.catalogue(name, "tool-holder", spring_joint(), Conditions(
                 rnd.choice(MATERIALS), torque_nm=torque, preload_n=rnd.choice((None, 1e4, 3e4)),
-                geometry=geometry), "spring-damper-planar")
+                geometry=geometry), "spring-damper-planar", force=True)
         order.append(name)
         n = len(repo.history(name))
         if rnd.random() < 0.6:
