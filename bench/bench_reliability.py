@@ -34,7 +34,10 @@ def _serve(db: str, blobs: Path, log: Path, port: int) -> subprocess.Popen:
     env = {**os.environ, "OPENBLAS_NUM_THREADS": "1", "JOINTDB_AUTHOR": "server-process"}
     with open(log, "ab") as fh:
         proc = subprocess.Popen([sys.executable, "-m", "jointdb", "serve", "--db", db, "--blobs", str(blobs),
-                                 "--port", str(port), "--workers", "1"], stdout=fh, stderr=subprocess.STDOUT, env=env)
+                                 "--port", str(port), "--workers", "1",
+                                 # the bench connects as the server's superuser (JOINTDB_TEST_PG_URL)
+                                 *(["--allow-owner"] if db.startswith("postgresql") else [])],
+                                stdout=fh, stderr=subprocess.STDOUT, env=env)
     deadline = time.monotonic() + 60
     while time.monotonic() < deadline:
         if proc.poll() is not None:

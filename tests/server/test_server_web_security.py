@@ -55,9 +55,9 @@ def _new_token(server, name: str, role: str = "writer", team: str | None = None)
         return create_token(r, name, role, **({"team": team} if team else {}))[0]
 
 
-def _catalogue(server, token: str, tmp_path, name: str) -> None:
+def _catalogue(server, token: str, tmp_path, name: str, **extra) -> None:
     with server.client(token=token) as c:
-        r = c.post("/api/v1/catalogue", json=joint_upload(tmp_path, name))
+        r = c.post("/api/v1/catalogue", json={**joint_upload(tmp_path, name), **extra})
         assert r.status_code == 201, r.text
 
 
@@ -245,7 +245,7 @@ def test_writer_may_change_only_their_own_or_their_teams_joints(server, tmp_path
     alice, admin = server.tokens["writer"], server.tokens["admin"]  # alice: writer-owner
     bob = _new_token(server, f"bob-{suffix}")
     _catalogue(server, alice, tmp_path, "OWN-A")
-    _catalogue(server, bob, tmp_path, "OWN-A")  # bob adds v2: still alice's joint
+    _catalogue(server, bob, tmp_path, "OWN-A", allow_identical=True)  # bob adds v2: still alice's joint
     for body_path, body in (("labels", {"version": 1, "label": "released"}), ("deprecate", {"reason": "mine now"})):
         with server.client(token=bob) as c:
             r = c.post(f"/api/v1/joints/OWN-A/{body_path}", json=body)

@@ -15,7 +15,7 @@ from store_helpers import planar_conditions, run_cli, spring_joint
 
 def _populate(repo):
     repo.catalogue("T1", "tool-holder", spring_joint(), planar_conditions(torque=40.0), "spring-damper-planar")
-    repo.catalogue("T1", "tool-holder", spring_joint(k=(3e6, 8e4)), planar_conditions(torque=50.0),
+    repo.catalogue("T1", "tool-holder", spring_joint(k=(3e6, 8e4)), planar_conditions(torque=40.0),
                    "spring-damper-planar", label="released")
     repo.deprecate("T1", 1, reason="loose nut")
     repo.catalogue("T2", "tool-holder", spring_joint(k=(4e6, 9e4)), planar_conditions(torque=60.0),

@@ -191,7 +191,8 @@ def test_a_page_of_the_listing_is_a_constant_number_of_statements(repo):
 
 def test_listing_shows_the_version_get_shows(repo):
     _catalogue(repo, "A")
-    _catalogue(repo, "A", torque=41.0)
+    repo.catalogue("A", "tool-holder", spring_joint(k=(3e6, 8e4)), {"materials": ["tungsten-carbide", "steel"],
+                                                                   "torque_nm": 40.0}, KIND)  # re-identified
     _catalogue(repo, "B")
     repo.deprecate("A", 2, reason="bad fit")
     _catalogue(repo, "C")

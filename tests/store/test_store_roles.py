@@ -60,7 +60,7 @@ def test_the_app_role_writes_but_cannot_rewrite_history(two_roles):
     repo = Repository(two_roles.app_url, blobs=two_roles.blobs, auto_create=False)
     try:  # every write path works with the minimal privileges
         repo.catalogue("T1", "tool-holder", spring_joint(), planar_conditions(torque=40.0), "spring-damper-planar")
-        repo.catalogue("T1", "tool-holder", spring_joint(k=(3e6, 8e4)), planar_conditions(torque=50.0),
+        repo.catalogue("T1", "tool-holder", spring_joint(k=(3e6, 8e4)), planar_conditions(torque=40.0),
                        "spring-damper-planar", label="released")
         repo.label("T1", 1, "released")
         repo.deprecate("T1", 1, reason="loose nut")
