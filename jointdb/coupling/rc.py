@@ -28,38 +28,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from jointdb.coupling._common import JointSubstructure, reciprocal_index
 from jointdb.coupling._common import as_receptance as _receptance
 from jointdb.coupling._common import check_grid as _check_grid
-from jointdb.coupling._common import reciprocal_index
 from jointdb.errors import InputError, NumericalError
 from jointdb.frf import FRF, Dof, Quantity, dofs
 
 __all__ = ["Interface", "JointSubstructure", "couple", "spring_damper_joint"]
-
-
-@dataclass(frozen=True)
-class JointSubstructure:
-    """A joint body with inertia (docs/theory.md §1b).
-
-    Parameters
-    ----------
-    frf
-        Free receptance of the joint body over (at least) ``a_side + b_side``
-        DOFs, e.g. from a short free-free beam model of the joint segment.
-    a_side, b_side
-        The joint body's DOFs attached rigidly to the interface's ``a_dofs``
-        and ``b_dofs`` respectively (same lengths, paired in order).
-    """
-
-    frf: FRF
-    a_side: tuple[Dof, ...]
-    b_side: tuple[Dof, ...]
-
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "a_side", dofs(self.a_side))
-        object.__setattr__(self, "b_side", dofs(self.b_side))
-        if not isinstance(self.frf, FRF):
-            raise InputError("JointSubstructure.frf must be an FRF container")
 
 
 @dataclass(frozen=True)

@@ -11,7 +11,7 @@ offered when there are at least two levels.
 
 from __future__ import annotations
 
-from jointdb.diagnose.physics import register
+from jointdb.diagnose.physics._candidate import register
 from jointdb.diagnose.physics._util import full_clamps, without_ingredient
 from jointdb.diagnose.physics.joint import CompliantJoint
 from jointdb.diagnose.physics.microslip import _law_params, _state

@@ -22,7 +22,7 @@ import dataclasses
 
 import numpy as np
 
-from jointdb.diagnose.physics import Candidate, Param, register
+from jointdb.diagnose.physics._candidate import Candidate, Param, register
 from jointdb.diagnose.physics._util import AtClamp, full_clamps, without_ingredient
 from jointdb.fe import Support
 

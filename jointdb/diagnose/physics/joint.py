@@ -9,7 +9,7 @@ dampers with one joint loss factor η (``c = η k / ω₁``).
 
 from __future__ import annotations
 
-from jointdb.diagnose.physics import Candidate, Param, register
+from jointdb.diagnose.physics._candidate import Candidate, Param, register
 from jointdb.diagnose.physics._util import AtClamp, bending_stiffness_at, full_clamps, without_ingredient
 from jointdb.fe import Clamp, Support
 
