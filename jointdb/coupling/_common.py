@@ -8,7 +8,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from jointdb.errors import InputError, NumericalError
-from jointdb.frf import FRF, Dof, Quantity, dofs
+from jointdb.frf import FRF, Dof, Quantity, dofs, reciprocal_index
 
 __all__ = [
     "IdentificationResult",
@@ -174,32 +174,6 @@ def same_grid(named: Mapping[str, FRF]) -> np.ndarray:
     for name, frf in items[1:]:
         check_grid(ref_name, ref.freq, name, frf.freq)
     return ref.freq
-
-
-def reciprocal_index(frf: FRF, outs: Sequence[Dof], ins: Sequence[Dof]):
-    """Where each entry of the block ``outs × ins`` sits in ``frf.values``, directly or by reciprocity.
-
-    Returns
-    -------
-    (rows, cols), None
-        Integer arrays ``(len(outs), len(ins))`` with
-        ``frf.values[:, rows, cols]`` the requested block: ``H[o, i]`` where
-        measured, else ``H[i, o]`` (reciprocity ``H_oi = H_io``).
-    None, (o, i)
-        The first requested pair known neither way.
-    """
-    oidx, iidx = frf._index["out"], frf._index["in"]
-    rows = np.empty((len(outs), len(ins)), dtype=np.intp)
-    cols = np.empty_like(rows)
-    for r, o in enumerate(outs):  # loops over DOF pairs, not frequency lines
-        for c, i in enumerate(ins):
-            if o in oidx and i in iidx:
-                rows[r, c], cols[r, c] = oidx[o], iidx[i]
-            elif i in oidx and o in iidx:
-                rows[r, c], cols[r, c] = oidx[i], iidx[o]
-            else:
-                return None, (o, i)
-    return (rows, cols), None
 
 
 def _run(idx: np.ndarray) -> "slice | None":
