@@ -167,6 +167,7 @@ def register(app: typer.Typer) -> None:
     app.command("identify")(identify_cmd)
     app.command("couple")(couple_cmd)
 
+
 def _identify_plots(directory: Path, result) -> list[str]:
     from jointdb.plots._coupling import save_comparison_plot, save_kc_plot
 
