@@ -338,13 +338,7 @@ def prepare(model, measurements: Sequence[Measurement], mapping: Mapping[int, st
                 "several recordings must be the same test at different excitation levels"
             )
     label = labels[0]
-    dirs_ok = ("x", "ry") if model.kind == "planar" else ("x", "y", "z", "rx", "ry", "rz")
-    for d in (*first.outputs, *first.inputs):
-        if d.direction not in dirs_ok:
-            raise InputError(f"{label}: DOF {d} is in direction {d.direction!r}, which a {model.kind} model "
-                             f"does not have ({', '.join(dirs_ok)})")
-    outs = [_point_for(d, model, mapping, "output", label) for d in first.outputs]
-    ins = [_point_for(d, model, mapping, "input", label) for d in first.inputs]
+    outs, ins = _model_points(first, model, mapping, label)
     lo, hi = _common_band(frfs, labels, band, notes)
     base = first.freq[(first.freq >= lo) & (first.freq <= hi) & (first.freq > 0)]
     if base.size < 8:
@@ -365,6 +359,19 @@ def prepare(model, measurements: Sequence[Measurement], mapping: Mapping[int, st
         levels=tuple(m.level for m in measurements), labels=tuple(m.label for m in measurements),
         full_freq=base, full_values=values, full_weight=weight, notes=tuple(notes),
     )
+
+
+def _model_points(first, model, mapping: dict, label: str) -> tuple[list[str], list[str]]:
+    """The model point of each output and input DOF of the recordings (InputError for a direction
+    the model lacks or a DOF with no point)."""
+    dirs_ok = ("x", "ry") if model.kind == "planar" else ("x", "y", "z", "rx", "ry", "rz")
+    for d in (*first.outputs, *first.inputs):
+        if d.direction not in dirs_ok:
+            raise InputError(f"{label}: DOF {d} is in direction {d.direction!r}, which a {model.kind} model "
+                             f"does not have ({', '.join(dirs_ok)})")
+    outs = [_point_for(d, model, mapping, "output", label) for d in first.outputs]
+    ins = [_point_for(d, model, mapping, "input", label) for d in first.inputs]
+    return outs, ins
 
 
 def _common_band(frfs, labels, band, notes: list[str]) -> tuple[float, float]:

@@ -12,7 +12,13 @@ import numpy as np
 from jointdb.diagnose._compare import Signature, find_peaks, signature
 from jointdb.diagnose._data import Measurement, Observation, prepare
 from jointdb.diagnose._fit import Fit, ModelEvaluator, fit_candidate, jackknife_spread, nominal_fit
-from jointdb.diagnose._verdict import explained_verdict, levels_text, shift_text, unexplained_verdict
+from jointdb.diagnose._verdict import (
+    explained_verdict,
+    levels_text,
+    not_better_verdict,
+    shift_text,
+    unexplained_verdict,
+)
 from jointdb.diagnose.physics import Combination, Context, candidates_for
 from jointdb.diagnose.physics.interface import screen_sites
 from jointdb.errors import InputError
@@ -284,24 +290,19 @@ def diagnose(model, measurements: Sequence[Measurement], mapping: Mapping[int, s
     if combinations and fits:
         fits = _fit_pairs(ev, model, fits, rules)
     ok = [f for f in fits if rules.eligible(f) and rules.passes(f, nominal)]
-    best = None
+    best, found = None, _Found()
     if ok:
         best, fits = _settle_best(ev, model, ok, fits, rules)
-    found = _Found()
-    if best is not None:
         found = _apply_best(model, best, obs, full, levels_data)
     mis0 = full.mismatch(np.asarray(H0_full))
     mis1 = full.mismatch(np.asarray(found.H_full)) if found.H_full is not None else mis0
     levels_model = _model_level_analysis(full, np.asarray(found.H_full), obs, levels_data) \
         if found.H_full is not None and levels_data is not None else None
-
     where = shift_text(before) + levels_text(levels_data)
     alternative, advice = None, ""
     if best is not None and mis1 * MIN_IMPROVEMENT > mis0:
         # the fit lines improved but the whole band did not: not an explanation (never explained=True below 1.5x)
-        verdict = (f"The recording differs from the model ({where}; mismatch {100 * mis0:.1f} %). The best "
-                   f"candidate, {best.describe()}, improves the fit lines but brings the whole band only to "
-                   f"{100 * mis1:.1f} % (less than {MIN_IMPROVEMENT:g}× better). Nothing is added.")
+        verdict = not_better_verdict(best, where, mis0, mis1, MIN_IMPROVEMENT)
         best, found, levels_model = None, _Found(), None
         mis1 = mis0
     elif best is None:

@@ -183,12 +183,8 @@ def local_modal_fit(freq: np.ndarray, values: np.ndarray, weight: np.ndarray | N
         raise InputError(f"local modal fit: {f_centre:g} Hz is outside the recorded {freq[0]:g}–{freq[-1]:g} Hz")
     vals = np.where(ok, values, 0.0)
     ind = indicator(vals, weight)
-    win = np.where(np.abs(freq - f_centre) <= search * f_centre)[0]
-    i = int(win[np.argmax(ind[win])]) if win.size else int(np.argmin(np.abs(freq - f_centre)))
+    i, hw, sel = _band(freq, ind, f_centre, search, band_halfwidths, min_band, max_band)
     f_pk = float(freq[i])
-    hw = max(_half_power(freq, ind, i), 0.5 * float(np.median(np.diff(freq))) if freq.size > 1 else 0.0)
-    half = min(max(band_halfwidths * hw, min_band * f_pk), max_band * f_pk)
-    sel = (freq >= f_pk - half) & (freq <= f_pk + half)
     f_b, y, w = freq[sel], vals[sel], weight[sel]
     n_out, n_in = values.shape[1:]
     y = y.reshape(f_b.size, -1)
@@ -217,6 +213,19 @@ def local_modal_fit(freq: np.ndarray, values: np.ndarray, weight: np.ndarray | N
         band=(float(f_b[0]), float(f_b[-1])), n_lines=int((fit.s > 0).sum()), chi2_red=chi2_red,
         neighbours=tuple((float(p[0] / (2 * np.pi)), float(p[1])) for p in poles[1:]),
     )
+
+
+def _band(freq: np.ndarray, ind: np.ndarray, f_centre: float, search: float, band_halfwidths: float,
+          min_band: float, max_band: float):
+    """The recorded peak's line (the indicator's maximum within ``± search · f_centre``), its half-power
+    half-width [Hz] and the lines of the band around it."""
+    win = np.where(np.abs(freq - f_centre) <= search * f_centre)[0]
+    i = int(win[np.argmax(ind[win])]) if win.size else int(np.argmin(np.abs(freq - f_centre)))
+    f_pk = float(freq[i])
+    hw = max(_half_power(freq, ind, i), 0.5 * float(np.median(np.diff(freq))) if freq.size > 1 else 0.0)
+    half = min(max(band_halfwidths * hw, min_band * f_pk), max_band * f_pk)
+    sel = (freq >= f_pk - half) & (freq <= f_pk + half)
+    return i, hw, sel
 
 
 class _BandFit:

@@ -8,7 +8,7 @@ import numpy as np
 from jointdb.diagnose._compare import Signature
 
 __all__ = ["shift_text", "separating_measurement", "where_text", "implausibility_text", "levels_text",
-           "level_table_text", "explained_verdict", "unexplained_verdict"]
+           "level_table_text", "explained_verdict", "unexplained_verdict", "not_better_verdict"]
 
 
 def shift_text(sig: Signature) -> str:
@@ -142,6 +142,13 @@ def level_table_text(rows: list) -> str:
             text += f", slip {slip * 1e6:.3g} µm"
         out.append(text)
     return " Per level: " + "; ".join(out) + "."
+
+
+def not_better_verdict(best, where: str, mis0: float, mis1: float, min_improvement: float) -> str:
+    """The verdict when the best candidate improves the fit lines but not the whole band enough."""
+    return (f"The recording differs from the model ({where}; mismatch {100 * mis0:.1f} %). The best "
+            f"candidate, {best.describe()}, improves the fit lines but brings the whole band only to "
+            f"{100 * mis1:.1f} % (less than {min_improvement:g}× better). Nothing is added.")
 
 
 def unexplained_verdict(fits: list, runner, nominal_mismatch: float, level_dependent: bool, where: str,
