@@ -142,11 +142,6 @@ def run_main_job(
     -------
     JourneyResult
     """
-    from jointdb import app, io
-    from jointdb.plots._lobes import plot_lobes
-    from jointdb.plots._stack import joints_legend, save_joint_distances, save_tip_comparison
-    from jointdb.stability import MillingCut, milling_lobes_zoa, refine_lobes
-    from jointdb.stack import stack_to_dict
     from jointdb.store import Repository
 
     out = Path(out_dir)
@@ -157,143 +152,17 @@ def run_main_job(
         cat = bundled_catalogue(stack)
         repo = stack.enter_context(Repository(url))
         say(f"jointdb main job → {out}  (database: {url})")
-
-        # 1. catalogue ---------------------------------------------------------------
-        campaigns = sorted((cat / "campaigns").glob("*/campaign.json"))
-        kinds = _joint_types(campaigns)
-        say(f"[1/4] identify and catalogue {len(campaigns)} campaigns "
-            f"({', '.join(f'{n} {t}' for t, n in kinds.items())}; IRC, docs/theory.md §2a)")
-        for path in campaigns:
-            outcome = app.catalogue_campaign(repo, path)
-            row = {"joint_type": outcome.campaign.joint_type, **outcome.row(),
-                   **_condition_columns(outcome.campaign.conditions)}
-            truth_file = path.parent / "truth.json"
-            if truth_file.is_file() and "k_x_n_per_m" in row:  # synthetic campaign: compare with the true joint
-                truth = json.loads(truth_file.read_text(encoding="utf-8"))
-                row["k_x_error"] = row["k_x_n_per_m"] / truth["k"][0] - 1.0
-                row["k_theta_error"] = row["k_theta_nm_per_rad"] / truth["k"][1] - 1.0
-            result.catalogued.append(row)
-            vs_truth = (f"  (true k: {row['k_x_error']:+.2%}, {row['k_theta_error']:+.2%})"
-                        if "k_x_error" in row else "")
-            say(f"      {row['joint']:<26} {row['condition']:<34} "
-                f"k_x={row['k_x_n_per_m']:.3e} N/m  k_θ={row['k_theta_nm_per_rad']:.3e} N·m/rad  "
-                f"c_x={row['c_x_ns_per_m']:.0f} N·s/m{vs_truth}  "
-                f"{'new version' if row['new'] else 'identical to v' + str(outcome.version.version) + ', nothing written'}")
-        result.files.append(_write_csv(out / "catalogue.csv", result.catalogued))
-
-        # 2. query ---------------------------------------------------------------------
-        spec = app.load_stack(cat / "demo-stack.json")
-        result.files.append(_write_json(out / "stack.json", stack_to_dict(spec)))
-        say(f"[2/4] new stack: {spec.name}")
-        say(f"      tool {spec.tool.length * 1e3:.0f} mm ({spec.gauge_length * 1e3:.0f} mm gauge, "
-            f"{spec.insertion_length * 1e3:.0f} mm inserted), holder {spec.holder.length * 1e3:.0f} mm")
-        resolutions = app.resolve_joints(spec, repo)
-        for res in resolutions.values():
-            row = res.row()
-            result.joints.append({**row, "candidates": [list(c) for c in res.candidates]})
-            if res.candidates:
-                extrapolating = f"  EXTRAPOLATING: {', '.join(res.outside_range)}" if res.extrapolating else ""
-                say(f"      {res.interface}: chose {res.name}@{res.version} at distance {res.distance:.3f} "
-                    f"({row['per_condition']}){extrapolating}")
-                for name, version, dist in res.candidates[1:]:
-                    say(f"          next: {name}@{version} at {dist:.3f}")
-            else:
-                say(f"      {res.interface}: {row['joint']}")
-            for w in res.warnings:
-                say(f"      warning: {w}")
-        result.files.append(_write_json(out / "joint-choice.json", result.joints))
-        result.files.append(save_joint_distances(out / "joint-choice.png", resolutions))
-
-        # 3. predict -------------------------------------------------------------------
-        say("[3/4] predict the tool-tip FRF (three-component receptance coupling, docs/theory.md §4)")
-        from jointdb.stack import predict_tool_tip, prediction_grid
-
-        grid = prediction_grid(spec)
-        pred = predict_tool_tip(spec, {n: r.frf for n, r in resolutions.items() if r.frf is not None}, grid)
-        result.prediction = pred.summary()
-        same_y = np.allclose(pred.tip.entry("1y", "1y"), pred.tip.entry("1x", "1x"))
-        for row in result.prediction[:1] if same_y else result.prediction:
-            say(f"      {row['direction']}{' (and y)' if same_y else ''}: peak {row['peak_m_per_n']:.3e} m/N at "
-                f"{row['peak_hz']:.0f} Hz (rigid joints: {row['rigid_peak_m_per_n']:.3e} m/N at "
-                f"{row['rigid_peak_hz']:.0f} Hz); most negative real part {row['min_real_m_per_n']:.3e} m/N")
-        for note in pred.notes:
-            say(f"      note: {note}")
-        extra = []
-        queried = {n for n, r in resolutions.items() if r.kind == "query" and len(r.candidates) > 1}
-        if queried:  # cross-check: the same stack with joints interpolated between the catalogued conditions
-            ispec = spec.replace(interfaces={
-                n: dataclasses.replace(c, interpolate=True, neighbours=2) if n in queried else c
-                for n, c in spec.interfaces.items()
-            })
-            ires = app.resolve_joints(ispec, repo)
-            ipred = predict_tool_tip(ispec, {n: r.frf for n, r in ires.items() if r.frf is not None}, grid)
-            irow = ipred.summary()[0]
-            result.interpolated = {"joints": {n: ires[n].description for n in queried}, **irow}
-            say("      cross-check, both queried interfaces interpolated:" if len(queried) > 1 else "      cross-check:")
-            for n in sorted(queried):
-                say(f"          {ires[n].description}")
-            say(f"          peak {irow['peak_m_per_n']:.3e} m/N at {irow['peak_hz']:.0f} Hz "
-                f"(nearest joint: {result.prediction[0]['peak_m_per_n']:.3e} m/N at "
-                f"{result.prediction[0]['peak_hz']:.0f} Hz)")
-            extra.append((joints_legend({n: ires[n] for n in sorted(queried)}), ipred.tip))
-        io.write_uff58(out / "tip.uff", pred.tip, round_freq=True)
-        io.write_frf_csv(out / "tip.csv", pred.tip)
-        result.files += [out / "tip.uff", out / "tip.csv"]
-        from jointdb._journey_band import journey_bands
-
-        # the lobes (step 4) use 4x finer lines; their band is sampled on those lines too
-        fine = np.linspace(grid[0], grid[-1], 4 * (grid.size - 1) + 1)
-        tip_band, lobe_band, band_summary = journey_bands(spec, resolutions, grid, say, lobe_grid=fine)
-        result.files.append(save_tip_comparison(out / "tip-vs-rigid.png", pred, title=spec.name, extra=extra,
-                                                label=joints_legend(resolutions), band=tip_band))
-
-        # 4. lobes ---------------------------------------------------------------------
-        cut = MillingCut(**DEMO_CUT)
-        speeds = np.linspace(*speed_range_rpm, n_speeds)
-        say(f"[4/4] milling stability lobes (zero-order approximation, docs/theory.md §5): {cut.n_teeth} teeth, "
-            f"K_t={cut.kt:.3g} N/m², K_r={cut.kr:.3g} N/m², a_e/D={cut.radial_immersion:g}, "
-            f"{'down' if cut.down_milling else 'up'}-milling, {n_speeds} speeds, refined near the minima and pockets")
-        cross = bool(np.any(pred.tip.values[:, 0, 1]))  # planes coupled by the spindle: use H[x,y], H[y,x]
-        # more speeds near the envelope's minima and pockets (equal to the plain grid at its speeds)
-        # the lobes from the same prediction on 4x finer lines: ZOA draws each lobe through the FRF's lines,
-        # and at high speeds (low lobe numbers) 20 Hz lines are far apart in speed
-        lob = predict_tool_tip(spec, {n: r.frf for n, r in resolutions.items() if r.frf is not None}, fine)
-        lobes = refine_lobes(lambda s: milling_lobes_zoa(lob.tip, cut, cross_terms=cross, spindle_speed_rpm=s),
-                             speeds)
-        lobes_rigid = refine_lobes(
-            lambda s: milling_lobes_zoa(lob.rigid, cut, cross_terms=cross, spindle_speed_rpm=s), speeds)
-        # on the nominal lobes' (refined) speeds, so that band and nominal limit are computed alike
-        lobe_band = lobe_band(cut, lobes.spindle_speed_rpm) if lobe_band is not None else None
-        best = int(np.nanargmax(np.where(np.isfinite(lobes.depth_m), lobes.depth_m, -np.inf)))
-        result.lobes = {
-            "method": lobes.method,
-            "min_depth_m": lobes.min_depth_m,
-            "min_depth_rigid_m": lobes_rigid.min_depth_m,
-            "best_speed_rpm": float(lobes.spindle_speed_rpm[best]),
-            "best_depth_m": float(lobes.depth_m[best]),
-            "cut": DEMO_CUT,
-            "planes": "x and y (tool-tip FRF 1x,1x and 1y,1y" + (", equal" if same_y else "") + ")",
-        }
-        say(f"      from the x and y planes of the tip FRF{' (y equal to x)' if same_y else ''}")
-        say(f"      unconditionally stable below {lobes.min_depth_m * 1e3:.3f} mm "
-            f"(with rigid joints: {lobes_rigid.min_depth_m * 1e3:.3f} mm); "
-            f"best pocket {lobes.depth_m[best] * 1e3:.2f} mm at {lobes.spindle_speed_rpm[best]:.0f} rpm")
-        result.files.append(_write_csv(out / "lobes.csv", lobes.table()))
-        result.files.append(plot_lobes([lobes, lobes_rigid], out / "lobes.png",
-                                       labels=["with catalogued joints", "rigid joints"],
-                                       title=f"Stability lobes: {spec.name}", band=lobe_band))
-        if lobe_band is not None:
-            band_summary["lobes"] = lobe_band.to_json()
-            lo, mid, hi = lobe_band.critical_depth_m * 1e3
-            say(f"      critical depth 5–95 %: {lo:.3f} – {hi:.3f} mm (median {mid:.3f} mm, "
-                f"{lobe_band.samples} sampled joints)")
+        _catalogue(repo, cat, result, say)
+        spec, resolutions = _query(repo, cat, result, say)
+        tip = _predict(repo, spec, resolutions, result, say)
+        band_summary = _lobes(spec, tip, result, say, n_speeds, speed_range_rpm)
         summary = {
             "database": url,
             "catalogued": result.catalogued,
             "joints": result.joints,
             "prediction": result.prediction,
             "interpolated_cross_check": result.interpolated,
-            "notes": list(pred.notes),
+            "notes": list(tip.pred.notes),
             "lobes": result.lobes,
             "interfaces": {j["interface"]: {"joint": j["joint"], "distance": j["distance"],
                                             "extrapolating": j["extrapolating"]} for j in result.joints},
@@ -303,3 +172,204 @@ def run_main_job(
         result.files.append(_write_json(out / "summary.json", summary))
     say(f"done: {len(result.files)} files in {out}")
     return result
+
+
+def _catalogue(repo, cat: Path, result: JourneyResult, say: Callable[[str], None]) -> None:
+    """Step 1: identify and catalogue every bundled campaign (one row each, ``catalogue.csv``)."""
+    from jointdb import app
+
+    campaigns = sorted((cat / "campaigns").glob("*/campaign.json"))
+    kinds = _joint_types(campaigns)
+    say(f"[1/4] identify and catalogue {len(campaigns)} campaigns "
+        f"({', '.join(f'{n} {t}' for t, n in kinds.items())}; IRC, docs/theory.md §2a)")
+    for path in campaigns:
+        outcome = app.catalogue_campaign(repo, path)
+        row = {"joint_type": outcome.campaign.joint_type, **outcome.row(),
+               **_condition_columns(outcome.campaign.conditions)}
+        truth_file = path.parent / "truth.json"
+        if truth_file.is_file() and "k_x_n_per_m" in row:  # synthetic campaign: compare with the true joint
+            truth = json.loads(truth_file.read_text(encoding="utf-8"))
+            row["k_x_error"] = row["k_x_n_per_m"] / truth["k"][0] - 1.0
+            row["k_theta_error"] = row["k_theta_nm_per_rad"] / truth["k"][1] - 1.0
+        result.catalogued.append(row)
+        vs_truth = (f"  (true k: {row['k_x_error']:+.2%}, {row['k_theta_error']:+.2%})"
+                    if "k_x_error" in row else "")
+        say(f"      {row['joint']:<26} {row['condition']:<34} "
+            f"k_x={row['k_x_n_per_m']:.3e} N/m  k_θ={row['k_theta_nm_per_rad']:.3e} N·m/rad  "
+            f"c_x={row['c_x_ns_per_m']:.0f} N·s/m{vs_truth}  "
+            f"{'new version' if row['new'] else 'identical to v' + str(outcome.version.version) + ', nothing written'}")
+    result.files.append(_write_csv(result.out_dir / "catalogue.csv", result.catalogued))
+
+
+def _query(repo, cat: Path, result: JourneyResult, say: Callable[[str], None]):
+    """Step 2: read the new stack and choose the nearest catalogued joint at each interface."""
+    from jointdb import app
+    from jointdb.plots._stack import save_joint_distances
+    from jointdb.stack import stack_to_dict
+
+    out = result.out_dir
+    spec = app.load_stack(cat / "demo-stack.json")
+    result.files.append(_write_json(out / "stack.json", stack_to_dict(spec)))
+    say(f"[2/4] new stack: {spec.name}")
+    say(f"      tool {spec.tool.length * 1e3:.0f} mm ({spec.gauge_length * 1e3:.0f} mm gauge, "
+        f"{spec.insertion_length * 1e3:.0f} mm inserted), holder {spec.holder.length * 1e3:.0f} mm")
+    resolutions = app.resolve_joints(spec, repo)
+    for res in resolutions.values():
+        row = res.row()
+        result.joints.append({**row, "candidates": [list(c) for c in res.candidates]})
+        if res.candidates:
+            extrapolating = f"  EXTRAPOLATING: {', '.join(res.outside_range)}" if res.extrapolating else ""
+            say(f"      {res.interface}: chose {res.name}@{res.version} at distance {res.distance:.3f} "
+                f"({row['per_condition']}){extrapolating}")
+            for name, version, dist in res.candidates[1:]:
+                say(f"          next: {name}@{version} at {dist:.3f}")
+        else:
+            say(f"      {res.interface}: {row['joint']}")
+        for w in res.warnings:
+            say(f"      warning: {w}")
+    result.files.append(_write_json(out / "joint-choice.json", result.joints))
+    result.files.append(save_joint_distances(out / "joint-choice.png", resolutions))
+    return spec, resolutions
+
+
+#: The lobes use lines this many times finer than the prediction's: ZOA draws each lobe through the
+#: FRF's lines, and at high speeds (low lobe numbers) 20 Hz lines are far apart in speed.
+LOBE_REFINEMENT = 4
+
+
+@dataclass
+class _Tip:
+    """The tool-tip prediction of the demo stack, on the lobes' fine lines and on the stack's own lines
+    (every :data:`LOBE_REFINEMENT`-th fine line: one prediction serves both), with its uncertainty bands."""
+
+    fine: Any            # Prediction on the fine lines
+    pred: Any            # the same on the stack's lines
+    same_y: bool
+    lobe_band: Any = None
+    band_summary: dict = field(default_factory=dict)
+
+
+def _finer_lines(grid: np.ndarray, factor: int) -> np.ndarray:
+    """``factor - 1`` lines evenly between each pair of ``grid`` lines; every ``factor``-th line is
+    exactly a line of ``grid``."""
+    return np.interp(np.arange(factor * (grid.size - 1) + 1) / factor, np.arange(grid.size), grid)
+
+
+def _every_line(pred, step: int):
+    """The prediction ``pred`` on every ``step``-th of its lines."""
+    from jointdb.frf import FRF
+    from jointdb.stack import Prediction
+
+    def thin(frf):
+        return FRF(frf.freq[::step], frf.values[::step], frf.outputs, frf.inputs, frf.quantity)
+
+    return Prediction(thin(pred.tip), thin(pred.rigid), {k: v[::step] for k, v in pred.tip_rotation.items()},
+                      pred.interfaces, pred.notes)
+
+
+def _predict(repo, spec, resolutions, result: JourneyResult, say: Callable[[str], None]) -> _Tip:
+    """Step 3: the tool-tip FRF with the chosen joints and with rigid ones, the cross-check with
+    interpolated joints, the uncertainty bands; ``tip.uff``, ``tip.csv``, ``tip-vs-rigid.png``."""
+    from jointdb import io
+    from jointdb._journey_band import journey_bands
+    from jointdb.plots._stack import joints_legend, save_tip_comparison
+    from jointdb.stack import predict_tool_tip, prediction_grid
+
+    out = result.out_dir
+    say("[3/4] predict the tool-tip FRF (three-component receptance coupling, docs/theory.md §4)")
+    grid = prediction_grid(spec)
+    fine = _finer_lines(grid, LOBE_REFINEMENT)
+    lob = predict_tool_tip(spec, {n: r.frf for n, r in resolutions.items() if r.frf is not None}, fine)
+    pred = _every_line(lob, LOBE_REFINEMENT)
+    result.prediction = pred.summary()
+    same_y = np.allclose(pred.tip.entry("1y", "1y"), pred.tip.entry("1x", "1x"))
+    for row in result.prediction[:1] if same_y else result.prediction:
+        say(f"      {row['direction']}{' (and y)' if same_y else ''}: peak {row['peak_m_per_n']:.3e} m/N at "
+            f"{row['peak_hz']:.0f} Hz (rigid joints: {row['rigid_peak_m_per_n']:.3e} m/N at "
+            f"{row['rigid_peak_hz']:.0f} Hz); most negative real part {row['min_real_m_per_n']:.3e} m/N")
+    for note in pred.notes:
+        say(f"      note: {note}")
+    extra = _cross_check(repo, spec, resolutions, grid, result, say)
+    io.write_uff58(out / "tip.uff", pred.tip, round_freq=True)
+    io.write_frf_csv(out / "tip.csv", pred.tip)
+    result.files += [out / "tip.uff", out / "tip.csv"]
+    # the lobes (step 4) use the fine lines; their band is sampled on those lines too
+    tip_band, lobe_band, band_summary = journey_bands(spec, resolutions, grid, say, lobe_grid=fine)
+    result.files.append(save_tip_comparison(out / "tip-vs-rigid.png", pred, title=spec.name, extra=extra,
+                                            label=joints_legend(resolutions), band=tip_band))
+    return _Tip(lob, pred, same_y, lobe_band, band_summary)
+
+
+def _cross_check(repo, spec, resolutions, grid, result: JourneyResult, say: Callable[[str], None]) -> list:
+    """The same stack with the queried joints interpolated between the catalogued conditions (when a
+    query had neighbours): ``[(legend, tip FRF)]`` for the comparison plot, or ``[]``."""
+    from jointdb import app
+    from jointdb.plots._stack import joints_legend
+    from jointdb.stack import predict_tool_tip
+
+    queried = {n for n, r in resolutions.items() if r.kind == "query" and len(r.candidates) > 1}
+    if not queried:
+        return []
+    ispec = spec.replace(interfaces={
+        n: dataclasses.replace(c, interpolate=True, neighbours=2) if n in queried else c
+        for n, c in spec.interfaces.items()
+    })
+    ires = app.resolve_joints(ispec, repo)
+    ipred = predict_tool_tip(ispec, {n: r.frf for n, r in ires.items() if r.frf is not None}, grid)
+    irow = ipred.summary()[0]
+    result.interpolated = {"joints": {n: ires[n].description for n in queried}, **irow}
+    say("      cross-check, both queried interfaces interpolated:" if len(queried) > 1 else "      cross-check:")
+    for n in sorted(queried):
+        say(f"          {ires[n].description}")
+    say(f"          peak {irow['peak_m_per_n']:.3e} m/N at {irow['peak_hz']:.0f} Hz "
+        f"(nearest joint: {result.prediction[0]['peak_m_per_n']:.3e} m/N at "
+        f"{result.prediction[0]['peak_hz']:.0f} Hz)")
+    return [(joints_legend({n: ires[n] for n in sorted(queried)}), ipred.tip)]
+
+
+def _lobes(spec, tip: _Tip, result: JourneyResult, say: Callable[[str], None], n_speeds: int,
+           speed_range_rpm: tuple[float, float]) -> dict:
+    """Step 4: milling lobes (ZOA) with the catalogued and with rigid joints; ``lobes.csv``, ``lobes.png``.
+    Returns the band summary (with the lobe band's when there is one)."""
+    from jointdb.plots._lobes import plot_lobes
+    from jointdb.stability import MillingCut, milling_lobes_zoa, refine_lobes
+
+    out, same_y, band_summary = result.out_dir, tip.same_y, tip.band_summary
+    cut = MillingCut(**DEMO_CUT)
+    speeds = np.linspace(*speed_range_rpm, n_speeds)
+    say(f"[4/4] milling stability lobes (zero-order approximation, docs/theory.md §5): {cut.n_teeth} teeth, "
+        f"K_t={cut.kt:.3g} N/m², K_r={cut.kr:.3g} N/m², a_e/D={cut.radial_immersion:g}, "
+        f"{'down' if cut.down_milling else 'up'}-milling, {n_speeds} speeds, refined near the minima and pockets")
+    cross = bool(np.any(tip.pred.tip.values[:, 0, 1]))  # planes coupled by the spindle: use H[x,y], H[y,x]
+    # more speeds near the envelope's minima and pockets (equal to the plain grid at its speeds),
+    # from the prediction on the fine lines
+    lobes = refine_lobes(lambda s: milling_lobes_zoa(tip.fine.tip, cut, cross_terms=cross, spindle_speed_rpm=s),
+                         speeds)
+    lobes_rigid = refine_lobes(
+        lambda s: milling_lobes_zoa(tip.fine.rigid, cut, cross_terms=cross, spindle_speed_rpm=s), speeds)
+    # on the nominal lobes' (refined) speeds, so that band and nominal limit are computed alike
+    lobe_band = tip.lobe_band(cut, lobes.spindle_speed_rpm) if tip.lobe_band is not None else None
+    best = int(np.nanargmax(np.where(np.isfinite(lobes.depth_m), lobes.depth_m, -np.inf)))
+    result.lobes = {
+        "method": lobes.method,
+        "min_depth_m": lobes.min_depth_m,
+        "min_depth_rigid_m": lobes_rigid.min_depth_m,
+        "best_speed_rpm": float(lobes.spindle_speed_rpm[best]),
+        "best_depth_m": float(lobes.depth_m[best]),
+        "cut": DEMO_CUT,
+        "planes": "x and y (tool-tip FRF 1x,1x and 1y,1y" + (", equal" if same_y else "") + ")",
+    }
+    say(f"      from the x and y planes of the tip FRF{' (y equal to x)' if same_y else ''}")
+    say(f"      unconditionally stable below {lobes.min_depth_m * 1e3:.3f} mm "
+        f"(with rigid joints: {lobes_rigid.min_depth_m * 1e3:.3f} mm); "
+        f"best pocket {lobes.depth_m[best] * 1e3:.2f} mm at {lobes.spindle_speed_rpm[best]:.0f} rpm")
+    result.files.append(_write_csv(out / "lobes.csv", lobes.table()))
+    result.files.append(plot_lobes([lobes, lobes_rigid], out / "lobes.png",
+                                   labels=["with catalogued joints", "rigid joints"],
+                                   title=f"Stability lobes: {spec.name}", band=lobe_band))
+    if lobe_band is not None:
+        band_summary["lobes"] = lobe_band.to_json()
+        lo, mid, hi = lobe_band.critical_depth_m * 1e3
+        say(f"      critical depth 5–95 %: {lo:.3f} – {hi:.3f} mm (median {mid:.3f} mm, "
+            f"{lobe_band.samples} sampled joints)")
+    return band_summary

@@ -21,7 +21,7 @@ import numpy as np
 
 from jointdb.errors import InputError
 
-__all__ = ["DIRECTIONS", "Dof", "Quantity", "FRF", "dofs"]
+__all__ = ["DIRECTIONS", "Dof", "Quantity", "FRF", "dofs", "reciprocal_index"]
 
 #: Direction names in UFF58 order: code 1..6.
 DIRECTIONS: tuple[str, ...] = ("x", "y", "z", "rx", "ry", "rz")
@@ -432,21 +432,13 @@ class FRF:
         target_out = dofs(outputs) if outputs is not None else tuple(union)
         target_in = dofs(inputs) if inputs is not None else tuple(union)
         _check_labels(target_out, target_in)
-        o_idx, i_idx = self._index["out"], self._index["in"]
-        rows = np.empty((len(target_out), len(target_in)), dtype=np.intp)
-        cols = np.empty_like(rows)
-        for a, row in enumerate(target_out):  # loops over DOF pairs, not frequency lines
-            for b, col in enumerate(target_in):
-                if row in o_idx and col in i_idx:
-                    rows[a, b], cols[a, b] = o_idx[row], i_idx[col]
-                elif col in o_idx and row in i_idx:
-                    rows[a, b], cols[a, b] = o_idx[col], i_idx[row]
-                else:
-                    raise InputError(
-                        f"H[{row}, {col}] is known neither directly nor by reciprocity; "
-                        "measure a row or column that covers it"
-                    )
-        vals = self.values[:, rows, cols]
+        index, missing = reciprocal_index(self, target_out, target_in)
+        if missing is not None:
+            raise InputError(
+                f"H[{missing[0]}, {missing[1]}] is known neither directly nor by reciprocity; "
+                "measure a row or column that covers it"
+            )
+        vals = self.values[:, index[0], index[1]]
         return FRF._trusted(self.freq, vals, target_out, target_in, self.quantity)
 
     def reciprocity_error(self) -> float:
@@ -467,6 +459,32 @@ class FRF:
     def concat_inputs(parts: Sequence["FRF"]) -> "FRF":
         """Stack FRFs with the same grid, outputs and quantity along inputs."""
         return _concat(parts, along="inputs")
+
+
+def reciprocal_index(frf: FRF, outs: Sequence[Dof], ins: Sequence[Dof]):
+    """Where each entry of the block ``outs × ins`` sits in ``frf.values``, directly or by reciprocity.
+
+    Returns
+    -------
+    (rows, cols), None
+        Integer arrays ``(len(outs), len(ins))`` with
+        ``frf.values[:, rows, cols]`` the requested block: ``H[o, i]`` where
+        measured, else ``H[i, o]`` (reciprocity ``H_oi = H_io``).
+    None, (o, i)
+        The first requested pair known neither way.
+    """
+    oidx, iidx = frf._index["out"], frf._index["in"]
+    rows = np.empty((len(outs), len(ins)), dtype=np.intp)
+    cols = np.empty_like(rows)
+    for r, o in enumerate(outs):  # loops over DOF pairs, not frequency lines
+        for c, i in enumerate(ins):
+            if o in oidx and i in iidx:
+                rows[r, c], cols[r, c] = oidx[o], iidx[i]
+            elif i in oidx and o in iidx:
+                rows[r, c], cols[r, c] = oidx[i], iidx[o]
+            else:
+                return None, (o, i)
+    return (rows, cols), None
 
 
 def _concat(parts: Sequence[FRF], along: str) -> FRF:

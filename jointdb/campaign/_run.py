@@ -108,19 +108,9 @@ def _joint_for_couple(result: IdentificationResult):
     return result.joint_substructure() if result.model == "matrix" else result.joint
 
 
-def identify_campaign(c: Campaign) -> IdentifyOutcome:
-    """Load everything, identify the joint, re-couple, fit constant (k, c), validate if asked.
-
-    Raises
-    ------
-    InputError
-        With the campaign file and field named, for bad files, DOFs or grids.
-    NumericalError
-        If the identification is singular.
-    """
-    measured = merge_measurements(c.path, "measurements", c.measurements, c.band)
-    freq = measured.freq
-    subs = {n: load_substructure(c.path, f"substructures.{n}", s, freq) for n, s in c.substructures.items()}
+def _identify_joint(c: Campaign, measured: FRF, subs: dict) -> IdentificationResult:
+    """The campaign's joint model identified from its measurements and substructures (InputError
+    naming the campaign file)."""
     i, o = c.interface, c.options
     common = dict(smoothing=o.get("smoothing"), smoothing_order=int(o.get("smoothing_order", 4)))
     try:
@@ -140,15 +130,64 @@ def identify_campaign(c: Campaign) -> IdentifyOutcome:
                                         symmetrize=bool(o.get("symmetrize", True)), **common)
     except InputError as exc:
         raise InputError(f"campaign {c.path.name}: {exc}") from None
-    from jointdb.campaign._oe import (
-        METHODS,
-        entry_peaks,
-        fit_output_error,
-        joint_from_fit,
-        kc_of_fit,
-        method_of,
-        verdict,
-    )
+    return res
+
+
+def _validate(c: Campaign, subs: dict, joint, freq: np.ndarray) -> dict:
+    """The identified joint against the validation assembly (and rigid joints): errors, FRFs, peaks."""
+    from jointdb.campaign._oe import entry_peaks
+
+    vmeas = merge_measurements(c.path, "validation.measurements", c.validation["measurements"], c.band)
+    if vmeas.freq.shape != freq.shape or not np.allclose(vmeas.freq, freq, rtol=1e-9, atol=1e-9):
+        raise _err(c.path, "validation.measurements", "must share the identification measurements' grid")
+    vsubs = dict(subs)
+    for n, s in c.validation["substructures"].items():
+        vsubs[n] = load_substructure(c.path, f"validation.substructures.{n}", s, freq)
+    pred = _couple_like(c, vsubs, joint, vmeas)
+    vrig = _couple_like(c, vsubs, None, vmeas)
+    return {
+        "identified_joint_error_mean": _mean_rel(pred, vmeas),
+        "rigid_joint_error_mean": _mean_rel(vrig, vmeas),
+        "measured": vmeas, "predicted": pred, "rigid": vrig,
+        "peaks": entry_peaks(pred, vmeas),
+    }
+
+
+def _quality(method: str, measured: FRF, reconstructed: FRF, irc_reconstructed, adequacy, oe, validation) -> dict:
+    """Peaks of the re-coupled assembly, the model-adequacy check and the verdict lines."""
+    from jointdb.campaign._oe import entry_peaks, verdict
+
+    peaks = entry_peaks(reconstructed, measured)
+    quality: dict[str, Any] = {"method": method, "peaks": peaks}
+    if irc_reconstructed is not None:
+        quality["peaks_irc_joint"] = entry_peaks(irc_reconstructed, measured)
+    lines = []
+    if adequacy is not None:
+        quality["model_adequacy"] = adequacy.as_dict()
+        lines = [adequacy.verdict()] if adequacy.verdict() else []
+    kept_fit = None if adequacy is not None and adequacy.keep_per_line else oe
+    quality["verdict"] = lines + verdict(kept_fit, peaks, _mean_rel(reconstructed, measured),
+                                         None if validation is None else validation["peaks"],
+                                         None if validation is None else validation["identified_joint_error_mean"])
+    return quality
+
+
+def identify_campaign(c: Campaign) -> IdentifyOutcome:
+    """Load everything, identify the joint, re-couple, fit constant (k, c), validate if asked.
+
+    Raises
+    ------
+    InputError
+        With the campaign file and field named, for bad files, DOFs or grids.
+    NumericalError
+        If the identification is singular.
+    """
+    measured = merge_measurements(c.path, "measurements", c.measurements, c.band)
+    freq = measured.freq
+    subs = {n: load_substructure(c.path, f"substructures.{n}", s, freq) for n, s in c.substructures.items()}
+    o = c.options
+    res = _identify_joint(c, measured, subs)
+    from jointdb.campaign._oe import METHODS, entry_peaks, fit_output_error, joint_from_fit, kc_of_fit, method_of
 
     method = method_of(c)
     if method not in METHODS:
@@ -184,34 +223,8 @@ def identify_campaign(c: Campaign) -> IdentifyOutcome:
             res = _replace(irc_res, settings={**irc_res.settings, "method": "irc (constant k, c rejected)"})
             joint, reconstructed, kc = _joint_for_couple(res), irc_reconstructed, kc_irc  # kc: of the kept joint
     rigid = _couple_like(c, subs, None, measured)
-    validation = None
-    if c.validation is not None:
-        vmeas = merge_measurements(c.path, "validation.measurements", c.validation["measurements"], c.band)
-        if vmeas.freq.shape != freq.shape or not np.allclose(vmeas.freq, freq, rtol=1e-9, atol=1e-9):
-            raise _err(c.path, "validation.measurements", "must share the identification measurements' grid")
-        vsubs = dict(subs)
-        for n, s in c.validation["substructures"].items():
-            vsubs[n] = load_substructure(c.path, f"validation.substructures.{n}", s, freq)
-        pred = _couple_like(c, vsubs, joint, vmeas)
-        vrig = _couple_like(c, vsubs, None, vmeas)
-        validation = {
-            "identified_joint_error_mean": _mean_rel(pred, vmeas),
-            "rigid_joint_error_mean": _mean_rel(vrig, vmeas),
-            "measured": vmeas, "predicted": pred, "rigid": vrig,
-            "peaks": entry_peaks(pred, vmeas),
-        }
-    peaks = entry_peaks(reconstructed, measured)
-    quality: dict[str, Any] = {"method": method, "peaks": peaks}
-    if irc_reconstructed is not None:
-        quality["peaks_irc_joint"] = entry_peaks(irc_reconstructed, measured)
-    lines = []
-    if adequacy is not None:
-        quality["model_adequacy"] = adequacy.as_dict()
-        lines = [adequacy.verdict()] if adequacy.verdict() else []
-    kept_fit = None if adequacy is not None and adequacy.keep_per_line else oe
-    quality["verdict"] = lines + verdict(kept_fit, peaks, _mean_rel(reconstructed, measured),
-                                         None if validation is None else validation["peaks"],
-                                         None if validation is None else validation["identified_joint_error_mean"])
+    validation = _validate(c, subs, joint, freq) if c.validation is not None else None
+    quality = _quality(method, measured, reconstructed, irc_reconstructed, adequacy, oe, validation)
     return IdentifyOutcome(c, res, measured, reconstructed, rigid, kc, validation, oe, quality)
 
 

@@ -15,106 +15,122 @@ import typer
 from jointdb.cli._options import LegacyPlotOpt, PlotsOpt, plot_file, plots_dir
 
 
+def _frequency_override(spec, fmin, fmax, df):
+    """The prediction's lines when --fmin/--fmax/--df override the stack file's grid, else None."""
+    from jointdb._limits import check_lines
+    from jointdb.errors import InputError
+    from jointdb.stack import FrequencyGrid, prediction_grid
+
+    if fmin is None and fmax is None and df is None:
+        return None
+    base = spec.frequency or FrequencyGrid()
+    grid = FrequencyGrid(fmin if fmin is not None else base.fmin, fmax if fmax is not None else base.fmax,
+                         df if df is not None else base.step)
+    if not (math.isfinite(grid.fmin) and math.isfinite(grid.fmax) and math.isfinite(grid.step)) or \
+            grid.fmin <= 0 or grid.fmax <= grid.fmin or grid.step <= 0:
+        raise InputError(f"--fmin/--fmax/--df: need finite 0 < fmin < fmax and df > 0, got "
+                         f"{grid.fmin:g}, {grid.fmax:g}, {grid.step:g}")
+    check_lines((grid.fmax - grid.fmin) / grid.step + 1, "--df")
+    return prediction_grid(spec, grid.lines())
+
+
+def _report_joint_choices(joints) -> None:
+    """On stderr: the joint version chosen per interface (and the next ones), extrapolation, warnings."""
+    from jointdb._output import message
+
+    for res in joints:
+        if res.candidates:
+            message(f"{res.interface}: chose {res.name}@{res.version} (distance {res.distance:.3f}; "
+                    + ", ".join(f"{n}@{v} {d:.3f}" for n, v, d in res.candidates[1:]) + " next)"
+                    if len(res.candidates) > 1 else
+                    f"{res.interface}: chose {res.name}@{res.version} (distance {res.distance:.3f})")
+        if res.extrapolating:
+            message(f"warning: {res.interface}: the request lies outside the catalogued range of "
+                    f"{', '.join(res.outside_range)}; the joint is extrapolated")
+        for w in res.warnings:
+            if not (res.extrapolating and "outside the catalogued range" in w):  # said just above
+                message(f"warning: {res.interface}: {w}")
+
+
+def predict(
+    stack_file: Annotated[Path, typer.Argument(help="Stack description (JSON, format jointdb-stack/1).",
+                                               metavar="STACK.json")],
+    db: Annotated[Optional[str], typer.Option("--db", help="Joint database URL or SQLite path "
+                                              "(default: $JOINTDB_URL or the per-user database).")] = None,
+    out: Annotated[Optional[Path], typer.Option("--out", help="Write the tool-tip FRF (x, y): "
+                                                ".uff (UFF58), .h5 (HDF5) or .csv.")] = None,
+    plots: PlotsOpt = None,
+    fmin: Annotated[Optional[float], typer.Option(help="Lowest line [Hz] (overrides the stack file).")] = None,
+    fmax: Annotated[Optional[float], typer.Option(help="Highest line [Hz].")] = None,
+    df: Annotated[Optional[float], typer.Option(help="Line spacing [Hz].")] = None,
+    as_json: Annotated[bool, typer.Option("--json", help="Machine-readable output.")] = False,
+    plot: LegacyPlotOpt = None,
+) -> None:
+    """Predict the tool-tip FRF of a tool / holder / spindle stack (three-component RC).
+
+    Each interface's joint is taken from the stack file: rigid, explicit (k, c),
+    a pinned catalogued joint name@version, or the nearest catalogued joint to
+    the given conditions. The chosen versions, their distances and any
+    extrapolation are reported.
+
+    With --plots DIR, DIR/tip-vs-rigid.png compares the prediction with rigid
+    joints (the legend names the joint versions and interpolation weights).
+
+    Example: jointdb predict fixtures/stacks/endmill-modelled-spindle.json --out tip.uff --plots figs
+    """
+    from jointdb import app as application
+    from jointdb._output import emit, message
+    from jointdb.errors import InputError
+
+    plot = plots_dir(plots, plot, one_file=True)
+    for label, path in (("--out", out),):
+        if path is not None and not path.parent.exists():
+            raise InputError(f"{label} {str(path)!r}: directory {str(path.parent)!r} does not exist")
+    if out is not None:
+        application.frf_format(out, "--out")
+    spec = application.load_stack(stack_file)
+    freq = _frequency_override(spec, fmin, fmax, df)
+    from jointdb.cli._store import check_db_target
+
+    if any(j.kind in ("catalogued", "query") for j in spec.interfaces.values()):  # only then is a db read
+        check_db_target(db)  # after every option is checked; a mistyped --db is not found, not created empty
+    result = application.predict_stack(spec, db, freq)
+    pred = result.prediction
+    _report_joint_choices(result.joints.values())
+    for note in pred.notes:
+        message(f"note: {note}")
+    from jointdb.cli._predict_band import band_for, choice_sensitivity
+
+    tip_band = band_for(result)
+    choice = choice_sensitivity(result, db, pred.tip.freq)
+    files = {}
+    if out is not None:
+        application.write_frf_file(out, pred.tip)
+        files["tip_frf"] = str(out)
+        message(f"wrote {out}")
+    if plot is not None:
+        from jointdb.plots._stack import joints_legend, save_tip_comparison
+
+        plot = save_tip_comparison(plot_file(plot, "tip-vs-rigid.png"), pred, title=spec.name,
+                                   label=joints_legend(result.joints), band=tip_band)
+        files["plot"] = str(plot)
+        message(f"wrote {plot}")
+    joints = [r.row() for r in result.joints.values()]
+    if as_json:
+        emit({"stack": spec.name, "joints": joints, "prediction": pred.summary(), "notes": list(pred.notes),
+              "frequency_hz": [float(pred.tip.freq[0]), float(pred.tip.freq[-1]), int(pred.tip.n_freq)],
+              "files": files, "band": None if tip_band is None else tip_band.to_json(),
+              "joint_choice_sensitivity": choice}, as_json=True)
+        return
+    emit([{"interface": j["interface"], "joint": j["joint"] if j["kind"] != "explicit" else "explicit k, c",
+           "distance": j["distance"], "extrapolating": j["extrapolating"]} for j in joints],
+         title=f"joints of {spec.name}")
+    emit([{"dir": r["direction"], "peak (Hz)": r["peak_hz"], "peak (m/N)": r["peak_m_per_n"],
+           "rigid peak (Hz)": r["rigid_peak_hz"], "rigid peak (m/N)": r["rigid_peak_m_per_n"]}
+          for r in pred.summary()], title="tool-tip receptance (rigid: all joints rigid)")
+
+
 def register(app: typer.Typer) -> None:
     """Add ``predict`` to the app."""
 
-    @app.command("predict")
-    def predict(
-        stack_file: Annotated[Path, typer.Argument(help="Stack description (JSON, format jointdb-stack/1).",
-                                                   metavar="STACK.json")],
-        db: Annotated[Optional[str], typer.Option("--db", help="Joint database URL or SQLite path "
-                                                  "(default: $JOINTDB_URL or the per-user database).")] = None,
-        out: Annotated[Optional[Path], typer.Option("--out", help="Write the tool-tip FRF (x, y): "
-                                                    ".uff (UFF58), .h5 (HDF5) or .csv.")] = None,
-        plots: PlotsOpt = None,
-        fmin: Annotated[Optional[float], typer.Option(help="Lowest line [Hz] (overrides the stack file).")] = None,
-        fmax: Annotated[Optional[float], typer.Option(help="Highest line [Hz].")] = None,
-        df: Annotated[Optional[float], typer.Option(help="Line spacing [Hz].")] = None,
-        as_json: Annotated[bool, typer.Option("--json", help="Machine-readable output.")] = False,
-        plot: LegacyPlotOpt = None,
-    ) -> None:
-        """Predict the tool-tip FRF of a tool / holder / spindle stack (three-component RC).
-
-        Each interface's joint is taken from the stack file: rigid, explicit (k, c),
-        a pinned catalogued joint name@version, or the nearest catalogued joint to
-        the given conditions. The chosen versions, their distances and any
-        extrapolation are reported.
-
-        With --plots DIR, DIR/tip-vs-rigid.png compares the prediction with rigid
-        joints (the legend names the joint versions and interpolation weights).
-
-        Example: jointdb predict fixtures/stacks/endmill-modelled-spindle.json --out tip.uff --plots figs
-        """
-        from jointdb import app as application
-        from jointdb._limits import check_lines
-        from jointdb._output import emit, message
-        from jointdb.errors import InputError
-        from jointdb.stack import FrequencyGrid, prediction_grid
-
-        plot = plots_dir(plots, plot, one_file=True)
-        for label, path in (("--out", out),):
-            if path is not None and not path.parent.exists():
-                raise InputError(f"{label} {str(path)!r}: directory {str(path.parent)!r} does not exist")
-        if out is not None:
-            application.frf_format(out, "--out")
-        spec = application.load_stack(stack_file)
-        freq = None
-        if fmin is not None or fmax is not None or df is not None:
-            base = spec.frequency or FrequencyGrid()
-            grid = FrequencyGrid(fmin if fmin is not None else base.fmin, fmax if fmax is not None else base.fmax,
-                                 df if df is not None else base.step)
-            if not (math.isfinite(grid.fmin) and math.isfinite(grid.fmax) and math.isfinite(grid.step)) or \
-                    grid.fmin <= 0 or grid.fmax <= grid.fmin or grid.step <= 0:
-                raise InputError(f"--fmin/--fmax/--df: need finite 0 < fmin < fmax and df > 0, got "
-                                 f"{grid.fmin:g}, {grid.fmax:g}, {grid.step:g}")
-            check_lines((grid.fmax - grid.fmin) / grid.step + 1, "--df")
-            freq = prediction_grid(spec, grid.lines())
-        from jointdb.cli._store import check_db_target
-
-        if any(j.kind in ("catalogued", "query") for j in spec.interfaces.values()):  # only then is a db read
-            check_db_target(db)  # after every option is checked; a mistyped --db is not found, not created empty
-        result = application.predict_stack(spec, db, freq)
-        pred = result.prediction
-        for res in result.joints.values():
-            if res.candidates:
-                message(f"{res.interface}: chose {res.name}@{res.version} (distance {res.distance:.3f}; "
-                        + ", ".join(f"{n}@{v} {d:.3f}" for n, v, d in res.candidates[1:]) + " next)"
-                        if len(res.candidates) > 1 else
-                        f"{res.interface}: chose {res.name}@{res.version} (distance {res.distance:.3f})")
-            if res.extrapolating:
-                message(f"warning: {res.interface}: the request lies outside the catalogued range of "
-                        f"{', '.join(res.outside_range)}; the joint is extrapolated")
-            for w in res.warnings:
-                if not (res.extrapolating and "outside the catalogued range" in w):  # said just above
-                    message(f"warning: {res.interface}: {w}")
-        for note in pred.notes:
-            message(f"note: {note}")
-        from jointdb.cli._predict_band import band_for, choice_sensitivity
-
-        tip_band = band_for(result)
-        choice = choice_sensitivity(result, db, pred.tip.freq)
-        files = {}
-        if out is not None:
-            application.write_frf_file(out, pred.tip)
-            files["tip_frf"] = str(out)
-            message(f"wrote {out}")
-        if plot is not None:
-            from jointdb.plots._stack import joints_legend, save_tip_comparison
-
-            plot = save_tip_comparison(plot_file(plot, "tip-vs-rigid.png"), pred, title=spec.name,
-                                       label=joints_legend(result.joints), band=tip_band)
-            files["plot"] = str(plot)
-            message(f"wrote {plot}")
-        joints = [r.row() for r in result.joints.values()]
-        if as_json:
-            emit({"stack": spec.name, "joints": joints, "prediction": pred.summary(), "notes": list(pred.notes),
-                  "frequency_hz": [float(pred.tip.freq[0]), float(pred.tip.freq[-1]), int(pred.tip.n_freq)],
-                  "files": files, "band": None if tip_band is None else tip_band.to_json(),
-                  "joint_choice_sensitivity": choice}, as_json=True)
-            return
-        emit([{"interface": j["interface"], "joint": j["joint"] if j["kind"] != "explicit" else "explicit k, c",
-               "distance": j["distance"], "extrapolating": j["extrapolating"]} for j in joints],
-             title=f"joints of {spec.name}")
-        emit([{"dir": r["direction"], "peak (Hz)": r["peak_hz"], "peak (m/N)": r["peak_m_per_n"],
-               "rigid peak (Hz)": r["rigid_peak_hz"], "rigid peak (m/N)": r["rigid_peak_m_per_n"]}
-              for r in pred.summary()], title="tool-tip receptance (rigid: all joints rigid)")
+    app.command("predict")(predict)

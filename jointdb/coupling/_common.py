@@ -1,4 +1,4 @@
-"""Shared pieces of the identification functions: result type, block access, checks."""
+"""Shared pieces of coupling and identification: the joint-body and result types, block access, checks."""
 
 from __future__ import annotations
 
@@ -7,11 +7,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from jointdb.errors import InputError
-from jointdb.frf import FRF, Dof, Quantity
+from jointdb.errors import InputError, NumericalError
+from jointdb.frf import FRF, Dof, Quantity, dofs, reciprocal_index
 
 __all__ = [
     "IdentificationResult",
+    "JointSubstructure",
     "fetch",
     "reciprocal_index",
     "as_receptance",
@@ -49,6 +50,31 @@ class LazyExtra(Mapping):
 
     def __repr__(self) -> str:
         return f"LazyExtra({', '.join(self)})"
+
+
+@dataclass(frozen=True)
+class JointSubstructure:
+    """A joint body with inertia (docs/theory.md §1b).
+
+    Parameters
+    ----------
+    frf
+        Free receptance of the joint body over (at least) ``a_side + b_side``
+        DOFs, e.g. from a short free-free beam model of the joint segment.
+    a_side, b_side
+        The joint body's DOFs attached rigidly to the interface's ``a_dofs``
+        and ``b_dofs`` respectively (same lengths, paired in order).
+    """
+
+    frf: FRF
+    a_side: tuple[Dof, ...]
+    b_side: tuple[Dof, ...]
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "a_side", dofs(self.a_side))
+        object.__setattr__(self, "b_side", dofs(self.b_side))
+        if not isinstance(self.frf, FRF):
+            raise InputError("JointSubstructure.frf must be an FRF container")
 
 
 @dataclass(frozen=True, eq=False)
@@ -97,8 +123,6 @@ class IdentificationResult:
 
     def joint_substructure(self):
         """The identified joint body as a :class:`~jointdb.coupling.JointSubstructure` (matrix model)."""
-        from jointdb.coupling.rc import JointSubstructure
-
         if self.model != "matrix":
             raise InputError(f"a {self.model} joint is massless; pass result.joint to Interface(joint=...)")
         n = len(self.joint.inputs) // 2
@@ -152,32 +176,6 @@ def same_grid(named: Mapping[str, FRF]) -> np.ndarray:
     return ref.freq
 
 
-def reciprocal_index(frf: FRF, outs: Sequence[Dof], ins: Sequence[Dof]):
-    """Where each entry of the block ``outs × ins`` sits in ``frf.values``, directly or by reciprocity.
-
-    Returns
-    -------
-    (rows, cols), None
-        Integer arrays ``(len(outs), len(ins))`` with
-        ``frf.values[:, rows, cols]`` the requested block: ``H[o, i]`` where
-        measured, else ``H[i, o]`` (reciprocity ``H_oi = H_io``).
-    None, (o, i)
-        The first requested pair known neither way.
-    """
-    oidx, iidx = frf._index["out"], frf._index["in"]
-    rows = np.empty((len(outs), len(ins)), dtype=np.intp)
-    cols = np.empty_like(rows)
-    for r, o in enumerate(outs):  # loops over DOF pairs, not frequency lines
-        for c, i in enumerate(ins):
-            if o in oidx and i in iidx:
-                rows[r, c], cols[r, c] = oidx[o], iidx[i]
-            elif i in oidx and o in iidx:
-                rows[r, c], cols[r, c] = oidx[i], iidx[o]
-            else:
-                return None, (o, i)
-    return (rows, cols), None
-
-
 def _run(idx: np.ndarray) -> "slice | None":
     """``idx`` as a slice when it is a run of consecutive integers."""
     if idx.size and np.array_equal(idx, np.arange(idx[0], idx[0] + idx.size)):
@@ -215,8 +213,6 @@ def fetch(
 
 def fill_bad_lines(values: np.ndarray, bad: np.ndarray, freq: np.ndarray, what: str) -> np.ndarray:
     """Replace lines where ``bad`` (or values non-finite) by interpolation over good lines."""
-    from jointdb.errors import NumericalError
-
     flat = values.reshape(values.shape[0], -1)
     bad = bad | ~np.all(np.isfinite(flat), axis=1)
     if not bad.any():

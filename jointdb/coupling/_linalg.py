@@ -164,12 +164,39 @@ def equilibrated_pinvs(
     The Gram matrices of all blocks go through one eigenvalue kernel call and
     one inverse kernel call (per block size), which is what costs.
     """
-    from jointdb.coupling._smallmat import hermitian_extremes, hpd_inverse, to_first
-
     nf = sides[0][0][0].shape[0]
-    # Per block: [ab, abh, gram (n, n, nf) frequency-last, equilibrated; scale sb (n, nf)]. The Gram
-    # matrices of equal size share one buffer (one kernel call each); elementwise work is done there,
-    # frequency-last, where every operation runs over long contiguous rows.
+    parts, buffers = _gram_buffers(sides, nf)
+    conds, fasts, lam_maxs = _side_conditions(sides, buffers, reg, nf)
+    inverses = _gram_inverses(sides, buffers, fasts, lam_maxs, reg, nf)
+    out_sides = []
+    for k, side in enumerate(parts):
+        wide, fast, cond = sides[k][1], fasts[k], conds[k]
+        out = []
+        for j, (ab, abh, _, sb) in enumerate(side):
+            sb = sb.T
+            if not fast.any():
+                out.append(np.zeros(abh.shape, dtype=complex))
+            elif (k, j) in inverses:
+                gi = inverses[k, j]
+                out.append(abh @ gi if wide else gi @ abh)
+            else:  # square: a solve, no normal equations
+                n = ab.shape[1]
+                a_s = ab / (sb[:, :, None] if wide else sb[:, None, :])
+                a_s[~fast] = np.eye(n)  # those lines are solved by SVD below
+                x = np.linalg.inv(a_s)
+                out.append(x / (sb[:, None, :] if wide else sb[:, :, None]))
+        slow = np.flatnonzero(~fast)
+        if slow.size:
+            _svd_lines(side, wide, slow, out, cond, reg)
+        out_sides.append((out, cond))
+    return out_sides
+
+
+def _gram_buffers(sides, nf: int):
+    """Per block: ``[ab, abh, gram (n, n, nf) frequency-last, scale sb (n, nf)]``; and per block size
+    ``n``: ``(buffer, scales, members)``. The Gram matrices of equal size share one buffer (one kernel
+    call each); elementwise work is done there, frequency-last, where every operation runs over long
+    contiguous rows."""
     parts = [[None] * len(blocks) for blocks, _ in sides]
     sizes = {}
     for k, (blocks, wide) in enumerate(sides):
@@ -189,21 +216,28 @@ def equilibrated_pinvs(
         for i, (k, j) in enumerate(members):
             parts[k][j][3] = sb[:, i * nf : (i + 1) * nf]
         buffers[n] = (buf, sb, members)
+    return parts, buffers
+
+
+def _side_conditions(sides, buffers, reg: Regularisation, nf: int):
+    """Per side: the condition number of the equilibrated matrix, the lines the normal equations may
+    serve (``fast``), and the largest Gram eigenvalue, from the extreme eigenvalues of every block."""
+    from jointdb.coupling._smallmat import hermitian_extremes
+
     # extreme eigenvalues of the Gram matrices (fewer equations than unknowns: rank deficient, λmin = 0)
     extremes = {}
-    for n, (buf, _, members) in buffers.items():
+    for n, (buf, sb, members) in buffers.items():
         lmin, lmax = hermitian_extremes(buf, sb, psd=True)
         for i, (k, j) in enumerate(members):
             ab, wide = sides[k][0][j], sides[k][1]
             deficient = (ab.shape[2] if wide else ab.shape[1]) < (ab.shape[1] if wide else ab.shape[2])
             lo = np.zeros(nf) if deficient else lmin[i * nf : (i + 1) * nf]
             extremes[k, j] = (lo, lmax[i * nf : (i + 1) * nf])
-    tikhonov = reg.method == "tikhonov" and reg.rel > 0
     conds, fasts, lam_maxs = [], [], []
-    for k, side in enumerate(parts):
+    for k, (blocks, _) in enumerate(sides):
         lam_max = np.zeros(nf)
         lam_min = np.full(nf, np.inf)
-        for j in range(len(side)):
+        for j in range(len(blocks)):
             lo, hi = extremes[k, j]
             lam_max = np.maximum(lam_max, hi)
             lam_min = np.minimum(lam_min, lo)
@@ -215,8 +249,18 @@ def equilibrated_pinvs(
         conds.append(cond)
         fasts.append(fast)
         lam_maxs.append(lam_max)
-    # normal equations: S⁻¹ (G_s + μ²I)⁻¹ S⁻¹ = (G + μ²S²)⁻¹ for the non-square blocks (identity on the
-    # lines left to the SVD); no need to equilibrate: see hpd_inverse
+    return conds, fasts, lam_maxs
+
+
+def _gram_inverses(sides, buffers, fasts, lam_maxs, reg: Regularisation, nf: int) -> dict:
+    """``{(side, block): S⁻¹ (G_s + μ²I)⁻¹ S⁻¹}`` for the non-square blocks (and all with Tikhonov).
+
+    Normal equations: S⁻¹ (G_s + μ²I)⁻¹ S⁻¹ = (G + μ²S²)⁻¹ (identity on the lines left to the SVD);
+    no need to equilibrate: see hpd_inverse.
+    """
+    from jointdb.coupling._smallmat import hpd_inverse, to_first
+
+    tikhonov = reg.method == "tikhonov" and reg.rel > 0
     inverses = {}
     for n, (buf, sb, members) in buffers.items():
         use = [(i, k, j) for i, (k, j) in enumerate(members)
@@ -238,44 +282,29 @@ def equilibrated_pinvs(
         hpd_inverse(inv, shift, skip if skip.any() else None)
         for u, (i, k, j) in zip(where, use):
             inverses[k, j] = to_first(inv[:, :, u * nf : (u + 1) * nf])
-    out_sides = []
-    for k, side in enumerate(parts):
-        wide, fast, cond = sides[k][1], fasts[k], conds[k]
-        out = []
-        for j, (ab, abh, _, sb) in enumerate(side):
-            sb = sb.T
-            if not fast.any():
-                out.append(np.zeros(abh.shape, dtype=complex))
-            elif (k, j) in inverses:
-                gi = inverses[k, j]
-                out.append(abh @ gi if wide else gi @ abh)
-            else:  # square: a solve, no normal equations
-                n = ab.shape[1]
-                a_s = ab / (sb[:, :, None] if wide else sb[:, None, :])
-                a_s[~fast] = np.eye(n)  # those lines are solved by SVD below
-                x = np.linalg.inv(a_s)
-                out.append(x / (sb[:, None, :] if wide else sb[:, :, None]))
-        slow = np.flatnonzero(~fast)
-        if slow.size:
-            blocks = [p[0] for p in side]
-            rows = np.cumsum([0] + [ab.shape[1] for ab in blocks])
-            cols = np.cumsum([0] + [ab.shape[2] for ab in blocks])
-            whole = np.zeros((slow.size, rows[-1], cols[-1]), dtype=complex)
-            scale = np.ones((slow.size, rows[-1] if wide else cols[-1]))
-            for b, (ab, _, _, sb) in enumerate(side):
-                whole[:, rows[b] : rows[b + 1], cols[b] : cols[b + 1]] = ab[slow]
-                span = slice(rows[b], rows[b + 1]) if wide else slice(cols[b], cols[b + 1])
-                scale[:, span] = sb.T[slow]
-            if wide:
-                ps, cond[slow] = pinv_condition(whole / scale[:, :, None], reg)
-                ps /= scale[:, None, :]
-            else:
-                ps, cond[slow] = pinv_condition(whole / scale[:, None, :], reg)
-                ps /= scale[:, :, None]
-            for b, pk in enumerate(out):
-                pk[slow] = ps[:, cols[b] : cols[b + 1], rows[b] : rows[b + 1]]
-        out_sides.append((out, cond))
-    return out_sides
+    return inverses
+
+
+def _svd_lines(side, wide: bool, slow: np.ndarray, out: list, cond: np.ndarray, reg: Regularisation) -> None:
+    """On the ``slow`` lines, the pseudo-inverse blocks of one side (into ``out``) and its condition
+    number (into ``cond``) from one SVD of the whole equilibrated block-diagonal matrix."""
+    blocks = [p[0] for p in side]
+    rows = np.cumsum([0] + [ab.shape[1] for ab in blocks])
+    cols = np.cumsum([0] + [ab.shape[2] for ab in blocks])
+    whole = np.zeros((slow.size, rows[-1], cols[-1]), dtype=complex)
+    scale = np.ones((slow.size, rows[-1] if wide else cols[-1]))
+    for b, (ab, _, _, sb) in enumerate(side):
+        whole[:, rows[b] : rows[b + 1], cols[b] : cols[b + 1]] = ab[slow]
+        span = slice(rows[b], rows[b + 1]) if wide else slice(cols[b], cols[b + 1])
+        scale[:, span] = sb.T[slow]
+    if wide:
+        ps, cond[slow] = pinv_condition(whole / scale[:, :, None], reg)
+        ps /= scale[:, None, :]
+    else:
+        ps, cond[slow] = pinv_condition(whole / scale[:, None, :], reg)
+        ps /= scale[:, :, None]
+    for b, pk in enumerate(out):
+        pk[slow] = ps[:, cols[b] : cols[b + 1], rows[b] : rows[b + 1]]
 
 
 def frobenius(x: np.ndarray) -> np.ndarray:

@@ -86,6 +86,68 @@ def _pass(h_ii, h_ic, h_ci, h_cc, g, rows, span, reg: Regularisation, symmetrize
     return cond, frobenius(rec) ** 2, den
 
 
+def _layout(substructures, measured, a: str, a_dofs, b: str, b_dofs):
+    """The contact DOFs of ``a`` and ``b`` and the measured ``(name, Dof)`` pairs, checked
+    (InputError: unknown names, overlapping labels, fewer measured DOFs than contact DOFs)."""
+    if a not in substructures or b not in substructures:
+        raise InputError(f"substructures must contain {a!r} and {b!r} (have: {', '.join(substructures)})")
+    ad, bd = dofs(a_dofs), dofs(b_dofs)
+    if set(ad) & set(bd):
+        raise InputError(
+            f"contact DOF labels on {a!r} and {b!r} overlap ({', '.join(map(str, set(ad) & set(bd)))}); "
+            "use distinct node numbers on the two bodies"
+        )
+    pairs = [(str(n), Dof.parse(d)) for n, d in measured]
+    for name, _ in pairs:
+        if name not in (a, b):
+            raise InputError(f"measured DOF on {name!r}: only {a!r} and {b!r} take part in this joint")
+    labels = [d for _, d in pairs]
+    if len(set(labels)) != len(labels):
+        raise InputError("measured DOF labels must be distinct between the two bodies")
+    nc = len(ad) + len(bd)
+    L = len(pairs)
+    if L < nc:
+        raise InputError(f"{L} measured DOFs cannot identify a {nc}×{nc} joint matrix; measure at least {nc}")
+    return ad, bd, pairs
+
+
+def _body_blocks(bodies, meas, contacts):
+    """Per body x: its receptance over measured DOFs I_x and contacts C_x (one gather), split into
+    ``H_II``, ``H_IC``, ``H_CI``, ``H_CC``: four lists of two views."""
+    h_ii, h_ic, h_ci, h_cc = [], [], [], []
+    for x, (name, sub) in enumerate(bodies):
+        m, lab = len(meas[x]), meas[x] + contacts[x]
+        blk = fetch(f"substructure {name!r}", sub, lab, lab, "measured and contact DOFs, incl. rotations", view=True)
+        h_ii.append(blk[:, :m, :m])
+        h_ic.append(blk[:, :m, m:])
+        h_ci.append(blk[:, m:, :m])
+        h_cc.append(blk[:, m:, m:])
+    return h_ii, h_ic, h_ci, h_cc
+
+
+def _solve_by_passes(h_ii, h_ic, h_ci, h_cc, g, rows, span, reg, symmetrize):
+    """The joint ``H^J``, cond(H_IC)·cond(H_CI), the residual's numerator and denominator per line,
+    solved in passes of ``_LINES`` lines; and a function computing cond(P) the same way when asked."""
+    nf = g.shape[0]
+    nc = h_cc[0].shape[1] + h_cc[1].shape[1]
+    hj = np.empty((nf, nc, nc), dtype=complex)
+    cond, num, den = np.empty(nf), np.empty(nf), np.empty(nf)
+    passes = [slice(start, start + _LINES) for start in range(0, nf, _LINES)]
+    for s in passes:
+        cond[s], num[s], den[s] = _pass(
+            [h[s] for h in h_ii], [h[s] for h in h_ic], [h[s] for h in h_ci], [h[s] for h in h_cc],
+            g[s], rows, span, reg, symmetrize, hj[s],
+        )
+
+    def condition_p() -> np.ndarray:  # P again (the same operations, so the same numbers), when first asked for
+        return np.concatenate([
+            condition(_p_pass([h[s] for h in h_ii], [h[s] for h in h_ic], [h[s] for h in h_ci], g[s], rows, span,
+                              reg, symmetrize)[0])
+            for s in passes
+        ])
+    return hj, cond, num, den, condition_p
+
+
 def identify_joint_matrix(
     assembly: FRF,
     substructures: Mapping[str, FRF],
@@ -145,43 +207,18 @@ def identify_joint_matrix(
         If ``H_IC`` is singular at every line (the measured DOFs do not
         determine the joint), or the identified joint is not finite.
     """
-    if a not in substructures or b not in substructures:
-        raise InputError(f"substructures must contain {a!r} and {b!r} (have: {', '.join(substructures)})")
-    ad, bd = dofs(a_dofs), dofs(b_dofs)
-    if set(ad) & set(bd):
-        raise InputError(
-            f"contact DOF labels on {a!r} and {b!r} overlap ({', '.join(map(str, set(ad) & set(bd)))}); "
-            "use distinct node numbers on the two bodies"
-        )
-    pairs = [(str(n), Dof.parse(d)) for n, d in measured]
-    for name, _ in pairs:
-        if name not in (a, b):
-            raise InputError(f"measured DOF on {name!r}: only {a!r} and {b!r} take part in this joint")
-    labels = [d for _, d in pairs]
-    if len(set(labels)) != len(labels):
-        raise InputError("measured DOF labels must be distinct between the two bodies")
-    nc = len(ad) + len(bd)
-    L = len(pairs)
-    if L < nc:
-        raise InputError(f"{L} measured DOFs cannot identify a {nc}×{nc} joint matrix; measure at least {nc}")
+    ad, bd, pairs = _layout(substructures, measured, a, a_dofs, b, b_dofs)
+    nc, L = len(ad) + len(bd), len(pairs)
     reg = Regularisation.parse(regularisation)
     G = as_receptance("assembly", assembly)
     A = as_receptance(f"substructure {a!r}", substructures[a])
     B = as_receptance(f"substructure {b!r}", substructures[b])
     freq = same_grid({"assembly": G, f"substructure {a!r}": A, f"substructure {b!r}": B})
-    nf = freq.size
 
     # Per body x: measured DOFs I_x, contacts C_x, and one gather of its receptance over I_x + C_x.
     meas = [[d for n, d in pairs if n == a], [d for n, d in pairs if n == b]]
     contacts = [list(ad), list(bd)]
-    h_ii, h_ic, h_ci, h_cc = [], [], [], []
-    for x, (name, sub) in enumerate(((a, A), (b, B))):
-        m, lab = len(meas[x]), meas[x] + contacts[x]
-        blk = fetch(f"substructure {name!r}", sub, lab, lab, "measured and contact DOFs, incl. rotations", view=True)
-        h_ii.append(blk[:, :m, :m])
-        h_ic.append(blk[:, :m, m:])
-        h_ci.append(blk[:, m:, :m])
-        h_cc.append(blk[:, m:, m:])
+    h_ii, h_ic, h_ci, h_cc = _body_blocks(((a, A), (b, B)), meas, contacts)
     order = meas[0] + meas[1]
     g = fetch("assembly", G, order, order, "the measured DOFs, directly or by reciprocity", view=True)
     if smoothing:
@@ -189,21 +226,7 @@ def identify_joint_matrix(
     rows = [slice(0, len(meas[0])), slice(len(meas[0]), L)]
     span = [slice(0, len(ad)), slice(len(ad), nc)]
 
-    hj = np.empty((nf, nc, nc), dtype=complex)
-    cond, num, den = np.empty(nf), np.empty(nf), np.empty(nf)
-    passes = [slice(start, start + _LINES) for start in range(0, nf, _LINES)]
-    for s in passes:
-        cond[s], num[s], den[s] = _pass(
-            [h[s] for h in h_ii], [h[s] for h in h_ic], [h[s] for h in h_ci], [h[s] for h in h_cc],
-            g[s], rows, span, reg, symmetrize, hj[s],
-        )
-
-    def condition_p() -> np.ndarray:  # P again (the same operations, so the same numbers), when first asked for
-        return np.concatenate([
-            condition(_p_pass([h[s] for h in h_ii], [h[s] for h in h_ic], [h[s] for h in h_ci], g[s], rows, span,
-                              reg, symmetrize)[0])
-            for s in passes
-        ])
+    hj, cond, num, den, condition_p = _solve_by_passes(h_ii, h_ic, h_ci, h_cc, g, rows, span, reg, symmetrize)
     if np.all(cond > condition_limit):
         raise NumericalError(
             f"H_IC (measured DOFs × contact DOFs) is singular at every line (condition > {condition_limit:g}); "
@@ -211,26 +234,13 @@ def identify_joint_matrix(
         )
     if not np.all(np.isfinite(hj)):
         raise NumericalError("the identified joint matrix is not finite at some line; check the measured FRFs")
-    residual = np.sqrt(num) / np.maximum(np.sqrt(den), 1e-300)
-
     ill = cond > condition_limit
     return IdentificationResult(
-        joint=FRF._trusted(freq, hj, ad + bd, ad + bd, Quantity.RECEPTANCE),
-        model="matrix",
-        residual=residual,
-        condition=cond,
-        unreliable=ill,
+        joint=FRF._trusted(freq, hj, ad + bd, ad + bd, Quantity.RECEPTANCE), model="matrix",
+        residual=np.sqrt(num) / np.maximum(np.sqrt(den), 1e-300), condition=cond, unreliable=ill,
         flags={"ill_conditioned": ill},
         extra=LazyExtra({"n_measured": L, "nc": nc}, {"condition_p": condition_p}),
-        settings={
-            "measured": [f"{n}:{d}" for n, d in pairs],
-            "a": a,
-            "a_dofs": [str(x) for x in ad],
-            "b": b,
-            "b_dofs": [str(x) for x in bd],
-            "regularisation": f"{reg.method}:{reg.rel:g}",
-            "smoothing": smoothing,
-            "smoothing_order": smoothing_order,
-            "symmetrize": symmetrize,
-        },
+        settings={"measured": [f"{n}:{d}" for n, d in pairs], "a": a, "a_dofs": [str(x) for x in ad],
+                  "b": b, "b_dofs": [str(x) for x in bd], "regularisation": f"{reg.method}:{reg.rel:g}",
+                  "smoothing": smoothing, "smoothing_order": smoothing_order, "symmetrize": symmetrize},
     )

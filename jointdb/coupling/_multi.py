@@ -3,7 +3,7 @@ and the least-squares helpers shared with the full joint matrix (``_matrix``).""
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -70,8 +70,37 @@ def _sym(a: np.ndarray) -> np.ndarray:
     return 0.5 * (a + np.swapaxes(a, 1, 2))
 
 
+def _diagonal_part(hj_full: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The diagonal of a joint matrix (independent springs) and the off-diagonal residue
+    ``‖offdiag H_J‖_F / ‖diag H_J‖`` per line."""
+    n = hj_full.shape[1]
+    diag_idx = np.arange(n)
+    diag_part = np.zeros_like(hj_full)
+    diag_part[:, diag_idx, diag_idx] = hj_full[:, diag_idx, diag_idx]
+    off = np.linalg.norm(hj_full - diag_part, axis=(1, 2)) / np.maximum(
+        np.linalg.norm(diag_part, axis=(1, 2)), 1e-300
+    )
+    return diag_part, off
+
+
 def _rel_residual(rec: np.ndarray, meas: np.ndarray) -> np.ndarray:
     return frobenius(rec - meas) / np.maximum(frobenius(meas), 1e-300)
+
+
+def _n_point_blocks(assembly, substructure_a, substructure_b, I, a, b, smoothing, smoothing_order, symmetrize):
+    """The grid, the measured ``G_II`` (smoothed, symmetrised as asked) and A's ``h_II``, ``H_Ia``,
+    ``H_aI``, ``H_aa`` and B's ``H_bb``."""
+    G = as_receptance("assembly", assembly)
+    A = as_receptance("substructure A", substructure_a)
+    B = as_receptance("substructure B", substructure_b)
+    freq = same_grid({"assembly": G, "substructure A": A, "substructure B": B})
+    g = _measured(G, I, smoothing, smoothing_order, symmetrize)
+    h_ii = fetch("substructure A", A, I, I)
+    h_ia = fetch("substructure A", A, I, a)
+    h_ai = fetch("substructure A", A, a, I)
+    h_aa = fetch("substructure A", A, a, a)
+    h_bb = fetch("substructure B", B, b, b)
+    return freq, g, (h_ii, h_ia, h_ai, h_aa, h_bb)
 
 
 def identify_n_point_joints(
@@ -140,16 +169,8 @@ def identify_n_point_joints(
             f"{len(I)} measured internal DOFs cannot identify {len(a)} joints; measure at least {len(a)}"
         )
     reg = Regularisation.parse(regularisation)
-    G = as_receptance("assembly", assembly)
-    A = as_receptance("substructure A", substructure_a)
-    B = as_receptance("substructure B", substructure_b)
-    freq = same_grid({"assembly": G, "substructure A": A, "substructure B": B})
-    g = _measured(G, I, smoothing, smoothing_order, symmetrize)
-    h_ii = fetch("substructure A", A, I, I)
-    h_ia = fetch("substructure A", A, I, a)
-    h_ai = fetch("substructure A", A, a, I)
-    h_aa = fetch("substructure A", A, a, a)
-    h_bb = fetch("substructure B", B, b, b)
+    freq, g, (h_ii, h_ia, h_ai, h_aa, h_bb) = _n_point_blocks(
+        assembly, substructure_a, substructure_b, I, a, b, smoothing, smoothing_order, symmetrize)
     d = h_ii - g
     (left,), (right,), cond, _ = _pinv_pair([h_ia], [h_ai], reg)
     b_inv = left @ d @ right
@@ -161,12 +182,8 @@ def identify_n_point_joints(
         )
     bmat = inverse(b_inv)
     hj_full = bmat - h_aa - h_bb
+    diag_part, off = _diagonal_part(hj_full)
     diag_idx = np.arange(n)
-    diag_part = np.zeros_like(hj_full)
-    diag_part[:, diag_idx, diag_idx] = hj_full[:, diag_idx, diag_idx]
-    off = np.linalg.norm(hj_full - diag_part, axis=(1, 2)) / np.maximum(
-        np.linalg.norm(diag_part, axis=(1, 2)), 1e-300
-    )
     hj = diag_part if diagonal else hj_full
     rec = h_ii - h_ia @ np.linalg.solve(h_aa + h_bb + hj, h_ai)
     passive = np.all(hj[:, diag_idx, diag_idx].imag <= 1e-6 * np.abs(hj[:, diag_idx, diag_idx]), axis=1)
@@ -179,14 +196,8 @@ def identify_n_point_joints(
         unreliable=ill | ~passive,
         flags={"ill_conditioned": ill, "non_passive": ~passive},
         extra=LazyExtra({"full_joint": hj_full, "off_diagonal": off}, {"condition_b": lambda: condition(b_inv)}),
-        settings={
-            "internal": [str(x) for x in I],
-            "a_contact": [str(x) for x in a],
-            "b_contact": [str(x) for x in b],
-            "diagonal": diagonal,
-            "regularisation": f"{reg.method}:{reg.rel:g}",
-            "smoothing": smoothing,
-            "smoothing_order": smoothing_order,
-            "symmetrize": symmetrize,
-        },
+        settings={"internal": [str(x) for x in I], "a_contact": [str(x) for x in a],
+                  "b_contact": [str(x) for x in b], "diagonal": diagonal,
+                  "regularisation": f"{reg.method}:{reg.rel:g}", "smoothing": smoothing,
+                  "smoothing_order": smoothing_order, "symmetrize": symmetrize},
     )

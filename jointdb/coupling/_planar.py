@@ -1,4 +1,18 @@
-"""Planar spring–damper joint from two translational assembly FRFs (docs/theory.md §2a, thesis §4.2)."""
+"""Planar spring–damper joint from two translational assembly FRFs (docs/theory.md §2a, thesis §4.2).
+
+Substructure A (e.g. machine + holder; only its contact-point block
+``H_33`` incl. rotations is needed) is joined at point ``a_point`` to
+substructure B (e.g. the tool, from a model) at ``b_contact``; ``b_tip`` is
+B's free end. From the measured translational assembly FRFs ``G_11`` (tip
+direct) and ``G_12`` (tip response, force at B's contact point), the two
+bilinear equations ``d_j (xy − b_tr b_rt) = h_12 h_2j y − h_12 n_2j b_tr −
+l_12 h_2j b_rt + l_12 n_2j x`` are reduced to a quadratic in
+``x = h_22 + h_33 + h_t``. Of its two roots, the one making both joint
+terms passive (``Im h ≤ 0``) and that reproduces the measurement when
+coupled back is chosen (the elimination can add a spurious root); where
+two roots pass both tests the choice follows the nearest unambiguous line
+(continuity) and the line is flagged ``ambiguous``.
+"""
 
 from __future__ import annotations
 
@@ -26,17 +40,6 @@ def _quadratic_roots(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> tuple[np.nd
     return r1, r2
 
 
-def _recouple_residual(h_t, h_r, h_b, h12, l12, h22, h33, p22, p33, btr, brt, meas):
-    """Relative residual of ``G_1j = h_1j − v B⁻¹ u_j`` (j = 1, 2) against the measurement."""
-    bm = np.empty((h_t.size, 2, 2), dtype=complex)
-    bm[:, 0, 0] = h22 + h33 + h_t
-    bm[:, 0, 1], bm[:, 1, 0] = btr, brt
-    bm[:, 1, 1] = p22 + p33 + h_r
-    v = np.stack([h12, l12], axis=1)[:, None, :]
-    rec = h_b[:, 0, :] - (v @ pinv(bm) @ h_b[:, 1:, :])[:, 0, :]
-    return np.linalg.norm(rec - meas, axis=1) / np.maximum(np.linalg.norm(meas, axis=1), 1e-300)
-
-
 def identify_planar_joint(
     assembly: FRF,
     substructure_a: FRF,
@@ -55,18 +58,8 @@ def identify_planar_joint(
 ) -> IdentificationResult:
     """Identify a planar spring–damper joint ``diag(h_t, h_r)`` (docs/theory.md §2a, thesis eq. 4.12–4.13).
 
-    Substructure A (e.g. machine + holder; only its contact-point block
-    ``H_33`` incl. rotations is needed) is joined at point ``a_point`` to
-    substructure B (e.g. the tool, from a model) at ``b_contact``; ``b_tip`` is
-    B's free end. From the measured translational assembly FRFs ``G_11`` (tip
-    direct) and ``G_12`` (tip response, force at B's contact point), the two
-    bilinear equations ``d_j (xy − b_tr b_rt) = h_12 h_2j y − h_12 n_2j b_tr −
-    l_12 h_2j b_rt + l_12 n_2j x`` are reduced to a quadratic in
-    ``x = h_22 + h_33 + h_t``. Of its two roots, the one making both joint
-    terms passive (``Im h ≤ 0``) and that reproduces the measurement when
-    coupled back is chosen (the elimination can add a spurious root); where
-    two roots pass both tests the choice follows the nearest unambiguous line
-    (continuity) and the line is flagged ``ambiguous``.
+    How (quadratic elimination, root choice by passivity, re-coupling and continuity): see the
+    module docstring.
 
     Parameters
     ----------
@@ -111,6 +104,44 @@ def identify_planar_joint(
         raise InputError(f"translation {t!r} must be a translation and rotation {r!r} a rotation direction")
     if b_contact == b_tip:
         raise InputError(f"b_contact and b_tip are both node {b_tip}; the tip must be another node of B")
+    freq, p3, HB, H33, meas = _blocks(assembly, substructure_a, a_point, substructure_b, b_contact, b_tip, t, r)
+    if smoothing:
+        meas = savgol_smooth(meas, int(smoothing), smoothing_order)
+
+    eq = _Equations(HB, H33, meas)
+    xs, ys, ht, hr = eq.roots()
+    passive, consistent, cand_res = eq.judge(ht, hr, passivity_tol, consistency_tol)
+    choice, ambiguous = _choose_roots(consistent & passive, cand_res, ht, hr)
+    idx = np.arange(freq.size)
+    h_t = ht[idx, choice]
+    h_r = hr[idx, choice]
+    degenerate = ~np.isfinite(h_t) | ~np.isfinite(h_r)
+    cond = eq.condition(xs[idx, choice], ys[idx, choice])
+    non_passive = ~passive[idx, choice] & ~degenerate
+    inconsistent = ~consistent[idx, choice] & ~degenerate
+    ill = cond > condition_limit
+    values = np.zeros((freq.size, 2, 2), dtype=complex)
+    values[:, 0, 0], values[:, 1, 1] = h_t, h_r
+    values = fill_bad_lines(values, degenerate, freq, "planar joint identification")
+    flags = {"ambiguous": ambiguous, "non_passive": non_passive, "inconsistent": inconsistent,
+             "ill_conditioned": ill, "degenerate": degenerate}
+    return IdentificationResult(
+        joint=FRF(freq, values, p3, p3, Quantity.RECEPTANCE),
+        model="planar",
+        residual=eq.recouple_residual(values[:, 0, 0], values[:, 1, 1]),
+        condition=np.where(np.isfinite(cond), cond, np.inf),
+        unreliable=ambiguous | non_passive | inconsistent | ill | degenerate,
+        flags=flags,
+        extra={"roots_x": xs, "roots_y": ys, "choice": choice},
+        settings={"a_point": a_point, "b_contact": b_contact, "b_tip": b_tip, "translation": t, "rotation": r,
+                  "smoothing": smoothing, "smoothing_order": smoothing_order, "passivity_tol": passivity_tol,
+                  "condition_limit": condition_limit, "consistency_tol": consistency_tol},
+    )
+
+
+def _blocks(assembly, substructure_a, a_point, substructure_b, b_contact, b_tip, t, r):
+    """The grid, A's contact DOFs, B's tip/contact block, A's contact block and the measured
+    ``G_11``, ``G_12`` ``(nf, 2)`` (InputError naming what is missing)."""
     G = as_receptance("assembly", assembly)
     A = as_receptance("substructure A", substructure_a)
     B = as_receptance("substructure B", substructure_b)
@@ -122,53 +153,103 @@ def identify_planar_joint(
     meas = np.stack(
         [fetch("assembly", G, [p1t], [p1t])[:, 0, 0], fetch("assembly", G, [p1t], [p2t])[:, 0, 0]], axis=1
     )
-    if smoothing:
-        meas = savgol_smooth(meas, int(smoothing), smoothing_order)
+    return freq, p3, HB, H33, meas
 
-    h11, h12, l12 = HB[:, 0, 0], HB[:, 0, 2], HB[:, 0, 3]
-    h21, n21 = HB[:, 2, 0], HB[:, 3, 0]
-    h22, l22, n22, p22 = HB[:, 2, 2], HB[:, 2, 3], HB[:, 3, 2], HB[:, 3, 3]
-    h33, l33, n33, p33 = H33[:, 0, 0], H33[:, 0, 1], H33[:, 1, 0], H33[:, 1, 1]
-    btr, brt = l22 + l33, n22 + n33
-    prod = btr * brt
-    d1, d2 = h11 - meas[:, 0], h12 - meas[:, 1]
-    # d_j (xy − P) = a_j y + e_j x + f_j
-    a1, a2 = h12 * h21, h12 * h22
-    e1, e2 = l12 * n21, l12 * n22
-    f1 = -h12 * n21 * btr - l12 * h21 * brt
-    f2 = -h12 * n22 * btr - l12 * h22 * brt
-    with np.errstate(divide="ignore", invalid="ignore"):
-        den = d2 * a1 - d1 * a2
-        alpha = -(d2 * e1 - d1 * e2) / den
-        beta = -(d2 * f1 - d1 * f2) / den
-        x1, x2 = _quadratic_roots(d1 * alpha, d1 * beta - a1 * alpha - e1, -d1 * prod - a1 * beta - f1)
-        xs = np.stack([x1, x2], axis=1)
-        ys = alpha[:, None] * xs + beta[:, None]
-        ht = xs - (h22 + h33)[:, None]
-        hr = ys - (p22 + p33)[:, None]
-    finite = np.isfinite(ht) & np.isfinite(hr)
-    passive = (
-        finite
-        & (ht.imag <= passivity_tol * np.abs(ht))
-        & (hr.imag <= passivity_tol * np.abs(hr))
-    )
-    # Each candidate re-coupled: the elimination can introduce a spurious root
-    # that solves the quadratic but not the coupling equations.
-    h_b = np.stack([np.stack([h11, h21, n21], 1), np.stack([h12, h22, n22], 1)], axis=2)  # (nf, 3, 2)
-    cand_res = np.stack(
-        [_recouple_residual(np.where(finite[:, k], ht[:, k], 0), np.where(finite[:, k], hr[:, k], 0),
-                            h_b, h12, l12, h22, h33, p22, p33, btr, brt, meas) for k in range(2)],
-        axis=1,
-    )
-    cand_res = np.where(finite, cand_res, np.inf)
-    consistent = cand_res <= consistency_tol
-    ok = consistent & passive
+
+class _Equations:
+    """The two bilinear coupling equations of one planar identification, per line.
+
+    ``d_j (xy − P) = a_j y + e_j x + f_j`` (j = 1, 2) in ``x = h_22 + h_33 + h_t`` and
+    ``y = p_22 + p_33 + h_r``, from B's tip/contact block ``HB (nf, 4, 4)`` (tip t, tip r,
+    contact t, contact r), A's contact block ``H33 (nf, 2, 2)`` and the measured tip FRFs
+    ``meas (nf, 2)`` (``G_11``, ``G_12``).
+    """
+
+    def __init__(self, HB: np.ndarray, H33: np.ndarray, meas: np.ndarray) -> None:
+        self.meas = meas
+        h11, h12, l12 = HB[:, 0, 0], HB[:, 0, 2], HB[:, 0, 3]
+        h21, n21 = HB[:, 2, 0], HB[:, 3, 0]
+        h22, l22, n22, p22 = HB[:, 2, 2], HB[:, 2, 3], HB[:, 3, 2], HB[:, 3, 3]
+        h33, l33, n33, p33 = H33[:, 0, 0], H33[:, 0, 1], H33[:, 1, 0], H33[:, 1, 1]
+        self.h12, self.l12 = h12, l12
+        self.x0, self.y0 = h22 + h33, p22 + p33          # x and y without the joint
+        self.btr, self.brt = l22 + l33, n22 + n33
+        self.prod = self.btr * self.brt
+        self.d1, self.d2 = h11 - meas[:, 0], h12 - meas[:, 1]
+        self.a1, self.a2 = h12 * h21, h12 * h22
+        self.e1, self.e2 = l12 * n21, l12 * n22
+        self.f1 = -h12 * n21 * self.btr - l12 * h21 * self.brt
+        self.f2 = -h12 * n22 * self.btr - l12 * h22 * self.brt
+        self.h_b = np.stack([np.stack([h11, h21, n21], 1), np.stack([h12, h22, n22], 1)], axis=2)  # (nf, 3, 2)
+
+    def roots(self):
+        """Both roots ``(x, y)`` per line, reduced to a quadratic in x, and the joint terms
+        ``h_t``, ``h_r`` they give: four ``(nf, 2)`` arrays."""
+        d1, d2, a1, a2, e1, e2, f1, f2 = self.d1, self.d2, self.a1, self.a2, self.e1, self.e2, self.f1, self.f2
+        with np.errstate(divide="ignore", invalid="ignore"):
+            den = d2 * a1 - d1 * a2
+            alpha = -(d2 * e1 - d1 * e2) / den
+            beta = -(d2 * f1 - d1 * f2) / den
+            x1, x2 = _quadratic_roots(d1 * alpha, d1 * beta - a1 * alpha - e1, -d1 * self.prod - a1 * beta - f1)
+            xs = np.stack([x1, x2], axis=1)
+            ys = alpha[:, None] * xs + beta[:, None]
+            ht = xs - self.x0[:, None]
+            hr = ys - self.y0[:, None]
+        return xs, ys, ht, hr
+
+    def judge(self, ht: np.ndarray, hr: np.ndarray, passivity_tol: float, consistency_tol: float):
+        """Per root ``(nf, 2)``: passive (``Im h ≤ tol·|h|`` for both terms), consistent (re-coupling
+        reproduces the measurement to ``consistency_tol``) and the re-coupling residual."""
+        finite = np.isfinite(ht) & np.isfinite(hr)
+        passive = (
+            finite
+            & (ht.imag <= passivity_tol * np.abs(ht))
+            & (hr.imag <= passivity_tol * np.abs(hr))
+        )
+        # Each candidate re-coupled: the elimination can introduce a spurious root
+        # that solves the quadratic but not the coupling equations.
+        cand_res = np.stack(
+            [self.recouple_residual(np.where(finite[:, k], ht[:, k], 0), np.where(finite[:, k], hr[:, k], 0))
+             for k in range(2)],
+            axis=1,
+        )
+        cand_res = np.where(finite, cand_res, np.inf)
+        return passive, cand_res <= consistency_tol, cand_res
+
+    def recouple_residual(self, h_t: np.ndarray, h_r: np.ndarray) -> np.ndarray:
+        """Relative residual of ``G_1j = h_1j − v B⁻¹ u_j`` (j = 1, 2) against the measurement."""
+        bm = np.empty((h_t.size, 2, 2), dtype=complex)
+        bm[:, 0, 0] = self.x0 + h_t
+        bm[:, 0, 1], bm[:, 1, 0] = self.btr, self.brt
+        bm[:, 1, 1] = self.y0 + h_r
+        v = np.stack([self.h12, self.l12], axis=1)[:, None, :]
+        rec = self.h_b[:, 0, :] - (v @ pinv(bm) @ self.h_b[:, 1:, :])[:, 0, :]
+        meas = self.meas
+        return np.linalg.norm(rec - meas, axis=1) / np.maximum(np.linalg.norm(meas, axis=1), 1e-300)
+
+    def condition(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """Condition number of the Jacobian of ``F_j(x, y) = d_j (xy − P) − a_j y − e_j x − f_j`` at a root."""
+        jac = np.empty((x.size, 2, 2), dtype=complex)
+        jac[:, 0, 0], jac[:, 0, 1] = self.d1 * y - self.e1, self.d1 * x - self.a1
+        jac[:, 1, 0], jac[:, 1, 1] = self.d2 * y - self.e2, self.d2 * x - self.a2
+        jac = np.where(np.isfinite(jac), jac, 0.0)
+        s = np.linalg.svd(jac, compute_uv=False)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.where(s[:, 1] > 0, s[:, 0] / s[:, 1], np.inf)
+
+
+def _choose_roots(ok: np.ndarray, cand_res: np.ndarray, ht: np.ndarray, hr: np.ndarray):
+    """Per line, the root to keep (index 0 or 1) and whether the choice was ambiguous.
+
+    The one root that is consistent and passive (``ok``); with none, the best re-coupling; with
+    both, the one nearest (in log distance) to the choice at the nearest unambiguous line.
+    """
     n_ok = ok.sum(axis=1)
     clear = n_ok == 1
     choice = np.where(clear, np.argmax(ok, axis=1), np.argmin(cand_res, axis=1))
     # several consistent and passive roots: decide by continuity
     ambiguous = n_ok >= 2
-    idx = np.arange(freq.size)
+    idx = np.arange(ok.shape[0])
     if ambiguous.any() and clear.any():
         clear_idx = idx[clear]
         amb = idx[ambiguous]
@@ -182,56 +263,4 @@ def identify_planar_joint(
             dist = np.abs(np.log(ht[amb] / ref_t[:, None])) + np.abs(np.log(hr[amb] / ref_r[:, None]))
         dist = np.where(np.isfinite(dist) & ok[amb], dist, np.inf)
         choice[amb] = np.argmin(dist, axis=1)
-    h_t = ht[idx, choice]
-    h_r = hr[idx, choice]
-    x = xs[idx, choice]
-    y = ys[idx, choice]
-    degenerate = ~np.isfinite(h_t) | ~np.isfinite(h_r)
-    # Jacobian of F_j(x, y) = d_j (xy − P) − a_j y − e_j x − f_j at the chosen root
-    jac = np.empty((freq.size, 2, 2), dtype=complex)
-    jac[:, 0, 0], jac[:, 0, 1] = d1 * y - e1, d1 * x - a1
-    jac[:, 1, 0], jac[:, 1, 1] = d2 * y - e2, d2 * x - a2
-    jac = np.where(np.isfinite(jac), jac, 0.0)
-    s = np.linalg.svd(jac, compute_uv=False)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        cond = np.where(s[:, 1] > 0, s[:, 0] / s[:, 1], np.inf)
-    non_passive = ~passive[idx, choice] & ~degenerate
-    inconsistent = ~consistent[idx, choice] & ~degenerate
-    ill = cond > condition_limit
-    values = np.zeros((freq.size, 2, 2), dtype=complex)
-    values[:, 0, 0], values[:, 1, 1] = h_t, h_r
-    values = fill_bad_lines(values, degenerate, freq, "planar joint identification")
-    joint = FRF(freq, values, p3, p3, Quantity.RECEPTANCE)
-
-    residual = _recouple_residual(
-        values[:, 0, 0], values[:, 1, 1], h_b, h12, l12, h22, h33, p22, p33, btr, brt, meas
-    )
-    flags = {
-        "ambiguous": ambiguous,
-        "non_passive": non_passive,
-        "inconsistent": inconsistent,
-        "ill_conditioned": ill,
-        "degenerate": degenerate,
-    }
-    unreliable = ambiguous | non_passive | inconsistent | ill | degenerate
-    return IdentificationResult(
-        joint=joint,
-        model="planar",
-        residual=residual,
-        condition=np.where(np.isfinite(cond), cond, np.inf),
-        unreliable=unreliable,
-        flags=flags,
-        extra={"roots_x": xs, "roots_y": ys, "choice": choice},
-        settings={
-            "a_point": a_point,
-            "b_contact": b_contact,
-            "b_tip": b_tip,
-            "translation": t,
-            "rotation": r,
-            "smoothing": smoothing,
-            "smoothing_order": smoothing_order,
-            "passivity_tol": passivity_tol,
-            "condition_limit": condition_limit,
-            "consistency_tol": consistency_tol,
-        },
-    )
+    return choice, ambiguous

@@ -28,38 +28,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from jointdb.coupling._common import JointSubstructure, reciprocal_index
 from jointdb.coupling._common import as_receptance as _receptance
 from jointdb.coupling._common import check_grid as _check_grid
-from jointdb.coupling._common import reciprocal_index
 from jointdb.errors import InputError, NumericalError
 from jointdb.frf import FRF, Dof, Quantity, dofs
 
 __all__ = ["Interface", "JointSubstructure", "couple", "spring_damper_joint"]
-
-
-@dataclass(frozen=True)
-class JointSubstructure:
-    """A joint body with inertia (docs/theory.md §1b).
-
-    Parameters
-    ----------
-    frf
-        Free receptance of the joint body over (at least) ``a_side + b_side``
-        DOFs, e.g. from a short free-free beam model of the joint segment.
-    a_side, b_side
-        The joint body's DOFs attached rigidly to the interface's ``a_dofs``
-        and ``b_dofs`` respectively (same lengths, paired in order).
-    """
-
-    frf: FRF
-    a_side: tuple[Dof, ...]
-    b_side: tuple[Dof, ...]
-
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "a_side", dofs(self.a_side))
-        object.__setattr__(self, "b_side", dofs(self.b_side))
-        if not isinstance(self.frf, FRF):
-            raise InputError("JointSubstructure.frf must be an FRF container")
 
 
 @dataclass(frozen=True)
@@ -280,6 +255,37 @@ def couple(
         If the interface matrix ``B H_CC Bᵀ + H_J`` is singular at some line
         (e.g. rigidly coupling two rigid-body DOFs with no flexibility).
     """
+    subs, freq = _receptances(substructures)
+    flat = _flatten(interfaces, subs, freq)
+    outs = _as_pairs(outputs, "outputs")
+    ins = outs if inputs is None else _as_pairs(inputs, "inputs")
+    for which, pairs in (("output", outs), ("input", ins)):
+        for name, _ in pairs:
+            if name not in substructures:
+                raise InputError(f"{which} substructure {name!r} is unknown (have: {', '.join(substructures)})")
+        labels = [d for _, d in pairs]
+        if len(set(labels)) != len(labels):
+            raise InputError(
+                f"{which} DOF labels must be distinct across substructures (got "
+                f"{', '.join(f'{n}:{d}' for n, d in pairs)}); give the substructures distinct node numbers"
+            )
+    z, u, v, g = _interface_problem(subs, flat, freq, outs, ins)
+    # Interface problem: Z λ = V,  G = H_oi − U λ.
+    try:
+        lam = np.linalg.solve(z, v)
+    except np.linalg.LinAlgError:
+        raise NumericalError(
+            "the interface matrix B H_CC Bᵀ + H_J is singular at some frequency line; "
+            "check for redundant interfaces or rigid couplings between rigid-body DOFs"
+        ) from None
+    g -= u @ lam
+    if not np.all(np.isfinite(g)):
+        raise NumericalError("coupling produced NaN/inf: the interface matrix is singular at some line")
+    return FRF._trusted(freq, g, tuple(d for _, d in outs), tuple(d for _, d in ins), Quantity.RECEPTANCE)
+
+
+def _receptances(substructures: Mapping[str, FRF]) -> tuple[dict[str, FRF], np.ndarray]:
+    """The substructures as receptances by name, and their common grid (InputError otherwise)."""
     if not isinstance(substructures, Mapping):
         raise InputError(f"couple: substructures must be a mapping name -> FRF, got {type(substructures).__name__}")
     if not substructures:
@@ -293,8 +299,13 @@ def couple(
     freq = subs[ref_name].freq
     for name, frf in subs.items():
         _check_grid(f"substructure {ref_name!r}", freq, f"substructure {name!r}", frf.freq)
+    return subs, freq
 
-    # Expand joint bodies into extra substructures with two rigid interfaces.
+
+def _flatten(interfaces: Sequence[Interface], subs: dict[str, FRF], freq: np.ndarray) -> list[tuple[Interface, str]]:
+    """The interfaces with each joint body expanded into an extra substructure (added to ``subs``)
+    with two rigid interfaces; each with its label for messages."""
+    ref_name = next(iter(subs))
     flat: list[tuple[Interface, str]] = []
     for k, iface in enumerate(interfaces):
         if not isinstance(iface, Interface):
@@ -314,24 +325,17 @@ def couple(
             flat.append((Interface(jname, iface.joint.b_side, iface.b, iface.b_dofs), label))
         else:
             flat.append((iface, label))
+    return flat
 
-    outs = _as_pairs(outputs, "outputs")
-    ins = outs if inputs is None else _as_pairs(inputs, "inputs")
-    for which, pairs in (("output", outs), ("input", ins)):
-        for name, _ in pairs:
-            if name not in substructures:
-                raise InputError(f"{which} substructure {name!r} is unknown (have: {', '.join(substructures)})")
-        labels = [d for _, d in pairs]
-        if len(set(labels)) != len(labels):
-            raise InputError(
-                f"{which} DOF labels must be distinct across substructures (got "
-                f"{', '.join(f'{n}:{d}' for n, d in pairs)}); give the substructures distinct node numbers"
-            )
 
-    # One row per paired contact DOF (a Lagrange multiplier λ): B u = u_a − u_b.
-    # For each substructure s: the λ rows it takes part in, its DOF there and the
-    # sign (+1 on side a, −1 on side b). Then, with only the blocks needed,
-    #   Z = Σ_s B_s H_s,CC B_sᵀ + H_J,  U = H_oC Bᵀ,  V = B H_Ci,  G = H_oi − U Z⁻¹ V.
+def _interface_problem(subs: dict[str, FRF], flat: list[tuple[Interface, str]], freq: np.ndarray,
+                       outs: list, ins: list):
+    """``Z = Σ_s B_s H_s,CC B_sᵀ + H_J``, ``U = H_oC Bᵀ``, ``V = B H_Ci`` and ``H_oi``, batched over lines.
+
+    One row per paired contact DOF (a Lagrange multiplier λ): B u = u_a − u_b. For each
+    substructure s: the λ rows it takes part in, its DOF there and the sign (+1 on side a,
+    −1 on side b); only the blocks needed are read.
+    """
     n_lambda = sum(len(i.a_dofs) for i, _ in flat)
     lam_rows: dict[str, list[int]] = {name: [] for name in subs}
     lam_dofs: dict[str, list[Dof]] = {name: [] for name in subs}
@@ -379,16 +383,4 @@ def couple(
             g[_at(ro, ci)] = blk[:, nl:, nl:]
     for rows, jm in joints:
         z[_at(rows, rows)] += jm
-
-    # Interface problem: Z λ = V,  G = H_oi − U λ.
-    try:
-        lam = np.linalg.solve(z, v)
-    except np.linalg.LinAlgError:
-        raise NumericalError(
-            "the interface matrix B H_CC Bᵀ + H_J is singular at some frequency line; "
-            "check for redundant interfaces or rigid couplings between rigid-body DOFs"
-        ) from None
-    g -= u @ lam
-    if not np.all(np.isfinite(g)):
-        raise NumericalError("coupling produced NaN/inf: the interface matrix is singular at some line")
-    return FRF._trusted(freq, g, tuple(d for _, d in outs), tuple(d for _, d in ins), Quantity.RECEPTANCE)
+    return z, u, v, g

@@ -113,6 +113,69 @@ def _wrms(x, w):
     return float(np.sqrt((w2 * np.abs(x) ** 2).sum() / s)) if s > 0 else float("nan")
 
 
+def _gain_and_delay(freq: np.ndarray, lr: np.ndarray, w: np.ndarray, pairs: list) -> tuple[float, float, float]:
+    """Magnitude offset [dB] and time delay [s] (with the r² of its phase slope), away from the paired peaks."""
+    away = np.ones(freq.size, dtype=bool)
+    for p in pairs:
+        for f0 in (p.model.freq_hz, p.recorded.freq_hz):
+            away &= np.abs(freq / f0 - 1) > 0.08
+    wa = w[:, away]
+    la = lr[:, away]
+    gain_db = float(-20 / np.log(10) * np.median(la.real[wa > 0])) if np.any(wa > 0) else 0.0
+    # phase drift: per FRF, the recorded-minus-model phase on trusted lines away
+    # from the peaks, unwrapped along frequency; one pooled slope (own intercepts)
+    num = den = ss = 0.0
+    fa = freq[away]
+    for lv in range(lr.shape[0]):
+        for i in range(lr.shape[2]):
+            for j in range(lr.shape[3]):
+                wv = wa[lv, :, i, j]
+                good = wv > 0.3 * wv.max() if wv.max() > 0 else wv > 0
+                if good.sum() < 5:
+                    continue
+                x = fa[good]
+                y = np.unwrap(-la[lv, good, i, j].imag)
+                ww = wv[good] ** 2
+                xm, ym = np.average(x, weights=ww), np.average(y, weights=ww)
+                num += float((ww * (x - xm) * (y - ym)).sum())
+                den += float((ww * (x - xm) ** 2).sum())
+                ss += float((ww * (y - ym) ** 2).sum())
+    if den > 0:
+        slope = num / den
+        resid = ss - slope * num
+        r2 = 1 - resid / ss if ss > 0 else 0.0
+        delay = float(-slope / (2 * np.pi))
+    else:
+        delay, r2 = 0.0, 0.0
+
+    return gain_db, delay, r2
+
+
+def _level_shifts(freq: np.ndarray, rec: np.ndarray, w: np.ndarray, pairs: list, affected):
+    """Recorded modes that move between the first and the last excitation level (frequency shift,
+    damping ratio), and the mode most affected (else ``affected`` unchanged)."""
+
+    def strong(peaks):
+        top = max((p.height for p in peaks), default=0.0)
+        return [p for p in peaks if p.height >= 0.1 * top]
+
+    first = strong(find_peaks(freq, rec[0], w[0]))
+    last = strong(find_peaks(freq, rec[-1], w[-1]))
+    lidx, _, _ = pair_modes(first, last, max_ratio=1.2)
+    shifts = []
+    for a, b in lidx:
+        near = [p for p in pairs if abs(p.recorded.freq_hz / first[a].freq_hz - 1) < 0.05]
+        if not near:
+            continue
+        shifts.append({"mode": near[0].mode, "f_first_hz": first[a].freq_hz, "f_last_hz": last[b].freq_hz,
+                       "shift": last[b].freq_hz / first[a].freq_hz - 1,
+                       "damping_ratio": last[b].zeta / first[a].zeta})
+    if shifts:
+        worst = max(shifts, key=lambda s: abs(s["shift"]) + 0.1 * abs(np.log(s["damping_ratio"])))
+        affected = worst["mode"]
+    return shifts, affected
+
+
 def signature(ev, H_model: np.ndarray) -> Signature:
     """Locate and characterise the mismatch of ``H_model`` against the recordings.
 
@@ -155,61 +218,11 @@ def signature(ev, H_model: np.ndarray) -> Signature:
             height_db=float(20 * np.log10(np.abs(rec[0, r.index]).max() / np.abs(H_model[0, m.index]).max())),
             mismatch=_wrms(lr[:, band], w[:, band]), dofs=tuple(names[t] for t in top)))
 
-    # magnitude offset and phase drift, away from the paired peaks
-    away = np.ones(freq.size, dtype=bool)
-    for p in pairs:
-        for f0 in (p.model.freq_hz, p.recorded.freq_hz):
-            away &= np.abs(freq / f0 - 1) > 0.08
-    wa = w[:, away]
-    la = lr[:, away]
-    gain_db = float(-20 / np.log(10) * np.median(la.real[wa > 0])) if np.any(wa > 0) else 0.0
-    # phase drift: per FRF, the recorded-minus-model phase on trusted lines away
-    # from the peaks, unwrapped along frequency; one pooled slope (own intercepts)
-    num = den = ss = 0.0
-    fa = freq[away]
-    for lv in range(lr.shape[0]):
-        for i in range(lr.shape[2]):
-            for j in range(lr.shape[3]):
-                wv = wa[lv, :, i, j]
-                good = wv > 0.3 * wv.max() if wv.max() > 0 else wv > 0
-                if good.sum() < 5:
-                    continue
-                x = fa[good]
-                y = np.unwrap(-la[lv, good, i, j].imag)
-                ww = wv[good] ** 2
-                xm, ym = np.average(x, weights=ww), np.average(y, weights=ww)
-                num += float((ww * (x - xm) * (y - ym)).sum())
-                den += float((ww * (x - xm) ** 2).sum())
-                ss += float((ww * (y - ym) ** 2).sum())
-    if den > 0:
-        slope = num / den
-        resid = ss - slope * num
-        r2 = 1 - resid / ss if ss > 0 else 0.0
-        delay = float(-slope / (2 * np.pi))
-    else:
-        delay, r2 = 0.0, 0.0
+    gain_db, delay, r2 = _gain_and_delay(freq, lr, w, pairs)
 
     sig = Signature(overall, mag_db, ph_deg, frac, pairs, extra, missing, gain_db, delay, r2)
     sig.bands = [{"band_hz": (round(p.recorded.freq_hz * 0.94), round(p.recorded.freq_hz * 1.06)),
                   "mode": p.mode, "mismatch": p.mismatch} for p in pairs]
     if rec.shape[0] > 1:
-        def strong(peaks):
-            top = max((p.height for p in peaks), default=0.0)
-            return [p for p in peaks if p.height >= 0.1 * top]
-
-        first = strong(find_peaks(freq, rec[0], w[0]))
-        last = strong(find_peaks(freq, rec[-1], w[-1]))
-        lidx, _, _ = pair_modes(first, last, max_ratio=1.2)
-        shifts = []
-        for a, b in lidx:
-            near = [p for p in pairs if abs(p.recorded.freq_hz / first[a].freq_hz - 1) < 0.05]
-            if not near:
-                continue
-            shifts.append({"mode": near[0].mode, "f_first_hz": first[a].freq_hz, "f_last_hz": last[b].freq_hz,
-                           "shift": last[b].freq_hz / first[a].freq_hz - 1,
-                           "damping_ratio": last[b].zeta / first[a].zeta})
-        sig.level_shifts = shifts
-        if shifts:
-            worst = max(shifts, key=lambda s: abs(s["shift"]) + 0.1 * abs(np.log(s["damping_ratio"])))
-            sig.affected_mode = worst["mode"]
+        sig.level_shifts, sig.affected_mode = _level_shifts(freq, rec, w, pairs, sig.affected_mode)
     return sig

@@ -338,6 +338,32 @@ def prepare(model, measurements: Sequence[Measurement], mapping: Mapping[int, st
                 "several recordings must be the same test at different excitation levels"
             )
     label = labels[0]
+    outs, ins = _model_points(first, model, mapping, label)
+    lo, hi = _common_band(frfs, labels, band, notes)
+    base = first.freq[(first.freq >= lo) & (first.freq <= hi) & (first.freq > 0)]
+    if base.size < 8:
+        raise InputError(f"only {base.size} recorded lines between {lo:g} and {hi:g} Hz; need at least 8")
+    vals, wts = [], []
+    for (frf0, coh, bad), lab in zip(checked, labels):
+        v, w = _on_base_lines(frf0.to("receptance"), coh, bad, base, lab, label, (lo, hi), notes)
+        vals.append(v)
+        wts.append(w)
+    values = np.stack(vals)
+    weight = np.stack(wts)
+
+    sel = _fit_lines(base, values, weight, lines_per_mode, background_lines, model_freqs)
+    return Observation(
+        freq=base[sel], values=values[:, sel], weight=weight[:, sel],
+        out_points=tuple(outs), out_dirs=tuple(d.direction for d in first.outputs),
+        in_points=tuple(ins), in_dirs=tuple(d.direction for d in first.inputs),
+        levels=tuple(m.level for m in measurements), labels=tuple(m.label for m in measurements),
+        full_freq=base, full_values=values, full_weight=weight, notes=tuple(notes),
+    )
+
+
+def _model_points(first, model, mapping: dict, label: str) -> tuple[list[str], list[str]]:
+    """The model point of each output and input DOF of the recordings (InputError for a direction
+    the model lacks or a DOF with no point)."""
     dirs_ok = ("x", "ry") if model.kind == "planar" else ("x", "y", "z", "rx", "ry", "rz")
     for d in (*first.outputs, *first.inputs):
         if d.direction not in dirs_ok:
@@ -345,7 +371,11 @@ def prepare(model, measurements: Sequence[Measurement], mapping: Mapping[int, st
                              f"does not have ({', '.join(dirs_ok)})")
     outs = [_point_for(d, model, mapping, "output", label) for d in first.outputs]
     ins = [_point_for(d, model, mapping, "input", label) for d in first.inputs]
+    return outs, ins
 
+
+def _common_band(frfs, labels, band, notes: list[str]) -> tuple[float, float]:
+    """The frequency range all recordings share, within ``band``; notes on the lines cut from each."""
     common_lo = max(frf.freq[0] for frf in frfs)
     common_hi = min(frf.freq[-1] for frf in frfs)
     lo, hi = common_lo, common_hi
@@ -361,71 +391,64 @@ def prepare(model, measurements: Sequence[Measurement], mapping: Mapping[int, st
         )
     if len(frfs) > 1:
         notes += _cut_notes(frfs, labels, common_lo, common_hi)
-    base = first.freq[(first.freq >= lo) & (first.freq <= hi) & (first.freq > 0)]
-    if base.size < 8:
-        raise InputError(f"only {base.size} recorded lines between {lo:g} and {hi:g} Hz; need at least 8")
-    vals, wts = [], []
-    for (frf0, coh, bad), m, lab in zip(checked, measurements, labels):
-        frf = frf0.to("receptance")
-        idx = np.searchsorted(frf.freq, base).clip(0, frf.freq.size - 1)
-        same = bool(np.allclose(frf.freq[idx], base, rtol=1e-12, atol=0.0))   # base lines are recorded lines
-        if same:
-            v = frf.values[idx]
-            n_in = int(((frf.freq >= base[0]) & (frf.freq <= base[-1])).sum())
-            if n_in > base.size:
-                notes.append(f"{lab}: only {base.size} of its {n_in} lines between {base[0]:g} and {base[-1]:g} Hz "
-                             f"are used (those on the grid of {label}); the others are dropped")
-        else:
-            inside = (frf.freq >= base[0]) & (frf.freq <= base[-1])
-            df = np.median(np.diff(frf.freq)) if frf.freq.size > 1 else 0.0
-            df0 = np.median(np.diff(base)) if base.size > 1 else 0.0
-            notes.append(f"{lab}: its {int(inside.sum())} lines between {base[0]:g} and {base[-1]:g} Hz "
-                         f"(spacing {df:.4g} Hz) were interpolated linearly onto the {base.size} lines of "
-                         f"{label} (spacing {df0:.4g} Hz)"
-                         + ("; its grid is coarser, so resonance peaks lose height" if df > 1.01 * df0 else ""))
-            v = frf.resample(base).values
-        if bad is not None:
-            bad = bad[idx] if same else np.stack(
-                [np.interp(base, frf.freq, b.astype(float)) > 0 for b in bad.reshape(bad.shape[0], -1).T],
-                -1).reshape(v.shape)
-        if coh is not None:
-            if coh.ndim == 1:
-                coh = np.broadcast_to(coh[:, None, None], frf.values.shape) if coh.shape == frf.freq.shape else coh
-            if coh.shape != frf.values.shape:
-                raise InputError(f"{lab}: coherence has shape {coh.shape}, the FRF has {frf.values.shape}")
-            coh = coh[idx] if same else \
-                np.stack([np.interp(base, frf.freq, c) for c in coh.reshape(coh.shape[0], -1).T],
-                         -1).reshape(v.shape)
-            sigma = _sigma_from_coherence(coh)
-            usable = coh >= MIN_COHERENCE
-            if bad is not None:
-                usable &= ~bad
-            if usable.mean() < 0.1:
-                raise InputError(
-                    f"{lab}: only {100 * usable.mean():.0f} % of the lines between "
-                    f"{lo:g} and {hi:g} Hz have coherence >= {MIN_COHERENCE}; no usable data to diagnose"
-                )
-        else:
-            sigma = roughness_sigma(v)
-            usable = sigma < 1.0
-            if bad is not None:
-                usable &= ~bad
-        w = np.where(usable & np.isfinite(v) & (np.abs(v) > 0), 1.0 / np.sqrt(sigma**2 + MODEL_FLOOR**2), 0.0)
-        if not w.any():
-            raise InputError(f"{lab}: no usable line between {lo:g} and {hi:g} Hz")
-        vals.append(np.where(w > 0, v, 1.0))
-        wts.append(w)
-    values = np.stack(vals)
-    weight = np.stack(wts)
+    return lo, hi
 
-    sel = _fit_lines(base, values, weight, lines_per_mode, background_lines, model_freqs)
-    return Observation(
-        freq=base[sel], values=values[:, sel], weight=weight[:, sel],
-        out_points=tuple(outs), out_dirs=tuple(d.direction for d in first.outputs),
-        in_points=tuple(ins), in_dirs=tuple(d.direction for d in first.inputs),
-        levels=tuple(m.level for m in measurements), labels=tuple(m.label for m in measurements),
-        full_freq=base, full_values=values, full_weight=weight, notes=tuple(notes),
-    )
+
+def _on_base_lines(frf, coh, bad, base: np.ndarray, lab: str, label: str, band: tuple[float, float],
+                   notes: list[str]):
+    """One recording (receptance) on the first recording's lines ``base`` — taken where they are its own
+    lines, else interpolated (noted) — and the weight of each value (0 where unusable)."""
+    idx = np.searchsorted(frf.freq, base).clip(0, frf.freq.size - 1)
+    same = bool(np.allclose(frf.freq[idx], base, rtol=1e-12, atol=0.0))   # base lines are recorded lines
+    if same:
+        v = frf.values[idx]
+        n_in = int(((frf.freq >= base[0]) & (frf.freq <= base[-1])).sum())
+        if n_in > base.size:
+            notes.append(f"{lab}: only {base.size} of its {n_in} lines between {base[0]:g} and {base[-1]:g} Hz "
+                         f"are used (those on the grid of {label}); the others are dropped")
+    else:
+        inside = (frf.freq >= base[0]) & (frf.freq <= base[-1])
+        df = np.median(np.diff(frf.freq)) if frf.freq.size > 1 else 0.0
+        df0 = np.median(np.diff(base)) if base.size > 1 else 0.0
+        notes.append(f"{lab}: its {int(inside.sum())} lines between {base[0]:g} and {base[-1]:g} Hz "
+                     f"(spacing {df:.4g} Hz) were interpolated linearly onto the {base.size} lines of "
+                     f"{label} (spacing {df0:.4g} Hz)"
+                     + ("; its grid is coarser, so resonance peaks lose height" if df > 1.01 * df0 else ""))
+        v = frf.resample(base).values
+
+    def on_base(a, cast=float):
+        """Per-entry arrays ``a`` (on the recording's lines) on the base lines."""
+        if same:
+            return a[idx]
+        return np.stack([np.interp(base, frf.freq, c.astype(cast)) for c in a.reshape(a.shape[0], -1).T],
+                        -1).reshape(v.shape)
+
+    if bad is not None:
+        bad = bad[idx] if same else on_base(bad) > 0
+    if coh is not None:
+        if coh.ndim == 1:
+            coh = np.broadcast_to(coh[:, None, None], frf.values.shape) if coh.shape == frf.freq.shape else coh
+        if coh.shape != frf.values.shape:
+            raise InputError(f"{lab}: coherence has shape {coh.shape}, the FRF has {frf.values.shape}")
+        coh = on_base(coh, coh.dtype)
+        sigma = _sigma_from_coherence(coh)
+        usable = coh >= MIN_COHERENCE
+        if bad is not None:
+            usable &= ~bad
+        if usable.mean() < 0.1:
+            raise InputError(
+                f"{lab}: only {100 * usable.mean():.0f} % of the lines between "
+                f"{band[0]:g} and {band[1]:g} Hz have coherence >= {MIN_COHERENCE}; no usable data to diagnose"
+            )
+    else:
+        sigma = roughness_sigma(v)
+        usable = sigma < 1.0
+        if bad is not None:
+            usable &= ~bad
+    w = np.where(usable & np.isfinite(v) & (np.abs(v) > 0), 1.0 / np.sqrt(sigma**2 + MODEL_FLOOR**2), 0.0)
+    if not w.any():
+        raise InputError(f"{lab}: no usable line between {band[0]:g} and {band[1]:g} Hz")
+    return np.where(w > 0, v, 1.0), w
 
 
 def peak_indices(freq: np.ndarray, values: np.ndarray, weight: np.ndarray | None = None) -> np.ndarray:

@@ -13,11 +13,11 @@ from jointdb.diagnose._compare import Signature, find_peaks, signature
 from jointdb.diagnose._data import Measurement, Observation, prepare
 from jointdb.diagnose._fit import Fit, ModelEvaluator, fit_candidate, jackknife_spread, nominal_fit
 from jointdb.diagnose._verdict import (
-    implausibility_text,
-    level_table_text,
+    explained_verdict,
     levels_text,
-    separating_measurement,
+    not_better_verdict,
     shift_text,
+    unexplained_verdict,
 )
 from jointdb.diagnose.physics import Combination, Context, candidates_for
 from jointdb.diagnose.physics.interface import screen_sites
@@ -108,20 +108,20 @@ class Diagnosis:
     @property
     def location(self) -> str | None:
         """Where the selected explanation sits, in words (joints, sensors), or None."""
-        if self.best is None:
-            return None
-        c = self.best.candidate
-        c = c.parts[0] if hasattr(c, "parts") else c
-        return getattr(c, "location", None)
+        return self._where("location")
 
     @property
     def position(self) -> float | None:
         """Axial position [m] of the selected explanation (model coordinates), or None."""
+        return self._where("position")
+
+    def _where(self, attr: str):
+        """``attr`` of the selected candidate (the first of a combination), or None."""
         if self.best is None:
             return None
         c = self.best.candidate
         c = c.parts[0] if hasattr(c, "parts") else c
-        return getattr(c, "position", None)
+        return getattr(c, attr, None)
 
     def table(self) -> list[dict]:
         """Ranked explanations as rows (name, family, parameters, ΔBIC, mismatch, improvement)."""
@@ -280,6 +280,49 @@ def diagnose(model, measurements: Sequence[Measurement], mapping: Mapping[int, s
     full = ModelEvaluator(obs, full=True, method="direct")
     H0_full = full.predict(model)
     before = signature(full, np.asarray(H0_full))
+    _check_shared_resonance(obs, modes, before)
+    nominal = nominal_fit(ev, model)
+    nominal.score = nominal.bic
+    levels_data = _level_analysis(obs)
+    rules = _Rules(nominal, levels_data is not None and levels_data.differs)
+    cands = _candidates(model, obs, modes, before, families, rules.level_dependent)
+    fits = _fit_singles(ev, model, cands, _prefit_targets(full), rules)
+    if combinations and fits:
+        fits = _fit_pairs(ev, model, fits, rules)
+    ok = [f for f in fits if rules.eligible(f) and rules.passes(f, nominal)]
+    best, found = None, _Found()
+    if ok:
+        best, fits = _settle_best(ev, model, ok, fits, rules)
+        found = _apply_best(model, best, obs, full, levels_data)
+    mis0 = full.mismatch(np.asarray(H0_full))
+    mis1 = full.mismatch(np.asarray(found.H_full)) if found.H_full is not None else mis0
+    levels_model = _model_level_analysis(full, np.asarray(found.H_full), obs, levels_data) \
+        if found.H_full is not None and levels_data is not None else None
+    where = shift_text(before) + levels_text(levels_data)
+    alternative, advice = None, ""
+    if best is not None and mis1 * MIN_IMPROVEMENT > mis0:
+        # the fit lines improved but the whole band did not: not an explanation (never explained=True below 1.5x)
+        verdict = not_better_verdict(best, where, mis0, mis1, MIN_IMPROVEMENT)
+        best, found, levels_model = None, _Found(), None
+        mis1 = mis0
+    elif best is None:
+        runner = next((f for f in fits if rules.eligible(f)), fits[0] if fits else None)
+        verdict = unexplained_verdict(fits, runner, rules.nominal.mismatch, rules.level_dependent, where, mis0)
+    else:
+        verdict, alternative, advice = explained_verdict(best, ok, found.level_table, obs, where, mis0, mis1,
+                                                         CLOSE_CALL)
+    return Diagnosis(
+        explained=best is not None, verdict=verdict, best=best, ranking=fits, nominal=nominal, before=before,
+        after=found.after, mismatch_before=mis0, mismatch_after=mis1, augmented=found.augmented,
+        chain_correction=found.chain, observation=obs, level_table=found.level_table,
+        seconds=time.perf_counter() - t0, H_before=np.asarray(H0_full),
+        H_after=None if found.H_full is None else np.asarray(found.H_full),
+        levels_data=levels_data, levels_model=levels_model, alternative=alternative, advice=advice,
+    )
+
+
+def _check_shared_resonance(obs: Observation, modes: np.ndarray, before: Signature) -> None:
+    """InputError when the recorded band holds no resonance of the model or the recording."""
     in_band = [f for f in modes if obs.full_freq[0] <= f <= obs.full_freq[-1]]
     if not in_band and not before.pairs and not before.extra_peaks:
         raise InputError(
@@ -287,10 +330,34 @@ def diagnose(model, measurements: Sequence[Measurement], mapping: Mapping[int, s
             f"the model's modes are at {', '.join(f'{f:.0f}' for f in modes[:4])} Hz; "
             "record (or choose with --band) a range that contains them"
         )
-    nominal = nominal_fit(ev, model)
-    nominal.score = nominal.bic
-    levels_data = _level_analysis(obs)
-    level_dependent = levels_data is not None and levels_data.differs
+
+
+@dataclass(frozen=True)
+class _Rules:
+    """The selection rules of a diagnosis, against its nominal fit."""
+
+    nominal: Fit
+    #: the recordings differ across levels beyond noise
+    level_dependent: bool
+
+    def eligible(self, f: Fit) -> bool:
+        # when the levels disagree beyond noise, only an explanation that accounts for all of them may win
+        return not self.level_dependent or f.candidate.per_level
+
+    @staticmethod
+    def passes(f: Fit, ref: Fit) -> bool:
+        return f.score <= ref.score - BIC_MARGIN and f.mismatch * MIN_IMPROVEMENT <= ref.mismatch
+
+    def simplest(self, f: Fit, fits: list[Fit]) -> Fit:
+        """The member of f's slot with fewest parameters that is practically as good."""
+        near = [g for g in fits if g.candidate.slot == f.candidate.slot and self.passes(g, self.nominal)
+                and self.eligible(g) and g.mismatch <= OCCAM_TOLERANCE * f.mismatch]
+        return min(near, key=lambda g: (g.p, g.score)) if near else f
+
+
+def _candidates(model, obs: Observation, modes: np.ndarray, before: Signature, families, level_dependent: bool):
+    """The candidates worth fitting: the families asked for, the best-screened interface sites, and
+    level-dependent physics only when the levels differ."""
     ctx = Context(model=model, points=tuple(dict.fromkeys(obs.out_points)), n_levels=len(obs.levels),
                   levels=obs.levels, modes_hz=modes)
     cands = candidates_for(ctx)
@@ -303,12 +370,20 @@ def diagnose(model, measurements: Sequence[Measurement], mapping: Mapping[int, s
     if not level_dependent:
         # a level-dependent explanation of recordings that agree across levels is invented physics
         cands = [c for c in cands if not c.per_level]
-    # recorded resonances for the stage-1 frequency pre-fit: the strong recorded
-    # peaks (10 % of the strongest), each pulling its nearest model mode
+    return cands
+
+
+def _prefit_targets(full: ModelEvaluator) -> np.ndarray | None:
+    """Recorded resonances for the stage-1 frequency pre-fit: the strong recorded peaks
+    (10 % of the strongest), each pulling its nearest model mode."""
     rpk = find_peaks(full.freq, full.rec[0], full.w[0])
     top = max((p.height for p in rpk), default=0.0)
     strong = sorted(p.freq_hz for p in rpk if p.height >= 0.1 * top)
-    target = np.asarray(strong) if strong else None
+    return np.asarray(strong) if strong else None
+
+
+def _fit_singles(ev: ModelEvaluator, model, cands, target, rules: _Rules) -> list[Fit]:
+    """Fit every single candidate, best score first (level-dependent joints only at the best sites)."""
     fits = [fit_candidate(ev, model, c, target_freqs=target) for c in cands if not c.per_level]
     # level-dependent joints (each fit costs one model per level) only where a linear joint fits best
     linear = sorted((f for f in fits if hasattr(f.candidate, "site") and f.family in JOINT_FAMILIES),
@@ -318,147 +393,105 @@ def diagnose(model, measurements: Sequence[Measurement], mapping: Mapping[int, s
         if c.per_level and (not hasattr(c, "site") or c.site in best_sites):
             fits.append(fit_candidate(ev, model, c, start=_per_level_start(c, fits)))
     for f in fits:
-        _plausibility(f, nominal)
+        _plausibility(f, rules.nominal)
     fits.sort(key=lambda f: f.score)
+    return fits
 
-    def eligible(f):
-        # when the levels disagree beyond noise, only an explanation that accounts for all of them may win
-        return not level_dependent or f.candidate.per_level
 
-    def passes(f, ref):
-        return f.score <= ref.score - BIC_MARGIN and f.mismatch * MIN_IMPROVEMENT <= ref.mismatch
+def _fit_pairs(ev: ModelEvaluator, model, fits: list[Fit], rules: _Rules) -> list[Fit]:
+    """Add the pairs of the (up to three) best single explanations of different slots and families
+    that beat the best single one clearly enough; all fits, best score first."""
+    tops = []
+    for f in (rules.simplest(f, fits) for f in fits):
+        if rules.passes(f, rules.nominal) and all(f.candidate.slot != t.candidate.slot and
+                                                  f.family != t.family for t in tops):
+            tops.append(f)
+        if len(tops) == 3:
+            break
+    best_single = next((f for f in fits if rules.eligible(f)), fits[0])
+    pair_fits = []
+    for i in range(len(tops)):
+        for j in range(i + 1, len(tops)):
+            a, b = tops[i], tops[j]
+            if a.candidate.per_level and b.candidate.per_level:
+                continue
+            if rules.level_dependent and not (a.candidate.per_level or b.candidate.per_level):
+                continue
+            combo = Combination(a.candidate, b.candidate)
+            start = {f"a.{k}": v for k, v in a.values.items()} | {f"b.{k}": v for k, v in b.values.items()}
+            pf = fit_candidate(ev, model, combo, start=start, max_nfev=12 * (len(combo.params) + 1))
+            _plausibility(pf, rules.nominal)
+            tau = max(best_single.tau, 1.0)
+            if (best_single.score - pf.score) / tau >= BIC_MARGIN and pf.mismatch * MIN_PAIR_IMPROVEMENT <= \
+                    best_single.mismatch:
+                pair_fits.append(pf)
+    return sorted(fits + pair_fits, key=lambda f: f.score)
 
-    def simplest(f):
-        """The member of f's slot with fewest parameters that is practically as good."""
-        near = [g for g in fits if g.candidate.slot == f.candidate.slot and passes(g, nominal) and eligible(g)
-                and g.mismatch <= OCCAM_TOLERANCE * f.mismatch]
-        return min(near, key=lambda g: (g.p, g.score)) if near else f
 
-    if combinations and fits:
-        tops = []
-        for f in (simplest(f) for f in fits):
-            if passes(f, nominal) and all(f.candidate.slot != t.candidate.slot and
-                                          f.family != t.family for t in tops):
-                tops.append(f)
-            if len(tops) == 3:
-                break
-        best_single = next((f for f in fits if eligible(f)), fits[0])
-        pair_fits = []
-        for i in range(len(tops)):
-            for j in range(i + 1, len(tops)):
-                a, b = tops[i], tops[j]
-                if a.candidate.per_level and b.candidate.per_level:
-                    continue
-                if level_dependent and not (a.candidate.per_level or b.candidate.per_level):
-                    continue
-                combo = Combination(a.candidate, b.candidate)
-                start = {f"a.{k}": v for k, v in a.values.items()} | {f"b.{k}": v for k, v in b.values.items()}
-                pf = fit_candidate(ev, model, combo, start=start, max_nfev=12 * (len(combo.params) + 1))
-                _plausibility(pf, nominal)
-                tau = max(best_single.tau, 1.0)
-                if (best_single.score - pf.score) / tau >= BIC_MARGIN and pf.mismatch * MIN_PAIR_IMPROVEMENT <= \
-                        best_single.mismatch:
-                    pair_fits.append(pf)
-        fits = sorted(fits + pair_fits, key=lambda f: f.score)
+def _settle_best(ev: ModelEvaluator, model, ok: list[Fit], fits: list[Fit], rules: _Rules):
+    """The selected explanation among the accepted ``ok`` (the simplest practically as good as the best),
+    with its uncertainties, refined by harmonic balance when it can be; and the ranking, it first."""
+    best = ok[0]
+    near = [f for f in ok if f.mismatch <= OCCAM_TOLERANCE * best.mismatch]
+    best = min(near, key=lambda f: (bool(f.implausible), f.p, f.score))
+    fits = [best] + [f for f in fits if f is not best]
+    # honest uncertainty of the selected explanation: statistical (χ²_red, τ) ⊕ model-form (jackknife)
+    best.sigmas_model = jackknife_spread(ev, model, best)
+    # model-form spread across the accepted variants of the same physics (e.g. a sensor as point mass,
+    # with rotary inertia, with an offset): RMS deviation of their estimates of a shared parameter
+    if best.candidate.slot:
+        rivals = [g for g in fits if g is not best and g.candidate.slot == best.candidate.slot
+                  and rules.passes(g, rules.nominal)]
+        for k in best.values:
+            dev = [g.values[k] - best.values[k] for g in rivals if k in g.values]
+            if dev:
+                v = float(np.sqrt(np.mean(np.square(dev))))
+                best.sigmas_model[k] = float(np.hypot(best.sigmas_model.get(k, 0.0), v))
+    best.sigmas = {k: float(np.hypot(v, best.sigmas_model.get(k, 0.0))) for k, v in best.sigmas_stat.items()}
+    # an amplitude-dependent joint with known forces: refine by harmonic balance line by line (the
+    # selection used the per-level describing function at the linear peak, which is ~20x cheaper)
+    refine = getattr(best.candidate, "refined", None)
+    fine = refine() if refine is not None else None
+    if fine is not None:
+        rf = fit_candidate(ev, model, fine, start=best.values, max_nfev=REFINE_EVALUATIONS * (best.p + 1))
+        _plausibility(rf, rules.nominal)
+        if rf.mismatch < best.mismatch:
+            rf.sigmas_model = best.sigmas_model
+            rf.sigmas = {k: float(np.hypot(v, rf.sigmas_model.get(k, 0.0))) for k, v in rf.sigmas_stat.items()}
+            fits = [rf] + fits
+            best = rf
+    return best, fits
 
-    ok = [f for f in fits if eligible(f) and passes(f, nominal)]
-    best = ok[0] if ok else None
-    if best is not None:
-        near = [f for f in ok if f.mismatch <= OCCAM_TOLERANCE * best.mismatch]
-        best = min(near, key=lambda f: (bool(f.implausible), f.p, f.score))
-        fits = [best] + [f for f in fits if f is not best]
-        # honest uncertainty of the selected explanation: statistical (χ²_red, τ) ⊕ model-form (jackknife)
-        best.sigmas_model = jackknife_spread(ev, model, best)
-        # model-form spread across the accepted variants of the same physics (e.g. a sensor as point mass,
-        # with rotary inertia, with an offset): RMS deviation of their estimates of a shared parameter
-        if best.candidate.slot:
-            rivals = [g for g in fits if g is not best and g.candidate.slot == best.candidate.slot
-                      and passes(g, nominal)]
-            for k in best.values:
-                dev = [g.values[k] - best.values[k] for g in rivals if k in g.values]
-                if dev:
-                    v = float(np.sqrt(np.mean(np.square(dev))))
-                    best.sigmas_model[k] = float(np.hypot(best.sigmas_model.get(k, 0.0), v))
-        best.sigmas = {k: float(np.hypot(v, best.sigmas_model.get(k, 0.0))) for k, v in best.sigmas_stat.items()}
-        # an amplitude-dependent joint with known forces: refine by harmonic balance line by line (the
-        # selection used the per-level describing function at the linear peak, which is ~20x cheaper)
-        refine = getattr(best.candidate, "refined", None)
-        fine = refine() if refine is not None else None
-        if fine is not None:
-            rf = fit_candidate(ev, model, fine, start=best.values, max_nfev=REFINE_EVALUATIONS * (best.p + 1))
-            _plausibility(rf, nominal)
-            if rf.mismatch < best.mismatch:
-                rf.sigmas_model = best.sigmas_model
-                rf.sigmas = {k: float(np.hypot(v, rf.sigmas_model.get(k, 0.0))) for k, v in rf.sigmas_stat.items()}
-                fits = [rf] + fits
-                best = rf
+
+@dataclass
+class _Found:
+    """What a selected explanation gives: the augmented model(s), the measurement-chain correction,
+    the per-level joint table, the signature and FRFs after (all empty without one)."""
+
     augmented: tuple = ()
-    chain: dict = {}
-    level_table: list = []
-    after = None
-    H1_full = None
-    if best is not None:
-        c = best.candidate
-        augmented = tuple(c.apply(model, best.values, lv) for lv in range(len(obs.levels) if c.per_level else 1))
-        parts = c.parts if isinstance(c, Combination) else (c,)
-        prefix = ("a.", "b.") if isinstance(c, Combination) else ("",)
-        H1_full = full.predict(model, c, best.values)
-        for part, pre in zip(parts, prefix):
-            if part.family == "gain":
-                chain["gain"] = best.values[pre + "gain"]
-            if part.family == "delay":
-                chain["delay_s"] = best.values[pre + "delay"]
-            if hasattr(part, "level_table"):
-                vals = {k[len(pre):]: v for k, v in best.values.items() if k.startswith(pre)}
-                f1 = levels_data.tracks[0].freq_hz if levels_data is not None and levels_data.tracks else None
-                grid = None if f1 is None else np.linspace(0.9 * f1.min(), 1.1 * f1.max(), 81)
-                level_table = part.level_table(vals, models=augmented if isinstance(c, type(part)) else None,
-                                               input_point=obs.in_points[0], freq_hz=grid)
-        after = signature(full, np.asarray(H1_full))
-    mis0 = full.mismatch(np.asarray(H0_full))
-    mis1 = full.mismatch(np.asarray(H1_full)) if H1_full is not None else mis0
-    levels_model = _model_level_analysis(full, np.asarray(H1_full), obs, levels_data) \
-        if H1_full is not None and levels_data is not None else None
+    chain: dict = field(default_factory=dict)
+    level_table: list = field(default_factory=list)
+    after: Signature | None = None
+    H_full: object = None
 
-    where = shift_text(before) + levels_text(levels_data)
-    alternative, advice = None, ""
-    if best is not None and mis1 * MIN_IMPROVEMENT > mis0:
-        # the fit lines improved but the whole band did not: not an explanation (never explained=True below 1.5x)
-        verdict = (f"The recording differs from the model ({where}; mismatch {100 * mis0:.1f} %). The best "
-                   f"candidate, {best.describe()}, improves the fit lines but brings the whole band only to "
-                   f"{100 * mis1:.1f} % (less than {MIN_IMPROVEMENT:g}× better). Nothing is added.")
-        best, augmented, chain, level_table, after, H1_full, levels_model = None, (), {}, [], None, None, None
-        mis1 = mis0
-    elif best is None:
-        runner = next((f for f in fits if eligible(f)), fits[0] if fits else None)
-        if nominal.mismatch < 0.08 or runner is None:
-            verdict = (f"No significant mismatch: model and recording agree to {100 * mis0:.1f} % "
-                       f"({where}); no physics is added.")
-        elif level_dependent and not any(f.candidate.per_level for f in fits):
-            verdict = (f"The recording differs from the model ({where}; mismatch {100 * mis0:.1f} %) and changes "
-                       "with the excitation level, but no amplitude-dependent candidate could be fitted. "
-                       "Nothing is added.")
-        else:
-            verdict = (f"The recording differs from the model ({where}; mismatch {100 * mis0:.1f} %), but no "
-                       f"candidate physics explains it well: the best, {runner.describe()}, only brings it to "
-                       f"{100 * runner.mismatch:.1f} % on the fit lines. Nothing is added.")
-    else:
-        lv = level_table_text(level_table)
-        verdict = (f"{where[0].upper() + where[1:]}. Best explained by {best.describe()}"
-                   f"{implausibility_text(best)}; mismatch {100 * mis0:.1f} % → {100 * mis1:.1f} %.{lv}")
-        rivals = [f for f in ok if f is not best and f.candidate.slot != best.candidate.slot
-                  and f.family.split(" + ")[0] != best.family.split(" + ")[0]
-                  and f.mismatch <= CLOSE_CALL * best.mismatch]
-        if rivals:
-            alternative = rivals[0]
-            advice = separating_measurement(best, alternative, len(obs.levels), len(set(obs.out_points)))
-            verdict += (f" A close alternative is {alternative.describe()}{implausibility_text(alternative)} "
-                        f"(mismatch {100 * alternative.mismatch:.1f} % against {100 * best.mismatch:.1f} % on the "
-                        f"fit lines); to tell them apart, {advice}.")
-    return Diagnosis(
-        explained=best is not None, verdict=verdict, best=best, ranking=fits, nominal=nominal, before=before,
-        after=after, mismatch_before=mis0, mismatch_after=mis1, augmented=augmented, chain_correction=chain,
-        observation=obs, level_table=level_table, seconds=time.perf_counter() - t0,
-        H_before=np.asarray(H0_full), H_after=None if H1_full is None else np.asarray(H1_full),
-        levels_data=levels_data, levels_model=levels_model, alternative=alternative, advice=advice,
-    )
+
+def _apply_best(model, best: Fit, obs: Observation, full: ModelEvaluator, levels_data) -> _Found:
+    c = best.candidate
+    found = _Found(augmented=tuple(c.apply(model, best.values, lv)
+                                   for lv in range(len(obs.levels) if c.per_level else 1)))
+    parts = c.parts if isinstance(c, Combination) else (c,)
+    prefix = ("a.", "b.") if isinstance(c, Combination) else ("",)
+    found.H_full = full.predict(model, c, best.values)
+    for part, pre in zip(parts, prefix):
+        if part.family == "gain":
+            found.chain["gain"] = best.values[pre + "gain"]
+        if part.family == "delay":
+            found.chain["delay_s"] = best.values[pre + "delay"]
+        if hasattr(part, "level_table"):
+            vals = {k[len(pre):]: v for k, v in best.values.items() if k.startswith(pre)}
+            f1 = levels_data.tracks[0].freq_hz if levels_data is not None and levels_data.tracks else None
+            grid = None if f1 is None else np.linspace(0.9 * f1.min(), 1.1 * f1.max(), 81)
+            found.level_table = part.level_table(vals, models=found.augmented if isinstance(c, type(part)) else None,
+                                                 input_point=obs.in_points[0], freq_hz=grid)
+    found.after = signature(full, np.asarray(found.H_full))
+    return found

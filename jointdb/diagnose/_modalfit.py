@@ -169,8 +169,6 @@ def local_modal_fit(freq: np.ndarray, values: np.ndarray, weight: np.ndarray | N
         Shapes that do not match; ``f_centre`` outside the recorded lines;
         fewer than 8 usable lines in the band.
     """
-    import scipy.optimize
-
     freq = np.asarray(freq, dtype=float)
     values = np.asarray(values)
     if values.ndim != 3 or values.shape[0] != freq.size:
@@ -185,12 +183,8 @@ def local_modal_fit(freq: np.ndarray, values: np.ndarray, weight: np.ndarray | N
         raise InputError(f"local modal fit: {f_centre:g} Hz is outside the recorded {freq[0]:g}–{freq[-1]:g} Hz")
     vals = np.where(ok, values, 0.0)
     ind = indicator(vals, weight)
-    win = np.where(np.abs(freq - f_centre) <= search * f_centre)[0]
-    i = int(win[np.argmax(ind[win])]) if win.size else int(np.argmin(np.abs(freq - f_centre)))
+    i, hw, sel = _band(freq, ind, f_centre, search, band_halfwidths, min_band, max_band)
     f_pk = float(freq[i])
-    hw = max(_half_power(freq, ind, i), 0.5 * float(np.median(np.diff(freq))) if freq.size > 1 else 0.0)
-    half = min(max(band_halfwidths * hw, min_band * f_pk), max_band * f_pk)
-    sel = (freq >= f_pk - half) & (freq <= f_pk + half)
     f_b, y, w = freq[sel], vals[sel], weight[sel]
     n_out, n_in = values.shape[1:]
     y = y.reshape(f_b.size, -1)
@@ -200,67 +194,15 @@ def local_modal_fit(freq: np.ndarray, values: np.ndarray, weight: np.ndarray | N
         raise InputError(f"local modal fit at {f_pk:.4g} Hz: fewer than {_MIN_LINES} usable lines in "
                          f"{f_b[0] if f_b.size else f_pk:.4g}–{f_b[-1] if f_b.size else f_pk:.4g} Hz; "
                          "record a finer frequency grid or a wider band")
-    y, s = y[:, used], s[:, used]
-    omega = 2 * np.pi * f_b
-    w_c = 2 * np.pi * f_pk
-    n_e = int(used.sum())
-    n_res = 2 * int((s > 0).sum())
-
-    def solve(starts):
-        n_p = len(starts)
-
-        def poles_of(x):
-            x = x.reshape(n_p, 2)
-            return np.column_stack([w_c * x[:, 0], np.exp(x[:, 1])])
-
-        def resid(x):
-            _, r = _project(_basis(omega, poles_of(x), w_c), y, s)
-            return np.concatenate([r.real.ravel(), r.imag.ravel()])
-
-        x0 = np.array([[f / f_pk, np.log(np.clip(z, *_ZETA_BOUNDS))] for f, z in starts]).ravel()
-        lo = np.tile([f_b[0] / f_pk * 0.98, np.log(_ZETA_BOUNDS[0])], n_p)
-        hi = np.tile([f_b[-1] / f_pk * 1.02, np.log(_ZETA_BOUNDS[1])], n_p)
-        x0 = np.clip(x0, lo + 1e-12, hi - 1e-12)
-        sol = scipy.optimize.least_squares(resid, x0, bounds=(lo, hi), x_scale=np.tile([1e-3, 0.1], n_p),
-                                           xtol=1e-14, ftol=1e-14, gtol=1e-14, max_nfev=400)
-        r = resid(sol.x)
-        n_par = sol.x.size + 2 * (n_p + 3) * n_e
-        return sol.x, r, poles_of, resid, n_par
-
-    # a neighbouring recorded peak in the band is fitted along as a pole of its own when it earns
-    # its parameters (BIC); candidates: local maxima of the smoothed indicator 10 % above their saddles
-    import scipy.signal
-
-    sm = np.convolve(np.log(np.maximum(ind[sel], 1e-300)), np.ones(3) / 3, mode="same")
-    cand, props = scipy.signal.find_peaks(sm, prominence=0.1)
-    cand = [int(k) for k in cand[np.argsort(-props["prominences"])] if abs(int(k) + np.argmax(sel) - i) > 2]
-    starts = [(f_pk, max(hw / f_pk, 2e-4))]
-    x, r, poles_of, resid, n_par = solve(starts)
-
-    def bic(r, n_par):
-        return n_res * np.log(max(float(r @ r), 1e-300) / n_res) + n_par * np.log(n_res)
-
-    for k in cand[:2]:
-        kk = k + int(np.argmax(sel))
-        trial = starts + [(float(freq[kk]), max(_half_power(freq, ind, kk) / freq[kk], 2e-4))]
-        x2, r2, p2, res2, n2 = solve(trial)
-        if bic(r2, n2) <= bic(r, n_par) - 10.0 and abs(p2(x2)[0, 0] - p2(x2)[1, 0]) > 2 * np.pi * 1e-3 * f_pk:
-            starts, x, r, poles_of, resid, n_par = trial, x2, r2, p2, res2, n2
-    # central-difference Jacobian at the solution (more accurate than the solver's forward one)
-    jac = np.empty((r.size, x.size))
-    for k in range(x.size):
-        h = 1e-6 if k % 2 == 0 else 1e-5
-        dx = np.zeros_like(x)
-        dx[k] = h
-        jac[:, k] = (resid(x + dx) - resid(x - dx)) / (2 * h)
-    chi2_red = float(r @ r) / max(r.size - n_par, 1)
-    cov = np.linalg.pinv(jac.T @ jac) * chi2_red
-    poles = poles_of(x)
+    fit = _BandFit(f_b, y[:, used], s[:, used], f_pk)
+    x, r, n_par = _with_neighbours(fit, freq, ind, sel, i, [(f_pk, max(hw / f_pk, 2e-4))])
+    cov, chi2_red = fit.covariance(x, r, n_par)
+    poles = fit.poles(x)
     f_r, z_r = poles[0, 0] / (2 * np.pi), poles[0, 1]
     sig_f = f_pk * float(np.sqrt(max(cov[0, 0], 0.0)))
     sig_z = z_r * float(np.sqrt(max(cov[1, 1], 0.0)))
-    coef, _ = _project(_basis(omega, poles, w_c), y, s)
-    h_at = _basis(np.array([poles[0, 0]]), poles, w_c)[0] @ coef.T
+    coef, _ = _project(_basis(fit.omega, poles, fit.w_c), fit.y, fit.s)
+    h_at = _basis(np.array([poles[0, 0]]), poles, fit.w_c)[0] @ coef.T
     peaks = np.zeros(n_out * n_in)
     peaks[used] = np.abs(h_at)
     res = np.zeros(n_out * n_in, complex)
@@ -268,6 +210,93 @@ def local_modal_fit(freq: np.ndarray, values: np.ndarray, weight: np.ndarray | N
     return ModalFit(
         freq_hz=float(f_r), zeta=float(z_r), sigma_freq_hz=sig_f, sigma_zeta=sig_z,
         peak=float(peaks.max()), peak_entries=peaks.reshape(n_out, n_in), residues=res.reshape(n_out, n_in),
-        band=(float(f_b[0]), float(f_b[-1])), n_lines=int((s > 0).sum()), chi2_red=chi2_red,
+        band=(float(f_b[0]), float(f_b[-1])), n_lines=int((fit.s > 0).sum()), chi2_red=chi2_red,
         neighbours=tuple((float(p[0] / (2 * np.pi)), float(p[1])) for p in poles[1:]),
     )
+
+
+def _band(freq: np.ndarray, ind: np.ndarray, f_centre: float, search: float, band_halfwidths: float,
+          min_band: float, max_band: float):
+    """The recorded peak's line (the indicator's maximum within ``± search · f_centre``), its half-power
+    half-width [Hz] and the lines of the band around it."""
+    win = np.where(np.abs(freq - f_centre) <= search * f_centre)[0]
+    i = int(win[np.argmax(ind[win])]) if win.size else int(np.argmin(np.abs(freq - f_centre)))
+    f_pk = float(freq[i])
+    hw = max(_half_power(freq, ind, i), 0.5 * float(np.median(np.diff(freq))) if freq.size > 1 else 0.0)
+    half = min(max(band_halfwidths * hw, min_band * f_pk), max_band * f_pk)
+    sel = (freq >= f_pk - half) & (freq <= f_pk + half)
+    return i, hw, sel
+
+
+class _BandFit:
+    """The least-squares problem of one band: poles ``(ω_r, ζ)`` as unknowns ``x`` (per pole ω_r/ω_c and
+    log ζ), the residues and out-of-band terms projected out per entry (:func:`_project`).
+
+    ``f_b`` the band's lines [Hz], ``y``/``s`` ``(n, n_e)`` the used entries and their weights,
+    ``f_pk`` the recorded peak [Hz] (ω_c = 2π f_pk).
+    """
+
+    def __init__(self, f_b: np.ndarray, y: np.ndarray, s: np.ndarray, f_pk: float) -> None:
+        self.f_b, self.y, self.s, self.f_pk = f_b, y, s, f_pk
+        self.omega = 2 * np.pi * f_b
+        self.w_c = 2 * np.pi * f_pk
+        self.n_e = y.shape[1]
+        self.n_res = 2 * int((s > 0).sum())
+
+    def poles(self, x: np.ndarray) -> np.ndarray:
+        x = x.reshape(-1, 2)
+        return np.column_stack([self.w_c * x[:, 0], np.exp(x[:, 1])])
+
+    def resid(self, x: np.ndarray) -> np.ndarray:
+        _, r = _project(_basis(self.omega, self.poles(x), self.w_c), self.y, self.s)
+        return np.concatenate([r.real.ravel(), r.imag.ravel()])
+
+    def solve(self, starts):
+        """Poles from ``starts`` [(Hz, ζ)]: the unknowns, the residual and the number of parameters."""
+        import scipy.optimize
+
+        n_p, f_pk, f_b = len(starts), self.f_pk, self.f_b
+        x0 = np.array([[f / f_pk, np.log(np.clip(z, *_ZETA_BOUNDS))] for f, z in starts]).ravel()
+        lo = np.tile([f_b[0] / f_pk * 0.98, np.log(_ZETA_BOUNDS[0])], n_p)
+        hi = np.tile([f_b[-1] / f_pk * 1.02, np.log(_ZETA_BOUNDS[1])], n_p)
+        x0 = np.clip(x0, lo + 1e-12, hi - 1e-12)
+        sol = scipy.optimize.least_squares(self.resid, x0, bounds=(lo, hi), x_scale=np.tile([1e-3, 0.1], n_p),
+                                           xtol=1e-14, ftol=1e-14, gtol=1e-14, max_nfev=400)
+        r = self.resid(sol.x)
+        n_par = sol.x.size + 2 * (n_p + 3) * self.n_e
+        return sol.x, r, n_par
+
+    def bic(self, r: np.ndarray, n_par: int) -> float:
+        return self.n_res * np.log(max(float(r @ r), 1e-300) / self.n_res) + n_par * np.log(self.n_res)
+
+    def covariance(self, x: np.ndarray, r: np.ndarray, n_par: int):
+        """Covariance of ``x`` (central-difference Jacobian at the solution: more accurate than the
+        solver's forward one) and the reduced χ²."""
+        jac = np.empty((r.size, x.size))
+        for k in range(x.size):
+            h = 1e-6 if k % 2 == 0 else 1e-5
+            dx = np.zeros_like(x)
+            dx[k] = h
+            jac[:, k] = (self.resid(x + dx) - self.resid(x - dx)) / (2 * h)
+        chi2_red = float(r @ r) / max(r.size - n_par, 1)
+        return np.linalg.pinv(jac.T @ jac) * chi2_red, chi2_red
+
+
+def _with_neighbours(fit: _BandFit, freq: np.ndarray, ind: np.ndarray, sel: np.ndarray, i: int, starts):
+    """The fit from ``starts``, with a neighbouring recorded peak in the band fitted along as a pole of
+    its own when it earns its parameters (BIC); candidates: local maxima of the smoothed indicator
+    10 % above their saddles. Returns the unknowns, the residual and the number of parameters."""
+    import scipy.signal
+
+    sm = np.convolve(np.log(np.maximum(ind[sel], 1e-300)), np.ones(3) / 3, mode="same")
+    cand, props = scipy.signal.find_peaks(sm, prominence=0.1)
+    cand = [int(k) for k in cand[np.argsort(-props["prominences"])] if abs(int(k) + np.argmax(sel) - i) > 2]
+    x, r, n_par = fit.solve(starts)
+    for k in cand[:2]:
+        kk = k + int(np.argmax(sel))
+        trial = starts + [(float(freq[kk]), max(_half_power(freq, ind, kk) / freq[kk], 2e-4))]
+        x2, r2, n2 = fit.solve(trial)
+        p2 = fit.poles(x2)
+        if fit.bic(r2, n2) <= fit.bic(r, n_par) - 10.0 and abs(p2[0, 0] - p2[1, 0]) > 2 * np.pi * 1e-3 * fit.f_pk:
+            starts, x, r, n_par = trial, x2, r2, n2
+    return x, r, n_par

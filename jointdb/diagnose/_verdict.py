@@ -8,7 +8,7 @@ import numpy as np
 from jointdb.diagnose._compare import Signature
 
 __all__ = ["shift_text", "separating_measurement", "where_text", "implausibility_text", "levels_text",
-           "level_table_text"]
+           "level_table_text", "explained_verdict", "unexplained_verdict", "not_better_verdict"]
 
 
 def shift_text(sig: Signature) -> str:
@@ -142,3 +142,46 @@ def level_table_text(rows: list) -> str:
             text += f", slip {slip * 1e6:.3g} µm"
         out.append(text)
     return " Per level: " + "; ".join(out) + "."
+
+
+def not_better_verdict(best, where: str, mis0: float, mis1: float, min_improvement: float) -> str:
+    """The verdict when the best candidate improves the fit lines but not the whole band enough."""
+    return (f"The recording differs from the model ({where}; mismatch {100 * mis0:.1f} %). The best "
+            f"candidate, {best.describe()}, improves the fit lines but brings the whole band only to "
+            f"{100 * mis1:.1f} % (less than {min_improvement:g}× better). Nothing is added.")
+
+
+def unexplained_verdict(fits: list, runner, nominal_mismatch: float, level_dependent: bool, where: str,
+                        mis0: float) -> str:
+    """The verdict when no candidate is accepted: no mismatch, or none that candidate physics explains
+    (``runner``: the best eligible fit)."""
+    if nominal_mismatch < 0.08 or runner is None:
+        return (f"No significant mismatch: model and recording agree to {100 * mis0:.1f} % "
+                f"({where}); no physics is added.")
+    if level_dependent and not any(f.candidate.per_level for f in fits):
+        return (f"The recording differs from the model ({where}; mismatch {100 * mis0:.1f} %) and changes "
+                "with the excitation level, but no amplitude-dependent candidate could be fitted. "
+                "Nothing is added.")
+    return (f"The recording differs from the model ({where}; mismatch {100 * mis0:.1f} %), but no "
+            f"candidate physics explains it well: the best, {runner.describe()}, only brings it to "
+            f"{100 * runner.mismatch:.1f} % on the fit lines. Nothing is added.")
+
+
+def explained_verdict(best, ok: list, level_table: list, obs, where: str, mis0: float, mis1: float,
+                      close_call: float):
+    """The verdict naming ``best``, and a close alternative (an accepted fit of another physics within
+    ``close_call`` × its mismatch) with the measurement that separates them."""
+    alternative, advice = None, ""
+    lv = level_table_text(level_table)
+    verdict = (f"{where[0].upper() + where[1:]}. Best explained by {best.describe()}"
+               f"{implausibility_text(best)}; mismatch {100 * mis0:.1f} % → {100 * mis1:.1f} %.{lv}")
+    rivals = [f for f in ok if f is not best and f.candidate.slot != best.candidate.slot
+              and f.family.split(" + ")[0] != best.family.split(" + ")[0]
+              and f.mismatch <= close_call * best.mismatch]
+    if rivals:
+        alternative = rivals[0]
+        advice = separating_measurement(best, alternative, len(obs.levels), len(set(obs.out_points)))
+        verdict += (f" A close alternative is {alternative.describe()}{implausibility_text(alternative)} "
+                    f"(mismatch {100 * alternative.mismatch:.1f} % against {100 * best.mismatch:.1f} % on the "
+                    f"fit lines); to tell them apart, {advice}.")
+    return verdict, alternative, advice

@@ -11,6 +11,8 @@ finite frequency resolution (bin-averaged lines), seeded complex noise
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
+
 import numpy as np
 import scipy.signal
 
@@ -105,6 +107,96 @@ def _measure(rng, beam, g, f_max, df, level=None, law=None, chain=None):
     return record(rng, freq, H, labels, labels[:2], level=level, chain=chain)
 
 
+@dataclass
+class _Hidden:
+    """What hiding one effect changed: the truth beam, the nominal model's theory, the measurement
+    chain, the excitation levels and the band's top [Hz]."""
+
+    beam: object
+    theory: str = "timoshenko"
+    chain: object = None
+    levels: list = field(default_factory=lambda: [None])
+    f_max: float = 0.0
+
+
+def _hide(effect: str, rng, g: dict, clamped, f_max: float, truth: dict) -> _Hidden:
+    """Hide ``effect`` in the truth (one beam effect or chain effect; ``truth`` records its values).
+    The random draws are those of the case generator, in its order."""
+    h = _Hidden(beam=clamped, f_max=f_max)
+    sign = lambda: float(rng.choice([-1.0, 1.0]))  # noqa: E731
+    if effect in ("joint_compliance", "joint_damping", "softening_joint"):
+        ins = float(rng.uniform(0.03, 0.05))
+        beam = h.beam = _truth_beam(g, insertion=ins)
+        if effect == "joint_damping":
+            kprime = float(np.exp(rng.uniform(np.log(1e12), np.log(3e12))))
+            beam.bed_loss = float(rng.uniform(0.3, 0.6))
+        else:
+            kprime = float(np.exp(rng.uniform(np.log(2e11), np.log(2e12))))
+        slope = float(rng.uniform(0.0, 1.5))     # contact pressure rising towards the mouth
+        beam.add_winkler_bed(-ins, 0.0, kprime,
+                             profile=lambda z: (1 + slope * (z + ins) / ins) / (1 + slope / 2))
+        truth.update(insertion_m=ins, bed_stiffness_n_per_m2=kprime, bed_loss=beam.bed_loss,
+                     pressure_slope=slope)
+        if effect == "softening_joint":
+            h.levels = [2.0, 10.0, 50.0]
+            h.f_max = 1.25 * float(np.sqrt(clamped._modes()[0][1]) / (2 * np.pi))
+    elif effect == "sensor_mass":
+        where = str(rng.choice(["tip", "flute"]))
+        mass = float(rng.uniform(0.003, 0.010))
+        size = 0.006
+        z = _points(g)[where][1]
+        a, b = (z - size, z) if where == "tip" else (z - size / 2, z + size / 2)
+        e = g["d"] / 2 + 0.003
+        rot = mass * (size**2 / 12 + 0.006**2 / 12 + e**2)
+        h.beam.add_distributed_mass(a, b, mass, rot)
+        truth.update(where=where, mass_kg=mass, rotary_inertia_kgm2=rot, size_m=size)
+    elif effect == "shear_rotary":
+        h.theory = "euler-bernoulli"
+        truth.update(nominal_theory=h.theory)
+    elif effect == "fluted_diameter":
+        delta = sign() * float(rng.uniform(0.05, 0.12))
+        d_i = g["d_flute"] * (1 + delta)
+        d_a = g["d_flute"] * (1 + 0.6 * delta)
+        h.beam.set_section(g["flute_start"], g["length"], np.pi * d_a**2 / 4, np.pi * d_i**4 / 64)
+        truth.update(relative_error=delta, inertia_diameter_m=d_i, area_diameter_m=d_a)
+    elif effect == "hysteretic_damping":
+        eta = float(rng.uniform(0.01, 0.03))
+        truth.update(eta=eta)
+    elif effect == "gain":
+        gain = 1.0 + sign() * float(rng.uniform(0.08, 0.25))
+        h.chain = lambda f: np.full(f.shape, gain)  # noqa: E731
+        truth.update(gain=gain)
+    elif effect == "delay":
+        # channel skew (a pure delay) behind an 8th-order Bessel anti-alias filter
+        # with its −3 dB point at 2.5 × the top of the band (group delay adds to the skew)
+        skew = float(rng.uniform(15e-6, 60e-6))
+        b_, a_ = scipy.signal.bessel(8, 2 * np.pi * 2.5 * h.f_max, analog=True, norm="mag")
+        h.chain = lambda f: scipy.signal.freqs(b_, a_, 2 * np.pi * f)[1] * np.exp(-2j * np.pi * f * skew)  # noqa: E731
+        w_, h_ = scipy.signal.freqs(b_, a_, [2 * np.pi * 1.0, 2 * np.pi * 2.0])
+        tau_filter = float(-(np.angle(h_[1]) - np.angle(h_[0])) / (w_[1] - w_[0]))
+        truth.update(delay_s=skew + tau_filter, skew_s=skew, filter_group_delay_s=tau_filter,
+                     filter="8th-order Bessel anti-alias filter, -3 dB at 2.5 f_max")
+    return h
+
+
+def _softening_law(rng, beam, g: dict, f12, levels: list, truth: dict):
+    """The micro-slip law of a softening joint: stiffness scale and loss factor against the amplitude
+    at the mouth, scaled on the truth beam's response at the middle level."""
+    r_mouth = beam.node_at(0.0)
+    ref = beam.receptance(np.linspace(0.7, 1.0, 200) * f12[0], [2 * r_mouth], [2 * beam.node_at(g["length"])])
+    a_ref = float(np.abs(ref).max()) * levels[1]
+    a_c = a_ref / float(rng.uniform(0.5, 2.0))
+    s_max = float(rng.uniform(0.4, 0.7))
+    eta_max = float(rng.uniform(0.2, 0.4))
+
+    def law(a, a_c=a_c, s_max=s_max, eta_max=eta_max, eta0=beam.bed_loss):
+        r = a / a_c
+        return 1.0 - s_max * r / (1.0 + r), eta0 + eta_max * r / (1.0 + r)
+
+    truth.update(slip_amplitude_m=a_c, max_softening=s_max, max_loss=eta_max, levels_n=levels)
+    return law
+
+
 def generate_case(effect: str, seed: int) -> BenchCase:
     """One seeded case with ``effect`` hidden (``"none"``: nothing hidden).
 
@@ -121,97 +213,26 @@ def generate_case(effect: str, seed: int) -> BenchCase:
     g = _geometry(rng)
     clamped = _truth_beam(g)
     alpha, beta, f12 = _rayleigh_for(clamped)
-    theory = "timoshenko"
     truth: dict = {"effect": effect}
-    beam = clamped
-    chain = None
-    levels = [None]
-    law = None
     df = float(rng.choice([2.5, 5.0]))
     f3 = float(np.sqrt(clamped._modes()[0][2]) / (2 * np.pi))
-    f_max = 1.25 * f3
-    sign = lambda: float(rng.choice([-1.0, 1.0]))  # noqa: E731
-
-    if effect in ("joint_compliance", "joint_damping", "softening_joint"):
-        ins = float(rng.uniform(0.03, 0.05))
-        beam = _truth_beam(g, insertion=ins)
-        if effect == "joint_damping":
-            kprime = float(np.exp(rng.uniform(np.log(1e12), np.log(3e12))))
-            beam.bed_loss = float(rng.uniform(0.3, 0.6))
-        else:
-            kprime = float(np.exp(rng.uniform(np.log(2e11), np.log(2e12))))
-        slope = float(rng.uniform(0.0, 1.5))     # contact pressure rising towards the mouth
-        beam.add_winkler_bed(-ins, 0.0, kprime,
-                             profile=lambda z: (1 + slope * (z + ins) / ins) / (1 + slope / 2))
-        truth.update(insertion_m=ins, bed_stiffness_n_per_m2=kprime, bed_loss=beam.bed_loss,
-                     pressure_slope=slope)
-        if effect == "softening_joint":
-            levels = [2.0, 10.0, 50.0]
-            f_max = 1.25 * float(np.sqrt(clamped._modes()[0][1]) / (2 * np.pi))
-    elif effect == "sensor_mass":
-        where = str(rng.choice(["tip", "flute"]))
-        mass = float(rng.uniform(0.003, 0.010))
-        size = 0.006
-        z = _points(g)[where][1]
-        a, b = (z - size, z) if where == "tip" else (z - size / 2, z + size / 2)
-        e = g["d"] / 2 + 0.003
-        rot = mass * (size**2 / 12 + 0.006**2 / 12 + e**2)
-        beam.add_distributed_mass(a, b, mass, rot)
-        truth.update(where=where, mass_kg=mass, rotary_inertia_kgm2=rot, size_m=size)
-    elif effect == "shear_rotary":
-        theory = "euler-bernoulli"
-        truth.update(nominal_theory=theory)
-    elif effect == "fluted_diameter":
-        delta = sign() * float(rng.uniform(0.05, 0.12))
-        d_i = g["d_flute"] * (1 + delta)
-        d_a = g["d_flute"] * (1 + 0.6 * delta)
-        beam.set_section(g["flute_start"], g["length"], np.pi * d_a**2 / 4, np.pi * d_i**4 / 64)
-        truth.update(relative_error=delta, inertia_diameter_m=d_i, area_diameter_m=d_a)
-    elif effect == "hysteretic_damping":
-        eta = float(rng.uniform(0.01, 0.03))
-        truth.update(eta=eta)
-    elif effect == "gain":
-        gain = 1.0 + sign() * float(rng.uniform(0.08, 0.25))
-        chain = lambda f: np.full(f.shape, gain)  # noqa: E731
-        truth.update(gain=gain)
-    elif effect == "delay":
-        # channel skew (a pure delay) behind an 8th-order Bessel anti-alias filter
-        # with its −3 dB point at 2.5 × the top of the band (group delay adds to the skew)
-        skew = float(rng.uniform(15e-6, 60e-6))
-        b_, a_ = scipy.signal.bessel(8, 2 * np.pi * 2.5 * f_max, analog=True, norm="mag")
-        chain = lambda f: scipy.signal.freqs(b_, a_, 2 * np.pi * f)[1] * np.exp(-2j * np.pi * f * skew)  # noqa: E731
-        w_, h_ = scipy.signal.freqs(b_, a_, [2 * np.pi * 1.0, 2 * np.pi * 2.0])
-        tau_filter = float(-(np.angle(h_[1]) - np.angle(h_[0])) / (w_[1] - w_[0]))
-        truth.update(delay_s=skew + tau_filter, skew_s=skew, filter_group_delay_s=tau_filter,
-                     filter="8th-order Bessel anti-alias filter, -3 dB at 2.5 f_max")
-
+    h = _hide(effect, rng, g, clamped, 1.25 * f3, truth)
+    beam, levels = h.beam, h.levels
     if effect == "hysteretic_damping":
         beam.rayleigh = (0.0, 0.0)
         beam.structural_loss = truth["eta"]
     else:
         beam.rayleigh = (alpha, beta)
-    if effect == "softening_joint":
-        r_mouth = beam.node_at(0.0)
-        ref = beam.receptance(np.linspace(0.7, 1.0, 200) * f12[0], [2 * r_mouth], [2 * beam.node_at(g["length"])])
-        a_ref = float(np.abs(ref).max()) * levels[1]
-        a_c = a_ref / float(rng.uniform(0.5, 2.0))
-        s_max = float(rng.uniform(0.4, 0.7))
-        eta_max = float(rng.uniform(0.2, 0.4))
-
-        def law(a, a_c=a_c, s_max=s_max, eta_max=eta_max, eta0=beam.bed_loss):
-            r = a / a_c
-            return 1.0 - s_max * r / (1.0 + r), eta0 + eta_max * r / (1.0 + r)
-
-        truth.update(slip_amplitude_m=a_c, max_softening=s_max, max_loss=eta_max, levels_n=levels)
+    law = _softening_law(rng, beam, g, f12, levels, truth) if effect == "softening_joint" else None
 
     recs = []
     noise = []
     for level in levels:
-        rec, rel = _measure(rng, beam, g, f_max, df, level=level, law=law, chain=chain)
+        rec, rel = _measure(rng, beam, g, h.f_max, df, level=level, law=law, chain=h.chain)
         recs.append(rec)
         noise.append(rel)
     truth.update(noise_rel=noise, resolution_hz=df, geometry=g)
-    model = _nominal(g, theory=theory, damping=(alpha, beta))
+    model = _nominal(g, theory=h.theory, damping=(alpha, beta))
     pmap = {node: name for name, (node, _) in _points(g).items()}
     return BenchCase(name=f"{effect}-{seed}", effects=(effect,), seed=seed, truth=truth,
                      model=model, recordings=tuple(recs), point_map=pmap)

@@ -18,9 +18,12 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from jointdb.errors import InputError
+from jointdb.fe._fields import FieldError, _number
+from jointdb.fe._synthesis import eigen_free
 
 if TYPE_CHECKING:  # pragma: no cover
-    from jointdb.fe._model import FEMatrices, Mesh
+    from jointdb.fe._matrices import FEMatrices
+    from jointdb.fe._mesh import Mesh
 
 __all__ = [
     "Ingredient",
@@ -32,31 +35,6 @@ __all__ = [
     "HystereticDamping",
     "FieldError",
 ]
-
-
-class FieldError(InputError):
-    """An :class:`InputError` about one named field (the model loader adds the path)."""
-
-    def __init__(self, field_name: str, reason: str) -> None:
-        self.field = field_name
-        self.reason = reason
-        super().__init__(f"{field_name}: {reason}")
-
-
-def _number(obj, name: str, *, minimum: float | None = None, strict: bool = False) -> float:
-    value = getattr(obj, name)
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
-        raise FieldError(name, f"must be a number, got {value!r}")
-    value = float(value)
-    if not math.isfinite(value):
-        raise FieldError(name, f"must be finite, got {value!r}")
-    if minimum is not None:
-        if strict and not value > minimum:
-            raise FieldError(name, f"must be > {minimum:g}, got {value:g}")
-        if not strict and value < minimum:
-            raise FieldError(name, f"must be >= {minimum:g}, got {value:g}")
-    object.__setattr__(obj, name, value)
-    return value
 
 
 class Ingredient:
@@ -281,8 +259,6 @@ class ModalDamping(Ingredient):
         return out
 
     def apply(self, matrices, mesh):
-        from jointdb.fe._synthesis import eigen_free  # late: avoids an import cycle
-
         free = ~matrices.fixed
         lam, phi, n_rb = eigen_free(matrices, None)
         omega = np.sqrt(np.clip(lam, 0.0, None))

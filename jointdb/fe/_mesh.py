@@ -1,8 +1,8 @@
-"""The mesh of a beam model: nodes, elements, DOF numbering, and interfaces.
+"""The mesh of a beam model: nodes, elements, DOF numbering.
 
 A plain stepped shaft is one chain of nodes along z, element ``e`` joining
 nodes ``e`` and ``e + 1``. Interfaces change that topology
-(:mod:`jointdb.fe._joints`): a joint splits the chain at a node into two
+(:mod:`jointdb.fe._joints`, whose ``interface_mesh`` builds such a mesh): a joint splits the chain at a node into two
 coincident nodes (sharing the DOFs of the directions it leaves rigid), and an
 inserted part adds its own chain of nodes over the overlap, bonded to the host
 (DOFs shared) or on a contact layer. The main chain's nodes always come first,
@@ -16,10 +16,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from jointdb.errors import InputError
-from jointdb.fe._ingredients import FieldError
 from jointdb.frf import DIRECTIONS, Dof
 
-__all__ = ["Mesh", "PLANAR_DIRECTIONS", "interface_mesh"]
+__all__ = ["Mesh", "PLANAR_DIRECTIONS"]
 
 PLANAR_DIRECTIONS = ("x", "ry")
 
@@ -133,93 +132,3 @@ class Mesh:
 def _merge_tol(length: float, max_element_length: float = 0.0) -> float:
     """Positions closer than this share a node (avoids ill-conditioned sliver elements)."""
     return max(1e-9 * max(abs(length), 1e-3), 1e-3 * max_element_length)
-
-
-def interface_mesh(model, nodes: np.ndarray, seg: np.ndarray, tol: float, topo: list) -> Mesh:
-    """The mesh of ``model`` with joints split and inserted parts added (see :mod:`jointdb.fe._joints`).
-
-    ``nodes`` are the main chain's positions, ``seg`` its elements' segment indices, ``topo`` the
-    ingredients that change the topology (in model order).
-    """
-    from jointdb.fe._joints import Insertion
-
-    n_main = nodes.size
-    length = float(nodes[-1])
-    nd = len(PLANAR_DIRECTIONS if model.kind == "planar" else DIRECTIONS)
-    dirs = PLANAR_DIRECTIONS if model.kind == "planar" else DIRECTIONS
-    positions = list(nodes)
-    elements = [[e, e + 1] for e in range(n_main - 1)]
-    section = list(seg)
-    sections = list(model.segments)
-    splits, contacts, tied = [], [], []        # tied: (new node, staying node, directions shared)
-    split_at: dict[int, str] = {}
-
-    def main_node(z, what):
-        i = int(np.argmin(np.abs(nodes - z)))
-        if abs(nodes[i] - z) > tol:  # pragma: no cover - every declared position is a node
-            raise InputError(f"{what} at {z:g} m is not a mesh node")
-        return i
-
-    index = {id(ing): i for i, ing in enumerate(model.ingredients)}
-    for ing in topo:
-        where = f"ingredients[{index[id(ing)]}]"
-        z = ing.split_position()
-        what = (f"insertion {ing.start:g}–{ing.end:g} m (mouth at {ing.mouth:g} m)" if isinstance(ing, Insertion)
-                else f"joint at {ing.positions()[0]:g} m")
-        if z is not None:
-            j = main_node(z, what)
-            if j == 0 or j == n_main - 1:
-                raise FieldError(where, f"{what}: an interface must be inside the model (0 < z < {length:g} m), "
-                                        "not at its end")
-            if j in split_at:
-                raise FieldError(where, f"{what}: the model already has an interface there ({split_at[j]})")
-            split_at[j] = what
-            new = len(positions)
-            positions.append(float(nodes[j]))
-            right = not isinstance(ing, Insertion) or ing.joined_at == "end"
-            if right:
-                elements[j][0] = new          # element j: (j, j+1) -> (new, j+1)
-            else:
-                elements[j - 1][1] = new      # element j-1: (j-1, j) -> (j-1, new)
-            splits.append((ing, j, new))
-            shared = tuple(d for d in dirs if d not in ing.free_directions()) if not isinstance(ing, Insertion) \
-                else ()
-            tied.append((new, j, shared))
-        if isinstance(ing, Insertion):
-            lo, hi = main_node(ing.start, what), main_node(ing.end, what)
-            host = list(range(lo, hi + 1))
-            k_sec = len(sections)
-            sections.append(ing.section)
-            if ing.rigid:
-                inner = host
-            else:
-                mouth = hi if ing.joined_at == "end" else lo
-                inner = []
-                for h in host:
-                    if h == mouth:
-                        inner.append(splits[-1][2])
-                    else:
-                        inner.append(len(positions))
-                        positions.append(float(nodes[h]))
-            for a, b in zip(inner[:-1], inner[1:]):
-                elements.append([a, b])
-                section.append(k_sec)
-            if not ing.rigid:
-                zs = nodes[host]
-                trib = np.zeros(len(host))
-                dz = np.diff(zs)
-                trib[:-1] += dz / 2
-                trib[1:] += dz / 2
-                pairs = tuple(zip(inner, host, (float(t) for t in trib)))
-                elems = tuple((inner[k], inner[k + 1], host[k], host[k + 1], float(dz[k])) for k in range(len(dz)))
-                contacts.append((ing, pairs, elems))
-    n_nodes = len(positions)
-    table = np.arange(n_nodes * nd).reshape(n_nodes, nd)
-    for new, j, shared in tied:
-        for d in shared:
-            k = dirs.index(d)
-            table[new, k] = table[j, k]
-    _, table = np.unique(table, return_inverse=True)
-    return Mesh(node_positions=np.asarray(positions), element_segment=np.asarray(section), kind=model.kind, tol=tol,
-                element_nodes=np.asarray(elements), sections=tuple(sections), n_main=n_main,
-                dof_table=table.reshape(n_nodes, nd), splits=tuple(splits), contacts=tuple(contacts))

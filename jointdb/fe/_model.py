@@ -5,64 +5,25 @@ from __future__ import annotations
 import dataclasses
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
 from jointdb.errors import InputError
 from jointdb.fe._elements import bar_matrices, bending_matrices, section_properties, shear_coefficient
-from jointdb.fe._ingredients import FieldError, Ingredient, _number
-from jointdb.fe._materials import Material, get_material
-from jointdb.fe._mesh import Mesh, _merge_tol, interface_mesh
+from jointdb.fe._fields import FieldError, _number
+from jointdb.fe._ingredients import Ingredient
+from jointdb.fe._joints import interface_mesh
+from jointdb.fe._matrices import FEMatrices, Modes
+from jointdb.fe._mesh import Mesh, _merge_tol
+from jointdb.fe._segments import Segment
+from jointdb.fe._synthesis import frf_direct, frf_modal, natural_modes
 from jointdb.frf import FRF, Dof
 
 __all__ = ["Segment", "NamedPoint", "Mesh", "FEMatrices", "Modes", "BeamModel", "THEORIES", "KINDS"]
 
 THEORIES = ("timoshenko", "euler-bernoulli")
 KINDS = ("planar", "frame3d")
-
-
-@dataclass(frozen=True)
-class Segment:
-    """A uniform (hollow) circular shaft segment.
-
-    Parameters
-    ----------
-    length, outer_diameter, inner_diameter
-        Metres; ``length > 0``, ``outer_diameter > 0``, ``0 <= inner_diameter < outer_diameter``.
-    material
-        A material name from :data:`MATERIALS` or a :class:`Material`.
-
-    Raises
-    ------
-    InputError
-        Naming the field that is wrong.
-    """
-
-    length: float
-    outer_diameter: float
-    inner_diameter: float = 0.0
-    material: "str | Material" = "steel"
-
-    def __post_init__(self) -> None:
-        _number(self, "length", minimum=0.0, strict=True)
-        _number(self, "outer_diameter", minimum=0.0, strict=True)
-        _number(self, "inner_diameter", minimum=0.0)
-        if self.inner_diameter >= self.outer_diameter:
-            raise FieldError(
-                "inner_diameter",
-                f"must be < outer_diameter ({self.outer_diameter:g} m), got {self.inner_diameter:g}",
-            )
-        try:
-            get_material(self.material)
-        except InputError as exc:
-            raise FieldError("material", str(exc)) from None
-        if isinstance(self.material, str):
-            object.__setattr__(self, "material", self.material.strip().lower())
-
-    @property
-    def mat(self) -> Material:
-        return get_material(self.material)
 
 
 @dataclass(frozen=True)
@@ -90,46 +51,6 @@ class NamedPoint:
         if isinstance(self.node, bool) or not isinstance(self.node, (int, np.integer)) or self.node < 0:
             raise FieldError("node", f"must be an integer >= 0, got {self.node!r}")
         object.__setattr__(self, "node", int(self.node))
-
-
-@dataclass(frozen=True, eq=False)
-class FEMatrices:
-    """Assembled matrices over all mesh DOFs (SI).
-
-    ``K`` stiffness, ``M`` mass, ``C`` viscous damping, ``K_loss`` the
-    hysteretic part (dynamic stiffness ``K + i K_loss + iωC − ω²M``), all
-    ``(n_dof, n_dof)``; ``fixed`` marks constrained DOFs; ``dof_labels`` are
-    ``Dof(mesh node index, direction)``; ``node_positions`` in metres.
-    """
-
-    K: np.ndarray
-    M: np.ndarray
-    C: np.ndarray
-    K_loss: np.ndarray
-    dof_labels: tuple[Dof, ...]
-    node_positions: np.ndarray
-    fixed: np.ndarray
-    #: the full eigen-solution of the constrained (K, M) problem when an ingredient already
-    #: computed it (modal damping does), with the arrays it belongs to; reused only while
-    #: ``K``, ``M`` and ``fixed`` are those very arrays (see ``jointdb.fe._synthesis.eigen_free``)
-    eigen_solution: tuple | None = field(default=None, repr=False)
-
-    @property
-    def free(self) -> np.ndarray:
-        return ~self.fixed
-
-
-@dataclass(frozen=True, eq=False)
-class Modes:
-    """Undamped natural frequencies [Hz] ``(n,)`` and mass-normalised shapes ``(n_dof, n)``.
-
-    Rigid-body modes have frequency 0 exactly; shapes are zero on fixed DOFs.
-    """
-
-    freq_hz: np.ndarray
-    shapes: np.ndarray
-    dof_labels: tuple[Dof, ...]
-    n_rigid: int = 0
 
 
 def _as_tuple(value, what: str) -> tuple:
@@ -372,8 +293,6 @@ class BeamModel:
         Modes
             ``freq_hz (n,)``, ``shapes (n_dof, n)`` over all mesh DOFs.
         """
-        from jointdb.fe._synthesis import natural_modes
-
         return natural_modes(self.assemble(), n)
 
     def frf(
@@ -416,8 +335,6 @@ class BeamModel:
         InputError
             Unknown point/direction/method; 0 Hz on a model with rigid-body modes.
         """
-        from jointdb.fe._synthesis import frf_direct, frf_modal
-
         mesh = self.mesh()
         names = [p.name for p in self.points] if points is None else list(points)
         if not names:

@@ -9,6 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from jointdb.errors import InputError, NumericalError
+from jointdb.fe._matrices import Modes
 
 __all__ = ["eigen_free", "rigid_body_count", "rigid_body_modes", "natural_modes", "frf_direct", "frf_modal"]
 
@@ -128,8 +129,6 @@ def natural_modes(matrices, n: int | None = None):
     -------
     Modes
     """
-    from jointdb.fe._model import Modes
-
     if n is not None and (isinstance(n, bool) or int(n) < 1):
         raise InputError(f"number of modes must be >= 1, got {n!r}")
     lam, phi, n_rb = eigen_free(matrices, None if n is None else int(n))

@@ -83,53 +83,9 @@ def frf_from_records(
     if fill not in ("error", "reciprocity"):
         raise InputError(f"fill must be 'error' or 'reciprocity', got {fill!r}")
     fq = Quantity.parse(file_quantity) if file_quantity is not None else None
-    used: list[UffRecord] = []
-    skipped: list[str] = []
-    for r in records:
-        if r.function_type == 4 or (r.function_type == 0 and (r.quantity is not None or fq is not None)):
-            used.append(r)
-        else:
-            skipped.append(f"dataset #{r.index} ({r.label}): {r.function_name} (function type "
-                           f"{r.function_type}) is not an FRF; skipped")
-    if not used:
-        kinds = sorted({f"{r.function_name} ({r.function_type})" for r in records}) or ["none"]
-        raise InputError(f"{source}: no FRF records (function type 4) among the dataset-58 records; "
-                         f"found: {', '.join(kinds)}")
-    notes: list[str] = []
-    quantities: list[Quantity] = []
-    for r in used:
-        where = f"{source}: dataset #{r.index} ({r.label})"
-        if r.response is None or r.reference is None:
-            raise InputError(f"{where}: a scalar DOF (direction code 0) cannot be placed in an FRF matrix")
-        q = r.quantity
-        if q is None:
-            if fq is None:
-                raise InputError(
-                    f"{where}: the data-type codes (numerator {r.data_types[1]}, denominator "
-                    f"{r.data_types[2]}) do not say receptance, mobility or accelerance; pass file_quantity="
-                )
-            q = fq
-            notes.append(f"dataset #{r.index} ({r.label}): quantity {fq.value} taken from file_quantity")
-        elif fq is not None and q is not fq:
-            raise InputError(f"{where}: the file says {q.value} but file_quantity={fq.value}")
-        quantities.append(q)
-        if r.function_type == 0:
-            notes.append(f"dataset #{r.index} ({r.label}): function type 0 (general) read as an FRF "
-                         "(response over force by its data-type codes)")
-        notes.extend(f"dataset #{r.index} ({r.label}): {c}" for c in r.conversions)
-    # one grid
-    ref = used[0]
-    grid = ref.freq
-    for r in used[1:]:
-        same = r.freq.shape == grid.shape and np.allclose(
-            r.freq, grid, rtol=0.0, atol=_GRID_RTOL * max(abs(grid[-1]), 1.0)
-        )
-        if not same:
-            raise InputError(
-                f"{source}: inconsistent frequency grids: dataset #{r.index} ({r.label}) has {r.freq.size} lines "
-                f"{r.freq[0]:g}–{r.freq[-1]:g} Hz, dataset #{ref.index} ({ref.label}) has {grid.size} lines "
-                f"{grid[0]:g}–{grid[-1]:g} Hz; resample them onto one grid first"
-            )
+    used, skipped = _frf_records(records, fq, source)
+    quantities, notes = _quantities(used, fq, source)
+    grid = _common_grid(used, source)
     # one quantity per matrix
     file_q = quantities[0]
     if any(q is not file_q for q in quantities):
@@ -137,20 +93,27 @@ def frf_from_records(
             mixed = sorted({q.value for q in quantities})
             raise InputError(f"{source}: the FRF records mix quantities ({', '.join(mixed)}); "
                              "pass quantity= to convert them to one")
-    outputs: list[Dof] = []
-    inputs: list[Dof] = []
-    where_pair: dict[tuple[Dof, Dof], UffRecord] = {}
-    for r in used:
-        key = (r.response, r.reference)
-        if key in where_pair:
-            raise InputError(f"{source}: the pair {r.label} appears twice (datasets #{where_pair[key].index} "
-                             f"and #{r.index}); remove one")
-        where_pair[key] = r  # type: ignore[index]
-        if r.response not in outputs:
-            outputs.append(r.response)  # type: ignore[arg-type]
-        if r.reference not in inputs:
-            inputs.append(r.reference)  # type: ignore[arg-type]
+    outputs, inputs, where_pair = _layout(used, source)
     target = Quantity.parse(quantity) if quantity is not None else file_q
+    values, missing = _matrix_values(used, quantities, target, grid, outputs, inputs, where_pair, fill, source,
+                                     notes)
+    if missing:
+        raise InputError(
+            f"{source}: the FRF matrix {len(outputs)} outputs x {len(inputs)} inputs is incomplete; "
+            f"missing {len(missing)} pair(s) response/reference: {_pairs(missing)}"
+            + ("" if fill == "reciprocity" else " (fill='reciprocity' may complete it)")
+        )
+    try:
+        frf = FRF(grid, values, tuple(outputs), tuple(inputs), target)
+    except InputError as exc:
+        raise InputError(f"{source}: {exc}") from None
+    return UffImport(frf, tuple(used), tuple(skipped), tuple(notes))
+
+
+def _matrix_values(used, quantities, target: Quantity, grid, outputs, inputs, where_pair, fill: str, source: str,
+                   notes: list[str]):
+    """The FRF matrix in the ``target`` quantity (``(iω)^p`` conversions noted in ``notes``), with
+    missing pairs filled by reciprocity when ``fill`` says so; and the pairs still missing."""
     values = np.zeros((grid.size, len(outputs), len(inputs)), dtype=np.complex128)
     oi = {d: k for k, d in enumerate(outputs)}
     ii = {d: k for k, d in enumerate(inputs)}
@@ -177,17 +140,86 @@ def frf_from_records(
             else:
                 still.append((o, i))
         missing = still
-    if missing:
-        raise InputError(
-            f"{source}: the FRF matrix {len(outputs)} outputs x {len(inputs)} inputs is incomplete; "
-            f"missing {len(missing)} pair(s) response/reference: {_pairs(missing)}"
-            + ("" if fill == "reciprocity" else " (fill='reciprocity' may complete it)")
+    return values, missing
+
+
+def _frf_records(records: Sequence[UffRecord], fq: Quantity | None, source: str):
+    """The records that are FRFs, and a note for each one skipped (InputError when none is)."""
+    used: list[UffRecord] = []
+    skipped: list[str] = []
+    for r in records:
+        if r.function_type == 4 or (r.function_type == 0 and (r.quantity is not None or fq is not None)):
+            used.append(r)
+        else:
+            skipped.append(f"dataset #{r.index} ({r.label}): {r.function_name} (function type "
+                           f"{r.function_type}) is not an FRF; skipped")
+    if not used:
+        kinds = sorted({f"{r.function_name} ({r.function_type})" for r in records}) or ["none"]
+        raise InputError(f"{source}: no FRF records (function type 4) among the dataset-58 records; "
+                         f"found: {', '.join(kinds)}")
+    return used, skipped
+
+
+def _quantities(used: list[UffRecord], fq: Quantity | None, source: str):
+    """Each record's quantity (its codes, else ``file_quantity``) and the notes on how it was read."""
+    notes: list[str] = []
+    quantities: list[Quantity] = []
+    for r in used:
+        where = f"{source}: dataset #{r.index} ({r.label})"
+        if r.response is None or r.reference is None:
+            raise InputError(f"{where}: a scalar DOF (direction code 0) cannot be placed in an FRF matrix")
+        q = r.quantity
+        if q is None:
+            if fq is None:
+                raise InputError(
+                    f"{where}: the data-type codes (numerator {r.data_types[1]}, denominator "
+                    f"{r.data_types[2]}) do not say receptance, mobility or accelerance; pass file_quantity="
+                )
+            q = fq
+            notes.append(f"dataset #{r.index} ({r.label}): quantity {fq.value} taken from file_quantity")
+        elif fq is not None and q is not fq:
+            raise InputError(f"{where}: the file says {q.value} but file_quantity={fq.value}")
+        quantities.append(q)
+        if r.function_type == 0:
+            notes.append(f"dataset #{r.index} ({r.label}): function type 0 (general) read as an FRF "
+                         "(response over force by its data-type codes)")
+        notes.extend(f"dataset #{r.index} ({r.label}): {c}" for c in r.conversions)
+    return quantities, notes
+
+
+def _common_grid(used: list[UffRecord], source: str) -> np.ndarray:
+    """The records' one frequency grid (InputError naming two records that differ)."""
+    ref = used[0]
+    grid = ref.freq
+    for r in used[1:]:
+        same = r.freq.shape == grid.shape and np.allclose(
+            r.freq, grid, rtol=0.0, atol=_GRID_RTOL * max(abs(grid[-1]), 1.0)
         )
-    try:
-        frf = FRF(grid, values, tuple(outputs), tuple(inputs), target)
-    except InputError as exc:
-        raise InputError(f"{source}: {exc}") from None
-    return UffImport(frf, tuple(used), tuple(skipped), tuple(notes))
+        if not same:
+            raise InputError(
+                f"{source}: inconsistent frequency grids: dataset #{r.index} ({r.label}) has {r.freq.size} lines "
+                f"{r.freq[0]:g}–{r.freq[-1]:g} Hz, dataset #{ref.index} ({ref.label}) has {grid.size} lines "
+                f"{grid[0]:g}–{grid[-1]:g} Hz; resample them onto one grid first"
+            )
+    return grid
+
+
+def _layout(used: list[UffRecord], source: str):
+    """Outputs and inputs in order of first appearance, and the record of each (output, input) pair."""
+    outputs: list[Dof] = []
+    inputs: list[Dof] = []
+    where_pair: dict[tuple[Dof, Dof], UffRecord] = {}
+    for r in used:
+        key = (r.response, r.reference)
+        if key in where_pair:
+            raise InputError(f"{source}: the pair {r.label} appears twice (datasets #{where_pair[key].index} "
+                             f"and #{r.index}); remove one")
+        where_pair[key] = r  # type: ignore[index]
+        if r.response not in outputs:
+            outputs.append(r.response)  # type: ignore[arg-type]
+        if r.reference not in inputs:
+            inputs.append(r.reference)  # type: ignore[arg-type]
+    return outputs, inputs, where_pair
 
 
 def import_uff58(

@@ -154,12 +154,8 @@ class _UnitSystem:
     force: float
 
 
-def _record_from_dict(d: dict, index: int, path: Path, units: _UnitSystem | None, assume_si: bool) -> UffRecord:
-    where = f"{path}: dataset #{index}"
-    func_type = int(d.get("func_type", 0))
-    response, rsign = _direction(d.get("rsp_node"), d.get("rsp_dir"), "response", where)
-    reference, fsign = _direction(d.get("ref_node"), d.get("ref_dir"), "reference", where)
-    where = f"{where} ({response or 'scalar'}/{reference or 'scalar'})"
+def _arrays(d: dict, where: str):
+    """The abscissa, the ordinate and the ordinate data type of a record, checked."""
     x = np.asarray(d.get("x"), dtype=np.float64)
     y = np.asarray(d.get("data"))
     num_pts = int(d.get("num_pts", -1))
@@ -176,25 +172,11 @@ def _record_from_dict(d: dict, index: int, path: Path, units: _UnitSystem | None
     ord_type = int(d.get("ord_data_type", 0))
     if ord_type not in (2, 4, 5, 6):
         raise InputError(f"{where}: unknown ordinate data type {ord_type} (expected 2, 4, 5 or 6)")
-    types = (int(d.get("abscissa_spec_data_type", 0)), int(d.get("ordinate_spec_data_type", 0)),
-             int(d.get("orddenom_spec_data_type", 0)))
-    labels = (str(d.get("abscissa_axis_units_lab", "") or ""), str(d.get("ordinate_axis_units_lab", "") or ""),
-              str(d.get("orddenom_axis_units_lab", "") or ""))
-    notes: list[str] = []
-    values = y.astype(np.complex128)
-    if ord_type in (2, 4) and func_type in (0, 4):
-        notes.append("real-valued ordinate read as complex with zero imaginary part")
-    sign = rsign * fsign
-    if sign < 0:
-        values = -values
-    if rsign < 0 or fsign < 0:
-        flipped = [f"response {response} (code {d.get('rsp_dir')})"] if rsign < 0 else []
-        flipped += [f"reference {reference} (code {d.get('ref_dir')})"] if fsign < 0 else []
-        notes.append(
-            "negative direction " + " and ".join(flipped) + " relabelled positive"
-            + ("; values negated" if sign < 0 else "; signs cancel, values unchanged")
-        )
-    # quantity from the data-type codes
+    return x, y, ord_type
+
+
+def _quantity(types: tuple, func_type: int, where: str, notes: list[str]) -> Quantity | None:
+    """The FRF quantity the data-type codes say (None: not an FRF, or not known), noting assumptions."""
     num, den = types[1], types[2]
     quantity = U.UFF_CODE_TO_QUANTITY.get(num)
     if num == 13 and den in (8, 11, 12):
@@ -216,6 +198,35 @@ def _record_from_dict(d: dict, index: int, path: Path, units: _UnitSystem | None
         notes.append("denominator data type unknown (code 0); assumed excitation force")
     if func_type == 0 and quantity is not None and den == 0:
         quantity = None  # a general function with no denominator is not an FRF
+    return quantity
+
+
+def _record_from_dict(d: dict, index: int, path: Path, units: _UnitSystem | None, assume_si: bool) -> UffRecord:
+    where = f"{path}: dataset #{index}"
+    func_type = int(d.get("func_type", 0))
+    response, rsign = _direction(d.get("rsp_node"), d.get("rsp_dir"), "response", where)
+    reference, fsign = _direction(d.get("ref_node"), d.get("ref_dir"), "reference", where)
+    where = f"{where} ({response or 'scalar'}/{reference or 'scalar'})"
+    x, y, ord_type = _arrays(d, where)
+    types = (int(d.get("abscissa_spec_data_type", 0)), int(d.get("ordinate_spec_data_type", 0)),
+             int(d.get("orddenom_spec_data_type", 0)))
+    labels = (str(d.get("abscissa_axis_units_lab", "") or ""), str(d.get("ordinate_axis_units_lab", "") or ""),
+              str(d.get("orddenom_axis_units_lab", "") or ""))
+    notes: list[str] = []
+    values = y.astype(np.complex128)
+    if ord_type in (2, 4) and func_type in (0, 4):
+        notes.append("real-valued ordinate read as complex with zero imaginary part")
+    sign = rsign * fsign
+    if sign < 0:
+        values = -values
+    if rsign < 0 or fsign < 0:
+        flipped = [f"response {response} (code {d.get('rsp_dir')})"] if rsign < 0 else []
+        flipped += [f"reference {reference} (code {d.get('ref_dir')})"] if fsign < 0 else []
+        notes.append(
+            "negative direction " + " and ".join(flipped) + " relabelled positive"
+            + ("; values negated" if sign < 0 else "; signs cancel, values unchanged")
+        )
+    quantity = _quantity(types, func_type, where, notes)
     # abscissa
     freq = x
     if types[0] not in (18, 0) and func_type in (0, 4):

@@ -166,19 +166,16 @@ def turning_lobes(
     g = kf * oriented_frf(rec, orientation)
     lobes = lobes_from_transfer(rec.freq, g, 1, max_lobes)
     speeds = _default_speeds(lobes, 1) if spindle_speed_rpm is None else spindle_speeds(spindle_speed_rpm)
+    return _hopf_envelope("turning", lobes, speeds, {
+        "kf": kf, "orientation": None if orientation is None else np.asarray(orientation).tolist(),
+        "absolute_limit_m": lim, "absolute_limit_freq_hz": fc})
+
+
+def _hopf_envelope(method: str, lobes, speeds: np.ndarray, info: dict) -> LobeResult:
+    """The envelope of frequency-domain ``lobes`` at ``speeds`` (every limit a Hopf one) as a result."""
     depth, freq, num = envelope(lobes, speeds)
     kind = np.where(np.isfinite(depth), "hopf", "")
-    return LobeResult(
-        "turning",
-        speeds,
-        depth,
-        freq,
-        num,
-        kind,
-        lobes,
-        {"kf": kf, "orientation": None if orientation is None else np.asarray(orientation).tolist(),
-         "absolute_limit_m": lim, "absolute_limit_freq_hz": fc},
-    )
+    return LobeResult(method, speeds, depth, freq, num, kind, lobes, info)
 
 
 def tool_tip_matrix(frf: FRF, frf_y: FRF | None = None, cross_terms: bool = False) -> tuple[np.ndarray, np.ndarray, tuple[bool, bool]]:
@@ -302,16 +299,6 @@ def milling_lobes_zoa(
     speeds = (
         _default_speeds(lobes, cut.n_teeth) if spindle_speed_rpm is None else spindle_speeds(spindle_speed_rpm)
     )
-    depth, fc, num = envelope(tuple(lobes), speeds)
-    kind = np.where(np.isfinite(depth), "hopf", "")
-    return LobeResult(
-        "milling-zoa",
-        speeds,
-        depth,
-        fc,
-        num,
-        kind,
-        tuple(lobes),
-        {"n_teeth": cut.n_teeth, "kt": cut.kt, "kr": cut.kr, "radial_immersion": cut.radial_immersion,
-         "down_milling": cut.down_milling, "cross_terms": cross_terms, "mean_directional_matrix": hbar.tolist()},
-    )
+    return _hopf_envelope("milling-zoa", tuple(lobes), speeds, {
+        "n_teeth": cut.n_teeth, "kt": cut.kt, "kr": cut.kr, "radial_immersion": cut.radial_immersion,
+        "down_milling": cut.down_milling, "cross_terms": cross_terms, "mean_directional_matrix": hbar.tolist()})

@@ -12,6 +12,18 @@ def full_clamps(model) -> list:
     return [i for i in model.ingredients if isinstance(i, Clamp) and i.directions is None]
 
 
+def single_clamp(model):
+    """The model's one full clamp, or None (no clamp, or several): where a joint at the clamp sits."""
+    clamps = full_clamps(model)
+    return clamps[0] if len(clamps) == 1 else None
+
+
+def first_mode_rad_s(ctx) -> float:
+    """ω₁ [rad/s], the nominal model's first natural frequency (1.0 when none is known): where a joint's
+    loss factor is matched by its viscous damping."""
+    return 2 * np.pi * float(ctx.modes_hz[0]) if len(ctx.modes_hz) else 1.0
+
+
 def bending_stiffness_at(model, position: float) -> float:
     """E·I [N·m²] of the segment at ``position``."""
     z = 0.0

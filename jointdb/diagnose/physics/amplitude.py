@@ -11,8 +11,8 @@ offered when there are at least two levels.
 
 from __future__ import annotations
 
-from jointdb.diagnose.physics import register
-from jointdb.diagnose.physics._util import full_clamps, without_ingredient
+from jointdb.diagnose.physics._candidate import register
+from jointdb.diagnose.physics._util import first_mode_rad_s, single_clamp, without_ingredient
 from jointdb.diagnose.physics.joint import CompliantJoint
 from jointdb.diagnose.physics.microslip import _law_params, _state
 
@@ -54,10 +54,7 @@ class AmplitudeDependentJoint(CompliantJoint):
 
 @register
 def _factory(ctx):
-    import numpy as np
-
-    clamps = full_clamps(ctx.model)
-    if ctx.n_levels < 2 or len(clamps) != 1:
+    clamp = single_clamp(ctx.model)
+    if ctx.n_levels < 2 or clamp is None:
         return []
-    omega1 = 2 * np.pi * float(ctx.modes_hz[0]) if len(ctx.modes_hz) else 1.0
-    return [AmplitudeDependentJoint(ctx.model, clamps[0], ctx.n_levels, ctx.levels, omega1)]
+    return [AmplitudeDependentJoint(ctx.model, clamp, ctx.n_levels, ctx.levels, first_mode_rad_s(ctx))]

@@ -20,10 +20,8 @@ from __future__ import annotations
 
 import dataclasses
 
-import numpy as np
-
-from jointdb.diagnose.physics import Candidate, Param, register
-from jointdb.diagnose.physics._util import AtClamp, full_clamps, without_ingredient
+from jointdb.diagnose.physics._candidate import Candidate, Param, register
+from jointdb.diagnose.physics._util import AtClamp, first_mode_rad_s, single_clamp, without_ingredient
 from jointdb.fe import Support
 
 #: Springs spread over the insertion length (evenly, at the centres of N equal parts).
@@ -89,11 +87,10 @@ def _shifted(model, shift, segments):
 
 @register
 def _factory(ctx):
-    clamps = full_clamps(ctx.model)
-    if len(clamps) != 1:
+    clamp = single_clamp(ctx.model)
+    if clamp is None:
         return []
-    clamp = clamps[0]
     if not (clamp.position <= 1e-12 or abs(clamp.position - ctx.model.length) <= 1e-9):
         return []
-    omega1 = 2 * np.pi * float(ctx.modes_hz[0]) if len(ctx.modes_hz) else 1.0
+    omega1 = first_mode_rad_s(ctx)
     return [DistributedJoint(ctx.model, clamp, omega1), DistributedJoint(ctx.model, clamp, omega1, damped=True)]

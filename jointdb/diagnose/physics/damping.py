@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import dataclasses
 
-from jointdb.diagnose.physics import Candidate, Param, register
+from jointdb.diagnose.physics._candidate import Candidate, Param, register
 from jointdb.fe import HystereticDamping, ModalDamping, RayleighDamping
 
 VISCOUS = (RayleighDamping, ModalDamping)

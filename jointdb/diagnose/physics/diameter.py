@@ -14,7 +14,8 @@ from __future__ import annotations
 
 import dataclasses
 
-from jointdb.diagnose.physics import Candidate, Param, register
+from jointdb.diagnose.physics._candidate import Candidate, Param, register
+from jointdb.diagnose.physics._util import full_clamps
 from jointdb.fe import Material, get_material
 
 
@@ -55,8 +56,6 @@ PLAIN_BAND = 0.03
 
 def _free_end_segment(model) -> int | None:
     """Index of the segment at the free end (the end farthest from the clamps), if the model is clamped."""
-    from jointdb.diagnose.physics._util import full_clamps
-
     clamps = full_clamps(model)
     if not clamps:
         return None

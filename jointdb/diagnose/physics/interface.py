@@ -43,7 +43,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.optimize
 
-from jointdb.diagnose.physics import Candidate, Param, register
+from jointdb.diagnose.physics._candidate import Candidate, Param, register
 from jointdb.diagnose.physics._util import full_clamps
 from jointdb.fe import Contact, Insertion, Joint, get_material
 

@@ -9,8 +9,14 @@ dampers with one joint loss factor η (``c = η k / ω₁``).
 
 from __future__ import annotations
 
-from jointdb.diagnose.physics import Candidate, Param, register
-from jointdb.diagnose.physics._util import AtClamp, bending_stiffness_at, full_clamps, without_ingredient
+from jointdb.diagnose.physics._candidate import Candidate, Param, register
+from jointdb.diagnose.physics._util import (
+    AtClamp,
+    bending_stiffness_at,
+    first_mode_rad_s,
+    single_clamp,
+    without_ingredient,
+)
 from jointdb.fe import Clamp, Support
 
 
@@ -72,12 +78,9 @@ class DampedJoint(CompliantJoint):
 
 @register
 def _factory(ctx):
-    import numpy as np
-
-    clamps = full_clamps(ctx.model)
-    if len(clamps) != 1:
+    clamp = single_clamp(ctx.model)
+    if clamp is None:
         return []
-    clamp = clamps[0]
-    omega1 = 2 * np.pi * float(ctx.modes_hz[0]) if len(ctx.modes_hz) else 1.0
+    omega1 = first_mode_rad_s(ctx)
     return [CompliantJoint(ctx.model, clamp, ("x",)), CompliantJoint(ctx.model, clamp, ("ry",)),
             CompliantJoint(ctx.model, clamp, ("x", "ry")), DampedJoint(ctx.model, clamp, omega1)]

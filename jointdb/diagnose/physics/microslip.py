@@ -32,7 +32,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from jointdb.diagnose.physics import Param, register
+from jointdb.diagnose.physics._candidate import Param, register
 from jointdb.diagnose.physics.interface import InterfaceContact, InterfaceJoint, Site, interface_sites
 
 __all__ = ["MicroslipJoint", "MicroslipContact", "slip_amplitude"]

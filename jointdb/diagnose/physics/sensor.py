@@ -8,7 +8,7 @@ and mass with rotary inertia.
 
 from __future__ import annotations
 
-from jointdb.diagnose.physics import Candidate, Param, register
+from jointdb.diagnose.physics._candidate import Candidate, Param, register
 from jointdb.fe import PointMass
 
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from jointdb.diagnose.physics import Candidate, Param, register
+from jointdb.diagnose.physics._candidate import Candidate, Param, register
 from jointdb.fe import Clamp, Support
 
 

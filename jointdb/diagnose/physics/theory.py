@@ -8,7 +8,7 @@ parameter: the candidate switches the theory.
 
 from __future__ import annotations
 
-from jointdb.diagnose.physics import Candidate, register
+from jointdb.diagnose.physics._candidate import Candidate, register
 
 
 class ShearRotary(Candidate):

@@ -1,0 +1,163 @@
+"""What a candidate physics is: its parameters, the context it is offered in, the
+base class and the pairing of two, and the registry of factories (see the package
+docstring for how to add one)."""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["Param", "Context", "Candidate", "Combination", "register", "candidates_for", "REGISTRY"]
+
+
+@dataclass(frozen=True)
+class Param:
+    """A fitted parameter: SI ``unit``, bounds, start; ``log`` = fitted in log space.
+
+    ``show``/``show_unit`` convert for display (e.g. ``show=1e3, show_unit="g"``).
+    ``starts`` are extra starting values for multi-start fits. ``plausible``
+    is the physically plausible range (default: the fit bounds); a fitted value
+    outside it is reported and penalised (:meth:`implausibility`).
+    """
+
+    name: str
+    unit: str
+    lower: float
+    upper: float
+    start: float
+    log: bool = True
+    show: float = 1.0
+    show_unit: str = ""
+    starts: tuple[float, ...] = ()
+    plausible: tuple[float, float] | None = None
+
+    def implausibility(self, value: float) -> float:
+        """Distance of ``value`` outside the plausible range, in units of that range's width
+        (in log space for logarithmic parameters); 0 inside."""
+        if self.plausible is None:
+            return 0.0
+        lo, hi = self.plausible
+        if self.log and lo > 0 and value > 0:
+            x, a, b = np.log(value), np.log(lo), np.log(hi)
+        else:
+            x, a, b = value, lo, hi
+        width = max(b - a, 1e-12)
+        return float(max(a - x, x - b, 0.0) / width)
+
+    def to_u(self, value: float) -> float:
+        return float(np.log(value / self.start)) if self.log else (value - self.start) / self.scale
+
+    def from_u(self, u: float) -> float:
+        return float(self.start * np.exp(u)) if self.log else float(self.start + u * self.scale)
+
+    @property
+    def scale(self) -> float:
+        return (self.upper - self.lower) / 10.0
+
+    @property
+    def u_bounds(self) -> tuple[float, float]:
+        return self.to_u(self.lower), self.to_u(self.upper)
+
+    def fmt(self, value: float, sigma: float | None = None) -> str:
+        unit = self.show_unit or self.unit
+        v = value * self.show
+        if sigma is None or not np.isfinite(sigma):
+            return f"{v:.3g} {unit}".strip()
+        return f"{v:.3g} ± {sigma * self.show:.2g} {unit}".strip()
+
+
+@dataclass(frozen=True, eq=False)
+class Context:
+    """What candidates need to know: the nominal model, measured points, levels."""
+
+    model: object
+    points: tuple[str, ...]
+    n_levels: int
+    levels: tuple
+    modes_hz: np.ndarray
+
+
+class Candidate:
+    """Base class of one candidate physics (see the package docstring)."""
+
+    name: str = ""
+    family: str = ""
+    slot: str = ""               # candidates sharing a slot cannot be combined
+    explanation: str = ""
+    params: tuple[Param, ...] = ()
+    per_level: bool = False
+
+    def apply(self, model, values: dict, level: int = 0):
+        return model
+
+    def chain(self, freq: np.ndarray, values: dict, level: int = 0):
+        return None
+
+    def describe(self, values: dict, sigmas: dict | None = None) -> str:
+        """Plain-language phrase with the fitted values, e.g. 'an unmodelled 5.6 ± 0.3 g sensor at tip'."""
+        sigmas = sigmas or {}
+        parts = ", ".join(f"{p.name} = {p.fmt(values[p.name], sigmas.get(p.name))}" for p in self.params)
+        return f"{self.explanation} ({parts})" if parts else self.explanation
+
+    def __repr__(self) -> str:
+        return f"<candidate {self.name}>"
+
+
+class Combination(Candidate):
+    """Two candidates applied together (parameters prefixed ``a.``/``b.``)."""
+
+    def __init__(self, first: Candidate, second: Candidate):
+        self.parts = (first, second)
+        self.name = f"{first.name} + {second.name}"
+        self.family = f"{first.family} + {second.family}"
+        self.slot = ""
+        self.explanation = f"{first.explanation}; and {second.explanation}"
+        self.per_level = first.per_level or second.per_level
+        self.params = tuple(dataclasses.replace(p, name=f"{k}.{p.name}")
+                            for k, c in zip("ab", self.parts) for p in c.params)
+
+    def _split(self, values):
+        return [{p.name: values[f"{k}.{p.name}"] for p in c.params} for k, c in zip("ab", self.parts)]
+
+    def apply(self, model, values, level=0):
+        # candidates that move the model's coordinates (e.g. an insertion prepended) go last
+        todo = sorted(zip(self.parts, self._split(values)), key=lambda cv: bool(getattr(cv[0], "reshapes", False)))
+        for c, v in todo:
+            model = c.apply(model, v, level)
+        return model
+
+    def chain(self, freq, values, level=0):
+        out = None
+        for c, v in zip(self.parts, self._split(values)):
+            f = c.chain(freq, v, level)
+            if f is not None:
+                out = f if out is None else out * f
+        return out
+
+    def describe(self, values, sigmas=None):
+        sigmas = sigmas or {}
+        texts = []
+        for k, c, v in zip("ab", self.parts, self._split(values)):
+            s = {p.name: sigmas.get(f"{k}.{p.name}") for p in c.params}
+            texts.append(c.describe(v, s))
+        return " together with ".join(texts)
+
+
+REGISTRY: list[Callable[[Context], Iterable[Candidate]]] = []
+
+
+def register(factory: Callable[[Context], Iterable[Candidate]]):
+    """Decorator: add a candidate factory ``f(context) -> iterable of Candidate``."""
+    REGISTRY.append(factory)
+    return factory
+
+
+def candidates_for(ctx: Context) -> list[Candidate]:
+    """All candidates the registered factories offer for this model and data."""
+    out: list[Candidate] = []
+    for factory in REGISTRY:
+        out.extend(factory(ctx))
+    return out
