@@ -17,20 +17,10 @@ import jointdb
 PACKAGE = Path(jointdb.__file__).resolve().parent
 
 #: Cycles known today, each as the set of modules of one strongly connected component.
-#: Both live in the store, which is being refactored behind a store protocol (issue 23,
-#: step 2); the integrator removes these entries with that refactor. The test fails when
-#: a listed cycle is gone or has changed, so this list cannot go stale.
-KNOWN_CYCLES = {
-    # the query/bundle/maintenance helpers call the Repository's private methods
-    frozenset({
-        "jointdb.store._repository",
-        "jointdb.store._bundle",
-        "jointdb.store._maintenance",
-        "jointdb.store._query",
-    }),
-    # the nearest-joint search and its query cache call each other
-    frozenset({"jointdb.store._nearest", "jointdb.store._qcache"}),
-}
+#: None: the store's two (repository <-> bundle/maintenance/query, nearest <-> qcache) went
+#: with the store protocol (issue 23, step 2). The test fails when a listed cycle is gone
+#: or has changed, so this list cannot go stale.
+KNOWN_CYCLES: set[frozenset[str]] = set()
 
 
 def _modules(root: Path) -> dict[str, Path]:

@@ -45,6 +45,7 @@ from sqlalchemy import select
 
 from jointdb.errors import ConflictError, InputError, IntegrityError
 from jointdb.io._atomic import atomic_path
+from jointdb.store._access import joint_row, read_session
 from jointdb.store._blobformat import write_frf_group
 from jointdb.store._bundle_read import FORMAT, FORMAT_VERSION, Bundle, manifest_sha256, read_bundle
 from jointdb.store._identity import describe, identity_changes
@@ -53,9 +54,10 @@ from jointdb.store._models import AuditRow, JointRow, LabelRow, StateRow, Versio
 from jointdb.store._records import check_record, current_actor, record_dict, row_from_record
 
 if TYPE_CHECKING:  # pragma: no cover
-    from jointdb.store._repository import Repository
+    from jointdb.store._protocol import ReadAccess, WriteAccess
 
-def export_bundle(repo: "Repository", names: Iterable[str] | None, path: str | os.PathLike,
+
+def export_bundle(store: "ReadAccess", names: Iterable[str] | None, path: str | os.PathLike,
                   sign_key=None) -> dict[str, Any]:
     """Write the named joints (all when ``names`` is None) to ``path``; returns counts.
 
@@ -66,11 +68,11 @@ def export_bundle(repo: "Repository", names: Iterable[str] | None, path: str | o
 
     from jointdb import __version__
 
-    with repo._read() as s:
+    with read_session(store) as s:
         if names is None:
             joints = list(s.scalars(select(JointRow).order_by(JointRow.name)))
         else:
-            joints = [repo._joint(s, n) for n in dict.fromkeys(names)]
+            joints = [joint_row(s, n) for n in dict.fromkeys(names)]
         if not joints:
             raise InputError("nothing to export: no joints selected")
         plan = []
@@ -120,10 +122,10 @@ def export_bundle(repo: "Repository", names: Iterable[str] | None, path: str | o
                 vg = g.create_group(f"v{record['version']:04d}")
                 vg.attrs["record"] = json.dumps(record, sort_keys=True)
                 vg.attrs["record_sha256"] = record_digest
-                write_frf_group(vg.create_group("frf"), repo.blobs.get(record["blob_sha256"]), record["blob_sha256"])
+                write_frf_group(vg.create_group("frf"), store.blobs.get(record["blob_sha256"]), record["blob_sha256"])
                 for key, raw_digest in record["raw_blobs"].items():
                     rg = vg.require_group("raw").create_group(key)
-                    write_frf_group(rg, repo.blobs.get(raw_digest), raw_digest)
+                    write_frf_group(rg, store.blobs.get(raw_digest), raw_digest)
                 n_versions += 1
     out: dict[str, Any] = {"joints": len(plan), "versions": n_versions, "bundle_sha256": digest}
     if signature is not None:
@@ -199,7 +201,7 @@ def _forced(name: str, latest: VersionRow | None, new: list[dict], force: bool) 
     return forced
 
 
-def import_bundle(repo: "Repository", bundle: "Bundle | str | os.PathLike", author: str | None = None,
+def import_bundle(store: "WriteAccess", bundle: "Bundle | str | os.PathLike", author: str | None = None,
                   trusted_keys=(), require_signature: bool = False, force: bool = False) -> dict[str, Any]:
     """Import a bundle (module docstring); returns counts of new and unchanged versions.
 
@@ -212,13 +214,13 @@ def import_bundle(repo: "Repository", bundle: "Bundle | str | os.PathLike", auth
         raise IntegrityError(f"{bundle.path}: the bundle is not signed by a trusted key")
     joints = bundle.joints
     path = bundle.path
-    with repo._read() as s:
+    with read_session(store) as s:
         plan = _plan(s, joints, force)  # refuse conflicts before touching anything
     for _, new, _ in plan:
         for v in new:
-            repo.blobs.put(v["frf"])
+            store.blobs.put(v["frf"])
             for raw in v["raw"].values():
-                repo.blobs.put(raw)
+                store.blobs.put(raw)
     actor = current_actor(author)
     summary: dict[str, Any] = {"joints": len(joints), "new_versions": 0, "unchanged_versions": 0, "labels_skipped": [],
                                "signed_by": bundle.signer, "signature_verified": bundle.signature_verified}
@@ -266,5 +268,5 @@ def import_bundle(repo: "Repository", bundle: "Bundle | str | os.PathLike", auth
         s.flush()
         refresh_joints(s, touched)  # the query index, in the same transaction
 
-    repo._retrying(write)
+    store.retrying(write)
     return summary

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -11,12 +12,17 @@ from sqlalchemy.orm import Session
 
 from jointdb.errors import IntegrityError, NotFoundError
 from jointdb.frf import FRF
+from jointdb.store._access import read_session
 from jointdb.store._models import AuditRow, JointRow, VersionRow, utcnow
 from jointdb.store._records import check_record, current_actor
+from jointdb.store._reports import CheckReport, VersionDiff
 from jointdb.store._types import JointVersion
 
 if TYPE_CHECKING:  # pragma: no cover
-    from jointdb.store._repository import CheckReport, Repository, VersionDiff
+    from jointdb.store._protocol import ReadAccess, WriteAccess
+
+#: what :func:`diff_versions` needs of a store: the verified FRF of a version
+LoadFRF = Callable[[JointVersion], FRF]
 
 
 def _references(s) -> dict[str, list[str]]:
@@ -32,17 +38,17 @@ def _references(s) -> dict[str, list[str]]:
     return refs
 
 
-def _referenced(repo: "Repository") -> dict[str, list[str]]:
+def _referenced(store: "ReadAccess") -> dict[str, list[str]]:
     """blob sha -> list of "name vN" rows referencing it."""
-    with repo._read() as s:
+    with read_session(store) as s:
         return _references(s)
 
 
 @contextlib.contextmanager
-def snapshot(repo: "Repository"):
+def snapshot(store: "ReadAccess"):
     """One read-only transaction that sees a single snapshot of the whole database (PostgreSQL:
     REPEATABLE READ, READ ONLY; SQLite: one deferred read transaction, which WAL keeps consistent)."""
-    conn = repo.read_engine.connect()
+    conn = store.read_engine.connect()
     try:
         if conn.dialect.name == "postgresql":
             conn = conn.execution_options(isolation_level="REPEATABLE READ")
@@ -55,7 +61,7 @@ def snapshot(repo: "Repository"):
         conn.close()
 
 
-def check(repo: "Repository", verify_blobs: bool = True, checkpoint: dict | None = None) -> "CheckReport":
+def check(store: "ReadAccess", verify_blobs: bool = True, checkpoint: dict | None = None) -> CheckReport:
     """Walk every version row and every blob (see :meth:`Repository.check`).
 
     Problems reported: a row whose blob is missing or corrupt, a row whose
@@ -71,10 +77,9 @@ def check(repo: "Repository", verify_blobs: bool = True, checkpoint: dict | None
     from jointdb.store._chain import chain_problems
     from jointdb.store._guards import missing_guards
     from jointdb.store._index import index_problems
-    from jointdb.store._repository import CheckReport
 
     n_rows = 0
-    with snapshot(repo) as s:
+    with snapshot(store) as s:
         conn = s.connection()
         problems, notes = missing_guards(conn)
         problems += chain_problems(conn, checkpoint)  # first: it names the first entry that differs
@@ -97,20 +102,20 @@ def check(repo: "Repository", verify_blobs: bool = True, checkpoint: dict | None
     for digest, users in sorted(refs.items()):
         n_blobs += 1
         if verify_blobs:
-            problem = repo.blobs.verify(digest)
+            problem = store.blobs.verify(digest)
         else:
             try:
-                problem = None if repo.blobs.exists(digest) else f"blob {digest} is missing"
+                problem = None if store.blobs.exists(digest) else f"blob {digest} is missing"
             except IntegrityError as exc:  # a digest that is not hex
                 problem = str(exc)
         if problem:
             problems.append(f"{', '.join(users)}: {problem}")
-    orphans = tuple(b.sha256 for b in repo.blobs.walk() if b.sha256 not in refs)
-    temps = tuple(str(p) for p in repo.blobs.temporaries())
+    orphans = tuple(b.sha256 for b in store.blobs.walk() if b.sha256 not in refs)
+    temps = tuple(str(p) for p in store.blobs.temporaries())
     return CheckReport(n_rows, n_blobs, tuple(problems), orphans, temps, tuple(notes))
 
 
-def gc(repo: "Repository", min_age_s: float = 3600.0, dry_run: bool = False) -> list[str]:
+def gc(store: "WriteAccess", min_age_s: float = 3600.0, dry_run: bool = False) -> list[str]:
     """Delete blobs that no row references, and stale temporary files.
 
     Only files older than ``min_age_s`` are touched: a blob that a running
@@ -120,20 +125,20 @@ def gc(repo: "Repository", min_age_s: float = 3600.0, dry_run: bool = False) -> 
     writer can never reference a blob between that check and the deletion
     (see ``BlobStore.collect``).
     """
-    refs = _referenced(repo)
+    refs = _referenced(store)
     if not dry_run:  # blobs an interrupted gc had set aside and a row references go back first
-        repo.blobs.restore_set_aside(lambda d: d in refs)
+        store.blobs.restore_set_aside(lambda d: d in refs)
     removed: list[str] = []
-    for blob in list(repo.blobs.walk()):
-        if blob.sha256 in refs or repo.blobs.age_seconds(blob.path) < min_age_s:
+    for blob in list(store.blobs.walk()):
+        if blob.sha256 in refs or store.blobs.age_seconds(blob.path) < min_age_s:
             continue
         if dry_run:
             removed.append(blob.sha256)
-        elif repo.blobs.collect(blob.sha256, min_age_s, lambda d: d in _referenced(repo)):
+        elif store.blobs.collect(blob.sha256, min_age_s, lambda d: d in _referenced(store)):
             # collect() moves the blob aside, then re-checks the database and the age
             removed.append(blob.sha256)
-    for tmp in repo.blobs.temporaries():
-        if repo.blobs.age_seconds(tmp) >= min_age_s:
+    for tmp in store.blobs.temporaries():
+        if store.blobs.age_seconds(tmp) >= min_age_s:
             removed.append(str(tmp))
             if not dry_run:
                 tmp.unlink(missing_ok=True)
@@ -144,7 +149,7 @@ def gc(repo: "Repository", min_age_s: float = 3600.0, dry_run: bool = False) -> 
             s.add(AuditRow(at=now, actor=current_actor(), action="gc", joint_name=None, version=None,
                            details={"removed": len(removed)}))
 
-        repo._retrying(write)
+        store.retrying(write)
     return removed
 
 
@@ -192,9 +197,9 @@ def frf_difference(a: FRF, b: FRF) -> tuple[list[dict[str, Any]], list[str]]:
     return rows, notes
 
 
-def diff_versions(repo: "Repository", a: JointVersion, b: JointVersion) -> "VersionDiff":
-    from jointdb.store._repository import VersionDiff
-
+def diff_versions(load_frf: LoadFRF, a: JointVersion, b: JointVersion) -> VersionDiff:
+    """What differs between versions ``a`` and ``b``: conditions, fields, and per FRF entry the
+    largest relative difference (:func:`frf_difference`; FRFs read with ``load_frf``)."""
     ca, cb = _conditions_flat(a), _conditions_flat(b)
     conditions = {k: (ca.get(k), cb.get(k)) for k in sorted(set(ca) | set(cb)) if ca.get(k) != cb.get(k)}
     fields = {}
@@ -217,7 +222,7 @@ def diff_versions(repo: "Repository", a: JointVersion, b: JointVersion) -> "Vers
         notes: list[str] = ["identical FRF blob"]
     else:
         try:
-            rows, notes = frf_difference(repo.load_frf(a), repo.load_frf(b))
+            rows, notes = frf_difference(load_frf(a), load_frf(b))
         except (IntegrityError, NotFoundError):
             raise
     worst = max((r["max_rel_diff"] for r in rows), default=None)

@@ -25,6 +25,8 @@ from pathlib import Path
 
 import numpy as np
 
+from jointdb.store._candidates import Candidates
+
 MAX_FILES = 64
 _ARRAYS = ("version_id", "joint_id", "number", "torque", "preload", "materials_index")
 
@@ -50,8 +52,6 @@ def _path(root: Path, db_key: str, stamp: tuple, sel) -> Path:
 
 def load(db_key: str, stamp: tuple, sel):
     """The cached candidates for exactly this stamp, or None."""
-    from jointdb.store._nearest import Candidates
-
     root = cache_dir()
     if root is None:
         return None

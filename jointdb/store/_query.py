@@ -50,7 +50,7 @@ joints ``Z = k + iωc``, so this interpolates stiffness and damping linearly
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from datetime import datetime
 from typing import TYPE_CHECKING, Any
 
@@ -59,6 +59,7 @@ from sqlalchemy import select
 
 from jointdb.errors import InputError, NumericalError
 from jointdb.frf import FRF
+from jointdb.store._access import read_session
 from jointdb.store._dberrors import translate_error
 from jointdb.store._interp import bracketing_weights
 from jointdb.store._index import materials_key, standing
@@ -74,10 +75,13 @@ from jointdb.store._nearest import (
     nearest_now,
     not_found,
 )
-from jointdb.store._types import Conditions, InterpolatedJoint, Match, as_conditions
+from jointdb.store._types import Conditions, InterpolatedJoint, JointVersion, Match, as_conditions
 
 if TYPE_CHECKING:  # pragma: no cover
-    from jointdb.store._repository import Repository
+    from jointdb.store._protocol import ReadAccess
+
+#: what :func:`interpolate` needs of a store: the verified FRF of a version
+LoadFRF = Callable[[JointVersion], FRF]
 
 __all__ = ["OutsideCatalogueWarning", "nearest", "interpolate", "candidates_from_history", "INTERPOLATION_METHODS"]
 
@@ -87,7 +91,7 @@ __all__ = ["OutsideCatalogueWarning", "nearest", "interpolate", "candidates_from
 INTERPOLATION_METHODS = ("axes", "idw")
 
 
-def candidates_from_history(repo: "Repository", sel: Selection, at: datetime | None,
+def candidates_from_history(store: "ReadAccess", sel: Selection, at: datetime | None,
                             geometry_keys: Sequence[str]) -> tuple[Candidates, dict[int, str]]:
     """The candidates of ``sel`` as of ``at`` (None: now), computed from the history tables.
 
@@ -96,7 +100,7 @@ def candidates_from_history(repo: "Repository", sel: Selection, at: datetime | N
     and the selection applied. Labels are the current ones. Returns the candidates
     and ``{version_id: state}`` at that time.
     """
-    with repo._read() as s:
+    with read_session(store) as s:
         vq = (select(VersionRow.id, VersionRow.joint_id, VersionRow.version, VersionRow.materials,
                      VersionRow.torque_nm, VersionRow.preload_n, VersionRow.geometry)
               .join(JointRow, JointRow.id == VersionRow.joint_id).where(JointRow.joint_type == sel.joint_type))
@@ -135,7 +139,7 @@ def candidates_from_history(repo: "Repository", sel: Selection, at: datetime | N
 
 
 def nearest(
-    repo: "Repository",
+    store: "ReadAccess",
     joint_type: str,
     conditions: Conditions | Mapping[str, Any],
     k: int = 3,
@@ -157,21 +161,21 @@ def nearest(
     if at is not None and label is not None:
         raise InputError("a label names one version now; do not combine --label with --at")
     joint_type, req, k, label = check_request(joint_type, conditions, k, label)
-    engine = repo.read_engine
+    engine = store.read_engine
     raw = engine.raw_connection()
     try:
         reader = Reader(raw, engine.dialect.name)
         if at is None:
-            return nearest_now(reader, repo.url, joint_type, req, k, label=label, all_versions=all_versions,
+            return nearest_now(reader, store.url, joint_type, req, k, label=label, all_versions=all_versions,
                                include_deprecated=include_deprecated, stacklevel=5)
         sel = Selection(joint_type, None, bool(all_versions), bool(include_deprecated))
-        cand, states = candidates_from_history(repo, sel, at, list(req.geometry))
+        cand, states = candidates_from_history(store, sel, at, list(req.geometry))
         with reader.snapshot():
             if cand.version_id.size == 0:
                 raise not_found(reader, sel)
             return matches(reader, cand, req, k, sel, states, stacklevel=5)
     except engine.dialect.dbapi.Error as exc:
-        raise translate_error(exc, repo.url) from None
+        raise translate_error(exc, store.url) from None
     finally:
         raw.close()
 
@@ -187,7 +191,7 @@ def _weights(distances: Sequence[float]) -> np.ndarray:
 
 
 def interpolate(
-    repo: "Repository",
+    load_frf: LoadFRF,
     matches: Sequence[Match],
     conditions: Conditions | Mapping[str, Any] | None = None,
     *,
@@ -197,6 +201,8 @@ def interpolate(
 
     Parameters
     ----------
+    load_frf
+        Reads the verified FRF of a version (:meth:`jointdb.store.Repository.load_frf`).
     matches
         Candidates (e.g. from :func:`nearest`); the ``"axes"`` method uses only those bracketing the
         request, so give it the catalogued grid around the request, not only the two nearest.
@@ -239,7 +245,7 @@ def interpolate(
     if w is None:
         w = _weights([m.distance for m in matches])
     used = [(float(wi), m) for wi, m in zip(w, matches) if wi > 0.0]
-    frfs = [repo.load_frf(m.version) for _, m in used]
+    frfs = [load_frf(m.version) for _, m in used]
     lo = max(f.freq[0] for f in frfs)
     hi = min(f.freq[-1] for f in frfs)
     if lo > hi:

@@ -4,10 +4,13 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 from sqlalchemy.exc import IntegrityError as DBIntegrityError
 from sqlalchemy.exc import OperationalError
+
+if TYPE_CHECKING:  # pragma: no cover
+    from jointdb.store._types import JointVersion
 
 
 @dataclass(frozen=True)
@@ -55,3 +58,11 @@ def _is_transient(exc: OperationalError) -> bool:
     text = str(exc.orig).lower()
     sqlstate = getattr(exc.orig, "sqlstate", None)
     return "locked" in text or "busy" in text or sqlstate in ("40001", "40P01")
+
+
+class Catalogued(NamedTuple):
+    """What :meth:`Repository.catalogue_outcome` did: the version, and whether it was written now
+    (False: identical to the latest version, nothing written)."""
+
+    version: "JointVersion"
+    created: bool

@@ -3,27 +3,23 @@
 from __future__ import annotations
 
 import os
-import random
 import re
-import time
 import warnings
 from collections.abc import Iterable, Mapping
 from datetime import datetime
-from typing import Any, NamedTuple
+from typing import Any
 
 from sqlalchemy import func, select
-from sqlalchemy.exc import IntegrityError as DBIntegrityError
-from sqlalchemy.exc import OperationalError
 from sqlalchemy.orm import Session
 
-from jointdb._limits import control_character
-from jointdb.errors import ConflictError, InputError, IntegrityError, NotFoundError
+from jointdb.errors import InputError, IntegrityError, NotFoundError
 from jointdb.frf import FRF
 from jointdb.store import _db
+from jointdb.store._access import MAX_WRITE_ATTEMPTS, Storage, joint_row  # noqa: F401 - re-exported
 from jointdb.store._blobformat import frf_sha256
 from jointdb.store._catalogue import idempotent_answer, identity_of, precheck, write_version
 from jointdb.store._labels import LabelsAndStates
-from jointdb.store._reports import CheckReport, VersionDiff, _is_transient, _is_unique_violation
+from jointdb.store._reports import Catalogued, CheckReport, VersionDiff  # noqa: F401 - re-exported
 from jointdb.store._models import JointRow, LabelRow, StateRow, VersionRow
 from jointdb.store._listing import JointPage, list_page
 from jointdb.store._records import (
@@ -48,7 +44,6 @@ from jointdb.store._types import (
     check_name,
 )
 
-MAX_WRITE_ATTEMPTS = 60
 _HEX64 = re.compile(r"[0-9a-f]{64}")
 
 
@@ -59,14 +54,6 @@ def _report_damaged(found: list[DamagedVersion], into: list | None) -> None:
     elif found:
         warnings.warn("skipped damaged versions (run `jointdb db check`): "
                       + "; ".join(d.describe() for d in found[:10]), DamagedRecordWarning, stacklevel=3)
-
-
-class Catalogued(NamedTuple):
-    """What :meth:`Repository.catalogue_outcome` did: the version, and whether it was written now
-    (False: identical to the latest version, nothing written)."""
-
-    version: JointVersion
-    created: bool
 
 
 class Repository(LabelsAndStates):
@@ -121,6 +108,8 @@ class Repository(LabelsAndStates):
             from jointdb.store._dbblobs import open_blob_store
 
             self.blobs = open_blob_store(self.url, blobs, self.write_engine)  # a directory, or "database"
+            #: what the query, bundle and maintenance helpers are given (never the repository itself)
+            self.storage = Storage(self.url, self.read_engine, self.write_engine, self.blobs)
             with _db.db_errors(self.url):
                 if check_schema:
                     _db.ensure_schema(self.read_engine, self.write_engine, auto)
@@ -142,28 +131,15 @@ class Repository(LabelsAndStates):
         return f"Repository({self.url!r}, blobs={str(self.blobs.root)!r})"
 
     def _read(self) -> Session:
-        return Session(self.read_engine, expire_on_commit=False)
+        return self.storage.read()
 
     def _write(self) -> Session:
-        return Session(self.write_engine, expire_on_commit=False)
+        return self.storage.write()
 
     def _retrying(self, fn):
-        """Run ``fn(session)`` in a write transaction; retry after rollback on conflicts."""
-        delay = 0.005
-        for attempt in range(MAX_WRITE_ATTEMPTS):
-            try:
-                with self._write() as session, session.begin():
-                    return fn(session)
-            except (DBIntegrityError, OperationalError) as exc:
-                if isinstance(exc, OperationalError) and not _is_transient(exc):
-                    raise
-                if isinstance(exc, DBIntegrityError) and not _is_unique_violation(exc):
-                    raise
-                if attempt == MAX_WRITE_ATTEMPTS - 1:
-                    raise ConflictError(f"write kept conflicting with other writers: {exc.orig}") from None
-                time.sleep(delay * (1 + random.random()))
-                delay = min(delay * 2, 0.5)
-        raise AssertionError("unreachable")  # pragma: no cover
+        """Run ``fn(session)`` in a write transaction; retry after rollback on conflicts
+        (:meth:`jointdb.store._access.Storage.retrying`)."""
+        return self.storage.retrying(fn)
 
     # ------------------------------------------------------------- catalogue
     @_db.with_db_errors
@@ -289,13 +265,9 @@ class Repository(LabelsAndStates):
         return Catalogued(self.get(answer[0], answer[1]), answer[2] == 201)
 
     # ------------------------------------------------------------------ reads
-    def _joint(self, session: Session, name: str) -> JointRow:
-        if not isinstance(name, str) or len(name) > 1000 or control_character(name):  # PostgreSQL refuses NUL
-            raise InputError(f"joint name {str(name)[:60]!r} must be text without control characters")
-        joint = session.scalar(select(JointRow).where(JointRow.name == name))
-        if joint is None:
-            raise NotFoundError(f"no joint named {name!r} (see `jointdb joints list`)")
-        return joint
+    @staticmethod
+    def _joint(session: Session, name: str) -> JointRow:
+        return joint_row(session, name)
 
     def _states(self, session: Session, joint_id: int, at: datetime | None) -> list[StateRow]:
         q = select(StateRow).where(StateRow.joint_id == joint_id)
@@ -465,21 +437,21 @@ class Repository(LabelsAndStates):
 
         a = self.get(name, version_a)
         b = self.get(other or name, version_b) if (version_b is not None or other) else self.get(name)
-        return diff_versions(self, a, b)
+        return diff_versions(self.load_frf, a, b)
 
     @_db.with_db_errors
     def check(self, verify_blobs: bool = True) -> CheckReport:
         """Walk every row and blob; report missing or corrupt data (``jointdb db check``)."""
         from jointdb.store._maintenance import check
 
-        return check(self, verify_blobs)
+        return check(self.storage, verify_blobs)
 
     @_db.with_db_errors
     def gc(self, min_age_s: float = 3600.0, dry_run: bool = False) -> list[str]:
         """Remove blobs no row references (and stale temporaries) older than ``min_age_s``."""
         from jointdb.store._maintenance import gc
 
-        return gc(self, min_age_s, dry_run)
+        return gc(self.storage, min_age_s, dry_run)
 
     @_db.with_db_errors
     def nearest(self, joint_type: str, conditions: Conditions | Mapping[str, Any], k: int = 3,
@@ -490,7 +462,7 @@ class Repository(LabelsAndStates):
         ``all_versions``, ``include_deprecated`` widen or narrow that; see :mod:`jointdb.store._query`."""
         from jointdb.store._query import nearest
 
-        return nearest(self, joint_type, conditions, k, as_utc(at), label=label, all_versions=all_versions,
+        return nearest(self.storage, joint_type, conditions, k, as_utc(at), label=label, all_versions=all_versions,
                        include_deprecated=include_deprecated)
 
     @_db.with_db_errors
@@ -500,7 +472,7 @@ class Repository(LabelsAndStates):
         see :mod:`jointdb.store._query`."""
         from jointdb.store._query import interpolate
 
-        return interpolate(self, matches, conditions, method=method)
+        return interpolate(self.load_frf, matches, conditions, method=method)
 
     @_db.with_db_errors
     def export(self, names: Iterable[str] | None, path: str | os.PathLike, *, sign_key=None) -> dict[str, Any]:
@@ -511,7 +483,7 @@ class Repository(LabelsAndStates):
         """
         from jointdb.store._bundle import export_bundle
 
-        return export_bundle(self, names, path, sign_key)
+        return export_bundle(self.storage, names, path, sign_key)
 
     @_db.with_db_errors
     def import_(self, path, author: str | None = None, *, trusted_keys=(),
@@ -522,4 +494,4 @@ class Repository(LabelsAndStates):
         ``require_signature``) refuse a bundle not signed by one of them (Ed25519 public keys)."""
         from jointdb.store._bundle import import_bundle
 
-        return import_bundle(self, path, author, trusted_keys, require_signature, force)
+        return import_bundle(self.storage, path, author, trusted_keys, require_signature, force)
