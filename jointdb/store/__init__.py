@@ -13,7 +13,10 @@ Library first; the ``jointdb catalogue / joints / query / db`` commands call it.
 >>> repo.get("T1-HSK63", version=1); repo.load_frf(jv)            # doctest: +SKIP
 >>> repo.nearest("tool-holder", Conditions(torque_nm=35.0), k=3)  # doctest: +SKIP
 
-API (contract in /work/api-contracts.md; additions are keyword arguments or new methods):
+API (one protocol, :class:`JointStore`, which ``Repository`` and
+:class:`jointdb.client.RemoteRepository` implement; :class:`LocalJointStore` adds what only a
+local database offers; :func:`open_store` opens either from a path, URL or server address;
+the blob stores implement :class:`BlobStoreProtocol`; see :mod:`jointdb.store._protocol`):
 
 - ``Repository(url=None, *, blobs=None, auto_create=None)`` - ``url``: SQLAlchemy URL
   or SQLite path (default ``$JOINTDB_URL``, else ``$XDG_DATA_HOME/jointdb/jointdb.sqlite``);
@@ -97,6 +100,12 @@ __all__ = [
     "file_sha256",
     "read_frf_file",
     "write_frf_file",
+    "JointStore",
+    "LocalJointStore",
+    "BlobStoreProtocol",
+    "open_store",
+    "owned_store",
+    "Catalogued",
     "upgrade",
     "downgrade",
     "current_revision",
@@ -107,7 +116,9 @@ __all__ = [
 _LAZY = {
     "Repository": "_repository", "CheckReport": "_reports", "VersionDiff": "_reports",
     "BlobStore": "_blobs", "file_sha256": "_blobs", "frf_sha256": "_blobs", "read_frf_file": "_blobs",
-    "write_frf_file": "_blobs", "JointPage": "_listing",
+    "write_frf_file": "_blobs", "JointPage": "_listing", "Catalogued": "_reports",
+    "JointStore": "_protocol", "LocalJointStore": "_protocol", "BlobStoreProtocol": "_protocol",
+    "open_store": "_open", "owned_store": "_open",
 }
 
 

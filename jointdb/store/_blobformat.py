@@ -55,6 +55,20 @@ _FILE_MAGIC = b"jointdb-blob-file-sha256:"
 _HEX64 = re.compile(r"[0-9a-f]{64}")
 
 
+def check_digest(digest: str) -> str:
+    """``digest`` when it is 64 lower-case hex digits (what both blob stores key blobs by).
+
+    Raises
+    ------
+    IntegrityError
+        It is not a SHA-256 hex digest (often read from the database: never used to build a
+        path or a query).
+    """
+    if not isinstance(digest, str) or not _HEX64.fullmatch(digest):
+        raise IntegrityError(f"blob digest {str(digest)[:80]!r} is not a SHA-256 hex digest; refusing to use it")
+    return digest
+
+
 def frf_sha256(frf: FRF) -> str:
     """SHA-256 (hex) of the canonical form of an FRF (module docstring)."""
     h = hashlib.sha256()

@@ -33,6 +33,7 @@ from jointdb.store._blobformat import (  # noqa: F401 - re-exported: the blob fo
     USERBLOCK,
     _userblock,
     blob_bytes,
+    check_digest,
     check_file_checksum,
     decode_blob_bytes,
     file_sha256,
@@ -58,7 +59,23 @@ class BlobInfo:
     mtime: float
 
 
-class BlobStore:
+class VerifyingBlobs:
+    """What both blob stores share (:class:`jointdb.store._protocol.BlobStoreProtocol`): ``verify``
+    through ``get``. A subclass defines ``get``."""
+
+    def get(self, digest: str) -> FRF:  # pragma: no cover - defined by each store
+        raise NotImplementedError
+
+    def verify(self, digest: str) -> str | None:
+        """None when the blob is present and intact, else a one-line problem description."""
+        try:
+            self.get(digest)
+        except (NotFoundError, IntegrityError) as exc:
+            return str(exc)
+        return None
+
+
+class BlobStore(VerifyingBlobs):
     """Content-addressed FRF blobs in a directory (module docstring for the format).
 
     Parameters
@@ -81,8 +98,7 @@ class BlobStore:
         IntegrityError
             ``digest`` is not a SHA-256 hex digest (never used to build a path).
         """
-        if not isinstance(digest, str) or not _HEX64.fullmatch(digest):
-            raise IntegrityError(f"blob digest {str(digest)[:80]!r} is not a SHA-256 hex digest; refusing to use it")
+        check_digest(digest)
         return self.root / digest[:2] / f"{digest}.h5"
 
     def exists(self, digest: str) -> bool:
@@ -200,14 +216,6 @@ class BlobStore:
         if actual != digest:
             raise IntegrityError(f"blob {digest} is corrupt: its content hashes to {actual} ({path})")
         return frf
-
-    def verify(self, digest: str) -> str | None:
-        """None when the blob is present and intact, else a one-line problem description."""
-        try:
-            self.get(digest)
-        except (NotFoundError, IntegrityError) as exc:
-            return str(exc)
-        return None
 
     # ------------------------------------------------------------------ walk
     def walk(self) -> Iterator[BlobInfo]:

@@ -23,8 +23,8 @@ from sqlalchemy.orm import Session
 
 from jointdb.errors import IntegrityError, NotFoundError
 from jointdb.frf import FRF
-from jointdb.store._blobformat import _HEX64, blob_bytes, decode_blob_bytes
-from jointdb.store._blobs import BlobInfo
+from jointdb.store._blobformat import blob_bytes, check_digest, decode_blob_bytes
+from jointdb.store._blobs import BlobInfo, PendingPut, VerifyingBlobs
 from jointdb.store._models import BlobRow
 
 #: the value of ``blobs=`` / ``JOINTDB_BLOBS`` that selects this store
@@ -35,7 +35,7 @@ def _now() -> datetime:
     return datetime.now(timezone.utc)
 
 
-class DatabaseBlobStore:
+class DatabaseBlobStore(VerifyingBlobs):
     """Content-addressed FRF blobs in the ``frf_blobs`` table of the repository's database."""
 
     def __init__(self, engine: Engine, where: str = "database"):
@@ -45,11 +45,7 @@ class DatabaseBlobStore:
     def __repr__(self) -> str:
         return f"DatabaseBlobStore({self.root!r})"
 
-    @staticmethod
-    def _key(digest: str) -> str:
-        if not isinstance(digest, str) or not _HEX64.fullmatch(digest):
-            raise IntegrityError(f"blob digest {str(digest)[:80]!r} is not a SHA-256 hex digest; refusing to use it")
-        return digest
+    _key = staticmethod(check_digest)
 
     def _upsert(self, session: Session, digest: str, data: bytes, now: datetime) -> None:
         dialect = self.engine.dialect.name
@@ -75,8 +71,6 @@ class DatabaseBlobStore:
     def put_pending(self, frf: FRF):
         """:meth:`put` done now (committed in its own transaction), as the file store's
         :meth:`~jointdb.store._blobs.BlobStore.put_pending` interface: nothing left to wait for."""
-        from jointdb.store._blobs import PendingPut
-
         return PendingPut(self.put(frf))
 
     # ------------------------------------------------------------------- read
@@ -106,13 +100,6 @@ class DatabaseBlobStore:
         with Session(self.engine) as s:
             return s.scalar(select(BlobRow.sha256).where(BlobRow.sha256 == key)) is not None
 
-    def verify(self, digest: str) -> str | None:
-        try:
-            self.get(digest)
-        except (NotFoundError, IntegrityError) as exc:
-            return str(exc)
-        return None
-
     # ------------------------------------------------------------------ walk / gc
     def walk(self) -> Iterator[BlobInfo]:
         """All blobs; ``path`` is the digest (what :meth:`age_seconds` takes)."""
@@ -128,9 +115,10 @@ class DatabaseBlobStore:
     def restore_set_aside(self, is_referenced) -> list[str]:
         return []
 
-    def age_seconds(self, digest) -> float:
+    def age_seconds(self, path) -> float:
+        """Seconds since the blob ``path`` (its digest, as :meth:`walk` gives it) was written or touched."""
         with Session(self.engine) as s:
-            touched = s.scalar(select(BlobRow.touched_at).where(BlobRow.sha256 == str(digest)))
+            touched = s.scalar(select(BlobRow.touched_at).where(BlobRow.sha256 == str(path)))
         return 0.0 if touched is None else (_now() - touched).total_seconds()
 
     def remove(self, digest: str) -> None:

@@ -70,8 +70,8 @@ class BlobStoreProtocol(Protocol):
     def restore_set_aside(self, is_referenced: Callable[[str], bool]) -> list[str]:
         """Put back blobs an interrupted ``gc`` set aside that a row references."""
 
-    def age_seconds(self, where: Any) -> float:
-        """Seconds since the blob at ``where`` (a path, or a digest) was written or touched."""
+    def age_seconds(self, path: Any) -> float:
+        """Seconds since the blob at ``path`` (``BlobInfo.path``: a file, or the digest) was written or touched."""
 
     def remove(self, digest: str) -> None:
         """Delete one blob unconditionally (tests and repairs)."""
