@@ -140,3 +140,15 @@ def test_the_client_imports_no_server_code():
             "print(bad); sys.exit(1 if bad else 0)")
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert done.returncode == 0, done.stdout + done.stderr
+
+
+@pytest.mark.parametrize("module", ["_query", "_bundle", "_maintenance"])
+def test_the_helpers_use_no_private_of_the_repository(module):
+    """The query, bundle and maintenance helpers take narrow interfaces (ReadAccess, WriteAccess, a
+    load_frf function), never the Repository facade or its private _read, _retrying, _joint."""
+    path = Path(jointdb.__file__).parent / "store" / f"{module}.py"
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    privates = {n.attr for n in ast.walk(tree) if isinstance(n, ast.Attribute)} & {"_read", "_write", "_retrying",
+                                                                                   "_joint", "_blob"}
+    imported = {n.module for n in ast.walk(tree) if isinstance(n, ast.ImportFrom)}
+    assert not privates and "jointdb.store._repository" not in imported
