@@ -1,7 +1,8 @@
 """Labels (mutable pointers), deprecation states and the audit log of a repository.
 
-A mixin of :class:`jointdb.store.Repository`: it uses the repository's
-``get``, ``history``, ``_joint``, ``_read`` and ``_retrying``.
+A mixin of :class:`jointdb.store.Repository`: it uses the repository's ``get``,
+``history`` and ``storage`` (:class:`jointdb.store._access.Storage`: read sessions and
+retried write transactions).
 """
 
 from __future__ import annotations
@@ -13,6 +14,7 @@ from sqlalchemy.orm import Session
 
 from jointdb._limits import check_text
 from jointdb.store import _db
+from jointdb.store._access import joint_row
 from jointdb.store._index import bump, refresh_joints
 from jointdb.store._models import AuditRow, JointRow, LabelRow, StateRow, utcnow
 from jointdb.store._records import current_actor
@@ -35,10 +37,10 @@ class LabelsAndStates:
         self.get(name, version)  # NotFoundError for an unknown joint or version
 
         def write(s: Session) -> None:
-            self._move_label(s, self._joint(s, name), name, int(version), label, actor, utcnow())
+            self._move_label(s, joint_row(s, name), name, int(version), label, actor, utcnow())
             bump(s)  # labels are read live by the query; only its stamp changes
 
-        self._retrying(write)
+        self.storage.retrying(write)
         return self.get(name, version)
 
     @staticmethod
@@ -73,7 +75,7 @@ class LabelsAndStates:
         state = "active" if undo else "deprecated"
 
         def write(s: Session) -> None:
-            joint = self._joint(s, name)
+            joint = joint_row(s, name)
             now = utcnow()
             s.add(StateRow(joint_id=joint.id, version=version, state=state, reason=str(reason), author=actor, at=now))
             s.add(AuditRow(at=now, actor=actor, action="undeprecate" if undo else "deprecate", joint_name=name,
@@ -81,13 +83,13 @@ class LabelsAndStates:
             s.flush()
             refresh_joints(s, [joint.id])  # the query index, in the same transaction
 
-        self._retrying(write)
+        self.storage.retrying(write)
         return self.history(name)
 
     @_db.with_db_errors
     def audit(self, name: str | None = None, limit: int = 100) -> list[dict[str, Any]]:
         """The newest audit-log entries (optionally for one joint)."""
-        with self._read() as s:
+        with self.storage.read() as s:
             q = select(AuditRow).order_by(AuditRow.id.desc()).limit(limit)
             if name:
                 q = q.where(AuditRow.joint_name == name)

@@ -32,6 +32,7 @@ from sqlalchemy import delete, select, update
 from sqlalchemy.orm import Session
 
 from jointdb.errors import InputError, NotFoundError, NotPermittedError
+from jointdb.store._access import read_session
 from jointdb.store._models import AuditRow, JointRow, TokenRow, VersionRow, WebSessionRow, utcnow
 from jointdb.store._records import as_utc, current_actor
 
@@ -155,11 +156,11 @@ def create_token(repo: "Repository", name: str, role: str, expires: str | dateti
         s.flush()
         return _info(row)
 
-    return token, repo._retrying(write)
+    return token, repo.storage.retrying(write)
 
 
 def list_tokens(repo: "Repository") -> list[TokenInfo]:
-    with repo._read() as s:
+    with read_session(repo) as s:
         return [_info(r) for r in s.scalars(select(TokenRow).order_by(TokenRow.id))]
 
 
@@ -188,7 +189,7 @@ def revoke_token(repo: "Repository", token_id: str, revoked_by: str | None = Non
         s.flush()
         return _info(row)
 
-    return repo._retrying(write)
+    return repo.storage.retrying(write)
 
 
 def authenticate(repo: "Repository", token: str) -> TokenInfo | None:
@@ -199,7 +200,7 @@ def authenticate(repo: "Repository", token: str) -> TokenInfo | None:
     if not isinstance(token, str) or not _TOKEN.fullmatch(token):
         return None
     digest = token_sha256(token)
-    with repo._read() as s:
+    with read_session(repo) as s:
         row = s.scalar(select(TokenRow).where(TokenRow.token_id == token[4:16]))
     if row is None or not hmac.compare_digest(row.sha256, digest):
         return None
@@ -225,7 +226,7 @@ def check_may_change(repo: "Repository", who: TokenInfo, name: str, action: str)
         return
     if not who.allows("writer"):
         raise NotPermittedError(f"the token of {who.name} has role {who.role}; {action} needs writer")
-    with repo._read() as s:
+    with read_session(repo) as s:
         author = s.scalar(select(VersionRow.author).join(JointRow, JointRow.id == VersionRow.joint_id)
                           .where(JointRow.name == name).order_by(VersionRow.version).limit(1))
         if author is None or author == who.name:
@@ -275,7 +276,7 @@ def open_session(repo: "Repository", token: str, lifetime_s: float,
         s.flush()
         return WebSession(info, now, now, expires)
 
-    return session_id, repo._retrying(write)
+    return session_id, repo.storage.retrying(write)
 
 
 def session_user(repo: "Repository", session_id: str | None, idle_s: float,
@@ -287,7 +288,7 @@ def session_user(repo: "Repository", session_id: str | None, idle_s: float,
         return None
     now = now or utcnow()
     digest = session_sha256(session_id)
-    with repo._read() as s:
+    with read_session(repo) as s:
         found = s.execute(select(WebSessionRow, TokenRow).join(TokenRow, TokenRow.token_id == WebSessionRow.token_id)
                           .where(WebSessionRow.sha256 == digest)).first()
     if found is None:
@@ -304,7 +305,7 @@ def session_user(repo: "Repository", session_id: str | None, idle_s: float,
             s.execute(update(WebSessionRow).where(WebSessionRow.id == row.id, WebSessionRow.revoked_at.is_(None))
                       .values(last_seen_at=now))
 
-        repo._retrying(touch)
+        repo.storage.retrying(touch)
     return info
 
 
@@ -320,4 +321,4 @@ def close_session(repo: "Repository", session_id: str | None) -> bool:
                          .values(revoked_at=utcnow()))
         return bool(done.rowcount)
 
-    return repo._retrying(write)
+    return repo.storage.retrying(write)
