@@ -15,7 +15,6 @@ from typing import Annotated, Any, Optional
 import typer
 
 from jointdb._output import emit, message
-from jointdb.cli._joint_files import _write_joint_file
 from jointdb.errors import InputError, IntegrityError, NotFoundError
 
 DbOpt = Annotated[
@@ -205,7 +204,7 @@ def register(app: typer.Typer) -> None:
         Example: jointdb catalogue joint.h5 --name T1-HSK63 --type tool-holder
         --material carbide --material steel --torque 40 --geometry diameter_m=0.02
         """
-        from jointdb.cli._joint_files import catalogue_inputs
+        from jointdb.usecases import catalogue_inputs
         from jointdb.store._types import check_label, check_name
 
         args = catalogue_inputs(joint_file, _conditions(material, preload, torque, geometry, extra),
@@ -290,8 +289,10 @@ def register(app: typer.Typer) -> None:
             write_rows(out, rows, kind="matches", meta={"joint_type": joint_type, "request": req.to_dict()})
             message(f"wrote {out} ({len(rows)} matches)")
         if interpolate is not None:
+            from jointdb.usecases import write_joint_file
+
             ij = repo.interpolate(matches, req)
-            _write_joint_file(interpolate, ij.frf, {
+            write_joint_file(interpolate, ij.frf, {
                 "model_kind": matches[0].version.model_kind, "joint_type": ij.joint_type,
                 "conditions": req.to_dict(), "interpolated": True, "method": "interpolated-dynamic-stiffness",
                 "neighbours": [{"name": n, "version": v, "weight": w} for n, v, w in ij.neighbours]})
@@ -334,7 +335,9 @@ def register(app: typer.Typer) -> None:
         repo = _repo(db, blobs)
         jv = repo.get(name, version=version, at=at, label=label)
         if frf_out is not None:
-            _write_joint_file(frf_out, repo.load_frf(jv), {
+            from jointdb.usecases import write_joint_file
+
+            write_joint_file(frf_out, repo.load_frf(jv), {
                 "model_kind": jv.model_kind, "joint_type": jv.joint_type, "conditions": jv.conditions.to_dict(),
                 "catalogue": {"name": jv.name, "version": jv.version, "uuid": jv.uuid, "blob_sha256": jv.blob_sha256},
                 "quality": dict(jv.quality)})

@@ -53,7 +53,7 @@ def interpolate(body: NearestIn, r=Depends(repo), _who=reader) -> dict[str, Any]
 def predict(body: PredictIn, r=Depends(repo), _who=reader) -> dict[str, Any]:
     """Joints from the catalogue (pinned, nearest or explicit); the stack must carry its
     spindle model inline (a server reads no client files)."""
-    from jointdb import app as application
+    from jointdb import usecases
     from jointdb.stack import MeasuredSpindle, ModelledSpindle, stack_from_dict
 
     spec = stack_from_dict(body.stack)
@@ -61,7 +61,7 @@ def predict(body: PredictIn, r=Depends(repo), _who=reader) -> dict[str, Any]:
     if isinstance(sp, MeasuredSpindle) or (isinstance(sp, ModelledSpindle) and isinstance(sp.model, str)):
         raise InputError("stack.spindle: refers to a file; send the spindle model inline (the server reads "
                          "no client files)")
-    result = application.predict_stack(spec, r)
+    result = usecases.predict_stack(spec, r)
     pred = result.prediction
     return {"stack": spec.name, "joints": [j.row() for j in result.joints.values()], "prediction": pred.summary(),
             "notes": list(pred.notes), "tip_frf": frf_json(pred.tip)}
