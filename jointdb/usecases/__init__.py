@@ -8,6 +8,8 @@ this package, never each other). Measurement campaigns (reading, identification,
 coupling) are the sibling package :mod:`jointdb.campaign`; the demo's job is
 :mod:`jointdb._journey`, which calls these functions.
 
+Campaigns (:mod:`jointdb.usecases._catalogue`; planning a campaign is :func:`jointdb.campaign._plan.plan_campaign`)
+    identify              -- read, check and identify a campaign file (IRC)
 Catalogue (:mod:`jointdb.usecases._catalogue`; one path, one provenance rule)
     catalogue_inputs      -- a campaign or identified joint file -> the catalogue's arguments
     read_joint_file       -- what a joint / campaign file holds (:class:`JointSource`)
@@ -16,6 +18,8 @@ Catalogue (:mod:`jointdb.usecases._catalogue`; one path, one provenance rule)
 Stacks (:mod:`jointdb.usecases._stack`)
     resolve_joints        -- each interface's joint from the catalogue (:class:`JointResolution`)
     predict_stack         -- resolve, then predict the tool-tip FRF (:class:`StackPrediction`)
+Lobes (:mod:`jointdb.usecases._lobes`)
+    stability_lobes       -- milling (ZOA) or turning lobes of a tool-tip FRF over a speed grid
 Files (:mod:`jointdb.usecases._files`)
     load_stack            -- a stack file with the spindle FRF / model file it names
     read_frf_file, write_frf_file, frf_format -- FRF files by suffix (UFF58, HDF5, CSV)
@@ -27,6 +31,7 @@ from jointdb.usecases._catalogue import (
     JointSource,
     catalogue_campaign,
     catalogue_inputs,
+    identify,
     merge_conditions,
     read_joint_file,
 )
@@ -39,6 +44,7 @@ from jointdb.usecases._files import (
     write_frf_file,
     write_joint_file,
 )
+from jointdb.usecases._lobes import stability_lobes
 from jointdb.usecases._stack import (
     INTERPOLATION_POOL,
     JointResolution,
@@ -52,6 +58,7 @@ __all__ = [
     "JointSource",
     "catalogue_campaign",
     "catalogue_inputs",
+    "identify",
     "merge_conditions",
     "read_joint_file",
     "FRF_SUFFIXES",
@@ -61,6 +68,7 @@ __all__ = [
     "read_frf_file",
     "write_frf_file",
     "write_joint_file",
+    "stability_lobes",
     "INTERPOLATION_POOL",
     "JointResolution",
     "StackPrediction",

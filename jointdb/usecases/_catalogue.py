@@ -70,6 +70,33 @@ class JointSource:
     identified: Any = None
 
 
+def identify(path: Path | str, *, root: Path | str | None = None):
+    """Read, check and identify a campaign file (``jointdb identify``; IRC, docs/theory.md §2).
+
+    Parameters
+    ----------
+    path
+        The campaign file (``jointdb-campaign/1``); the files it names are relative to it.
+    root
+        Confine the campaign to this folder (an unpacked upload), as
+        :func:`jointdb.campaign.load_campaign` does.
+
+    Returns
+    -------
+    jointdb.campaign.IdentifyOutcome
+        The campaign, the identified joint, the re-coupled and rigid assemblies, the constant
+        (k, c) fit, the validation and the quality record.
+
+    Raises
+    ------
+    InputError
+        Naming the campaign file and field; NotFoundError for a missing campaign file.
+    """
+    from jointdb.campaign import identify_campaign, load_campaign
+
+    return identify_campaign(load_campaign(path, root=root))
+
+
 def read_joint_file(path: Path | str, root: Path | str | None = None) -> JointSource:
     """Read a joint or campaign file for the catalogue.
 
@@ -92,14 +119,13 @@ def read_joint_file(path: Path | str, root: Path | str | None = None) -> JointSo
     if not path.is_file():
         raise InputError(f"{path}: no such file")
     if path.suffix.lower() == ".json":
-        from jointdb.campaign import file_hashes, identify_campaign, joint_attrs, load_campaign
+        from jointdb.campaign import file_hashes, joint_attrs
 
-        campaign = load_campaign(path, root=root)
-        outcome = identify_campaign(campaign)
+        outcome = identify(path, root=root)
         raw = {"measured": outcome.measured} if outcome.measured is not None else {}
         meta = joint_attrs(outcome)
         meta["quality"] = {**meta.get("quality", {}), **_identification_quality(outcome)}
-        return JointSource(outcome.result.joint, meta, file_hashes(campaign), raw, outcome)
+        return JointSource(outcome.result.joint, meta, file_hashes(outcome.campaign), raw, outcome)
     hashes = {path.name: file_sha256(path)}
     try:
         with h5py.File(path, "r", locking=False) as f:
