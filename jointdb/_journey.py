@@ -273,13 +273,14 @@ def _predict(repo, spec, resolutions, result: JourneyResult, say: Callable[[str]
     from jointdb import io
     from jointdb._journey_band import journey_bands
     from jointdb.plots._stack import joints_legend, save_tip_comparison
-    from jointdb.stack import predict_tool_tip, prediction_grid
+    from jointdb.stack import prediction_grid
+    from jointdb.usecases import predict_with_joints
 
     out = result.out_dir
     say("[3/4] predict the tool-tip FRF (three-component receptance coupling, docs/theory.md §4)")
     grid = prediction_grid(spec)
     fine = _finer_lines(grid, LOBE_REFINEMENT)
-    lob = predict_tool_tip(spec, {n: r.frf for n, r in resolutions.items() if r.frf is not None}, fine)
+    lob = predict_with_joints(spec, resolutions, fine).prediction
     pred = _every_line(lob, LOBE_REFINEMENT)
     result.prediction = pred.summary()
     same_y = np.allclose(pred.tip.entry("1y", "1y"), pred.tip.entry("1x", "1x"))
@@ -305,7 +306,6 @@ def _cross_check(repo, spec, resolutions, grid, result: JourneyResult, say: Call
     query had neighbours): ``[(legend, tip FRF)]`` for the comparison plot, or ``[]``."""
     from jointdb import usecases
     from jointdb.plots._stack import joints_legend
-    from jointdb.stack import predict_tool_tip
 
     queried = {n for n, r in resolutions.items() if r.kind == "query" and len(r.candidates) > 1}
     if not queried:
@@ -315,7 +315,7 @@ def _cross_check(repo, spec, resolutions, grid, result: JourneyResult, say: Call
         for n, c in spec.interfaces.items()
     })
     ires = usecases.resolve_joints(ispec, repo)
-    ipred = predict_tool_tip(ispec, {n: r.frf for n, r in ires.items() if r.frf is not None}, grid)
+    ipred = usecases.predict_with_joints(ispec, ires, grid).prediction
     irow = ipred.summary()[0]
     result.interpolated = {"joints": {n: ires[n].description for n in queried}, **irow}
     say("      cross-check, both queried interfaces interpolated:" if len(queried) > 1 else "      cross-check:")

@@ -18,6 +18,7 @@ Catalogue (:mod:`jointdb.usecases._catalogue`; one path, one provenance rule)
 Stacks (:mod:`jointdb.usecases._stack`)
     resolve_joints        -- each interface's joint from the catalogue (:class:`JointResolution`)
     predict_stack         -- resolve, then predict the tool-tip FRF (:class:`StackPrediction`)
+    predict_with_joints   -- predict the tool-tip FRF with joints already resolved
 Lobes (:mod:`jointdb.usecases._lobes`)
     stability_lobes       -- milling (ZOA) or turning lobes of a tool-tip FRF over a speed grid
 Files (:mod:`jointdb.usecases._files`)
@@ -50,6 +51,7 @@ from jointdb.usecases._stack import (
     JointResolution,
     StackPrediction,
     predict_stack,
+    predict_with_joints,
     resolve_joints,
 )
 
@@ -73,5 +75,6 @@ __all__ = [
     "JointResolution",
     "StackPrediction",
     "predict_stack",
+    "predict_with_joints",
     "resolve_joints",
 ]

@@ -159,17 +159,29 @@ class StackPrediction:
     joints: Mapping[str, JointResolution]
 
 
+def predict_with_joints(spec: StackSpec, joints: Mapping[str, JointResolution], freq=None) -> StackPrediction:
+    """Predict a stack's tool-tip FRF with joints already resolved (:func:`resolve_joints`).
+
+    Parameters
+    ----------
+    spec
+        The stack.
+    joints
+        Interface -> :class:`JointResolution`; rigid / explicit ones carry no FRF.
+    freq
+        Frequency lines [Hz], shape ``(n_freq,)`` (default: the stack's grid,
+        :func:`jointdb.stack.prediction_grid`).
+    """
+    resolved = {n: r.frf for n, r in joints.items() if r.frf is not None}
+    return StackPrediction(spec, predict_tool_tip(spec, resolved, prediction_grid(spec, freq)), joints)
+
+
 def predict_stack(spec: StackSpec | Path | str, repo=None, freq=None) -> StackPrediction:
     """Resolve a stack's joints from the database, then predict its tool-tip FRF (docs/theory.md §4).
 
-    ``spec`` may be a path to a stack file. See :func:`resolve_joints` for ``repo``.
+    ``spec`` may be a path to a stack file. See :func:`resolve_joints` for ``repo``,
+    :func:`predict_with_joints` for ``freq``.
     """
     if not isinstance(spec, StackSpec):
         spec = load_stack(spec)
-    joints = resolve_joints(spec, repo)
-    f = prediction_grid(spec, freq)
-    resolved = {n: r.frf for n, r in joints.items() if r.frf is not None}
-    pred = predict_tool_tip(spec, resolved, f)
-    return StackPrediction(spec, pred, joints)
-
-
+    return predict_with_joints(spec, resolve_joints(spec, repo), freq)
