@@ -70,7 +70,7 @@ def register(app: typer.Typer) -> None:
         os.environ.update(env)  # every worker reads its settings from the environment
         import logging
 
-        from jointdb.server._logging import configure, event, log_config
+        from jointdb.io._jsonlog import configure, event, log_config
 
         configure(log_level.lower())  # from here on every line on stderr is JSON, uvicorn's too
         event(logging.getLogger("jointdb.server"), "serve", url=f"http://{host}:{port}", workers=workers)
