@@ -243,3 +243,14 @@ def test_every_allow_listed_layer_break_still_exists():
     gone = KNOWN_LAYER_BREAKS - layer_breaks(import_graph())
     assert not gone, "these allow-listed layer breaks are gone; remove them from KNOWN_LAYER_BREAKS in this file: " + (
         "; ".join(f"{a} -> {b}" for a, b in sorted(gone)))
+
+
+def test_the_client_and_its_wire_format_load_no_server_library():
+    """The client decodes FRFs with :mod:`jointdb.io`; neither pulls in FastAPI or the server."""
+    import subprocess
+    import sys
+
+    code = ("import sys, jointdb.client\nfrom jointdb.io import frf_from_json, frf_json\n"
+            "print(','.join(m for m in ('fastapi', 'starlette', 'uvicorn', 'jointdb.server') if m in sys.modules))\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "", f"the client loads {out.stdout.strip()}"
