@@ -117,7 +117,7 @@ class RemoteRepository:
         return [version_from_json(v) for v in self._all("/joints", damaged=damaged, **params)]
 
     def load_frf(self, version, number: int | None = None):
-        from jointdb.server._deps import frf_from_json
+        from jointdb.io import frf_from_json
 
         name, v = (version.name, version.version) if number is None and hasattr(version, "name") else (version, number)
         return frf_from_json(self._call("GET", f"/joints/{self._name(name)}/versions/{int(v)}/frf",
@@ -153,7 +153,7 @@ class RemoteRepository:
                       tuple(m["outside_range"])) for m in out["matches"]]
 
     def interpolate(self, matches, conditions=None):
-        from jointdb.server._deps import frf_from_json
+        from jointdb.io import frf_from_json
         from jointdb.store._types import InterpolatedJoint, as_conditions
 
         if not matches:
@@ -180,7 +180,7 @@ class RemoteRepository:
         latest version, nothing written). The request carries an ``Idempotency-Key`` and is
         retried with the same key after a connection error or a 503, so a retry never makes a
         second version."""
-        from jointdb.server._deps import frf_json
+        from jointdb.io import frf_json
         from jointdb.store._types import as_conditions, as_provenance
 
         prov = as_provenance(provenance)

@@ -5,10 +5,10 @@ from __future__ import annotations
 
 from typing import Any
 
-import numpy as np
 from fastapi import Depends, HTTPException, Query, Request, Security
 from fastapi.security import HTTPBearer
 
+from jointdb.io import frf_from_json, frf_json  # noqa: F401  (the routes import them from here)
 from jointdb.store._tokens import TokenInfo, authenticate, check_may_change
 
 SESSION_COOKIE = "jointdb_session"
@@ -104,48 +104,3 @@ def version_json(v) -> dict[str, Any]:
                        "software_version": p.software_version, "author": p.author},
         "quality": dict(v.quality), "raw_measurements": sorted(v.raw_blobs),
     }
-
-
-def frf_json(frf) -> dict[str, Any]:
-    """An FRF as JSON: frequencies in Hz, entries as real and imaginary parts in SI units."""
-    from jointdb.io import unit_label
-
-    return {
-        "quantity": frf.quantity.value,
-        "freq_hz": frf.freq.tolist(),
-        "outputs": [str(d) for d in frf.outputs],
-        "inputs": [str(d) for d in frf.inputs],
-        "units": [[unit_label(frf.quantity, o, i) for i in frf.inputs] for o in frf.outputs],
-        "real": np.ascontiguousarray(frf.values.real).tolist(),
-        "imag": np.ascontiguousarray(frf.values.imag).tolist(),
-    }
-
-
-def frf_from_json(data: dict[str, Any]):
-    """The inverse of :func:`frf_json` (InputError naming the field on bad input)."""
-    from jointdb.errors import InputError
-    from jointdb.frf import FRF
-
-    try:
-        freq = np.asarray(data["freq_hz"], dtype=float)
-        re_, im = np.asarray(data["real"], dtype=float), np.asarray(data["imag"], dtype=float)
-        want = (freq.size, len(data["outputs"]), len(data["inputs"]))
-        for part, arr in (("real", re_), ("imag", im)):  # no broadcasting: every entry given
-            if arr.shape != want:
-                raise InputError(f"frf.{part}: shape {arr.shape} must be (n_freq, n_outputs, n_inputs) = {want}")
-        frf = FRF(freq, re_ + 1j * im, tuple(data["outputs"]), tuple(data["inputs"]),
-                  data.get("quantity", "receptance"))
-    except KeyError as exc:
-        raise InputError(f"frf: missing field {exc.args[0]!r} (freq_hz, outputs, inputs, real, imag)") from None
-    except InputError:
-        raise
-    except (TypeError, ValueError) as exc:
-        raise InputError(f"frf: {' '.join(str(exc).split())}") from None
-    if data.get("units") is not None:  # given: must be what the quantity and DOFs make them
-        from jointdb.io import unit_label
-
-        want_units = [[unit_label(frf.quantity, o, i) for i in frf.inputs] for o in frf.outputs]
-        if data["units"] != want_units:
-            raise InputError(f"frf.units: {str(data['units'])[:80]} do not match the quantity "
-                             f"{frf.quantity.value} and the DOFs, which give {want_units}")
-    return frf
