@@ -99,19 +99,19 @@ def oracle_joints(case: sv.Case, workdir, side_repo, cache: dict) -> dict:
     with a 45 mm / 35 mm blank of its shank and torque on that machine (A through that taper joint); catalogued
     in ``side_repo``: the prediction path's error with no interpolation. ``cache`` maps a campaign's
     conditions to its joint FRF (campaigns shared between stacks)."""
-    from jointdb import app
+    from jointdb import usecases
 
     hs_key = ("hs", case.taper, case.drawbar)
     th_key = ("th", case.taper, case.drawbar, case.diameter, case.torque)
     if hs_key not in cache:
         name = f"oracle-hs-{case.taper.lower()}-{case.drawbar:.0f}n"
         c = sv.Case(name, 0.012, 0.045, 0.035, 80.0, case.taper, case.drawbar)
-        out = app.catalogue_campaign(side_repo, sv.write_hs_campaign(workdir / name, c))
+        out = usecases.catalogue_campaign(side_repo, sv.write_hs_campaign(workdir / name, c))
         cache[hs_key] = side_repo.load_frf(side_repo.get(out.row()["joint"].split("@")[0]))
     if th_key not in cache:
         name = f"oracle-th-{case.taper.lower()}-{case.drawbar:.0f}n-d{case.diameter * 1e3:.0f}-{case.torque:.0f}nm"
         c = sv.Case(name, case.diameter, 0.045, 0.035, case.torque, case.taper, case.drawbar)
-        out = app.catalogue_campaign(side_repo, sv.write_th_campaign(workdir / name, c, cache[hs_key]))
+        out = usecases.catalogue_campaign(side_repo, sv.write_th_campaign(workdir / name, c, cache[hs_key]))
         cache[th_key] = side_repo.load_frf(side_repo.get(out.row()["joint"].split("@")[0]))
     return {"tool-holder": cache[th_key], "holder-spindle": cache[hs_key]}
 

@@ -351,11 +351,11 @@ def _adequacy(out) -> dict:
 def build_catalogue(workdir: Path, repo, say=print) -> list[dict]:
     """Write and catalogue every campaign (holder–spindle first: the tool–holder campaigns' A needs the
     reference machine's taper joint). Returns one row per campaign (joint, constant k, residual, joint kept)."""
-    from jointdb import app
+    from jointdb import usecases
 
     rows = []
     for case in HS_CAMPAIGNS:
-        out = app.catalogue_campaign(repo, write_hs_campaign(workdir / case.name, case))
+        out = usecases.catalogue_campaign(repo, write_hs_campaign(workdir / case.name, case))
         rows.append(out.row() | {"type": "holder-spindle", "case": case.name} | _adequacy(out))
         say(f"  catalogued {rows[-1]['joint']}: k_x={rows[-1]['k_x_n_per_m']:.3e} N/m, "
             f"k_θ={rows[-1]['k_theta_nm_per_rad']:.3e} N·m/rad")
@@ -364,7 +364,7 @@ def build_catalogue(workdir: Path, repo, say=print) -> list[dict]:
         machine = hs_name(case.taper, case.drawbar)
         if machine not in hs_joints:
             hs_joints[machine] = repo.load_frf(repo.get(machine))
-        out = app.catalogue_campaign(repo, write_th_campaign(workdir / case.name, case, hs_joints[machine]))
+        out = usecases.catalogue_campaign(repo, write_th_campaign(workdir / case.name, case, hs_joints[machine]))
         rows.append(out.row() | {"type": "tool-holder", "case": case.name} | _adequacy(out))
         say(f"  catalogued {rows[-1]['joint']}: k_x={rows[-1]['k_x_n_per_m']:.3e} N/m, "
             f"k_θ={rows[-1]['k_theta_nm_per_rad']:.3e} N·m/rad")
@@ -451,12 +451,12 @@ def validate(case: Case, repo, spindle=None, before: bool = False) -> dict:
     Per variant: dominant-mode frequency / peak / lobe-floor errors, and the mode-matched comparison (the
     predicted resonance nearest the truth's dominant one: ``near_freq_err``, ``near_peak_err``).
     """
-    from jointdb import app
+    from jointdb import usecases
     from jointdb.stack import MeasuredSpindle, predict_tool_tip
 
     truth = truth_tip(case).values[:, 0, 0]
     spec = spec_for(case, queries(case))
-    res = app.resolve_joints(spec, repo)
+    res = usecases.resolve_joints(spec, repo)
     joints = {n: r.frf for n, r in res.items() if r.frf is not None}
     pred = predict_tool_tip(spec, joints, FREQ)
     variants = {"cat": pred.tip.values[:, 0, 0], "rigid": pred.rigid.values[:, 0, 0]}
@@ -471,13 +471,13 @@ def validate(case: Case, repo, spindle=None, before: bool = False) -> dict:
         q = queries(case)
         q["tool-holder"]["query"]["geometry"] = {**q["tool-holder"]["query"]["geometry"],
                                                  "taper_diameter_m": TAPERS[other][0]}
-        ores = app.resolve_joints(spec_for(case, q), repo)
+        ores = usecases.resolve_joints(spec_for(case, q), repo)
         variants["cat_th_other_family"] = predict_tool_tip(
             spec, {**joints, "tool-holder": ores["tool-holder"].frf}, FREQ).tip.values[:, 0, 0]
         # the tool–holder joints of the family's low-force machine only (as if catalogued on one machine)
         q = queries(case)
         q["tool-holder"]["query"]["preload_n"] = min(TH_MACHINES[case.taper])
-        ores = app.resolve_joints(spec_for(case, q), repo)
+        ores = usecases.resolve_joints(spec_for(case, q), repo)
         variants["cat_th_one_machine"] = predict_tool_tip(
             spec, {**joints, "tool-holder": ores["tool-holder"].frf}, FREQ).tip.values[:, 0, 0]
     if spindle is not None:

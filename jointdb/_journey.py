@@ -176,14 +176,14 @@ def run_main_job(
 
 def _catalogue(repo, cat: Path, result: JourneyResult, say: Callable[[str], None]) -> None:
     """Step 1: identify and catalogue every bundled campaign (one row each, ``catalogue.csv``)."""
-    from jointdb import app
+    from jointdb import usecases
 
     campaigns = sorted((cat / "campaigns").glob("*/campaign.json"))
     kinds = _joint_types(campaigns)
     say(f"[1/4] identify and catalogue {len(campaigns)} campaigns "
         f"({', '.join(f'{n} {t}' for t, n in kinds.items())}; IRC, docs/theory.md §2a)")
     for path in campaigns:
-        outcome = app.catalogue_campaign(repo, path)
+        outcome = usecases.catalogue_campaign(repo, path)
         row = {"joint_type": outcome.campaign.joint_type, **outcome.row(),
                **_condition_columns(outcome.campaign.conditions)}
         truth_file = path.parent / "truth.json"
@@ -203,17 +203,17 @@ def _catalogue(repo, cat: Path, result: JourneyResult, say: Callable[[str], None
 
 def _query(repo, cat: Path, result: JourneyResult, say: Callable[[str], None]):
     """Step 2: read the new stack and choose the nearest catalogued joint at each interface."""
-    from jointdb import app
+    from jointdb import usecases
     from jointdb.plots._stack import save_joint_distances
     from jointdb.stack import stack_to_dict
 
     out = result.out_dir
-    spec = app.load_stack(cat / "demo-stack.json")
+    spec = usecases.load_stack(cat / "demo-stack.json")
     result.files.append(_write_json(out / "stack.json", stack_to_dict(spec)))
     say(f"[2/4] new stack: {spec.name}")
     say(f"      tool {spec.tool.length * 1e3:.0f} mm ({spec.gauge_length * 1e3:.0f} mm gauge, "
         f"{spec.insertion_length * 1e3:.0f} mm inserted), holder {spec.holder.length * 1e3:.0f} mm")
-    resolutions = app.resolve_joints(spec, repo)
+    resolutions = usecases.resolve_joints(spec, repo)
     for res in resolutions.values():
         row = res.row()
         result.joints.append({**row, "candidates": [list(c) for c in res.candidates]})
@@ -273,13 +273,14 @@ def _predict(repo, spec, resolutions, result: JourneyResult, say: Callable[[str]
     from jointdb import io
     from jointdb._journey_band import journey_bands
     from jointdb.plots._stack import joints_legend, save_tip_comparison
-    from jointdb.stack import predict_tool_tip, prediction_grid
+    from jointdb.stack import prediction_grid
+    from jointdb.usecases import predict_with_joints
 
     out = result.out_dir
     say("[3/4] predict the tool-tip FRF (three-component receptance coupling, docs/theory.md §4)")
     grid = prediction_grid(spec)
     fine = _finer_lines(grid, LOBE_REFINEMENT)
-    lob = predict_tool_tip(spec, {n: r.frf for n, r in resolutions.items() if r.frf is not None}, fine)
+    lob = predict_with_joints(spec, resolutions, fine).prediction
     pred = _every_line(lob, LOBE_REFINEMENT)
     result.prediction = pred.summary()
     same_y = np.allclose(pred.tip.entry("1y", "1y"), pred.tip.entry("1x", "1x"))
@@ -303,9 +304,8 @@ def _predict(repo, spec, resolutions, result: JourneyResult, say: Callable[[str]
 def _cross_check(repo, spec, resolutions, grid, result: JourneyResult, say: Callable[[str], None]) -> list:
     """The same stack with the queried joints interpolated between the catalogued conditions (when a
     query had neighbours): ``[(legend, tip FRF)]`` for the comparison plot, or ``[]``."""
-    from jointdb import app
+    from jointdb import usecases
     from jointdb.plots._stack import joints_legend
-    from jointdb.stack import predict_tool_tip
 
     queried = {n for n, r in resolutions.items() if r.kind == "query" and len(r.candidates) > 1}
     if not queried:
@@ -314,8 +314,8 @@ def _cross_check(repo, spec, resolutions, grid, result: JourneyResult, say: Call
         n: dataclasses.replace(c, interpolate=True, neighbours=2) if n in queried else c
         for n, c in spec.interfaces.items()
     })
-    ires = app.resolve_joints(ispec, repo)
-    ipred = predict_tool_tip(ispec, {n: r.frf for n, r in ires.items() if r.frf is not None}, grid)
+    ires = usecases.resolve_joints(ispec, repo)
+    ipred = usecases.predict_with_joints(ispec, ires, grid).prediction
     irow = ipred.summary()[0]
     result.interpolated = {"joints": {n: ires[n].description for n in queried}, **irow}
     say("      cross-check, both queried interfaces interpolated:" if len(queried) > 1 else "      cross-check:")

@@ -5,7 +5,7 @@ interface, the measured assembly files and the joint model (format in
 :mod:`jointdb.campaign._file`). This package reads and checks it, runs the
 identification (:mod:`jointdb.coupling`) and forward coupling, and is shared by
 the CLI (``jointdb identify``, ``jointdb couple``, ``jointdb catalogue``) and by
-:mod:`jointdb.app`. It spans files and numerics, so it lives outside both the
+:mod:`jointdb.usecases`. It spans files and numerics, so it lives outside both the
 numerical core and the CLI.
 """
 

@@ -59,16 +59,23 @@ class Substructure:
 
 
 def file_hashes(c: "Campaign") -> dict[str, str]:
-    """SHA-256 of the campaign file and of every file it references (provenance)."""
+    """SHA-256 of the campaign file and of every file it names, keyed by path relative to the campaign file.
+
+    The one rule of the catalogue's provenance (``input_files``, :mod:`jointdb.usecases`):
+    ``campaign.json``, ``assembly.uff``, ``../../models/tool.json`` — the same keys whether
+    the campaign is read where the user keeps it or unpacked from an uploaded archive (where
+    the relative path is the path inside the archive, never the server's folder).
+    """
     import hashlib
 
     paths = [c.path] + [s.path for s in c.substructures.values()] + list(c.measurements)
     if c.validation is not None:
         paths += [s.path for s in c.validation["substructures"].values()] + list(c.validation["measurements"])
+    base = c.path.resolve().parent
     out = {}
     for p in dict.fromkeys(Path(x).resolve() for x in paths):
-        out[p.name if p.parent == c.path.resolve().parent else str(p)] = hashlib.sha256(p.read_bytes()).hexdigest()
-    return out
+        out[Path(os.path.relpath(p, base)).as_posix()] = hashlib.sha256(p.read_bytes()).hexdigest()
+    return dict(sorted(out.items()))
 
 
 @dataclass(frozen=True)

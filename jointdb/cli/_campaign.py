@@ -175,7 +175,7 @@ def rotations_cmd(
     --node 3 --out holder.uff
     """
     from jointdb._output import emit, message
-    from jointdb.app import frf_format, read_frf_file, write_frf_file
+    from jointdb.usecases import frf_format, read_frf_file, write_frf_file
     from jointdb.campaign._rotations import estimate_rotations
 
     frf_format(out, "--out")

@@ -1,7 +1,7 @@
 """CLI: ``jointdb identify`` (IRC) and ``jointdb couple`` (RC), driven by a campaign file.
 
-Thin: the campaign is read and checked by :mod:`jointdb.campaign._file`,
-run by :mod:`jointdb.campaign._run`; files are written only after every
+Thin: the campaign is read, checked and identified by :func:`jointdb.usecases.identify`
+(:mod:`jointdb.campaign`); files are written only after every
 computation succeeded.
 """
 
@@ -43,14 +43,14 @@ def identify_cmd(
     Example: jointdb identify fixtures/campaigns/th-steel-30nm/campaign.json --out joint.h5 --plots figs
     """
     from jointdb._output import emit, message
-    from jointdb.campaign import load_campaign
-    from jointdb.campaign import identify_campaign, joint_attrs
+    from jointdb.campaign import joint_attrs
+    from jointdb.usecases import identify
 
     _check_out(out, (".h5", ".hdf5"), "--out")
     _check_out(report, (".json",), "--report")
     plots = plots_dir(plots, plot)
-    c = load_campaign(campaign)
-    result = identify_campaign(c)
+    result = identify(campaign)
+    c = result.campaign
     rep = result.report()
     # everything computed: now write
     from jointdb.io import write_frf_hdf5

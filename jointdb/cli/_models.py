@@ -63,8 +63,8 @@ def write_frf_file(path: Path, frf, *, binary: bool = False) -> str:
 
     ``binary`` selects binary UFF58 (58b, exact) instead of ASCII.
     """
-    from jointdb.app import frf_format
-    from jointdb.app import write_frf_file as write
+    from jointdb.usecases import frf_format
+    from jointdb.usecases import write_frf_file as write
 
     write(path, frf, binary=binary, round_freq=False)
     return frf_format(path)
@@ -177,7 +177,7 @@ def frf_cmd(
     model = load_model(model_file)
     q = Quantity.parse(quantity)
     if out is not None:
-        from jointdb.app import frf_format
+        from jointdb.usecases import frf_format
 
         frf_format(out, "--out")
         if not out.parent.is_dir():  # fail before the computation, not after

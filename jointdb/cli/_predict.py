@@ -1,6 +1,6 @@
 """CLI: ``jointdb predict STACK.json`` — tool-tip FRF of a new stack with joints from the database.
 
-Thin: :func:`jointdb.app.load_stack` / :func:`jointdb.app.predict_stack` do the
+Thin: :func:`jointdb.usecases.load_stack` / :func:`jointdb.usecases.predict_stack` do the
 work; this module parses options, writes the requested files and renders.
 """
 
@@ -78,7 +78,7 @@ def predict(
 
     Example: jointdb predict fixtures/stacks/endmill-modelled-spindle.json --out tip.uff --plots figs
     """
-    from jointdb import app as application
+    from jointdb import usecases
     from jointdb._output import emit, message
     from jointdb.errors import InputError
 
@@ -87,14 +87,14 @@ def predict(
         if path is not None and not path.parent.exists():
             raise InputError(f"{label} {str(path)!r}: directory {str(path.parent)!r} does not exist")
     if out is not None:
-        application.frf_format(out, "--out")
-    spec = application.load_stack(stack_file)
+        usecases.frf_format(out, "--out")
+    spec = usecases.load_stack(stack_file)
     freq = _frequency_override(spec, fmin, fmax, df)
     from jointdb.cli._store import check_db_target
 
     if any(j.kind in ("catalogued", "query") for j in spec.interfaces.values()):  # only then is a db read
         check_db_target(db)  # after every option is checked; a mistyped --db is not found, not created empty
-    result = application.predict_stack(spec, db, freq)
+    result = usecases.predict_stack(spec, db, freq)
     pred = result.prediction
     _report_joint_choices(result.joints.values())
     for note in pred.notes:
@@ -105,7 +105,7 @@ def predict(
     choice = choice_sensitivity(result, db, pred.tip.freq)
     files = {}
     if out is not None:
-        application.write_frf_file(out, pred.tip)
+        usecases.write_frf_file(out, pred.tip)
         files["tip_frf"] = str(out)
         message(f"wrote {out}")
     if plot is not None:

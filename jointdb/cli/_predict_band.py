@@ -32,7 +32,7 @@ def band_for(result, n: int = 200, seed: int = 0):
 
 def choice_sensitivity(result, db, freq, max_alternatives: int = 2) -> list[dict]:
     """How much the tip peak changes when a queried interface takes its next-nearest catalogued joints."""
-    from jointdb import app as application
+    from jointdb import usecases
     from jointdb.stack import JointChoice
 
     base = {r["direction"]: r["peak_m_per_n"] for r in result.prediction.summary()}
@@ -43,7 +43,7 @@ def choice_sensitivity(result, db, freq, max_alternatives: int = 2) -> list[dict
         for cand_name, cand_version, dist in res.candidates[1:1 + max_alternatives]:
             spec = result.spec.replace(interfaces={
                 **result.spec.interfaces, name: JointChoice("catalogued", name=cand_name, version=int(cand_version))})
-            alt = application.predict_stack(spec, db, freq).prediction.summary()
+            alt = usecases.predict_stack(spec, db, freq).prediction.summary()
             for r in alt:
                 change = r["peak_m_per_n"] / base[r["direction"]] - 1
                 rows.append({"interface": name, "alternative": f"{cand_name}@{cand_version}", "distance": dist,

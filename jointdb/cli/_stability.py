@@ -34,7 +34,7 @@ def _at_most(value: int, option: str, limit: int) -> None:
 
 def read_frf_file(path: Path):
     """Read a tool-tip FRF from UFF58, the HDF5 exchange file or CSV (by suffix)."""
-    from jointdb.app import read_frf_file as read
+    from jointdb.usecases import read_frf_file as read
 
     return read(path)
 

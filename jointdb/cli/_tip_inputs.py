@@ -33,10 +33,10 @@ def read_tool_tip(path: Path) -> tuple[FRF, list[str]]:
     Raises
     ------
     InputError, NotFoundError
-        As :func:`jointdb.app.read_frf_file`, or for a file that is neither a full matrix nor
+        As :func:`jointdb.usecases.read_frf_file`, or for a file that is neither a full matrix nor
         driving points only.
     """
-    from jointdb.app import frf_format, read_frf_file
+    from jointdb.usecases import frf_format, read_frf_file
 
     try:
         return read_frf_file(path), []

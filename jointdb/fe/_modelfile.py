@@ -132,8 +132,124 @@ def _material(value: Any, path: str, named: dict[str, Material], default_name: s
     raise _fail(path, f"must be a material name or an object with E, nu, rho, got {value!r}")
 
 
+def _materials(d: dict) -> dict[str, Material]:
+    """The file's ``materials``: a new material {E, nu, rho} (named by its key) or an alias of a library one."""
+    named: dict[str, Material] = {}
+    for key, spec in _obj(d.get("materials", {}), "materials").items():
+        mat = _material(spec, f"materials.{key}", {}, default_name=str(key))
+        named[str(key).strip().lower()] = mat if isinstance(mat, Material) else MATERIALS[mat]
+    return named
+
+
+def _segments(d: dict, named: dict[str, Material]) -> list[Segment]:
+    segments = []
+    for i, s in enumerate(_list(d["segments"], "segments")):
+        p = f"segments[{i}]"
+        s = _obj(s, p)
+        _keys(s, p, {"length", "outer_diameter", "inner_diameter", "material", "label"}, {"length", "outer_diameter"})
+        mat = _material(s.get("material", "steel"), f"{p}.material", named)
+        segments.append(
+            _build(Segment, p, length=s["length"], outer_diameter=s["outer_diameter"],
+                   inner_diameter=s.get("inner_diameter", 0.0), material=mat)
+        )
+    if not segments:
+        raise _fail("segments", "needs at least one segment")
+    return segments
+
+
+def _points(d: dict) -> list[NamedPoint]:
+    points = []
+    for i, pt in enumerate(_list(d.get("points", []), "points")):
+        p = f"points[{i}]"
+        pt = _obj(pt, p)
+        _keys(pt, p, {"name", "position", "node"}, {"name", "position", "node"})
+        points.append(_build(NamedPoint, p, name=pt["name"], position=pt["position"], node=pt["node"]))
+    return points
+
+
+def _clamp(c: dict, p: str, named: dict[str, Material]) -> Clamp:
+    _keys(c, p, {"position", "directions"}, {"position"})
+    dirs = c.get("directions")
+    if dirs is not None:
+        dirs = tuple(_list(dirs, f"{p}.directions"))
+    return _build(Clamp, p, position=c["position"], directions=dirs)
+
+
+def _support(s: dict, p: str, named: dict[str, Material]) -> Support:
+    _keys(s, p, {"position", "stiffness", "damping"}, {"position"})
+    return _build(Support, p, position=s["position"], stiffness=s.get("stiffness", {}), damping=s.get("damping", {}))
+
+
+def _point_mass(m: dict, p: str, named: dict[str, Material]) -> PointMass:
+    _keys(m, p, {"position", "mass", "rotary_inertia", "polar_inertia", "label"}, {"position", "mass"})
+    return _build(PointMass, p, position=m["position"], mass=m["mass"],
+                  rotary_inertia=m.get("rotary_inertia", 0.0), polar_inertia=m.get("polar_inertia", 0.0))
+
+
+def _joint(j: dict, p: str, named: dict[str, Material]) -> Joint:
+    _keys(j, p, {"position", "stiffness", "damping", "loss_factor", "label"}, {"position", "stiffness"})
+    return _build(Joint, p, position=j["position"], stiffness=j["stiffness"], damping=j.get("damping", {}),
+                  loss_factor=j.get("loss_factor", 0.0), label=str(j.get("label", "")))
+
+
+def _insertion(s: dict, p: str, named: dict[str, Material]) -> Insertion:
+    _keys(s, p, {"start", "end", "outer_diameter", "inner_diameter", "material", "joined_at", "contact", "label"},
+          {"start", "end", "outer_diameter"})
+    contact = s.get("contact", "rigid")
+    if isinstance(contact, dict):
+        _keys(contact, f"{p}.contact", {"stiffness_per_length", "loss_factor"}, {"stiffness_per_length"})
+        contact = _build(Contact, f"{p}.contact", stiffness_per_length=contact["stiffness_per_length"],
+                         loss_factor=contact.get("loss_factor", 0.0))
+    return _build(Insertion, p, start=s["start"], end=s["end"], outer_diameter=s["outer_diameter"],
+                  inner_diameter=s.get("inner_diameter", 0.0),
+                  material=_material(s.get("material", "steel"), f"{p}.material", named),
+                  joined_at=s.get("joined_at", "end"), contact=contact, label=str(s.get("label", "")))
+
+
+def _damping(dm: dict, p: str, named: dict[str, Material]):
+    kind = dm.get("type")
+    if not isinstance(kind, str) or kind not in _DAMPING:  # a list or object is not a name (and not hashable)
+        raise _fail(f"{p}.type", f"must be one of {', '.join(_DAMPING)}, got {kind!r}")
+    cls, fields = _DAMPING[kind]
+    _keys(dm, p, fields | {"type"}, fields - {"alpha", "beta"})
+    kwargs = {k: dm[k] for k in fields if k in dm}
+    if "zeta" in kwargs and isinstance(kwargs["zeta"], list):
+        kwargs["zeta"] = tuple(kwargs["zeta"])
+    return _build(cls, p, **kwargs)
+
+
+#: The ingredient lists of a model file, in the order they are read, and the reader of one entry.
+_INGREDIENTS = (("clamps", _clamp), ("supports", _support), ("point_masses", _point_mass), ("joints", _joint),
+                ("insertions", _insertion), ("damping", _damping))
+
+
+def _ingredients(d: dict, named: dict[str, Material]) -> tuple[list, list[str]]:
+    """Every ingredient of the file and the field path of each (``clamps[0]``, ``damping[1]`` ...)."""
+    ingredients: list = []
+    paths: list[str] = []
+    for key, read in _INGREDIENTS:
+        entries = d.get(key, [])
+        if key == "damping" and isinstance(entries, dict):  # one damping model may stand alone
+            entries = [entries]
+        for i, entry in enumerate(_list(entries, key)):
+            p = f"{key}[{i}]"
+            ingredients.append(read(_obj(entry, p), p, named))
+            paths.append(p)
+    return ingredients, paths
+
+
 def model_from_dict(data: Any) -> BeamModel:
     """Build a :class:`BeamModel` from a parsed model description (see module docstring).
+
+    Parameters
+    ----------
+    data : Any
+        The parsed JSON of a model file (format ``jointdb-beam-model/1``); lengths in m,
+        stiffnesses in N/m and N·m/rad, masses in kg.
+
+    Returns
+    -------
+    BeamModel
 
     Raises
     ------
@@ -147,99 +263,10 @@ def model_from_dict(data: Any) -> BeamModel:
     fmt = d.get("format", FORMAT)
     if fmt != FORMAT:
         raise _fail("format", f"unsupported format {fmt!r} (this jointdb reads {FORMAT!r})")
-    named: dict[str, Material] = {}
-    for key, spec in _obj(d.get("materials", {}), "materials").items():
-        # a new material {E, nu, rho} (named by its key), or an alias of a library material
-        mat = _material(spec, f"materials.{key}", {}, default_name=str(key))
-        named[str(key).strip().lower()] = mat if isinstance(mat, Material) else MATERIALS[mat]
-
-    segments = []
-    for i, s in enumerate(_list(d["segments"], "segments")):
-        p = f"segments[{i}]"
-        s = _obj(s, p)
-        _keys(s, p, {"length", "outer_diameter", "inner_diameter", "material", "label"}, {"length", "outer_diameter"})
-        mat = _material(s.get("material", "steel"), f"{p}.material", named)
-        segments.append(
-            _build(Segment, p, length=s["length"], outer_diameter=s["outer_diameter"],
-                   inner_diameter=s.get("inner_diameter", 0.0), material=mat)
-        )
-    if not segments:
-        raise _fail("segments", "needs at least one segment")
-
-    points = []
-    for i, pt in enumerate(_list(d.get("points", []), "points")):
-        p = f"points[{i}]"
-        pt = _obj(pt, p)
-        _keys(pt, p, {"name", "position", "node"}, {"name", "position", "node"})
-        points.append(_build(NamedPoint, p, name=pt["name"], position=pt["position"], node=pt["node"]))
-
-    ingredients: list = []
-    paths: list[str] = []
-    for i, c in enumerate(_list(d.get("clamps", []), "clamps")):
-        p = f"clamps[{i}]"
-        c = _obj(c, p)
-        _keys(c, p, {"position", "directions"}, {"position"})
-        dirs = c.get("directions")
-        if dirs is not None:
-            dirs = tuple(_list(dirs, f"{p}.directions"))
-        ingredients.append(_build(Clamp, p, position=c["position"], directions=dirs))
-        paths.append(p)
-    for i, s in enumerate(_list(d.get("supports", []), "supports")):
-        p = f"supports[{i}]"
-        s = _obj(s, p)
-        _keys(s, p, {"position", "stiffness", "damping"}, {"position"})
-        ingredients.append(_build(Support, p, position=s["position"], stiffness=s.get("stiffness", {}),
-                                  damping=s.get("damping", {})))
-        paths.append(p)
-    for i, m in enumerate(_list(d.get("point_masses", []), "point_masses")):
-        p = f"point_masses[{i}]"
-        m = _obj(m, p)
-        _keys(m, p, {"position", "mass", "rotary_inertia", "polar_inertia", "label"}, {"position", "mass"})
-        ingredients.append(_build(PointMass, p, position=m["position"], mass=m["mass"],
-                                  rotary_inertia=m.get("rotary_inertia", 0.0),
-                                  polar_inertia=m.get("polar_inertia", 0.0)))
-        paths.append(p)
-    for i, j in enumerate(_list(d.get("joints", []), "joints")):
-        p = f"joints[{i}]"
-        j = _obj(j, p)
-        _keys(j, p, {"position", "stiffness", "damping", "loss_factor", "label"}, {"position", "stiffness"})
-        ingredients.append(_build(Joint, p, position=j["position"], stiffness=j["stiffness"],
-                                  damping=j.get("damping", {}), loss_factor=j.get("loss_factor", 0.0),
-                                  label=str(j.get("label", ""))))
-        paths.append(p)
-    for i, s in enumerate(_list(d.get("insertions", []), "insertions")):
-        p = f"insertions[{i}]"
-        s = _obj(s, p)
-        _keys(s, p, {"start", "end", "outer_diameter", "inner_diameter", "material", "joined_at", "contact", "label"},
-              {"start", "end", "outer_diameter"})
-        contact = s.get("contact", "rigid")
-        if isinstance(contact, dict):
-            _keys(contact, f"{p}.contact", {"stiffness_per_length", "loss_factor"}, {"stiffness_per_length"})
-            contact = _build(Contact, f"{p}.contact", stiffness_per_length=contact["stiffness_per_length"],
-                             loss_factor=contact.get("loss_factor", 0.0))
-        ingredients.append(_build(Insertion, p, start=s["start"], end=s["end"], outer_diameter=s["outer_diameter"],
-                                  inner_diameter=s.get("inner_diameter", 0.0),
-                                  material=_material(s.get("material", "steel"), f"{p}.material", named),
-                                  joined_at=s.get("joined_at", "end"), contact=contact,
-                                  label=str(s.get("label", ""))))
-        paths.append(p)
-    damping = d.get("damping", [])
-    if isinstance(damping, dict):
-        damping = [damping]
-    for i, dm in enumerate(_list(damping, "damping")):
-        p = f"damping[{i}]"
-        dm = _obj(dm, p)
-        kind = dm.get("type")
-        if not isinstance(kind, str) or kind not in _DAMPING:  # a list or object is not a name (and not hashable)
-            raise _fail(f"{p}.type", f"must be one of {', '.join(_DAMPING)}, got {kind!r}")
-        cls, fields = _DAMPING[kind]
-        _keys(dm, p, fields | {"type"}, fields - {"alpha", "beta"})
-        kwargs = {k: dm[k] for k in fields if k in dm}
-        if "zeta" in kwargs and isinstance(kwargs["zeta"], list):
-            kwargs["zeta"] = tuple(kwargs["zeta"])
-        ingredients.append(_build(cls, p, **kwargs))
-        paths.append(p)
-
+    named = _materials(d)
+    segments = _segments(d, named)
+    points = _points(d)
+    ingredients, paths = _ingredients(d, named)
     try:
         return BeamModel(
             segments=tuple(segments),

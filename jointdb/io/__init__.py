@@ -30,6 +30,10 @@ HDF5 exchange file (format ``jointdb-frf`` version 1; layout in :mod:`jointdb.io
 CSV (layout in :mod:`jointdb.io._csv`)
     ``write_frf_csv(path, frf)``, ``read_frf_csv(path) -> FRF``.
 
+JSON (the HTTP API's wire format; :mod:`jointdb.io._frfjson`)
+    ``frf_json(frf) -> dict``, ``frf_from_json(data) -> FRF`` — frequencies in Hz,
+    real and imaginary parts in SI units, the unit label of every entry.
+
 Units
     ``unit_label(quantity, output, input) -> str`` — the SI unit of an entry,
     e.g. ``"m/s^2/N"``.
@@ -39,6 +43,7 @@ All writers are atomic: a temporary file in the target directory, fsync,
 """
 
 from jointdb.io._csv import read_frf_csv, write_frf_csv
+from jointdb.io._frfjson import frf_from_json, frf_json
 from jointdb.io._hdf5 import (
     HDF5_FORMAT,
     HDF5_FORMAT_VERSION,
@@ -69,7 +74,9 @@ __all__ = [
     "UffFrfRecord",
     "UffImport",
     "UffRecord",
+    "frf_from_json",
     "frf_from_records",
+    "frf_json",
     "import_uff58",
     "read_frf_csv",
     "read_frf_hdf5",

@@ -19,7 +19,7 @@ def joints_legend(resolutions) -> str:
     """Short legend text naming the joints used: ``"tool-holder: th-er32-carbide-120nm v1"``, or for an
     interpolated joint its neighbours and weights (``"… v1 (w=0.550), … v1 (w=0.450)"``); rigid joints omitted.
 
-    ``resolutions``: mapping interface → :class:`jointdb.app.JointResolution`.
+    ``resolutions``: mapping interface → :class:`jointdb.usecases.JointResolution`.
     """
     parts = []
     for name, res in resolutions.items():

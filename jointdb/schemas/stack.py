@@ -1,4 +1,4 @@
-"""Schema of a stack file (``jointdb-stack/1``; read by :func:`jointdb.app.load_stack`)."""
+"""Schema of a stack file (``jointdb-stack/1``; read by :func:`jointdb.usecases.load_stack`)."""
 
 from __future__ import annotations
 

@@ -99,20 +99,8 @@ def _validation_message(exc: RequestValidationError) -> str:
     return "; ".join(parts)
 
 
-def create_app(settings: Settings | None = None, repo=None) -> FastAPI:
-    """The jointdb service as an ASGI app.
-
-    Parameters
-    ----------
-    settings
-        :class:`Settings` (default: from the environment).
-    repo
-        An open :class:`jointdb.store.Repository` to serve (default: opened from
-        ``settings.url`` / ``settings.blobs`` at start-up, closed at shutdown).
-    """
-    from jointdb import __version__
-
-    settings = settings or Settings.from_env()
+def _lifespan(settings: Settings, repo):
+    """The app's lifespan: open the repository at start-up unless one was given (and close it)."""
 
     @asynccontextmanager
     async def lifespan(app: FastAPI):
@@ -129,49 +117,69 @@ def create_app(settings: Settings | None = None, repo=None) -> FastAPI:
                 app.state.repo.close()
             log.info(json.dumps({"event": "shutdown"}))
 
-    app = FastAPI(
-        title="jointdb",
-        version=__version__,
-        summary="Catalogue of machine-tool joint dynamics: versioned joints, FRFs, nearest-joint queries.",
-        lifespan=lifespan,
-    )
-    app.state.settings = settings
-    if repo is not None:
-        app.state.repo = repo
+    return lifespan
 
-    @app.exception_handler(JointdbError)
-    async def _jointdb_error(request: Request, exc: JointdbError):
-        rid = request.scope.get("state", {}).get("request_id")
-        if exc.http_status >= 500 and _value_fault(exc):  # the database refused a value of the request
-            return _error(request, 422, _value_fault(exc))
-        status, text = client_error(exc, rid, _hidden_dirs(request.app))  # 5xx: no URL, SQL or path
-        if status >= 500 or isinstance(exc, IntegrityError):
-            _note_failure(request, exc)  # the full text goes to the request's log line
-        return _error(request, status, text)
 
-    @app.exception_handler(OverflowError)
-    async def _overflow(request: Request, exc: OverflowError):
-        return _error(request, 422, _value_fault(exc) or "a number in the request is out of range")
-
-    @app.exception_handler(DataError)
-    async def _data_error(request: Request, exc: DataError):  # a database error no store method translated
+async def _jointdb_error(request: Request, exc: JointdbError):
+    rid = request.scope.get("state", {}).get("request_id")
+    if exc.http_status >= 500 and _value_fault(exc):  # the database refused a value of the request
         return _error(request, 422, _value_fault(exc))
+    status, text = client_error(exc, rid, _hidden_dirs(request.app))  # 5xx: no URL, SQL or path
+    if status >= 500 or isinstance(exc, IntegrityError):
+        _note_failure(request, exc)  # the full text goes to the request's log line
+    return _error(request, status, text)
 
-    @app.exception_handler(RequestValidationError)
-    async def _validation(request: Request, exc: RequestValidationError):
-        return _error(request, 422, _validation_message(exc))
 
-    @app.exception_handler(StarletteHTTPException)
-    async def _http(request: Request, exc: StarletteHTTPException):
-        return _error(request, exc.status_code, str(exc.detail), getattr(exc, "headers", None))
+async def _overflow(request: Request, exc: OverflowError):
+    return _error(request, 422, _value_fault(exc) or "a number in the request is out of range")
 
-    @app.exception_handler(Exception)
-    async def _unexpected(request: Request, exc: Exception):  # only outside ServiceMiddleware, which
-        rid = request.scope.get("state", {}).get("request_id")  # answers every route's exception itself
-        log.error(json.dumps({"event": "error", "request_id": rid, "status": 500,
-                              "error": f"{type(exc).__name__}: {_one_line(exc, 500)}"}), exc_info=exc)
-        return _error(request, 500, f"internal error (request id {rid}); the server log has the details")
 
+async def _data_error(request: Request, exc: DataError):  # a database error no store method translated
+    return _error(request, 422, _value_fault(exc))
+
+
+async def _validation(request: Request, exc: RequestValidationError):
+    return _error(request, 422, _validation_message(exc))
+
+
+async def _http(request: Request, exc: StarletteHTTPException):
+    return _error(request, exc.status_code, str(exc.detail), getattr(exc, "headers", None))
+
+
+async def _unexpected(request: Request, exc: Exception):  # only outside ServiceMiddleware, which
+    rid = request.scope.get("state", {}).get("request_id")  # answers every route's exception itself
+    log.error(json.dumps({"event": "error", "request_id": rid, "status": 500,
+                          "error": f"{type(exc).__name__}: {_one_line(exc, 500)}"}), exc_info=exc)
+    return _error(request, 500, f"internal error (request id {rid}); the server log has the details")
+
+
+#: Each error type and its handler (see the module's docstring).
+_ERROR_HANDLERS = ((JointdbError, _jointdb_error), (OverflowError, _overflow), (DataError, _data_error),
+                   (RequestValidationError, _validation), (StarletteHTTPException, _http), (Exception, _unexpected))
+
+
+def healthz() -> dict:
+    """The process is up (no database access)."""
+    return {"status": "ok"}
+
+
+def readyz(request: Request):
+    """The database answers and has this jointdb's schema."""
+    from jointdb.store import head_revision
+    from jointdb.store._db import current_revision
+
+    try:  # through the app's own engine: never open and close the SQLite file beside it
+        current = current_revision(request.app.state.repo.read_engine)
+    except Exception as exc:  # noqa: BLE001 - any failure means: not ready
+        return _error(request, 503, f"database not ready: {type(exc).__name__}")
+    head = head_revision()
+    if current != head:
+        return _error(request, 503, f"database schema is at {current}, this jointdb needs {head}")
+    return {"status": "ready", "revision": current}
+
+
+def _install_routes(app: FastAPI) -> None:
+    """The API under ``/api/v1``, the web pages, the checkpoint and the health probes."""
     from jointdb.server import routes_admin, routes_frf, routes_joints, routes_query, routes_writes, web
 
     for module in (routes_joints, routes_frf, routes_query, routes_writes, routes_admin):
@@ -180,28 +188,37 @@ def create_app(settings: Settings | None = None, repo=None) -> FastAPI:
     from jointdb.server.routes_chain import install as install_checkpoints  # GET /api/v1/checkpoint
 
     install_checkpoints(app)
+    app.get("/healthz", tags=["service"])(healthz)
+    app.get("/readyz", tags=["service"])(readyz)
+
+
+def create_app(settings: Settings | None = None, repo=None) -> FastAPI:
+    """The jointdb service as an ASGI app.
+
+    Parameters
+    ----------
+    settings
+        :class:`Settings` (default: from the environment).
+    repo
+        An open :class:`jointdb.store.Repository` to serve (default: opened from
+        ``settings.url`` / ``settings.blobs`` at start-up, closed at shutdown).
+    """
+    from jointdb import __version__
+
+    settings = settings or Settings.from_env()
+    app = FastAPI(
+        title="jointdb",
+        version=__version__,
+        summary="Catalogue of machine-tool joint dynamics: versioned joints, FRFs, nearest-joint queries.",
+        lifespan=_lifespan(settings, repo),
+    )
+    app.state.settings = settings
+    if repo is not None:
+        app.state.repo = repo
+    for error, handler in _ERROR_HANDLERS:
+        app.add_exception_handler(error, handler)
+    _install_routes(app)
     install_security_headers(app, settings)
-
-    @app.get("/healthz", tags=["service"])
-    def healthz() -> dict:
-        """The process is up (no database access)."""
-        return {"status": "ok"}
-
-    @app.get("/readyz", tags=["service"])
-    def readyz(request: Request):
-        """The database answers and has this jointdb's schema."""
-        from jointdb.store import head_revision
-        from jointdb.store._db import current_revision
-
-        try:  # through the app's own engine: never open and close the SQLite file beside it
-            current = current_revision(request.app.state.repo.read_engine)
-        except Exception as exc:  # noqa: BLE001 - any failure means: not ready
-            return _error(request, 503, f"database not ready: {type(exc).__name__}")
-        head = head_revision()
-        if current != head:
-            return _error(request, 503, f"database schema is at {current}, this jointdb needs {head}")
-        return {"status": "ready", "revision": current}
-
     app.add_middleware(ControlCharacterGuard, openapi=app.openapi)  # inside ServiceMiddleware: logged
     app.add_middleware(ServiceMiddleware, max_upload_bytes=settings.max_upload_bytes,
                        request_timeout_s=settings.request_timeout_s)

@@ -8,7 +8,7 @@ from typing import Any
 from fastapi import Depends, HTTPException, Query, Request, Security
 from fastapi.security import HTTPBearer
 
-from jointdb.io._frfjson import frf_from_json, frf_to_json as frf_json  # noqa: F401 - moved to jointdb.io
+from jointdb.io import frf_from_json, frf_json  # noqa: F401  (the routes import them from here)
 from jointdb.store._tokens import TokenInfo, authenticate, check_may_change
 
 SESSION_COOKIE = "jointdb_session"
@@ -104,5 +104,3 @@ def version_json(v) -> dict[str, Any]:
                        "software_version": p.software_version, "author": p.author},
         "quality": dict(v.quality), "raw_measurements": sorted(v.raw_blobs),
     }
-
-

@@ -22,14 +22,12 @@ import tempfile
 import unicodedata
 from urllib.parse import parse_qsl
 
+from jointdb.io._jsonlog import redact_secrets  # noqa: F401  (log lines: shared with the CLI)
+
 _URL = re.compile(r"\b[A-Za-z][A-Za-z0-9+.\-]*://[^\s'\"<>]*[^\s'\"<>/.,;:)]")
 _POSIX_PATH = re.compile(r"(?<![\w.~:/\-])(?:/[^\s/'\"(),;:<>\[\]{}|]+){2,}/?")
 _WINDOWS_PATH = re.compile(r"(?<![\w])[A-Za-z]:\\[^\s'\"(),;<>|]*")
 _UPLOAD_DIR = re.compile(r"\bjointdb-upload-[^/\\\s]+[/\\](?:campaign[/\\])?")
-_URL_PASSWORD = re.compile(r"(://[^:/@\s]*:)[^@\s]*@")
-_TOKEN = re.compile(r"\b(jdb_[0-9a-f]{12}_)[A-Za-z0-9_\-]+")
-_BEARER = re.compile(r"(?i)\b(bearer|basic)(\s+)[^\s'\",]+")
-_HEADER_SECRET = re.compile(r"(?i)\b(authorization|cookie|set-cookie|x-api-key)(['\"]?\s*[:=,]\s*['\"]?)[^'\"\n]+")
 
 
 def _last_part(match: re.Match) -> str:
@@ -79,14 +77,6 @@ def client_error(exc: BaseException, request_id: str | None, dirs: tuple[str, ..
     else:
         text = str(exc)
     return status, " ".join(scrub_message(text, dirs).split())
-
-
-def redact_secrets(text: str) -> str:
-    """``text`` with URL passwords, API tokens, bearer credentials and cookie values hidden."""
-    text = _URL_PASSWORD.sub(r"\1***@", text)
-    text = _TOKEN.sub(r"\1***", text)
-    text = _BEARER.sub(r"\1\2***", text)
-    return _HEADER_SECRET.sub(r"\1\2***", text)
 
 
 def _has_control(text: str) -> bool:

@@ -30,9 +30,9 @@ YEAR = 365 * 24 * 3600
 
 
 def _exchange_file(jv, frf, path: FsPath) -> None:
-    from jointdb.cli._joint_files import _write_joint_file
+    from jointdb.usecases import write_joint_file
 
-    _write_joint_file(path, frf, {
+    write_joint_file(path, frf, {
         "model_kind": jv.model_kind, "joint_type": jv.joint_type, "conditions": jv.conditions.to_dict(),
         "catalogue": {"name": jv.name, "version": jv.version, "uuid": jv.uuid, "blob_sha256": jv.blob_sha256},
         "quality": dict(jv.quality)})
@@ -43,7 +43,7 @@ def render(jv, frf, fmt: str) -> bytes:
     if fmt == "json":
         return json.dumps({"name": jv.name, "version": jv.version, "blob_sha256": jv.blob_sha256,
                            **frf_json(frf)}).encode()
-    from jointdb.app import write_frf_file
+    from jointdb.usecases import write_frf_file
 
     with tempfile.TemporaryDirectory(prefix="jointdb-dl-") as tmp:
         path = FsPath(tmp) / f"frf{FORMATS[fmt][1]}"

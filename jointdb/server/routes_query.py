@@ -53,7 +53,7 @@ def interpolate(body: NearestIn, r=Depends(repo), _who=reader) -> dict[str, Any]
 def predict(body: PredictIn, r=Depends(repo), _who=reader) -> dict[str, Any]:
     """Joints from the catalogue (pinned, nearest or explicit); the stack must carry its
     spindle model inline (a server reads no client files)."""
-    from jointdb import app as application
+    from jointdb import usecases
     from jointdb.stack import MeasuredSpindle, ModelledSpindle, stack_from_dict
 
     spec = stack_from_dict(body.stack)
@@ -61,7 +61,7 @@ def predict(body: PredictIn, r=Depends(repo), _who=reader) -> dict[str, Any]:
     if isinstance(sp, MeasuredSpindle) or (isinstance(sp, ModelledSpindle) and isinstance(sp.model, str)):
         raise InputError("stack.spindle: refers to a file; send the spindle model inline (the server reads "
                          "no client files)")
-    result = application.predict_stack(spec, r)
+    result = usecases.predict_stack(spec, r)
     pred = result.prediction
     return {"stack": spec.name, "joints": [j.row() for j in result.joints.values()], "prediction": pred.summary(),
             "notes": list(pred.notes), "tip_frf": frf_json(pred.tip)}
@@ -69,7 +69,7 @@ def predict(body: PredictIn, r=Depends(repo), _who=reader) -> dict[str, Any]:
 
 @router.post("/lobes", summary="Stability lobes from a tool-tip FRF (milling ZOA or turning)")
 def lobes(body: LobesIn, r=Depends(repo), _who=reader) -> dict[str, Any]:
-    from jointdb import stability
+    from jointdb.usecases import stability_lobes
 
     if (body.frf is None) == (body.joint is None):
         raise InputError("give either frf (JSON) or joint and version")
@@ -77,18 +77,8 @@ def lobes(body: LobesIn, r=Depends(repo), _who=reader) -> dict[str, Any]:
         frf = frf_from_json(body.frf.model_dump())
     else:
         frf = r.load_frf(r.get(body.joint, body.version))
-    if not (np.isfinite(body.rpm_max) and body.rpm_min < body.rpm_max):
-        raise InputError("need finite 0 < rpm_min < rpm_max")
-    speeds = np.linspace(body.rpm_min, body.rpm_max, body.n_speeds)
-    if body.op == "turning":
-        if body.kf is None:
-            raise InputError("turning needs kf (cutting coefficient in N/m²)")
-        res = stability.turning_lobes(frf, body.kf, None, spindle_speed_rpm=speeds)
-    else:
-        if body.kt is None or body.kr is None:
-            raise InputError("milling needs kt and kr (cutting coefficients in N/m²)")
-        cut = stability.MillingCut(body.teeth, body.kt, body.kr, body.immersion, not body.up)
-        res = stability.milling_lobes_zoa(frf, cut, spindle_speed_rpm=speeds)
+    res = stability_lobes(frf, body.op, rpm_min=body.rpm_min, rpm_max=body.rpm_max, n_speeds=body.n_speeds,
+                          kf=body.kf, teeth=body.teeth, kt=body.kt, kr=body.kr, immersion=body.immersion, up=body.up)
     rows = [{k: (None if isinstance(v, float) and not np.isfinite(v) else v) for k, v in row.items()}
             for row in res.table()]
     return {"method": res.method, "rows": rows}

@@ -40,7 +40,7 @@ def upload_name(filename: str) -> str:
 
 def catalogue_upload(r, body: CatalogueIn, owner: str):
     """Decode, read and catalogue an uploaded joint file (shared by the API and the web form)."""
-    from jointdb.cli._joint_files import catalogue_inputs
+    from jointdb.usecases import catalogue_inputs
     from jointdb.store._types import check_label
 
     name = joint_name(body.name)

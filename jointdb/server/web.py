@@ -115,9 +115,10 @@ def _same_origin(request: Request) -> None:
         raise PermissionError("this form was sent from another site; open the page on this server and try again")
 
 
-async def _form(request: Request) -> dict[str, str]:
+def _form(request: Request) -> dict[str, str]:
+    """The posted form's fields (the body was read by :func:`_handle` before the worker thread)."""
     _same_origin(request)
-    body = (await request.body()).decode("utf-8", "replace")
+    body = getattr(request.state, "form_body", b"").decode("utf-8", "replace")
     return {k: v[-1] for k, v in parse_qs(body, keep_blank_values=True).items()}
 
 
@@ -133,29 +134,40 @@ def _writer_form(request: Request, form: dict[str, str]):
 
 
 def _handle(fn):
-    """Map errors of a page to the page with a one-line message (or to the sign-in page), and
-    clear the cookie of a session that is no longer open."""
+    """Run the page ``fn`` (a plain function: it calls the synchronous repository) in the
+    thread pool, so a slow database never blocks the event loop; map its errors to the page
+    with a one-line message (or to the sign-in page), and clear the cookie of a session that
+    is no longer open. A POST's body is read here, on the loop, for :func:`_form`."""
     import functools
+
+    from starlette.concurrency import run_in_threadpool
 
     @functools.wraps(fn)
     async def wrapper(request: Request, *args, **kwargs):
-        try:
-            resp = await fn(request, *args, **kwargs)
-        except _NeedSignIn:
-            resp = RedirectResponse("/ui/signin", status_code=303)
-        except PermissionError as exc:
-            resp = _page(request, "base.html", 403, title="not allowed", error=str(exc))
-        except JointdbError as exc:  # the same one-line, scrubbed message the API would give
-            from jointdb.server._safety import client_error
-
-            status, text = client_error(exc, request.scope.get("state", {}).get("request_id"))
-            resp = _page(request, "signin.html" if status == 401 else "base.html", status, error=text)
-        if getattr(request.state, "stale_session", False):
-            resp.delete_cookie(SESSION_COOKIE, path="/ui", httponly=True, samesite="strict",
-                               secure=request.app.state.settings.cookie_secure)
-        return resp
+        if request.method == "POST":
+            request.state.form_body = await request.body()
+        return await run_in_threadpool(_respond, fn, request, *args, **kwargs)
 
     return wrapper
+
+
+def _respond(fn, request: Request, *args, **kwargs) -> Response:
+    """``fn(request, ...)``, its errors as pages (see :func:`_handle`); runs in a worker thread."""
+    try:
+        resp = fn(request, *args, **kwargs)
+    except _NeedSignIn:
+        resp = RedirectResponse("/ui/signin", status_code=303)
+    except PermissionError as exc:
+        resp = _page(request, "base.html", 403, title="not allowed", error=str(exc))
+    except JointdbError as exc:  # the same one-line, scrubbed message the API would give
+        from jointdb.server._safety import client_error
+
+        status, text = client_error(exc, request.scope.get("state", {}).get("request_id"))
+        resp = _page(request, "signin.html" if status == 401 else "base.html", status, error=text)
+    if getattr(request.state, "stale_session", False):
+        resp.delete_cookie(SESSION_COOKIE, path="/ui", httponly=True, samesite="strict",
+                           secure=request.app.state.settings.cookie_secure)
+    return resp
 
 
 def _float(text: str | None, what: str) -> float | None:
@@ -175,14 +187,14 @@ async def home() -> RedirectResponse:
 
 @router.get("/signin")
 @_handle
-async def signin_page(request: Request):
+def signin_page(request: Request):
     return _page(request, "signin.html", title="sign in")
 
 
 @router.post("/signin")
 @_handle
-async def signin(request: Request):
-    form = await _form(request)
+def signin(request: Request):
+    form = _form(request)
     nonce = _signin_nonce(request)
     if nonce is None:
         return _page(request, "signin.html", 403, title="sign in", error=(
@@ -209,8 +221,8 @@ async def signin(request: Request):
 
 @router.post("/signout")
 @_handle
-async def signout(request: Request):
-    form = await _form(request)
+def signout(request: Request):
+    form = _form(request)
     sid, _ = _session(request)
     if sid and not hmac.compare_digest(form.get("csrf", ""), _csrf(sid)):
         raise InputError("the form's CSRF token does not match your session")
@@ -223,7 +235,7 @@ async def signout(request: Request):
 
 @router.get("/joints")
 @_handle
-async def joints(request: Request):
+def joints(request: Request):
     from jointdb.server.routes_joints import filter_versions
 
     _reader(request)
@@ -245,7 +257,7 @@ async def joints(request: Request):
 
 @router.get("/joints/{name}")
 @_handle
-async def joint(request: Request, name: str):
+def joint(request: Request, name: str):
     from jointdb.server._svg import frf_svg
     from jointdb.server.routes_joints import joint_name
 
@@ -267,7 +279,7 @@ async def joint(request: Request, name: str):
 
 @router.get("/joints/{name}/overlay")
 @_handle
-async def overlay(request: Request, name: str):
+def overlay(request: Request, name: str):
     from jointdb.server._svg import frf_svg
     from jointdb.server.routes_joints import joint_name
 
@@ -286,7 +298,7 @@ async def overlay(request: Request, name: str):
 
 @router.get("/joints/{name}/versions/{version}/frf")
 @_handle
-async def download(request: Request, name: str, version: int):
+def download(request: Request, name: str, version: int):
     from jointdb.server.routes_frf import FORMATS, _cached, etag
     from jointdb.server.routes_joints import joint_name
 
@@ -308,10 +320,10 @@ async def download(request: Request, name: str, version: int):
 
 @router.post("/joints/{name}/{action}")
 @_handle
-async def write(request: Request, name: str, action: str):
+def write(request: Request, name: str, action: str):
     from jointdb.server.routes_joints import joint_name
 
-    form = await _form(request)
+    form = _form(request)
     who = _writer_form(request, form)
     r = request.app.state.repo
     name = joint_name(name)
@@ -332,7 +344,7 @@ async def write(request: Request, name: str, action: str):
 
 @router.get("/nearest")
 @_handle
-async def nearest(request: Request):
+def nearest(request: Request):
     from jointdb.server._schemas import ConditionsIn, NearestIn
     from jointdb.server.routes_query import match_json, run_nearest
 

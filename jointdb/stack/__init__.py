@@ -1,7 +1,7 @@
 """Stack description (tool / holder / spindle) and tool-tip FRF prediction.
 
 docs/theory.md §4 (three-component receptance coupling). Pure numerics: no files,
-no database. The application layer (:mod:`jointdb.app`) reads stack files,
+no database. The application layer (:mod:`jointdb.usecases`) reads stack files,
 attaches a measured spindle FRF, resolves catalogued joints from the database
 and then calls :func:`predict_tool_tip`.
 

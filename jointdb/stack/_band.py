@@ -70,7 +70,7 @@ def describes_catalogued_joint(record: Mapping) -> bool:
 def sampleable_uncertainties(resolutions: Mapping) -> tuple[dict, list[str]]:
     """``(interface → uncertainty record, notes)`` of the resolved joints a band may sample.
 
-    ``resolutions``: interface → :class:`jointdb.app.JointResolution`. Joints whose record does not
+    ``resolutions``: interface → :class:`jointdb.usecases.JointResolution`. Joints whose record does not
     describe their catalogued FRF keep their nominal FRF in the band, with a note saying so.
     """
     unc, notes = {}, []

@@ -1,7 +1,7 @@
 """Tool-tip FRF prediction of a stack from its parts and resolved joints (docs/theory.md §4).
 
 Pure numerics: the joints of catalogued / queried interfaces arrive already
-resolved as FRFs (the application layer, :mod:`jointdb.app`, fetches them from
+resolved as FRFs (the application layer, :mod:`jointdb.usecases`, fetches them from
 the database); a measured spindle FRF arrives attached to the spec.
 """
 
@@ -86,7 +86,7 @@ def spindle_model(spec: StackSpec) -> BeamModel:
     if isinstance(sp.model, BeamModel):
         return sp.model
     if isinstance(sp.model, str):
-        raise InputError(f"spindle.model: {sp.model!r} is a file path; load the stack with jointdb.app.load_stack")
+        raise InputError(f"spindle.model: {sp.model!r} is a file path; load the stack with jointdb.usecases.load_stack")
     try:
         return model_from_dict(sp.model)
     except InputError as exc:
@@ -196,7 +196,7 @@ def stack_parts(spec: StackSpec, freq=None) -> dict[str, FRF]:
     sp = spec.spindle
     if isinstance(sp, MeasuredSpindle):
         if sp.frf is None:
-            raise InputError(f"spindle.file: {sp.file!r} is not loaded; load the stack with jointdb.app.load_stack")
+            raise InputError(f"spindle.file: {sp.file!r} is not loaded; load the stack with jointdb.usecases.load_stack")
         parts["spindle"] = _on_grid(sp.frf, f, f"spindle.file {sp.file!r}")
     else:
         model = spindle_model(spec)
@@ -228,7 +228,7 @@ def _joint_planes(name: str, spec: StackSpec, resolved: Mapping[str, FRF], f: np
         return {"x": vals, "y": vals}, choice.reference
     raise InputError(
         f"interfaces.{name}: {choice.reference} must be resolved from the joint database first "
-        "(use jointdb.app.predict_stack, or pass resolved_joints)"
+        "(use jointdb.usecases.predict_stack, or pass resolved_joints)"
     )
 
 

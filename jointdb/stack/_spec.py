@@ -4,7 +4,7 @@ This module holds the frozen dataclasses of a stack; reading and writing the
 JSON document (``stack_from_dict`` / ``stack_to_dict``, errors naming the exact
 field) is in :mod:`jointdb.stack._stackfile`. Nothing here reads files: a
 measured spindle FRF is referenced by path and attached later by the
-application layer (:func:`jointdb.app.load_stack`).
+application layer (:func:`jointdb.usecases.load_stack`).
 
 Geometry conventions (SI, metres). The tool is described from its tip towards
 its shank end; the holder from its nose (the face the tool sticks out of)
@@ -132,7 +132,7 @@ class MeasuredSpindle:
         if ``node y`` and ``node rx`` are there too, the y plane is predicted
         from them, otherwise it is taken equal to the x plane (axisymmetric).
     frf
-        The loaded FRF (set by :func:`jointdb.app.load_stack`; ``None`` until then).
+        The loaded FRF (set by :func:`jointdb.usecases.load_stack`; ``None`` until then).
     """
 
     file: str

@@ -14,7 +14,7 @@ from jointdb.errors import IntegrityError, NotFoundError
 from jointdb.frf import FRF
 from jointdb.store._access import read_session
 from jointdb.store._models import AuditRow, JointRow, VersionRow, utcnow
-from jointdb.store._records import check_record, current_actor
+from jointdb.store._records import DamagedJSON, check_record, current_actor
 from jointdb.store._reports import CheckReport, VersionDiff
 from jointdb.store._types import JointVersion
 
@@ -25,13 +25,20 @@ if TYPE_CHECKING:  # pragma: no cover
 LoadFRF = Callable[[JointVersion], FRF]
 
 
-def _references(s) -> dict[str, list[str]]:
-    """blob sha -> list of "name vN" rows referencing it (in the session's snapshot)."""
+def _references(s, strict: bool = False) -> dict[str, list[str]]:
+    """blob sha -> list of "name vN" rows referencing it (in the session's snapshot).
+
+    ``strict`` (garbage collection): a row whose ``raw_blobs`` column cannot be read is an
+    IntegrityError, since the blobs it names cannot be known and must not be collected.
+    """
     refs: dict[str, list[str]] = {}
     q = select(JointRow.name, VersionRow.version, VersionRow.blob_sha256, VersionRow.raw_blobs).join(
         JointRow, JointRow.id == VersionRow.joint_id
     )
     for name, version, blob, raw in s.execute(q):
+        if strict and (isinstance(raw, DamagedJSON) or not isinstance(raw, (dict, type(None)))):
+            raise IntegrityError(f"db gc refused: joint {name!r} v{version} has a damaged raw_blobs column, so the "
+                                 "blobs it references are unknown; nothing was collected (run `jointdb db check`)")
         refs.setdefault(blob, []).append(f"{name} v{version}")
         for key, digest in (raw or {}).items():
             refs.setdefault(digest, []).append(f"{name} v{version} raw {key}")
@@ -41,7 +48,7 @@ def _references(s) -> dict[str, list[str]]:
 def _referenced(store: "ReadAccess") -> dict[str, list[str]]:
     """blob sha -> list of "name vN" rows referencing it."""
     with read_session(store) as s:
-        return _references(s)
+        return _references(s, strict=True)
 
 
 @contextlib.contextmanager

@@ -8,7 +8,7 @@ so ``jointdb --server URL query ...`` (or ``JOINTDB_SERVER=URL``, token from
 ``JOINTDB_TOKEN``) behaves as with a local database. The rules are applied once, by the
 server's repository; HTTP errors come back as the same jointdb errors (404 NotFoundError,
 409 ConflictError, 422 InputError, ...), with the server's one-line reason. It imports no
-server code (the FRF's JSON form is :mod:`jointdb.io._frfjson`). Public as :mod:`jointdb.client`.
+server code (the FRF's JSON form is :func:`jointdb.io.frf_json`). Public as :mod:`jointdb.client`.
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, Any
 from urllib.parse import quote
 
 from jointdb.errors import ConflictError, InputError, IntegrityError, JointdbError, NotFoundError
-from jointdb.io._frfjson import frf_from_json, frf_to_json
+from jointdb.io import frf_from_json, frf_json
 
 if TYPE_CHECKING:  # pragma: no cover
     from jointdb.store._reports import Catalogued
@@ -190,7 +190,7 @@ class RemoteRepository:
         from jointdb.store._types import as_conditions, as_provenance
 
         prov = as_provenance(provenance)
-        body = {"name": name, "joint_type": joint_type, "model_kind": model_kind, "frf": frf_to_json(frf),
+        body = {"name": name, "joint_type": joint_type, "model_kind": model_kind, "frf": frf_json(frf),
                 "conditions": as_conditions(conditions).to_dict(), "quality": dict(quality or {}),
                 "method": prov.method, "input_files": dict(prov.input_files), "parameters": dict(prov.parameters),
                 **({"parent": parent} if parent is not None else {}), **({"label": label} if label else {}),

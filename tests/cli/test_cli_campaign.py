@@ -143,7 +143,7 @@ def _rotation_rig(tmp_path):
 
 
 def test_rotations_by_extension_recover_the_contact_receptance_and_report_noise_amplification(tmp_path):
-    from jointdb.app import read_frf_file
+    from jointdb.usecases import read_frf_file
 
     truth = _rotation_rig(tmp_path)
     out = run("rotations", tmp_path / "ext.h5", "--extension", tmp_path / "ext.json", "--joint-point", "base",

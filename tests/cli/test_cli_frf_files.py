@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from jointdb.app import read_frf_file, write_frf_file
+from jointdb.usecases import read_frf_file, write_frf_file
 from jointdb.errors import InputError, NotFoundError
 from jointdb.frf import FRF
 

@@ -148,7 +148,7 @@ def test_campaign_archive_is_identified_by_the_server(catalogued, tmp_path):
 def test_predict_and_lobes(catalogued):
     from pathlib import Path
 
-    from jointdb import app as application
+    from jointdb import usecases
     from jointdb.stack import stack_from_dict
 
     stacks = Path(__file__).resolve().parents[2] / "fixtures" / "stacks"
@@ -160,7 +160,7 @@ def test_predict_and_lobes(catalogued):
         r = c.post("/api/v1/predict", json={"stack": stack})
         assert r.status_code == 200, r.text
         out = r.json()
-        expected = application.predict_stack(stack_from_dict(stack), None).prediction.summary()
+        expected = usecases.predict_stack(stack_from_dict(stack), None).prediction.summary()
         assert [row["peak_hz"] for row in out["prediction"]] == [row["peak_hz"] for row in expected]
         tip = out["tip_frf"]
         assert tip["units"][0][0] == "m/N" and len(tip["freq_hz"]) == 146

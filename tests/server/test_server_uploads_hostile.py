@@ -168,7 +168,8 @@ def test_bundled_campaign_zipped_with_its_models(server):
     assert r.status_code == 201, r.text
     v = r.json()
     assert v["conditions"]["torque_nm"] == 80.0
-    assert {"campaign.json", "assembly.uff", "models/test-tool-carbide.json"} <= set(v["provenance"]["input_files"])
+    # by path relative to the campaign file (inside the archive): the same keys as `jointdb catalogue campaign.json`
+    assert {"campaign.json", "assembly.uff", "../../models/test-tool-carbide.json"} <= set(v["provenance"]["input_files"])
     _clean(server, r.text)
 
 

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from jointdb import app
+from jointdb import usecases
 from jointdb.stack import predict_tool_tip, stack_from_dict
 from jointdb.store import Repository
 
@@ -22,7 +22,7 @@ def repo(tmp_path_factory):
     url = f"sqlite:///{tmp_path_factory.mktemp('hs') / 'j.sqlite'}"
     with Repository(url) as r:
         for name in ("hs-hsk-a63-12kn", "hs-hsk-a63-24kn", "hs-bt40-12kn"):
-            app.catalogue_campaign(r, CAT / "campaigns" / name / "campaign.json")
+            usecases.catalogue_campaign(r, CAT / "campaigns" / name / "campaign.json")
         r.label("hs-hsk-a63-24kn", 1, "released")
         yield r
 
@@ -34,9 +34,9 @@ def _spec(holder_spindle):
 
 
 def test_pinned_version_and_label(repo):
-    pinned = app.resolve_joints(_spec("hs-hsk-a63-12kn@1"), repo)["holder-spindle"]
+    pinned = usecases.resolve_joints(_spec("hs-hsk-a63-12kn@1"), repo)["holder-spindle"]
     assert (pinned.kind, pinned.name, pinned.version, pinned.distance) == ("catalogued", "hs-hsk-a63-12kn", 1, 0.0)
-    labelled = app.resolve_joints(_spec("hs-hsk-a63-24kn@released"), repo)["holder-spindle"]
+    labelled = usecases.resolve_joints(_spec("hs-hsk-a63-24kn@released"), repo)["holder-spindle"]
     assert (labelled.name, labelled.version) == ("hs-hsk-a63-24kn", 1)
 
 
@@ -44,14 +44,14 @@ def test_query_by_taper_and_drawbar_force_picks_the_same_taper_and_changes_the_t
     q = {"query": {"joint_type": "holder-spindle", "materials": ["steel", "steel"], "preload_n": 22e3,
                    "geometry": {"taper_diameter_m": 0.063}}}
     spec = _spec(q)
-    res = app.resolve_joints(spec, repo)["holder-spindle"]
+    res = usecases.resolve_joints(spec, repo)["holder-spindle"]
     assert res.kind == "query" and res.name == "hs-hsk-a63-24kn" and not res.extrapolating
     bt = _spec({"query": {**q["query"], "preload_n": 12e3, "geometry": {"taper_diameter_m": 0.04445}}})
-    assert app.resolve_joints(bt, repo)["holder-spindle"].name == "hs-bt40-12kn"
+    assert usecases.resolve_joints(bt, repo)["holder-spindle"].name == "hs-bt40-12kn"
     # the joint matters: the catalogued taper joint lowers the dominant tip mode compared with a rigid taper
     pred = predict_tool_tip(spec, {"holder-spindle": res.frf})
     rigid = predict_tool_tip(_spec("rigid"))
     f = pred.tip.freq
     assert f[np.argmax(np.abs(pred.tip.values[:, 0, 0]))] < f[np.argmax(np.abs(rigid.tip.values[:, 0, 0]))]
-    out = app.resolve_joints(_spec({"query": {**q["query"], "preload_n": 40e3}}), repo)["holder-spindle"]
+    out = usecases.resolve_joints(_spec({"query": {**q["query"], "preload_n": 40e3}}), repo)["holder-spindle"]
     assert out.extrapolating and "preload_n" in " ".join(out.warnings)

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from jointdb import app
+from jointdb import usecases
 from jointdb.coupling import spring_damper_joint
 from jointdb.errors import InputError, NotFoundError
 from jointdb.stack import predict_tool_tip, stack_from_dict
@@ -56,7 +56,7 @@ def _explicit(k, c):
 def test_nearest_joint_is_reported_and_used(repo):
     spec = stack_from_dict(_doc({"query": {"joint_type": "tool-holder", "materials": ["carbide", "steel"],
                                            "torque_nm": 90}}))
-    result = app.predict_stack(spec, repo, FREQ)
+    result = usecases.predict_stack(spec, repo, FREQ)
     res = result.joints["tool-holder"]
     expected = repo.nearest("tool-holder", Conditions(("tungsten-carbide", "steel"), torque_nm=90.0), k=3)
     assert (res.kind, res.name, res.version) == ("query", "th-80", 2)  # the current version of the nearest joint
@@ -72,28 +72,28 @@ def test_nearest_joint_is_reported_and_used(repo):
 
 def test_extrapolation_is_flagged(repo):
     spec = stack_from_dict(_doc({"query": {"joint_type": "tool-holder", "torque_nm": 200}}))
-    res = app.resolve_joints(spec, repo)["tool-holder"]
+    res = usecases.resolve_joints(spec, repo)["tool-holder"]
     assert res.name == "th-120" and res.extrapolating and "torque_nm" in res.outside_range
     assert res.warnings  # the store's warning is captured into the report, not printed
 
 
 def test_pinned_version_is_used_even_when_newer_exists(repo):
-    result = app.predict_stack(stack_from_dict(_doc("th-80@1")), repo, FREQ)
+    result = usecases.predict_stack(stack_from_dict(_doc("th-80@1")), repo, FREQ)
     res = result.joints["tool-holder"]
     assert (res.kind, res.name, res.version, res.distance) == ("catalogued", "th-80", 1, 0.0)
     np.testing.assert_allclose(result.prediction.tip.values, _explicit((2.5e7, 3.5e5), (250.0, 2.0)).values,
                                rtol=1e-10)
     with pytest.raises(NotFoundError):
-        app.predict_stack(stack_from_dict(_doc("th-80@7")), repo, FREQ)
+        usecases.predict_stack(stack_from_dict(_doc("th-80@7")), repo, FREQ)
     repo.label("th-80", 1, "released")
-    res = app.resolve_joints(stack_from_dict(_doc("th-80@released")), repo)["tool-holder"]
+    res = usecases.resolve_joints(stack_from_dict(_doc("th-80@released")), repo)["tool-holder"]
     assert (res.name, res.version) == ("th-80", 1)
 
 
 def test_interpolated_joint_is_labelled(repo):
     spec = stack_from_dict(_doc({"query": {"joint_type": "tool-holder", "torque_nm": 100, "neighbours": 2,
                                            "interpolate": True}}))
-    res = app.resolve_joints(spec, repo)["tool-holder"]
+    res = usecases.resolve_joints(spec, repo)["tool-holder"]
     assert res.kind == "interpolated" and "INTERPOLATED" in res.description
     assert len(res.candidates) == 2
 
@@ -104,12 +104,12 @@ def test_load_stack_names_the_file_and_field(tmp_path):
     bad = tmp_path / "bad.json"
     bad.write_text(json.dumps(doc))
     with pytest.raises(InputError, match=r"^bad\.json: tool\.segments\[0\]\.length: must be > 0"):
-        app.load_stack(bad)
+        usecases.load_stack(bad)
     (tmp_path / "broken.json").write_text("{ not json")
     with pytest.raises(InputError, match=r"broken\.json: not valid JSON \(line 1"):
-        app.load_stack(tmp_path / "broken.json")
+        usecases.load_stack(tmp_path / "broken.json")
     with pytest.raises(NotFoundError):
-        app.load_stack(tmp_path / "missing.json")
+        usecases.load_stack(tmp_path / "missing.json")
 
 
 def test_measured_spindle_file_is_loaded_relative_to_the_stack(tmp_path):
@@ -121,7 +121,7 @@ def test_measured_spindle_file_is_loaded_relative_to_the_stack(tmp_path):
     doc = _doc("rigid")
     doc["spindle"] = {"file": "spindle.h5", "node": 5}
     (tmp_path / "s.json").write_text(json.dumps(doc))
-    loaded = app.load_stack(tmp_path / "s.json")
+    loaded = usecases.load_stack(tmp_path / "s.json")
     a = predict_tool_tip(loaded, freq=FREQ)
     b = predict_tool_tip(spec, freq=FREQ)
     np.testing.assert_allclose(a.tip.values, b.tip.values, rtol=1e-12)
@@ -131,7 +131,7 @@ def test_campaign_identification_recovers_the_true_joint_and_catalogues_once(tmp
     path = CATALOGUE / "campaigns" / "th-er32-carbide-080nm" / "campaign.json"
     truth = json.loads((path.parent / "truth.json").read_text())
     with Repository(f"sqlite:///{tmp_path / 'c.sqlite'}") as repo:
-        first = app.catalogue_campaign(repo, path)
+        first = usecases.catalogue_campaign(repo, path)
         row = first.row()
         # 0.2 % noise, finer-mesh "measurement", coarser models: named tolerances
         assert row["k_x_n_per_m"] == pytest.approx(truth["k"][0], rel=0.01)
@@ -141,13 +141,13 @@ def test_campaign_identification_recovers_the_true_joint_and_catalogues_once(tmp
         assert first.version.model_kind == "spring-damper-planar"
         files = first.version.provenance.input_files
         assert {"campaign.json", "assembly.uff", "../../models/test-tool-carbide.json"} <= set(files)
-        again = app.catalogue_campaign(repo, path)
+        again = usecases.catalogue_campaign(repo, path)
         assert again.reused and again.version.version == 1
 
 
 def test_spindle_model_file_is_loaded_relative_to_the_stack():
     path = ROOT / "fixtures" / "stacks" / "endmill-catalogued-joint.json"
-    spec = app.load_stack(path)
+    spec = usecases.load_stack(path)
     assert isinstance(spec.spindle.model, dict) and spec.spindle.model["segments"]
     with pytest.raises(InputError, match="interfaces.tool-holder: nearest tool-holder .* must be resolved"):
         predict_tool_tip(spec, freq=FREQ)

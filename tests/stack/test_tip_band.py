@@ -96,12 +96,12 @@ def test_predict_json_and_plot_carry_the_band(catalogued_with_covariance):
 
 
 def test_lobe_band_brackets_the_nominal_critical_depth(catalogued_with_covariance):
-    from jointdb import app as application
+    from jointdb import usecases
     from jointdb.stack._band import tip_band
 
     _, db, stack = catalogued_with_covariance
-    spec = application.load_stack(stack)
-    result = application.predict_stack(spec, str(db))
+    spec = usecases.load_stack(stack)
+    result = usecases.predict_stack(spec, str(db))
     res = result.joints["tool-holder"]
     b = tip_band(spec, {"tool-holder": res.frf}, {"tool-holder": res.uncertainty}, result.prediction.tip.freq, n=60)
     cut = MillingCut(4, 7.96e8, 1.69e8, 0.5, True)

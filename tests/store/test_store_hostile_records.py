@@ -250,3 +250,31 @@ def test_a_row_an_older_version_wrote_beyond_todays_limits_is_reported_not_serve
     assert [(d.name, d.version) for d in page.damaged] == [("B", 1)] and "nested more than 64" in page.damaged[0].reason
     with pytest.raises(IntegrityError, match="^B v1: stored record is damaged"):
         repo.get("B")
+
+
+def test_gc_refuses_while_a_raw_blobs_column_is_unreadable(backend):
+    """A version whose raw_blobs column cannot be read names blobs nobody can know: collecting
+    "unreferenced" blobs then would delete its raw measurements. gc refuses and removes nothing."""
+    repo = backend.repo()
+    raw = spring_joint(k=(9e6, 9e5), dofs=("1x", "1ry"))
+    jv = repo.catalogue("RAW", "tool-holder", spring_joint(), {"materials": ["steel"], "torque_nm": 40.0}, KIND,
+                        raw_frfs={"tip": raw})
+    digest = jv.raw_blobs["tip"]
+    if backend.name == "sqlite":
+        repo.close()
+        path = backend.url.removeprefix("sqlite:///")
+        data = open(path, "rb").read()
+        stored = json.dumps({"tip": digest}).encode()
+        assert data.count(stored) == 1
+        with open(path, "wb") as fh:
+            fh.write(data.replace(stored, stored.replace(b":", b";")))
+    else:
+        alter_version_row(backend.url, "UPDATE joint_versions SET raw_blobs = '[\"not\", \"an\", \"object\"]' "
+                                       "WHERE joint_id = (SELECT id FROM joints WHERE name = 'RAW')")
+    repo = backend.repo()
+    try:
+        with pytest.raises(IntegrityError, match=r"db gc refused: joint 'RAW' v1 has a damaged raw_blobs column"):
+            repo.gc(min_age_s=0.0)
+        assert digest in {b.sha256 for b in repo.blobs.walk()}  # the raw measurement is still there
+    finally:
+        repo.close()
