@@ -54,6 +54,7 @@ LAYERS = {
     # files, wire formats, the store and its HTTP implementation
     "jointdb.io": "store",
     "jointdb.store": "store",
+    "jointdb.migrations": "store",  # the Alembic environment, shipped in the wheel as jointdb/migrations
     "jointdb.client": "store",  # the store over HTTP: imports no server code
     "jointdb.plots": "store",
     "jointdb.schemas": "store",
