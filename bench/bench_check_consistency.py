@@ -19,7 +19,6 @@ import sys
 import tempfile
 import threading
 import time
-import uuid
 from pathlib import Path
 
 import numpy as np
@@ -121,26 +120,16 @@ def main() -> int:
     if not base:
         print("JOINTDB_TEST_PG_URL is not set; this bench needs PostgreSQL (skipped)", file=sys.stderr)
         return 0
-    import sqlalchemy as sa
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "server"))
+    from server_helpers import _pg_schema, drop_pg_schema  # the tests' schema helpers (DDL guard dropped first)
 
-    schema = "jt_bench_" + uuid.uuid4().hex[:10]
-    admin = sa.create_engine(base)
-    with admin.begin() as conn:
-        conn.exec_driver_sql(f"CREATE SCHEMA {schema}")
-    sep = "&" if "?" in base else "?"
+    admin, schema, url = _pg_schema(base)
     try:
         with tempfile.TemporaryDirectory() as tmp:
-            result = run(f"{base}{sep}options=-csearch_path%3D{schema}", Path(tmp) / "blobs", args.writers,
-                         args.checks, args.before)
+            result = run(url, Path(tmp) / "blobs", args.writers, args.checks, args.before)
         print(json.dumps({"backend": "postgresql", **result}))
     finally:
-        from jointdb.store._guards import event_trigger_names, guard_function
-
-        with admin.begin() as conn:
-            for name in event_trigger_names(schema):
-                conn.exec_driver_sql(f'DROP EVENT TRIGGER IF EXISTS "{name}"')
-            conn.exec_driver_sql(f"DROP FUNCTION IF EXISTS {guard_function(schema)}()")
-            conn.exec_driver_sql(f"DROP SCHEMA {schema} CASCADE")
+        drop_pg_schema(admin, schema)
         admin.dispose()
     return 0 if result["false_alarms"] == 0 and result["final_check_ok"] else 1
 
