@@ -7,16 +7,8 @@ from __future__ import annotations
 import pytest
 from server_helpers import _load, _STORE, joint_upload
 
-alter_version_row = _load("jointdb_store_helpers", _STORE / "store_helpers.py").alter_version_row
-
-
-def _nested(depth: int) -> dict:
-    out: dict = {}
-    cur = out
-    for _ in range(depth - 1):
-        cur["a"] = {}
-        cur = cur["a"]
-    return out
+_store_helpers = _load("jointdb_store_helpers", _STORE / "store_helpers.py")
+alter_version_row, nested_dict = _store_helpers.alter_version_row, _store_helpers.nested_dict
 
 
 def _one_line(r, low=400, high=500) -> str:
@@ -40,7 +32,7 @@ def listed(server, tmp_path_factory):
 def test_nesting_300_is_a_422_and_commits_nothing(listed):
     with listed.client("writer") as c:
         body = joint_upload(listed.tmp, "L-0", torque=10.0)
-        body["conditions"] = {"materials": ["tungsten-carbide", "steel"], "torque_nm": 10.0, "extra": _nested(300)}
+        body["conditions"] = {"materials": ["tungsten-carbide", "steel"], "torque_nm": 10.0, "extra": nested_dict(300)}
         msg = _one_line(c.post("/api/v1/catalogue", json=body), 422, 423)
         assert "conditions.extra" in msg and "64" in msg
         assert [v["version"] for v in c.get("/api/v1/joints/L-0/history").json()["items"]] == [1]

@@ -149,3 +149,13 @@ def db_rows(url: str) -> dict[str, list]:
                     for t in sorted(tables)}
     finally:
         engine.dispose()
+
+
+def nested_dict(depth: int) -> dict:
+    """``{"a": {"a": ... {}}}``: a JSON object nested ``depth`` levels deep."""
+    out: dict = {}
+    cur = out
+    for _ in range(depth - 1):
+        cur["a"] = {}
+        cur = cur["a"]
+    return out

@@ -9,20 +9,11 @@ import warnings
 
 import pytest
 from sqlalchemy import event
-from store_helpers import alter_version_row, count_rows, run_main, spring_joint
+from store_helpers import alter_version_row, count_rows, nested_dict, run_main, spring_joint
 
 from jointdb.errors import InputError, IntegrityError
 
 KIND = "spring-damper-planar"
-
-
-def _nested(depth: int) -> dict:
-    out: dict = {}
-    cur = out
-    for _ in range(depth - 1):
-        cur["a"] = {}
-        cur = cur["a"]
-    return out
 
 
 def _catalogue(repo, name, torque=40.0, **cond):
@@ -35,12 +26,12 @@ def test_nesting_300_is_refused_before_anything_is_committed(repo):
     _catalogue(repo, "T1")
     before = count_rows(repo)
     with pytest.raises(InputError, match=r"conditions\.extra: nested more than 64 levels"):
-        _catalogue(repo, "T1", extra=_nested(300))
+        _catalogue(repo, "T1", extra=nested_dict(300))
     assert count_rows(repo) == before
     assert [v.version for v in repo.history("T1")] == [1]
     assert [v.name for v in repo.list_joints()] == ["T1"]
-    _catalogue(repo, "T2", extra=_nested(64))  # the limit itself is accepted and reads back
-    assert repo.get("T2").conditions.extra == _nested(64)
+    _catalogue(repo, "T2", extra=nested_dict(64))  # the limit itself is accepted and reads back
+    assert repo.get("T2").conditions.extra == nested_dict(64)
 
 
 def test_numbers_beyond_what_a_record_may_hold_are_refused_before_the_write(repo):
@@ -80,7 +71,7 @@ def test_hostile_conditions_are_input_errors_naming_the_field(repo, field, value
 
 @pytest.mark.parametrize("kwargs, message", [
     ({"provenance": {"method": "irc\x00"}}, "provenance.method: holds the control character U+0000"),
-    ({"provenance": {"method": "irc", "parameters": {"p": _nested(100)}}}, "provenance.parameters: nested"),
+    ({"provenance": {"method": "irc", "parameters": {"p": nested_dict(100)}}}, "provenance.parameters: nested"),
     ({"provenance": {"method": "irc", "bogus": 1}}, "unknown fields bogus"),
     ({"provenance": {"method": "irc", "input_files": {"a\x00": "0" * 64}}}, "input_files key"),
     ({"quality": {"fit\x00": 1.0}}, "quality metric name"),
@@ -244,7 +235,7 @@ def test_a_row_an_older_version_wrote_beyond_todays_limits_is_reported_not_serve
     _catalogue(repo, "A")
     with monkeypatch.context() as m:
         m.setattr(_limits, "MAX_FIELD_DEPTH", 1000)  # as an older jointdb wrote it
-        _catalogue(repo, "B", extra=_nested(300))
+        _catalogue(repo, "B", extra=nested_dict(300))
     page = repo.list_page()
     assert [v.name for v in page.items] == ["A"]
     assert [(d.name, d.version) for d in page.damaged] == [("B", 1)] and "nested more than 64" in page.damaged[0].reason
