@@ -8,7 +8,6 @@ from typing import Any
 from fastapi import Depends, HTTPException, Query, Request, Security
 from fastapi.security import HTTPBearer
 
-from jointdb.io import frf_from_json, frf_json  # noqa: F401  (the routes import them from here)
 from jointdb.store._tokens import TokenInfo, authenticate, check_may_change
 
 SESSION_COOKIE = "jointdb_session"

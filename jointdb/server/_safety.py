@@ -6,8 +6,8 @@ lines, and refusal of control characters in query and path parameters.
   first) become their last part, so a message may still name the file the user
   sent but never where the server keeps it. It is the last line of defence; the
   messages are meant not to carry paths in the first place.
-- :func:`redact_secrets` (log lines): passwords in URLs, tokens, bearer
-  credentials and cookies become ``***``.
+- log lines are redacted by :func:`jointdb.io._jsonlog.redact_secrets` (shared with
+  the CLI, which configures the log of ``jointdb serve``).
 - :class:`ControlCharacterGuard` (ASGI): a NUL or other control character in a
   query parameter or in the path is a 422 naming the parameter, before any route
   or database sees it.
@@ -21,8 +21,6 @@ import re
 import tempfile
 import unicodedata
 from urllib.parse import parse_qsl
-
-from jointdb.io._jsonlog import redact_secrets  # noqa: F401  (log lines: shared with the CLI)
 
 _URL = re.compile(r"\b[A-Za-z][A-Za-z0-9+.\-]*://[^\s'\"<>]*[^\s'\"<>/.,;:)]")
 _POSIX_PATH = re.compile(r"(?<![\w.~:/\-])(?:/[^\s/'\"(),;:<>\[\]{}|]+){2,}/?")

@@ -15,7 +15,8 @@ from typing import Annotated, Literal
 
 from fastapi import APIRouter, Depends, Path, Query, Request, Response
 
-from jointdb.server._deps import frf_json, reader, repo
+from jointdb.io import frf_json
+from jointdb.server._deps import reader, repo
 from jointdb.server.routes_joints import Name, joint_name
 
 router = APIRouter(tags=["frf"])

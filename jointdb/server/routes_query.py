@@ -9,7 +9,8 @@ import numpy as np
 from fastapi import APIRouter, Depends
 
 from jointdb.errors import InputError
-from jointdb.server._deps import frf_from_json, frf_json, reader, repo, version_json
+from jointdb.io import frf_from_json, frf_json
+from jointdb.server._deps import reader, repo, version_json
 from jointdb.server._schemas import LobesIn, NearestIn, PredictIn
 
 router = APIRouter(tags=["query"])

@@ -74,7 +74,7 @@ def catalogue_upload(r, body: CatalogueIn, owner: str):
 
 def _catalogue_frf(r, body: CatalogueIn, name: str, label: str | None, owner: str):
     """Catalogue an FRF sent as JSON (``jointdb --server URL catalogue`` reads the file locally)."""
-    from jointdb.server._deps import frf_from_json
+    from jointdb.io import frf_from_json
     from jointdb.store import Provenance
 
     if not body.joint_type or not body.model_kind:

@@ -38,7 +38,7 @@ from typing import Any
 import numpy as np
 
 from jointdb.errors import InputError, IntegrityError, NotFoundError
-from jointdb.store._candidates import _NULL, Candidates  # noqa: F401 - re-exported
+from jointdb.store._candidates import _NULL, Candidates
 from jointdb.store._records import DamagedRecordWarning, load_stored_json, to_version
 from jointdb.store._types import Conditions, Match, as_conditions, check_joint_type, check_label
 

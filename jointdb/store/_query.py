@@ -60,13 +60,12 @@ from sqlalchemy import select
 from jointdb.errors import InputError, NumericalError
 from jointdb.frf import FRF
 from jointdb.store._access import read_session
+from jointdb.store._candidates import _NULL, Candidates
 from jointdb.store._dberrors import translate_error
 from jointdb.store._interp import bracketing_weights
 from jointdb.store._index import materials_key, standing
 from jointdb.store._models import JointRow, LabelRow, StateRow, VersionRow
 from jointdb.store._nearest import (
-    _NULL,
-    Candidates,
     OutsideCatalogueWarning,
     Reader,
     Selection,

@@ -15,11 +15,11 @@ from sqlalchemy.orm import Session
 from jointdb.errors import InputError, IntegrityError, NotFoundError
 from jointdb.frf import FRF
 from jointdb.store import _db
-from jointdb.store._access import MAX_WRITE_ATTEMPTS, Storage, joint_row  # noqa: F401 - re-exported
+from jointdb.store._access import Storage, joint_row
 from jointdb.store._blobformat import frf_sha256
 from jointdb.store._catalogue import idempotent_answer, identity_of, precheck, write_version
 from jointdb.store._labels import LabelsAndStates
-from jointdb.store._reports import Catalogued, CheckReport, VersionDiff  # noqa: F401 - re-exported
+from jointdb.store._reports import Catalogued, CheckReport, VersionDiff
 from jointdb.store._models import JointRow, LabelRow, StateRow, VersionRow
 from jointdb.store._listing import JointPage, list_page
 from jointdb.store._records import (

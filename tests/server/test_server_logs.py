@@ -73,7 +73,7 @@ _CRASH = textwrap.dedent('''
     import sys, threading, time
     import httpx, uvicorn
     from jointdb.server import Settings, create_app
-    from jointdb.server._logging import log_config
+    from jointdb.io._jsonlog import log_config
 
     db, blobs, port, token = sys.argv[1], sys.argv[2], int(sys.argv[3]), sys.argv[4]
     app = create_app(Settings(url=db, blobs=blobs))
