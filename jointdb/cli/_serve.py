@@ -57,7 +57,8 @@ def serve(
     event(logging.getLogger("jointdb.server"), "serve", url=f"http://{host}:{port}", workers=workers)
     uvicorn.run("jointdb.server:app_from_env", factory=True, host=host, port=port, workers=workers,
                 log_config=log_config(log_level.lower()), access_log=False, timeout_graceful_shutdown=30,
-                proxy_headers=False, server_header=False)
+                proxy_headers=False, server_header=False,
+                http="jointdb.server._protocol:NoDelayHTTPProtocol")  # TCP_NODELAY with any worker count
 
 
 def _check_limits(port: int, workers: int, max_upload_mb: float, timeout: float, log_level: str) -> None:
