@@ -20,6 +20,8 @@ def serve(
     open_reads: Annotated[bool, typer.Option("--open-reads", help="Allow reads without a token (default: token-only).")] = False,
     max_upload_mb: Annotated[float, typer.Option("--max-upload-mb", help="Largest request body [MiB].")] = 64.0,
     timeout: Annotated[float, typer.Option("--timeout", help="Longest request time [s] before 503.")] = 60.0,
+    concurrency: Annotated[int, typer.Option("--concurrency", help="Requests handled at once per worker (the PostgreSQL pool holds as many connections, plus half again in a burst).")] = 16,
+    max_queued: Annotated[int, typer.Option("--max-queued", help="Requests that may wait for a turn per worker; more are answered 429 with Retry-After.")] = 64,
     log_level: Annotated[str, typer.Option("--log-level", help="debug, info, warning, error.")] = "info",
     secure_cookies: Annotated[Optional[bool], typer.Option(
         "--secure-cookies/--insecure-cookies",
@@ -42,12 +44,15 @@ def serve(
     except ImportError:
         raise InputError("jointdb serve needs the server extra: pip install 'jointdb[server]'") from None
     _check_limits(port, workers, max_upload_mb, timeout, log_level)
+    if not (1 <= concurrency <= 1000 and 0 <= max_queued <= 10_000):
+        raise InputError(f"--concurrency must be 1..1000 and --max-queued 0..10000, got {concurrency}, {max_queued}")
     check_db_target(db)  # a missing SQLite file is refused here, never created by the server
     from jointdb.store._chain import check_serve_options
 
     env = check_serve_options(db, allow_owner, checkpoint_key, checkpoint_interval)  # roles: docs/service.md
     env |= {"JOINTDB_OPEN_READS": "1" if open_reads else "0", "JOINTDB_MAX_UPLOAD_MB": str(max_upload_mb),
-            "JOINTDB_REQUEST_TIMEOUT_S": str(timeout), "JOINTDB_BIND_HOST": host}
+            "JOINTDB_REQUEST_TIMEOUT_S": str(timeout), "JOINTDB_BIND_HOST": host,
+            "JOINTDB_CONCURRENCY": str(concurrency), "JOINTDB_MAX_QUEUED": str(max_queued)}
     os.environ.update(env | _store_env(db, blobs, secure_cookies))  # every worker reads its settings from here
     import logging
 

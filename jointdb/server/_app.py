@@ -20,6 +20,7 @@ from fastapi import FastAPI, Request
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
 from sqlalchemy.exc import DataError
+from sqlalchemy.exc import TimeoutError as PoolTimeout
 from starlette.exceptions import HTTPException as StarletteHTTPException
 
 from jointdb.errors import IntegrityError, JointdbError
@@ -108,7 +109,8 @@ def _lifespan(settings: Settings, repo):
         if own:
             from jointdb.store import Repository
 
-            app.state.repo = Repository(settings.url, blobs=settings.blobs, auto_create=False)
+            app.state.repo = Repository(settings.url, blobs=settings.blobs, auto_create=False,
+                                        pool_size=settings.concurrency)  # one connection per admitted request
         log.info(json.dumps({"event": "startup", "database": _safe(app.state.repo.url)}))
         try:
             yield
@@ -128,6 +130,13 @@ async def _jointdb_error(request: Request, exc: JointdbError):
     if status >= 500 or isinstance(exc, IntegrityError):
         _note_failure(request, exc)  # the full text goes to the request's log line
     return _error(request, status, text)
+
+
+async def _pool_timeout(request: Request, exc: PoolTimeout):
+    """Every database connection stayed busy for the pool's whole wait: 503, try again (never a 500)."""
+    _note_failure(request, exc)
+    return _error(request, 503, "the service is busy (no database connection free); retry shortly",
+                  headers={"Retry-After": "1"})
 
 
 async def _overflow(request: Request, exc: OverflowError):
@@ -154,7 +163,7 @@ async def _unexpected(request: Request, exc: Exception):  # only outside Service
 
 
 #: Each error type and its handler (see the module's docstring).
-_ERROR_HANDLERS = ((JointdbError, _jointdb_error), (OverflowError, _overflow), (DataError, _data_error),
+_ERROR_HANDLERS = ((JointdbError, _jointdb_error), (PoolTimeout, _pool_timeout), (OverflowError, _overflow), (DataError, _data_error),
                    (RequestValidationError, _validation), (StarletteHTTPException, _http), (Exception, _unexpected))
 
 
@@ -221,7 +230,8 @@ def create_app(settings: Settings | None = None, repo=None) -> FastAPI:
     install_security_headers(app, settings)
     app.add_middleware(ControlCharacterGuard, openapi=app.openapi)  # inside ServiceMiddleware: logged
     app.add_middleware(ServiceMiddleware, max_upload_bytes=settings.max_upload_bytes,
-                       request_timeout_s=settings.request_timeout_s)
+                       request_timeout_s=settings.request_timeout_s, concurrency=settings.concurrency,
+                       max_queued=settings.max_queued)
     return app
 
 

@@ -1,5 +1,10 @@
-"""One ASGI middleware: request id, upload-size limit, request time limit and one
-structured (JSON) log line per request.
+"""One ASGI middleware: request id, admission (back-pressure), upload-size limit,
+request time limit and one structured (JSON) log line per request.
+
+Admission: at most ``concurrency`` requests run in the app at once, at most
+``max_queued`` wait for a turn; one more is answered 429 with ``Retry-After`` at
+once (no database connection is taken, nothing waits for a pool that is empty).
+The probes (``/healthz``, ``/readyz``) are never queued.
 
 The log line holds method, path (never the query string or any header, so a
 token can never reach it), status, duration, body size, the token owner and a
@@ -21,18 +26,62 @@ import uuid
 log = logging.getLogger("jointdb.server.access")
 
 
+#: Paths that bypass admission: a load balancer's probes must answer while the service is busy.
+UNQUEUED = frozenset({"/healthz", "/readyz"})
+RETRY_AFTER_S = 1
+
+
 def _json_response(status: int, message: str, request_id: str) -> tuple[dict, dict]:
     body = json.dumps({"error": message, "request_id": request_id}).encode()
-    start = {"type": "http.response.start", "status": status,
-             "headers": [(b"content-type", b"application/json"), (b"content-length", str(len(body)).encode())]}
+    headers = [(b"content-type", b"application/json"), (b"content-length", str(len(body)).encode())]
+    if status in (429, 503):
+        headers.append((b"retry-after", str(RETRY_AFTER_S).encode()))
+    start = {"type": "http.response.start", "status": status, "headers": headers}
     return start, {"type": "http.response.body", "body": body}
 
 
+class Busy(Exception):
+    """More requests are waiting than the queue holds."""
+
+
+class Admission:
+    """At most ``concurrency`` holders at once; at most ``max_queued`` waiting (else :class:`Busy`).
+
+    Runs on one event loop (one per worker process), so the counters need no lock.
+    """
+
+    def __init__(self, concurrency: int, max_queued: int):
+        if concurrency < 1 or max_queued < 0:
+            raise ValueError(f"concurrency must be >= 1 and max_queued >= 0, got {concurrency}, {max_queued}")
+        self.concurrency, self.max_queued = int(concurrency), int(max_queued)
+        self.running = 0
+        self.waiting = 0
+        self._turns: asyncio.Semaphore | None = None  # made on the loop that uses it
+
+    async def enter(self) -> None:
+        if self._turns is None:
+            self._turns = asyncio.Semaphore(self.concurrency)
+        if self._turns.locked() and self.waiting >= self.max_queued:
+            raise Busy
+        self.waiting += 1
+        try:
+            await self._turns.acquire()  # a cancelled wait (request time limit) gives no turn away
+        finally:
+            self.waiting -= 1
+        self.running += 1
+
+    def leave(self) -> None:
+        self.running -= 1
+        self._turns.release()
+
+
 class ServiceMiddleware:
-    def __init__(self, app, max_upload_bytes: int, request_timeout_s: float):
+    def __init__(self, app, max_upload_bytes: int, request_timeout_s: float,
+                 concurrency: int = 16, max_queued: int = 64):
         self.app = app
         self.max_upload = int(max_upload_bytes)
         self.timeout = float(request_timeout_s)
+        self.admission = Admission(concurrency, max_queued)
 
     async def __call__(self, scope, receive, send):
         if scope["type"] != "http":
@@ -91,7 +140,10 @@ class ServiceMiddleware:
                     async def replay():
                         return buffered.pop(0) if buffered else await receive()
 
-                    await asyncio.wait_for(self.app(scope, replay, send_wrapped), self.timeout)
+                    await asyncio.wait_for(self._admitted(scope, replay, send_wrapped), self.timeout)
+        except Busy:
+            await refuse(429, f"the service is busy ({self.admission.concurrency} requests running, "
+                              f"{self.admission.waiting} waiting); retry in {RETRY_AFTER_S} s")
         except asyncio.TimeoutError:
             await refuse(503, f"request took longer than {self.timeout:g} s; try again or narrow the request")
         except Exception as exc:  # noqa: BLE001 - unhandled: one 500 and one log line with the traceback
@@ -110,3 +162,14 @@ class ServiceMiddleware:
             }
             line.update({k: state[k] for k in ("error", "traceback") if state.get(k)})
             log.log(logging.ERROR if status["code"] >= 500 else logging.INFO, json.dumps(line))
+
+    async def _admitted(self, scope, receive, send) -> None:
+        """Run the app for one request once admission lets it in (probes at once)."""
+        if scope.get("path") in UNQUEUED:
+            await self.app(scope, receive, send)
+            return
+        await self.admission.enter()
+        try:
+            await self.app(scope, receive, send)
+        finally:
+            self.admission.leave()

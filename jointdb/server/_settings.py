@@ -33,6 +33,15 @@ def _env_float(name: str, default: float) -> float:
     return value
 
 
+def _env_count(name: str, default: int, lowest: int = 0) -> int:
+    text = os.environ.get(name)
+    if text is None or text == "":
+        return default
+    if not text.strip().isdigit() or not lowest <= int(text) <= 10_000:
+        raise InputError(f"${name} must be a whole number {lowest}..10000, got {text!r}")
+    return int(text)
+
+
 LOOPBACK_HOSTS = frozenset({"127.0.0.1", "::1", "localhost"})
 
 
@@ -59,6 +68,12 @@ class Settings:
     unknown ``bind_host`` counts as not loopback. ``session_idle_s`` and
     ``session_lifetime_s``: a sign-in ends after this long without a page
     view, and after this long at the latest.
+
+    Load: ``concurrency`` requests are handled at once per worker process (the
+    PostgreSQL connection pool is sized to it); up to ``max_queued`` more wait
+    for a turn; beyond that a request is answered 429 with ``Retry-After`` at once
+    instead of waiting for a connection that may never come (back-pressure).
+    ``/healthz`` and ``/readyz`` are never queued.
     """
 
     url: str | None = None
@@ -70,6 +85,8 @@ class Settings:
     bind_host: str | None = None
     session_idle_s: float = 30 * 60.0
     session_lifetime_s: float = 12 * 3600.0
+    concurrency: int = 16
+    max_queued: int = 64
 
     @property
     def cookie_secure(self) -> bool:
@@ -84,7 +101,7 @@ class Settings:
         """``JOINTDB_URL``, ``JOINTDB_BLOBS``, ``JOINTDB_OPEN_READS``, ``JOINTDB_MAX_UPLOAD_MB``,
         ``JOINTDB_REQUEST_TIMEOUT_S``, ``JOINTDB_SECURE_COOKIES`` (true, false or auto),
         ``JOINTDB_BIND_HOST`` (set by ``jointdb serve``), ``JOINTDB_SESSION_IDLE_MIN`` (30),
-        ``JOINTDB_SESSION_HOURS`` (12)."""
+        ``JOINTDB_SESSION_HOURS`` (12), ``JOINTDB_CONCURRENCY`` (16), ``JOINTDB_MAX_QUEUED`` (64)."""
         return cls(
             url=os.environ.get("JOINTDB_URL") or None,
             blobs=os.environ.get("JOINTDB_BLOBS") or None,
@@ -95,4 +112,6 @@ class Settings:
             bind_host=os.environ.get("JOINTDB_BIND_HOST") or None,
             session_idle_s=_env_float("JOINTDB_SESSION_IDLE_MIN", 30.0) * 60,
             session_lifetime_s=_env_float("JOINTDB_SESSION_HOURS", 12.0) * 3600,
+            concurrency=_env_count("JOINTDB_CONCURRENCY", 16, lowest=1),
+            max_queued=_env_count("JOINTDB_MAX_QUEUED", 64),
         )

@@ -229,11 +229,13 @@ def _sqlite_engine(url: str) -> tuple[Engine, Engine]:
     return engine, engine.execution_options(sqlite_begin="IMMEDIATE")
 
 
-def make_engines(url: str) -> tuple[Engine, Engine]:
+def make_engines(url: str, pool_size: int | None = None) -> tuple[Engine, Engine]:
     """``(read_engine, write_engine)`` for a URL; identical for PostgreSQL.
 
     No connection is opened here (and no file created); for SQLite call
-    :func:`open_sqlite_target` first.
+    :func:`open_sqlite_target` first. ``pool_size`` (PostgreSQL): connections kept
+    open, plus up to half as many again under a burst (default: SQLAlchemy's 5 + 10);
+    a server sizes it to the requests it lets in at once (``jointdb serve --concurrency``).
 
     Raises
     ------
@@ -244,6 +246,10 @@ def make_engines(url: str) -> tuple[Engine, Engine]:
         if is_sqlite(url):
             return _sqlite_engine(url)
         kwargs: dict = {"pool_pre_ping": True}
+        if pool_size is not None:
+            if not 1 <= int(pool_size) <= 1000:
+                raise InputError(f"pool_size must be 1..1000, got {pool_size}")
+            kwargs |= {"pool_size": int(pool_size), "max_overflow": max(2, int(pool_size) // 2)}
         if "connect_timeout" not in make_url(url).query:
             kwargs["connect_args"] = {"connect_timeout": PG_CONNECT_TIMEOUT_S}
         engine = create_engine(url, **kwargs)

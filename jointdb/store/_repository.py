@@ -74,6 +74,11 @@ class Repository(LabelsAndStates):
         PostgreSQL (run ``jointdb db upgrade`` on a shared server). An existing
         SQLite file that is empty, not SQLite or not a jointdb database is
         always refused (InputError), never re-created.
+    check_schema
+        Refuse a database whose schema is not this jointdb's (default True).
+    pool_size
+        PostgreSQL: connections kept open (up to half as many again in a burst);
+        default SQLAlchemy's 5 + 10. Ignored for SQLite.
 
     Raises
     ------
@@ -93,13 +98,14 @@ class Repository(LabelsAndStates):
         blobs: str | os.PathLike | None = None,
         auto_create: bool | None = None,
         check_schema: bool = True,
+        pool_size: int | None = None,
     ):
         self.url = _db.resolve_url(url)
         self.is_sqlite = _db.is_sqlite(self.url)
         auto = self.is_sqlite if auto_create is None else bool(auto_create)
         if self.is_sqlite:  # refuse a directory, an empty or foreign file; create a missing one only if asked
             _db.open_sqlite_target(self.url, create=auto and check_schema)
-        self.read_engine, self.write_engine = _db.make_engines(self.url)  # a missing driver first
+        self.read_engine, self.write_engine = _db.make_engines(self.url, pool_size)  # a missing driver first
         # a JSON column that does not decode (a damaged file) reads as DamagedJSON instead of raising in the
         # middle of a result: each read then refuses that one row by name (check_record). Set before the
         # first connection: psycopg registers the loader on connect, SQLite's JSON type reads it per query.

@@ -1,0 +1,126 @@
+"""The service under 32 clients (issue 26, item 4): show, FRF download and nearest on a
+PostgreSQL catalogue of 100k versions, ``jointdb serve --workers 2``.
+
+The catalogue is bulk-filled (``bench/_bulk.py``: real rows and record hashes, no blobs)
+plus ``--with-blobs`` versions catalogued through the Repository (their FRFs are what
+the downloads fetch, HDF5 exchange files, each version several times so the encoded-file
+cache is exercised as in real use). Each of ``--clients`` threads sends a mix of the three
+requests on its own kept-alive connection; the bench prints p50/p99 per kind and the count
+of every status (the goal: no 500 and no 503; 429 is the service's back-pressure and is
+counted separately).
+
+Reference in the same run: the same mix from one client (the service's unloaded latency).
+
+    python bench/bench_service_load.py --db postgresql+psycopg://postgres@127.0.0.1:54330/postgres \
+        --versions 100000 --workers 2 --clients 32
+"""
+
+from __future__ import annotations
+
+import argparse
+import collections
+import concurrent.futures as cf
+import random
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "server"))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _bulk import bulk_fill  # noqa: E402
+from bench_server import fresh_db  # noqa: E402
+from server_helpers import drop_pg_schema, make_tokens, spring_joint, start_server, stop_server  # noqa: E402
+
+
+def seed(url: str, blobs, versions: int, with_blobs: int) -> list[tuple[str, int]]:
+    """Bulk rows, then ``with_blobs`` real versions (10 joints); their (name, version) pairs."""
+    from jointdb.store import Repository
+
+    with Repository(url, blobs=blobs, auto_create=False) as repo:
+        bulk_fill(repo, versions, per_joint=10)
+        if not repo.is_sqlite:  # bulk_fill gives explicit ids: move the sequence past them
+            with repo.write_engine.begin() as conn:
+                conn.exec_driver_sql("SELECT setval(pg_get_serial_sequence('joints', 'id'), "
+                                     "(SELECT max(id) FROM joints))")
+        frf = spring_joint()
+        real = [repo.catalogue(f"D{i % 10:02d}", "tool-holder", frf, {"torque_nm": 20.0 + i},
+                               "spring-damper-planar", author="bench", force=True) for i in range(with_blobs)]
+    return [(v.name, v.version) for v in real]
+
+
+def one_request(c, rng, kinds, downloads, n_joints: int) -> tuple[str, int, float]:
+    kind = rng.choice(kinds)
+    t0 = time.perf_counter()
+    if kind == "show":
+        r = c.get(f"/api/v1/joints/bulk-{rng.randrange(n_joints):06d}/versions/{rng.randint(1, 10)}")
+    elif kind == "download":
+        name, version = rng.choice(downloads)
+        r = c.get(f"/api/v1/joints/{name}/versions/{version}/frf", params={"format": "hdf5"})
+    else:
+        r = c.post("/api/v1/query/nearest", json={"joint_type": "tool-holder", "conditions": {
+            "materials": ["tungsten-carbide", "steel"], "torque_nm": rng.uniform(10, 200)}, "k": 3})
+    return kind, r.status_code, time.perf_counter() - t0
+
+
+def run(server, clients: int, per_client: int, downloads, seed_: int, n_joints: int) -> tuple[dict, collections.Counter]:
+    kinds = ("show", "download", "nearest")
+
+    def client(i: int):
+        rng = random.Random(seed_ * 1000 + i)
+        with server.client("reader") as c:
+            return [one_request(c, rng, kinds, downloads, n_joints) for _ in range(per_client)]
+
+    with cf.ThreadPoolExecutor(clients) as pool:
+        results = [x for part in pool.map(client, range(clients)) for x in part]
+    statuses = collections.Counter(status for _, status, _ in results)
+    table = {}
+    for kind in kinds:
+        t = np.array([dt for k, s, dt in results if k == kind and s == 200]) * 1e3
+        table[kind] = {"n": len(t), "p50_ms": round(float(np.percentile(t, 50)), 1),
+                       "p99_ms": round(float(np.percentile(t, 99)), 1)} if len(t) else {"n": 0}
+    return table, statuses
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--db", required=True, help="PostgreSQL base URL (a fresh schema is made) or 'sqlite'.")
+    ap.add_argument("--versions", type=int, default=100_000)
+    ap.add_argument("--with-blobs", type=int, default=40)
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--clients", type=int, default=32)
+    ap.add_argument("--per-client", type=int, default=60)
+    ap.add_argument("--blobs", default="database", help="'database' or 'files'")
+    args = ap.parse_args()
+    with tempfile.TemporaryDirectory() as tmp_:
+        tmp = Path(tmp_)
+        url, (engine, schema) = fresh_db(args.db, tmp)
+        blobs = "database" if args.blobs == "database" else tmp / "blobs"
+        try:
+            t0 = time.perf_counter()
+            downloads = seed(url, blobs, args.versions, args.with_blobs)
+            print(f"seeded {args.versions} + {args.with_blobs} versions in {time.perf_counter() - t0:.0f} s", flush=True)
+            tokens = make_tokens(url, blobs)
+            server = start_server(url, blobs, tmp / "server.log", workers=args.workers)
+            server.tokens = tokens
+            try:
+                n_joints = args.versions // 10
+                run(server, 4, 10, downloads, 0, n_joints)  # warm: connections, caches, imports
+                ref, _ = run(server, 1, 3 * args.per_client, downloads, 1, n_joints)
+                print("reference, 1 client:", ref, flush=True)
+                table, statuses = run(server, args.clients, args.per_client, downloads, 2, n_joints)
+                print(f"{args.clients} clients, {args.workers} workers:", table, flush=True)
+                print("statuses:", dict(statuses), flush=True)
+                print("p99 ratio to 1 client:", {k: round(table[k]["p99_ms"] / ref[k]["p99_ms"], 1)
+                                                 for k in table if table[k].get("n") and ref[k].get("n")})
+            finally:
+                stop_server(server)
+        finally:
+            if engine is not None:
+                drop_pg_schema(engine, schema)
+
+
+if __name__ == "__main__":
+    main()
