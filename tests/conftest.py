@@ -16,6 +16,8 @@ ROOT = Path(__file__).resolve().parents[1]
 # The nearest-query cache (jointdb.store._qcache) goes to a directory of this test run, inherited by the
 # `python -m jointdb` subprocesses the CLI tests start; a test that sets its own value still wins.
 os.environ.setdefault("JOINTDB_QUERY_CACHE", tempfile.mkdtemp(prefix="jointdb-test-query-cache-"))
+# the server's cache of encoded FRF downloads (jointdb.server._encoded), likewise
+os.environ.setdefault("JOINTDB_CACHE_DIR", tempfile.mkdtemp(prefix="jointdb-test-download-cache-"))
 
 
 def _load_script(relative: str):

@@ -74,6 +74,10 @@ class Settings:
     for a turn; beyond that a request is answered 429 with ``Retry-After`` at once
     instead of waiting for a connection that may never come (back-pressure).
     ``/healthz`` and ``/readyz`` are never queued.
+
+    ``cache_dir``: the folder of encoded FRF downloads shared by the workers
+    (:mod:`jointdb.server._encoded`); None: the default per-user cache folder;
+    ``""``: memory only.
     """
 
     url: str | None = None
@@ -87,6 +91,7 @@ class Settings:
     session_lifetime_s: float = 12 * 3600.0
     concurrency: int = 16
     max_queued: int = 64
+    cache_dir: str | None = None
 
     @property
     def cookie_secure(self) -> bool:
@@ -101,7 +106,7 @@ class Settings:
         """``JOINTDB_URL``, ``JOINTDB_BLOBS``, ``JOINTDB_OPEN_READS``, ``JOINTDB_MAX_UPLOAD_MB``,
         ``JOINTDB_REQUEST_TIMEOUT_S``, ``JOINTDB_SECURE_COOKIES`` (true, false or auto),
         ``JOINTDB_BIND_HOST`` (set by ``jointdb serve``), ``JOINTDB_SESSION_IDLE_MIN`` (30),
-        ``JOINTDB_SESSION_HOURS`` (12), ``JOINTDB_CONCURRENCY`` (16), ``JOINTDB_MAX_QUEUED`` (64)."""
+        ``JOINTDB_SESSION_HOURS`` (12), ``JOINTDB_CONCURRENCY`` (16), ``JOINTDB_MAX_QUEUED`` (64), ``JOINTDB_CACHE_DIR``."""
         return cls(
             url=os.environ.get("JOINTDB_URL") or None,
             blobs=os.environ.get("JOINTDB_BLOBS") or None,
@@ -114,4 +119,5 @@ class Settings:
             session_lifetime_s=_env_float("JOINTDB_SESSION_HOURS", 12.0) * 3600,
             concurrency=_env_count("JOINTDB_CONCURRENCY", 16, lowest=1),
             max_queued=_env_count("JOINTDB_MAX_QUEUED", 64),
+            cache_dir=os.environ.get("JOINTDB_CACHE_DIR"),
         )

@@ -2,14 +2,15 @@
 
 A catalogued version never changes, so its FRF in a given format never does:
 the response carries a strong ETag (record hash + format) and may be cached for
-a year (``immutable``); ``If-None-Match`` gets 304 without reading the blob.
+a year (``immutable``); ``If-None-Match`` gets 304 without reading the blob. The
+encoded bytes are kept by the same key (:mod:`jointdb.server._encoded`: memory,
+then a folder all workers share), so a version is read and encoded once.
 """
 
 from __future__ import annotations
 
 import json
 import tempfile
-from functools import lru_cache
 from pathlib import Path as FsPath
 from typing import Annotated, Literal
 
@@ -55,10 +56,18 @@ def render(jv, frf, fmt: str) -> bytes:
         return path.read_bytes()
 
 
-@lru_cache(maxsize=64)
-def _cached(r, name: str, version: int, record: str, fmt: str) -> bytes:
-    jv = r.get(name, version)
-    return render(jv, r.load_frf(jv), fmt)
+def encoded_cache(request: Request):
+    """The app's :class:`~jointdb.server._encoded.EncodedCache` (made on first use)."""
+    cache = getattr(request.app.state, "encoded_cache", None)
+    if cache is None:
+        from jointdb import __version__
+        from jointdb.server._encoded import EncodedCache, default_cache_dir
+
+        folder = request.app.state.settings.cache_dir
+        folder = default_cache_dir() if folder is None else (FsPath(folder) if folder else None)
+        cache = EncodedCache(folder, tag=__version__)
+        request.app.state.encoded_cache = cache
+    return cache
 
 
 def etag(record_sha256: str, fmt: str) -> str:
@@ -78,7 +87,7 @@ def download(request: Request, name: Name, version: Annotated[int, Path(ge=1, le
     wanted = [t.strip() for t in request.headers.get("if-none-match", "").split(",")]
     if tag in wanted or "*" in wanted:
         return Response(status_code=304, headers=headers)
-    body = _cached(r, name, version, jv.record_sha256, format)
+    body = encoded_cache(request).get(jv.record_sha256, format, lambda: render(jv, r.load_frf(jv), format))
     media, suffix = FORMATS[format]
     safe = "".join(ch if ch.isalnum() or ch in "-_." else "_" for ch in name)
     headers["Content-Disposition"] = f'attachment; filename="{safe}-v{version}{suffix}"'
