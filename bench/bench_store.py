@@ -9,7 +9,11 @@ Prints numbers and ratios against references measured in the same process:
 2. Nearest-query latency: see ``bench/bench_store_rows.py`` (100,000 versions filled
    in bulk through the real tables, the query index, warm and cold, against numpy).
 
-Run: ``.venv/bin/python bench/bench_store.py [--quick]``.
+3. With ``--pg URL`` also catalogue throughput on PostgreSQL with the blobs in the
+   database (``blobs="database"``: blob and row in one transaction, one commit), in a
+   fresh schema that is dropped afterwards, against the same bare-write reference.
+
+Run: ``.venv/bin/python bench/bench_store.py [--quick] [--pg postgresql+psycopg://...]``.
 """
 
 from __future__ import annotations
@@ -52,8 +56,8 @@ def bare_durable_write(directory: Path, payload: bytes) -> None:
     os.close(fd)
 
 
-def bench_catalogue(root: Path, n: int) -> None:
-    repo = Repository(root / "cat.sqlite")
+def bench_catalogue(root: Path, n: int, url: str | None = None, blobs=None, what: str = "SQLite") -> None:
+    repo = Repository(url or root / "cat.sqlite", blobs=blobs)
     frfs = [joint_frf(1e6 * (1 + i)) for i in range(n)]
     t0 = time.perf_counter()
     for i, frf in enumerate(frfs):
@@ -73,7 +77,7 @@ def bench_catalogue(root: Path, n: int) -> None:
         t0 = time.perf_counter()
         repo.load_frf(jv)
         frf_read.append(time.perf_counter() - t0)
-    print(f"catalogue: {n} versions of a 1000-line 2x2 joint FRF")
+    print(f"catalogue ({what}): {n} versions of a 1000-line 2x2 joint FRF")
     print(f"  {1 / t_cat:8.1f} versions/s  ({t_cat * 1e3:.1f} ms each: blob write+fsync+verify, row commit)")
     print(f"  reference bare durable write of the raw bytes: {t_ref * 1e3:.1f} ms -> ratio {t_cat / t_ref:.1f}x")
     print(f"  verified read (load_frf) median {np.median(frf_read) * 1e3:.1f} ms")
@@ -85,6 +89,34 @@ def main() -> None:
     with tempfile.TemporaryDirectory(prefix="jointdb-bench-") as tmp:
         root = Path(tmp)
         bench_catalogue(root, 30 if quick else 100)
+        if "--pg" in sys.argv:
+            bench_catalogue_pg(root / "pg", sys.argv[sys.argv.index("--pg") + 1], 30 if quick else 200)
+
+
+def bench_catalogue_pg(root: Path, base: str, n: int) -> None:
+    """:func:`bench_catalogue` on PostgreSQL, blobs in the database, in a fresh schema."""
+    import sqlalchemy as sa
+
+    from jointdb.store import upgrade
+
+    root.mkdir()
+    schema = "bench_" + uuid.uuid4().hex[:10]
+    engine = sa.create_engine(base)
+    with engine.begin() as conn:
+        conn.exec_driver_sql(f"CREATE SCHEMA {schema}")
+    url = f"{base}{'&' if '?' in base else '?'}options=-csearch_path%3D{schema}"
+    try:
+        upgrade(url)
+        bench_catalogue(root, n, url=url, blobs="database", what="PostgreSQL, blobs in the database")
+    finally:
+        from jointdb.store._guards import event_trigger_names, guard_function
+
+        with engine.begin() as conn:  # the DDL guard a superuser migration installed refuses the drop
+            for name in event_trigger_names(schema):
+                conn.exec_driver_sql(f'DROP EVENT TRIGGER IF EXISTS "{name}"')
+            conn.exec_driver_sql(f"DROP FUNCTION IF EXISTS {guard_function(schema)}()")
+            conn.exec_driver_sql(f"DROP SCHEMA {schema} CASCADE")
+        engine.dispose()
 
 
 if __name__ == "__main__":

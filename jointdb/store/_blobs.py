@@ -375,8 +375,9 @@ class PendingPut:
         if self._thread is not None:
             self._thread.result()  # run() keeps what finish() raised for wait()
 
-    def wait(self) -> str:
-        """The digest once the blob is durable in place.
+    def wait(self, session=None) -> str:
+        """The digest once the blob is durable in place (``session``: the version's transaction,
+        which a file blob does not take part in; the database store writes into it).
 
         Raises
         ------

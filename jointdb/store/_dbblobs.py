@@ -24,7 +24,7 @@ from sqlalchemy.orm import Session
 from jointdb.errors import IntegrityError, NotFoundError
 from jointdb.frf import FRF
 from jointdb.store._blobformat import blob_bytes, check_digest, decode_blob_bytes
-from jointdb.store._blobs import BlobInfo, PendingPut, VerifyingBlobs
+from jointdb.store._blobs import BlobInfo, VerifyingBlobs
 from jointdb.store._models import BlobRow
 
 #: the value of ``blobs=`` / ``JOINTDB_BLOBS`` that selects this store
@@ -33,6 +33,29 @@ DATABASE = "database"
 
 def _now() -> datetime:
     return datetime.now(timezone.utc)
+
+
+class SessionPut:
+    """A database blob waiting to be written in the transaction of its version (see
+    :meth:`DatabaseBlobStore.put_pending`); the interface of :class:`~jointdb.store._blobs.PendingPut`."""
+
+    def __init__(self, store: "DatabaseBlobStore", digest: str, data: bytes):
+        self.store, self.digest, self._data = store, digest, data
+
+    def wait(self, session: Session | None = None) -> str:
+        """Write the blob in ``session`` (committed with it), or in its own transaction; its digest."""
+        if session is None:
+            with Session(self.store.engine) as own, own.begin():
+                self.store._write(own, self.digest, self._data)
+        else:
+            self.store._write(session, self.digest, self._data)
+        return self.digest
+
+    def join(self) -> None:
+        """Nothing runs in the background."""
+
+    def cancel(self) -> None:
+        """Nothing was written."""
 
 
 class DatabaseBlobStore(VerifyingBlobs):
@@ -68,10 +91,20 @@ class DatabaseBlobStore(VerifyingBlobs):
         self.get(digest)
         return digest
 
-    def put_pending(self, frf: FRF):
-        """:meth:`put` done now (committed in its own transaction), as the file store's
-        :meth:`~jointdb.store._blobs.BlobStore.put_pending` interface: nothing left to wait for."""
-        return PendingPut(self.put(frf))
+    def put_pending(self, frf: FRF) -> "SessionPut":
+        """The blob encoded and verified now, written by ``wait(session)`` in the transaction of
+        the version that references it (one commit for blob and row; nothing written when the
+        version is refused). ``wait()`` without a session writes it in its own transaction."""
+        digest, data = blob_bytes(frf)
+        self._decode(digest, data)  # the one decode: the bytes about to be stored give back this FRF
+        return SessionPut(self, digest, data)
+
+    def _write(self, session: Session, digest: str, data: bytes) -> None:
+        """Insert (or touch) a verified blob in ``session``; a damaged stored copy is replaced."""
+        existing = session.get(BlobRow, digest)
+        if existing is not None and bytes(existing.data) != data and self._check(digest, existing.data):
+            existing.data, existing.size = data, len(data)
+        self._upsert(session, digest, data, _now())
 
     # ------------------------------------------------------------------- read
     @staticmethod

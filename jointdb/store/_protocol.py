@@ -50,7 +50,8 @@ class BlobStoreProtocol(Protocol):
         """Store ``frf`` durably (idempotent, read back and verified); its SHA-256 hex digest."""
 
     def put_pending(self, frf: FRF) -> PendingPut:
-        """Start :meth:`put`; ``.wait()`` returns the digest once the blob is durable."""
+        """Start :meth:`put`; ``.wait(session)`` returns the digest once the blob is durable (a store
+        that lives in the database writes it in ``session``, the transaction of its version)."""
 
     def get(self, digest: str) -> FRF:
         """The verified FRF (NotFoundError when missing, IntegrityError when corrupt)."""

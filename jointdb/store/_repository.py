@@ -245,7 +245,7 @@ class Repository(LabelsAndStates):
                                     prov=prov, qual=qual, parent=parent, actor=actor, label=label, blob=blob,
                                     raw_blobs=raw_blobs, move_label=self._move_label, force=force,
                                     allow_identical=allow_identical, idempotency=idempotency)
-                pending.wait()  # the blob is durable before the row that references it commits
+                pending.wait(session)  # the blob is durable before (file) or with (database) the row
                 return out
 
             out = self._retrying(write)

@@ -74,3 +74,22 @@ def test_gc_removes_only_old_unreferenced_blobs(dbrepo):
     # a put of an old blob refreshes it: the next gc spares it
     again = dbrepo.blobs.put(spring_joint(k=(3e6, 9e4)))
     assert dbrepo.gc(min_age_s=3600) == [] and dbrepo.blobs.exists(again)
+
+
+def test_blob_and_version_commit_in_one_transaction(dbrepo, monkeypatch):
+    """A version whose row fails to write leaves no blob behind (issue 26, item 5): the blob is
+    inserted in the version's own transaction, not committed before it."""
+    import jointdb.store._repository as repository_module
+
+    def failing_write(session, **kwargs):
+        session.flush()  # the blob row is in this transaction already
+        raise RuntimeError("the row write failed")
+
+    monkeypatch.setattr(repository_module, "write_version", failing_write)
+    with pytest.raises(RuntimeError, match="row write failed"):
+        dbrepo.catalogue("DB-TX", "tool-holder", spring_joint(), planar_conditions(), "spring-damper-planar")
+    with dbrepo.write_engine.connect() as conn:
+        assert conn.execute(sa.text("select count(*) from frf_blobs")).scalar() == 0
+    monkeypatch.undo()
+    jv = dbrepo.catalogue("DB-TX", "tool-holder", spring_joint(), planar_conditions(), "spring-damper-planar")
+    assert dbrepo.load_frf(jv).allclose(spring_joint(), rtol=0) and dbrepo.check().ok
