@@ -25,7 +25,7 @@ correlation, an :class:`OutputErrorResult`): :func:`fit_planar_joint`,
 Rotational receptances at a contact point (docs/theory.md §3):
 :func:`rotations_by_extension`, :func:`rotations_by_finite_difference`.
 
-Notes on the contract (api-contracts.md): outputs/inputs are
+Labels: outputs/inputs are
 ``(substructure name, Dof)`` pairs and the result FRF is labelled with the bare
 Dofs, so requested DOF labels must be distinct across substructures. A joint
 given as an FRF is matched to the interface by its labels when they equal the
