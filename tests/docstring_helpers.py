@@ -60,7 +60,7 @@ def sections(doc: str | None) -> dict[str, str]:
     return {name: "\n".join(body) for name, body in out.items()}
 
 
-def documented_parameters(doc: str | None) -> list[str]:
+def documented_parameters(doc: str | None, titles: tuple[str, ...] = _PARAM_SECTIONS) -> list[str]:
     """Parameter names listed in the Parameters (and Other Parameters) sections, in order.
 
     An entry is an unindented line ``name : type`` or ``name`` (``a, b : type`` names two);
@@ -68,7 +68,7 @@ def documented_parameters(doc: str | None) -> list[str]:
     """
     found: list[str] = []
     secs = sections(doc)
-    for title in _PARAM_SECTIONS:
+    for title in titles:
         for line in secs.get(title, "").splitlines():
             if not line.strip() or line[:1].isspace():
                 continue
@@ -103,13 +103,16 @@ def parameter_problems(obj: Callable, doc: str | None = None) -> list[str]:
     """What disagrees between ``obj``'s signature and the Parameters section of ``doc`` (its docstring).
 
     Every parameter of the signature must be listed; every listed parameter must be in the signature.
+    A class (a dataclass above all) may document its constructor's parameters as Attributes too:
+    they are its fields.
     """
     doc = inspect.getdoc(obj) if doc is None else doc
     wanted = signature_parameters(obj)
     if wanted is None:
         return []
     listed = documented_parameters(doc)
-    problems = [f"parameter {name!r} is not documented" for name in wanted if name not in listed]
+    fields = documented_parameters(doc, ("Attributes",)) if inspect.isclass(obj) else []
+    problems = [f"parameter {name!r} is not documented" for name in wanted if name not in listed + fields]
     problems += [f"documented parameter {name!r} is not in the signature" for name in listed if name not in wanted]
     return problems
 

@@ -14,7 +14,8 @@ Identification (IRC, docs/theory.md §2), each returning an :class:`Identificati
 - :func:`identify_n_point_joints` — n translational joints between two bodies (§2b).
 - :func:`identify_joint_matrix` — full joint matrix with inertia (§2c).
 - :class:`Regularisation` — truncated-SVD / Tikhonov pseudo-inverses.
-- :func:`equivalent_stiffness_damping`, :func:`fit_constant_kc` — k(ω), c(ω), constant (k, c).
+- :func:`equivalent_stiffness_damping`, :func:`fit_constant_kc` — k(ω), c(ω), constant (k, c)
+  (a :class:`KCFit`).
 
 Output-error identification (all lines at once, weighted by the measurement's
 uncertainty, started from the IRC estimate; parameters with standard errors and

@@ -20,6 +20,14 @@ these models by ``python -m jointdb.schemas DIR`` and let an editor complete
 and check the files (``"$schema"`` is not needed: map the schema to the file
 pattern in the editor).
 
+Functions
+---------
+   validate      -- check a parsed document against the schema of its kind (one field-named error)
+   json_schema   -- the JSON Schema of a file kind
+   schema_files  -- file name -> text of every published schema
+   SCHEMAS       -- kind -> the pydantic model (``"module:Class"``)
+   SCHEMA_FILES  -- kind -> published file name under ``docs/schemas/``
+
 Importing this module imports pydantic; the file readers import it only when
 they validate.
 """

@@ -1,0 +1,127 @@
+"""Every public parameter is documented (in the manner of python-control's ``test_docstrings.py``).
+
+The public API is the ``__all__`` of each public package (:data:`docstring_helpers.PUBLIC_MODULES`):
+its functions, its classes (their constructors) and the public methods of its classes. For each,
+every parameter of the signature must appear in the numpydoc ``Parameters`` section of its
+docstring (a class may list its fields under ``Attributes``), and no listed parameter may be
+missing from the signature — a renamed or removed argument cannot leave its documentation behind.
+
+Callables written before this rule and not yet documented are listed by name in
+``tests/docstring_backlog.txt``; the list can only shrink: a listed callable that is now
+documented fails the test until its line is removed, and a callable that is not listed must be
+documented in full. Package docstrings are catalogues: each public name appears in its package's
+docstring.
+"""
+
+from __future__ import annotations
+
+import importlib
+import inspect
+from pathlib import Path
+
+import pytest
+
+from docstring_helpers import (
+    PUBLIC_MODULES,
+    documented_parameters,
+    parameter_problems,
+    public_callables,
+    sections,
+)
+
+BACKLOG_FILE = Path(__file__).with_name("docstring_backlog.txt")
+BACKLOG = {line.split("#")[0].strip() for line in BACKLOG_FILE.read_text().splitlines()} - {""}
+CALLABLES = list(public_callables())
+NAMES = [name for name, _, _ in CALLABLES]
+
+#: the main entry points: each has an Examples section (run by ``test_doctests``)
+WITH_EXAMPLES = (
+    "jointdb.coupling.couple",
+    "jointdb.coupling.identify_planar_joint",
+    "jointdb.coupling.identify_n_point_joints",
+    "jointdb.coupling.identify_joint_matrix",
+    "jointdb.FRF",
+    "jointdb.fe.BeamModel",
+    "jointdb.stack.predict_tool_tip",
+    "jointdb.stack.tool_model",
+    "jointdb.stability.milling_lobes_zoa",
+    "jointdb.stability.turning_lobes",
+    "jointdb.store.Repository",
+    "jointdb.store.Repository.nearest",
+    "jointdb.store.Repository.interpolate",
+    "jointdb.diagnose.diagnose",
+)
+
+
+@pytest.mark.parametrize("name,doc_obj,sig_obj", CALLABLES, ids=NAMES)
+def test_every_parameter_is_documented(name, doc_obj, sig_obj):
+    problems = parameter_problems(sig_obj, inspect.getdoc(doc_obj))
+    if name in BACKLOG:
+        assert problems, (f"{name} is documented now: remove its line from {BACKLOG_FILE.name} "
+                          "so that it stays documented")
+        pytest.xfail(f"in {BACKLOG_FILE.name}: " + "; ".join(problems))
+    assert not problems, f"{name}: " + "; ".join(problems)
+
+
+def test_backlog_names_only_public_callables():
+    stale = sorted(BACKLOG - set(NAMES))
+    assert not stale, f"{BACKLOG_FILE.name} lists names that are not public callables: {stale}"
+
+
+@pytest.mark.parametrize("name", WITH_EXAMPLES)
+def test_main_entry_points_have_examples(name):
+    obj = dict((n, d) for n, d, _ in CALLABLES)[name]
+    assert ">>>" in sections(inspect.getdoc(obj)).get("Examples", ""), f"{name}: no Examples section with code"
+
+
+@pytest.mark.parametrize("modname", PUBLIC_MODULES)
+def test_package_docstring_is_a_catalogue(modname):
+    """Each public name of a package is named in the package's docstring (scipy.signal style)."""
+    module = importlib.import_module(modname)
+    doc = module.__doc__ or ""
+    missing = [name for name in module.__all__ if name not in doc]
+    assert not missing, f"{modname}: the docstring does not name {missing}"
+
+
+# --- the check itself can fail -------------------------------------------------------------------
+
+
+def _documented(freq, values, *, rtol=1e-9):
+    """A well documented function.
+
+    Parameters
+    ----------
+    freq : ndarray, shape (n_freq,)
+        Frequencies [Hz].
+    values : ndarray, shape (n_freq, n_out, n_in)
+        Receptances [m/N].
+    rtol : float, optional
+        Relative tolerance.
+
+    Returns
+    -------
+    bool
+    """
+
+
+def _undocumented_and_stale(freq, values, *, atol=0.0):
+    """A parameter renamed without its docstring (``rtol`` -> ``atol``), another never written down.
+
+    Parameters
+    ----------
+    freq : ndarray, shape (n_freq,)
+        Frequencies [Hz].
+    rtol : float
+        Relative tolerance.
+    """
+
+
+def test_the_check_catches_missing_and_stale_parameters():
+    assert documented_parameters(inspect.getdoc(_documented)) == ["freq", "values", "rtol"]
+    assert parameter_problems(_documented) == []
+    problems = parameter_problems(_undocumented_and_stale)
+    assert problems == [
+        "parameter 'values' is not documented",
+        "parameter 'atol' is not documented",
+        "documented parameter 'rtol' is not in the signature",
+    ]
