@@ -182,6 +182,25 @@ class FRF:
     InputError
         On wrong shapes, NaN/inf, non-increasing or negative frequencies,
         duplicate or unknown DOFs, or an unknown quantity.
+
+    Examples
+    --------
+    The receptance of a 1 kg mass on a 1 MN/m spring (natural frequency 159.15 Hz), then the
+    same as mobility (``iω`` times it) and one entry picked by its labels:
+
+    >>> import numpy as np
+    >>> from jointdb import FRF
+    >>> freq = np.array([0.0, 100.0, 200.0])                    # Hz
+    >>> w = 2 * np.pi * freq
+    >>> h = FRF(freq, 1 / (1e6 - 1.0 * w**2), outputs=["1x"], inputs=["1x"])
+    >>> h.shape, h.quantity.value
+    ((3, 1, 1), 'receptance')
+    >>> np.round(h.entry("1x", "1x").real * 1e6, 4)            # µm/N: 1 / (1 − (f/fn)²)
+    array([ 1.    ,  1.6523, -1.7267])
+    >>> bool(np.allclose(h.to("mobility").values[:, 0, 0], 1j * w * h.values[:, 0, 0]))
+    True
+    >>> [str(dof) for dof in h.outputs]
+    ['1x']
     """
 
     freq: np.ndarray

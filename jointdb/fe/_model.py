@@ -83,6 +83,26 @@ class BeamModel:
         point and ingredient position.
     name
         Free text.
+
+    Examples
+    --------
+    A steel shaft of 0.5 m, 20 mm diameter, free at both ends, in Euler–Bernoulli theory: two
+    rigid-body modes, then the first bending mode at ``(4.7300² / 2π) √(EI / ρAL⁴)``:
+
+    >>> import numpy as np
+    >>> from jointdb.fe import BeamModel, Segment, NamedPoint, get_material
+    >>> model = BeamModel(segments=(Segment(0.5, 0.02, material="steel"),),
+    ...                   points=(NamedPoint("end", 0.5, node=1),), theory="euler-bernoulli")
+    >>> modes = model.modes(3)
+    >>> modes.n_rigid
+    2
+    >>> steel, L, d = get_material("steel"), 0.5, 0.02
+    >>> EI, rhoA = steel.E * np.pi * d**4 / 64, steel.rho * np.pi * d**2 / 4
+    >>> f1 = 4.7300**2 / (2 * np.pi) * np.sqrt(EI / (rhoA * L**4))
+    >>> round(float(modes.freq_hz[2] / f1), 4)
+    1.0
+    >>> model.frf([100.0, 200.0], points=["end"]).shape           # (n_freq, n_out, n_in): 1x, 1ry
+    (2, 2, 2)
     """
 
     segments: tuple[Segment, ...]
