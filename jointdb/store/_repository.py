@@ -74,6 +74,9 @@ class Repository(LabelsAndStates):
         PostgreSQL (run ``jointdb db upgrade`` on a shared server). An existing
         SQLite file that is empty, not SQLite or not a jointdb database is
         always refused (InputError), never re-created.
+    check_schema
+        Refuse a database whose schema revision is not this jointdb's (default True).
+        False skips the check and creates nothing (a missing SQLite file is then refused).
 
     Raises
     ------
@@ -84,6 +87,31 @@ class Repository(LabelsAndStates):
         driver, outdated schema).
     IntegrityError
         A damaged SQLite file.
+
+    Examples
+    --------
+    A new SQLite catalogue; a spring–damper tool–holder joint catalogued as version 1, read
+    back by name and its FRF loaded (verified against its SHA-256):
+
+    >>> import os, tempfile
+    >>> import numpy as np
+    >>> from jointdb.coupling import spring_damper_joint
+    >>> from jointdb.store import Conditions, Provenance, Repository
+    >>> repo = Repository(os.path.join(tempfile.mkdtemp(), "joints.sqlite"))
+    >>> freq = np.linspace(100.0, 2000.0, 20)                                    # Hz
+    >>> joint = spring_damper_joint(freq, k=[2e7, 5e5], c=[50.0, 1.0], dofs_=["1x", "1ry"])
+    >>> jv = repo.catalogue("th-80nm", "tool-holder", joint,
+    ...                     Conditions(("carbide", "steel"), torque_nm=80.0),
+    ...                     model_kind="spring-damper-planar", provenance=Provenance(method="irc-planar"))
+    >>> jv.name, jv.version, jv.conditions.materials, jv.dofs
+    ('th-80nm', 1, ('tungsten-carbide', 'steel'), ('1x', '1ry'))
+    >>> repo.get("th-80nm").record_sha256 == jv.record_sha256
+    True
+    >>> repo.load_frf(jv).allclose(joint)
+    True
+    >>> repo.catalogue("th-80nm", "tool-holder", joint, Conditions(("carbide", "steel"), torque_nm=80.0),
+    ...                model_kind="spring-damper-planar").version           # identical content: no new version
+    1
     """
 
     def __init__(
@@ -457,9 +485,65 @@ class Repository(LabelsAndStates):
     def nearest(self, joint_type: str, conditions: Conditions | Mapping[str, Any], k: int = 3,
                 at: datetime | str | None = None, *, label: str | None = None, all_versions: bool = False,
                 include_deprecated: bool = False):
-        """The ``k`` versions of ``joint_type`` closest to ``conditions``: by default each joint's
-        newest version that is not deprecated; ``label`` (only versions carrying it),
-        ``all_versions``, ``include_deprecated`` widen or narrow that; see :mod:`jointdb.store._query`."""
+        """The ``k`` versions of ``joint_type`` closest to ``conditions``.
+
+        By default each joint's newest version that is not deprecated takes part; ``label``,
+        ``all_versions`` and ``include_deprecated`` narrow or widen that. The distance (a
+        weighted sum over materials, preload, torque and geometry, each normalised by the
+        catalogued range) is defined in :mod:`jointdb.store._query`; a request outside the
+        catalogued range of a condition warns :class:`OutsideCatalogueWarning`.
+
+        Parameters
+        ----------
+        joint_type
+            ``"tool-holder"``, ``"holder-spindle"``, ...
+        conditions
+            The request: a :class:`Conditions` or a mapping of its fields (torque in N·m,
+            preload in N, geometry in m).
+        k
+            How many versions to return, >= 1.
+        at
+            A past instant (datetime or ISO 8601 text): answer as the catalogue stood then.
+        label
+            Only versions carrying this label (not with ``at``).
+        all_versions
+            Every version of each joint, not only its newest.
+        include_deprecated
+            Deprecated versions too.
+
+        Returns
+        -------
+        list of Match
+            Nearest first: ``version``, ``distance``, ``per_condition``, ``extrapolating``,
+            ``outside_range``.
+
+        Raises
+        ------
+        InputError
+            ``k < 1``, bad conditions or label, or ``label`` with ``at``.
+        NotFoundError
+            No catalogued version of that type in the selection.
+
+        Examples
+        --------
+        Three tool–holder joints catalogued at 40, 80 and 120 N·m; the two nearest to 100 N·m:
+
+        >>> import os, tempfile
+        >>> import numpy as np
+        >>> from jointdb.coupling import spring_damper_joint
+        >>> from jointdb.store import Conditions, Repository
+        >>> repo = Repository(os.path.join(tempfile.mkdtemp(), "joints.sqlite"))
+        >>> freq = np.linspace(100.0, 2000.0, 20)
+        >>> for torque, k in [(40.0, 1e7), (80.0, 2e7), (120.0, 3e7)]:
+        ...     _ = repo.catalogue(f"th-{torque:.0f}nm", "tool-holder",
+        ...                        spring_damper_joint(freq, [k, k / 40], [50.0, 1.0], ["1x", "1ry"]),
+        ...                        Conditions(("carbide", "steel"), torque_nm=torque), "spring-damper-planar")
+        >>> matches = repo.nearest("tool-holder", Conditions(("carbide", "steel"), torque_nm=100.0), k=2)
+        >>> [(m.version.name, m.extrapolating) for m in matches]
+        [('th-120nm', False), ('th-80nm', False)]
+        >>> matches[0].distance < matches[1].distance
+        True
+        """
         from jointdb.store._query import nearest
 
         return nearest(self.storage, joint_type, conditions, k, as_utc(at), label=label, all_versions=all_versions,
@@ -468,8 +552,58 @@ class Repository(LabelsAndStates):
     @_db.with_db_errors
     def interpolate(self, matches, conditions: Conditions | Mapping[str, Any] | None = None, *,
                     method: str = "axes"):
-        """An interpolated joint between matches (dynamic stiffness; ``method`` ``"axes"`` or ``"idw"``);
-        see :mod:`jointdb.store._query`."""
+        """An interpolated joint between catalogued neighbours, in dynamic stiffness.
+
+        Parameters
+        ----------
+        matches
+            Candidates, e.g. from :meth:`nearest`; ``"axes"`` uses those that bracket the
+            request along its condition axes, so pass the catalogued grid around it.
+        conditions
+            The request (None: inverse-distance weights).
+        method
+            ``"axes"`` (weights along each condition axis; torque and preload on a log scale)
+            or ``"idw"`` (inverse distance).
+
+        Returns
+        -------
+        InterpolatedJoint
+            ``frf`` (receptance on the neighbours' common band), ``neighbours`` ``(name,
+            version, weight)`` with weight > 0, ``conditions``. Not a catalogued joint.
+
+        Raises
+        ------
+        InputError
+            No matches, an unknown method, neighbours of different type, model kind or DOFs,
+            or no common frequency band.
+        NumericalError
+            A neighbour's receptance is singular on some line.
+
+        Examples
+        --------
+        Joints at 80 and 120 N·m with stiffness 2·10⁷ and 3·10⁷ N/m; at 100 N·m the weights
+        are those of log-torque, ``ln(100/80) / ln(120/80)`` = 0.5503 for the 120 N·m joint,
+        and the interpolated stiffness is the weighted mean:
+
+        >>> import os, tempfile
+        >>> import numpy as np
+        >>> from jointdb.coupling import equivalent_stiffness_damping, spring_damper_joint
+        >>> from jointdb.store import Conditions, Repository
+        >>> repo = Repository(os.path.join(tempfile.mkdtemp(), "joints.sqlite"))
+        >>> freq = np.linspace(100.0, 2000.0, 20)
+        >>> for torque, k in [(80.0, 2e7), (120.0, 3e7)]:
+        ...     _ = repo.catalogue(f"th-{torque:.0f}nm", "tool-holder",
+        ...                        spring_damper_joint(freq, [k, k / 40], [50.0, 1.0], ["1x", "1ry"]),
+        ...                        Conditions(("carbide", "steel"), torque_nm=torque), "spring-damper-planar")
+        >>> request = Conditions(("carbide", "steel"), torque_nm=100.0)
+        >>> joint = repo.interpolate(repo.nearest("tool-holder", request, k=2), request)
+        >>> [(name, round(weight, 4)) for name, _, weight in joint.neighbours]
+        [('th-120nm', 0.5503), ('th-80nm', 0.4497)]
+        >>> w = np.log(100 / 80) / np.log(120 / 80)
+        >>> k, c = equivalent_stiffness_damping(joint.frf)                   # N/m, N·m/rad per line
+        >>> bool(np.allclose(k[:, 0], w * 3e7 + (1 - w) * 2e7))
+        True
+        """
         from jointdb.store._query import interpolate
 
         return interpolate(self.load_frf, matches, conditions, method=method)
