@@ -181,12 +181,17 @@ def identify_joint_matrix(
         measured and contact DOFs (incl. rotations at the contacts).
     measured
         ``(name, Dof)`` pairs of the L measured DOFs, on ``a`` or ``b``.
+    a, b
+        Names (keys of ``substructures``) of the two bodies the joint connects.
     a_dofs, b_dofs
         Contact DOFs (e.g. all six at one node on each side); nc = total.
     regularisation
         For the pseudo-inverses of ``H_IC`` and ``H_CI`` (``"tikhonov:1e-3"``, ``"tsvd:1e-4"``).
     smoothing, smoothing_order, symmetrize
         As in :func:`identify_n_point_joints`.
+    condition_limit
+        Lines whose condition number exceeds this are flagged ``ill_conditioned``; if every
+        line does, the measured DOFs do not determine the joint (NumericalError).
 
     Returns
     -------

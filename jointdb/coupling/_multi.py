@@ -147,8 +147,13 @@ def identify_n_point_joints(
         ``"tsvd:1e-4"``, a :class:`Regularisation`, or None).
     smoothing
         Optional odd Savitzky–Golay window applied to the measured FRFs.
+    smoothing_order
+        Polynomial order of the Savitzky–Golay filter.
     symmetrize
         Average the measured matrix with its transpose (reciprocity).
+    condition_limit
+        Lines where cond(H_Ia) exceeds this are flagged ``ill_conditioned``; if every line
+        does, the measured points cannot determine the joints (NumericalError).
 
     Returns
     -------

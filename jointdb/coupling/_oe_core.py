@@ -244,6 +244,25 @@ class OutputErrorResult:
 
     Attributes
     ----------
+    model
+        The parametrised joint model that was fitted (spring–damper or joint body).
+    theta
+        The fitted parameters as optimised, ``(n_par,)`` (log-parameters for spring–dampers).
+    start_theta
+        The starting point of the optimisation, ``(n_par,)``.
+    cost_start, cost
+        Weighted least-squares cost at the start and at the optimum.
+    n_residuals
+        Number of real residuals fitted.
+    nfev
+        Number of model evaluations.
+    log_parameters
+        True when ``theta`` holds log-parameters.
+    fitted
+        The assembly receptance the fitted model predicts on the fitted entries,
+        ``(n_freq, n_out, n_in)`` [m/N].
+    settings
+        The fit's settings (model, order, band) as recorded in provenance.
     names
         Parameter names, e.g. ``"k 3x"``, ``"c 3ry"``.
     values

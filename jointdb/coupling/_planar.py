@@ -76,6 +76,8 @@ def identify_planar_joint(
         Directions of the plane (default ``x`` and ``ry``).
     smoothing
         Optional odd Savitzky–Golay window (lines) applied to the measured FRFs.
+    smoothing_order
+        Polynomial order of the Savitzky–Golay filter.
     passivity_tol
         Relative tolerance on ``Im h ≤ tol·|h|`` in the passivity test.
     condition_limit
