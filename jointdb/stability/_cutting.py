@@ -82,7 +82,18 @@ class MillingCut:
         return 0.0, float(np.arccos(np.clip(1 - 2 * r, -1, 1)))
 
     def tooth_period(self, spindle_speed_rpm) -> np.ndarray:
-        """Tooth-passing period ``τ = 60/(N n)`` in s."""
+        """Tooth-passing period ``τ = 60/(N n)`` in s.
+
+        Parameters
+        ----------
+        spindle_speed_rpm
+            Spindle speed(s) n [rpm], scalar or array.
+
+        Returns
+        -------
+        ndarray
+            τ [s], the shape of ``spindle_speed_rpm``.
+        """
         return 60.0 / (self.n_teeth * np.asarray(spindle_speed_rpm, dtype=float))
 
 

@@ -200,11 +200,26 @@ def _hopf_envelope(method: str, lobes, speeds: np.ndarray, info: dict) -> LobeRe
 def tool_tip_matrix(frf: FRF, frf_y: FRF | None = None, cross_terms: bool = False) -> tuple[np.ndarray, np.ndarray, tuple[bool, bool]]:
     """Tool-tip receptance matrix Φ (n_freq, 2, 2) in (x, y) from FRF container(s).
 
-    ``frf`` holds the x driving point (and optionally y and cross terms) as DOFs
-    with directions ``x``/``y`` at one node; ``frf_y`` may hold the y driving point
-    separately (resampled onto ``frf``'s grid when needed). A missing direction
-    is rigid (zero). Cross terms are used only when ``cross_terms`` is true.
-    Returns ``(freq_hz, Φ, (has_x, has_y))``.
+    A missing direction is rigid (zero).
+
+    Parameters
+    ----------
+    frf
+        The x driving point (and optionally y and cross terms) as DOFs with directions
+        ``x``/``y`` at one node; any quantity (converted to receptance).
+    frf_y
+        The y driving point given separately (resampled onto ``frf``'s grid when needed).
+    cross_terms
+        Use the cross terms Φ_xy, Φ_yx when present (otherwise they are zero).
+
+    Returns
+    -------
+    freq_hz : ndarray, shape (n_freq,)
+        Frequency lines [Hz].
+    phi : ndarray, shape (n_freq, 2, 2)
+        Receptance [m/N] in (x, y).
+    present : tuple of bool
+        ``(has_x, has_y)``.
 
     Raises
     ------

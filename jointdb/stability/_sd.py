@@ -203,7 +203,18 @@ def monodromy(sys: SDSystem, spindle_speed_rpm: float, depth: float, n_intervals
 
 
 def spectral_radius(sys: SDSystem, spindle_speed_rpm: float, depth: float, n_intervals: int = 40) -> float:
-    """Largest |Floquet multiplier| of :func:`monodromy` (same parameters); the cut is stable when < 1.
+    """Largest |Floquet multiplier| of :func:`monodromy`; the cut is stable when < 1.
+
+    Parameters
+    ----------
+    sys
+        From :func:`sd_system`.
+    spindle_speed_rpm
+        Spindle speed [rpm].
+    depth
+        Axial depth of cut a [m].
+    n_intervals
+        Intervals m per tooth period.
 
     Returns
     -------
@@ -359,6 +370,9 @@ def milling_lobes_sd(
         Intervals m per tooth period (accuracy; 40 is usual).
     rtol
         Relative tolerance of the critical depth.
+    depth_max
+        Largest depth [m] searched per speed (default 1000× the starting depth); a speed
+        still stable there has no limit (kind ``""``).
 
     Returns
     -------
