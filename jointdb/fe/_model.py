@@ -172,15 +172,46 @@ class BeamModel:
         return float(math.fsum(s.length for s in self.segments))
 
     def replace(self, **changes) -> "BeamModel":
-        """A new model with some fields replaced (validated again)."""
+        """A new model with some fields replaced (validated again).
+
+        Parameters
+        ----------
+        **changes
+            Field name → new value (``segments``, ``points``, ``ingredients``, ...).
+
+        Returns
+        -------
+        BeamModel
+        """
         return dataclasses.replace(self, **changes)
 
     def with_ingredient(self, *ingredients: Ingredient) -> "BeamModel":
-        """A new model with the ingredient(s) added."""
+        """A new model with the ingredient(s) added.
+
+        Parameters
+        ----------
+        *ingredients
+            :class:`Ingredient` s to append.
+
+        Returns
+        -------
+        BeamModel
+        """
         return self.replace(ingredients=self.ingredients + tuple(ingredients))
 
     def without(self, kind_or_predicate: "type | str | Callable[[Ingredient], bool]") -> "BeamModel":
-        """A new model without the ingredients of a class (or class name), or matching a predicate."""
+        """A new model without the ingredients of a class (or class name), or matching a predicate.
+
+        Parameters
+        ----------
+        kind_or_predicate
+            An ingredient class (``ModalDamping``), its name (``"modal-damping"``; case,
+            ``-`` and ``_`` ignored) or a function ``Ingredient -> bool`` (True: drop it).
+
+        Returns
+        -------
+        BeamModel
+        """
         if isinstance(kind_or_predicate, type):
             drop = lambda ing: isinstance(ing, kind_or_predicate)  # noqa: E731
         elif isinstance(kind_or_predicate, str):
@@ -193,7 +224,22 @@ class BeamModel:
         return self.replace(ingredients=tuple(i for i in self.ingredients if not drop(i)))
 
     def point(self, name: str) -> NamedPoint:
-        """The named point ``name``."""
+        """The named point ``name``.
+
+        Parameters
+        ----------
+        name
+            A point name of the model.
+
+        Returns
+        -------
+        NamedPoint
+
+        Raises
+        ------
+        InputError
+            No point of that name (the message lists those there are).
+        """
         for p in self.points:
             if p.name == name:
                 return p
