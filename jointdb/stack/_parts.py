@@ -40,6 +40,22 @@ def composite_material(holder: Material, tool: Material, outer: float, bore: flo
 
     The equivalent solid circle of diameter ``outer`` has
     ``E_eq I = E_h I_h + E_t I_t`` and ``ρ_eq A = ρ_h A_h + ρ_t A_t``; ν is the holder's.
+
+    Parameters
+    ----------
+    holder, tool
+        The holder's and the tool's :class:`jointdb.fe.Material`.
+    outer
+        Holder outer diameter [m].
+    bore
+        Holder bore diameter [m].
+    shank
+        Tool shank diameter [m] (<= ``bore``).
+
+    Returns
+    -------
+    Material
+        E_eq [Pa], ν, ρ_eq [kg/m³] of a solid circle of diameter ``outer``.
     """
     a_full, i_full = math.pi * outer**2 / 4, math.pi * outer**4 / 64
     a_h, i_h = math.pi * (outer**2 - bore**2) / 4, math.pi * (outer**4 - bore**4) / 64

@@ -75,6 +75,15 @@ class Prediction:
 def spindle_model(spec: StackSpec) -> BeamModel:
     """The spindle's beam model of a :class:`ModelledSpindle` stack.
 
+    Parameters
+    ----------
+    spec
+        A stack with a :class:`ModelledSpindle` whose model is a dict or a BeamModel.
+
+    Returns
+    -------
+    BeamModel
+
     Raises
     ------
     InputError
@@ -96,6 +105,13 @@ def spindle_model(spec: StackSpec) -> BeamModel:
 def prediction_grid(spec: StackSpec, freq=None) -> np.ndarray:
     """Frequency lines [Hz] of a prediction: ``freq`` if given, else the stack file's
     ``frequency``, else a measured spindle FRF's own lines above 0 Hz, else 10–5000 Hz by 5 Hz.
+
+    Parameters
+    ----------
+    spec
+        The stack.
+    freq
+        Explicit lines [Hz], ``(n_freq,)``, or None.
 
     Returns
     -------
