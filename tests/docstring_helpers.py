@@ -150,6 +150,10 @@ def public_callables() -> Iterator[tuple[str, Callable, Callable]]:
 
 
 def _methods(qualname: str, cls: type) -> Iterator[tuple[str, Callable, Callable]]:
+    """The public methods of ``cls``; none for a ``typing.Protocol``, whose methods are documented
+    where they are implemented (its docstring names the implementation)."""
+    if getattr(cls, "_is_protocol", False):
+        return
     for attr, raw in vars(cls).items():
         if attr.startswith("_"):
             continue

@@ -1,7 +1,9 @@
 """Every public parameter is documented (in the manner of python-control's ``test_docstrings.py``).
 
 The public API is the ``__all__`` of each public package (:data:`docstring_helpers.PUBLIC_MODULES`):
-its functions, its classes (their constructors) and the public methods of its classes. For each,
+its functions, its classes (their constructors) and the public methods of its classes (a
+``typing.Protocol``'s methods are documented at their implementation, e.g. ``JointStore`` at
+``Repository``, so the protocol's own stubs are not checked). For each,
 every parameter of the signature must appear in the numpydoc ``Parameters`` section of its
 docstring (a class may list its fields under ``Attributes``), and no listed parameter may be
 missing from the signature — a renamed or removed argument cannot leave its documentation behind.

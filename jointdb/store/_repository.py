@@ -207,6 +207,41 @@ class Repository(LabelsAndStates):
         ``label`` (optional) is pointed at the new version in the same
         transaction: both happen or neither.
 
+        Parameters
+        ----------
+        name
+            The joint's name (letters, digits, ``._-``; e.g. ``"th-er32-carbide-80nm"``).
+        joint_type
+            ``"tool-holder"``, ``"holder-spindle"``, ...
+        frf
+            The joint receptance (:class:`~jointdb.frf.FRF`, ``(n_freq, n, n)``).
+        conditions
+            :class:`Conditions` (or a mapping of its fields) it was identified under.
+        model_kind
+            One of :data:`MODEL_KINDS` (its DOF structure is checked against ``frf``).
+        provenance
+            :class:`Provenance` (method, parameters, input file hashes, author).
+        quality
+            Named quality numbers (e.g. ``{"identification_residual": 1e-3}``).
+        parent
+            Version number of this joint the new one derives from.
+        raw_frfs
+            Raw measurement FRFs to store with the version, by key.
+        author
+            Who catalogues it (default: the provenance's author, else ``JOINTDB_AUTHOR``, else the
+            login name).
+        label
+            A label to point at the new version.
+        force
+            Accept conditions that contradict the latest version (listed in the audit entry).
+        allow_identical
+            Write a new version even when the content equals the latest one.
+
+        Returns
+        -------
+        JointVersion
+            The new version, or the latest one when nothing was written.
+
         Raises
         ------
         InputError
@@ -229,10 +264,21 @@ class Repository(LabelsAndStates):
         """:meth:`catalogue`, saying whether a version was written: ``Catalogued(version, created)``.
 
         ``created`` is False when the content was identical to the latest version (nothing
-        written; ``version`` is that version). ``idempotency``: ``(owner, key, request_sha256)``
-        of a request made with an idempotency key: a key already answered returns its stored
-        answer (the same version; InputError when it answered another request), otherwise the
-        answer is stored in the version's own transaction.
+        written; ``version`` is that version).
+
+        Parameters
+        ----------
+        name, joint_type, frf, conditions, model_kind, provenance, quality, parent, raw_frfs, author, label, force, allow_identical
+            As :meth:`catalogue`.
+        idempotency
+            ``(owner, key, request_sha256)`` of a request made with an idempotency key: a key
+            already answered returns its stored answer (the same version; InputError when it
+            answered another request), otherwise the answer is stored in the version's own
+            transaction.
+
+        Returns
+        -------
+        Catalogued
         """
         name = check_name(name)
         joint_type = check_joint_type(joint_type)
@@ -279,6 +325,15 @@ class Repository(LabelsAndStates):
     def idempotent_answer(self, idempotency: tuple[str, str, str] | None) -> Catalogued | None:
         """The stored answer to ``(owner, key, request_sha256)``, or None when the key is new.
 
+        Parameters
+        ----------
+        idempotency
+            ``(owner, key, request_sha256)``, or None (then None is returned).
+
+        Returns
+        -------
+        Catalogued or None
+
         Raises
         ------
         InputError
@@ -320,6 +375,21 @@ class Repository(LabelsAndStates):
         """One version of a joint: pinned (``version``), by ``label``, current at
         time ``at``, or (default) the latest version that is not deprecated
         (the latest one if all are).
+
+        Parameters
+        ----------
+        name
+            The joint's name.
+        version
+            A version number.
+        at
+            A past instant (datetime or ISO 8601 text).
+        label
+            A label of the joint.
+
+        Returns
+        -------
+        JointVersion
 
         Raises
         ------
@@ -371,8 +441,23 @@ class Repository(LabelsAndStates):
         """All versions of a joint, oldest first, with their current state and labels.
 
         A version whose stored row is damaged is left out and reported: appended to ``damaged``
-        (a list, as :class:`jointdb.store._records.DamagedVersion`) when given, else in a
-        :class:`DamagedRecordWarning`.
+        (a list, as :class:`DamagedVersion`) when given, else in a :class:`DamagedRecordWarning`.
+
+        Parameters
+        ----------
+        name
+            The joint's name.
+        damaged
+            A list to append the damaged versions to, or None (warn instead).
+
+        Returns
+        -------
+        list of JointVersion
+
+        Raises
+        ------
+        NotFoundError
+            No joint of that name.
         """
         with self._read() as s:
             joint = self._joint(s, name)
@@ -397,8 +482,37 @@ class Repository(LabelsAndStates):
         """One page of the catalogue: the current version of each joint that passes the filters,
         by name, in one SQL statement (see :mod:`jointdb.store._listing`).
 
-        ``after`` is the ``next`` cursor of the previous page; ``limit=None`` lists all. Damaged
-        rows do not stop the list: they are in ``JointPage.damaged``.
+        Damaged rows do not stop the list: they are in ``JointPage.damaged``.
+
+        Parameters
+        ----------
+        joint_type
+            Only joints of this type.
+        materials
+            Only joints whose conditions name all these materials.
+        label
+            Only versions carrying this label.
+        include_deprecated
+            List joints whose every version is deprecated too.
+        state
+            Only versions in this state (``"active"``, ``"deprecated"``).
+        torque_min, torque_max
+            Bounds on the torque [N·m].
+        preload_min, preload_max
+            Bounds on the preload [N].
+        name_contains
+            Part of the joint's name.
+        after
+            The ``next`` cursor of the previous page (keyset pagination).
+        offset
+            Rows to skip (without a cursor).
+        limit
+            Page size; None lists all.
+
+        Returns
+        -------
+        JointPage
+            ``items``, ``next`` cursor, ``damaged``.
 
         Raises
         ------
@@ -417,6 +531,19 @@ class Repository(LabelsAndStates):
         """The current version (as :meth:`get`) of every joint, by name (one SQL statement).
 
         Damaged rows are left out and reported as in :meth:`history`.
+
+        Parameters
+        ----------
+        joint_type
+            Only joints of this type (None: all).
+        include_deprecated
+            Include joints whose every version is deprecated.
+        damaged
+            A list to append the damaged versions to, or None (warn instead).
+
+        Returns
+        -------
+        list of JointVersion
         """
         page = self.list_page(joint_type, include_deprecated=include_deprecated, limit=None)
         _report_damaged(list(page.damaged), damaged)
@@ -427,6 +554,17 @@ class Repository(LabelsAndStates):
         """The joint FRF of a version, read from its blob and verified against its hash.
 
         ``load_frf(jv)`` or ``load_frf("name", 3)``.
+
+        Parameters
+        ----------
+        version
+            A :class:`JointVersion`, or a joint's name.
+        number
+            With a name: the version number (None: the current version).
+
+        Returns
+        -------
+        FRF
 
         Raises
         ------
@@ -452,7 +590,24 @@ class Repository(LabelsAndStates):
 
     @_db.with_db_errors
     def load_raw(self, version: JointVersion, key: str) -> FRF:
-        """One raw measurement FRF stored with a version."""
+        """One raw measurement FRF stored with a version.
+
+        Parameters
+        ----------
+        version
+            The :class:`JointVersion`.
+        key
+            A key of ``version.raw_blobs``.
+
+        Returns
+        -------
+        FRF
+
+        Raises
+        ------
+        NotFoundError
+            No raw measurement of that key, or its blob is missing.
+        """
         if key not in version.raw_blobs:
             raise NotFoundError(f"{version.name} v{version.version} has no raw measurement {key!r}")
         return self._blob(version, version.raw_blobs[key], f"raw measurement {key!r}")
@@ -460,7 +615,23 @@ class Repository(LabelsAndStates):
     # -------------------------------------------------------------- diff, etc.
     @_db.with_db_errors
     def diff(self, name: str, version_a: int, version_b: int | None = None, other: str | None = None) -> VersionDiff:
-        """Compare two versions (of one joint, or of ``name`` and ``other``)."""
+        """Compare two versions (of one joint, or of ``name`` and ``other``).
+
+        Parameters
+        ----------
+        name
+            The joint's name.
+        version_a
+            The first version number.
+        version_b
+            The second version number (default: the current version).
+        other
+            Another joint's name for ``version_b``.
+
+        Returns
+        -------
+        VersionDiff
+        """
         from jointdb.store._maintenance import diff_versions
 
         a = self.get(name, version_a)
@@ -469,14 +640,37 @@ class Repository(LabelsAndStates):
 
     @_db.with_db_errors
     def check(self, verify_blobs: bool = True) -> CheckReport:
-        """Walk every row and blob; report missing or corrupt data (``jointdb db check``)."""
+        """Walk every row and blob; report missing or corrupt data (``jointdb db check``).
+
+        Parameters
+        ----------
+        verify_blobs
+            Read and verify every blob (slow for a large store), not only that it exists.
+
+        Returns
+        -------
+        CheckReport
+        """
         from jointdb.store._maintenance import check
 
         return check(self.storage, verify_blobs)
 
     @_db.with_db_errors
     def gc(self, min_age_s: float = 3600.0, dry_run: bool = False) -> list[str]:
-        """Remove blobs no row references (and stale temporaries) older than ``min_age_s``."""
+        """Remove blobs no row references (and stale temporaries) older than ``min_age_s``.
+
+        Parameters
+        ----------
+        min_age_s
+            Only blobs older than this [s] (a blob being written is not yet referenced).
+        dry_run
+            Report without removing.
+
+        Returns
+        -------
+        list of str
+            The blobs removed (or that would be).
+        """
         from jointdb.store._maintenance import gc
 
         return gc(self.storage, min_age_s, dry_run)
@@ -612,8 +806,20 @@ class Repository(LabelsAndStates):
     def export(self, names: Iterable[str] | None, path: str | os.PathLike, *, sign_key=None) -> dict[str, Any]:
         """Write joints (all versions, provenance, labels, states) to one HDF5 bundle.
 
-        ``sign_key``: an Ed25519 private key (``jointdb.store._signing.load_private_key``)
-        to sign the bundle with.
+        Parameters
+        ----------
+        names
+            Joint names to export (None: all).
+        path
+            The bundle file to write.
+        sign_key
+            An Ed25519 private key (``jointdb.store._signing.load_private_key``) to sign the
+            bundle with, or None.
+
+        Returns
+        -------
+        dict
+            Counts of what was written.
         """
         from jointdb.store._bundle import export_bundle
 
@@ -625,7 +831,26 @@ class Repository(LabelsAndStates):
         """Import a bundle (a path or a verified ``Bundle``); identical versions are no-ops,
         conflicting ones raise ConflictError, and so does a new version that is not the same
         joint as the one before it (unless ``force``); any ``trusted_keys`` (or
-        ``require_signature``) refuse a bundle not signed by one of them (Ed25519 public keys)."""
+        ``require_signature``) refuse a bundle not signed by one of them (Ed25519 public keys).
+
+        Parameters
+        ----------
+        path
+            The bundle file, or a verified ``Bundle``.
+        author
+            Recorded as who imported.
+        trusted_keys
+            Ed25519 public keys; the bundle must be signed by one of them when any is given.
+        require_signature
+            Refuse an unsigned bundle.
+        force
+            Accept a new version that is not the same joint as the one before it.
+
+        Returns
+        -------
+        dict
+            A summary: versions added, identical ones skipped.
+        """
         from jointdb.store._bundle import import_bundle
 
         return import_bundle(self.storage, path, author, trusted_keys, require_signature, force)
