@@ -150,10 +150,22 @@ def _migrate(step: str, url: str | None, revision: str) -> str | None:
 
 
 def upgrade(url: str | None = None, revision: str = "head") -> str | None:
-    """Apply Alembic migrations to ``revision``; returns the new revision.
+    """Apply Alembic migrations to ``revision``.
 
     A SQLite file that does not exist is created (atomically); an existing file
     must be a jointdb database (see :func:`jointdb.store._db.open_sqlite_target`).
+
+    Parameters
+    ----------
+    url
+        Database URL or SQLite path (default ``JOINTDB_URL`` or the per-user file).
+    revision
+        Target revision (``"head"``: the newest).
+
+    Returns
+    -------
+    str or None
+        The revision after the upgrade.
     """
     return _migrate("upgrade", url, revision)
 
@@ -163,12 +175,35 @@ def downgrade(url: str | None = None, revision: str = "-1") -> str | None:
 
     Never creates a database (NotFoundError for a missing SQLite file). The
     command line asks for ``--yes`` first (see :func:`jointdb.store._db.downgrade_plan`).
+
+    Parameters
+    ----------
+    url
+        Database URL or SQLite path (default ``JOINTDB_URL`` or the per-user file).
+    revision
+        Target revision.
+
+    Returns
+    -------
+    str or None
+        The revision after the downgrade (None at ``base``).
     """
     return _migrate("downgrade", url, revision)
 
 
 def current_revision(url: str | None = None) -> str | None:
-    """The schema revision of a database (None when it has none, or when a SQLite file does not exist)."""
+    """The schema revision of a database.
+
+    Parameters
+    ----------
+    url
+        Database URL or SQLite path (default ``JOINTDB_URL`` or the per-user file).
+
+    Returns
+    -------
+    str or None
+        None when it has none, or when a SQLite file does not exist (nothing is created).
+    """
     from jointdb.store import _db
 
     resolved = _db.resolve_url(url)

@@ -106,7 +106,15 @@ class DamagedRecordWarning(UserWarning):
 
 @dataclass(frozen=True)
 class DamagedVersion:
-    """A version a listing skipped because its stored row cannot be used (``reason`` says why)."""
+    """A version a listing skipped because its stored row cannot be used.
+
+    Attributes
+    ----------
+    name, version
+        The joint and version number.
+    reason
+        Why its row cannot be used.
+    """
 
     name: str
     version: int
