@@ -154,7 +154,12 @@ def _methods(qualname: str, cls: type) -> Iterator[tuple[str, Callable, Callable
     where they are implemented (its docstring names the implementation)."""
     if getattr(cls, "_is_protocol", False):
         return
-    for attr, raw in vars(cls).items():
+    own: dict[str, object] = {}
+    for base in reversed(cls.__mro__):  # inherited methods too, when jointdb defines them
+        if base is not cls and (not _is_ours(base) or getattr(base, "_is_protocol", False)):
+            continue
+        own.update(vars(base))
+    for attr, raw in own.items():
         if attr.startswith("_"):
             continue
         if isinstance(raw, (staticmethod, classmethod)):

@@ -67,7 +67,18 @@ class VerifyingBlobs:
         raise NotImplementedError
 
     def verify(self, digest: str) -> str | None:
-        """None when the blob is present and intact, else a one-line problem description."""
+        """Check one blob.
+
+        Parameters
+        ----------
+        digest
+            The blob's SHA-256 (hex).
+
+        Returns
+        -------
+        str or None
+            None when the blob is present and intact, else a one-line problem description.
+        """
         try:
             self.get(digest)
         except (NotFoundError, IntegrityError) as exc:
