@@ -140,7 +140,21 @@ def _message(err: dict[str, Any]) -> str:
 
 
 def validate(kind: str, data: Any, where: str = "") -> Any:
-    """Validate a parsed JSON document against the schema of ``kind``; return the pydantic model.
+    """Validate a parsed JSON document against the schema of ``kind``.
+
+    Parameters
+    ----------
+    kind
+        A key of :data:`SCHEMAS` (``"model"``, ``"stack"``, ``"campaign"``, ...).
+    data
+        The parsed JSON document.
+    where
+        The file name, put in front of the message.
+
+    Returns
+    -------
+    pydantic.BaseModel
+        The validated document.
 
     Raises
     ------
@@ -175,7 +189,17 @@ def validate(kind: str, data: Any, where: str = "") -> Any:
 
 
 def json_schema(kind: str) -> dict[str, Any]:
-    """The JSON Schema (draft 2020-12) of a file kind, as published under docs/schemas/."""
+    """The JSON Schema (draft 2020-12) of a file kind, as published under docs/schemas/.
+
+    Parameters
+    ----------
+    kind
+        A key of :data:`SCHEMAS`.
+
+    Returns
+    -------
+    dict
+    """
     schema = _model(kind).model_json_schema(by_alias=True)
     return {"$schema": "https://json-schema.org/draft/2020-12/schema", "$id": _IDS[kind], **schema}
 
