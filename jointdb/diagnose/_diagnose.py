@@ -80,6 +80,22 @@ class Diagnosis:
     chain_correction
         For measurement-chain explanations: ``{"gain": g, "delay": τ}`` to
         apply to the recording (the model itself is unchanged).
+    observation
+        The :class:`Observation` the fits ran on.
+    level_table
+        Per excitation level, the fitted level-dependent values (level-dependent explanations).
+    seconds
+        Wall time of the diagnosis [s].
+    H_before, H_after
+        Nominal and augmented model receptance on all recorded lines,
+        ``(n_level, n_freq, n_out, n_in)``, or None.
+    levels_data, levels_model
+        Local modal fits per excitation level of the recordings and of the augmented model
+        (:class:`LevelAnalysis`), or None.
+    alternative
+        A close second explanation (another physics within ``CLOSE_CALL`` of the best), or None.
+    advice
+        How to separate the best explanation from the alternative (which measurement to add).
     """
 
     explained: bool

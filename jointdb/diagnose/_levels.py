@@ -149,6 +149,8 @@ class LevelAnalysis:
         The excitation levels as given (None = unknown).
     order
         Indices of the levels from lowest to highest (as given when unknown).
+    skipped
+        Centres [Hz] that could not be fitted at some level (too few lines).
     """
 
     tracks: tuple
@@ -247,6 +249,10 @@ def track_modes(freq: np.ndarray, values: np.ndarray, weight: np.ndarray | None,
     centres
         Frequencies [Hz] of the modes to follow; default: the recorded peaks
         of the lowest level at least ``STRONG_PEAK`` of the strongest.
+    band_halfwidths
+        Fit band: this many half-power half-widths each side of the peak ...
+    min_band
+        ... but at least this fraction of the frequency each side.
 
     Returns
     -------
