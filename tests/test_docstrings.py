@@ -19,6 +19,8 @@ from __future__ import annotations
 
 import importlib
 import inspect
+import pkgutil
+import re
 from pathlib import Path
 
 import pytest
@@ -83,6 +85,35 @@ def test_package_docstring_is_a_catalogue(modname):
     doc = module.__doc__ or ""
     missing = [name for name in module.__all__ if name not in doc]
     assert not missing, f"{modname}: the docstring does not name {missing}"
+
+
+ROLE = re.compile(r":(?:func|class|data|meth):`~?([A-Za-z_]\w*)`")
+ENTRY = re.compile(r"^ {2,}([A-Za-z_]\w*(?:, [A-Za-z_]\w*)*) +-- ", re.M)
+
+
+def _catalogued_names(doc: str) -> set[str]:
+    """Bare names the catalogue lists: ``:func:`name``` roles and ``   name -- text`` entries."""
+    names = set(ROLE.findall(doc))
+    for group in ENTRY.findall(doc):
+        names |= {n.strip() for n in group.split(",")}
+    return names
+
+
+@pytest.mark.parametrize("modname", PUBLIC_MODULES)
+def test_package_catalogue_lists_only_public_names(modname):
+    """The other way round: what a package's catalogue lists is public there (in ``__all__``, or in one
+    of its public submodules such as ``jointdb.schemas.model``) -- no stale or private entry."""
+    module = importlib.import_module(modname)
+    subs = [importlib.import_module(f"{modname}.{m.name}") for m in pkgutil.iter_modules(getattr(module, "__path__", []))
+            if not m.name.startswith("_")]
+    stale = sorted(n for n in _catalogued_names(module.__doc__ or "")
+                   if n not in module.__all__ and not any(n in getattr(s, "__all__", vars(s)) for s in subs))
+    assert not stale, f"{modname}: the docstring lists names that are not public there: {stale}"
+
+
+def test_the_catalogue_check_sees_entries():
+    doc = "Stores\n------\n   Repository   -- rows\n   a, b -- two\n:func:`open_store` and :mod:`x`\n"
+    assert _catalogued_names(doc) == {"Repository", "a", "b", "open_store"}
 
 
 # --- the check itself can fail -------------------------------------------------------------------
