@@ -10,6 +10,7 @@ anything (ELLIPSIS) and runs of whitespace compare equal. Any failing example fa
 from __future__ import annotations
 
 import doctest
+import tempfile
 
 import numpy as np
 import pytest
@@ -27,20 +28,43 @@ def _examples(module) -> list[doctest.DocTest]:
 MODULES = [m for m in sorted(public_modules_with_docstrings(), key=lambda m: m.__name__) if _examples(m)]
 
 
-@pytest.mark.parametrize("module", MODULES, ids=lambda m: m.__name__)
-def test_examples_run(module, tmp_path, monkeypatch):
-    tests = _examples(module)
-    monkeypatch.chdir(tmp_path)  # an example that writes a file writes it here
+def _failures(tests: list[doctest.DocTest]) -> str:
+    """Run ``tests`` with numpy's print options fixed; the runner's report of every failing example."""
     saved = np.get_printoptions()
     np.set_printoptions(precision=8, suppress=True, legacy=False)
+    report = _Collector()
     try:
         runner = doctest.DocTestRunner(optionflags=FLAGS)
         for test in tests:
-            report = _Collector()
             runner.run(test, out=report)
-            assert not runner.failures, f"{test.name}:\n{report.text}"
     finally:
         np.set_printoptions(**saved)
+    return report.text
+
+
+@pytest.mark.parametrize("module", MODULES, ids=lambda m: m.__name__)
+def test_examples_run(module, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)  # an example that writes a file writes it here,
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))  # and so does one that asks tempfile for a folder
+    failures = _failures(_examples(module))
+    assert not failures, failures
+
+
+def test_a_wrong_example_fails():
+    """The runner is not vacuous: an example whose shown output is wrong is reported, a right one is not."""
+    def documented():
+        """
+        >>> import numpy as np
+        >>> np.array([1.0, 2.0]) * 2
+        array([2., 4.])
+        >>> 1 + 1
+        3
+        """
+
+    tests = doctest.DocTestFinder().find(documented, "documented", globs={})
+    report = _failures(tests)
+    assert "1 + 1" in report and "Expected:\n    3" in report
+    assert "np.array" not in report
 
 
 def test_there_are_examples():

@@ -112,6 +112,7 @@ class Repository(LabelsAndStates):
     >>> repo.catalogue("th-80nm", "tool-holder", joint, Conditions(("carbide", "steel"), torque_nm=80.0),
     ...                model_kind="spring-damper-planar").version           # identical content: no new version
     1
+    >>> repo.close()
     """
 
     def __init__(
@@ -737,6 +738,7 @@ class Repository(LabelsAndStates):
         [('th-120nm', False), ('th-80nm', False)]
         >>> matches[0].distance < matches[1].distance
         True
+        >>> repo.close()
         """
         from jointdb.store._query import nearest
 
@@ -797,6 +799,7 @@ class Repository(LabelsAndStates):
         >>> k, c = equivalent_stiffness_damping(joint.frf)                   # N/m, N·m/rad per line
         >>> bool(np.allclose(k[:, 0], w * 3e7 + (1 - w) * 2e7))
         True
+        >>> repo.close()
         """
         from jointdb.store._query import interpolate
 
