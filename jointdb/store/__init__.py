@@ -45,6 +45,12 @@ Blob files
    write_frf_file          -- one FRF in the blob layout; returns its content hash
    read_frf_file           -- read it back, checksum and content hash verified
 
+Bundle signatures (Ed25519)
+---------------------------
+   create_key_pair         -- write a new key pair (``NAME``, ``NAME.pub``)
+   load_private_key        -- a private key to sign an exported bundle with
+   load_public_key         -- a public key to trust when importing one
+
 Schema migrations
 -----------------
    upgrade                 -- apply Alembic migrations to a revision
@@ -101,6 +107,9 @@ __all__ = [
     "open_store",
     "owned_store",
     "Catalogued",
+    "create_key_pair",
+    "load_private_key",
+    "load_public_key",
     "upgrade",
     "downgrade",
     "current_revision",
@@ -114,6 +123,7 @@ _LAZY = {
     "write_frf_file": "_blobs", "JointPage": "_listing", "Catalogued": "_reports",
     "JointStore": "_protocol", "LocalJointStore": "_protocol", "BlobStoreProtocol": "_protocol",
     "open_store": "_open", "owned_store": "_open",
+    "create_key_pair": "_signing", "load_private_key": "_signing", "load_public_key": "_signing",
 }
 
 

@@ -816,7 +816,7 @@ class Repository(LabelsAndStates):
         path
             The bundle file to write.
         sign_key
-            An Ed25519 private key (``jointdb.store._signing.load_private_key``) to sign the
+            An Ed25519 private key (:func:`jointdb.store.load_private_key`) to sign the
             bundle with, or None.
 
         Returns
@@ -843,7 +843,8 @@ class Repository(LabelsAndStates):
         author
             Recorded as who imported.
         trusted_keys
-            Ed25519 public keys; the bundle must be signed by one of them when any is given.
+            Ed25519 public keys (:func:`jointdb.store.load_public_key`); the bundle must be
+            signed by one of them when any is given.
         require_signature
             Refuse an unsigned bundle.
         force
