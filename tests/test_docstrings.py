@@ -49,6 +49,7 @@ WITH_EXAMPLES = (
     "jointdb.stack.predict_tool_tip",
     "jointdb.stack.tool_model",
     "jointdb.stability.milling_lobes_zoa",
+    "jointdb.stability.milling_lobes_sd",
     "jointdb.stability.turning_lobes",
     "jointdb.store.Repository",
     "jointdb.store.Repository.nearest",

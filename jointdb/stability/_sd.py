@@ -388,6 +388,26 @@ def milling_lobes_sd(
         DOFs, bad speeds (non-finite, <= 0 rpm), ``n_intervals < 2``.
     NumericalError
         If the model is unstable without cutting.
+
+    Examples
+    --------
+    Slotting with four teeth on one mode per direction (k = 2·10⁷ N/m, ζ = 0.03, 800 Hz). In
+    slotting the zero-order approximation is accurate, and the semi-discretization agrees with
+    it to within 1 % at each speed:
+
+    >>> import numpy as np
+    >>> from jointdb.modal import ModalModel
+    >>> from jointdb.stability import MillingCut, milling_lobes_sd, milling_lobes_zoa
+    >>> model = ModalModel.block_diagonal([ModalModel.from_modal_parameters([800.0], [0.03], [2e7], dof)
+    ...                                    for dof in ("1x", "1y")])
+    >>> cut = MillingCut(n_teeth=4, kt=6e8, kr=1.8e8, radial_immersion=1.0)      # N/m²
+    >>> speeds = np.array([5000.0, 5600.0, 6200.0, 6800.0])                      # rpm
+    >>> sd = milling_lobes_sd(model, cut, speeds)
+    >>> sd.kind.tolist()
+    ['hopf', 'hopf', 'hopf', 'hopf']
+    >>> zoa = milling_lobes_zoa(model.synthesize(np.linspace(700.0, 900.0, 2001)), cut, spindle_speed_rpm=speeds)
+    >>> bool(np.all(np.abs(sd.depth_m / zoa.depth_m - 1) < 0.01))
+    True
     """
     sys = sd_system(model, cut)
     speeds = spindle_speeds(spindle_speed_rpm)
