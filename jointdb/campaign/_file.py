@@ -262,6 +262,10 @@ def load_campaign(path: "str | Path", *, root: "str | Path | None" = None) -> Ca
         without symbolic links; absolute paths and '..' leading out are refused before
         anything is opened. Default: no confinement (the user's own files).
 
+    Returns
+    -------
+    Campaign
+
     Raises
     ------
     NotFoundError

@@ -51,6 +51,11 @@ def sigma_from_coherence(frf: FRF, coherence: np.ndarray, n_averages: int) -> np
     n_averages
         Number of averaged taps (≥ 1).
 
+    Returns
+    -------
+    ndarray, shape (n_freq, n_out, n_in)
+        Standard deviation of each FRF value (the FRF's units), floored at 1e-4 of ``|H|``.
+
     Raises
     ------
     InputError

@@ -277,6 +277,10 @@ def signature(ev, H_model: np.ndarray) -> Signature:
         A full-line :class:`jointdb.diagnose._fit.ModelEvaluator`.
     H_model
         ``(n_level, n_freq, n_out, n_in)`` model receptances at those lines.
+
+    Returns
+    -------
+    Signature
     """
     obs = ev.obs
     freq, rec, w = ev.freq, ev.rec, ev.w

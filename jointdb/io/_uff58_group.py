@@ -73,6 +73,11 @@ def frf_from_records(
     source
         Name used in error messages (the file name).
 
+    Returns
+    -------
+    UffImport
+        ``frf`` (SI units) with the ``conversions`` and ``skipped`` notes.
+
     Raises
     ------
     InputError

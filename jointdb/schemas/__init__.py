@@ -205,6 +205,12 @@ def json_schema(kind: str) -> dict[str, Any]:
 
 
 def schema_files() -> dict[str, str]:
-    """File name -> text of every published schema (sorted keys, two-space indent, final newline)."""
+    """Every published schema as text (sorted keys, two-space indent, final newline).
+
+    Returns
+    -------
+    dict
+        File name under ``docs/schemas/`` → JSON text.
+    """
     return {SCHEMA_FILES[k]: json.dumps(json_schema(k), indent=2, sort_keys=True, ensure_ascii=False) + "\n"
             for k in SCHEMAS}

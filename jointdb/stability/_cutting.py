@@ -143,6 +143,11 @@ def interval_directional_matrices(cut: MillingCut, n_intervals: int) -> np.ndarr
         :class:`MillingCut`.
     n_intervals
         Number m of intervals per tooth period (>= 1).
+
+    Returns
+    -------
+    ndarray, shape (m, 2, 2)
+        N/m².
     """
     m = int(n_intervals)
     st, ex = cut.angles

@@ -36,6 +36,11 @@ def oriented_frf(frf: FRF, orientation: Sequence[float] | np.ndarray | None = No
         direction at β_k to the force, θ the cut normal), or a full
         ``(n_out, n_in)`` matrix of factors. Default: 1 on the diagonal.
 
+    Returns
+    -------
+    ndarray, complex, shape (n_freq,)
+        G_o [m/N] on the FRF's lines above 0 Hz.
+
     Raises
     ------
     InputError
@@ -100,6 +105,13 @@ def tlusty_limit(frf: FRF, kf: float, orientation=None) -> tuple[float, float]:
         Cutting-force coefficient K_f [N/m²].
     orientation
         Directional factors (see :func:`oriented_frf`).
+
+    Returns
+    -------
+    depth_m : float
+        The limit [m].
+    chatter_freq_hz : float
+        Where ``Re G_o`` is lowest [Hz].
 
     Raises
     ------

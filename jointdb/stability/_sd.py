@@ -306,6 +306,12 @@ def critical_depth(
     depth_max
         Search ceiling [m].
 
+    Returns
+    -------
+    tuple
+        ``(depth_m, chatter_freq_hz, kind, lobe, n_evaluations)``; depth ``inf`` and kind
+        ``""`` when still stable at ``depth_max``.
+
     Raises
     ------
     NumericalError

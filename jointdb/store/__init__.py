@@ -230,7 +230,13 @@ def current_revision(url: str | None = None) -> str | None:
 
 
 def head_revision() -> str:
-    """The newest schema revision this jointdb knows."""
+    """The newest schema revision this jointdb knows.
+
+    Returns
+    -------
+    str
+        An Alembic revision id.
+    """
     from jointdb.store import _db
 
     return _db.head_revision()

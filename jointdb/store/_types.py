@@ -66,7 +66,12 @@ MATERIAL_ALIASES: dict[str, str] = {
 
 
 def known_materials() -> set[str]:
-    """The accepted material names: built-in list plus ``JOINTDB_MATERIALS``."""
+    """The accepted material names: built-in list plus ``JOINTDB_MATERIALS``.
+
+    Returns
+    -------
+    set of str
+    """
     extra = {m.strip().lower() for m in os.environ.get("JOINTDB_MATERIALS", "").split(",") if m.strip()}
     return KNOWN_MATERIALS | extra
 

@@ -377,6 +377,10 @@ def catalogue_campaign(repo, path: Path | str, author: str | None = None) -> Cat
     author
         Who catalogues (default: ``$JOINTDB_AUTHOR`` or the login).
 
+    Returns
+    -------
+    CatalogueOutcome
+
     Raises
     ------
     InputError

@@ -104,6 +104,11 @@ def resolve_joints(spec: StackSpec, repo=None) -> dict[str, JointResolution]:
         ``JOINTDB_URL`` or the per-user default). Only opened when some
         interface needs the database.
 
+    Returns
+    -------
+    dict
+        Interface name → :class:`JointResolution`.
+
     Raises
     ------
     NotFoundError
