@@ -610,7 +610,13 @@ class FRF:
         return FRF._trusted(self.freq, vals, target_out, target_in, self.quantity)
 
     def reciprocity_error(self) -> float:
-        """Largest relative asymmetry ``|H_ij − H_ji| / max|H|`` over common DOFs."""
+        """Largest relative asymmetry ``|H_ij − H_ji| / max|H|`` over common DOFs.
+
+        Returns
+        -------
+        float
+            0 for an FRF without two common DOFs.
+        """
         common = [d for d in self.outputs if d in self._index["in"]]
         if len(common) < 2:
             return 0.0

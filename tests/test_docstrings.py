@@ -68,6 +68,25 @@ def test_every_parameter_is_documented(name, doc_obj, sig_obj):
     assert not problems, f"{name}: " + "; ".join(problems)
 
 
+def _returns_a_value(func) -> bool:
+    """True unless the signature says ``-> None`` (a function without annotation counts as returning)."""
+    try:
+        ann = inspect.signature(func).return_annotation
+    except (TypeError, ValueError):
+        return True
+    return ann not in (None, "None")
+
+
+@pytest.mark.parametrize("name,doc_obj,sig_obj", [c for c in CALLABLES if not inspect.isclass(c[1])],
+                         ids=[n for n, d, _ in CALLABLES if not inspect.isclass(d)])
+def test_every_returned_value_is_documented(name, doc_obj, sig_obj):
+    """A public function or method that returns something says what, in a Returns (or Yields) section."""
+    if not _returns_a_value(sig_obj):
+        return
+    found = sections(inspect.getdoc(doc_obj))
+    assert "Returns" in found or "Yields" in found, f"{name}: no Returns section"
+
+
 def test_backlog_names_only_public_callables():
     stale = sorted(BACKLOG - set(NAMES))
     assert not stale, f"{BACKLOG_FILE.name} lists names that are not public callables: {stale}"

@@ -70,6 +70,12 @@ class IdentifyOutcome:
     quality: Mapping[str, Any] | None = None  # peak errors and verdict lines
 
     def report(self) -> dict:
+        """The outcome as a JSON-ready dict (joint, errors, constant (k, c), validation, quality).
+
+        Returns
+        -------
+        dict
+        """
         c = self.campaign
         rep: dict[str, Any] = {
             "campaign": c.name,

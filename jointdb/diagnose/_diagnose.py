@@ -140,7 +140,12 @@ class Diagnosis:
         return getattr(c, attr, None)
 
     def table(self) -> list[dict]:
-        """Ranked explanations as rows (name, family, parameters, ΔBIC, mismatch, improvement)."""
+        """Ranked explanations as rows (name, family, parameters, ΔBIC, mismatch, improvement).
+
+        Returns
+        -------
+        list of dict
+        """
         rows = []
         for rank, f in enumerate(self.ranking, 1):
             rows.append({
@@ -155,6 +160,12 @@ class Diagnosis:
         return rows
 
     def to_dict(self) -> dict:
+        """The diagnosis as a JSON-ready dict (verdict, signatures, ranking, level tables).
+
+        Returns
+        -------
+        dict
+        """
         b = self.best
         return {
             "explained": self.explained,

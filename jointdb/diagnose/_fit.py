@@ -264,6 +264,12 @@ class Fit:
         return "none" if self.candidate is None else self.candidate.family
 
     def describe(self) -> str:
+        """Plain-language phrase of this fit (the nominal model, or the candidate with its values).
+
+        Returns
+        -------
+        str
+        """
         if self.candidate is None:
             return "the nominal model as it is"
         return self.candidate.describe(self.values, self.sigmas)

@@ -165,7 +165,12 @@ class LevelAnalysis:
 
     def summary(self) -> str:
         """One line per mode, levels from lowest to highest, e.g.
-        ``mode 1: 2305 ± 1 → 2260 ± 1 → 2185 ± 2 Hz, ζ 1.1 → 1.4 → 2.0 % (changes with level: …)``."""
+        ``mode 1: 2305 ± 1 → 2260 ± 1 → 2185 ± 2 Hz, ζ 1.1 → 1.4 → 2.0 % (changes with level: …)``.
+
+        Returns
+        -------
+        str
+        """
         lines = []
         o = list(self.order)
         for t in self.tracks:
@@ -186,7 +191,12 @@ class LevelAnalysis:
         return "\n".join(lines)
 
     def to_dict(self) -> dict:
-        """JSON-ready dict (lists of floats, levels in the order given)."""
+        """JSON-ready dict (lists of floats, levels in the order given).
+
+        Returns
+        -------
+        dict
+        """
         return {
             "differs": self.differs,
             "levels": [None if v is None else float(v) for v in self.levels],

@@ -43,7 +43,12 @@ class Ingredient:
     stage: int = 0
 
     def positions(self) -> tuple[float, ...]:
-        """Axial positions [m] where the mesh needs a node."""
+        """Axial positions [m] where the mesh needs a node.
+
+        Returns
+        -------
+        tuple of float
+        """
         return ()
 
     def apply(self, matrices: "FEMatrices", mesh: "Mesh") -> "FEMatrices":  # pragma: no cover
@@ -94,6 +99,12 @@ class Clamp(Ingredient):
             object.__setattr__(self, "directions", tuple(str(d).lower() for d in self.directions))
 
     def positions(self) -> tuple[float, ...]:
+        """Axial positions [m] where the mesh needs a node.
+
+        Returns
+        -------
+        tuple of float
+        """
         return (self.position,)
 
     def apply(self, matrices, mesh):
@@ -142,6 +153,12 @@ class Support(Ingredient):
         return hash((self.position, tuple(sorted(self.stiffness.items())), tuple(sorted(self.damping.items()))))
 
     def positions(self) -> tuple[float, ...]:
+        """Axial positions [m] where the mesh needs a node.
+
+        Returns
+        -------
+        tuple of float
+        """
         return (self.position,)
 
     def apply(self, matrices, mesh):
@@ -188,6 +205,12 @@ class PointMass(Ingredient):
         _number(self, "polar_inertia", minimum=0.0)
 
     def positions(self) -> tuple[float, ...]:
+        """Axial positions [m] where the mesh needs a node.
+
+        Returns
+        -------
+        tuple of float
+        """
         return (self.position,)
 
     def apply(self, matrices, mesh):

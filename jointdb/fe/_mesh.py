@@ -199,7 +199,13 @@ class Mesh:
         return ()
 
     def dof_labels(self) -> tuple[Dof, ...]:
-        """``Dof(node, direction)`` of every global DOF (the first node that owns it)."""
+        """``Dof(node, direction)`` of every global DOF (the first node that owns it).
+
+        Returns
+        -------
+        tuple of Dof
+            One per global DOF, ``(n_dof,)``.
+        """
         cached = self.__dict__.get("_labels")
         if cached is not None:
             return cached

@@ -250,7 +250,12 @@ class BeamModel:
         """Nodes at segment ends, point and ingredient positions, refined to ``max_element_length``;
         then the interfaces: splits for joints, extra nodes for inserted parts (see :mod:`jointdb.fe._joints`).
 
-        Computed once per model (a model is immutable; :meth:`replace` makes a new one)."""
+        Computed once per model (a model is immutable; :meth:`replace` makes a new one).
+
+        Returns
+        -------
+        Mesh
+        """
         cached = self.__dict__.get("_mesh")
         if cached is None:
             cached = self._make_mesh()

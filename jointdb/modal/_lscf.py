@@ -86,7 +86,12 @@ class StabilisationDiagram:
     band: tuple[float, float]
 
     def stable(self) -> np.ndarray:
-        """Boolean mask of the fully stable poles (status ``'s'``)."""
+        """Boolean mask of the fully stable poles (status ``'s'``).
+
+        Returns
+        -------
+        ndarray of bool, shape (n_poles,)
+        """
         return self.status == "s"
 
 

@@ -83,7 +83,13 @@ class ModalFit:
         return self.model.residues
 
     def table(self) -> list[dict]:
-        """One row per mode: frequency, damping and the largest residue magnitude."""
+        """One row per mode: frequency, damping and the largest residue magnitude.
+
+        Returns
+        -------
+        list of dict
+            ``mode``, ``freq_hz``, ``zeta``, ``max_abs_residue``.
+        """
         return [
             {
                 "mode": k + 1,

@@ -307,6 +307,12 @@ class ModalModel:
         ``residuals=False``. Shapes: A (n, n), B (n, n_in), C (n_out, n) with
         ``n = 2 · n_modes · n_in``; states of modes with zero residue columns are
         dropped.
+
+        Returns
+        -------
+        A, B, C : ndarray
+            Shapes ``(n, n)``, ``(n, n_in)``, ``(n_out, n)`` as above; ``q`` is the receptance
+            response [m per N of input].
         """
         blocks_a, cols_b, rows_c = [], [], []
         n_in = len(self.inputs)

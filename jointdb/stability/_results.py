@@ -120,7 +120,12 @@ class LobeResult:
         return float(d.min()) if d.size else float("nan")
 
     def table(self) -> list[dict]:
-        """One row per spindle speed: speed, depth, chatter frequency, lobe number, kind."""
+        """One row per spindle speed: speed, depth, chatter frequency, lobe number, kind.
+
+        Returns
+        -------
+        list of dict
+        """
         return [
             {
                 "spindle_speed_rpm": float(n),

@@ -55,7 +55,13 @@ class Prediction:
     notes: tuple[str, ...]
 
     def summary(self) -> list[dict]:
-        """Per direction: dominant peak (frequency, |H|) with the joints and with rigid joints."""
+        """Per direction: dominant peak (frequency, |H|) with the joints and with rigid joints.
+
+        Returns
+        -------
+        list of dict
+            One row per direction.
+        """
         rows = []
         for k, dof in enumerate(self.tip.outputs):
             h = np.abs(self.tip.values[:, k, k])

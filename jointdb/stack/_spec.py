@@ -261,6 +261,12 @@ class FrequencyGrid:
     step: float = 5.0
 
     def lines(self):
+        """The frequency lines [Hz].
+
+        Returns
+        -------
+        ndarray, shape (n,)
+        """
         import numpy as np
 
         n = int(math.floor((self.fmax - self.fmin) / self.step + 1e-9)) + 1

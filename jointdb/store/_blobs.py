@@ -282,7 +282,13 @@ class BlobStore(VerifyingBlobs):
 
     # ------------------------------------------------------------------ walk
     def walk(self) -> Iterator[BlobInfo]:
-        """All finished blobs in the store."""
+        """All finished blobs in the store.
+
+        Yields
+        ------
+        BlobInfo
+            ``sha256``, ``path``, ``size`` [bytes], ``mtime`` [s since the epoch].
+        """
         if not self.root.is_dir():
             return
         for sub in sorted(self.root.iterdir()):
@@ -295,7 +301,12 @@ class BlobStore(VerifyingBlobs):
                 yield BlobInfo(p.stem, p, st.st_size, st.st_mtime)
 
     def temporaries(self) -> list[Path]:
-        """Left-over temporary files of interrupted writes."""
+        """Left-over temporary files of interrupted writes.
+
+        Returns
+        -------
+        list of Path
+        """
         if not self.root.is_dir():
             return []
         return sorted(self.root.glob(f"*/{_TMP_PREFIX}*"))

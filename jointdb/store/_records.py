@@ -121,6 +121,12 @@ class DamagedVersion:
     reason: str
 
     def describe(self) -> str:
+        """One line: the version and why it was skipped.
+
+        Returns
+        -------
+        str
+        """
         return f"{self.name} v{self.version}: {self.reason}"
 
 

@@ -218,6 +218,13 @@ class Conditions:
         object.__setattr__(self, "extra", extra)
 
     def to_dict(self) -> dict[str, Any]:
+        """The conditions as a JSON-ready dict (read back by :meth:`from_dict`).
+
+        Returns
+        -------
+        dict
+            ``materials``, ``preload_n``, ``torque_nm``, ``geometry``, ``extra``.
+        """
         return {
             "materials": list(self.materials),
             "preload_n": self.preload_n,
@@ -436,7 +443,13 @@ class JointVersion:
     labels: tuple[str, ...] = ()
 
     def summary(self) -> dict[str, Any]:
-        """A flat row for tables."""
+        """A flat row for tables.
+
+        Returns
+        -------
+        dict
+            name, type, version, state, labels, materials, preload, torque, model kind, band, date, author.
+        """
         c = self.conditions
         return {
             "name": self.name,
@@ -509,6 +522,12 @@ class InterpolatedJoint:
     label: str = "interpolated"
 
     def describe(self) -> str:
+        """One line naming the neighbours and their weights.
+
+        Returns
+        -------
+        str
+        """
         parts = ", ".join(f"{n} v{v} (w={w:.3f})" for n, v, w in self.neighbours)
         return f"INTERPOLATED {self.joint_type} joint from {parts}"
 

@@ -341,7 +341,12 @@ class CatalogueOutcome:
         return self.identified.campaign
 
     def row(self) -> dict[str, Any]:
-        """A flat row: joint, conditions, constant (k, c), residuals."""
+        """A flat row: joint, conditions, constant (k, c), residuals.
+
+        Returns
+        -------
+        dict
+        """
         cond = self.campaign.conditions
         kc = self.identified.kc
         res = self.identified.result

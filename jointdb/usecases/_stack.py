@@ -63,7 +63,12 @@ class JointResolution:
     uncertainty: Mapping[str, Any] | None = None  # the version's parameter covariance, if it was fitted with one
 
     def row(self) -> dict[str, Any]:
-        """A flat row for tables / JSON."""
+        """A flat row for tables / JSON.
+
+        Returns
+        -------
+        dict
+        """
         return {
             "interface": self.interface,
             "kind": self.kind,
