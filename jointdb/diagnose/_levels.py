@@ -259,10 +259,9 @@ def track_modes(freq: np.ndarray, values: np.ndarray, weight: np.ndarray | None,
     centres
         Frequencies [Hz] of the modes to follow; default: the recorded peaks
         of the lowest level at least ``STRONG_PEAK`` of the strongest.
-    band_halfwidths
-        Fit band: this many half-power half-widths each side of the peak ...
-    min_band
-        ... but at least this fraction of the frequency each side.
+    band_halfwidths, min_band
+        Fit band: this many half-power half-widths each side of the peak, but at least
+        ``min_band`` × the frequency each side.
 
     Returns
     -------

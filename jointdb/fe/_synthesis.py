@@ -197,10 +197,8 @@ def frf_direct(
         Frequencies [Hz], ``(n_freq,)``.
     dof_index
         Global DOF indices of outputs = inputs, ``(m,)``.
-    chunk_bytes
-        Memory bound [bytes] of one stack of LU systems.
-    algorithm
-        ``"auto"``, ``"lu"`` or ``"spectral"`` (above).
+    chunk_bytes, algorithm
+        Memory bound [bytes] of one stack of LU systems; ``"auto"``, ``"lu"`` or ``"spectral"``.
 
     Returns
     -------

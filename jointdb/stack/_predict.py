@@ -284,40 +284,32 @@ def predict_tool_tip(spec: StackSpec, resolved_joints: Mapping[str, FRF] | None 
 
     Examples
     --------
-    A 12 mm carbide tool at 50 mm gauge length in a steel chuck on a clamped spindle shaft.
-    The tool–holder joint (k in N/m and N·m/rad, c in N·s/m and N·m·s/rad) moves the dominant
-    tip mode far below the rigid-joint prediction; as the joint stiffens, the prediction tends
-    to the rigid-joint one, the gap shrinking as 1/k:
+    A 12 mm carbide tool at 50 mm gauge length in a steel chuck on a clamped spindle shaft. The
+    tool–holder joint (k [N/m, N·m/rad], c [N·s/m, N·m·s/rad]) moves the dominant tip mode far
+    below the rigid-joint prediction; a stiffer joint tends to the rigid one, the gap as 1/k:
 
     >>> import numpy as np
     >>> from jointdb.stack import stack_from_dict, predict_tool_tip
+    >>> spindle = {"segments": [{"length": 0.2, "outer_diameter": 0.07, "material": "steel"}],
+    ...            "points": [{"name": "nose", "position": 0.0, "node": 5}], "clamps": [{"position": 0.2}]}
     >>> def stack(tool_holder):
-    ...     return stack_from_dict({
-    ...         "format": "jointdb-stack/1", "name": "example",
+    ...     return stack_from_dict({"name": "example", "gauge_length": 0.05,
     ...         "tool": {"material": "carbide", "segments": [{"length": 0.08, "diameter": 0.012}]},
-    ...         "gauge_length": 0.05,
     ...         "holder": {"material": "steel", "segments": [
     ...             {"length": 0.04, "outer_diameter": 0.032, "inner_diameter": 0.012},
     ...             {"length": 0.03, "outer_diameter": 0.05}]},
-    ...         "spindle": {"point": "nose", "model": {
-    ...             "format": "jointdb-beam-model/1",
-    ...             "segments": [{"length": 0.2, "outer_diameter": 0.07, "material": "steel"}],
-    ...             "points": [{"name": "nose", "position": 0.0, "node": 5}],
-    ...             "clamps": [{"position": 0.2}]}},
-    ...         "interfaces": {"tool-holder": tool_holder, "holder-spindle": "rigid"},
-    ...         "frequency": {"min": 100, "max": 6000, "step": 20}})
+    ...         "spindle": {"point": "nose", "model": spindle}, "frequency": {"min": 100, "max": 6000, "step": 20},
+    ...         "interfaces": {"tool-holder": tool_holder, "holder-spindle": "rigid"}})
     >>> p = predict_tool_tip(stack({"k": [2e7, 1e6], "c": [100.0, 5.0]}))
     >>> p.tip.shape, [str(dof) for dof in p.tip.outputs]          # (n_freq, n_out, n_in), receptance m/N
     ((296, 2, 2), ['1x', '1y'])
-    >>> def peak_hz(frf):
-    ...     return float(frf.freq[np.argmax(np.abs(frf.entry("1x", "1x")))])
-    >>> peak_hz(p.tip) < 0.5 * peak_hz(p.rigid)
+    >>> peak_hz = [float(f.freq[np.argmax(np.abs(f.entry("1x", "1x")))]) for f in (p.tip, p.rigid)]
+    >>> peak_hz[0] < 0.5 * peak_hz[1]
     True
     >>> def gap(k, k_rot):
     ...     s = predict_tool_tip(stack({"k": [k, k_rot], "c": [0.0, 0.0]}))
     ...     return np.abs(s.tip.values - s.rigid.values).max() / np.abs(s.rigid.values).max()
-    >>> g1, g2 = gap(1e12, 1e10), gap(1e13, 1e11)
-    >>> bool(g2 < 2e-3 and 8 < g1 / g2 < 12)
+    >>> g1, g2 = gap(1e12, 1e10), gap(1e13, 1e11); bool(g2 < 2e-3 and 8 < g1 / g2 < 12)
     True
     """
     resolved = dict(resolved_joints or {})
