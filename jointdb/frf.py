@@ -35,6 +35,13 @@ class Dof:
 
     ``str(Dof(12, "rx")) == "12rx"``; :meth:`parse` reads ``"12rx"``, ``"12:rx"``
     or ``"12 RX"``.
+
+    Parameters
+    ----------
+    node
+        Node number, >= 0.
+    direction
+        ``x``, ``y``, ``z`` (translations) or ``rx``, ``ry``, ``rz`` (rotations); case-insensitive.
     """
 
     node: int
@@ -69,6 +76,15 @@ class Dof:
     def parse(cls, text: "str | Dof | tuple[int, str]") -> "Dof":
         """Read a DOF from ``"12x"``, ``"12:rx"``, ``(12, "rx")`` or a Dof.
 
+        Parameters
+        ----------
+        text
+            The label: text, a ``(node, direction)`` pair or a :class:`Dof` (returned as is).
+
+        Returns
+        -------
+        Dof
+
         Raises
         ------
         InputError
@@ -94,6 +110,19 @@ class Dof:
     def from_uff(cls, node: int, code: int) -> tuple["Dof", int]:
         """DOF and sign (+1/−1) from a UFF58 node and signed direction code (±1..±6).
 
+        Parameters
+        ----------
+        node
+            UFF node number.
+        code
+            Signed UFF direction code: ±1..±3 translations x y z, ±4..±6 rotations.
+
+        Returns
+        -------
+        dof : Dof
+        sign : int
+            +1 or −1.
+
         Raises
         ------
         InputError
@@ -106,7 +135,23 @@ class Dof:
 
 
 def dofs(labels: Iterable["str | Dof | tuple[int, str]"]) -> tuple[Dof, ...]:
-    """Parse an iterable of DOF labels into a tuple of :class:`Dof`."""
+    """Parse an iterable of DOF labels into a tuple of :class:`Dof`.
+
+    Parameters
+    ----------
+    labels
+        Labels as :meth:`Dof.parse` reads them; a single label is taken as a list of one.
+
+    Returns
+    -------
+    tuple of Dof
+
+    Examples
+    --------
+    >>> from jointdb import dofs
+    >>> [str(d) for d in dofs(["1x", "1:RY", (3, "z")])]
+    ['1x', '1ry', '3z']
+    """
     if isinstance(labels, (str, Dof)):
         labels = [labels]
     return tuple(Dof.parse(label) for label in labels)
@@ -126,6 +171,22 @@ class Quantity(str, enum.Enum):
 
     @classmethod
     def parse(cls, value: "str | Quantity") -> "Quantity":
+        """A Quantity from its name (case-insensitive) or a Quantity.
+
+        Parameters
+        ----------
+        value
+            ``"receptance"``, ``"mobility"``, ``"accelerance"`` or a :class:`Quantity`.
+
+        Returns
+        -------
+        Quantity
+
+        Raises
+        ------
+        InputError
+            An unknown name.
+        """
         try:
             return cls(str(getattr(value, "value", value)).lower())
         except ValueError:
@@ -182,6 +243,25 @@ class FRF:
     InputError
         On wrong shapes, NaN/inf, non-increasing or negative frequencies,
         duplicate or unknown DOFs, or an unknown quantity.
+
+    Examples
+    --------
+    The receptance of a 1 kg mass on a 1 MN/m spring (natural frequency 159.15 Hz), then the
+    same as mobility (``iω`` times it) and one entry picked by its labels:
+
+    >>> import numpy as np
+    >>> from jointdb import FRF
+    >>> freq = np.array([0.0, 100.0, 200.0])                    # Hz
+    >>> w = 2 * np.pi * freq
+    >>> h = FRF(freq, 1 / (1e6 - 1.0 * w**2), outputs=["1x"], inputs=["1x"])
+    >>> h.shape, h.quantity.value
+    ((3, 1, 1), 'receptance')
+    >>> np.round(h.entry("1x", "1x").real * 1e6, 4)            # µm/N: 1 / (1 − (f/fn)²)
+    array([ 1.    ,  1.6523, -1.7267])
+    >>> bool(np.allclose(h.to("mobility").values[:, 0, 0], 1j * w * h.values[:, 0, 0]))
+    True
+    >>> [str(dof) for dof in h.outputs]
+    ['1x']
     """
 
     freq: np.ndarray
@@ -284,7 +364,17 @@ class FRF:
         )
 
     def replace(self, **changes) -> "FRF":
-        """A new FRF with some fields replaced (validated again)."""
+        """A new FRF with some fields replaced (validated again).
+
+        Parameters
+        ----------
+        **changes
+            ``freq``, ``values``, ``outputs``, ``inputs`` or ``quantity``.
+
+        Returns
+        -------
+        FRF
+        """
         kwargs = dict(
             freq=self.freq, values=self.values, outputs=self.outputs, inputs=self.inputs, quantity=self.quantity
         )
@@ -292,7 +382,20 @@ class FRF:
         return FRF(**kwargs)
 
     def allclose(self, other: "FRF", rtol: float = 1e-10, atol: float = 0.0) -> bool:
-        """Same labels, quantity and grid, and values equal within tolerances."""
+        """Same labels, quantity and grid, and values equal within tolerances.
+
+        Parameters
+        ----------
+        other
+            The FRF to compare with.
+        rtol, atol
+            Relative and absolute tolerance on the values (as :func:`numpy.allclose`;
+            ``atol`` in the FRF's units).
+
+        Returns
+        -------
+        bool
+        """
         return (
             self.outputs == other.outputs
             and self.inputs == other.inputs
@@ -317,6 +420,16 @@ class FRF:
     def select(self, outputs: Iterable | None = None, inputs: Iterable | None = None) -> "FRF":
         """Sub-FRF on the given output and input DOFs (in the order given).
 
+        Parameters
+        ----------
+        outputs, inputs
+            DOF labels to keep (None: all).
+
+        Returns
+        -------
+        FRF
+            Shape ``(n_freq, len(outputs), len(inputs))``.
+
         Raises
         ------
         InputError
@@ -331,6 +444,15 @@ class FRF:
     def block(self, outputs: Iterable, inputs: Iterable) -> np.ndarray:
         """Values on the given DOFs as a new array ``(n_freq, len(outputs), len(inputs))``.
 
+        Parameters
+        ----------
+        outputs, inputs
+            DOF labels.
+
+        Returns
+        -------
+        ndarray, complex
+
         Raises
         ------
         InputError
@@ -339,7 +461,17 @@ class FRF:
         return _take(self.values, self._positions("out", outputs), self._positions("in", inputs))
 
     def entry(self, output, input) -> np.ndarray:  # noqa: A002 - field's own word
-        """One FRF ``H[output, input]`` as an array ``(n_freq,)``."""
+        """One FRF ``H[output, input]`` as an array ``(n_freq,)``.
+
+        Parameters
+        ----------
+        output, input
+            DOF labels.
+
+        Returns
+        -------
+        ndarray, complex, shape (n_freq,)
+        """
         return self.block([output], [input])[:, 0, 0]
 
     # ------------------------------------------------------------- conversion
@@ -348,6 +480,15 @@ class FRF:
 
         Converting *from* mobility or accelerance to receptance divides by
         ``(iω)^p``, undefined at 0 Hz: a 0 Hz line is refused in that case.
+
+        Parameters
+        ----------
+        quantity
+            ``"receptance"``, ``"mobility"`` or ``"accelerance"``.
+
+        Returns
+        -------
+        FRF
 
         Raises
         ------
@@ -375,7 +516,22 @@ class FRF:
         return FRF._trusted(self.freq, values, self.outputs, self.inputs, target)
 
     def band(self, fmin: float | None = None, fmax: float | None = None) -> "FRF":
-        """The lines with ``fmin <= f <= fmax`` (``fmin`` exclusive of 0 when given as 0+)."""
+        """The lines with ``fmin <= f <= fmax``.
+
+        Parameters
+        ----------
+        fmin, fmax
+            Band limits [Hz]; None: unbounded on that side.
+
+        Returns
+        -------
+        FRF
+
+        Raises
+        ------
+        InputError
+            No line in the band.
+        """
         mask = np.ones(self.n_freq, dtype=bool)
         if fmin is not None:
             mask &= self.freq >= fmin
@@ -387,6 +543,15 @@ class FRF:
 
     def resample(self, freq: Sequence[float] | np.ndarray) -> "FRF":
         """Linear interpolation (real and imaginary parts) onto another grid.
+
+        Parameters
+        ----------
+        freq
+            The new lines [Hz], ``(n,)``, within this FRF's range.
+
+        Returns
+        -------
+        FRF
 
         Raises
         ------
@@ -420,8 +585,11 @@ class FRF:
             Target DOFs. By default the square set over the union of this
             FRF's output and input DOFs. A measured row (one output, many
             inputs) becomes a column with ``outputs=row.inputs, inputs=row.outputs``.
+            Where an entry is present directly it is kept as measured.
 
-        Where an entry is present directly it is kept as measured.
+        Returns
+        -------
+        FRF
 
         Raises
         ------
@@ -442,7 +610,13 @@ class FRF:
         return FRF._trusted(self.freq, vals, target_out, target_in, self.quantity)
 
     def reciprocity_error(self) -> float:
-        """Largest relative asymmetry ``|H_ij − H_ji| / max|H|`` over common DOFs."""
+        """Largest relative asymmetry ``|H_ij − H_ji| / max|H|`` over common DOFs.
+
+        Returns
+        -------
+        float
+            0 for an FRF without two common DOFs.
+        """
         common = [d for d in self.outputs if d in self._index["in"]]
         if len(common) < 2:
             return 0.0
@@ -452,12 +626,32 @@ class FRF:
 
     @staticmethod
     def concat_outputs(parts: Sequence["FRF"]) -> "FRF":
-        """Stack FRFs with the same grid, inputs and quantity along outputs."""
+        """Stack FRFs with the same grid, inputs and quantity along outputs.
+
+        Parameters
+        ----------
+        parts
+            The FRFs, in order.
+
+        Returns
+        -------
+        FRF
+        """
         return _concat(parts, along="outputs")
 
     @staticmethod
     def concat_inputs(parts: Sequence["FRF"]) -> "FRF":
-        """Stack FRFs with the same grid, outputs and quantity along inputs."""
+        """Stack FRFs with the same grid, outputs and quantity along inputs.
+
+        Parameters
+        ----------
+        parts
+            The FRFs, in order.
+
+        Returns
+        -------
+        FRF
+        """
         return _concat(parts, along="inputs")
 
 

@@ -12,7 +12,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from jointdb.plots._axes import phase_deg, robust_limits
+from jointdb.plots import phase_deg, robust_limits
 
 
 def test_phase_breaks_at_wraps():
@@ -35,7 +35,7 @@ def test_robust_limits_ignore_single_spikes():
 
 def test_kc_plot_keeps_the_scale_of_the_bulk(tmp_path):
     from jointdb.frf import FRF
-    from jointdb.plots._coupling import save_kc_plot
+    from jointdb.plots import save_kc_plot
 
     f = np.linspace(50, 5000, 200)
     z = 3e7 + 1j * 2 * np.pi * f * 200.0
@@ -64,7 +64,7 @@ def test_kc_plot_keeps_the_scale_of_the_bulk(tmp_path):
 
 
 def test_tip_legend_names_versions_and_weights():
-    from jointdb.plots._stack import joints_legend
+    from jointdb.plots import joints_legend
 
     res = {
         "tool-holder": SimpleNamespace(kind="interpolated", name="th-a", version=1,

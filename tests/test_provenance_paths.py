@@ -65,7 +65,7 @@ def _by_api(tmp_path: Path) -> bytes:
     from fastapi.testclient import TestClient
 
     from jointdb.server import create_app
-    from jointdb.server._settings import Settings
+    from jointdb.server import Settings
     from jointdb.store._tokens import create_token
 
     url, blobs = _database(tmp_path, "api")

@@ -52,6 +52,20 @@ JOINT_MODELS = ("planar", "n-point", "matrix")
 
 @dataclass(frozen=True)
 class Substructure:
+    """One substructure of a campaign.
+
+    Attributes
+    ----------
+    name
+        Its name in the campaign (``substructures.<name>``).
+    kind
+        ``"model"`` (a beam model file) or ``"uff58"`` (a measured FRF file).
+    path
+        The file.
+    dofs
+        The DOFs to use from it, or None for all.
+    """
+
     name: str
     kind: str  # "model" | "uff58"
     path: Path
@@ -65,6 +79,16 @@ def file_hashes(c: "Campaign") -> dict[str, str]:
     ``campaign.json``, ``assembly.uff``, ``../../models/tool.json`` — the same keys whether
     the campaign is read where the user keeps it or unpacked from an uploaded archive (where
     the relative path is the path inside the archive, never the server's folder).
+
+    Parameters
+    ----------
+    c
+        The campaign.
+
+    Returns
+    -------
+    dict
+        Relative path → SHA-256 (hex), sorted by path.
     """
     import hashlib
 
@@ -80,7 +104,36 @@ def file_hashes(c: "Campaign") -> dict[str, str]:
 
 @dataclass(frozen=True)
 class Campaign:
-    """A parsed, checked campaign file (no FRFs loaded yet)."""
+    """A parsed, checked campaign file (no FRFs loaded yet); format in the module docstring.
+
+    Attributes
+    ----------
+    path
+        The campaign file.
+    name, joint_type
+        The campaign's name and the joint type it identifies.
+    conditions
+        The conditions of the joint (dict form of :class:`jointdb.store.Conditions`).
+    joint_model
+        ``"planar"``, ``"n-point"`` or ``"matrix"``.
+    substructures
+        Name → :class:`Substructure`.
+    interface
+        The interface: ``a``, ``a_dofs``, ``b``, ``b_dofs`` (substructure names, contact DOFs).
+    measurements
+        The measured assembly files.
+    band
+        ``(f_min, f_max)`` [Hz] used, or None for all lines.
+    model_options
+        The joint model's own section (``b_tip`` for planar, ``internal`` for n-point,
+        ``measured`` for matrix).
+    options
+        Options of the identification (``smoothing``, ``regularisation``, ``fit_band``, ...).
+    validation
+        A validation assembly (its substructures and measurements), or None.
+    couple
+        What ``jointdb couple`` computes (joint, outputs, inputs).
+    """
 
     path: Path
     name: str
@@ -208,6 +261,10 @@ def load_campaign(path: "str | Path", *, root: "str | Path | None" = None) -> Ca
         does): every file it names must lie inside ``root``, named by a relative path
         without symbolic links; absolute paths and '..' leading out are refused before
         anything is opened. Default: no confinement (the user's own files).
+
+    Returns
+    -------
+    Campaign
 
     Raises
     ------

@@ -34,6 +34,31 @@ from jointdb.frf import FRF, Dof
 
 @dataclass(frozen=True, eq=False)
 class IdentifyOutcome:
+    """What :func:`identify_campaign` found; ``report()`` gives it as a JSON-ready dict.
+
+    Attributes
+    ----------
+    campaign
+        The :class:`Campaign` identified.
+    result
+        The IRC :class:`jointdb.coupling.IdentificationResult` (the output-error joint when
+        that method was used and kept).
+    measured
+        The measured assembly FRF on the campaign's band.
+    reconstructed
+        The assembly re-coupled with the identified joint (same DOFs and lines).
+    rigid
+        The assembly coupled with rigid joints.
+    kc
+        Constant (k, c) fitted to the joint (:class:`jointdb.coupling.KCFit`), or None.
+    validation
+        The joint against the validation assembly (errors, FRFs, peaks), or None.
+    output_error
+        The :class:`jointdb.coupling.OutputErrorResult` (None for method ``irc``).
+    quality
+        Peak errors and verdict lines, or None.
+    """
+
     campaign: Campaign
     result: IdentificationResult
     measured: FRF
@@ -45,6 +70,12 @@ class IdentifyOutcome:
     quality: Mapping[str, Any] | None = None  # peak errors and verdict lines
 
     def report(self) -> dict:
+        """The outcome as a JSON-ready dict (joint, errors, constant (k, c), validation, quality).
+
+        Returns
+        -------
+        dict
+        """
         c = self.campaign
         rep: dict[str, Any] = {
             "campaign": c.name,
@@ -175,6 +206,15 @@ def _quality(method: str, measured: FRF, reconstructed: FRF, irc_reconstructed, 
 def identify_campaign(c: Campaign) -> IdentifyOutcome:
     """Load everything, identify the joint, re-couple, fit constant (k, c), validate if asked.
 
+    Parameters
+    ----------
+    c
+        A campaign from :func:`load_campaign`.
+
+    Returns
+    -------
+    IdentifyOutcome
+
     Raises
     ------
     InputError
@@ -229,7 +269,18 @@ def identify_campaign(c: Campaign) -> IdentifyOutcome:
 
 
 def joint_attrs(out: IdentifyOutcome) -> dict:
-    """Metadata stored with the joint FRF in the HDF5 exchange file."""
+    """Metadata stored with the joint FRF in the HDF5 exchange file.
+
+    Parameters
+    ----------
+    out
+        An :class:`IdentifyOutcome`.
+
+    Returns
+    -------
+    dict
+        JSON-ready: kind, joint model, campaign, joint type, conditions, interface, report.
+    """
     from jointdb._output import to_jsonable
 
     rep = to_jsonable(out.report())
@@ -269,7 +320,25 @@ def _per_line_kept(out: IdentifyOutcome) -> bool:
 
 
 def load_joint_file(path: Path) -> tuple[FRF, str]:
-    """A joint FRF written by ``jointdb identify`` and its model kind (``planar``/``n-point``/``matrix``)."""
+    """A joint FRF written by ``jointdb identify`` and its model kind.
+
+    Parameters
+    ----------
+    path
+        The joint HDF5 file.
+
+    Returns
+    -------
+    frf : FRF
+        The joint receptance.
+    model : str
+        ``"planar"``, ``"n-point"`` or ``"matrix"``.
+
+    Raises
+    ------
+    InputError
+        Not a joint file written by ``jointdb identify``.
+    """
     from jointdb.io import read_frf_hdf5_full
 
     frf, meta = read_frf_hdf5_full(path)
@@ -282,8 +351,20 @@ def load_joint_file(path: Path) -> tuple[FRF, str]:
 def couple_campaign(c: Campaign, joint_override: Path | None = None) -> dict:
     """Couple the campaign's substructures with a joint; compare with measurements if there are any.
 
-    The joint is ``--joint FILE`` if given, else ``couple.joint`` of the campaign:
-    ``"rigid"``, a joint HDF5 file, or ``{"k": [...], "c": [...]}`` (spring–dampers on a_dofs).
+    Parameters
+    ----------
+    c
+        A campaign from :func:`load_campaign`.
+    joint_override
+        A joint HDF5 file (``jointdb couple --joint FILE``); default the campaign's
+        ``couple.joint``: ``"rigid"``, a joint HDF5 file, or ``{"k": [...], "c": [...]}``
+        (spring–dampers on the interface's a_dofs).
+
+    Returns
+    -------
+    dict
+        ``assembly`` (coupled FRF), ``joint`` (its label), ``measured`` (or None) and, with a
+        measurement to compare with, ``error_mean``, ``peaks`` and ``verdict``.
     """
     freq = grid_for_couple(c)
     subs = {n: load_substructure(c.path, f"substructures.{n}", s, freq) for n, s in c.substructures.items()}

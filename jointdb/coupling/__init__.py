@@ -14,7 +14,8 @@ Identification (IRC, docs/theory.md §2), each returning an :class:`Identificati
 - :func:`identify_n_point_joints` — n translational joints between two bodies (§2b).
 - :func:`identify_joint_matrix` — full joint matrix with inertia (§2c).
 - :class:`Regularisation` — truncated-SVD / Tikhonov pseudo-inverses.
-- :func:`equivalent_stiffness_damping`, :func:`fit_constant_kc` — k(ω), c(ω), constant (k, c).
+- :func:`equivalent_stiffness_damping`, :func:`fit_constant_kc` — k(ω), c(ω), constant (k, c)
+  (a :class:`KCFit`).
 
 Output-error identification (all lines at once, weighted by the measurement's
 uncertainty, started from the IRC estimate; parameters with standard errors and
@@ -25,7 +26,7 @@ correlation, an :class:`OutputErrorResult`): :func:`fit_planar_joint`,
 Rotational receptances at a contact point (docs/theory.md §3):
 :func:`rotations_by_extension`, :func:`rotations_by_finite_difference`.
 
-Notes on the contract (api-contracts.md): outputs/inputs are
+Labels: outputs/inputs are
 ``(substructure name, Dof)`` pairs and the result FRF is labelled with the bare
 Dofs, so requested DOF labels must be distinct across substructures. A joint
 given as an FRF is matched to the interface by its labels when they equal the

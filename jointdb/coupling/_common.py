@@ -122,14 +122,27 @@ class IdentificationResult:
         return self.joint.freq
 
     def joint_substructure(self):
-        """The identified joint body as a :class:`~jointdb.coupling.JointSubstructure` (matrix model)."""
+        """The identified joint body as a :class:`~jointdb.coupling.JointSubstructure` (matrix model).
+
+        Returns
+        -------
+        JointSubstructure
+            Pass it as ``Interface(..., joint=...)``; InputError for a massless (planar or n-point) joint.
+        """
         if self.model != "matrix":
             raise InputError(f"a {self.model} joint is massless; pass result.joint to Interface(joint=...)")
         n = len(self.joint.inputs) // 2
         return JointSubstructure(self.joint, self.joint.inputs[:n], self.joint.inputs[n:])
 
     def summary(self) -> dict:
-        """Scalar reliability report: residual and condition statistics, flagged line counts."""
+        """Scalar reliability report: residual and condition statistics, flagged line counts.
+
+        Returns
+        -------
+        dict
+            ``model``, ``n_lines``, ``band_hz``, ``residual_median``/``_max``,
+            ``condition_median``/``_max``, ``unreliable_lines`` and per-flag counts.
+        """
         out: dict[str, object] = {
             "model": self.model,
             "n_lines": int(self.joint.n_freq),

@@ -57,8 +57,18 @@ def equivalent_stiffness_damping(joint_frf: FRF, full: bool = False) -> tuple[np
 class KCFit:
     """Constant spring–damper fitted to a joint FRF over a band.
 
-    ``k``, ``c`` and ``error`` have one entry per diagonal DOF; ``error`` is the
-    relative RMS misfit ``‖h − 1/(k + iωc)‖ / ‖h‖`` of the receptance over the band.
+    Attributes
+    ----------
+    dofs
+        The joint's DOFs, one per diagonal term.
+    k
+        Stiffness per DOF ``(n,)`` [N/m or N·m/rad].
+    c
+        Viscous damping per DOF ``(n,)`` [N·s/m or N·m·s/rad].
+    error
+        Relative RMS misfit ``‖h − 1/(k + iωc)‖ / ‖h‖`` of the receptance over the band, ``(n,)``.
+    band_hz
+        ``(f_min, f_max)`` [Hz] of the lines used.
     """
 
     dofs: tuple[Dof, ...]

@@ -62,6 +62,24 @@ class Regularisation:
 
     @classmethod
     def parse(cls, value: "Regularisation | str | None | tuple") -> "Regularisation":
+        """A :class:`Regularisation` from its written forms.
+
+        Parameters
+        ----------
+        value
+            None (no regularisation), a :class:`Regularisation` (returned as is), text
+            ``"method:rel"`` (``"tikhonov:1e-3"``, ``"tsvd:1e-4"``, ``"none"``; a method
+            without ``rel`` takes 1e-3) or a tuple ``(method, rel)``.
+
+        Returns
+        -------
+        Regularisation
+
+        Raises
+        ------
+        InputError
+            An unknown method, a ``rel`` that is not a number in [0, 1), or another type.
+        """
         if value is None:
             return cls()
         if isinstance(value, Regularisation):

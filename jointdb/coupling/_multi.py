@@ -147,8 +147,13 @@ def identify_n_point_joints(
         ``"tsvd:1e-4"``, a :class:`Regularisation`, or None).
     smoothing
         Optional odd Savitzky–Golay window applied to the measured FRFs.
+    smoothing_order
+        Polynomial order of the Savitzky–Golay filter.
     symmetrize
         Average the measured matrix with its transpose (reciprocity).
+    condition_limit
+        Lines where cond(H_Ia) exceeds this are flagged ``ill_conditioned``; if every line
+        does, the measured points cannot determine the joints (NumericalError).
 
     Returns
     -------
@@ -160,6 +165,33 @@ def identify_n_point_joints(
     ------
     InputError
         m < n, missing DOFs, grid mismatch.
+
+    Examples
+    --------
+    A free steel beam (A) held on a clamped-clamped beam (B) by two translational springs
+    (A's nodes 2 and 4 to B's nodes 6 and 7); the assembly is "measured" at A's ends (nodes
+    1 and 5), and the two springs come back:
+
+    >>> import numpy as np
+    >>> from jointdb.fe import BeamModel, Segment, NamedPoint, Clamp, HystereticDamping
+    >>> from jointdb.coupling import (Interface, couple, spring_damper_joint, identify_n_point_joints,
+    ...                               fit_constant_kc)
+    >>> freq = np.linspace(200.0, 3000.0, 15)                                    # Hz
+    >>> pts = lambda *p: tuple(NamedPoint(name, z, node=n) for name, z, n in p)
+    >>> A = BeamModel(segments=(Segment(0.3, 0.03, material="steel"),),
+    ...               points=pts(("p1", 0.0, 1), ("c2", 0.05, 2), ("c4", 0.25, 4), ("p5", 0.3, 5)),
+    ...               ).frf(freq, points=["p1", "c2", "c4", "p5"])
+    >>> B = BeamModel(segments=(Segment(0.3, 0.06, material="steel"),),
+    ...               points=pts(("c6", 0.05, 6), ("c7", 0.25, 7)),
+    ...               ingredients=(Clamp(0.0), Clamp(0.3), HystereticDamping(0.01)),
+    ...               ).frf(freq, points=["c6", "c7"])
+    >>> springs = spring_damper_joint(freq, k=[5e7, 8e7], c=[300.0, 500.0], dofs_=["2x", "4x"])
+    >>> measured = couple({"A": A, "B": B}, [Interface("A", ["2x", "4x"], "B", ["6x", "7x"], joint=springs)],
+    ...                   outputs=[("A", "1x"), ("A", "5x")])
+    >>> result = identify_n_point_joints(measured, A, ["1x", "5x"], ["2x", "4x"], B, ["6x", "7x"])
+    >>> fit = fit_constant_kc(result.joint)
+    >>> fit.k.round(-2), fit.c.round(3)                                           # N/m, N·s/m
+    (array([50000000., 80000000.]), array([300., 500.]))
     """
     I, a, b = dofs(internal), dofs(a_contact), dofs(b_contact)
     if len(a) != len(b):

@@ -244,6 +244,25 @@ class OutputErrorResult:
 
     Attributes
     ----------
+    model
+        The parametrised joint model that was fitted (spring–damper or joint body).
+    theta
+        The fitted parameters as optimised, ``(n_par,)`` (log-parameters for spring–dampers).
+    start_theta
+        The starting point of the optimisation, ``(n_par,)``.
+    cost_start, cost
+        Weighted least-squares cost at the start and at the optimum.
+    n_residuals
+        Number of real residuals fitted.
+    nfev
+        Number of model evaluations.
+    log_parameters
+        True when ``theta`` holds log-parameters.
+    fitted
+        The assembly receptance the fitted model predicts on the fitted entries,
+        ``(n_freq, n_out, n_in)`` [m/N].
+    settings
+        The fit's settings (model, order, band) as recorded in provenance.
     names
         Parameter names, e.g. ``"k 3x"``, ``"c 3ry"``.
     values
@@ -281,17 +300,35 @@ class OutputErrorResult:
     settings: Mapping[str, object] = field(default_factory=dict)
 
     def relative_std_error(self) -> np.ndarray:
+        """Standard error over |value| per parameter.
+
+        Returns
+        -------
+        ndarray, shape (n_par,)
+        """
         with np.errstate(divide="ignore", invalid="ignore"):
             return np.abs(self.std_error / self.values)
 
     def table(self) -> list[dict]:
-        """One row per parameter: name, value, std_error, relative std error."""
+        """One row per parameter: name, value, std_error, relative std error.
+
+        Returns
+        -------
+        list of dict
+            ``parameter``, ``value``, ``std_error``, ``relative_std_error``.
+        """
         rel = self.relative_std_error()
         return [{"parameter": n, "value": float(v), "std_error": float(s), "relative_std_error": float(r)}
                 for n, v, s, r in zip(self.names, self.values, self.std_error, rel)]
 
     def max_correlation(self) -> tuple[float, str, str]:
-        """The strongest off-diagonal correlation and the two parameters it links."""
+        """The strongest off-diagonal correlation and the two parameters it links.
+
+        Returns
+        -------
+        (float, str, str)
+            |correlation| and the two parameter names.
+        """
         c = np.abs(self.correlation - np.eye(len(self.names)))
         if c.size == 0:
             return 0.0, "", ""

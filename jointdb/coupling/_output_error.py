@@ -51,6 +51,11 @@ def sigma_from_coherence(frf: FRF, coherence: np.ndarray, n_averages: int) -> np
     n_averages
         Number of averaged taps (≥ 1).
 
+    Returns
+    -------
+    ndarray, shape (n_freq, n_out, n_in)
+        Standard deviation of each FRF value (the FRF's units), floored at 1e-4 of ``|H|``.
+
     Raises
     ------
     InputError
@@ -71,6 +76,18 @@ def sigma_from_coherence(frf: FRF, coherence: np.ndarray, n_averages: int) -> np
 
 def mean_and_sigma_of_repeats(repeats: Sequence[FRF]) -> tuple[FRF, np.ndarray]:
     """Mean FRF of repeated taps and the standard deviation of that mean, per line and entry.
+
+    Parameters
+    ----------
+    repeats
+        Two or more FRFs of the same test, on one grid with the same labels.
+
+    Returns
+    -------
+    mean : FRF
+        The mean of the repeats.
+    sigma : ndarray, shape (n_freq, n_out, n_in)
+        Standard deviation of the mean (same units as the FRF), floored at 1e-6 of ``|mean|``.
 
     Raises
     ------
@@ -232,6 +249,8 @@ def fit_n_point_joints(
 
     Parameters
     ----------
+    assembly, substructure_a, internal, a_contact, substructure_b, b_contact
+        As :func:`~jointdb.coupling.identify_n_point_joints`.
     sigma
         Standard deviation of the measured block, shape ``(n_freq, m, m)``; default ``σ ∝ |G|``.
     start
@@ -292,6 +311,8 @@ def fit_joint_matrix(
 
     Parameters
     ----------
+    assembly, substructures, a, a_dofs, b, b_dofs
+        As :func:`~jointdb.coupling.identify_joint_matrix`.
     measured
         ``(name, Dof)`` of the L measured DOFs (on ``a`` or ``b``); the L×L block is fitted.
     start
@@ -299,6 +320,8 @@ def fit_joint_matrix(
         impedance (least squares over the band).
     sigma
         Standard deviation of the measured L×L block ``(n_freq, L, L)``; default ``σ ∝ |G|``.
+    band
+        ``(f_min, f_max)`` [Hz] of the lines fitted; default all.
 
     Returns
     -------

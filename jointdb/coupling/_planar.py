@@ -76,6 +76,8 @@ def identify_planar_joint(
         Directions of the plane (default ``x`` and ``ry``).
     smoothing
         Optional odd Savitzky–Golay window (lines) applied to the measured FRFs.
+    smoothing_order
+        Polynomial order of the Savitzky–Golay filter.
     passivity_tol
         Relative tolerance on ``Im h ≤ tol·|h|`` in the passivity test.
     condition_limit
@@ -98,6 +100,34 @@ def identify_planar_joint(
         Missing DOFs (e.g. a substructure without rotational terms), grid mismatch.
     NumericalError
         If no line gives a finite solution.
+
+    Examples
+    --------
+    A carbide tool (B: free beam, tip node 1, face node 2) held by a steel holder (A: clamped
+    beam, nose node 3) through a spring–damper joint of known stiffness and damping; the
+    "measured" tip FRFs are coupled from them, and the identification gets the joint back:
+
+    >>> import numpy as np
+    >>> from jointdb.fe import BeamModel, Segment, NamedPoint, Clamp, HystereticDamping
+    >>> from jointdb.coupling import (Interface, couple, spring_damper_joint, identify_planar_joint,
+    ...                               fit_constant_kc)
+    >>> freq = np.linspace(200.0, 3000.0, 15)                                    # Hz
+    >>> holder = BeamModel(segments=(Segment(0.1, 0.04, material="steel"),),
+    ...                    points=(NamedPoint("nose", 0.0, node=3),),
+    ...                    ingredients=(Clamp(0.1), HystereticDamping(0.002)))
+    >>> tool = BeamModel(segments=(Segment(0.06, 0.012, material="carbide"),),
+    ...                  points=(NamedPoint("tip", 0.0, node=1), NamedPoint("face", 0.06, node=2)))
+    >>> A, B = holder.frf(freq, points=["nose"]), tool.frf(freq, points=["tip", "face"])
+    >>> true_joint = spring_damper_joint(freq, k=[2e7, 5e5], c=[200.0, 5.0], dofs_=["3x", "3ry"])
+    >>> measured = couple({"A": A, "B": B},
+    ...                   [Interface("A", ["3x", "3ry"], "B", ["2x", "2ry"], joint=true_joint)],
+    ...                   outputs=[("B", "1x"), ("B", "2x")], inputs=[("B", "1x")])
+    >>> result = identify_planar_joint(measured, A, 3, B, b_contact=2, b_tip=1)
+    >>> [str(dof) for dof in result.joint.outputs], int(result.unreliable.sum())
+    (['3x', '3ry'], 0)
+    >>> fit = fit_constant_kc(result.joint)
+    >>> fit.k.round(-2), fit.c.round(3)                       # N/m, N·m/rad; N·s/m, N·m·s/rad
+    (array([20000000.,   500000.]), array([200.,   5.]))
     """
     t, r = translation, rotation
     if Dof(0, t).is_rotation or not Dof(0, r).is_rotation:

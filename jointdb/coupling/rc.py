@@ -254,6 +254,33 @@ def couple(
     NumericalError
         If the interface matrix ``B H_CC Bᵀ + H_J`` is singular at some line
         (e.g. rigidly coupling two rigid-body DOFs with no flexibility).
+
+    Examples
+    --------
+    A mass ``m1`` on a spring ``k`` to ground (node 1) and a free mass ``m2`` (node 2). Joined
+    rigidly they are one mass ``m1 + m2`` on the spring; joined by a spring ``kj`` they are the
+    two-mass chain, whose driving-point receptance at 1 is
+    ``(kj − m2ω²) / ((k + kj − m1ω²)(kj − m2ω²) − kj²)``:
+
+    >>> import numpy as np
+    >>> from jointdb import FRF
+    >>> from jointdb.coupling import Interface, couple, spring_damper_joint
+    >>> freq = np.array([10.0, 50.0, 100.0, 400.0])            # Hz
+    >>> w = 2 * np.pi * freq
+    >>> k, kj, m1, m2 = 1e6, 2e6, 2.0, 0.5                      # N/m, N/m, kg, kg
+    >>> A = FRF(freq, (1 / (k - m1 * w**2))[:, None, None], ["1x"], ["1x"])
+    >>> B = FRF(freq, (-1 / (m2 * w**2))[:, None, None], ["2x"], ["2x"])
+    >>> rigid = couple({"A": A, "B": B}, [Interface("A", ["1x"], "B", ["2x"])], outputs=[("A", "1x")])
+    >>> rigid.shape
+    (4, 1, 1)
+    >>> bool(np.allclose(rigid.values[:, 0, 0], 1 / (k - (m1 + m2) * w**2)))
+    True
+    >>> spring = spring_damper_joint(freq, kj, 0.0, ["1x"])
+    >>> G = couple({"A": A, "B": B}, [Interface("A", ["1x"], "B", ["2x"], joint=spring)],
+    ...            outputs=[("A", "1x"), ("B", "2x")], inputs=[("A", "1x")])
+    >>> expected = (kj - m2 * w**2) / ((k + kj - m1 * w**2) * (kj - m2 * w**2) - kj**2)
+    >>> bool(np.allclose(G.entry("1x", "1x"), expected))
+    True
     """
     subs, freq = _receptances(substructures)
     flat = _flatten(interfaces, subs, freq)

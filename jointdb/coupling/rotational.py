@@ -53,6 +53,8 @@ def rotations_by_extension(
         Two measured nodes on E (distinct distances from the joint).
     a_point
         Node label of A's contact point in the returned FRF.
+    translation, rotation
+        Directions of the bending plane (default ``x`` and ``ry``).
 
     Returns
     -------
@@ -128,6 +130,8 @@ def rotations_by_finite_difference(
     method
         ``"first-order"``: ``n = (h_33 − h_43)/s``, ``p = n²/h_33``;
         ``"second-order"``: same ``n``, ``p = (h_33 − h_34 − h_43 + h_44)/s²``.
+    translation, rotation
+        Directions of the bending plane (default ``x`` and ``ry``).
 
     Returns
     -------

@@ -28,9 +28,45 @@ effects):
 Mismatch = weighted RMS of ``|log(H_model/H_recorded)|`` (≈ relative error;
 weights from coherence with a 2 % model floor).
 
->>> from jointdb.diagnose import diagnose, Measurement
->>> result = diagnose(model, [Measurement(frf)])          # doctest: +SKIP
->>> result.verdict, result.best.values, result.augmented[0]  # doctest: +SKIP
+Entry point
+-----------
+   diagnose             -- locate the mismatch and explain it with candidate physics (example there)
+   Diagnosis            -- its result: signature, ranked fits, verdict, augmented model
+   Measurement          -- one recorded FRF set, with coherence and excitation level
+
+Comparison
+----------
+   prepare              -- map, check and thin the recordings for diagnosis
+   Observation          -- recordings aligned with the model on the fit lines
+   signature            -- locate and characterise the mismatch
+   Signature            -- overall / per-band mismatch, peak pairs, shift pattern
+   find_peaks           -- resonance peaks of an FRF set ``(n_freq, n_out, n_in)``
+   pair_modes           -- pair model and recorded peaks by log-frequency distance
+   Peak, ModePair       -- one peak; one paired mode
+
+Fitting candidates
+------------------
+   fit_candidate        -- fit one candidate's parameters (bounded least squares) and score it
+   jackknife_spread     -- model-form spread of a fit (delete-one-block jackknife)
+   Fit                  -- a fitted candidate: values, sigmas, BIC, mismatch
+   ModelEvaluator       -- model FRFs at the observation's lines and DOFs
+   BIC_MARGIN, MIN_IMPROVEMENT, MIN_PAIR_IMPROVEMENT -- the acceptance thresholds
+
+Physics library
+---------------
+   Candidate            -- base class of one candidate physics
+   Param                -- a fitted parameter: SI unit, bounds, start
+   Context              -- what candidates need: nominal model, measured points, levels
+   register             -- decorator adding a candidate factory
+   candidates_for       -- all candidates the registered factories offer
+
+Excitation levels
+-----------------
+   track_modes          -- follow each recorded mode across excitation levels
+   LevelAnalysis        -- modes tracked across levels
+   ModeTrack            -- one mode followed across levels
+   local_modal_fit      -- one mode fitted in a band around a recorded resonance
+   ModalFit             -- one local modal fit
 """
 
 from jointdb.diagnose._compare import ModePair, Peak, Signature, find_peaks, pair_modes, signature

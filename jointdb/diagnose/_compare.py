@@ -25,6 +25,20 @@ __all__ = ["Peak", "ModePair", "Signature", "find_peaks", "pair_modes", "signatu
 
 @dataclass(frozen=True)
 class Peak:
+    """A resonance peak of an FRF set (:func:`find_peaks`).
+
+    Attributes
+    ----------
+    freq_hz
+        Peak frequency [Hz] (parabolic interpolation between lines).
+    zeta
+        Damping ratio from the half-power bandwidth.
+    height
+        Height of the peak indicator (relative).
+    index
+        The frequency line nearest to the peak.
+    """
+
     freq_hz: float
     zeta: float
     height: float           # indicator height (relative)
@@ -33,6 +47,26 @@ class Peak:
 
 @dataclass(frozen=True)
 class ModePair:
+    """A model mode paired with a recorded one (:func:`signature`).
+
+    Attributes
+    ----------
+    mode
+        The mode's 1-based order in the model.
+    model, recorded
+        The two :class:`Peak` s.
+    shift
+        ``(f_rec − f_model) / f_model``.
+    damping_ratio
+        ``ζ_rec / ζ_model``.
+    height_db
+        Recorded − model peak height at the recorded DOFs [dB].
+    mismatch
+        The band's mismatch (weighted RMS |log ratio|).
+    dofs
+        The recorded DOFs that show the mismatch most.
+    """
+
     mode: int                # 1-based order in the model
     model: Peak
     recorded: Peak
@@ -45,6 +79,33 @@ class ModePair:
 
 @dataclass
 class Signature:
+    """Where and how a model and a recording disagree (:func:`signature`).
+
+    Attributes
+    ----------
+    overall
+        Mismatch: weighted RMS of ``|log(H_model / H_recorded)|`` over all lines.
+    magnitude_db, phase_deg
+        Weighted RMS magnitude [dB] and phase [deg] errors.
+    frac
+        FRAC per recorded entry (``"out:dir/in:dir"`` → 0..1).
+    pairs
+        The :class:`ModePair` s.
+    extra_peaks, missing_peaks
+        Strong recorded peaks without a model partner, and model peaks without a recorded
+        one [Hz].
+    gain_db
+        Median magnitude offset recorded / model away from the peaks [dB].
+    delay_s, delay_r2
+        Phase drift as a time delay [s] (positive: the recording lags) and the r² of its slope.
+    level_shifts
+        Per mode, the relative frequency shift from the first to the last excitation level.
+    affected_mode
+        The mode whose frequency depends on the level most, or None.
+    bands
+        Per paired mode: ``band_hz``, ``mode`` and ``mismatch``.
+    """
+
     overall: float
     magnitude_db: float
     phase_deg: float
@@ -63,7 +124,21 @@ class Signature:
 
 
 def find_peaks(freq, values, weight) -> list[Peak]:
-    """Resonance peaks of a FRF set ``(n_freq, n_out, n_in)``."""
+    """Resonance peaks of a FRF set.
+
+    Parameters
+    ----------
+    freq
+        Frequency lines [Hz], ``(n_freq,)``.
+    values
+        Complex FRF values, ``(n_freq, n_out, n_in)``.
+    weight
+        Weight of each value (0: ignored), same shape.
+
+    Returns
+    -------
+    list of Peak
+    """
     ind = np.maximum(indicator(values, weight), 1e-300)
     out = []
     for i in peak_indices(freq, values, weight):
@@ -87,7 +162,24 @@ def find_peaks(freq, values, weight) -> list[Peak]:
 
 
 def pair_modes(model_peaks, rec_peaks, max_ratio=1.35):
-    """Greedy pairing by log-frequency distance; returns (pairs, extra, missing)."""
+    """Greedy pairing of model and recorded peaks by log-frequency distance.
+
+    Parameters
+    ----------
+    model_peaks, rec_peaks
+        :class:`Peak` s of the model and of the recording.
+    max_ratio
+        Peaks further apart than this frequency ratio are not paired.
+
+    Returns
+    -------
+    pairs : list of (int, int)
+        Indices ``(model, recorded)``, by model order.
+    extra : list of float
+        Strong unpaired recorded peaks [Hz] (>= 10 % of the strongest).
+    missing : list of float
+        Strong unpaired model peaks [Hz].
+    """
     cand = sorted(((abs(np.log(r.freq_hz / m.freq_hz)), a, b) for a, m in enumerate(model_peaks)
                    for b, r in enumerate(rec_peaks)), key=lambda t: t[0])
     used_m, used_r, pairs = set(), set(), []
@@ -185,6 +277,10 @@ def signature(ev, H_model: np.ndarray) -> Signature:
         A full-line :class:`jointdb.diagnose._fit.ModelEvaluator`.
     H_model
         ``(n_level, n_freq, n_out, n_in)`` model receptances at those lines.
+
+    Returns
+    -------
+    Signature
     """
     obs = ev.obs
     freq, rec, w = ev.freq, ev.rec, ev.w

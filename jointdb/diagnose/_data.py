@@ -48,8 +48,24 @@ class Measurement:
         """A recording given as plain arrays, which may hold NaN/Inf lines (an :class:`FRF` refuses them).
 
         :func:`prepare` refuses the non-finite lines, naming them, or masks
-        them with ``mask_nonfinite=True``. ``freq`` ``(n_freq,)`` [Hz],
-        ``values`` ``(n_freq, n_out, n_in)``, ``outputs``/``inputs`` DOF labels.
+        them with ``mask_nonfinite=True``.
+
+        Parameters
+        ----------
+        freq
+            Frequency lines [Hz], ``(n_freq,)``.
+        values
+            Complex FRF values, ``(n_freq, n_out, n_in)``.
+        outputs, inputs
+            DOF labels of the rows and columns.
+        quantity
+            ``"receptance"``, ``"mobility"`` or ``"accelerance"``.
+        coherence, level, label
+            As for :class:`Measurement`.
+
+        Returns
+        -------
+        Measurement
         """
         return cls(RecordedArrays(np.asarray(freq, dtype=float), np.asarray(values, dtype=complex),
                                   tuple(outputs), tuple(inputs), quantity), coherence, level, label)
@@ -70,12 +86,28 @@ class RecordedArrays:
 class Observation:
     """Recordings aligned with the model on the selected fit lines.
 
-    ``values`` is ``(n_level, n_freq, n_out, n_in)`` receptance, ``sigma`` the
-    standard deviation of ``log H`` per entry (from coherence, with the model
-    floor), ``weight = 1/sigma`` (0 for unusable lines). ``points`` are model
-    point names of the outputs/inputs and ``directions`` their directions.
-    ``notes`` says what :func:`prepare` did to the recordings beyond mapping
-    them (masked non-finite lines, resampling, lines cut to the common band).
+    Attributes
+    ----------
+    freq
+        The fit lines [Hz], ``(n_freq,)``.
+    values
+        Recorded receptance on them, ``(n_level, n_freq, n_out, n_in)``.
+    weight
+        ``1/σ`` of ``log H`` per value (from coherence, with the model floor; 0 for unusable
+        lines), same shape.
+    out_points, out_dirs
+        Model point name and direction of each output.
+    in_points, in_dirs
+        Model point name and direction of each input.
+    levels
+        Excitation level of each recording (None when not given).
+    labels
+        Each recording's label.
+    full_freq, full_values, full_weight
+        The same on all recorded lines inside the band.
+    notes
+        What :func:`prepare` did beyond mapping (masked non-finite lines, resampling, lines
+        cut to the common band), one sentence each.
     """
 
     freq: np.ndarray

@@ -80,6 +80,22 @@ class Diagnosis:
     chain_correction
         For measurement-chain explanations: ``{"gain": g, "delay": τ}`` to
         apply to the recording (the model itself is unchanged).
+    observation
+        The :class:`Observation` the fits ran on.
+    level_table
+        Per excitation level, the fitted level-dependent values (level-dependent explanations).
+    seconds
+        Wall time of the diagnosis [s].
+    H_before, H_after
+        Nominal and augmented model receptance on all recorded lines,
+        ``(n_level, n_freq, n_out, n_in)``, or None.
+    levels_data, levels_model
+        Local modal fits per excitation level of the recordings and of the augmented model
+        (:class:`LevelAnalysis`), or None.
+    alternative
+        A close second explanation (another physics within ``CLOSE_CALL`` of the best), or None.
+    advice
+        How to separate the best explanation from the alternative (which measurement to add).
     """
 
     explained: bool
@@ -124,7 +140,12 @@ class Diagnosis:
         return getattr(c, attr, None)
 
     def table(self) -> list[dict]:
-        """Ranked explanations as rows (name, family, parameters, ΔBIC, mismatch, improvement)."""
+        """Ranked explanations as rows (name, family, parameters, ΔBIC, mismatch, improvement).
+
+        Returns
+        -------
+        list of dict
+        """
         rows = []
         for rank, f in enumerate(self.ranking, 1):
             rows.append({
@@ -139,6 +160,12 @@ class Diagnosis:
         return rows
 
     def to_dict(self) -> dict:
+        """The diagnosis as a JSON-ready dict (verdict, signatures, ranking, level tables).
+
+        Returns
+        -------
+        dict
+        """
         b = self.best
         return {
             "explained": self.explained,
@@ -271,6 +298,27 @@ def diagnose(model, measurements: Sequence[Measurement], mapping: Mapping[int, s
     InputError
         See :func:`jointdb.diagnose._data.prepare`; also when the recorded band
         holds no resonance of model or recording.
+
+    Examples
+    --------
+    A clamped steel rod recorded with a 20 g accelerometer at its tip that the model left
+    out: the bending modes are recorded 6–7 % low, and the diagnosis names the sensor and
+    its mass (here only the sensor-mass family is tried, to keep the example fast):
+
+    >>> import numpy as np
+    >>> from jointdb.fe import BeamModel, Clamp, ModalDamping, NamedPoint, PointMass, Segment
+    >>> from jointdb.diagnose import Measurement, diagnose
+    >>> shaft, tip = (Segment(0.2, 0.02, material="steel"),), (NamedPoint("tip", 0.0, node=1),)
+    >>> model = BeamModel(shaft, tip, (Clamp(0.2), ModalDamping(0.01)))
+    >>> with_sensor = BeamModel(shaft, tip, (Clamp(0.2), ModalDamping(0.01), PointMass(0.0, 0.02)))
+    >>> recording = with_sensor.frf(np.arange(50.0, 3000.0, 5.0), points=["tip"]).select(["1x"], ["1x"])
+    >>> result = diagnose(model, [Measurement(recording)], families=["sensor_mass"], combinations=False)
+    >>> result.explained, result.best.candidate.family
+    (True, 'sensor_mass')
+    >>> round(result.best.values["mass"] * 1e3, 2)                     # g
+    20.0
+    >>> result.mismatch_before > 0.5, result.mismatch_after < 1e-6
+    (True, True)
     """
     t0 = time.perf_counter()
     modes = model.modes(8).freq_hz

@@ -33,7 +33,19 @@ __all__ = ["Fit", "ModelEvaluator", "fit_candidate"]
 
 
 class ModelEvaluator:
-    """Model FRFs at the observation's lines and DOFs, with residuals."""
+    """Model FRFs at the observation's lines and DOFs, with residuals.
+
+    Parameters
+    ----------
+    obs
+        The :class:`Observation`.
+    full
+        Evaluate on all recorded lines in the band (``obs.full_*``) instead of the fit lines.
+    method
+        ``"modal"`` (truncated modal superposition, fast) or ``"direct"``.
+    n_modes
+        Modes kept by the modal method.
+    """
 
     def __init__(self, obs, full: bool = False, method: str = "modal", n_modes: int = 12):
         self.obs = obs
@@ -52,7 +64,17 @@ class ModelEvaluator:
         self.n = int(2 * np.count_nonzero(self.w))
 
     def frf(self, model) -> np.ndarray:
-        """Receptance ``(n_freq, n_out, n_in)`` of ``model`` at the recorded DOFs."""
+        """Receptance ``(n_freq, n_out, n_in)`` of ``model`` at the recorded DOFs.
+
+        Parameters
+        ----------
+        model
+            A :class:`jointdb.fe.BeamModel` with the observation's points.
+
+        Returns
+        -------
+        ndarray, complex
+        """
         if self.method == "modal":
             n = min(self.n_modes, max(1, model.mesh().n_dof - 4))
             H = model.frf(self.freq, points=self.points, directions=self.dirs, method="modal", n_modes=n).values
@@ -61,7 +83,17 @@ class ModelEvaluator:
         return H[:, self.oi][:, :, self.ii]
 
     def dof_indices(self, model) -> tuple[list[int], list[int]]:
-        """Global DOF indices in ``model``'s mesh of the recorded outputs and inputs."""
+        """Global DOF indices in ``model``'s mesh of the recorded outputs and inputs.
+
+        Parameters
+        ----------
+        model
+            A :class:`jointdb.fe.BeamModel` with the observation's points.
+
+        Returns
+        -------
+        outputs, inputs : list of int
+        """
         mesh = model.mesh()
 
         def dof(point, direction):
@@ -72,7 +104,21 @@ class ModelEvaluator:
                 [dof(p, d) for p, d in zip(obs.in_points, obs.in_dirs)])
 
     def predict(self, nominal, cand=None, values=None) -> np.ndarray:
-        """``(n_level, n_freq, n_out, n_in)`` predictions of nominal (+ candidate)."""
+        """Predictions of the nominal model, with a candidate's physics when given.
+
+        Parameters
+        ----------
+        nominal
+            The nominal :class:`jointdb.fe.BeamModel`.
+        cand
+            A :class:`Candidate`, or None.
+        values
+            The candidate's parameter values, SI.
+
+        Returns
+        -------
+        ndarray, complex, shape (n_level, n_freq, n_out, n_in)
+        """
         n_lv = self.rec.shape[0]
         if cand is None:
             return np.broadcast_to(self.frf(nominal), self.rec.shape)
@@ -99,16 +145,50 @@ class ModelEvaluator:
         return np.stack(out)
 
     def log_ratio(self, H: np.ndarray) -> np.ndarray:
+        """``log(H / H_rec)``, 0 where the weight is 0 or the ratio is not finite.
+
+        Parameters
+        ----------
+        H
+            Model receptance, ``(n_level, n_freq, n_out, n_in)``.
+
+        Returns
+        -------
+        ndarray, complex, same shape
+        """
         with np.errstate(divide="ignore", invalid="ignore"):
             lr = np.log(H / self.rec)
         return np.where(self.w > 0, np.nan_to_num(lr, nan=0.0, posinf=0.0, neginf=0.0), 0.0)
 
     def residual(self, H: np.ndarray) -> np.ndarray:
+        """The weighted residual ``w log(H / H_rec)``, real and imaginary parts stacked.
+
+        Parameters
+        ----------
+        H
+            Model receptance, ``(n_level, n_freq, n_out, n_in)``.
+
+        Returns
+        -------
+        ndarray, shape (2 · H.size,)
+        """
         r = self.w * self.log_ratio(H)
         return np.concatenate([r.real.ravel(), r.imag.ravel()])
 
     def mismatch(self, H: np.ndarray, per_level: bool = False):
-        """Weighted RMS of ``|log(H_model/H_rec)|`` (≈ relative FRF error; 0.05 = 5 %)."""
+        """Weighted RMS of ``|log(H_model/H_rec)|`` (≈ relative FRF error; 0.05 = 5 %).
+
+        Parameters
+        ----------
+        H
+            Model receptance, ``(n_level, n_freq, n_out, n_in)``.
+        per_level
+            One value per level instead of one overall.
+
+        Returns
+        -------
+        float or ndarray of shape (n_level,)
+        """
         lr = np.abs(self.log_ratio(H)) ** 2
         w2 = self.w**2
         if per_level:
@@ -118,7 +198,39 @@ class ModelEvaluator:
 
 @dataclass
 class Fit:
-    """A fitted candidate (or the nominal model when ``candidate is None``)."""
+    """A fitted candidate (or the nominal model when ``candidate is None``).
+
+    Attributes
+    ----------
+    candidate
+        The :class:`Candidate`, or None for the nominal model.
+    values, sigmas
+        Fitted value and standard deviation per parameter, SI.
+    rss
+        Weighted residual sum of squares.
+    n, p
+        Number of real residuals and of parameters.
+    bic
+        ``n ln(RSS/n) + p ln n``.
+    mismatch
+        Weighted RMS ``|log(H_model/H_rec)|`` on the fit lines.
+    mismatch_levels
+        The same per excitation level.
+    nfev
+        Model evaluations used.
+    at_bound
+        Parameters that ended at a bound of the fit.
+    chi2_red
+        ``RSS / (n − p)`` (> 1: model-form error or underestimated noise).
+    tau
+        Integrated autocorrelation time of the residual along frequency (n_eff = n / τ).
+    sigmas_stat, sigmas_model
+        Statistical σ (linearised, scaled by χ²_red and τ) and model-form σ (jackknife).
+    score
+        Ranking criterion: the BIC with its gain shrunk for implausible parameters.
+    implausible
+        Parameters outside their plausible range: name → distance in range widths.
+    """
 
     candidate: object
     values: dict
@@ -152,6 +264,12 @@ class Fit:
         return "none" if self.candidate is None else self.candidate.family
 
     def describe(self) -> str:
+        """Plain-language phrase of this fit (the nominal model, or the candidate with its values).
+
+        Returns
+        -------
+        str
+        """
         if self.candidate is None:
             return "the nominal model as it is"
         return self.candidate.describe(self.values, self.sigmas)
@@ -206,6 +324,22 @@ def jackknife_spread(ev: ModelEvaluator, nominal, fit: "Fit", blocks: int = JACK
     the refits scatter. Returns ``{name: σ_jk}`` (SI) with
     ``σ_jk² = (B−1)/B Σ_b (θ_b − θ̄)²`` (in the fit's log space where the
     parameter is logarithmic). Costs ``blocks`` short refits.
+
+    Parameters
+    ----------
+    ev
+        The :class:`ModelEvaluator` of the fit.
+    nominal
+        The nominal :class:`jointdb.fe.BeamModel`.
+    fit
+        The :class:`Fit` to assess.
+    blocks
+        Number of contiguous frequency blocks B.
+
+    Returns
+    -------
+    dict
+        Parameter name → σ_jk, SI (empty when there are too few lines or no parameters).
     """
     import copy
 
@@ -287,7 +421,8 @@ def fit_candidate(ev: ModelEvaluator, nominal, cand, start: dict | None = None, 
         A :class:`jointdb.diagnose.physics.Candidate`.
     start
         Optional starting values (SI) overriding the candidate's.
-
+    max_nfev
+        Most model evaluations of the least-squares fit (default ``30 (p + 1)``).
     target_freqs
         Recorded resonance frequencies [Hz] (ascending, the model's first
         modes); if given, each start is first moved to match them (stage 1)

@@ -149,6 +149,8 @@ class LevelAnalysis:
         The excitation levels as given (None = unknown).
     order
         Indices of the levels from lowest to highest (as given when unknown).
+    skipped
+        Centres [Hz] that could not be fitted at some level (too few lines).
     """
 
     tracks: tuple
@@ -163,7 +165,12 @@ class LevelAnalysis:
 
     def summary(self) -> str:
         """One line per mode, levels from lowest to highest, e.g.
-        ``mode 1: 2305 ± 1 → 2260 ± 1 → 2185 ± 2 Hz, ζ 1.1 → 1.4 → 2.0 % (changes with level: …)``."""
+        ``mode 1: 2305 ± 1 → 2260 ± 1 → 2185 ± 2 Hz, ζ 1.1 → 1.4 → 2.0 % (changes with level: …)``.
+
+        Returns
+        -------
+        str
+        """
         lines = []
         o = list(self.order)
         for t in self.tracks:
@@ -184,7 +191,12 @@ class LevelAnalysis:
         return "\n".join(lines)
 
     def to_dict(self) -> dict:
-        """JSON-ready dict (lists of floats, levels in the order given)."""
+        """JSON-ready dict (lists of floats, levels in the order given).
+
+        Returns
+        -------
+        dict
+        """
         return {
             "differs": self.differs,
             "levels": [None if v is None else float(v) for v in self.levels],
@@ -247,6 +259,9 @@ def track_modes(freq: np.ndarray, values: np.ndarray, weight: np.ndarray | None,
     centres
         Frequencies [Hz] of the modes to follow; default: the recorded peaks
         of the lowest level at least ``STRONG_PEAK`` of the strongest.
+    band_halfwidths, min_band
+        Fit band: this many half-power half-widths each side of the peak, but at least
+        ``min_band`` × the frequency each side.
 
     Returns
     -------

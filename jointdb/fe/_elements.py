@@ -26,6 +26,11 @@ __all__ = [
 def section_properties(outer_diameter, inner_diameter):
     """Area, second moment of area and polar moment of a (hollow) circle.
 
+    Parameters
+    ----------
+    outer_diameter, inner_diameter
+        Diameters D and d [m] (0 for a solid section); scalars or arrays.
+
     Returns
     -------
     A, I, J : ndarray
@@ -45,6 +50,18 @@ def shear_coefficient(nu, outer_diameter, inner_diameter=0.0):
     Cowper (1966), J. Appl. Mech. 33, 335–340: with ``m = d/D``,
     ``κ = 6(1+ν)(1+m²)² / ((7+6ν)(1+m²)² + (20+12ν)m²)``; for a solid
     circle (m = 0) ``κ = 6(1+ν)/(7+6ν)`` (0.886 for ν = 0.3).
+
+    Parameters
+    ----------
+    nu
+        Poisson's ratio ν.
+    outer_diameter, inner_diameter
+        Diameters D and d [m] (d = 0: solid); scalars or arrays.
+
+    Returns
+    -------
+    ndarray
+        κ (dimensionless).
     """
     nu = np.asarray(nu, dtype=float)
     m2 = (np.asarray(inner_diameter, dtype=float) / np.asarray(outer_diameter, dtype=float)) ** 2

@@ -43,10 +43,28 @@ class Ingredient:
     stage: int = 0
 
     def positions(self) -> tuple[float, ...]:
-        """Axial positions [m] where the mesh needs a node."""
+        """Axial positions [m] where the mesh needs a node.
+
+        Returns
+        -------
+        tuple of float
+        """
         return ()
 
     def apply(self, matrices: "FEMatrices", mesh: "Mesh") -> "FEMatrices":  # pragma: no cover
+        """The matrices with this ingredient applied (a new :class:`FEMatrices`; the input is unchanged).
+
+        Parameters
+        ----------
+        matrices
+            The assembled matrices so far (:class:`FEMatrices`, ``(n_dof, n_dof)`` each).
+        mesh
+            The model's :class:`Mesh` (node positions, DOF numbering).
+
+        Returns
+        -------
+        FEMatrices
+        """
         raise NotImplementedError
 
 
@@ -81,6 +99,12 @@ class Clamp(Ingredient):
             object.__setattr__(self, "directions", tuple(str(d).lower() for d in self.directions))
 
     def positions(self) -> tuple[float, ...]:
+        """Axial positions [m] where the mesh needs a node.
+
+        Returns
+        -------
+        tuple of float
+        """
         return (self.position,)
 
     def apply(self, matrices, mesh):
@@ -129,6 +153,12 @@ class Support(Ingredient):
         return hash((self.position, tuple(sorted(self.stiffness.items())), tuple(sorted(self.damping.items()))))
 
     def positions(self) -> tuple[float, ...]:
+        """Axial positions [m] where the mesh needs a node.
+
+        Returns
+        -------
+        tuple of float
+        """
         return (self.position,)
 
     def apply(self, matrices, mesh):
@@ -175,6 +205,12 @@ class PointMass(Ingredient):
         _number(self, "polar_inertia", minimum=0.0)
 
     def positions(self) -> tuple[float, ...]:
+        """Axial positions [m] where the mesh needs a node.
+
+        Returns
+        -------
+        tuple of float
+        """
         return (self.position,)
 
     def apply(self, matrices, mesh):
@@ -190,7 +226,15 @@ class PointMass(Ingredient):
 
 @dataclass(frozen=True)
 class RayleighDamping(Ingredient):
-    """Proportional viscous damping ``C += α M + β K`` (α in 1/s, β in s)."""
+    """Proportional viscous damping ``C += α M + β K``.
+
+    Parameters
+    ----------
+    alpha
+        Mass-proportional factor α [1/s], >= 0.
+    beta
+        Stiffness-proportional factor β [s], >= 0.
+    """
 
     alpha: float = 0.0
     beta: float = 0.0
@@ -210,6 +254,11 @@ class HystereticDamping(Ingredient):
 
     The loss is frequency independent: a mode's loss factor is η whatever its
     frequency. Stored as ``K_loss += η K``.
+
+    Parameters
+    ----------
+    eta
+        Loss factor η (dimensionless), >= 0.
     """
 
     eta: float
@@ -226,8 +275,14 @@ class HystereticDamping(Ingredient):
 class ModalDamping(Ingredient):
     """Modal viscous damping ratios ζ.
 
-    ``zeta`` is one ratio for every elastic mode, or a tuple for the first
-    elastic modes in order (the last value applies to all higher modes).
+    Parameters
+    ----------
+    zeta
+        One ratio (dimensionless, >= 0) for every elastic mode, or a tuple for the first
+        elastic modes in order (the last value applies to all higher modes).
+
+    Notes
+    -----
     Realised as the viscous matrix ``C += M Φ diag(2 ζ_r ω_r) Φᵀ M`` over all
     modes of the constrained model (mass-normalised Φ), so the direct solution
     and modal superposition see the same damping; rigid-body modes get none.
@@ -251,7 +306,17 @@ class ModalDamping(Ingredient):
         object.__setattr__(self, "zeta", clean[0] if not isinstance(z, (tuple, list)) else tuple(clean))
 
     def ratios(self, n: int) -> np.ndarray:
-        """Damping ratios of the first ``n`` elastic modes."""
+        """Damping ratios of the first ``n`` elastic modes.
+
+        Parameters
+        ----------
+        n
+            Number of elastic modes.
+
+        Returns
+        -------
+        ndarray, shape (n,)
+        """
         values = np.atleast_1d(np.asarray(self.zeta, dtype=float))
         out = np.full(n, values[-1])
         m = min(n, values.size)

@@ -116,13 +116,30 @@ class Joint(Ingredient):
                      self.loss_factor))
 
     def positions(self) -> tuple[float, ...]:
+        """Axial positions [m] where the mesh needs a node.
+
+        Returns
+        -------
+        tuple of float
+        """
         return (self.position,)
 
     def split_position(self) -> float:
+        """Axial position [m] where the mesh is split into two sides.
+
+        Returns
+        -------
+        float
+        """
         return self.position
 
     def free_directions(self) -> tuple[str, ...]:
-        """Directions in which the two sides move separately (the rest share a DOF)."""
+        """Directions in which the two sides move separately (the rest share a DOF).
+
+        Returns
+        -------
+        tuple of str
+        """
         return tuple(self.stiffness)
 
     def apply(self, matrices, mesh):
@@ -242,9 +259,21 @@ class Insertion(Ingredient):
         return self.end - self.start
 
     def positions(self) -> tuple[float, ...]:
+        """Axial positions [m] where the mesh needs a node.
+
+        Returns
+        -------
+        tuple of float
+        """
         return (self.start, self.end)
 
     def split_position(self) -> float | None:
+        """Axial position [m] where the inserted part joins the main beam, or None.
+
+        Returns
+        -------
+        float or None
+        """
         return None if self.rigid else self.mouth
 
     def apply(self, matrices, mesh):

@@ -84,6 +84,16 @@ MATERIALS.update({alias: MATERIALS[target] for alias, target in _ALIASES.items()
 def get_material(name_or_material: "str | Material") -> Material:
     """Look a material up by name (case-insensitive), or pass a :class:`Material` through.
 
+    Parameters
+    ----------
+    name_or_material
+        A name of :data:`MATERIALS` (``"steel"``, ``"carbide"``, ...) or a :class:`Material`.
+
+    Returns
+    -------
+    Material
+        E [Pa], ν, ρ [kg/m³].
+
     Raises
     ------
     InputError

@@ -19,10 +19,27 @@ __all__ = ["FEMatrices", "Modes"]
 class FEMatrices:
     """Assembled matrices over all mesh DOFs (SI).
 
-    ``K`` stiffness, ``M`` mass, ``C`` viscous damping, ``K_loss`` the
-    hysteretic part (dynamic stiffness ``K + i K_loss + iωC − ω²M``), all
-    ``(n_dof, n_dof)``; ``fixed`` marks constrained DOFs; ``dof_labels`` are
-    ``Dof(mesh node index, direction)``; ``node_positions`` in metres.
+    The dynamic stiffness is ``K + i K_loss + iωC − ω²M``.
+
+    Attributes
+    ----------
+    K
+        Stiffness ``(n_dof, n_dof)`` [N/m, N, N·m/rad].
+    M
+        Mass ``(n_dof, n_dof)`` [kg, kg·m²].
+    C
+        Viscous damping ``(n_dof, n_dof)`` [N·s/m, ...].
+    K_loss
+        Hysteretic part of the stiffness ``(n_dof, n_dof)``.
+    dof_labels
+        ``Dof(mesh node index, direction)`` of each DOF.
+    node_positions
+        Axial node positions [m], ``(n_nodes,)``.
+    fixed
+        Bool ``(n_dof,)``: the constrained DOFs.
+    eigen_solution
+        The eigen-solution of the constrained (K, M) problem when an ingredient already
+        computed it (modal damping does); reused only while K, M and ``fixed`` are unchanged.
     """
 
     K: np.ndarray
@@ -47,6 +64,17 @@ class Modes:
     """Undamped natural frequencies [Hz] ``(n,)`` and mass-normalised shapes ``(n_dof, n)``.
 
     Rigid-body modes have frequency 0 exactly; shapes are zero on fixed DOFs.
+
+    Attributes
+    ----------
+    freq_hz
+        Natural frequencies [Hz], ascending, ``(n,)``.
+    shapes
+        Mass-normalised mode shapes, ``(n_dof, n)``.
+    dof_labels
+        ``Dof`` of each row of ``shapes``.
+    n_rigid
+        How many of the modes are rigid-body modes (the first ones).
     """
 
     freq_hz: np.ndarray

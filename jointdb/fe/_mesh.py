@@ -33,6 +33,29 @@ class Mesh:
     ``element_section`` indexes ``sections`` (the model's segments, then the
     inserted parts' sections). ``dof_table (n_nodes, n_dir)`` gives each node's
     global DOFs; nodes tied in a direction share that DOF.
+
+    Attributes
+    ----------
+    node_positions
+        Axial node positions [m], ``(n_nodes,)``.
+    element_segment
+        Index into ``sections`` of each element, ``(n_el,)``.
+    kind
+        ``"planar"`` or ``"frame3d"``.
+    tol
+        Distance [m] within which a position is taken to be at a node.
+    element_nodes
+        Node pair of each element, ``(n_el, 2)`` (default: consecutive nodes).
+    sections
+        The element sections: the model's segments, then the inserted parts'.
+    n_main
+        Number of nodes on the main chain (default: all).
+    dof_table
+        Global DOF of each node and direction, ``(n_nodes, n_dir)``.
+    splits
+        ``(ingredient, staying node, new node)`` of each joint split.
+    contacts
+        ``(ingredient, node pairs, element pairs)`` of each insertion's contact layer.
     """
 
     node_positions: np.ndarray
@@ -78,7 +101,24 @@ class Mesh:
         return float(self.node_positions[self.n_main - 1])
 
     def node_at(self, position: float, what: str = "position") -> int:
-        """Index of the main-chain node at ``position`` (mesh nodes include every declared position)."""
+        """Index of the main-chain node at ``position`` (mesh nodes include every declared position).
+
+        Parameters
+        ----------
+        position
+            Axial position [m].
+        what
+            What is placed there, for the error message.
+
+        Returns
+        -------
+        int
+
+        Raises
+        ------
+        InputError
+            No node at that position.
+        """
         main = self.node_positions[: self.n_main]
         i = int(np.argmin(np.abs(main - position)))
         if abs(main[i] - position) > max(self.tol, _merge_tol(self.length)):
@@ -86,7 +126,19 @@ class Mesh:
         return i
 
     def dof(self, node: int, direction: str) -> int:
-        """Global DOF index of a node's direction."""
+        """Global DOF index of a node's direction.
+
+        Parameters
+        ----------
+        node
+            Mesh node index.
+        direction
+            ``"x"``, ``"ry"``, ... (one of the model's directions).
+
+        Returns
+        -------
+        int
+        """
         try:
             return int(self.dof_table[node, self.directions.index(direction)])
         except ValueError:
@@ -95,28 +147,65 @@ class Mesh:
             ) from None
 
     def split_nodes(self, ingredient) -> tuple[int, int]:
-        """``(staying node, new node)`` of the split made by ``ingredient``."""
+        """``(staying node, new node)`` of the split made by ``ingredient``.
+
+        Parameters
+        ----------
+        ingredient
+            A :class:`jointdb.fe.Joint` of the model.
+
+        Returns
+        -------
+        tuple of int
+        """
         for ing, a, b in self.splits:
             if ing is ingredient:
                 return a, b
         raise InputError(f"{type(ingredient).__name__} at {ingredient.positions()} m is not part of this mesh")
 
     def contact_pairs(self, ingredient) -> tuple:
-        """``((inner node, host node, tributary length), ...)`` of an insertion's contact layer."""
+        """``((inner node, host node, tributary length [m]), ...)`` of an insertion's contact layer.
+
+        Parameters
+        ----------
+        ingredient
+            A :class:`jointdb.fe.Insertion` of the model.
+
+        Returns
+        -------
+        tuple
+            Empty when it has no contact layer.
+        """
         for ing, pairs, _ in self.contacts:
             if ing is ingredient:
                 return pairs
         return ()
 
     def contact_elements(self, ingredient) -> tuple:
-        """``((inner a, inner b, host a, host b, length), ...)``: the overlap's element pairs."""
+        """``((inner a, inner b, host a, host b, length [m]), ...)``: the overlap's element pairs.
+
+        Parameters
+        ----------
+        ingredient
+            A :class:`jointdb.fe.Insertion` of the model.
+
+        Returns
+        -------
+        tuple
+        """
         for ing, _, elems in self.contacts:
             if ing is ingredient:
                 return elems
         return ()
 
     def dof_labels(self) -> tuple[Dof, ...]:
-        """``Dof(node, direction)`` of every global DOF (the first node that owns it)."""
+        """``Dof(node, direction)`` of every global DOF (the first node that owns it).
+
+        Returns
+        -------
+        tuple of Dof
+            One per global DOF, ``(n_dof,)``.
+        """
         cached = self.__dict__.get("_labels")
         if cached is not None:
             return cached

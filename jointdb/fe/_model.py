@@ -83,6 +83,26 @@ class BeamModel:
         point and ingredient position.
     name
         Free text.
+
+    Examples
+    --------
+    A steel shaft of 0.5 m, 20 mm diameter, free at both ends, in Euler–Bernoulli theory: two
+    rigid-body modes, then the first bending mode at ``(4.7300² / 2π) √(EI / ρAL⁴)``:
+
+    >>> import numpy as np
+    >>> from jointdb.fe import BeamModel, Segment, NamedPoint, get_material
+    >>> model = BeamModel(segments=(Segment(0.5, 0.02, material="steel"),),
+    ...                   points=(NamedPoint("end", 0.5, node=1),), theory="euler-bernoulli")
+    >>> modes = model.modes(3)
+    >>> modes.n_rigid
+    2
+    >>> steel, L, d = get_material("steel"), 0.5, 0.02
+    >>> EI, rhoA = steel.E * np.pi * d**4 / 64, steel.rho * np.pi * d**2 / 4
+    >>> f1 = 4.7300**2 / (2 * np.pi) * np.sqrt(EI / (rhoA * L**4))
+    >>> round(float(modes.freq_hz[2] / f1), 4)
+    1.0
+    >>> model.frf([100.0, 200.0], points=["end"]).shape           # (n_freq, n_out, n_in): 1x, 1ry
+    (2, 2, 2)
     """
 
     segments: tuple[Segment, ...]
@@ -152,15 +172,46 @@ class BeamModel:
         return float(math.fsum(s.length for s in self.segments))
 
     def replace(self, **changes) -> "BeamModel":
-        """A new model with some fields replaced (validated again)."""
+        """A new model with some fields replaced (validated again).
+
+        Parameters
+        ----------
+        **changes
+            Field name → new value (``segments``, ``points``, ``ingredients``, ...).
+
+        Returns
+        -------
+        BeamModel
+        """
         return dataclasses.replace(self, **changes)
 
     def with_ingredient(self, *ingredients: Ingredient) -> "BeamModel":
-        """A new model with the ingredient(s) added."""
+        """A new model with the ingredient(s) added.
+
+        Parameters
+        ----------
+        *ingredients
+            :class:`Ingredient` s to append.
+
+        Returns
+        -------
+        BeamModel
+        """
         return self.replace(ingredients=self.ingredients + tuple(ingredients))
 
     def without(self, kind_or_predicate: "type | str | Callable[[Ingredient], bool]") -> "BeamModel":
-        """A new model without the ingredients of a class (or class name), or matching a predicate."""
+        """A new model without the ingredients of a class (or class name), or matching a predicate.
+
+        Parameters
+        ----------
+        kind_or_predicate
+            An ingredient class (``ModalDamping``), its name (``"modal-damping"``; case,
+            ``-`` and ``_`` ignored) or a function ``Ingredient -> bool`` (True: drop it).
+
+        Returns
+        -------
+        BeamModel
+        """
         if isinstance(kind_or_predicate, type):
             drop = lambda ing: isinstance(ing, kind_or_predicate)  # noqa: E731
         elif isinstance(kind_or_predicate, str):
@@ -173,7 +224,22 @@ class BeamModel:
         return self.replace(ingredients=tuple(i for i in self.ingredients if not drop(i)))
 
     def point(self, name: str) -> NamedPoint:
-        """The named point ``name``."""
+        """The named point ``name``.
+
+        Parameters
+        ----------
+        name
+            A point name of the model.
+
+        Returns
+        -------
+        NamedPoint
+
+        Raises
+        ------
+        InputError
+            No point of that name (the message lists those there are).
+        """
         for p in self.points:
             if p.name == name:
                 return p
@@ -184,7 +250,12 @@ class BeamModel:
         """Nodes at segment ends, point and ingredient positions, refined to ``max_element_length``;
         then the interfaces: splits for joints, extra nodes for inserted parts (see :mod:`jointdb.fe._joints`).
 
-        Computed once per model (a model is immutable; :meth:`replace` makes a new one)."""
+        Computed once per model (a model is immutable; :meth:`replace` makes a new one).
+
+        Returns
+        -------
+        Mesh
+        """
         cached = self.__dict__.get("_mesh")
         if cached is None:
             cached = self._make_mesh()

@@ -288,6 +288,15 @@ def model_from_dict(data: Any) -> BeamModel:
 def load_model(path: "str | Path") -> BeamModel:
     """Read a JSON model description file.
 
+    Parameters
+    ----------
+    path
+        The model file (``jointdb-beam-model/1``, SI units).
+
+    Returns
+    -------
+    BeamModel
+
     Raises
     ------
     NotFoundError
@@ -304,7 +313,17 @@ def load_model(path: "str | Path") -> BeamModel:
 
 
 def model_to_dict(model: BeamModel) -> dict:
-    """The model as a JSON-ready dict that :func:`model_from_dict` reads back to an equal model."""
+    """The model as a JSON-ready dict that :func:`model_from_dict` reads back to an equal model.
+
+    Parameters
+    ----------
+    model
+        The :class:`BeamModel`.
+
+    Returns
+    -------
+    dict
+    """
     out: dict[str, Any] = {"format": FORMAT}
     if model.name:
         out["name"] = model.name

@@ -55,6 +55,15 @@ def rigid_body_count(matrices) -> int:
     A rigid motion ``R a`` is a mode at 0 Hz when it strains nothing
     (``K R a = 0``) and moves no fixed DOF; counted by an SVD of
     ``[K R; R_fixed]`` (small: at most 6 columns).
+
+    Parameters
+    ----------
+    matrices
+        :class:`FEMatrices` with constraints applied.
+
+    Returns
+    -------
+    int
     """
     return int(_rigid_null_space(matrices).shape[1])
 
@@ -188,6 +197,8 @@ def frf_direct(
         Frequencies [Hz], ``(n_freq,)``.
     dof_index
         Global DOF indices of outputs = inputs, ``(m,)``.
+    chunk_bytes, algorithm
+        Memory bound [bytes] of one stack of LU systems; ``"auto"``, ``"lu"`` or ``"spectral"``.
 
     Returns
     -------
@@ -303,6 +314,12 @@ def frf_modal(matrices, freq_hz, dof_index, n_modes: int | None = None, residual
 
     Parameters
     ----------
+    matrices
+        :class:`FEMatrices`.
+    freq_hz
+        Frequencies [Hz], ``(n_freq,)``.
+    dof_index
+        Global DOF indices of outputs = inputs, ``(m,)``.
     n_modes
         Number of lowest modes kept (default: all modes below 2 × max(freq)).
     residual

@@ -13,7 +13,10 @@ UFF58 (universal file dataset 58, ASCII and binary 58b)
     the missing pairs otherwise (``fill="reciprocity"`` fills from H[j, i]).
     ``import_uff58(...) -> UffImport`` — the same plus the notes of what was
     converted and which non-FRF records were skipped.
-    ``frf_from_records(records, ...)`` — the grouping step alone.
+    ``frf_from_records(records, ...)`` — the grouping step alone;
+    ``read_uff58_records(path)`` — the records before grouping (``UffFrfRecord`` each).
+    ``coherence_from_records(records, frf)`` — the coherence records arranged like ``frf``.
+    ``FUNCTION_TYPES`` — UFF58 function type numbers and their names.
     ``read_coherence_uff58(path, frf=None) -> ndarray | None`` — the
     coherence records (function type 6) as ``(n_freq, n_out, n_in)``.
     ``write_uff58(path, frf, binary=False, *, abscissa="auto", round_freq=False,
@@ -23,7 +26,7 @@ UFF58 (universal file dataset 58, ASCII and binary 58b)
     digits of values and 6 of frequencies, and refuses to round frequencies
     unless asked).
 
-HDF5 exchange file (format ``jointdb-frf`` version 1; layout in :mod:`jointdb.io._hdf5`)
+HDF5 exchange file (format ``jointdb-frf`` = ``HDF5_FORMAT``, version 1 = ``HDF5_FORMAT_VERSION``; layout in :mod:`jointdb.io._hdf5`)
     ``write_frf_hdf5(path, frf, attrs=None)``, ``read_frf_hdf5(path) -> FRF``,
     ``read_frf_hdf5_attrs(path) -> dict``, ``read_frf_hdf5_full(path) -> (FRF, dict)``.
 

@@ -41,6 +41,13 @@ _COL = re.compile(r"^\s*(Re|Im)\s+(\S+)/(\S+)\s+(receptance|mobility|accelerance
 def write_frf_csv(path: str | os.PathLike, frf: FRF) -> None:
     """Write an FRF as CSV (layout in the module docstring), atomically.
 
+    Parameters
+    ----------
+    path
+        Target file; replaced if it exists.
+    frf
+        The FRF (any quantity; unit labels in the header).
+
     Raises
     ------
     InputError
@@ -70,14 +77,22 @@ def write_frf_csv(path: str | os.PathLike, frf: FRF) -> None:
 def read_frf_csv(path: str | os.PathLike) -> FRF:
     """Read a CSV written by :func:`write_frf_csv`.
 
+    Parameters
+    ----------
+    path
+        The CSV file.
+
+    Returns
+    -------
+    FRF
+
     Raises
     ------
     NotFoundError
         If the file does not exist.
     InputError
-        Bad header (column named), unequal row lengths, non-numbers (line
-        named), mixed quantities, an incomplete outputs × inputs set, or
-        anything :class:`~jointdb.frf.FRF` refuses.
+        Bad header (column named), unequal row lengths, non-numbers (line named), mixed
+        quantities, an incomplete outputs × inputs set, or anything :class:`~jointdb.frf.FRF` refuses.
     """
     p = Path(path)
     if not p.is_file():

@@ -262,6 +262,17 @@ def _labels(raw: np.ndarray, name: str, p: Path):
 def read_frf_hdf5_full(path: str | os.PathLike) -> tuple[FRF, dict]:
     """Read a ``jointdb-frf`` HDF5 file: the FRF and the metadata dict.
 
+    Parameters
+    ----------
+    path
+        The HDF5 file.
+
+    Returns
+    -------
+    frf : FRF
+    attrs : dict
+        The metadata given to :func:`write_frf_hdf5`.
+
     Raises
     ------
     NotFoundError
@@ -305,7 +316,17 @@ def read_frf_hdf5_full(path: str | os.PathLike) -> tuple[FRF, dict]:
 
 
 def read_frf_hdf5(path: str | os.PathLike) -> FRF:
-    """Read the FRF of a ``jointdb-frf`` HDF5 file (see :func:`read_frf_hdf5_full`)."""
+    """Read the FRF of a ``jointdb-frf`` HDF5 file (errors as :func:`read_frf_hdf5_full`).
+
+    Parameters
+    ----------
+    path
+        The HDF5 file.
+
+    Returns
+    -------
+    FRF
+    """
     return read_frf_hdf5_full(path)[0]
 
 
@@ -315,6 +336,15 @@ def read_frf_hdf5_attrs(path: str | os.PathLike) -> dict:
     Checks that the file is a ``jointdb-frf`` file but does not read the
     data. The format's own attributes (``format``, ``quantity``, ...) are not
     mixed in.
+
+    Parameters
+    ----------
+    path
+        The HDF5 file.
+
+    Returns
+    -------
+    dict
     """
     p, f = _open(path)
     with f, _damaged(p):

@@ -73,6 +73,11 @@ def frf_from_records(
     source
         Name used in error messages (the file name).
 
+    Returns
+    -------
+    UffImport
+        ``frf`` (SI units) with the ``conversions`` and ``skipped`` notes.
+
     Raises
     ------
     InputError
@@ -234,6 +239,24 @@ def import_uff58(
 
     See :func:`read_uff58` (reading, units, signs) and :func:`frf_from_records`
     (grouping, ``quantity``, ``file_quantity``, ``fill``).
+
+    Parameters
+    ----------
+    path
+        The ``.uff`` / ``.unv`` file (ASCII 58 or binary 58b).
+    quantity
+        Quantity to return (converted exactly); None keeps the file's.
+    file_quantity
+        Quantity of records whose data-type codes do not say.
+    fill
+        ``"error"`` or ``"reciprocity"`` (see :func:`frf_from_records`).
+    assume_si
+        Ignore unit labels and take the values as SI (see :func:`read_uff58`).
+
+    Returns
+    -------
+    UffImport
+        ``frf`` (SI units), ``conversions`` and ``skipped`` notes.
     """
     records = read_uff58(path, assume_si=assume_si)
     return frf_from_records(records, quantity, file_quantity=file_quantity, fill=fill, source=str(path))
@@ -254,6 +277,24 @@ def read_frf_uff58(
     frequency grid. Use :func:`import_uff58` to also get the notes of what was
     converted, or :func:`read_uff58` for the individual records.
 
+    Parameters
+    ----------
+    path
+        The ``.uff`` / ``.unv`` file (ASCII 58 or binary 58b).
+    quantity
+        Quantity to return (converted exactly); None keeps the file's.
+    file_quantity
+        Quantity of records whose data-type codes do not say.
+    fill
+        ``"error"`` or ``"reciprocity"`` (see :func:`frf_from_records`).
+    assume_si
+        Ignore unit labels and take the values as SI (see :func:`read_uff58`).
+
+    Returns
+    -------
+    FRF
+        ``(n_freq, n_out, n_in)`` in SI units.
+
     Raises
     ------
     NotFoundError, InputError
@@ -264,6 +305,15 @@ def read_frf_uff58(
 
 def coherence_from_records(records: Sequence[UffRecord], frf: FRF, *, source: str = "UFF58 records") -> np.ndarray | None:
     """Ordinary coherence (function type 6 records) arranged like ``frf``.
+
+    Parameters
+    ----------
+    records
+        Records from :func:`read_uff58`.
+    frf
+        The FRF matrix whose lines and DOFs the coherence must cover.
+    source
+        Name used in error messages (the file name).
 
     Returns
     -------
@@ -309,9 +359,22 @@ def coherence_from_records(records: Sequence[UffRecord], frf: FRF, *, source: st
 def read_coherence_uff58(path: str | os.PathLike, frf: FRF | None = None, *, assume_si: bool = False) -> np.ndarray | None:
     """Read the coherence records (UFF58 function type 6) of a file, arranged like its FRF.
 
-    ``frf`` defaults to the file's own FRF matrix (:func:`read_frf_uff58`);
-    see :func:`coherence_from_records` for the result and errors. Written by
-    ``write_uff58(..., coherence=...)``.
+    Written by ``write_uff58(..., coherence=...)``; errors as :func:`coherence_from_records`.
+
+    Parameters
+    ----------
+    path
+        The ``.uff`` file.
+    frf
+        The FRF matrix to arrange the coherence like (default: the file's own,
+        :func:`read_frf_uff58`).
+    assume_si
+        As :func:`read_uff58`.
+
+    Returns
+    -------
+    ndarray or None
+        Real ``(n_freq, n_out, n_in)`` coherence 0..1, or None when the file has none.
     """
     records = read_uff58(path, assume_si=assume_si)
     if frf is None:

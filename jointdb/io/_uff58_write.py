@@ -216,6 +216,8 @@ def write_uff58(
         Accept rounding of frequencies to 6 significant digits in ASCII.
     description
         ID line 1 of every FRF record (default names quantity and DOF pair).
+    units_dataset
+        Write a dataset 164 (SI units) before the records.
     coherence
         Ordinary coherence 0..1 of each entry: a real ``(n_freq, n_out, n_in)``
         array, a ``(n_freq,)`` array shared by all entries, or an

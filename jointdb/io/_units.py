@@ -96,7 +96,26 @@ def excitation_label(rotational: bool) -> str:
 
 
 def unit_label(quantity: Quantity | str, output: Dof, input: Dof) -> str:  # noqa: A002
-    """SI unit of one FRF entry, e.g. ``"m/s^2/N"`` or ``"rad/(N*m)"``."""
+    """SI unit of one FRF entry, e.g. ``"m/s^2/N"`` or ``"rad/(N*m)"``.
+
+    Parameters
+    ----------
+    quantity
+        Receptance, mobility or accelerance.
+    output, input
+        The response and excitation DOFs (a rotation gives rad, a moment N*m).
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> from jointdb import Dof
+    >>> from jointdb.io import unit_label
+    >>> unit_label("accelerance", Dof(1, "x"), Dof(1, "x")), unit_label("receptance", Dof(1, "ry"), Dof(1, "ry"))
+    ('m/s^2/N', 'rad/(N*m)')
+    """
     num = response_label(quantity, output.is_rotation)
     den = excitation_label(input.is_rotation)
     return f"{num}/({den})" if input.is_rotation else f"{num}/{den}"

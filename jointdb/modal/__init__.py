@@ -1,25 +1,30 @@
 """Modal parameter estimation and modal models (numpy/scipy only).
 
-Public API
-----------
-``fit_modes(frf, n_modes=None, band=None, *, max_order=30, residuals=True,
-criteria=StabilisationCriteria(), min_count=3) -> ModalFit``
-    pLSCF (PolyMAX) poles over model orders 1..max_order, a stabilisation
-    diagram, automatic pole selection, LSFD residues with upper/lower residuals
-    and quality (NMSE, FRAC per entry).
-``ModalModel(freq_hz, zeta, residues, outputs, inputs, upper=None, lower=None)``
-    ``.synthesize(freq, quantity)`` -> FRF, ``.poles``, ``.state_space()``,
-    ``.modal_mass_stiffness(dof)``, ``.select()``, ``ModalModel.from_modal_parameters``,
-    ``ModalModel.block_diagonal([mx, my])``.
-``fit_tool_tip(frf, frf_y=None, n_modes=None, band=None, *, max_order=30) -> (ModalModel, fits)``
-    x/y driving points fitted separately, combined block-diagonally (input to
-    ``jointdb.stability.milling_lobes_sd``).
-``stabilisation_diagram``, ``select_poles``, ``fit_residues``, ``fit_quality``,
-``StabilisationCriteria``, ``StabilisationDiagram``, ``FitQuality``, ``ModalFit``,
-``single_dof_residue``.
+Fitting
+-------
+   fit_modes               -- pLSCF poles, stabilisation diagram, automatic selection, LSFD residues
+   fit_tool_tip            -- x and y tool-tip driving points fitted separately, combined block-diagonally
+   ModalFit                -- result of :func:`fit_modes`: model, stabilisation diagram, quality
 
-Deviation from api-contracts.md: ``ModalFit`` carries the model in ``.model``
-(with ``.freq_hz``, ``.zeta``, ``.residues`` shortcuts) and the quality in ``.quality``.
+Building blocks
+---------------
+   lscf_poles              -- poles and participation vectors of one pLSCF model order
+   stabilisation_diagram   -- pLSCF poles over model orders and their stability status
+   StabilisationDiagram    -- all physical poles per model order, with their status
+   StabilisationCriteria   -- tolerances for calling a pole stable between orders
+   select_poles            -- cluster the stable poles by frequency, keep the best clusters
+   fit_residues            -- LSFD residues and residual terms for fixed poles
+   fit_quality             -- NMSE and FRAC per entry of two FRF arrays
+   FitQuality              -- how well a modal model reproduces the FRF it was fitted to
+
+Modal models
+------------
+   ModalModel              -- poles and residues on labelled DOFs; ``.synthesize(freq)`` -> FRF
+   single_dof_residue      -- residue of a driving-point mode of given stiffness and damping
+
+``fit_tool_tip`` gives the input of :func:`jointdb.stability.milling_lobes_sd`.
+``ModalFit`` carries the model in ``.model`` (with ``.freq_hz``, ``.zeta``, ``.residues``
+shortcuts) and the quality in ``.quality``.
 """
 
 from jointdb.modal._lscf import (

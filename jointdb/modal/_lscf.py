@@ -36,10 +36,16 @@ __all__ = ["StabilisationCriteria", "StabilisationDiagram", "stabilisation_diagr
 class StabilisationCriteria:
     """Tolerances for calling a pole stable between consecutive model orders.
 
-    freq_tol: relative frequency change (default 1 %); damping_tol: relative
-    damping change (5 %); mac_min: participation-vector MAC (0.98, multi-input
-    only); max_damping: poles with larger ζ (or ζ ≤ 0) are discarded as
-    non-physical (0.3).
+    Parameters
+    ----------
+    freq_tol
+        Largest relative frequency change (default 1 %).
+    damping_tol
+        Largest relative damping change (5 %).
+    mac_min
+        Smallest participation-vector MAC (0.98; multi-input only).
+    max_damping
+        Poles with a larger ζ (or ζ ≤ 0) are discarded as non-physical (0.3).
     """
 
     freq_tol: float = 0.01
@@ -52,11 +58,23 @@ class StabilisationCriteria:
 class StabilisationDiagram:
     """All physical poles found at each model order, with their stability status.
 
-    Flat arrays, one entry per pole: ``order``, ``freq_hz``, ``zeta``, ``status``
-    (``'o'`` new, ``'f'`` frequency stable, ``'d'`` frequency and damping
-    stable, ``'s'`` stable in frequency, damping and participation vector),
-    ``participation`` (n_poles, n_in) complex, ``poles`` (rad/s). ``band`` is
-    the fitted band in Hz.
+    Attributes
+    ----------
+    order
+        Model order of each pole, ``(n_poles,)``.
+    freq_hz
+        Natural frequency [Hz] of each pole, ``(n_poles,)``.
+    zeta
+        Damping ratio of each pole, ``(n_poles,)``.
+    status
+        ``'o'`` new, ``'f'`` frequency stable, ``'d'`` frequency and damping stable,
+        ``'s'`` stable in frequency, damping and participation vector; ``(n_poles,)``.
+    poles
+        The poles [rad/s], complex ``(n_poles,)``.
+    participation
+        Participation vectors, complex ``(n_poles, n_in)``.
+    band
+        The fitted band ``(f_min, f_max)`` [Hz].
     """
 
     order: np.ndarray
@@ -68,7 +86,12 @@ class StabilisationDiagram:
     band: tuple[float, float]
 
     def stable(self) -> np.ndarray:
-        """Boolean mask of the fully stable poles (status ``'s'``)."""
+        """Boolean mask of the fully stable poles (status ``'s'``).
+
+        Returns
+        -------
+        ndarray of bool, shape (n_poles,)
+        """
         return self.status == "s"
 
 
@@ -125,7 +148,23 @@ def _blocks_row(alpha, p, n_i):
 def lscf_poles(freq, h, order: int, dt: float | None = None):
     """Poles (rad/s, all roots) and participation vectors of one pLSCF model order.
 
-    ``h`` has shape ``(n_f, n_out, n_in)``. Returns ``(poles, participation)``.
+    Parameters
+    ----------
+    freq
+        Frequencies [Hz], ``(n_f,)``.
+    h
+        FRF values, complex ``(n_f, n_out, n_in)``.
+    order
+        Polynomial order p.
+    dt
+        Sampling interval [s] of the z-domain basis (default ``1 / (2 max(freq))``).
+
+    Returns
+    -------
+    poles : ndarray, complex, shape (p · n_in,)
+        All roots [rad/s], physical or not.
+    participation : ndarray, complex, shape (p · n_in, n_in)
+        Participation vectors.
     """
     h = np.asarray(h, dtype=complex)
     dt = dt if dt is not None else 1.0 / (2 * float(np.max(freq)))
@@ -150,6 +189,14 @@ def stabilisation_diagram(
         FRF values ``(n_f, n_out, n_in)`` (any quantity: poles do not depend on it).
     max_order
         Highest polynomial order p (each order yields up to ``p · n_in`` poles).
+    criteria
+        :class:`StabilisationCriteria`.
+    min_order
+        Lowest polynomial order.
+
+    Returns
+    -------
+    StabilisationDiagram
 
     Raises
     ------
@@ -228,8 +275,23 @@ def select_poles(diagram: StabilisationDiagram, n_modes: int | None = None, freq
     of the running cluster mean; clusters are ranked by how many model orders
     they appear in. With ``n_modes`` the ``n_modes`` best clusters are taken,
     otherwise every cluster seen in at least ``min_count`` orders. Each cluster
-    is represented by its pole of median frequency. Returns poles (rad/s)
-    sorted by frequency.
+    is represented by its pole of median frequency.
+
+    Parameters
+    ----------
+    diagram
+        A :class:`StabilisationDiagram`.
+    n_modes
+        How many clusters to keep (None: every cluster seen in ``min_count`` orders).
+    freq_tol
+        Relative frequency tolerance of a cluster.
+    min_count
+        Orders a cluster must appear in when ``n_modes`` is None.
+
+    Returns
+    -------
+    ndarray, complex
+        The selected poles [rad/s], sorted by frequency.
 
     Raises
     ------

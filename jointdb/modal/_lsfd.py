@@ -28,8 +28,16 @@ __all__ = ["FitQuality", "ModalFit", "fit_modes", "fit_residues", "fit_quality"]
 class FitQuality:
     """How well a modal model reproduces the FRF it was fitted to, in the fitted band.
 
-    ``nmse`` and ``frac`` have shape ``(n_out, n_in)``; ``nmse_total`` and
-    ``frac_min`` summarise them (``nmse_total`` = ‖H − Ĥ‖²/‖H‖² over all entries).
+    Attributes
+    ----------
+    nmse
+        Normalised mean square error ``‖H − Ĥ‖² / ‖H‖²`` per entry, ``(n_out, n_in)``.
+    frac
+        Frequency response assurance criterion per entry (1 = same shape), ``(n_out, n_in)``.
+    nmse_total
+        ``‖H − Ĥ‖² / ‖H‖²`` over all entries.
+    frac_min
+        The smallest FRAC.
     """
 
     nmse: np.ndarray
@@ -40,7 +48,21 @@ class FitQuality:
 
 @dataclass(frozen=True, eq=False)
 class ModalFit:
-    """Result of :func:`fit_modes`: the model, the stabilisation diagram and the quality."""
+    """Result of :func:`fit_modes`: the model, the stabilisation diagram and the quality.
+
+    Attributes
+    ----------
+    model
+        The fitted :class:`ModalModel` (receptance residues).
+    diagram
+        The :class:`StabilisationDiagram` the poles were selected from.
+    quality
+        :class:`FitQuality` in the band, in the FRF's own quantity.
+    band
+        ``(f_min, f_max)`` [Hz] fitted.
+    quantity
+        The quantity of the fitted FRF.
+    """
 
     model: ModalModel
     diagram: StabilisationDiagram
@@ -61,7 +83,13 @@ class ModalFit:
         return self.model.residues
 
     def table(self) -> list[dict]:
-        """One row per mode: frequency, damping and the largest residue magnitude."""
+        """One row per mode: frequency, damping and the largest residue magnitude.
+
+        Returns
+        -------
+        list of dict
+            ``mode``, ``freq_hz``, ``zeta``, ``max_abs_residue``.
+        """
         return [
             {
                 "mode": k + 1,
@@ -74,7 +102,19 @@ class ModalFit:
 
 
 def fit_quality(measured: np.ndarray, fitted: np.ndarray) -> FitQuality:
-    """NMSE and FRAC per entry of two ``(n_f, n_out, n_in)`` arrays."""
+    """NMSE and FRAC per entry of two FRF arrays.
+
+    Parameters
+    ----------
+    measured
+        Reference FRF values, complex ``(n_f, n_out, n_in)``.
+    fitted
+        Model FRF values on the same lines, same shape and quantity.
+
+    Returns
+    -------
+    FitQuality
+    """
     h, g = np.asarray(measured), np.asarray(fitted)
     e2 = np.sum(np.abs(h - g) ** 2, axis=0)
     h2 = np.sum(np.abs(h) ** 2, axis=0)
@@ -103,10 +143,21 @@ def fit_residues(
         FRF values ``(n_f, n_out, n_in)`` in ``quantity``.
     poles
         Poles in rad/s with positive imaginary parts, shape ``(n_modes,)``.
+    quantity
+        The quantity of ``h`` (receptance, mobility, accelerance).
+    upper
+        Fit an upper residual (constant: flexibility of modes above the band).
+    lower
+        Fit a lower residual (``1/(iω)²``: modes below the band).
 
     Returns
     -------
-    residues (n_modes, n_out, n_in) complex, upper (n_out, n_in), lower (n_out, n_in)
+    residues : ndarray, complex, shape (n_modes, n_out, n_in)
+        Receptance residues [m/N].
+    upper : ndarray, shape (n_out, n_in)
+        Upper residual [m/N] (zero when not fitted).
+    lower : ndarray, shape (n_out, n_in)
+        Lower residual [m/(N·s²)] (zero when not fitted).
     """
     freq = np.asarray(freq, dtype=float)
     h = np.asarray(h, dtype=complex)
@@ -180,6 +231,10 @@ def fit_modes(
         Highest pLSCF model order of the stabilisation diagram.
     residuals
         Fit upper and lower residual terms (out-of-band modes).
+    criteria
+        :class:`StabilisationCriteria` of the stabilisation diagram.
+    min_count
+        Without ``n_modes``: the number of model orders a pole must be stable over.
 
     Returns
     -------

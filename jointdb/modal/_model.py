@@ -125,7 +125,23 @@ class ModalModel:
         stiffness: Sequence[float],
         dof: "Dof | str" = "1x",
     ) -> "ModalModel":
-        """Driving-point model from modal stiffnesses ``k_r`` [N/m] (``m_r = k_r/ω_r²``)."""
+        """Driving-point model from modal stiffnesses ``k_r`` [N/m] (``m_r = k_r/ω_r²``).
+
+        Parameters
+        ----------
+        freq_hz
+            Natural frequencies [Hz], ``(n_modes,)``.
+        zeta
+            Damping ratios, ``(n_modes,)``.
+        stiffness
+            Modal stiffnesses k_r [N/m], ``(n_modes,)``.
+        dof
+            The driving-point DOF.
+
+        Returns
+        -------
+        ModalModel
+        """
         f = np.atleast_1d(np.asarray(freq_hz, dtype=float))
         r = single_dof_residue(f, zeta, stiffness)
         d = Dof.parse(dof)
@@ -136,6 +152,15 @@ class ModalModel:
         """Combine models of uncoupled directions (e.g. x and y at the tool tip) into one.
 
         Residue matrices are placed block-diagonally; cross terms are zero.
+
+        Parameters
+        ----------
+        models
+            :class:`ModalModel` s on disjoint DOFs.
+
+        Returns
+        -------
+        ModalModel
         """
         if not models:
             raise InputError("block_diagonal needs at least one modal model")
@@ -168,7 +193,17 @@ class ModalModel:
         return -self.zeta * wn + 1j * wn * np.sqrt(1 - self.zeta**2)
 
     def select(self, outputs=None, inputs=None) -> "ModalModel":
-        """The same modes on a subset of DOFs."""
+        """The same modes on a subset of DOFs.
+
+        Parameters
+        ----------
+        outputs, inputs
+            DOFs to keep (None: all).
+
+        Returns
+        -------
+        ModalModel
+        """
         oi = list(range(len(self.outputs))) if outputs is None else [self._pos(self.outputs, d, "output") for d in dofs(outputs)]
         ii = list(range(len(self.inputs))) if inputs is None else [self._pos(self.inputs, d, "input") for d in dofs(inputs)]
         return ModalModel(
@@ -190,10 +225,23 @@ class ModalModel:
     def synthesize(
         self, freq: Sequence[float] | np.ndarray, quantity: "str | Quantity" = "receptance", residuals: bool = True
     ) -> FRF:
-        """Re-synthesise the FRF on a frequency grid (Hz) in the given quantity.
+        """Re-synthesise the FRF on a frequency grid in the given quantity.
 
-        Returns an :class:`~jointdb.frf.FRF` of shape ``(n_freq, n_out, n_in)``.
         The lower residual is singular at 0 Hz: it is skipped on a 0 Hz line.
+
+        Parameters
+        ----------
+        freq
+            Frequencies [Hz], ``(n_freq,)``.
+        quantity
+            ``"receptance"``, ``"mobility"`` or ``"accelerance"``.
+        residuals
+            Add the upper and lower residuals.
+
+        Returns
+        -------
+        FRF
+            Shape ``(n_freq, n_out, n_in)``.
         """
         f = np.asarray(freq, dtype=float)
         q = Quantity.parse(quantity)
@@ -216,6 +264,17 @@ class ModalModel:
         Uses ``m_r = 1 / (2 ω_d |R_r|)`` (proportional damping, unit mode shape at
         the driving point), ``k_r = m_r ω_r²``, ``c_r = 2 ζ_r m_r ω_r``. Also
         returns ``nonproportionality = |Re R_r| / |R_r|`` (0 for a real mode).
+
+        Parameters
+        ----------
+        dof
+            The driving-point DOF (default: the only DOF that is both output and input).
+
+        Returns
+        -------
+        dict of ndarray
+            ``mass`` [kg], ``stiffness`` [N/m], ``damping`` [N·s/m], ``nonproportionality``,
+            one value per mode.
 
         Raises
         ------
@@ -248,6 +307,12 @@ class ModalModel:
         ``residuals=False``. Shapes: A (n, n), B (n, n_in), C (n_out, n) with
         ``n = 2 · n_modes · n_in``; states of modes with zero residue columns are
         dropped.
+
+        Returns
+        -------
+        A, B, C : ndarray
+            Shapes ``(n, n)``, ``(n, n_in)``, ``(n_out, n)`` as above; ``q`` is the receptance
+            response [m per N of input].
         """
         blocks_a, cols_b, rows_c = [], [], []
         n_in = len(self.inputs)

@@ -27,6 +27,19 @@ def fit_tool_tip(
     direction is used; cross terms are not modelled. The result feeds
     :func:`jointdb.stability.milling_lobes_sd`.
 
+    Parameters
+    ----------
+    frf
+        The x (and/or y) tool-tip driving point(s).
+    frf_y
+        The y driving point in a separate container.
+    n_modes
+        Modes per direction (None: every well-stabilised pole).
+    band
+        ``(f_min, f_max)`` [Hz] fitted.
+    max_order
+        Highest pLSCF model order.
+
     Returns
     -------
     (model, fits)

@@ -14,6 +14,13 @@ def phase_deg(freq, h) -> tuple[np.ndarray, np.ndarray]:
     inserted between the two points, so a plotted line stops at ±180° instead of
     drawing a vertical bar across the axis.
 
+    Parameters
+    ----------
+    freq
+        Frequencies [Hz], ``(n,)``.
+    h
+        Complex FRF values, ``(n,)``.
+
     Returns
     -------
     (freq, phase)
@@ -31,8 +38,21 @@ def robust_limits(y, *, lower_pct: float = 2.0, upper_pct: float = 98.0, margin:
                   include_zero: bool = False) -> tuple[float, float] | None:
     """Axis limits from percentiles of the finite values (single spikes do not set the scale).
 
-    The range between the ``lower_pct`` and ``upper_pct`` percentiles, widened by
-    ``margin`` of its span on each side; ``None`` when no value is finite.
+    Parameters
+    ----------
+    y
+        The values to be plotted (non-finite ones are ignored).
+    lower_pct, upper_pct
+        Percentiles (0–100) that set the range.
+    margin
+        Fraction of the range added on each side.
+    include_zero
+        Widen the range to include 0.
+
+    Returns
+    -------
+    (low, high) or None
+        The limits; None when no value is finite.
     """
     v = np.asarray(y, dtype=float)
     v = v[np.isfinite(v)]

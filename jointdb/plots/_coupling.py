@@ -19,7 +19,25 @@ __all__ = ["save_kc_plot", "save_comparison_plot"]
 
 def save_kc_plot(path: "str | Path", joint: FRF, kc_fit=None, title: str | None = None,
                  flagged: np.ndarray | None = None) -> Path:
-    """Equivalent stiffness and damping of each diagonal joint term vs frequency (one row per DOF)."""
+    """Equivalent stiffness and damping of each diagonal joint term vs frequency (one row per DOF).
+
+    Parameters
+    ----------
+    path
+        Image file to write (``.png``, ``.pdf``, ``.svg``).
+    joint
+        The joint receptance (square FRF).
+    kc_fit
+        A :class:`jointdb.coupling.KCFit` drawn as horizontal lines, or None.
+    title
+        Figure title.
+    flagged
+        Bool ``(n_freq,)``: lines to mark as unreliable, or None.
+
+    Returns
+    -------
+    Path
+    """
     from jointdb.coupling import equivalent_stiffness_damping
 
     plt = _pyplot()
@@ -57,7 +75,23 @@ def save_kc_plot(path: "str | Path", joint: FRF, kc_fit=None, title: str | None 
 
 def save_comparison_plot(path: "str | Path", curves: Sequence[tuple[str, FRF]], pairs=None,
                          title: str | None = None) -> Path:
-    """Magnitude (log) and phase of several FRFs of the same entries (e.g. measured / reconstructed / rigid)."""
+    """Magnitude (log) and phase of several FRFs of the same entries (e.g. measured / reconstructed / rigid).
+
+    Parameters
+    ----------
+    path
+        Image file to write.
+    curves
+        ``[(label, FRF), ...]`` with the same DOFs.
+    pairs
+        ``[(output, input), ...]`` entries to draw (default: the first four of the first FRF).
+    title
+        Figure title.
+
+    Returns
+    -------
+    Path
+    """
     plt = _pyplot()
     ref = curves[0][1]
     if pairs is None:

@@ -29,7 +29,20 @@ def _plt():
 
 
 def plot_diagnosis(result, directory: Path) -> list[str]:
-    """Write the figures of a :class:`jointdb.diagnose.Diagnosis`; returns the paths written."""
+    """Write the figures of a :class:`jointdb.diagnose.Diagnosis`.
+
+    Parameters
+    ----------
+    result
+        The :class:`jointdb.diagnose.Diagnosis`.
+    directory
+        Existing directory the PNG files go to.
+
+    Returns
+    -------
+    list of str
+        The paths written.
+    """
     plt = _plt()
     obs = result.observation
     f = obs.full_freq

@@ -106,6 +106,15 @@ def bode_figure(
 def nyquist_figure(frf: FRF, pairs: Sequence[tuple] | None = None, title: str | None = None):
     """Nyquist plot (real vs imaginary part) of some FRF entries.
 
+    Parameters
+    ----------
+    frf
+        The FRF set.
+    pairs
+        ``[(output, input), ...]`` DOFs; default as :func:`bode_figure`.
+    title
+        Figure title.
+
     Returns
     -------
     matplotlib.figure.Figure
@@ -137,6 +146,19 @@ def save_figure(fig, path, dpi: int = 120) -> Path:
     The format follows the suffix (``.png``, ``.pdf``, ``.svg``, ...). The one
     place the plot modules (FRF, coupling, stack, lobes) save figures.
 
+    Parameters
+    ----------
+    fig
+        A matplotlib figure (closed afterwards).
+    path
+        The image file.
+    dpi
+        Resolution of raster formats.
+
+    Returns
+    -------
+    Path
+
     Raises
     ------
     InputError
@@ -165,10 +187,36 @@ def _save(fig, path) -> Path:
 
 
 def save_bode(path, frf: FRF, pairs: Sequence[tuple] | None = None, title: str | None = None, **kwargs) -> Path:
-    """Write a Bode plot PNG to ``path`` (see :func:`bode_figure`)."""
+    """Write a Bode plot PNG to ``path``.
+
+    Parameters
+    ----------
+    path
+        PNG file to write.
+    frf, pairs, title
+        As :func:`bode_figure`.
+    **kwargs
+        Further arguments of :func:`bode_figure` (``labels``, ``others``).
+
+    Returns
+    -------
+    Path
+    """
     return _save(bode_figure(frf, pairs, title, **kwargs), path)
 
 
 def save_nyquist(path, frf: FRF, pairs: Sequence[tuple] | None = None, title: str | None = None) -> Path:
-    """Write a Nyquist plot PNG to ``path``."""
+    """Write a Nyquist plot PNG to ``path``.
+
+    Parameters
+    ----------
+    path
+        PNG file to write.
+    frf, pairs, title
+        As :func:`nyquist_figure`.
+
+    Returns
+    -------
+    Path
+    """
     return _save(nyquist_figure(frf, pairs, title), path)

@@ -20,7 +20,21 @@ _UNIT = {"m": 1.0, "mm": 1e3, "um": 1e6}
 
 
 def plot_lobes(results, path, **kwargs) -> Path:
-    """Write :func:`lobes_figure` (same keyword arguments) to the PNG ``path``; returns the path."""
+    """Write :func:`lobes_figure` to a PNG file.
+
+    Parameters
+    ----------
+    results
+        As :func:`lobes_figure`.
+    path
+        PNG file to write.
+    **kwargs
+        Keyword arguments of :func:`lobes_figure`.
+
+    Returns
+    -------
+    Path
+    """
     return save_figure(lobes_figure(results, **kwargs), path, dpi=120)
 
 
@@ -36,9 +50,31 @@ def lobes_figure(
     boundaries with a real multiplier +1, not chatter limits) and non-finite
     depths are not drawn: the line breaks there and the legend counts them.
     Individual lobes (turning/ZOA) are drawn thin behind the envelope when
-    ``show_lobes``; ``band`` (a :class:`jointdb.stability._band.LobeBand`, the
-    5–95 % limiting depth from the joints' parameter covariance) is shaded.
-    Returns the matplotlib figure.
+    ``show_lobes``.
+
+    Parameters
+    ----------
+    results
+        One :class:`~jointdb.stability.LobeResult` or a sequence of them.
+    title
+        Figure title.
+    depth_unit
+        ``"m"``, ``"mm"`` or ``"um"`` on the depth axis.
+    labels
+        Legend label per result (default: its method).
+    show_lobes
+        Draw the individual lobes thin behind the envelope.
+    depth_max
+        Upper limit of the depth axis [m] (default: 1.1 × the largest depth drawn).
+    shade
+        Shade the stable region below the first result.
+    band
+        A :class:`jointdb.stability._band.LobeBand` (the 5–95 % limiting depth from the
+        joints' parameter covariance), shaded; or None.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
     """
     from jointdb.stability import plottable_depth
 
@@ -86,7 +122,23 @@ def lobes_figure(
 
 
 def plot_stabilisation(fit, path, *, frf=None, title: str | None = None) -> Path:
-    """Stabilisation diagram (poles per model order, by status) over the FRF magnitude sum."""
+    """Stabilisation diagram (poles per model order, by status) over the FRF magnitude sum.
+
+    Parameters
+    ----------
+    fit
+        A :class:`jointdb.modal.ModalFit`.
+    path
+        PNG file to write.
+    frf
+        The fitted FRF, whose magnitude sum is drawn behind the poles; or None.
+    title
+        Figure title.
+
+    Returns
+    -------
+    Path
+    """
     plt = _plt()
     d = fit.diagram
     fig, ax = plt.subplots(figsize=(8, 5))
@@ -113,7 +165,25 @@ def plot_stabilisation(fit, path, *, frf=None, title: str | None = None) -> Path
 
 
 def plot_modal_fit(frf, fit, path, *, title: str | None = None, max_entries: int = 6) -> Path:
-    """Measured FRF entries against the re-synthesised modal model (magnitude and phase)."""
+    """Measured FRF entries against the re-synthesised modal model (magnitude and phase).
+
+    Parameters
+    ----------
+    frf
+        The measured FRF.
+    fit
+        The :class:`jointdb.modal.ModalFit` of it.
+    path
+        PNG file to write.
+    title
+        Figure title.
+    max_entries
+        At most this many entries are drawn.
+
+    Returns
+    -------
+    Path
+    """
     plt = _plt()
     part = frf.band(*fit.band)
     syn = fit.model.synthesize(part.freq, part.quantity)

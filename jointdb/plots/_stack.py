@@ -19,7 +19,15 @@ def joints_legend(resolutions) -> str:
     """Short legend text naming the joints used: ``"tool-holder: th-er32-carbide-120nm v1"``, or for an
     interpolated joint its neighbours and weights (``"… v1 (w=0.550), … v1 (w=0.450)"``); rigid joints omitted.
 
-    ``resolutions``: mapping interface → :class:`jointdb.usecases.JointResolution`.
+    Parameters
+    ----------
+    resolutions
+        Interface name → :class:`jointdb.usecases.JointResolution`.
+
+    Returns
+    -------
+    str
+        ``"rigid"`` when every joint is rigid.
     """
     parts = []
     for name, res in resolutions.items():
@@ -44,6 +52,8 @@ def save_tip_comparison(path, prediction, *, title: str | None = None,
         PNG file to write.
     prediction
         :class:`jointdb.stack.Prediction`.
+    title
+        Figure title.
     extra
         Further ``(label, FRF)`` curves on the same tip DOFs (e.g. a measurement).
     label
@@ -95,7 +105,21 @@ def save_tip_comparison(path, prediction, *, title: str | None = None,
 
 
 def save_joint_distances(path, resolutions, *, title: str | None = None) -> Path:
-    """Bar chart of the candidate joints' distances for each queried interface (chosen one highlighted)."""
+    """Bar chart of the candidate joints' distances for each queried interface (chosen one highlighted).
+
+    Parameters
+    ----------
+    path
+        PNG file to write.
+    resolutions
+        Interface name → :class:`jointdb.usecases.JointResolution`.
+    title
+        Figure title.
+
+    Returns
+    -------
+    Path
+    """
     plt = _pyplot()
     queried = [r for r in resolutions.values() if r.candidates]
     fig, axes = plt.subplots(1, max(1, len(queried)), figsize=(6.5 * max(1, len(queried)), 3.6), squeeze=False)

@@ -20,6 +20,14 @@ these models by ``python -m jointdb.schemas DIR`` and let an editor complete
 and check the files (``"$schema"`` is not needed: map the schema to the file
 pattern in the editor).
 
+Functions
+---------
+   validate      -- check a parsed document against the schema of its kind (one field-named error)
+   json_schema   -- the JSON Schema of a file kind
+   schema_files  -- file name -> text of every published schema
+   SCHEMAS       -- kind -> the pydantic model (``"module:Class"``)
+   SCHEMA_FILES  -- kind -> published file name under ``docs/schemas/``
+
 Importing this module imports pydantic; the file readers import it only when
 they validate.
 """
@@ -132,7 +140,21 @@ def _message(err: dict[str, Any]) -> str:
 
 
 def validate(kind: str, data: Any, where: str = "") -> Any:
-    """Validate a parsed JSON document against the schema of ``kind``; return the pydantic model.
+    """Validate a parsed JSON document against the schema of ``kind``.
+
+    Parameters
+    ----------
+    kind
+        A key of :data:`SCHEMAS` (``"model"``, ``"stack"``, ``"campaign"``, ...).
+    data
+        The parsed JSON document.
+    where
+        The file name, put in front of the message.
+
+    Returns
+    -------
+    pydantic.BaseModel
+        The validated document.
 
     Raises
     ------
@@ -167,12 +189,28 @@ def validate(kind: str, data: Any, where: str = "") -> Any:
 
 
 def json_schema(kind: str) -> dict[str, Any]:
-    """The JSON Schema (draft 2020-12) of a file kind, as published under docs/schemas/."""
+    """The JSON Schema (draft 2020-12) of a file kind, as published under docs/schemas/.
+
+    Parameters
+    ----------
+    kind
+        A key of :data:`SCHEMAS`.
+
+    Returns
+    -------
+    dict
+    """
     schema = _model(kind).model_json_schema(by_alias=True)
     return {"$schema": "https://json-schema.org/draft/2020-12/schema", "$id": _IDS[kind], **schema}
 
 
 def schema_files() -> dict[str, str]:
-    """File name -> text of every published schema (sorted keys, two-space indent, final newline)."""
+    """Every published schema as text (sorted keys, two-space indent, final newline).
+
+    Returns
+    -------
+    dict
+        File name under ``docs/schemas/`` → JSON text.
+    """
     return {SCHEMA_FILES[k]: json.dumps(json_schema(k), indent=2, sort_keys=True, ensure_ascii=False) + "\n"
             for k in SCHEMAS}

@@ -1,19 +1,37 @@
 """Chatter stability lobes: turning, milling ZOA and milling semi-discretization (numpy/scipy only).
 
-Public API
-----------
-``turning_lobes(frf, kf, orientation=None, spindle_speed_rpm=None, max_lobes=30) -> LobeResult``
-``tlusty_limit(frf, kf, orientation=None) -> (depth_m, chatter_freq_hz)``
-``oriented_frf(frf, orientation=None) -> ndarray``
-``MillingCut(n_teeth, kt, kr, radial_immersion=1.0, down_milling=True)``  (kt, kr in N/m²)
-``milling_lobes_zoa(frf, cut, frf_y=None, *, cross_terms=False, spindle_speed_rpm=None, max_lobes=30) -> LobeResult``
-``milling_lobes_sd(model, cut, spindle_speed_rpm, *, n_intervals=40, rtol=1e-4, depth_max=None) -> LobeResult``
-``milling_lobes_sd_grid(model, cut, speeds, depths, *, n_intervals=40)`` (dense-grid reference)
-``sd_system``, ``monodromy``, ``spectral_radius``, ``critical_depth`` (SD building blocks)
-``refine_lobes(compute, speeds, *, rounds=3) -> LobeResult`` (adaptive speeds near the envelope's turning points;
-equal to the plain computation at the shared speeds), ``plottable_depth(result)`` (folds and non-finite as NaN)
-``LobeResult`` (frozen: spindle_speed_rpm, depth_m, chatter_freq_hz, lobe, kind, lobes, info;
-``.table()``, ``.min_depth_m``), ``Lobe``, ``mean_directional_matrix``, ``tool_tip_matrix``.
+Depths are in metres, spindle speeds in rpm, chatter frequencies in Hz, cutting
+coefficients in N/m² (docs/theory.md §5).
+
+Lobes
+-----
+   turning_lobes                 -- turning lobes (Tlusty) from a tool-tip FRF
+   tlusty_limit                  -- absolute (speed-independent) turning limit
+   milling_lobes_zoa             -- milling lobes by the zero-order approximation (Altintas & Budak)
+   milling_lobes_sd              -- milling lobes by semi-discretization on a modal model
+   milling_lobes_sd_grid         -- SD reference on a dense (speed × depth) grid
+   refine_lobes                  -- adaptive speeds near the envelope's turning points
+   MillingCut                    -- teeth, cutting coefficients, immersion, up/down milling
+
+Results
+-------
+   LobeResult                    -- limiting depth over spindle speed (the envelope) and its lobes
+   Lobe                          -- one lobe curve: depth and chatter frequency against speed
+   envelope                      -- lowest lobe at each spindle speed
+   merge_lobe_results            -- rows of two results of the same computation, sorted by speed
+   plottable_depth               -- limiting depth with folds and non-finite values as NaN
+
+Building blocks
+---------------
+   oriented_frf                  -- oriented receptance ``Σ μ_ij H_ij(ω)``
+   tool_tip_matrix               -- tool-tip receptance matrix Φ (n_freq, 2, 2) in (x, y)
+   lobes_from_transfer           -- lobes from an oriented transfer function ``g(ω)``
+   mean_directional_matrix       -- tooth-period mean of the directional matrix (ZOA)
+   interval_directional_matrices -- averages of the directional matrix over SD sub-intervals
+   sd_system                     -- the SD system of a tool-tip modal model
+   monodromy                     -- Floquet transition matrix over one tooth period
+   spectral_radius               -- largest |Floquet multiplier| (stable when < 1)
+   critical_depth                -- smallest depth with spectral radius 1 at one speed
 """
 
 from jointdb.stability._adaptive import merge_lobe_results, plottable_depth, refine_lobes

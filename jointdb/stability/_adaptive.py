@@ -32,13 +32,34 @@ log = logging.getLogger(__name__)
 
 
 def plottable_depth(result: LobeResult) -> np.ndarray:
-    """Limiting depth [m] with folds and non-finite values as NaN (what a lobe plot may draw), shape ``(n,)``."""
+    """Limiting depth [m] with folds and non-finite values as NaN (what a lobe plot may draw).
+
+    Parameters
+    ----------
+    result
+        A :class:`LobeResult`.
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        Depth [m] per speed of ``result``.
+    """
     d = np.where(np.isfinite(result.depth_m), result.depth_m, np.nan)
     return np.where(result.kind == "fold", np.nan, d)
 
 
 def merge_lobe_results(a: LobeResult, b: LobeResult) -> LobeResult:
     """The rows of two results of the same computation, sorted by speed (``a``'s lobes and info kept).
+
+    Parameters
+    ----------
+    a, b
+        :class:`LobeResult` s of one method at different speeds.
+
+    Returns
+    -------
+    LobeResult
+        All rows, by ascending speed; ``info["evaluations"]`` is summed.
 
     Raises
     ------

@@ -82,7 +82,18 @@ class MillingCut:
         return 0.0, float(np.arccos(np.clip(1 - 2 * r, -1, 1)))
 
     def tooth_period(self, spindle_speed_rpm) -> np.ndarray:
-        """Tooth-passing period ``τ = 60/(N n)`` in s."""
+        """Tooth-passing period ``τ = 60/(N n)`` in s.
+
+        Parameters
+        ----------
+        spindle_speed_rpm
+            Spindle speed(s) n [rpm], scalar or array.
+
+        Returns
+        -------
+        ndarray
+            τ [s], the shape of ``spindle_speed_rpm``.
+        """
         return 60.0 / (self.n_teeth * np.asarray(spindle_speed_rpm, dtype=float))
 
 
@@ -132,6 +143,11 @@ def interval_directional_matrices(cut: MillingCut, n_intervals: int) -> np.ndarr
         :class:`MillingCut`.
     n_intervals
         Number m of intervals per tooth period (>= 1).
+
+    Returns
+    -------
+    ndarray, shape (m, 2, 2)
+        N/m².
     """
     m = int(n_intervals)
     st, ex = cut.angles

@@ -36,6 +36,11 @@ def oriented_frf(frf: FRF, orientation: Sequence[float] | np.ndarray | None = No
         direction at β_k to the force, θ the cut normal), or a full
         ``(n_out, n_in)`` matrix of factors. Default: 1 on the diagonal.
 
+    Returns
+    -------
+    ndarray, complex, shape (n_freq,)
+        G_o [m/N] on the FRF's lines above 0 Hz.
+
     Raises
     ------
     InputError
@@ -101,6 +106,13 @@ def tlusty_limit(frf: FRF, kf: float, orientation=None) -> tuple[float, float]:
     orientation
         Directional factors (see :func:`oriented_frf`).
 
+    Returns
+    -------
+    depth_m : float
+        The limit [m].
+    chatter_freq_hz : float
+        Where ``Re G_o`` is lowest [Hz].
+
     Raises
     ------
     InputError
@@ -159,6 +171,25 @@ def turning_lobes(
     ------
     InputError
         ``kf <= 0``, ``Re G_o`` never negative, bad speeds or ``max_lobes`` < 1.
+
+    Examples
+    --------
+    A single mode (k = 2·10⁷ N/m, ζ = 0.03, 800 Hz): the lowest point of the lobes is the
+    absolute limit ``2 k ζ (1 + ζ) / K_f``:
+
+    >>> import numpy as np
+    >>> from jointdb import FRF
+    >>> from jointdb.stability import turning_lobes
+    >>> k, zeta, fn = 2e7, 0.03, 800.0                              # N/m, -, Hz
+    >>> m = k / (2 * np.pi * fn) ** 2
+    >>> freq = np.linspace(700.0, 900.0, 2001)
+    >>> w = 2 * np.pi * freq
+    >>> tip = FRF(freq, 1 / (k - m * w**2 + 2j * zeta * np.sqrt(k * m) * w), ["1x"], ["1x"])
+    >>> result = turning_lobes(tip, kf=1e9, spindle_speed_rpm=np.linspace(1000, 5000, 200))
+    >>> result.depth_m.shape                                        # one limit per speed, m
+    (200,)
+    >>> round(result.min_depth_m * 1e3, 3), round(2 * k * zeta * (1 + zeta) / 1e9 * 1e3, 3)   # mm
+    (1.236, 1.236)
     """
     max_lobes = check_max_lobes(max_lobes)
     lim, fc = tlusty_limit(frf, kf, orientation)
@@ -181,11 +212,26 @@ def _hopf_envelope(method: str, lobes, speeds: np.ndarray, info: dict) -> LobeRe
 def tool_tip_matrix(frf: FRF, frf_y: FRF | None = None, cross_terms: bool = False) -> tuple[np.ndarray, np.ndarray, tuple[bool, bool]]:
     """Tool-tip receptance matrix Φ (n_freq, 2, 2) in (x, y) from FRF container(s).
 
-    ``frf`` holds the x driving point (and optionally y and cross terms) as DOFs
-    with directions ``x``/``y`` at one node; ``frf_y`` may hold the y driving point
-    separately (resampled onto ``frf``'s grid when needed). A missing direction
-    is rigid (zero). Cross terms are used only when ``cross_terms`` is true.
-    Returns ``(freq_hz, Φ, (has_x, has_y))``.
+    A missing direction is rigid (zero).
+
+    Parameters
+    ----------
+    frf
+        The x driving point (and optionally y and cross terms) as DOFs with directions
+        ``x``/``y`` at one node; any quantity (converted to receptance).
+    frf_y
+        The y driving point given separately (resampled onto ``frf``'s grid when needed).
+    cross_terms
+        Use the cross terms Φ_xy, Φ_yx when present (otherwise they are zero).
+
+    Returns
+    -------
+    freq_hz : ndarray, shape (n_freq,)
+        Frequency lines [Hz].
+    phi : ndarray, shape (n_freq, 2, 2)
+        Receptance [m/N] in (x, y).
+    present : tuple of bool
+        ``(has_x, has_y)``.
 
     Raises
     ------
@@ -284,6 +330,31 @@ def milling_lobes_zoa(
     InputError
         No x/y driving point, no negative real eigenvalue part in the band, bad
         speeds (non-finite or <= 0 rpm) or ``max_lobes`` < 1.
+
+    Examples
+    --------
+    Slotting with four teeth on a tool tip with the same single mode in x and y. For this
+    symmetric case the eigenvalues of ``H̄ Φ`` are ``(N K_t / 4)(K_r/K_t ∓ i) G(ω)``, so the
+    lowest limit is ``−2 / (N K_t min(K_r/K_t Re G + Im G))``; doubling K_t halves it:
+
+    >>> import numpy as np
+    >>> from jointdb import FRF
+    >>> from jointdb.stability import MillingCut, milling_lobes_zoa
+    >>> k, zeta, fn = 2e7, 0.03, 800.0                              # N/m, -, Hz
+    >>> m = k / (2 * np.pi * fn) ** 2
+    >>> freq = np.linspace(700.0, 900.0, 2001)
+    >>> w = 2 * np.pi * freq
+    >>> g = 1 / (k - m * w**2 + 2j * zeta * np.sqrt(k * m) * w)
+    >>> tip = FRF(freq, np.einsum("f,ij->fij", g, np.eye(2)), ["1x", "1y"], ["1x", "1y"])
+    >>> speeds = np.linspace(2000, 12000, 300)                      # rpm
+    >>> cut = MillingCut(n_teeth=4, kt=6e8, kr=1.8e8, radial_immersion=1.0)   # N/m²
+    >>> result = milling_lobes_zoa(tip, cut, spindle_speed_rpm=speeds)
+    >>> closed_form = float(-2 / (4 * 6e8 * np.min(0.3 * g.real + g.imag)))
+    >>> round(result.min_depth_m * 1e3, 3), round(closed_form * 1e3, 3)          # mm
+    (0.983, 0.983)
+    >>> harder = milling_lobes_zoa(tip, MillingCut(4, kt=1.2e9, kr=3.6e8), spindle_speed_rpm=speeds)
+    >>> round(harder.min_depth_m / result.min_depth_m, 6)
+    0.5
     """
     if not isinstance(cut, MillingCut):
         raise InputError(f"cut must be a MillingCut, got {type(cut).__name__}")

@@ -48,7 +48,19 @@ class Lobe:
     """One lobe curve (lobe number k): depth and chatter frequency against spindle speed.
 
     Arrays of equal length, ordered by chatter frequency (not necessarily by speed).
-    ``family`` numbers the eigenvalue branch (milling ZOA has one per direction).
+
+    Attributes
+    ----------
+    number
+        Lobe number k (k = 0 at the highest speeds).
+    spindle_speed_rpm
+        Spindle speed [rpm] per point, shape ``(n,)``.
+    depth_m
+        Limiting axial depth of cut [m] per point, shape ``(n,)`` (NaN where the curve breaks).
+    chatter_freq_hz
+        Chatter frequency [Hz] per point, shape ``(n,)``.
+    family
+        The eigenvalue branch (milling ZOA has one per direction).
     """
 
     number: int
@@ -108,7 +120,12 @@ class LobeResult:
         return float(d.min()) if d.size else float("nan")
 
     def table(self) -> list[dict]:
-        """One row per spindle speed: speed, depth, chatter frequency, lobe number, kind."""
+        """One row per spindle speed: speed, depth, chatter frequency, lobe number, kind.
+
+        Returns
+        -------
+        list of dict
+        """
         return [
             {
                 "spindle_speed_rpm": float(n),
@@ -132,6 +149,24 @@ def lobes_from_transfer(
     ``ωT = ε + 2kπ`` with ``ε = (2 arg g − π) mod 2π`` (docs/theory.md §5; equivalent to
     Altintas's ``ε = 3π + 2ψ`` and ``ε = π − 2 tan⁻¹κ``). Spindle speed
     ``n = 60 / (N T)`` rpm.
+
+    Parameters
+    ----------
+    freq_hz
+        Frequency lines [Hz], shape ``(n_freq,)``.
+    g
+        The oriented transfer on those lines [1/m], complex, shape ``(n_freq,)``.
+    n_teeth
+        Number of teeth N (1 for turning).
+    max_lobes
+        Lobes k = 0..max_lobes−1.
+    family
+        Branch number stored in each :class:`Lobe`.
+
+    Returns
+    -------
+    tuple of Lobe
+        One per lobe number; empty when ``Re g`` is nowhere negative.
     """
     f = np.asarray(freq_hz, dtype=float)
     g = np.asarray(g, dtype=complex)
@@ -159,6 +194,27 @@ def envelope(lobes: tuple[Lobe, ...], speeds: np.ndarray) -> tuple[np.ndarray, n
     Each lobe is treated as a polyline in (speed, depth); at a speed the depth of
     every segment spanning it is interpolated and the minimum kept. ``nan`` and
     ``-1`` where no lobe covers a speed.
+
+    Parameters
+    ----------
+    lobes
+        The lobe curves (:func:`lobes_from_transfer`).
+    speeds
+        Spindle speeds [rpm], ascending, shape ``(n,)``.
+
+    Returns
+    -------
+    depth : ndarray, shape (n,)
+        Limiting depth [m].
+    chatter_freq : ndarray, shape (n,)
+        Chatter frequency [Hz] of the lowest lobe.
+    lobe : ndarray of int, shape (n,)
+        Its lobe number.
+
+    Raises
+    ------
+    ValueError
+        If ``speeds`` are not ascending.
     """
     s = np.asarray(speeds, dtype=float)
     if np.any(np.diff(s) < 0):

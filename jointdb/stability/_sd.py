@@ -203,7 +203,18 @@ def monodromy(sys: SDSystem, spindle_speed_rpm: float, depth: float, n_intervals
 
 
 def spectral_radius(sys: SDSystem, spindle_speed_rpm: float, depth: float, n_intervals: int = 40) -> float:
-    """Largest |Floquet multiplier| of :func:`monodromy` (same parameters); the cut is stable when < 1.
+    """Largest |Floquet multiplier| of :func:`monodromy`; the cut is stable when < 1.
+
+    Parameters
+    ----------
+    sys
+        From :func:`sd_system`.
+    spindle_speed_rpm
+        Spindle speed [rpm].
+    depth
+        Axial depth of cut a [m].
+    n_intervals
+        Intervals m per tooth period.
 
     Returns
     -------
@@ -295,6 +306,12 @@ def critical_depth(
     depth_max
         Search ceiling [m].
 
+    Returns
+    -------
+    tuple
+        ``(depth_m, chatter_freq_hz, kind, lobe, n_evaluations)``; depth ``inf`` and kind
+        ``""`` when still stable at ``depth_max``.
+
     Raises
     ------
     NumericalError
@@ -359,6 +376,9 @@ def milling_lobes_sd(
         Intervals m per tooth period (accuracy; 40 is usual).
     rtol
         Relative tolerance of the critical depth.
+    depth_max
+        Largest depth [m] searched per speed (default 1000× the starting depth); a speed
+        still stable there has no limit (kind ``""``).
 
     Returns
     -------
@@ -374,6 +394,26 @@ def milling_lobes_sd(
         DOFs, bad speeds (non-finite, <= 0 rpm), ``n_intervals < 2``.
     NumericalError
         If the model is unstable without cutting.
+
+    Examples
+    --------
+    Slotting with four teeth on one mode per direction (k = 2·10⁷ N/m, ζ = 0.03, 800 Hz). In
+    slotting the zero-order approximation is accurate, and the semi-discretization agrees with
+    it to within 1 % at each speed:
+
+    >>> import numpy as np
+    >>> from jointdb.modal import ModalModel
+    >>> from jointdb.stability import MillingCut, milling_lobes_sd, milling_lobes_zoa
+    >>> model = ModalModel.block_diagonal([ModalModel.from_modal_parameters([800.0], [0.03], [2e7], dof)
+    ...                                    for dof in ("1x", "1y")])
+    >>> cut = MillingCut(n_teeth=4, kt=6e8, kr=1.8e8, radial_immersion=1.0)      # N/m²
+    >>> speeds = np.array([5000.0, 5600.0, 6200.0, 6800.0])                      # rpm
+    >>> sd = milling_lobes_sd(model, cut, speeds)
+    >>> sd.kind.tolist()
+    ['hopf', 'hopf', 'hopf', 'hopf']
+    >>> zoa = milling_lobes_zoa(model.synthesize(np.linspace(700.0, 900.0, 2001)), cut, spindle_speed_rpm=speeds)
+    >>> bool(np.all(np.abs(sd.depth_m / zoa.depth_m - 1) < 0.01))
+    True
     """
     sys = sd_system(model, cut)
     speeds = spindle_speeds(spindle_speed_rpm)

@@ -22,7 +22,8 @@ Public API
 - :func:`stack_parts(spec, freq)` — the parts' free receptances;
   :func:`tool_model`, :func:`holder_model`, :func:`spindle_model` — their beam
   models; :func:`composite_material`; :func:`tool_tip_chain`, :func:`attach`
-  — the coupling algebra on arrays.
+  — the coupling algebra on arrays; :func:`prediction_grid` — the frequency
+  lines of a prediction.
 
 Bending planes: x and y are predicted separately (the tool and holder are
 axisymmetric); a spindle side without y terms gives y = x (with a note). A
@@ -31,7 +32,7 @@ spindle FRF with x–y cross terms couples the planes: one chain over
 ``H[1x,1y]``, ``H[1y,1x]``.
 
 Node numbers: tip 1, tool at holder face 2, holder nose 3, holder base 4,
-spindle nose 5 (:data:`NODES`). Interfaces: :data:`INTERFACE_NAMES` =
+spindle nose 5 (:data:`NODES`; :data:`TIP_NODE` = 1). Interfaces: :data:`INTERFACE_NAMES` =
 ``("tool-holder", "holder-spindle")``; joint FRFs are planar receptances on
 ``x`` and ``ry`` (any node number), ``u_A − u_B = H_J λ`` with A on the tool
 side.

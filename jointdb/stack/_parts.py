@@ -40,6 +40,22 @@ def composite_material(holder: Material, tool: Material, outer: float, bore: flo
 
     The equivalent solid circle of diameter ``outer`` has
     ``E_eq I = E_h I_h + E_t I_t`` and ``ρ_eq A = ρ_h A_h + ρ_t A_t``; ν is the holder's.
+
+    Parameters
+    ----------
+    holder, tool
+        The holder's and the tool's :class:`jointdb.fe.Material`.
+    outer
+        Holder outer diameter [m].
+    bore
+        Holder bore diameter [m].
+    shank
+        Tool shank diameter [m] (<= ``bore``).
+
+    Returns
+    -------
+    Material
+        E_eq [Pa], ν, ρ_eq [kg/m³] of a solid circle of diameter ``outer``.
     """
     a_full, i_full = math.pi * outer**2 / 4, math.pi * outer**4 / 64
     a_h, i_h = math.pi * (outer**2 - bore**2) / 4, math.pi * (outer**4 - bore**4) / 64
@@ -77,6 +93,36 @@ def tool_model(spec: StackSpec, max_element_length: float = 0.005) -> BeamModel:
     ------
     InputError
         Unknown tool material.
+
+    Examples
+    --------
+    The 50 mm overhang of a 12 mm carbide tool: free–free, so two rigid-body modes, then the
+    first bending mode, about 12 % below the Euler–Bernoulli value ``(4.7300² / 2π) √(EI / ρAL⁴)``
+    for so stubby a beam (L/d = 4.2: shear and rotary inertia):
+
+    >>> import numpy as np
+    >>> from jointdb.fe import get_material
+    >>> from jointdb.stack import stack_from_dict, tool_model
+    >>> spec = stack_from_dict({
+    ...     "format": "jointdb-stack/1", "name": "example",
+    ...     "tool": {"material": "carbide", "segments": [{"length": 0.08, "diameter": 0.012}]},
+    ...     "gauge_length": 0.05,
+    ...     "holder": {"material": "steel", "segments": [{"length": 0.07, "outer_diameter": 0.05,
+    ...                                                   "inner_diameter": 0.012}]},
+    ...     "spindle": {"point": "nose", "model": {
+    ...         "format": "jointdb-beam-model/1",
+    ...         "segments": [{"length": 0.2, "outer_diameter": 0.07, "material": "steel"}],
+    ...         "points": [{"name": "nose", "position": 0.0, "node": 5}], "clamps": [{"position": 0.2}]}},
+    ...     "interfaces": {"tool-holder": "rigid", "holder-spindle": "rigid"}})
+    >>> model = tool_model(spec)
+    >>> [(p.name, p.position, p.node) for p in model.points]
+    [('tip', 0.0, 1), ('base', 0.05, 2)]
+    >>> modes = model.modes(3)
+    >>> carbide, L, d = get_material("carbide"), 0.05, 0.012
+    >>> EI, rhoA = carbide.E * np.pi * d**4 / 64, carbide.rho * np.pi * d**2 / 4
+    >>> f_eb = 4.7300**2 / (2 * np.pi) * np.sqrt(EI / (rhoA * L**4))
+    >>> modes.n_rigid, round(float(modes.freq_hz[2] / f_eb), 2)
+    (2, 0.88)
     """
     tool = spec.tool
     material = get_material(tool.material)

@@ -55,7 +55,13 @@ class Prediction:
     notes: tuple[str, ...]
 
     def summary(self) -> list[dict]:
-        """Per direction: dominant peak (frequency, |H|) with the joints and with rigid joints."""
+        """Per direction: dominant peak (frequency, |H|) with the joints and with rigid joints.
+
+        Returns
+        -------
+        list of dict
+            One row per direction.
+        """
         rows = []
         for k, dof in enumerate(self.tip.outputs):
             h = np.abs(self.tip.values[:, k, k])
@@ -74,6 +80,15 @@ class Prediction:
 
 def spindle_model(spec: StackSpec) -> BeamModel:
     """The spindle's beam model of a :class:`ModelledSpindle` stack.
+
+    Parameters
+    ----------
+    spec
+        A stack with a :class:`ModelledSpindle` whose model is a dict or a BeamModel.
+
+    Returns
+    -------
+    BeamModel
 
     Raises
     ------
@@ -96,6 +111,13 @@ def spindle_model(spec: StackSpec) -> BeamModel:
 def prediction_grid(spec: StackSpec, freq=None) -> np.ndarray:
     """Frequency lines [Hz] of a prediction: ``freq`` if given, else the stack file's
     ``frequency``, else a measured spindle FRF's own lines above 0 Hz, else 10–5000 Hz by 5 Hz.
+
+    Parameters
+    ----------
+    spec
+        The stack.
+    freq
+        Explicit lines [Hz], ``(n_freq,)``, or None.
 
     Returns
     -------
@@ -259,6 +281,36 @@ def predict_tool_tip(spec: StackSpec, resolved_joints: Mapping[str, FRF] | None 
         grid or lack rotational DOFs, bad grids.
     NumericalError
         Singular interface matrix at some line.
+
+    Examples
+    --------
+    A 12 mm carbide tool at 50 mm gauge length in a steel chuck on a clamped spindle shaft. The
+    tool–holder joint (k [N/m, N·m/rad], c [N·s/m, N·m·s/rad]) moves the dominant tip mode far
+    below the rigid-joint prediction; a stiffer joint tends to the rigid one, the gap as 1/k:
+
+    >>> import numpy as np
+    >>> from jointdb.stack import stack_from_dict, predict_tool_tip
+    >>> spindle = {"segments": [{"length": 0.2, "outer_diameter": 0.07, "material": "steel"}],
+    ...            "points": [{"name": "nose", "position": 0.0, "node": 5}], "clamps": [{"position": 0.2}]}
+    >>> def stack(tool_holder):
+    ...     return stack_from_dict({"name": "example", "gauge_length": 0.05,
+    ...         "tool": {"material": "carbide", "segments": [{"length": 0.08, "diameter": 0.012}]},
+    ...         "holder": {"material": "steel", "segments": [
+    ...             {"length": 0.04, "outer_diameter": 0.032, "inner_diameter": 0.012},
+    ...             {"length": 0.03, "outer_diameter": 0.05}]},
+    ...         "spindle": {"point": "nose", "model": spindle}, "frequency": {"min": 100, "max": 6000, "step": 20},
+    ...         "interfaces": {"tool-holder": tool_holder, "holder-spindle": "rigid"}})
+    >>> p = predict_tool_tip(stack({"k": [2e7, 1e6], "c": [100.0, 5.0]}))
+    >>> p.tip.shape, [str(dof) for dof in p.tip.outputs]          # (n_freq, n_out, n_in), receptance m/N
+    ((296, 2, 2), ['1x', '1y'])
+    >>> peak_hz = [float(f.freq[np.argmax(np.abs(f.entry("1x", "1x")))]) for f in (p.tip, p.rigid)]
+    >>> peak_hz[0] < 0.5 * peak_hz[1]
+    True
+    >>> def gap(k, k_rot):
+    ...     s = predict_tool_tip(stack({"k": [k, k_rot], "c": [0.0, 0.0]}))
+    ...     return np.abs(s.tip.values - s.rigid.values).max() / np.abs(s.rigid.values).max()
+    >>> g1, g2 = gap(1e12, 1e10), gap(1e13, 1e11); bool(g2 < 2e-3 and 8 < g1 / g2 < 12)
+    True
     """
     resolved = dict(resolved_joints or {})
     unknown = set(resolved) - set(INTERFACE_NAMES)

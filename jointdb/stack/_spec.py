@@ -51,10 +51,17 @@ INTERFACE_NAMES: tuple[str, str] = ("tool-holder", "holder-spindle")
 # ------------------------------------------------------------------ parts
 @dataclass(frozen=True)
 class ToolSegment:
-    """One tool section: ``length`` and (cutter or shank) ``diameter`` in m.
+    """One tool section, from the tip.
 
-    ``fluted=True`` marks the cutting section; it is modelled as a solid
-    cylinder of ``Tool.fluted_ratio × diameter``.
+    Parameters
+    ----------
+    length
+        Section length [m].
+    diameter
+        Cutter or shank diameter [m].
+    fluted
+        True for the cutting section: modelled as a solid cylinder of
+        ``Tool.fluted_ratio × diameter``.
     """
 
     length: float
@@ -97,7 +104,17 @@ class Tool:
 
 @dataclass(frozen=True)
 class HolderSegment:
-    """One holder section (m): outer diameter and bore (0 for solid)."""
+    """One holder section, from the nose.
+
+    Parameters
+    ----------
+    length
+        Section length [m].
+    outer_diameter
+        Outer diameter [m].
+    inner_diameter
+        Bore diameter [m] (0 for a solid section).
+    """
 
     length: float
     outer_diameter: float
@@ -106,7 +123,17 @@ class HolderSegment:
 
 @dataclass(frozen=True)
 class Holder:
-    """The tool holder, from its nose (tool side) towards the spindle."""
+    """The tool holder, from its nose (tool side) towards the spindle.
+
+    Parameters
+    ----------
+    segments
+        :class:`HolderSegment` s from the nose.
+    material
+        A name known to :func:`jointdb.fe.get_material`.
+    loss_factor
+        Structural (hysteretic) loss factor η of the holder's beam model.
+    """
 
     segments: tuple[HolderSegment, ...]
     material: str = "steel"
@@ -144,9 +171,14 @@ class MeasuredSpindle:
 class ModelledSpindle:
     """Spindle side as a beam model with bearing supports (``jointdb.fe`` model dict).
 
-    ``model`` is the model description (a dict for :func:`jointdb.fe.model_from_dict`,
-    or a path to such a JSON file, loaded by the application layer into a dict);
-    ``point`` names the model point the holder is attached to.
+    Parameters
+    ----------
+    model
+        The model description (a dict for :func:`jointdb.fe.model_from_dict`, or a path to
+        such a JSON file, loaded by the application layer into a dict), or a
+        :class:`jointdb.fe.BeamModel`.
+    point
+        The model point the holder is attached to.
     """
 
     model: Any
@@ -167,6 +199,24 @@ class JointChoice:
     - ``"query"``: the nearest catalogued joint of ``joint_type`` to
       ``conditions`` (keys ``materials``, ``torque_nm``, ``preload_n``,
       ``geometry``, ``extra``), optionally interpolating the ``k`` nearest.
+
+    Parameters
+    ----------
+    kind
+        ``"rigid"``, ``"explicit"``, ``"catalogued"`` or ``"query"`` (above).
+    k, c
+        Explicit stiffness ``(k_x, k_θ)`` [N/m, N·m/rad] and damping ``(c_x, c_θ)``
+        [N·s/m, N·m·s/rad].
+    name, version
+        A catalogued joint's name and version number or label.
+    joint_type
+        The joint type a query searches (``"tool-holder"``, ``"holder-spindle"``).
+    conditions
+        The query's conditions (SI units: torque in N·m, preload in N, geometry in m).
+    neighbours
+        How many nearest joints a query reports (and interpolates between).
+    interpolate
+        Interpolate between the neighbours instead of taking the nearest.
     """
 
     kind: str
@@ -194,13 +244,29 @@ class JointChoice:
 
 @dataclass(frozen=True)
 class FrequencyGrid:
-    """Prediction frequency lines ``fmin, fmin+step, ..., <= fmax`` in Hz (fmin > 0)."""
+    """Prediction frequency lines ``fmin, fmin+step, ..., <= fmax`` in Hz.
+
+    Parameters
+    ----------
+    fmin
+        First line [Hz], > 0.
+    fmax
+        Last line at most [Hz].
+    step
+        Line spacing [Hz].
+    """
 
     fmin: float = 10.0
     fmax: float = 5000.0
     step: float = 5.0
 
     def lines(self):
+        """The frequency lines [Hz].
+
+        Returns
+        -------
+        ndarray, shape (n,)
+        """
         import numpy as np
 
         n = int(math.floor((self.fmax - self.fmin) / self.step + 1e-9)) + 1
@@ -211,9 +277,23 @@ class FrequencyGrid:
 class StackSpec:
     """A tool / holder / spindle stack (see the module docstring for conventions).
 
-    ``interfaces`` maps each of :data:`INTERFACE_NAMES` to a :class:`JointChoice`.
-    ``frequency`` is the default prediction grid (a measured spindle FRF's
-    own grid is used when ``frequency`` is not given in the file).
+    Parameters
+    ----------
+    name
+        Free text.
+    tool
+        The :class:`Tool`.
+    holder
+        The :class:`Holder`.
+    spindle
+        A :class:`MeasuredSpindle` or :class:`ModelledSpindle`.
+    gauge_length
+        Tool overhang from the holder face to the tip [m].
+    interfaces
+        Each of :data:`INTERFACE_NAMES` → a :class:`JointChoice`.
+    frequency
+        The default prediction grid (:class:`FrequencyGrid`); a measured spindle FRF's own
+        grid is used when it is not given.
     """
 
     name: str
@@ -230,4 +310,15 @@ class StackSpec:
         return self.tool.length - self.gauge_length
 
     def replace(self, **changes) -> "StackSpec":
+        """A copy with some fields replaced.
+
+        Parameters
+        ----------
+        **changes
+            Field name → new value.
+
+        Returns
+        -------
+        StackSpec
+        """
         return replace(self, **changes)

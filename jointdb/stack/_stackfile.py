@@ -277,6 +277,15 @@ def _frequency(obj: Any, path: str) -> FrequencyGrid:
 def stack_from_dict(doc: Any) -> StackSpec:
     """Validate a stack document (parsed JSON) and build a :class:`StackSpec`.
 
+    Parameters
+    ----------
+    doc
+        The parsed stack file (``jointdb-stack/1``, SI units; layout in :mod:`jointdb.stack`).
+
+    Returns
+    -------
+    StackSpec
+
     Raises
     ------
     InputError
@@ -362,7 +371,17 @@ def _joint_to_obj(j: JointChoice) -> Any:
 
 
 def stack_to_dict(spec: StackSpec) -> dict[str, Any]:
-    """The JSON document of a stack (inverse of :func:`stack_from_dict`)."""
+    """The JSON document of a stack (inverse of :func:`stack_from_dict`).
+
+    Parameters
+    ----------
+    spec
+        The :class:`StackSpec`.
+
+    Returns
+    -------
+    dict
+    """
     doc: dict[str, Any] = {
         "format": FORMAT,
         "name": spec.name,

@@ -1,65 +1,66 @@
 """The joint database: versioned joint records, HDF5 blob store, nearest-joint query.
 
-Library first; the ``jointdb catalogue / joints / query / db`` commands call it.
+Library first; the ``jointdb catalogue / joints / query / db`` commands call it. Every
+catalogued joint is an immutable version with its conditions, provenance and the SHA-256 of
+its FRF; every read verifies the record hash (:class:`~jointdb.errors.IntegrityError` on a
+mismatch). SQLAlchemy and h5py are imported on first use of a name that needs them.
 
->>> from jointdb.store import Repository, Conditions, Provenance
->>> repo = Repository("/tmp/joints.sqlite")                    # doctest: +SKIP
->>> jv = repo.catalogue("T1-HSK63", "tool-holder", frf,
-...                     Conditions(("tungsten-carbide", "steel"), torque_nm=40.0,
-...                                geometry={"diameter_m": 0.02}),
-...                     model_kind="spring-damper-planar",
-...                     provenance=Provenance(method="irc-planar"),
-...                     quality={"identification_residual": 1e-3})  # doctest: +SKIP
->>> repo.get("T1-HSK63", version=1); repo.load_frf(jv)            # doctest: +SKIP
->>> repo.nearest("tool-holder", Conditions(torque_nm=35.0), k=3)  # doctest: +SKIP
+Stores
+------
+   Repository              -- SQLite or PostgreSQL rows plus an HDF5 blob store (examples there)
+   JointStore              -- the store protocol that ``Repository`` and
+                              :class:`jointdb.client.RemoteRepository` implement
+   LocalJointStore         -- ``JointStore`` plus what only a local database offers
+   open_store              -- the store a path, database URL or server address names
+   owned_store             -- :func:`open_store` in a ``with`` block
+   BlobStore               -- content-addressed FRF blobs in a directory
+   BlobStoreProtocol       -- the protocol both blob stores implement
 
-API (one protocol, :class:`JointStore`, which ``Repository`` and
-:class:`jointdb.client.RemoteRepository` implement; :class:`LocalJointStore` adds what only a
-local database offers; :func:`open_store` opens either from a path, URL or server address;
-the blob stores implement :class:`BlobStoreProtocol`; see :mod:`jointdb.store._protocol`):
+Records
+-------
+   Conditions              -- materials, preload, torque, geometry a joint was identified under
+   Provenance              -- method, parameters, input files, software version, author
+   JointVersion            -- one immutable catalogued version
+   Catalogued              -- a version and whether this call wrote it
+   MODEL_KINDS             -- ``spring-damper-planar``, ``n-point-translational``, ``full-matrix``
+   KNOWN_MATERIALS         -- the built-in interface material names
+   known_materials         -- built-in names plus ``JOINTDB_MATERIALS``
+   register_material       -- accept a new material name for this process
 
-- ``Repository(url=None, *, blobs=None, auto_create=None)`` - ``url``: SQLAlchemy URL
-  or SQLite path (default ``$JOINTDB_URL``, else ``$XDG_DATA_HOME/jointdb/jointdb.sqlite``);
-  ``blobs``: blob directory (default ``$JOINTDB_BLOBS``, else ``<sqlite file>.blobs``;
-  required for PostgreSQL). A missing SQLite file is created (atomically, with its
-  schema) unless ``auto_create=False``; an existing file that is empty, not SQLite or
-  not a jointdb database is refused, never re-created. PostgreSQL needs
-  ``jointdb db upgrade`` first.
-- ``.catalogue(name, joint_type, frf, conditions, model_kind, provenance=None,
-  quality=None, parent=None, *, raw_frfs=None, author=None, label=None) -> JointVersion``
-  (the label is set in the same transaction)
-- ``.get(name, version=None, at=None, label=None) -> JointVersion`` (default: latest
-  non-deprecated); ``.load_frf(jv)`` or ``.load_frf(name, number) -> FRF`` (verified);
-  ``.load_raw(jv, key) -> FRF``
-- ``.history(name)``, ``.list_joints(joint_type=None, include_deprecated=True)``,
-  ``.list_page(joint_type=None, *, materials, label, state, torque_min, ..., after, limit) ->
-  JointPage`` (one SQL statement per page, ``next`` cursor; damaged rows are reported in
-  ``JointPage.damaged`` and by lists as :class:`DamagedRecordWarning`, never fatal to a list),
-  ``.label(name, version, label)``, ``.deprecate(name, version=None, reason="", undo=False)``,
-  ``.audit(name=None, limit=100)``
-- ``.diff(name, version_a, version_b=None, other=None) -> VersionDiff``
-- ``.export(names_or_None, path, *, sign_key=None) -> counts``,
-  ``.import_(path, author=None, *, trusted_keys=(), require_signature=False) -> summary``
-  (ConflictError on a conflicting version; identical content is a no-op; bundle hash
-  and Ed25519 signatures: :mod:`jointdb.store._bundle`, :mod:`jointdb.store._signing`)
-- ``.nearest(joint_type, conditions, k=3, at=None) -> list[Match]`` (distance defined in
-  :mod:`jointdb.store._query`; warns :class:`OutsideCatalogueWarning`);
-  ``.interpolate(matches, conditions=None, method="axes") -> InterpolatedJoint`` (``.frf``,
-  ``.neighbours``; weights of the matches bracketing the request along its condition axes,
-  :mod:`jointdb.store._interp`, or ``method="idw"`` inverse distance)
-- every read verifies the version's record hash (IntegrityError on a mismatch)
-- ``.check(verify_blobs=True) -> CheckReport`` (``.ok``, ``.problems``, ``.notes``; also
-  missing immutability guards), ``.gc(min_age_s=3600, dry_run=False)``
-- ``upgrade(url=None, revision="head")``, ``downgrade(url=None, revision="-1")``,
-  ``current_revision(url=None)``, ``head_revision()``
+Queries and listings
+--------------------
+   Match                   -- one answer of ``Repository.nearest``: version, distance, extrapolation
+   InterpolatedJoint       -- a joint FRF interpolated between catalogued neighbours
+   OutsideCatalogueWarning -- a request outside the catalogued range of a condition
+   JointPage               -- one page of ``Repository.list_page`` with its ``next`` cursor
+   DamagedVersion          -- a version a listing skipped, and why
+   DamagedRecordWarning    -- a list skipped damaged rows
+   VersionDiff             -- differences between two versions
+   CheckReport             -- result of ``Repository.check``
 
-Value types: ``Conditions(materials, preload_n, torque_nm, geometry, extra)`` (materials from
-:func:`known_materials`; extend with ``JOINTDB_MATERIALS=a,b`` or :func:`register_material`),
-``Provenance(method, parameters, input_files, software_version, author)``, ``JointVersion``,
-``Match(version, distance, per_condition, extrapolating, outside_range)``, ``MODEL_KINDS``
-(``spring-damper-planar``, ``n-point-translational``, ``full-matrix``).
-Blob format and canonical hash: :mod:`jointdb.store._blobs`; bundle format:
-:mod:`jointdb.store._bundle`; schema: :mod:`jointdb.store._models`.
+Blob files
+----------
+   frf_sha256              -- SHA-256 of the canonical form of an FRF
+   file_sha256             -- SHA-256 of a file's bytes
+   write_frf_file          -- one FRF in the blob layout; returns its content hash
+   read_frf_file           -- read it back, checksum and content hash verified
+
+Bundle signatures (Ed25519)
+---------------------------
+   create_key_pair         -- write a new key pair (``NAME``, ``NAME.pub``)
+   load_private_key        -- a private key to sign an exported bundle with
+   load_public_key         -- a public key to trust when importing one
+
+Schema migrations
+-----------------
+   upgrade                 -- apply Alembic migrations to a revision
+   downgrade               -- revert Alembic migrations
+   current_revision        -- the schema revision of a database
+   head_revision           -- the newest schema revision this jointdb knows
+
+Formats: blobs and the canonical hash :mod:`jointdb.store._blobs`; bundles
+:mod:`jointdb.store._bundle` (Ed25519 signatures :mod:`jointdb.store._signing`); the SQL
+schema :mod:`jointdb.store._models`; the nearest-joint distance :mod:`jointdb.store._query`.
 """
 
 from __future__ import annotations
@@ -106,6 +107,9 @@ __all__ = [
     "open_store",
     "owned_store",
     "Catalogued",
+    "create_key_pair",
+    "load_private_key",
+    "load_public_key",
     "upgrade",
     "downgrade",
     "current_revision",
@@ -119,6 +123,7 @@ _LAZY = {
     "write_frf_file": "_blobs", "JointPage": "_listing", "Catalogued": "_reports",
     "JointStore": "_protocol", "LocalJointStore": "_protocol", "BlobStoreProtocol": "_protocol",
     "open_store": "_open", "owned_store": "_open",
+    "create_key_pair": "_signing", "load_private_key": "_signing", "load_public_key": "_signing",
 }
 
 
@@ -155,10 +160,22 @@ def _migrate(step: str, url: str | None, revision: str) -> str | None:
 
 
 def upgrade(url: str | None = None, revision: str = "head") -> str | None:
-    """Apply Alembic migrations to ``revision``; returns the new revision.
+    """Apply Alembic migrations to ``revision``.
 
     A SQLite file that does not exist is created (atomically); an existing file
     must be a jointdb database (see :func:`jointdb.store._db.open_sqlite_target`).
+
+    Parameters
+    ----------
+    url
+        Database URL or SQLite path (default ``JOINTDB_URL`` or the per-user file).
+    revision
+        Target revision (``"head"``: the newest).
+
+    Returns
+    -------
+    str or None
+        The revision after the upgrade.
     """
     return _migrate("upgrade", url, revision)
 
@@ -168,12 +185,35 @@ def downgrade(url: str | None = None, revision: str = "-1") -> str | None:
 
     Never creates a database (NotFoundError for a missing SQLite file). The
     command line asks for ``--yes`` first (see :func:`jointdb.store._db.downgrade_plan`).
+
+    Parameters
+    ----------
+    url
+        Database URL or SQLite path (default ``JOINTDB_URL`` or the per-user file).
+    revision
+        Target revision.
+
+    Returns
+    -------
+    str or None
+        The revision after the downgrade (None at ``base``).
     """
     return _migrate("downgrade", url, revision)
 
 
 def current_revision(url: str | None = None) -> str | None:
-    """The schema revision of a database (None when it has none, or when a SQLite file does not exist)."""
+    """The schema revision of a database.
+
+    Parameters
+    ----------
+    url
+        Database URL or SQLite path (default ``JOINTDB_URL`` or the per-user file).
+
+    Returns
+    -------
+    str or None
+        None when it has none, or when a SQLite file does not exist (nothing is created).
+    """
     from jointdb.store import _db
 
     resolved = _db.resolve_url(url)
@@ -190,7 +230,13 @@ def current_revision(url: str | None = None) -> str | None:
 
 
 def head_revision() -> str:
-    """The newest schema revision this jointdb knows."""
+    """The newest schema revision this jointdb knows.
+
+    Returns
+    -------
+    str
+        An Alembic revision id.
+    """
     from jointdb.store import _db
 
     return _db.head_revision()

@@ -70,7 +70,18 @@ def check_digest(digest: str) -> str:
 
 
 def frf_sha256(frf: FRF) -> str:
-    """SHA-256 (hex) of the canonical form of an FRF (module docstring)."""
+    """SHA-256 (hex) of the canonical form of an FRF (module docstring).
+
+    Parameters
+    ----------
+    frf
+        The FRF (its quantity, labels, shape, lines and values enter the hash).
+
+    Returns
+    -------
+    str
+        64 hex digits.
+    """
     h = hashlib.sha256()
     h.update(b"jointdb-frf-v1\n")
     h.update(frf.quantity.value.encode() + b"\n")
@@ -83,7 +94,18 @@ def frf_sha256(frf: FRF) -> str:
 
 
 def file_sha256(path: str | os.PathLike) -> str:
-    """SHA-256 (hex) of a file's bytes (for provenance ``input_files``)."""
+    """SHA-256 (hex) of a file's bytes (for provenance ``input_files``).
+
+    Parameters
+    ----------
+    path
+        The file.
+
+    Returns
+    -------
+    str
+        64 hex digits.
+    """
     h = hashlib.sha256()
     with open(path, "rb") as f:
         for chunk in iter(lambda: f.read(1 << 20), b""):
@@ -187,7 +209,20 @@ def decode_blob_bytes(data: bytes, where: str, digest: str | None = None) -> FRF
 
 
 def write_frf_file(path: str | os.PathLike, frf: FRF) -> str:
-    """Write one FRF to an HDF5 file in the blob layout (no atomicity); returns its content hash."""
+    """Write one FRF to an HDF5 file in the blob layout (no atomicity).
+
+    Parameters
+    ----------
+    path
+        The file to write.
+    frf
+        The FRF.
+
+    Returns
+    -------
+    str
+        Its content hash (:func:`frf_sha256`).
+    """
     digest, data = blob_bytes(frf)
     with open(path, "wb") as fh:
         fh.write(data)
@@ -220,7 +255,24 @@ def _check_userblock(block: bytes, body_sha256: str, where: str) -> None:
 
 
 def read_frf_file(path: str | os.PathLike, verify: bool = True) -> FRF:
-    """Read a file written by :func:`write_frf_file` (file checksum and content hash verified)."""
+    """Read a file written by :func:`write_frf_file`.
+
+    Parameters
+    ----------
+    path
+        The file.
+    verify
+        Check the whole-file checksum and the content hash.
+
+    Returns
+    -------
+    FRF
+
+    Raises
+    ------
+    IntegrityError
+        A damaged file, or a content hash that does not match.
+    """
     import h5py
 
     where = str(path)

@@ -67,7 +67,18 @@ class VerifyingBlobs:
         raise NotImplementedError
 
     def verify(self, digest: str) -> str | None:
-        """None when the blob is present and intact, else a one-line problem description."""
+        """Check one blob.
+
+        Parameters
+        ----------
+        digest
+            The blob's SHA-256 (hex).
+
+        Returns
+        -------
+        str or None
+            None when the blob is present and intact, else a one-line problem description.
+        """
         try:
             self.get(digest)
         except (NotFoundError, IntegrityError) as exc:
@@ -93,6 +104,15 @@ class BlobStore(VerifyingBlobs):
     def path(self, digest: str) -> Path:
         """File of a blob; the digest (often read from the database) must be 64 lower-case hex digits.
 
+        Parameters
+        ----------
+        digest
+            The blob's SHA-256 (hex).
+
+        Returns
+        -------
+        Path
+
         Raises
         ------
         IntegrityError
@@ -102,11 +122,32 @@ class BlobStore(VerifyingBlobs):
         return self.root / digest[:2] / f"{digest}.h5"
 
     def exists(self, digest: str) -> bool:
+        """Whether the blob's file exists (not verified).
+
+        Parameters
+        ----------
+        digest
+            The blob's SHA-256 (hex).
+
+        Returns
+        -------
+        bool
+        """
         return self.path(digest).is_file()
 
     # ------------------------------------------------------------------ write
     def put(self, frf: FRF) -> str:
-        """Store an FRF durably; return its SHA-256. Idempotent (existing verified blob kept).
+        """Store an FRF durably. Idempotent (an existing verified blob is kept).
+
+        Parameters
+        ----------
+        frf
+            The FRF.
+
+        Returns
+        -------
+        str
+            Its SHA-256 (:func:`frf_sha256`).
 
         Raises
         ------
@@ -119,6 +160,19 @@ class BlobStore(VerifyingBlobs):
 
     def put_pending(self, frf: FRF) -> "PendingPut":
         """Start storing an FRF: encoded, written and verified now, made durable in the background.
+
+        Parameters
+        ----------
+        frf
+            The FRF.
+
+        Returns
+        -------
+        PendingPut
+            ``.wait()`` returns the digest once the blob is durable.
+
+        Notes
+        -----
 
         The blob file's bytes are built in memory (:func:`blob_bytes`) and written to a
         temporary file, whose fsync runs on a worker thread while the bytes are decoded
@@ -195,6 +249,15 @@ class BlobStore(VerifyingBlobs):
     def get(self, digest: str) -> FRF:
         """Read and verify a blob.
 
+        Parameters
+        ----------
+        digest
+            The blob's SHA-256 (hex).
+
+        Returns
+        -------
+        FRF
+
         Raises
         ------
         NotFoundError
@@ -219,7 +282,13 @@ class BlobStore(VerifyingBlobs):
 
     # ------------------------------------------------------------------ walk
     def walk(self) -> Iterator[BlobInfo]:
-        """All finished blobs in the store."""
+        """All finished blobs in the store.
+
+        Yields
+        ------
+        BlobInfo
+            ``sha256``, ``path``, ``size`` [bytes], ``mtime`` [s since the epoch].
+        """
         if not self.root.is_dir():
             return
         for sub in sorted(self.root.iterdir()):
@@ -232,13 +301,24 @@ class BlobStore(VerifyingBlobs):
                 yield BlobInfo(p.stem, p, st.st_size, st.st_mtime)
 
     def temporaries(self) -> list[Path]:
-        """Left-over temporary files of interrupted writes."""
+        """Left-over temporary files of interrupted writes.
+
+        Returns
+        -------
+        list of Path
+        """
         if not self.root.is_dir():
             return []
         return sorted(self.root.glob(f"*/{_TMP_PREFIX}*"))
 
     def remove(self, digest: str) -> None:
-        """Delete one blob file unconditionally (tests and repairs; ``gc`` uses :meth:`collect`)."""
+        """Delete one blob file unconditionally (tests and repairs; ``gc`` uses :meth:`collect`).
+
+        Parameters
+        ----------
+        digest
+            The blob's SHA-256 (hex).
+        """
         path = self.path(digest)
         path.unlink(missing_ok=True)
         _fsync_dir(path.parent)
@@ -250,7 +330,20 @@ class BlobStore(VerifyingBlobs):
         and writes a fresh copy), then ``still_referenced(digest)`` is asked again and
         the age re-read (a :meth:`put` that found the blob just before refreshed it).
         If either says keep, the blob is put back; otherwise it is deleted.
-        Returns True when deleted.
+
+        Parameters
+        ----------
+        digest
+            The blob's SHA-256 (hex).
+        min_age_s
+            Keep it if it is younger than this [s].
+        still_referenced
+            ``digest -> bool``: whether a row references it now.
+
+        Returns
+        -------
+        bool
+            True when deleted.
         """
         path = self.path(digest)
         aside = path.parent / f"{_GC_PREFIX}{digest}-{uuid.uuid4().hex}.h5"
@@ -279,7 +372,18 @@ class BlobStore(VerifyingBlobs):
         _fsync_dir(path.parent)
 
     def restore_set_aside(self, is_referenced) -> list[str]:
-        """Put back blobs an interrupted ``gc`` had set aside that a row references; returns their hashes."""
+        """Put back blobs an interrupted ``gc`` had set aside that a row references.
+
+        Parameters
+        ----------
+        is_referenced
+            ``digest -> bool``: whether a row references the blob.
+
+        Returns
+        -------
+        list of str
+            The digests put back.
+        """
         restored = []
         for tmp in self.temporaries():
             if not tmp.name.startswith(_GC_PREFIX):
@@ -292,6 +396,17 @@ class BlobStore(VerifyingBlobs):
 
     @staticmethod
     def age_seconds(path: Path) -> float:
+        """Seconds since a file was last modified (0 when it cannot be read).
+
+        Parameters
+        ----------
+        path
+            A file of the store.
+
+        Returns
+        -------
+        float
+        """
         try:
             return time.time() - path.stat().st_mtime
         except OSError:

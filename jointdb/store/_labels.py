@@ -31,6 +31,22 @@ class LabelsAndStates:
         The label row is locked (``SELECT ... FOR UPDATE`` on PostgreSQL; SQLite
         writers are serialised by ``BEGIN IMMEDIATE``) so that the audit row's
         ``previous_version`` is the version the label really pointed at.
+
+        Parameters
+        ----------
+        name
+            The joint's name.
+        version
+            The version number the label points at afterwards.
+        label
+            The label (letters, digits, ``._-``).
+        author
+            Recorded in the audit log (default ``JOINTDB_AUTHOR``, else the login name).
+
+        Returns
+        -------
+        JointVersion
+            The labelled version.
         """
         label = check_label(label)
         actor = current_actor(author)
@@ -66,7 +82,25 @@ class LabelsAndStates:
         Nothing is deleted: a new state row is appended (``undo=True`` appends
         ``active`` again); the latest applicable row wins. A joint deprecated as
         a whole stays deprecated, including versions catalogued later, until it
-        is undone. Returns the joint's history afterwards.
+        is undone.
+
+        Parameters
+        ----------
+        name
+            The joint's name.
+        version
+            The version (None: the whole joint).
+        reason
+            Why, recorded in the state row and the audit log.
+        author
+            Recorded in the audit log (default ``JOINTDB_AUTHOR``, else the login name).
+        undo
+            Make it active again.
+
+        Returns
+        -------
+        list of JointVersion
+            The joint's history afterwards.
         """
         actor = current_actor(author)
         reason = check_text(str(reason), "reason")  # no NUL or control characters, at most 10000 characters
@@ -88,7 +122,20 @@ class LabelsAndStates:
 
     @_db.with_db_errors
     def audit(self, name: str | None = None, limit: int = 100) -> list[dict[str, Any]]:
-        """The newest audit-log entries (optionally for one joint)."""
+        """The newest audit-log entries, newest first.
+
+        Parameters
+        ----------
+        name
+            Only entries of this joint (None: all).
+        limit
+            At most this many.
+
+        Returns
+        -------
+        list of dict
+            ``at`` (ISO 8601), ``actor``, ``action``, ``joint``, ``version``, ``details``.
+        """
         with self.storage.read() as s:
             q = select(AuditRow).order_by(AuditRow.id.desc()).limit(limit)
             if name:

@@ -47,9 +47,16 @@ _VERSION_COLUMNS = [c.name for c in VersionRow.__table__.columns]
 class JointPage:
     """One page of :meth:`jointdb.store.Repository.list_page`.
 
-    ``items``: the listed versions; ``damaged``: rows of this page that could not be read
-    (name, version, reason); ``total``: matches of the filters over the whole catalogue;
-    ``next``: the cursor of the next page (None on the last one).
+    Attributes
+    ----------
+    items
+        The listed versions.
+    damaged
+        Rows of this page that could not be read (:class:`DamagedVersion`).
+    total
+        Matches of the filters over the whole catalogue.
+    next
+        The cursor of the next page (None on the last one).
     """
 
     items: tuple[JointVersion, ...]

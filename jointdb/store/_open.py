@@ -66,7 +66,19 @@ def open_store(target: JointStore | str | os.PathLike | None = None, *, token: s
 
 @contextlib.contextmanager
 def owned_store(target: JointStore | str | os.PathLike | None = None, **options) -> Iterator[JointStore]:
-    """:func:`open_store` in a ``with`` block: the store is closed at the end only if it was opened here."""
+    """:func:`open_store` in a ``with`` block: the store is closed at the end only if it was opened here.
+
+    Parameters
+    ----------
+    target
+        An open store (used as is, not closed), or what :func:`open_store` takes.
+    **options
+        Keyword arguments of :func:`open_store`.
+
+    Yields
+    ------
+    JointStore
+    """
     store = open_store(target, **options)
     try:
         yield store

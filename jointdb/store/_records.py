@@ -106,13 +106,27 @@ class DamagedRecordWarning(UserWarning):
 
 @dataclass(frozen=True)
 class DamagedVersion:
-    """A version a listing skipped because its stored row cannot be used (``reason`` says why)."""
+    """A version a listing skipped because its stored row cannot be used.
+
+    Attributes
+    ----------
+    name, version
+        The joint and version number.
+    reason
+        Why its row cannot be used.
+    """
 
     name: str
     version: int
     reason: str
 
     def describe(self) -> str:
+        """One line: the version and why it was skipped.
+
+        Returns
+        -------
+        str
+        """
         return f"{self.name} v{self.version}: {self.reason}"
 
 

@@ -30,7 +30,20 @@ _ERRORS = {404: NotFoundError, 409: ConflictError, 422: InputError, 400: InputEr
 
 
 class RemoteRepository:
-    """The repository of a jointdb server (see the module docstring)."""
+    """The repository of a jointdb server (see the module docstring).
+
+    Each method answers as the :class:`jointdb.store.Repository` method of the same name
+    (the same parameters, documented there), over the server's HTTP API.
+
+    Parameters
+    ----------
+    url
+        The server's address, ``http(s)://host[:port]``.
+    token
+        An API token (sent as ``Authorization: Bearer``); None for an open server.
+    timeout
+        Seconds to wait for each response.
+    """
 
     def __init__(self, url: str, token: str | None = None, timeout: float = 120.0):
         try:
@@ -97,6 +110,17 @@ class RemoteRepository:
 
     # ----------------------------------------------------------------- reads
     def get(self, name: str, version: int | None = None, at=None, label: str | None = None):
+        """One version of a joint, as :meth:`jointdb.store.Repository.get`.
+
+        Parameters
+        ----------
+        name, version, at, label
+            As :meth:`jointdb.store.Repository.get`.
+
+        Returns
+        -------
+        JointVersion
+        """
         if version is not None:
             if label is not None:
                 raise InputError("a label names one version now; do not combine it with --version or --at")
@@ -111,23 +135,66 @@ class RemoteRepository:
         return version_from_json(self._call("GET", f"/joints/{self._name(name)}", params=params))
 
     def history(self, name: str, *, damaged: list | None = None) -> list:
+        """All versions of a joint, oldest first, as :meth:`jointdb.store.Repository.history`.
+
+        Parameters
+        ----------
+        name, damaged
+            As :meth:`jointdb.store.Repository.history`.
+
+        Returns
+        -------
+        list of JointVersion
+        """
         return [version_from_json(v) for v in self._all(f"/joints/{self._name(name)}/history", damaged=damaged)]
 
     def list_joints(self, joint_type: str | None = None, include_deprecated: bool = True, *,
                     damaged: list | None = None) -> list:
         """As :meth:`jointdb.store.Repository.list_joints`; versions the server reports damaged are
-        appended to ``damaged`` (when given) as ``DamagedVersion``."""
+        appended to ``damaged`` (when given) as ``DamagedVersion``.
+
+        Parameters
+        ----------
+        joint_type, include_deprecated, damaged
+            As :meth:`jointdb.store.Repository.list_joints`.
+
+        Returns
+        -------
+        list of JointVersion
+        """
         params = {"include_deprecated": include_deprecated}
         if joint_type:
             params["type"] = joint_type
         return [version_from_json(v) for v in self._all("/joints", damaged=damaged, **params)]
 
     def load_frf(self, version, number: int | None = None):
+        """The joint FRF of a version (the server verifies it against its hash).
+
+        Parameters
+        ----------
+        version, number
+            As :meth:`jointdb.store.Repository.load_frf`.
+
+        Returns
+        -------
+        FRF
+        """
         name, v = (version.name, version.version) if number is None and hasattr(version, "name") else (version, number)
         return frf_from_json(self._call("GET", f"/joints/{self._name(name)}/versions/{int(v)}/frf",
                                         params={"format": "json"}))
 
     def diff(self, name: str, version_a: int, version_b: int | None = None, other: str | None = None):
+        """Compare two versions, as :meth:`jointdb.store.Repository.diff`.
+
+        Parameters
+        ----------
+        name, version_a, version_b, other
+            As :meth:`jointdb.store.Repository.diff`.
+
+        Returns
+        -------
+        VersionDiff
+        """
         from jointdb.store._reports import VersionDiff
 
         params = {"a": version_a, **({"b": version_b} if version_b is not None else {}),
@@ -138,11 +205,35 @@ class RemoteRepository:
                            d["max_relative_difference"], d["same_blob"], tuple(d["notes"]))
 
     def audit(self, name: str | None = None, limit: int = 100) -> list[dict]:
+        """The newest audit entries, newest first.
+
+        Parameters
+        ----------
+        name
+            Only entries of this joint (None: all).
+        limit
+            At most this many (the server answers at most 500).
+
+        Returns
+        -------
+        list of dict
+        """
         params = {"limit": min(int(limit), 500), **({"joint": name} if name else {})}
         return self._call("GET", "/audit", params=params)["items"]
 
     def nearest(self, joint_type: str, conditions, k: int = 3, at=None, *, label: str | None = None,
                 all_versions: bool = False, include_deprecated: bool = False) -> list:
+        """The ``k`` versions closest to ``conditions``, as :meth:`jointdb.store.Repository.nearest`.
+
+        Parameters
+        ----------
+        joint_type, conditions, k, at, label, all_versions, include_deprecated
+            As :meth:`jointdb.store.Repository.nearest`.
+
+        Returns
+        -------
+        list of Match
+        """
         from jointdb.store._query import OutsideCatalogueWarning
         from jointdb.store._types import Match, as_conditions
 
@@ -157,7 +248,19 @@ class RemoteRepository:
                       tuple(m["outside_range"])) for m in out["matches"]]
 
     def interpolate(self, matches, conditions=None, *, method: str = "axes"):
-        """As :meth:`jointdb.store.Repository.interpolate`; the server interpolates with ``method="axes"``."""
+        """As :meth:`jointdb.store.Repository.interpolate`; the server interpolates with ``method="axes"``.
+
+        Parameters
+        ----------
+        matches, conditions
+            As :meth:`jointdb.store.Repository.interpolate`.
+        method
+            ``"axes"`` only.
+
+        Returns
+        -------
+        InterpolatedJoint
+        """
         from jointdb.store._types import InterpolatedJoint, as_conditions
 
         if not matches:
@@ -174,7 +277,20 @@ class RemoteRepository:
     # ---------------------------------------------------------------- writes
     def catalogue(self, name, joint_type, frf, conditions, model_kind, provenance=None, quality=None, parent=None,
                   *, raw_frfs=None, author=None, label=None, force=False, allow_identical=False):
-        """Catalogue on the server (the token's owner is the author; raw measurements stay local)."""
+        """Catalogue on the server (the token's owner is the author; raw measurements stay local).
+
+        Parameters
+        ----------
+        name, joint_type, frf, conditions, model_kind, provenance, quality, parent, label, force, allow_identical
+            As :meth:`jointdb.store.Repository.catalogue`.
+        raw_frfs, author
+            Accepted for the protocol's sake and not sent: the server records the token's owner
+            and keeps no raw measurements from a client.
+
+        Returns
+        -------
+        JointVersion
+        """
         return self.catalogue_outcome(name, joint_type, frf, conditions, model_kind, provenance, quality, parent,
                                       raw_frfs=raw_frfs, author=author, label=label, force=force,
                                       allow_identical=allow_identical)[0]
@@ -185,7 +301,17 @@ class RemoteRepository:
         """:meth:`catalogue`, returning ``(version, created)`` (``created`` False: identical to the
         latest version, nothing written). The request carries an ``Idempotency-Key`` and is
         retried with the same key after a connection error or a 503, so a retry never makes a
-        second version."""
+        second version.
+
+        Parameters
+        ----------
+        name, joint_type, frf, conditions, model_kind, provenance, quality, parent, raw_frfs, author, label, force, allow_identical
+            As :meth:`catalogue`.
+
+        Returns
+        -------
+        Catalogued
+        """
         from jointdb.store._reports import Catalogued
         from jointdb.store._types import as_conditions, as_provenance
 
@@ -222,18 +348,63 @@ class RemoteRepository:
         raise AssertionError("unreachable")  # pragma: no cover
 
     def label(self, name: str, version: int, label: str, author: str | None = None):
+        """Point ``label`` at a version.
+
+        Parameters
+        ----------
+        name, version
+            The joint and version.
+        label
+            The label.
+        author
+            Not sent: the server records the token's owner.
+
+        Returns
+        -------
+        JointVersion
+        """
         return version_from_json(self._call("POST", f"/joints/{self._name(name)}/labels",
                                             json={"version": int(version), "label": label}))
 
     def deprecate(self, name: str, version: int | None = None, reason: str = "", author: str | None = None,
                   undo: bool = False) -> list:
+        """Deprecate a version (or, with ``version=None``, the whole joint), or undo that.
+
+        Parameters
+        ----------
+        name
+            The joint.
+        version
+            The version (None: the whole joint, including versions catalogued later).
+        reason
+            Why, recorded in the audit log.
+        author
+            Not sent: the server records the token's owner.
+        undo
+            Make the version(s) active again.
+
+        Returns
+        -------
+        list of JointVersion
+            The joint's history afterwards.
+        """
         body = {"reason": reason, "undo": undo, **({"version": int(version)} if version is not None else {})}
         return [version_from_json(v) for v in self._call("POST", f"/joints/{self._name(name)}/deprecate",
                                                          json=body)["items"]]
 
 
 def version_from_json(d: dict):
-    """A :class:`jointdb.store.JointVersion` from the API's JSON form of a version."""
+    """A :class:`jointdb.store.JointVersion` from the API's JSON form of a version.
+
+    Parameters
+    ----------
+    d
+        The decoded JSON object of a version (``GET /api/v1/joints/{name}``).
+
+    Returns
+    -------
+    JointVersion
+    """
     from jointdb.store._types import Conditions, JointVersion, Provenance
 
     p = d["provenance"]

@@ -15,7 +15,21 @@ if TYPE_CHECKING:  # pragma: no cover
 
 @dataclass(frozen=True)
 class CheckReport:
-    """Result of :meth:`Repository.check`; ``ok`` when nothing is missing or corrupt."""
+    """Result of :meth:`Repository.check`; ``ok`` when nothing is missing or corrupt.
+
+    Attributes
+    ----------
+    versions_checked, blobs_checked
+        How many version rows and blobs were checked.
+    problems
+        One line per missing or corrupt row or blob.
+    orphan_blobs
+        Blobs no row references (``gc`` removes them).
+    temporaries
+        Stale temporary files in the blob store.
+    notes
+        Other observations (e.g. missing immutability guards).
+    """
 
     versions_checked: int
     blobs_checked: int
@@ -33,9 +47,23 @@ class CheckReport:
 class VersionDiff:
     """Differences between two versions (:meth:`Repository.diff`).
 
-    ``frf_entries`` rows: ``output``, ``input``, ``max_rel_diff`` = max over the
-    common frequency lines of ``|H_b − H_a|`` divided by the peak ``|H_a|`` of
-    that entry.
+    Attributes
+    ----------
+    a, b
+        The two versions, as ``"name vN"``.
+    conditions
+        Condition name → ``(value in a, value in b)`` for those that differ.
+    fields
+        Other record fields that differ, likewise.
+    frf_entries
+        Rows ``output``, ``input``, ``max_rel_diff`` = max over the common frequency lines of
+        ``|H_b − H_a|`` divided by the peak ``|H_a|`` of that entry.
+    max_relative_difference
+        The largest ``max_rel_diff``, or None when the FRFs share no entry or line.
+    same_blob
+        Both versions store the same FRF.
+    notes
+        Further remarks (e.g. different DOFs or bands).
     """
 
     a: str
@@ -61,8 +89,15 @@ def _is_transient(exc: OperationalError) -> bool:
 
 
 class Catalogued(NamedTuple):
-    """What :meth:`Repository.catalogue_outcome` did: the version, and whether it was written now
-    (False: identical to the latest version, nothing written)."""
+    """What :meth:`Repository.catalogue_outcome` did.
+
+    Attributes
+    ----------
+    version
+        The :class:`JointVersion` written, or the identical latest one.
+    created
+        Whether it was written now (False: identical to the latest version, nothing written).
+    """
 
     version: "JointVersion"
     created: bool

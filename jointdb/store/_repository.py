@@ -75,7 +75,8 @@ class Repository(LabelsAndStates):
         SQLite file that is empty, not SQLite or not a jointdb database is
         always refused (InputError), never re-created.
     check_schema
-        Refuse a database whose schema is not this jointdb's (default True).
+        Refuse a database whose schema revision is not this jointdb's (default True).
+        False skips the check and creates nothing (a missing SQLite file is then refused).
     pool_size
         PostgreSQL: connections kept open (up to half as many again in a burst);
         default SQLAlchemy's 5 + 10. Ignored for SQLite.
@@ -89,6 +90,32 @@ class Repository(LabelsAndStates):
         driver, outdated schema).
     IntegrityError
         A damaged SQLite file.
+
+    Examples
+    --------
+    A new SQLite catalogue; a spring–damper tool–holder joint catalogued as version 1, read
+    back by name and its FRF loaded (verified against its SHA-256):
+
+    >>> import os, tempfile
+    >>> import numpy as np
+    >>> from jointdb.coupling import spring_damper_joint
+    >>> from jointdb.store import Conditions, Provenance, Repository
+    >>> repo = Repository(os.path.join(tempfile.mkdtemp(), "joints.sqlite"))
+    >>> freq = np.linspace(100.0, 2000.0, 20)                                    # Hz
+    >>> joint = spring_damper_joint(freq, k=[2e7, 5e5], c=[50.0, 1.0], dofs_=["1x", "1ry"])
+    >>> jv = repo.catalogue("th-80nm", "tool-holder", joint,
+    ...                     Conditions(("carbide", "steel"), torque_nm=80.0),
+    ...                     model_kind="spring-damper-planar", provenance=Provenance(method="irc-planar"))
+    >>> jv.name, jv.version, jv.conditions.materials, jv.dofs
+    ('th-80nm', 1, ('tungsten-carbide', 'steel'), ('1x', '1ry'))
+    >>> repo.get("th-80nm").record_sha256 == jv.record_sha256
+    True
+    >>> repo.load_frf(jv).allclose(joint)
+    True
+    >>> repo.catalogue("th-80nm", "tool-holder", joint, Conditions(("carbide", "steel"), torque_nm=80.0),
+    ...                model_kind="spring-damper-planar").version           # identical content: no new version
+    1
+    >>> repo.close()
     """
 
     def __init__(
@@ -185,6 +212,41 @@ class Repository(LabelsAndStates):
         ``label`` (optional) is pointed at the new version in the same
         transaction: both happen or neither.
 
+        Parameters
+        ----------
+        name
+            The joint's name (letters, digits, ``._-``; e.g. ``"th-er32-carbide-80nm"``).
+        joint_type
+            ``"tool-holder"``, ``"holder-spindle"``, ...
+        frf
+            The joint receptance (:class:`~jointdb.frf.FRF`, ``(n_freq, n, n)``).
+        conditions
+            :class:`Conditions` (or a mapping of its fields) it was identified under.
+        model_kind
+            One of :data:`MODEL_KINDS` (its DOF structure is checked against ``frf``).
+        provenance
+            :class:`Provenance` (method, parameters, input file hashes, author).
+        quality
+            Named quality numbers (e.g. ``{"identification_residual": 1e-3}``).
+        parent
+            Version number of this joint the new one derives from.
+        raw_frfs
+            Raw measurement FRFs to store with the version, by key.
+        author
+            Who catalogues it (default: the provenance's author, else ``JOINTDB_AUTHOR``, else the
+            login name).
+        label
+            A label to point at the new version.
+        force
+            Accept conditions that contradict the latest version (listed in the audit entry).
+        allow_identical
+            Write a new version even when the content equals the latest one.
+
+        Returns
+        -------
+        JointVersion
+            The new version, or the latest one when nothing was written.
+
         Raises
         ------
         InputError
@@ -207,10 +269,21 @@ class Repository(LabelsAndStates):
         """:meth:`catalogue`, saying whether a version was written: ``Catalogued(version, created)``.
 
         ``created`` is False when the content was identical to the latest version (nothing
-        written; ``version`` is that version). ``idempotency``: ``(owner, key, request_sha256)``
-        of a request made with an idempotency key: a key already answered returns its stored
-        answer (the same version; InputError when it answered another request), otherwise the
-        answer is stored in the version's own transaction.
+        written; ``version`` is that version).
+
+        Parameters
+        ----------
+        name, joint_type, frf, conditions, model_kind, provenance, quality, parent, raw_frfs, author, label, force, allow_identical
+            As :meth:`catalogue`.
+        idempotency
+            ``(owner, key, request_sha256)`` of a request made with an idempotency key: a key
+            already answered returns its stored answer (the same version; InputError when it
+            answered another request), otherwise the answer is stored in the version's own
+            transaction.
+
+        Returns
+        -------
+        Catalogued
         """
         name = check_name(name)
         joint_type = check_joint_type(joint_type)
@@ -257,6 +330,15 @@ class Repository(LabelsAndStates):
     def idempotent_answer(self, idempotency: tuple[str, str, str] | None) -> Catalogued | None:
         """The stored answer to ``(owner, key, request_sha256)``, or None when the key is new.
 
+        Parameters
+        ----------
+        idempotency
+            ``(owner, key, request_sha256)``, or None (then None is returned).
+
+        Returns
+        -------
+        Catalogued or None
+
         Raises
         ------
         InputError
@@ -298,6 +380,21 @@ class Repository(LabelsAndStates):
         """One version of a joint: pinned (``version``), by ``label``, current at
         time ``at``, or (default) the latest version that is not deprecated
         (the latest one if all are).
+
+        Parameters
+        ----------
+        name
+            The joint's name.
+        version
+            A version number.
+        at
+            A past instant (datetime or ISO 8601 text).
+        label
+            A label of the joint.
+
+        Returns
+        -------
+        JointVersion
 
         Raises
         ------
@@ -349,8 +446,23 @@ class Repository(LabelsAndStates):
         """All versions of a joint, oldest first, with their current state and labels.
 
         A version whose stored row is damaged is left out and reported: appended to ``damaged``
-        (a list, as :class:`jointdb.store._records.DamagedVersion`) when given, else in a
-        :class:`DamagedRecordWarning`.
+        (a list, as :class:`DamagedVersion`) when given, else in a :class:`DamagedRecordWarning`.
+
+        Parameters
+        ----------
+        name
+            The joint's name.
+        damaged
+            A list to append the damaged versions to, or None (warn instead).
+
+        Returns
+        -------
+        list of JointVersion
+
+        Raises
+        ------
+        NotFoundError
+            No joint of that name.
         """
         with self._read() as s:
             joint = self._joint(s, name)
@@ -375,8 +487,37 @@ class Repository(LabelsAndStates):
         """One page of the catalogue: the current version of each joint that passes the filters,
         by name, in one SQL statement (see :mod:`jointdb.store._listing`).
 
-        ``after`` is the ``next`` cursor of the previous page; ``limit=None`` lists all. Damaged
-        rows do not stop the list: they are in ``JointPage.damaged``.
+        Damaged rows do not stop the list: they are in ``JointPage.damaged``.
+
+        Parameters
+        ----------
+        joint_type
+            Only joints of this type.
+        materials
+            Only joints whose conditions name all these materials.
+        label
+            Only versions carrying this label.
+        include_deprecated
+            List joints whose every version is deprecated too.
+        state
+            Only versions in this state (``"active"``, ``"deprecated"``).
+        torque_min, torque_max
+            Bounds on the torque [N·m].
+        preload_min, preload_max
+            Bounds on the preload [N].
+        name_contains
+            Part of the joint's name.
+        after
+            The ``next`` cursor of the previous page (keyset pagination).
+        offset
+            Rows to skip (without a cursor).
+        limit
+            Page size; None lists all.
+
+        Returns
+        -------
+        JointPage
+            ``items``, ``next`` cursor, ``damaged``.
 
         Raises
         ------
@@ -395,6 +536,19 @@ class Repository(LabelsAndStates):
         """The current version (as :meth:`get`) of every joint, by name (one SQL statement).
 
         Damaged rows are left out and reported as in :meth:`history`.
+
+        Parameters
+        ----------
+        joint_type
+            Only joints of this type (None: all).
+        include_deprecated
+            Include joints whose every version is deprecated.
+        damaged
+            A list to append the damaged versions to, or None (warn instead).
+
+        Returns
+        -------
+        list of JointVersion
         """
         page = self.list_page(joint_type, include_deprecated=include_deprecated, limit=None)
         _report_damaged(list(page.damaged), damaged)
@@ -405,6 +559,17 @@ class Repository(LabelsAndStates):
         """The joint FRF of a version, read from its blob and verified against its hash.
 
         ``load_frf(jv)`` or ``load_frf("name", 3)``.
+
+        Parameters
+        ----------
+        version
+            A :class:`JointVersion`, or a joint's name.
+        number
+            With a name: the version number (None: the current version).
+
+        Returns
+        -------
+        FRF
 
         Raises
         ------
@@ -430,7 +595,24 @@ class Repository(LabelsAndStates):
 
     @_db.with_db_errors
     def load_raw(self, version: JointVersion, key: str) -> FRF:
-        """One raw measurement FRF stored with a version."""
+        """One raw measurement FRF stored with a version.
+
+        Parameters
+        ----------
+        version
+            The :class:`JointVersion`.
+        key
+            A key of ``version.raw_blobs``.
+
+        Returns
+        -------
+        FRF
+
+        Raises
+        ------
+        NotFoundError
+            No raw measurement of that key, or its blob is missing.
+        """
         if key not in version.raw_blobs:
             raise NotFoundError(f"{version.name} v{version.version} has no raw measurement {key!r}")
         return self._blob(version, version.raw_blobs[key], f"raw measurement {key!r}")
@@ -438,7 +620,23 @@ class Repository(LabelsAndStates):
     # -------------------------------------------------------------- diff, etc.
     @_db.with_db_errors
     def diff(self, name: str, version_a: int, version_b: int | None = None, other: str | None = None) -> VersionDiff:
-        """Compare two versions (of one joint, or of ``name`` and ``other``)."""
+        """Compare two versions (of one joint, or of ``name`` and ``other``).
+
+        Parameters
+        ----------
+        name
+            The joint's name.
+        version_a
+            The first version number.
+        version_b
+            The second version number (default: the current version).
+        other
+            Another joint's name for ``version_b``.
+
+        Returns
+        -------
+        VersionDiff
+        """
         from jointdb.store._maintenance import diff_versions
 
         a = self.get(name, version_a)
@@ -447,14 +645,37 @@ class Repository(LabelsAndStates):
 
     @_db.with_db_errors
     def check(self, verify_blobs: bool = True) -> CheckReport:
-        """Walk every row and blob; report missing or corrupt data (``jointdb db check``)."""
+        """Walk every row and blob; report missing or corrupt data (``jointdb db check``).
+
+        Parameters
+        ----------
+        verify_blobs
+            Read and verify every blob (slow for a large store), not only that it exists.
+
+        Returns
+        -------
+        CheckReport
+        """
         from jointdb.store._maintenance import check
 
         return check(self.storage, verify_blobs)
 
     @_db.with_db_errors
     def gc(self, min_age_s: float = 3600.0, dry_run: bool = False) -> list[str]:
-        """Remove blobs no row references (and stale temporaries) older than ``min_age_s``."""
+        """Remove blobs no row references (and stale temporaries) older than ``min_age_s``.
+
+        Parameters
+        ----------
+        min_age_s
+            Only blobs older than this [s] (a blob being written is not yet referenced).
+        dry_run
+            Report without removing.
+
+        Returns
+        -------
+        list of str
+            The blobs removed (or that would be).
+        """
         from jointdb.store._maintenance import gc
 
         return gc(self.storage, min_age_s, dry_run)
@@ -463,9 +684,66 @@ class Repository(LabelsAndStates):
     def nearest(self, joint_type: str, conditions: Conditions | Mapping[str, Any], k: int = 3,
                 at: datetime | str | None = None, *, label: str | None = None, all_versions: bool = False,
                 include_deprecated: bool = False):
-        """The ``k`` versions of ``joint_type`` closest to ``conditions``: by default each joint's
-        newest version that is not deprecated; ``label`` (only versions carrying it),
-        ``all_versions``, ``include_deprecated`` widen or narrow that; see :mod:`jointdb.store._query`."""
+        """The ``k`` versions of ``joint_type`` closest to ``conditions``.
+
+        By default each joint's newest version that is not deprecated takes part; ``label``,
+        ``all_versions`` and ``include_deprecated`` narrow or widen that. The distance (a
+        weighted sum over materials, preload, torque and geometry, each normalised by the
+        catalogued range) is defined in :mod:`jointdb.store._query`; a request outside the
+        catalogued range of a condition warns :class:`OutsideCatalogueWarning`.
+
+        Parameters
+        ----------
+        joint_type
+            ``"tool-holder"``, ``"holder-spindle"``, ...
+        conditions
+            The request: a :class:`Conditions` or a mapping of its fields (torque in N·m,
+            preload in N, geometry in m).
+        k
+            How many versions to return, >= 1.
+        at
+            A past instant (datetime or ISO 8601 text): answer as the catalogue stood then.
+        label
+            Only versions carrying this label (not with ``at``).
+        all_versions
+            Every version of each joint, not only its newest.
+        include_deprecated
+            Deprecated versions too.
+
+        Returns
+        -------
+        list of Match
+            Nearest first: ``version``, ``distance``, ``per_condition``, ``extrapolating``,
+            ``outside_range``.
+
+        Raises
+        ------
+        InputError
+            ``k < 1``, bad conditions or label, or ``label`` with ``at``.
+        NotFoundError
+            No catalogued version of that type in the selection.
+
+        Examples
+        --------
+        Three tool–holder joints catalogued at 40, 80 and 120 N·m; the two nearest to 100 N·m:
+
+        >>> import os, tempfile
+        >>> import numpy as np
+        >>> from jointdb.coupling import spring_damper_joint
+        >>> from jointdb.store import Conditions, Repository
+        >>> repo = Repository(os.path.join(tempfile.mkdtemp(), "joints.sqlite"))
+        >>> freq = np.linspace(100.0, 2000.0, 20)
+        >>> for torque, k in [(40.0, 1e7), (80.0, 2e7), (120.0, 3e7)]:
+        ...     _ = repo.catalogue(f"th-{torque:.0f}nm", "tool-holder",
+        ...                        spring_damper_joint(freq, [k, k / 40], [50.0, 1.0], ["1x", "1ry"]),
+        ...                        Conditions(("carbide", "steel"), torque_nm=torque), "spring-damper-planar")
+        >>> matches = repo.nearest("tool-holder", Conditions(("carbide", "steel"), torque_nm=100.0), k=2)
+        >>> [(m.version.name, m.extrapolating) for m in matches]
+        [('th-120nm', False), ('th-80nm', False)]
+        >>> matches[0].distance < matches[1].distance
+        True
+        >>> repo.close()
+        """
         from jointdb.store._query import nearest
 
         return nearest(self.storage, joint_type, conditions, k, as_utc(at), label=label, all_versions=all_versions,
@@ -474,8 +752,59 @@ class Repository(LabelsAndStates):
     @_db.with_db_errors
     def interpolate(self, matches, conditions: Conditions | Mapping[str, Any] | None = None, *,
                     method: str = "axes"):
-        """An interpolated joint between matches (dynamic stiffness; ``method`` ``"axes"`` or ``"idw"``);
-        see :mod:`jointdb.store._query`."""
+        """An interpolated joint between catalogued neighbours, in dynamic stiffness.
+
+        Parameters
+        ----------
+        matches
+            Candidates, e.g. from :meth:`nearest`; ``"axes"`` uses those that bracket the
+            request along its condition axes, so pass the catalogued grid around it.
+        conditions
+            The request (None: inverse-distance weights).
+        method
+            ``"axes"`` (weights along each condition axis; torque and preload on a log scale)
+            or ``"idw"`` (inverse distance).
+
+        Returns
+        -------
+        InterpolatedJoint
+            ``frf`` (receptance on the neighbours' common band), ``neighbours`` ``(name,
+            version, weight)`` with weight > 0, ``conditions``. Not a catalogued joint.
+
+        Raises
+        ------
+        InputError
+            No matches, an unknown method, neighbours of different type, model kind or DOFs,
+            or no common frequency band.
+        NumericalError
+            A neighbour's receptance is singular on some line.
+
+        Examples
+        --------
+        Joints at 80 and 120 N·m with stiffness 2·10⁷ and 3·10⁷ N/m; at 100 N·m the weights
+        are those of log-torque, ``ln(100/80) / ln(120/80)`` = 0.5503 for the 120 N·m joint,
+        and the interpolated stiffness is the weighted mean:
+
+        >>> import os, tempfile
+        >>> import numpy as np
+        >>> from jointdb.coupling import equivalent_stiffness_damping, spring_damper_joint
+        >>> from jointdb.store import Conditions, Repository
+        >>> repo = Repository(os.path.join(tempfile.mkdtemp(), "joints.sqlite"))
+        >>> freq = np.linspace(100.0, 2000.0, 20)
+        >>> for torque, k in [(80.0, 2e7), (120.0, 3e7)]:
+        ...     _ = repo.catalogue(f"th-{torque:.0f}nm", "tool-holder",
+        ...                        spring_damper_joint(freq, [k, k / 40], [50.0, 1.0], ["1x", "1ry"]),
+        ...                        Conditions(("carbide", "steel"), torque_nm=torque), "spring-damper-planar")
+        >>> request = Conditions(("carbide", "steel"), torque_nm=100.0)
+        >>> joint = repo.interpolate(repo.nearest("tool-holder", request, k=2), request)
+        >>> [(name, round(weight, 4)) for name, _, weight in joint.neighbours]
+        [('th-120nm', 0.5503), ('th-80nm', 0.4497)]
+        >>> w = np.log(100 / 80) / np.log(120 / 80)
+        >>> k, c = equivalent_stiffness_damping(joint.frf)                   # N/m, N·m/rad per line
+        >>> bool(np.allclose(k[:, 0], w * 3e7 + (1 - w) * 2e7))
+        True
+        >>> repo.close()
+        """
         from jointdb.store._query import interpolate
 
         return interpolate(self.load_frf, matches, conditions, method=method)
@@ -484,8 +813,20 @@ class Repository(LabelsAndStates):
     def export(self, names: Iterable[str] | None, path: str | os.PathLike, *, sign_key=None) -> dict[str, Any]:
         """Write joints (all versions, provenance, labels, states) to one HDF5 bundle.
 
-        ``sign_key``: an Ed25519 private key (``jointdb.store._signing.load_private_key``)
-        to sign the bundle with.
+        Parameters
+        ----------
+        names
+            Joint names to export (None: all).
+        path
+            The bundle file to write.
+        sign_key
+            An Ed25519 private key (:func:`jointdb.store.load_private_key`) to sign the
+            bundle with, or None.
+
+        Returns
+        -------
+        dict
+            Counts of what was written.
         """
         from jointdb.store._bundle import export_bundle
 
@@ -497,7 +838,27 @@ class Repository(LabelsAndStates):
         """Import a bundle (a path or a verified ``Bundle``); identical versions are no-ops,
         conflicting ones raise ConflictError, and so does a new version that is not the same
         joint as the one before it (unless ``force``); any ``trusted_keys`` (or
-        ``require_signature``) refuse a bundle not signed by one of them (Ed25519 public keys)."""
+        ``require_signature``) refuse a bundle not signed by one of them (Ed25519 public keys).
+
+        Parameters
+        ----------
+        path
+            The bundle file, or a verified ``Bundle``.
+        author
+            Recorded as who imported.
+        trusted_keys
+            Ed25519 public keys (:func:`jointdb.store.load_public_key`); the bundle must be
+            signed by one of them when any is given.
+        require_signature
+            Refuse an unsigned bundle.
+        force
+            Accept a new version that is not the same joint as the one before it.
+
+        Returns
+        -------
+        dict
+            A summary: versions added, identical ones skipped.
+        """
         from jointdb.store._bundle import import_bundle
 
         return import_bundle(self.storage, path, author, trusted_keys, require_signature, force)

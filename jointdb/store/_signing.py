@@ -53,7 +53,16 @@ def _write_new(path: Path, data: bytes, mode: int) -> None:
 
 
 def create_key_pair(path: str | os.PathLike) -> tuple[Path, Path]:
-    """Write a new Ed25519 key pair to ``path`` (private) and ``path.pub``; returns both paths.
+    """Write a new Ed25519 key pair to ``path`` (private) and ``path.pub``.
+
+    Parameters
+    ----------
+    path
+        The private key file (PEM, mode 0600); the public key goes to ``path.pub``.
+
+    Returns
+    -------
+    private, public : Path
 
     Raises
     ------
@@ -96,7 +105,24 @@ def _read(path: str | os.PathLike, what: str) -> bytes:
 
 
 def load_private_key(path: str | os.PathLike):
-    """The Ed25519 private key in a PEM file (``jointdb keys create``)."""
+    """The Ed25519 private key in a PEM file (``jointdb keys create``), to sign a bundle with.
+
+    Parameters
+    ----------
+    path
+        The unencrypted PEM file.
+
+    Returns
+    -------
+    cryptography.hazmat.primitives.asymmetric.ed25519.Ed25519PrivateKey
+
+    Raises
+    ------
+    NotFoundError
+        No such file.
+    InputError
+        Not an unencrypted Ed25519 PEM private key.
+    """
     serialization, ed25519 = _crypto()
     data = _read(path, "private key")
     try:
@@ -109,7 +135,24 @@ def load_private_key(path: str | os.PathLike):
 
 
 def load_public_key(path: str | os.PathLike):
-    """The Ed25519 public key in a PEM file (``NAME.pub`` of ``jointdb keys create``)."""
+    """The Ed25519 public key in a PEM file (``NAME.pub`` of ``jointdb keys create``), to trust.
+
+    Parameters
+    ----------
+    path
+        The PEM file.
+
+    Returns
+    -------
+    cryptography.hazmat.primitives.asymmetric.ed25519.Ed25519PublicKey
+
+    Raises
+    ------
+    NotFoundError
+        No such file.
+    InputError
+        Not an Ed25519 PEM public key.
+    """
     serialization, ed25519 = _crypto()
     data = _read(path, "public key")
     try:

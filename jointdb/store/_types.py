@@ -66,13 +66,29 @@ MATERIAL_ALIASES: dict[str, str] = {
 
 
 def known_materials() -> set[str]:
-    """The accepted material names: built-in list plus ``JOINTDB_MATERIALS``."""
+    """The accepted material names: built-in list plus ``JOINTDB_MATERIALS``.
+
+    Returns
+    -------
+    set of str
+    """
     extra = {m.strip().lower() for m in os.environ.get("JOINTDB_MATERIALS", "").split(",") if m.strip()}
     return KNOWN_MATERIALS | extra
 
 
 def register_material(name: str) -> None:
-    """Accept a new interface material name for the rest of this process."""
+    """Accept a new interface material name for the rest of this process.
+
+    Parameters
+    ----------
+    name
+        Letters, digits and ``-`` (spaces and ``_`` become ``-``; case is ignored).
+
+    Raises
+    ------
+    InputError
+        Any other character.
+    """
     slug = str(name).strip().lower().replace(" ", "-").replace("_", "-")
     if not re.fullmatch(r"[a-z0-9][a-z0-9-]*", slug):
         raise InputError(f"material name {name!r} must be letters, digits and '-'")
@@ -202,6 +218,13 @@ class Conditions:
         object.__setattr__(self, "extra", extra)
 
     def to_dict(self) -> dict[str, Any]:
+        """The conditions as a JSON-ready dict (read back by :meth:`from_dict`).
+
+        Returns
+        -------
+        dict
+            ``materials``, ``preload_n``, ``torque_nm``, ``geometry``, ``extra``.
+        """
         return {
             "materials": list(self.materials),
             "preload_n": self.preload_n,
@@ -212,7 +235,22 @@ class Conditions:
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> "Conditions":
-        """Conditions from their dict form; InputError for a field of the wrong shape."""
+        """Conditions from their dict form (as :meth:`to_dict` writes it).
+
+        Parameters
+        ----------
+        data
+            ``materials``, ``preload_n`` [N], ``torque_nm`` [N·m], ``geometry`` [m], ``extra``.
+
+        Returns
+        -------
+        Conditions
+
+        Raises
+        ------
+        InputError
+            A field of the wrong shape, or a value :class:`Conditions` refuses.
+        """
         mats = data.get("materials") or ()
         if not isinstance(mats, (str, list, tuple)) or not all(isinstance(m, str) for m in
                                                                  ([mats] if isinstance(mats, str) else mats)):
@@ -233,10 +271,18 @@ class Conditions:
 class Provenance:
     """Where a joint version came from.
 
-    ``input_files`` maps a file name to the SHA-256 (hex) of its bytes (see
-    :func:`jointdb.store.file_sha256`); ``parameters`` is JSON-serialisable;
-    ``parent_version`` is the version this one corrects (default: the latest
-    version at the time of writing).
+    Parameters
+    ----------
+    method
+        How the joint was obtained (``"irc-planar"``, ``"output-error"``, ...).
+    parameters
+        The method's settings (JSON-serialisable).
+    input_files
+        File name → SHA-256 (hex) of its bytes (see :func:`jointdb.store.file_sha256`).
+    software_version
+        The jointdb version that produced it (filled in when catalogued).
+    author
+        Who produced it.
     """
 
     method: str = "unspecified"
@@ -336,8 +382,43 @@ def check_model_kind(model_kind: str, frf: FRF) -> str:
 class JointVersion:
     """One immutable catalogued version of a joint (a database row, detached).
 
-    ``state`` is ``"active"`` or ``"deprecated"`` as of the time of the query
-    that returned it; every other field never changes.
+    ``state`` and ``labels`` are as of the time of the query that returned it; every other
+    field never changes.
+
+    Attributes
+    ----------
+    name, joint_type, version
+        The joint's name and type, and the version number (1, 2, ...).
+    uuid
+        A unique id of this version.
+    created_at
+        When it was catalogued (UTC).
+    conditions
+        The :class:`Conditions` it was identified under.
+    model_kind
+        One of :data:`MODEL_KINDS`.
+    dofs
+        DOF labels of the joint FRF.
+    quantity
+        The FRF's quantity (``"receptance"``).
+    n_freq, freq_min_hz, freq_max_hz
+        Number of lines and band [Hz] of the FRF.
+    blob_sha256
+        SHA-256 of the FRF's canonical form (its blob's name).
+    provenance
+        The :class:`Provenance`.
+    parent_version
+        The version this one derives from, or None.
+    quality
+        Named quality numbers.
+    raw_blobs
+        Raw measurement key → blob SHA-256.
+    record_sha256
+        SHA-256 of the version record (verified on every read).
+    state
+        ``"active"`` or ``"deprecated"``.
+    labels
+        The labels pointing at this version.
     """
 
     name: str
@@ -362,7 +443,13 @@ class JointVersion:
     labels: tuple[str, ...] = ()
 
     def summary(self) -> dict[str, Any]:
-        """A flat row for tables."""
+        """A flat row for tables.
+
+        Returns
+        -------
+        dict
+            name, type, version, state, labels, materials, preload, torque, model kind, band, date, author.
+        """
         c = self.conditions
         return {
             "name": self.name,
@@ -384,10 +471,18 @@ class JointVersion:
 class Match:
     """One answer of :meth:`Repository.nearest`.
 
-    ``distance`` is the Euclidean norm of ``per_condition`` (see
-    :mod:`jointdb.store._query` for the definition of each term);
-    ``extrapolating`` is True when the request lies outside the catalogued range
-    of some condition, listed in ``outside_range``.
+    Attributes
+    ----------
+    version
+        The catalogued :class:`JointVersion`.
+    distance
+        The Euclidean norm of ``per_condition`` (dimensionless).
+    per_condition
+        Condition name → normalised distance (defined in :mod:`jointdb.store._query`).
+    extrapolating
+        True when the request lies outside the catalogued range of some condition.
+    outside_range
+        Those conditions.
     """
 
     version: JointVersion
@@ -404,8 +499,20 @@ class InterpolatedJoint:
     ``frf`` is a receptance obtained by weighting the neighbours' dynamic
     stiffness ``Z = H⁻¹`` on their common frequency band (weights of the joints
     bracketing the request along the condition axes, or inverse distance; see
-    :mod:`jointdb.store._query`); ``neighbours`` lists ``(name, version, weight)``
-    of those with weight > 0.
+    :mod:`jointdb.store._query`).
+
+    Attributes
+    ----------
+    frf
+        The interpolated receptance.
+    joint_type
+        The neighbours' joint type.
+    conditions
+        The request.
+    neighbours
+        ``(name, version, weight)`` of the neighbours with weight > 0.
+    label
+        ``"interpolated"``.
     """
 
     frf: FRF
@@ -415,6 +522,12 @@ class InterpolatedJoint:
     label: str = "interpolated"
 
     def describe(self) -> str:
+        """One line naming the neighbours and their weights.
+
+        Returns
+        -------
+        str
+        """
         parts = ", ".join(f"{n} v{v} (w={w:.3f})" for n, v, w in self.neighbours)
         return f"INTERPOLATED {self.joint_type} joint from {parts}"
 

@@ -15,15 +15,17 @@ Catalogue (:mod:`jointdb.usecases._catalogue`; one path, one provenance rule)
     read_joint_file       -- what a joint / campaign file holds (:class:`JointSource`)
     merge_conditions      -- the file's conditions completed by the caller's
     catalogue_campaign    -- identify a campaign and catalogue it (the demo; :class:`CatalogueOutcome`)
+    MODEL_KINDS           -- joint file model kind -> catalogue model kind
 Stacks (:mod:`jointdb.usecases._stack`)
     resolve_joints        -- each interface's joint from the catalogue (:class:`JointResolution`)
+    INTERPOLATION_POOL    -- how many nearest versions an interpolated joint is chosen from
     predict_stack         -- resolve, then predict the tool-tip FRF (:class:`StackPrediction`)
     predict_with_joints   -- predict the tool-tip FRF with joints already resolved
 Lobes (:mod:`jointdb.usecases._lobes`)
     stability_lobes       -- milling (ZOA) or turning lobes of a tool-tip FRF over a speed grid
 Files (:mod:`jointdb.usecases._files`)
     load_stack            -- a stack file with the spindle FRF / model file it names
-    read_frf_file, write_frf_file, frf_format -- FRF files by suffix (UFF58, HDF5, CSV)
+    read_frf_file, write_frf_file, frf_format -- FRF files by suffix (UFF58, HDF5, CSV; ``FRF_SUFFIXES``)
     write_joint_file      -- the HDF5 joint exchange file of ``jointdb identify``
 """
 

@@ -56,11 +56,20 @@ def numeric_metrics(data: Any, prefix: str = "") -> dict[str, float]:
 class JointSource:
     """What a joint or campaign file holds for the catalogue.
 
-    ``frf`` is the joint FRF; ``meta`` the metadata of an identified joint (``joint_model``,
-    ``joint_type``, ``conditions``, ``quality``, ``settings``, ...; empty for a bare FRF blob);
-    ``input_files`` the SHA-256 of the files it came from, by path relative to the campaign
-    (or file) it was read from; ``raw`` the measured FRFs to keep with the version;
-    ``identified`` the :class:`jointdb.campaign.IdentifyOutcome` when a campaign was identified.
+    Attributes
+    ----------
+    frf
+        The joint FRF.
+    meta
+        The metadata of an identified joint (``joint_model``, ``joint_type``, ``conditions``,
+        ``quality``, ``settings``, ...; empty for a bare FRF blob).
+    input_files
+        The SHA-256 of the files it came from, by path relative to the campaign (or file) it
+        was read from.
+    raw
+        The measured FRFs to keep with the version, by key.
+    identified
+        The :class:`jointdb.campaign.IdentifyOutcome` when a campaign was identified, else None.
     """
 
     frf: FRF
@@ -105,6 +114,17 @@ def read_joint_file(path: Path | str, root: Path | str | None = None) -> JointSo
     ``settings``), a jointdb FRF blob file, or a campaign JSON file (identified
     here first, as ``jointdb identify`` would). With ``root`` a campaign may only
     name files inside that folder (an unpacked upload; see :func:`jointdb.campaign.load_campaign`).
+
+    Parameters
+    ----------
+    path
+        The joint HDF5 file, FRF blob file or campaign JSON file.
+    root
+        Confine a campaign to this folder, or None.
+
+    Returns
+    -------
+    JointSource
 
     Raises
     ------
@@ -168,6 +188,21 @@ def merge_conditions(path: Path, recorded: Any, given, force: bool):
     An option that contradicts a value the file records is refused (one line
     naming both values) unless ``force``; then the option wins.
 
+    Parameters
+    ----------
+    path
+        The joint file (named in messages).
+    recorded
+        The conditions the file records (their dict form), or anything else for none.
+    given
+        The caller's :class:`jointdb.store.Conditions`.
+    force
+        Let the caller's values override the file's.
+
+    Returns
+    -------
+    Conditions
+
     Raises
     ------
     InputError
@@ -221,6 +256,25 @@ def catalogue_inputs(joint_file: Path | str, given=None, *, joint_type: str | No
     With ``root`` (the HTTP service: an unpacked upload) a campaign file may only name
     files inside that folder.
 
+    Parameters
+    ----------
+    joint_file
+        The joint or campaign file.
+    given
+        :class:`jointdb.store.Conditions` completing (or, with ``force``, overriding) the file's.
+    joint_type, model_kind, method
+        Take precedence over what the file records (None: the file's value).
+    quality
+        Quality numbers to store, merged over the file's.
+    author
+        The provenance's author.
+    force
+        As :func:`merge_conditions`.
+    root
+        Confine a campaign to this folder (an unpacked upload), or None.
+    source
+        The file already read by :func:`read_joint_file` (it is not read again).
+
     Returns
     -------
     dict
@@ -267,10 +321,15 @@ def catalogue_inputs(joint_file: Path | str, given=None, *, joint_type: str | No
 class CatalogueOutcome:
     """What cataloguing a campaign did.
 
-    ``identified`` is the :class:`jointdb.campaign._run.IdentifyOutcome`
-    (campaign, IRC result, re-coupled and rigid assemblies, constant (k, c) fit);
-    ``version`` the stored :class:`jointdb.store.JointVersion`; ``reused`` is
-    True when the latest version already held this exact record (nothing written).
+    Attributes
+    ----------
+    identified
+        The :class:`jointdb.campaign.IdentifyOutcome` (campaign, IRC result, re-coupled and
+        rigid assemblies, constant (k, c) fit).
+    version
+        The stored :class:`jointdb.store.JointVersion`.
+    reused
+        True when the latest version already held this exact record (nothing written).
     """
 
     identified: Any
@@ -282,7 +341,12 @@ class CatalogueOutcome:
         return self.identified.campaign
 
     def row(self) -> dict[str, Any]:
-        """A flat row: joint, conditions, constant (k, c), residuals."""
+        """A flat row: joint, conditions, constant (k, c), residuals.
+
+        Returns
+        -------
+        dict
+        """
         cond = self.campaign.conditions
         kc = self.identified.kc
         res = self.identified.result
@@ -317,6 +381,10 @@ def catalogue_campaign(repo, path: Path | str, author: str | None = None) -> Cat
         The campaign file (``jointdb-campaign/1``, :mod:`jointdb.campaign`).
     author
         Who catalogues (default: ``$JOINTDB_AUTHOR`` or the login).
+
+    Returns
+    -------
+    CatalogueOutcome
 
     Raises
     ------

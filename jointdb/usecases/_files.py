@@ -21,7 +21,25 @@ FRF_SUFFIXES = {".uff": "uff58", ".unv": "uff58", ".uff58": "uff58", ".uf": "uff
 
 
 def frf_format(path: Path | str, option: str = "") -> str:
-    """``"uff58"``, ``"hdf5"`` or ``"csv"`` from the suffix; InputError naming the option otherwise."""
+    """The FRF file format a suffix names.
+
+    Parameters
+    ----------
+    path
+        The file name.
+    option
+        The command-line option or field that gave it, named in the error.
+
+    Returns
+    -------
+    str
+        ``"uff58"``, ``"hdf5"`` or ``"csv"``.
+
+    Raises
+    ------
+    InputError
+        An unknown suffix.
+    """
     p = Path(path)
     fmt = FRF_SUFFIXES.get(p.suffix.lower())
     if fmt is None:
@@ -33,6 +51,15 @@ def frf_format(path: Path | str, option: str = "") -> str:
 
 def read_frf_file(path: Path | str) -> FRF:
     """Read an FRF from UFF58 (``.uff``, ``.unv``), HDF5 (``.h5``, ``.hdf5``) or CSV by suffix.
+
+    Parameters
+    ----------
+    path
+        The file.
+
+    Returns
+    -------
+    FRF
 
     Raises
     ------
@@ -55,8 +82,23 @@ def write_frf_file(path: Path | str, frf: FRF, *, binary: bool = False, round_fr
                    option: str = "--out") -> Path:
     """Write an FRF as UFF58 / HDF5 / CSV chosen by the suffix (atomically).
 
-    ``binary`` writes UFF58 as 58b (exact); ``round_freq`` lets ASCII UFF58
-    round frequencies to its 6 significant digits (see :func:`jointdb.io.write_uff58`).
+    Parameters
+    ----------
+    path
+        The target file (its directory must exist).
+    frf
+        The FRF.
+    binary
+        Write UFF58 as 58b (exact).
+    round_freq
+        Let ASCII UFF58 round frequencies to its 6 significant digits
+        (see :func:`jointdb.io.write_uff58`).
+    option
+        The command-line option that named the file, for error messages.
+
+    Returns
+    -------
+    Path
     """
     from jointdb import io
 
@@ -75,6 +117,16 @@ def write_frf_file(path: Path | str, frf: FRF, *, binary: bool = False, round_fr
 
 def load_stack(path: Path | str) -> StackSpec:
     """Read and validate a stack file; load a measured spindle FRF or a spindle model file it references.
+
+    Parameters
+    ----------
+    path
+        The stack JSON file (``jointdb-stack/1``); files it names are relative to it.
+
+    Returns
+    -------
+    StackSpec
+        With the spindle FRF attached (measured spindle) or the model loaded (modelled one).
 
     Raises
     ------
@@ -102,9 +154,20 @@ def load_stack(path: Path | str) -> StackSpec:
 
 
 def write_joint_file(path: Path, frf: FRF, meta: dict[str, Any]) -> None:
-    """Write a joint FRF as the HDF5 exchange file of ``jointdb identify`` (readable by
-    ``jointdb couple --joint`` and ``jointdb catalogue``), with ``meta`` as its metadata
-    (its ``model_kind``, if any, is written as the file's ``joint_model``)."""
+    """Write a joint FRF as the HDF5 exchange file of ``jointdb identify``.
+
+    Readable by ``jointdb couple --joint`` and ``jointdb catalogue``.
+
+    Parameters
+    ----------
+    path
+        The HDF5 file to write.
+    frf
+        The joint receptance.
+    meta
+        Its metadata (JSON-serialisable); a ``model_kind`` is written as the file's
+        ``joint_model``.
+    """
     from jointdb.io import write_frf_hdf5
 
     kinds = {v: k for k, v in MODEL_KINDS.items()}

@@ -22,11 +22,30 @@ INTERPOLATION_POOL = 64
 class JointResolution:
     """How one interface's joint was chosen.
 
-    ``kind``: rigid / explicit / catalogued / query / interpolated. For database
-    joints: ``name``, ``version``, ``distance`` (0 for a pinned joint),
-    ``per_condition`` terms, ``extrapolating`` and ``outside_range``; ``candidates``
-    lists the nearest versions considered as ``(name, version, distance)``;
-    ``warnings`` are messages for the user.
+    Attributes
+    ----------
+    interface
+        ``"tool-holder"`` or ``"holder-spindle"``.
+    kind
+        ``rigid``, ``explicit``, ``catalogued``, ``query`` or ``interpolated``.
+    frf
+        The joint receptance (None for a rigid joint).
+    name, version
+        The catalogued joint used (database joints).
+    distance
+        Its distance to the request (0 for a pinned joint).
+    per_condition
+        The distance's terms by condition.
+    extrapolating, outside_range
+        Whether the request lies outside the catalogued range, and of which conditions.
+    candidates
+        The nearest versions considered, ``(name, version, distance)``.
+    warnings
+        Messages for the user.
+    description
+        One line saying what was used.
+    uncertainty
+        The version's parameter covariance, if it was fitted with one.
     """
 
     interface: str
@@ -44,7 +63,12 @@ class JointResolution:
     uncertainty: Mapping[str, Any] | None = None  # the version's parameter covariance, if it was fitted with one
 
     def row(self) -> dict[str, Any]:
-        """A flat row for tables / JSON."""
+        """A flat row for tables / JSON.
+
+        Returns
+        -------
+        dict
+        """
         return {
             "interface": self.interface,
             "kind": self.kind,
@@ -84,6 +108,11 @@ def resolve_joints(spec: StackSpec, repo=None) -> dict[str, JointResolution]:
         A :class:`jointdb.store.Repository`, or a database URL / path (``None``:
         ``JOINTDB_URL`` or the per-user default). Only opened when some
         interface needs the database.
+
+    Returns
+    -------
+    dict
+        Interface name → :class:`JointResolution`.
 
     Raises
     ------
@@ -152,7 +181,17 @@ def resolve_joints(spec: StackSpec, repo=None) -> dict[str, JointResolution]:
 
 @dataclass(frozen=True, eq=False)
 class StackPrediction:
-    """A prediction with the record of how each joint was resolved."""
+    """A prediction with the record of how each joint was resolved.
+
+    Attributes
+    ----------
+    spec
+        The stack.
+    prediction
+        The :class:`jointdb.stack.Prediction` (tool-tip FRF with and without joints).
+    joints
+        Interface → :class:`JointResolution`.
+    """
 
     spec: StackSpec
     prediction: Prediction
@@ -171,6 +210,10 @@ def predict_with_joints(spec: StackSpec, joints: Mapping[str, JointResolution], 
     freq
         Frequency lines [Hz], shape ``(n_freq,)`` (default: the stack's grid,
         :func:`jointdb.stack.prediction_grid`).
+
+    Returns
+    -------
+    StackPrediction
     """
     resolved = {n: r.frf for n, r in joints.items() if r.frf is not None}
     return StackPrediction(spec, predict_tool_tip(spec, resolved, prediction_grid(spec, freq)), joints)
@@ -179,8 +222,18 @@ def predict_with_joints(spec: StackSpec, joints: Mapping[str, JointResolution], 
 def predict_stack(spec: StackSpec | Path | str, repo=None, freq=None) -> StackPrediction:
     """Resolve a stack's joints from the database, then predict its tool-tip FRF (docs/theory.md §4).
 
-    ``spec`` may be a path to a stack file. See :func:`resolve_joints` for ``repo``,
-    :func:`predict_with_joints` for ``freq``.
+    Parameters
+    ----------
+    spec
+        The stack, or a path to a stack file.
+    repo
+        The joint store (as :func:`resolve_joints` takes it).
+    freq
+        Frequency lines [Hz] (as :func:`predict_with_joints` takes them).
+
+    Returns
+    -------
+    StackPrediction
     """
     if not isinstance(spec, StackSpec):
         spec = load_stack(spec)

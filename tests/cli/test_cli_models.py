@@ -115,7 +115,7 @@ def test_demo_runs_end_to_end_outside_the_source_tree(tmp_path):
 def test_bode_and_nyquist_helpers_write_pngs(tmp_path):
     from jointdb.errors import InputError
     from jointdb.fe import load_model
-    from jointdb.plots._frf import save_bode, save_nyquist
+    from jointdb.plots import save_bode, save_nyquist
 
     model = load_model(MODEL)
     freq = np.linspace(100, 5000, 200)

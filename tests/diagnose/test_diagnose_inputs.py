@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from jointdb.diagnose import Measurement, diagnose, prepare
-from jointdb.diagnose._compare import find_peaks, pair_modes
+from jointdb.diagnose import find_peaks, pair_modes
 from jointdb.diagnose_bench import generate_case
 from jointdb.errors import InputError
 from jointdb.fe import model_from_dict

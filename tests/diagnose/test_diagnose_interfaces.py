@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from jointdb.diagnose._diagnose import _plausibility
-from jointdb.diagnose._fit import Fit
+from jointdb.diagnose import Fit
 from jointdb.diagnose._verdict import separating_measurement
 from jointdb.diagnose.physics import Param
 from jointdb.diagnose.physics.diameter import EffectiveDiameter, _free_end_segment

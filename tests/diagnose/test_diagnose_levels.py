@@ -9,8 +9,8 @@ preparation step does.
 import numpy as np
 import pytest
 
-from jointdb.diagnose._compare import find_peaks
-from jointdb.diagnose._levels import FREQ_FLOOR, ZETA_FLOOR, local_modal_fit, track_modes
+from jointdb.diagnose import find_peaks, local_modal_fit, track_modes
+from jointdb.diagnose._levels import FREQ_FLOOR, ZETA_FLOOR
 from jointdb.errors import InputError
 
 #: mode shapes (rows: modes) at three output DOFs; inputs are the first two DOFs
@@ -279,8 +279,8 @@ def test_single_level_never_differs():
 
 
 def test_backbone_plot_of_data_and_model(tmp_path):
-    from jointdb.diagnose._levels import LevelAnalysis
-    from jointdb.plots._diagnose import plot_backbone
+    from jointdb.diagnose import LevelAnalysis
+    from jointdb.plots import plot_backbone
 
     truth = [[(1200.0, 0.012), (2305.0, 0.011)], [(1200.0, 0.012), (2260.0, 0.014)],
              [(1200.0, 0.012), (2185.0, 0.020)]]

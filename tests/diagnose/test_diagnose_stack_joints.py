@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from jointdb.diagnose import Measurement, diagnose
-from jointdb.diagnose._diagnose import MIN_IMPROVEMENT
+from jointdb.diagnose import MIN_IMPROVEMENT
 from jointdb.diagnose_bench import generate_case
 from jointdb.fe import model_from_dict, model_to_dict
 

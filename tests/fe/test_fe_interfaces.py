@@ -16,7 +16,7 @@ from jointdb.fe import (
     model_from_dict,
     model_to_dict,
 )
-from jointdb.stack._parts import composite_material
+from jointdb.stack import composite_material
 
 EPS = np.finfo(float).eps
 

@@ -30,7 +30,7 @@ class _SlowRepo:
 
 async def _while_a_page_waits(repo: _SlowRepo) -> tuple[bool, int, int]:
     from jointdb.server import create_app
-    from jointdb.server._settings import Settings
+    from jointdb.server import Settings
 
     app = create_app(Settings(bind_host="127.0.0.1", open_reads=True), repo=repo)
     transport = httpx.ASGITransport(app=app)

@@ -311,7 +311,7 @@ def _local_client(repo, **settings):
     from fastapi.testclient import TestClient
 
     from jointdb.server import create_app
-    from jointdb.server._settings import Settings
+    from jointdb.server import Settings
 
     return TestClient(create_app(Settings(**settings), repo=repo), raise_server_exceptions=False)
 
@@ -331,7 +331,7 @@ def test_secure_cookies_unless_plain_http_on_loopback(local_repo, settings, secu
 
 
 def test_secure_cookie_setting_from_the_environment(monkeypatch):
-    from jointdb.server._settings import Settings
+    from jointdb.server import Settings
 
     monkeypatch.setenv("JOINTDB_BIND_HOST", "0.0.0.0")
     monkeypatch.setenv("JOINTDB_SECURE_COOKIES", "auto")
@@ -345,7 +345,7 @@ def test_secure_cookie_setting_from_the_environment(monkeypatch):
 
 def test_security_headers_on_an_unexpected_500(local_repo):
     from jointdb.server import create_app
-    from jointdb.server._settings import Settings
+    from jointdb.server import Settings
     from fastapi.testclient import TestClient
 
     app = create_app(Settings(bind_host="127.0.0.1"), repo=local_repo)

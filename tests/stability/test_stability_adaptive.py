@@ -95,7 +95,7 @@ def test_refine_rounds_zero_is_the_plain_computation():
 def test_folds_are_not_plottable_depths_nor_set_the_plot_scale():
     """SD on the README's demo tip gave a fold (real multiplier +1) of 423 mm at 5000 rpm beside
     real limits of 35-54 mm; the plot must not draw it. Here the same shape of result."""
-    from jointdb.plots._lobes import lobes_figure
+    from jointdb.plots import lobes_figure
 
     speeds = np.array([5000.0, 5066.9, 5133.8, 5200.7])
     depth = np.array([0.423, 0.0347, 0.0410, 0.0539])
@@ -115,7 +115,7 @@ def test_folds_are_not_plottable_depths_nor_set_the_plot_scale():
 def test_a_real_sd_fold_is_left_out_of_the_plot():
     """The case that produced the 423 mm spike: the README's SD example (2 teeth, K_t 6e8, K_r 2e8 N/m²,
     a/D 0.1, down-milling) on the demo's tool tip, fitted with 3 modes per direction (x = y)."""
-    from jointdb.plots._lobes import lobes_figure
+    from jointdb.plots import lobes_figure
 
     res = [1.6970204276e-05 - 1.9466645361e-04j, -3.6518113400e-05 - 5.9013790542e-04j,
            8.3752179325e-05 - 6.6576823504e-04j]

@@ -125,7 +125,7 @@ def test_altintas_half_immersion_example_runs_and_matches_the_book_formula(tmp_p
         alim = -2 * np.pi * lam.real * (1 + kappa**2) / (cut.n_teeth * cut.kt)
     book_floor = np.min(alim[alim > 0])
     assert res.min_depth_m == pytest.approx(book_floor, rel=5e-3)
-    from jointdb.plots._lobes import plot_lobes
+    from jointdb.plots import plot_lobes
 
     out = plot_lobes(res, tmp_path / "altintas.png", title="Altintas half immersion (ZOA)", depth_unit="mm")
     assert out.exists() and out.stat().st_size > 5000

@@ -15,7 +15,7 @@ from jointdb.errors import ConflictError, InputError, IntegrityError, NotFoundEr
 from jointdb.store import Repository
 from jointdb.store._bundle_read import manifest_sha256
 from jointdb.store._records import record_sha256
-from jointdb.store._signing import create_key_pair, load_private_key, load_public_key
+from jointdb.store import create_key_pair, load_private_key, load_public_key
 
 
 @pytest.fixture

@@ -22,7 +22,7 @@ from jointdb.errors import ConflictError, InputError, IntegrityError, NotFoundEr
 from jointdb.store import Repository, write_frf_file
 from jointdb.store._bundle_read import manifest_sha256
 from jointdb.store._records import record_sha256
-from jointdb.store._signing import create_key_pair
+from jointdb.store import create_key_pair
 
 BAD, MISSING, CONFLICT, INTEGRITY = (InputError.exit_code, NotFoundError.exit_code, ConflictError.exit_code,
                                      IntegrityError.exit_code)

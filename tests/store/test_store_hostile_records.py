@@ -197,7 +197,7 @@ def test_listing_shows_the_version_get_shows(repo):
 
 # ----------------------------------------------------------------------------- D: model files
 def test_a_damping_type_that_is_not_text_is_a_field_named_error(tmp_path, capsys):
-    from jointdb.fe._modelfile import model_from_dict
+    from jointdb.fe import model_from_dict
 
     model = {"segments": [{"length": 0.1, "outer_diameter": 0.02}], "damping": [{"type": [1, 2], "zeta": 0.01}]}
     with pytest.raises(InputError, match=r"damping\[0\]\.type: must be one of"):

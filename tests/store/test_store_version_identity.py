@@ -14,7 +14,7 @@ from store_helpers import assert_one_line_error, planar_conditions, run_main, sp
 
 from jointdb.errors import ConflictError, IntegrityError
 from jointdb.store import Conditions, Repository
-from jointdb.store._signing import create_key_pair, load_private_key
+from jointdb.store import create_key_pair, load_private_key
 
 CARBIDE_80 = dict(materials=("tungsten-carbide", "steel"), torque=80.0)
 STEEL_30 = dict(materials=("steel", "steel"), torque=30.0)

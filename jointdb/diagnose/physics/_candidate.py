@@ -15,12 +15,27 @@ __all__ = ["Param", "Context", "Candidate", "Combination", "register", "candidat
 
 @dataclass(frozen=True)
 class Param:
-    """A fitted parameter: SI ``unit``, bounds, start; ``log`` = fitted in log space.
+    """A fitted parameter of a candidate physics.
 
-    ``show``/``show_unit`` convert for display (e.g. ``show=1e3, show_unit="g"``).
-    ``starts`` are extra starting values for multi-start fits. ``plausible``
-    is the physically plausible range (default: the fit bounds); a fitted value
-    outside it is reported and penalised (:meth:`implausibility`).
+    Parameters
+    ----------
+    name
+        The parameter's name (e.g. ``"mass"``).
+    unit
+        Its SI unit (e.g. ``"kg"``).
+    lower, upper
+        Bounds of the fit, SI.
+    start
+        Starting value, SI.
+    log
+        Fitted in log space (positive parameters spanning decades).
+    show, show_unit
+        Display factor and unit (e.g. ``show=1e3, show_unit="g"``).
+    starts
+        Extra starting values for multi-start fits, SI.
+    plausible
+        The physically plausible range (default: the fit bounds); a fitted value outside it
+        is reported and penalised (:meth:`implausibility`).
     """
 
     name: str
@@ -36,7 +51,17 @@ class Param:
 
     def implausibility(self, value: float) -> float:
         """Distance of ``value`` outside the plausible range, in units of that range's width
-        (in log space for logarithmic parameters); 0 inside."""
+        (in log space for logarithmic parameters); 0 inside.
+
+        Parameters
+        ----------
+        value
+            A value of the parameter, SI.
+
+        Returns
+        -------
+        float
+        """
         if self.plausible is None:
             return 0.0
         lo, hi = self.plausible
@@ -48,9 +73,32 @@ class Param:
         return float(max(a - x, x - b, 0.0) / width)
 
     def to_u(self, value: float) -> float:
+        """The optimiser's coordinate of a value (``log(value/start)``, or scaled offset).
+
+        Parameters
+        ----------
+        value
+            A value of the parameter, SI.
+
+        Returns
+        -------
+        float
+        """
         return float(np.log(value / self.start)) if self.log else (value - self.start) / self.scale
 
     def from_u(self, u: float) -> float:
+        """The value of an optimiser coordinate (inverse of :meth:`to_u`).
+
+        Parameters
+        ----------
+        u
+            The optimiser's coordinate.
+
+        Returns
+        -------
+        float
+            The value, SI.
+        """
         return float(self.start * np.exp(u)) if self.log else float(self.start + u * self.scale)
 
     @property
@@ -62,6 +110,19 @@ class Param:
         return self.to_u(self.lower), self.to_u(self.upper)
 
     def fmt(self, value: float, sigma: float | None = None) -> str:
+        """The value (± sigma) for display, e.g. ``"5.6 ± 0.3 g"``.
+
+        Parameters
+        ----------
+        value
+            The value, SI.
+        sigma
+            Its standard deviation, SI, or None.
+
+        Returns
+        -------
+        str
+        """
         unit = self.show_unit or self.unit
         v = value * self.show
         if sigma is None or not np.isfinite(sigma):
@@ -71,7 +132,21 @@ class Param:
 
 @dataclass(frozen=True, eq=False)
 class Context:
-    """What candidates need to know: the nominal model, measured points, levels."""
+    """What candidates need to know: the nominal model, measured points, levels.
+
+    Parameters
+    ----------
+    model
+        The nominal :class:`jointdb.fe.BeamModel`.
+    points
+        The model points the recordings are at.
+    n_levels
+        Number of excitation levels recorded.
+    levels
+        The levels (None where not given).
+    modes_hz
+        The nominal model's natural frequencies [Hz].
+    """
 
     model: object
     points: tuple[str, ...]
@@ -91,13 +166,57 @@ class Candidate:
     per_level: bool = False
 
     def apply(self, model, values: dict, level: int = 0):
+        """The nominal model with this physics added.
+
+        Parameters
+        ----------
+        model
+            The nominal :class:`jointdb.fe.BeamModel`.
+        values
+            Parameter name → value, SI.
+        level
+            Index of the excitation level (for level-dependent physics).
+
+        Returns
+        -------
+        BeamModel
+            The base class returns ``model`` unchanged.
+        """
         return model
 
     def chain(self, freq: np.ndarray, values: dict, level: int = 0):
+        """A factor on the model FRF from the measurement chain (gain, delay), or None.
+
+        Parameters
+        ----------
+        freq
+            Frequency lines [Hz], ``(n_freq,)``.
+        values
+            Parameter name → value, SI.
+        level
+            Index of the excitation level.
+
+        Returns
+        -------
+        ndarray or None
+            Complex factor ``(n_freq,)``; the base class returns None (no chain effect).
+        """
         return None
 
     def describe(self, values: dict, sigmas: dict | None = None) -> str:
-        """Plain-language phrase with the fitted values, e.g. 'an unmodelled 5.6 ± 0.3 g sensor at tip'."""
+        """Plain-language phrase with the fitted values, e.g. 'an unmodelled 5.6 ± 0.3 g sensor at tip'.
+
+        Parameters
+        ----------
+        values
+            Parameter name → fitted value, SI.
+        sigmas
+            Parameter name → standard deviation, SI, or None.
+
+        Returns
+        -------
+        str
+        """
         sigmas = sigmas or {}
         parts = ", ".join(f"{p.name} = {p.fmt(values[p.name], sigmas.get(p.name))}" for p in self.params)
         return f"{self.explanation} ({parts})" if parts else self.explanation
@@ -150,13 +269,34 @@ REGISTRY: list[Callable[[Context], Iterable[Candidate]]] = []
 
 
 def register(factory: Callable[[Context], Iterable[Candidate]]):
-    """Decorator: add a candidate factory ``f(context) -> iterable of Candidate``."""
+    """Decorator: add a candidate factory ``f(context) -> iterable of Candidate``.
+
+    Parameters
+    ----------
+    factory
+        Called with a :class:`Context` for every diagnosis.
+
+    Returns
+    -------
+    callable
+        ``factory`` itself.
+    """
     REGISTRY.append(factory)
     return factory
 
 
 def candidates_for(ctx: Context) -> list[Candidate]:
-    """All candidates the registered factories offer for this model and data."""
+    """All candidates the registered factories offer for this model and data.
+
+    Parameters
+    ----------
+    ctx
+        The :class:`Context`.
+
+    Returns
+    -------
+    list of Candidate
+    """
     out: list[Candidate] = []
     for factory in REGISTRY:
         out.extend(factory(ctx))
