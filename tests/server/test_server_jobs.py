@@ -1,0 +1,236 @@
+"""Jobs on a real queue against live processes (issue 21): ``jointdb serve`` on the SQLite
+default (in-process worker) and on PostgreSQL with a separate ``jointdb worker`` process
+(procrastinate). POST answers 202 fast; a job's result equals the use case's / the CLI's on
+the same inputs; cancel works; ``kill -9`` of the server or the worker mid-job leaves the job
+resumed (run again) or failed with a reason, never lost."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import httpx
+import numpy as np
+import pytest
+
+from server_helpers import _pg_schema, drop_pg_schema, make_tokens, pg_base_url, start_server, stop_server
+
+ROOT = Path(__file__).resolve().parents[2]
+CUT = {"teeth": 4, "kt": 6e8, "kr": 2e8, "immersion": 0.5, "rpm_min": 2000.0, "rpm_max": 20000.0}
+
+
+def _stack() -> dict:
+    stacks = ROOT / "fixtures" / "stacks"
+    stack = json.loads((stacks / "endmill-catalogued-joint.json").read_text())
+    stack["spindle"]["model"] = json.loads((stacks / stack["spindle"]["model"]).read_text())  # inline
+    stack["interfaces"]["tool-holder"] = "rigid"
+    stack["frequency"] = {"min": 100.0, "max": 3000.0, "step": 20.0}
+    return stack
+
+
+def start_worker(db: str, blobs: Path, log: Path) -> subprocess.Popen:
+    env = {**os.environ, "OPENBLAS_NUM_THREADS": "1"}
+    with open(log, "ab") as fh:
+        return subprocess.Popen([sys.executable, "-m", "jointdb", "worker", "--db", db, "--blobs", str(blobs),
+                                 "--heartbeat", "1", "--stalled-after", "3"], stdout=fh, stderr=subprocess.STDOUT,
+                                env=env, cwd=ROOT)
+
+
+class Deployment:
+    def __init__(self, backend: str, db: str, tmp: Path):
+        self.backend, self.db, self.tmp = backend, db, tmp
+        self.blobs = tmp / "blobs"
+        self.tokens = make_tokens(db, self.blobs)
+        self.server = start_server(db, self.blobs, tmp / "server.log")
+        self.worker = start_worker(db, self.blobs, tmp / "worker.log") if backend == "postgresql" else None
+
+    def client(self, role="reader") -> httpx.Client:
+        return httpx.Client(base_url=self.server.url, timeout=60,
+                            headers={"Authorization": f"Bearer {self.tokens[role]}"})
+
+    def restart_server(self):
+        self.server = start_server(self.db, self.blobs, self.tmp / "server.log")
+
+    def restart_worker(self):
+        self.worker = start_worker(self.db, self.blobs, self.tmp / "worker.log")
+
+    def stop(self):
+        stop_server(self.server)
+        if self.worker is not None and self.worker.poll() is None:
+            self.worker.send_signal(signal.SIGTERM)
+            try:
+                self.worker.wait(timeout=30)
+            except subprocess.TimeoutExpired:
+                self.worker.kill()
+
+
+@pytest.fixture(scope="module", params=["sqlite", "postgresql"])
+def deployment(request, tmp_path_factory):
+    from jointdb.store import upgrade
+
+    tmp = tmp_path_factory.mktemp(f"jobs-{request.param}")
+    cleanup = None
+    if request.param == "sqlite":
+        db = f"sqlite:///{tmp / 'j.sqlite'}"
+    else:
+        engine, schema, db = _pg_schema(pg_base_url())
+        cleanup = (engine, schema)
+    try:
+        upgrade(db)
+        dep = Deployment(request.param, db, tmp)
+        yield dep
+        dep.stop()
+    finally:
+        if cleanup:
+            drop_pg_schema(*cleanup)
+            cleanup[0].dispose()
+
+
+def submit(c: httpx.Client, kind: str, body: dict) -> tuple[str, float]:
+    t0 = time.perf_counter()
+    r = c.post(f"/api/v1/jobs/{kind}", json=body)
+    elapsed = time.perf_counter() - t0
+    assert r.status_code == 202, r.text
+    out = r.json()
+    assert out["state"] == "queued" and r.headers["location"] == out["url"] == f"/api/v1/jobs/{out['id']}"
+    return out["id"], elapsed
+
+
+def wait(c: httpx.Client, job_id: str, until=("succeeded", "failed", "cancelled"), timeout=240.0) -> dict:
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        try:
+            job = c.get(f"/api/v1/jobs/{job_id}").json()
+        except httpx.HTTPError:  # a server being restarted
+            time.sleep(0.3)
+            continue
+        if job["state"] in until:
+            return job
+        time.sleep(0.2)
+    raise AssertionError(f"job {job_id} still {job['state']} ({job['message']}) after {timeout} s")
+
+
+def running(c, job_id) -> dict:
+    """Wait until the job is running and has reported progress (it is mid-work)."""
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline:
+        job = c.get(f"/api/v1/jobs/{job_id}").json()
+        if job["state"] == "running" and job["progress"] > 0.06:
+            return job
+        assert job["state"] in ("queued", "running"), job
+        time.sleep(0.1)
+    raise AssertionError(f"job {job_id} never got going: {job}")
+
+
+def test_predict_and_sd_lobes_jobs_equal_the_cli(deployment, tmp_path):
+    from jointdb import usecases
+    from jointdb.io import frf_from_json, frf_json, write_frf_hdf5
+    from jointdb.stack import stack_from_dict
+
+    stack = _stack()
+    with deployment.client() as c:
+        pid, t_predict = submit(c, "predict", {"stack": stack})
+        job = wait(c, pid)
+        assert job["state"] == "succeeded", job
+        assert job["progress"] == 1.0 and job["error"] is None and job["started"] and job["finished"]
+        local = usecases.predict_stack(stack_from_dict(stack), None).prediction
+        tip = job["result"]["tip_frf"]
+        want = frf_json(local.tip)
+        np.testing.assert_allclose(tip["real"], want["real"], rtol=1e-12, atol=0)
+        np.testing.assert_allclose(tip["imag"], want["imag"], rtol=1e-12, atol=0)
+        assert job["result"]["prediction"] == json.loads(json.dumps(local.summary()))
+
+        body = {"frf": tip, "method": "sd", "n_speeds": 24, "refine": 0, **CUT}
+        lid, t_lobes = submit(c, "lobes", body)
+        job = wait(c, lid)
+        assert job["state"] == "succeeded", job
+        assert t_predict < 0.2 and t_lobes < 0.2, (t_predict, t_lobes)
+        path = tmp_path / "tip.h5"
+        write_frf_hdf5(path, frf_from_json(tip), {})
+        cli = subprocess.run([sys.executable, "-m", "jointdb", "lobes", str(path), "--method", "sd", "--teeth", "4",
+                              "--kt", "6e8", "--kr", "2e8", "--immersion", "0.5", "--n-speeds", "24", "--refine", "0",
+                              "--json"], capture_output=True, text=True, cwd=ROOT,
+                             env={**os.environ, "OPENBLAS_NUM_THREADS": "1"})
+        assert cli.returncode == 0, cli.stderr
+        want = json.loads(cli.stdout)
+        got = job["result"]
+        assert got["summary"].keys() == want["summary"].keys()
+        for key, value in want["summary"].items():
+            assert got["summary"][key] == (pytest.approx(value, rel=1e-9) if isinstance(value, float) else value), key
+        np.testing.assert_allclose([r["depth_m"] for r in got["rows"]], [r["depth_m"] for r in want["rows"]],
+                                   rtol=1e-9)
+        # the listing shows the caller's jobs, newest first; another reader does not see them
+        items = c.get("/api/v1/jobs", params={"kind": "lobes"}).json()["items"]
+        assert items[0]["id"] == lid and all(j["kind"] == "lobes" for j in items)
+    with deployment.client("writer") as other:
+        assert other.get(f"/api/v1/jobs/{lid}").status_code == 404
+        assert all(j["id"] != lid for j in other.get("/api/v1/jobs").json()["items"])
+    with deployment.client("admin") as admin:
+        assert admin.get(f"/api/v1/jobs/{lid}").json()["state"] == "succeeded"
+
+
+def test_cancel_a_running_job(deployment):
+    tip = _tip(deployment)
+    with deployment.client() as c:
+        jid, _ = submit(c, "lobes", {"frf": tip, "method": "sd", "n_speeds": 300, "refine": 0, **CUT})
+        running(c, jid)
+        r = c.post(f"/api/v1/jobs/{jid}/cancel")
+        assert r.status_code == 202
+        job = wait(c, jid, timeout=60)
+        assert job["state"] == "cancelled" and job["result"] is None, job
+
+
+def _tip(deployment) -> dict:
+    with deployment.client() as c:
+        jid, _ = submit(c, "predict", {"stack": _stack()})
+        return wait(c, jid)["result"]["tip_frf"]
+
+
+def test_kill_9_mid_job_resumes_it(deployment):
+    """SQLite: the server runs the job, is killed and restarted. PostgreSQL: the worker is killed and
+    another started; then the server is killed while a job waits. The job runs again to the end."""
+    tip = _tip(deployment)
+    with deployment.client() as c:
+        jid, _ = submit(c, "lobes", {"frf": tip, "method": "sd", "n_speeds": 60, "refine": 0, **CUT})
+        first = running(c, jid)
+    victim = deployment.server.proc if deployment.backend == "sqlite" else deployment.worker
+    victim.send_signal(signal.SIGKILL)
+    victim.wait()
+    if deployment.backend == "sqlite":
+        deployment.restart_server()
+    else:
+        deployment.restart_worker()
+    with deployment.client() as c:
+        job = wait(c, jid)
+        assert job["state"] == "succeeded", job
+        assert job["attempts"] == first["attempts"] + 1 == 2
+        if deployment.backend == "postgresql":  # the server killed: the queue is in the database
+            jid2, _ = submit(c, "predict", {"stack": _stack()})
+    if deployment.backend == "postgresql":
+        deployment.server.proc.send_signal(signal.SIGKILL)
+        deployment.server.proc.wait()
+        deployment.restart_server()
+        with deployment.client() as c:
+            assert wait(c, jid2)["state"] == "succeeded"
+
+
+def test_job_input_errors_are_field_named_422s(deployment):
+    tip = _tip(deployment)
+    with deployment.client() as c:
+        bad = dict(tip, real=[row[:1] for row in tip["real"]])
+        r = c.post("/api/v1/jobs/lobes", json={"frf": bad, **CUT})
+        assert r.status_code == 422 and r.json()["error"].startswith("frf.real"), r.text
+        r = c.post("/api/v1/lobes", json={"joint": "TH-0", "version": 1, **CUT})
+        assert r.status_code == 422 and "tool-tip FRF" in r.json()["error"], r.text
+        r = c.post("/api/v1/lobes", json={"frf": tip, **dict(CUT, kt=796.0), "n_speeds": 20, "refine": 0})
+        assert r.status_code == 200, r.text
+        out = r.json()
+        assert any("N/mm²" in n and "7.96e+08" in n for n in out["notes"])
+        assert out["coefficients_n_per_m2"]["kt"] == 7.96e8 and out["summary"]["speeds"] == 20
+        assert c.post("/api/v1/jobs/identify", json={"file_b64": ""}).status_code == 403  # reader
+        assert c.get("/api/v1/jobs/" + "0" * 32).status_code == 404
