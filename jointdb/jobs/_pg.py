@@ -67,7 +67,8 @@ def ensure_schema(engine) -> bool:
             if schema_present(conn):
                 return False
             if conn.execute(text("SELECT to_regclass('procrastinate_jobs') IS NULL")).scalar():
-                conn.exec_driver_sql(SchemaManager.get_schema())
+                with conn.connection.dbapi_connection.cursor() as cur:  # no parameters: '%' is literal SQL
+                    cur.execute(SchemaManager.get_schema())
         ensure_table(engine)
     except Exception as exc:
         if "permission denied" in str(exc).lower() or "InsufficientPrivilege" in type(exc.__cause__ or exc).__name__:
@@ -84,12 +85,14 @@ def grant_queue(conn, role: str) -> None:
             conn.exec_driver_sql(f'GRANT SELECT, INSERT, UPDATE, DELETE ON "{table}" TO "{role}"')
 
 
-def make_app(url: str, repo=None):
-    """The procrastinate app over ``url`` with the task ``jointdb.run_job`` (run with ``repo``)."""
+def make_app(url: str, repo=None, sync: bool = False):
+    """The procrastinate app over ``url`` with the task ``jointdb.run_job`` (run with ``repo``);
+    ``sync``: a synchronous connector (the server's request threads defer and cancel)."""
     import procrastinate
 
-    app = procrastinate.App(connector=procrastinate.PsycopgConnector(conninfo=conninfo(url), min_size=1,
-                                                                   max_size=4))
+    connector = (procrastinate.SyncPsycopgConnector(conninfo=conninfo(url), min_size=1, max_size=4) if sync else
+                 procrastinate.PsycopgConnector(conninfo=conninfo(url), min_size=1, max_size=4))
+    app = procrastinate.App(connector=connector)
 
     @app.task(name=TASK, queue=QUEUE)
     def run_job(job_id: str) -> None:  # runs in a worker thread of `jointdb worker`
@@ -112,10 +115,11 @@ class ProcrastinateQueue:
 
     def start(self) -> None:
         ensure_schema(self.repo.write_engine)
-        self.app = make_app(self.repo.url, self.repo)
+        self.app = make_app(self.repo.url, self.repo, sync=True).open()
 
     def stop(self) -> None:
-        pass
+        if self.app is not None:
+            self.app.close()
 
     def submit(self, kind: str, owner: str, payload: dict, upload: bytes | None = None) -> str:
         job_id = self.rows.insert(kind, owner, payload, upload)

@@ -139,6 +139,8 @@ def _start_jobs(app: FastAPI) -> None:
 
             ensure_table(app.state.repo.write_engine)
         app.state.jobs = q
+        import jointdb.stack  # noqa: F401 - checked at submission; loaded now, not by the first request
+
         log.info(json.dumps({"event": "jobs", "backend": q.backend, "threads": threads}))
     except Exception as exc:  # noqa: BLE001 - the catalogue still serves; the job routes say 503
         app.state.jobs = None
