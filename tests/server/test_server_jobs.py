@@ -235,3 +235,51 @@ def test_job_input_errors_are_field_named_422s(deployment):
         assert out["coefficients_n_per_m2"]["kt"] == 7.96e8 and out["summary"]["speeds"] == 20
         assert c.post("/api/v1/jobs/identify", json={"file_b64": ""}).status_code == 403  # reader
         assert c.get("/api/v1/jobs/" + "0" * 32).status_code == 404
+
+
+def _campaign_zip(name: str = "th-er32-carbide-080nm") -> bytes:
+    """A bundled campaign zipped as it lies: campaigns/<name>/… beside models/ (its ../../models paths
+    stay inside the archive)."""
+    import io
+    import zipfile
+
+    base = ROOT / "fixtures" / "bundled" / "catalogue"
+    buf = io.BytesIO()
+    with zipfile.ZipFile(buf, "w", zipfile.ZIP_DEFLATED) as zf:
+        for path in sorted([*(base / "campaigns" / name).rglob("*"), *(base / "models").rglob("*")]):
+            if path.is_file():
+                zf.write(path, path.relative_to(base).as_posix())
+    return buf.getvalue()
+
+
+def test_identify_review_catalogue(deployment):
+    data = _campaign_zip()
+    with deployment.client("reader") as reader:
+        r = reader.post("/api/v1/jobs/identify", files={"file": ("c.zip", data, "application/zip")})
+        assert r.status_code == 403  # identify needs a writer
+    with deployment.client("writer") as c:
+        r = c.post("/api/v1/jobs/identify", files={"file": ("bad.zip", b"not a zip", "application/zip")})
+        assert r.status_code == 422 and "not a zip" in r.json()["error"]
+        t0 = time.perf_counter()
+        r = c.post("/api/v1/jobs/identify", files={"file": ("th.zip", data, "application/zip")},
+                   data={"conditions": json.dumps({"torque_nm": 75.0})})
+        assert r.status_code == 202, r.text
+        assert time.perf_counter() - t0 < 2.0
+        job = wait(c, r.json()["id"])
+        assert job["state"] == "succeeded", job
+        review = job["result"]
+        assert review["campaign"] == "th-er32-carbide-080nm" and review["conditions"]["torque_nm"] == 80
+        assert review["contradictions"] and "75" in review["contradictions"][0]
+        units = {(p["k_unit"], p["c_unit"]) for p in review["parameters"]}
+        assert units <= {("N/m", "N·s/m"), ("N·m/rad", "N·m·s/rad")} and len(review["parameters"]) >= 2
+        assert all(p["k"] > 0 for p in review["parameters"])
+        assert review["curves"]["assembly"]["entries"] and review["curves"]["joint"]["dofs"]
+        r = c.post(f"/api/v1/jobs/{job['id']}/catalogue", json={"name": "TH-job", "label": "reviewed"})
+        assert r.status_code == 201, r.text
+        v = r.json()
+        assert v["name"] == "TH-job" and v["version"] == 1 and "reviewed" in v["labels"]
+        assert v["conditions"]["torque_nm"] == 80 and v["provenance"]["author"] == "writer-owner"
+        assert v["provenance"]["parameters"]["job"] == job["id"]
+        assert c.get("/api/v1/joints/TH-job").json()["version"] == 1
+        assert c.post(f"/api/v1/jobs/{job['id']}/catalogue", json={}).status_code == 409
+        assert c.post(f"/api/v1/jobs/{job['id']}/discard").status_code == 409
