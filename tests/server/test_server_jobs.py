@@ -283,3 +283,26 @@ def test_identify_review_catalogue(deployment):
         assert c.get("/api/v1/joints/TH-job").json()["version"] == 1
         assert c.post(f"/api/v1/jobs/{job['id']}/catalogue", json={}).status_code == 409
         assert c.post(f"/api/v1/jobs/{job['id']}/discard").status_code == 409
+
+
+def test_cli_predict_over_server_equals_the_database(deployment, tmp_path):
+    """`jointdb --server URL predict` reads the catalogued joints from the server (the joint catalogued
+    by the identify job above) and answers what `--db` answers."""
+    stack = _stack()
+    stack["interfaces"]["tool-holder"] = {"query": {"joint_type": "tool-holder", "torque_nm": 80.0,
+                                                    "materials": ["tungsten-carbide", "steel"], "neighbours": 1}}
+    path = tmp_path / "stack.json"
+    path.write_text(json.dumps(stack))
+    env = {**os.environ, "OPENBLAS_NUM_THREADS": "1", "JOINTDB_TOKEN": deployment.tokens["reader"]}
+    env.pop("JOINTDB_URL", None)
+    runs = {}
+    for how, args in (("server", ["--server", deployment.server.url, "predict"]),
+                      ("db", ["predict", "--db", deployment.db])):
+        out = subprocess.run([sys.executable, "-m", "jointdb", *args, str(path), "--json"], capture_output=True,
+                             text=True, cwd=ROOT, env=env if how == "server" else {**env, "JOINTDB_BLOBS": str(
+                                 deployment.blobs)})
+        assert out.returncode == 0, out.stderr
+        runs[how] = json.loads(out.stdout)
+    assert runs["server"]["joints"] == runs["db"]["joints"]
+    assert any(j.get("joint", "").startswith("TH-job") for j in runs["server"]["joints"]), runs["server"]["joints"]
+    assert runs["server"]["prediction"] == runs["db"]["prediction"]
