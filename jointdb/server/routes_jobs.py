@@ -117,7 +117,7 @@ def check_lobes(body: LobesJobIn) -> dict[str, Any]:
         raise InputError("joint: a catalogued joint FRF describes an interface, not a tool tip; lobes need the "
                          "tool-tip FRF of a stack as frf (run a predict job and send its tip_frf)"
                          if body.joint is not None else "frf: give the tool-tip FRF (JSON)")
-    tip_frf_input(payload)
+    tip_frf_input(payload.get("frf"))
     if not body.rpm_min < body.rpm_max:
         raise InputError("rpm_min must be < rpm_max")
     if body.op == "milling" and (body.kt is None or body.kr is None):
