@@ -150,6 +150,8 @@ def test_predict_and_sd_lobes_jobs_equal_the_cli(deployment, tmp_path):
         lid, t_lobes = submit(c, "lobes", body)
         job = wait(c, lid)
         assert job["state"] == "succeeded", job
+        print(f"\n{deployment.backend}: POST /jobs/predict {t_predict * 1e3:.1f} ms, POST /jobs/lobes (SD) "
+              f"{t_lobes * 1e3:.1f} ms")
         assert t_predict < 0.2 and t_lobes < 0.2, (t_predict, t_lobes)
         path = tmp_path / "tip.h5"
         write_frf_hdf5(path, frf_from_json(tip), {})
