@@ -134,7 +134,8 @@ def test_predict_and_sd_lobes_jobs_equal_the_cli(deployment, tmp_path):
 
     stack = _stack()
     with deployment.client() as c:
-        submit(c, "predict", {"stack": stack})  # the process's first request opens its connections
+        warm, _ = submit(c, "predict", {"stack": stack})  # the process's first request opens its connections
+        wait(c, warm)
         pid, t_predict = submit(c, "predict", {"stack": stack})
         job = wait(c, pid)
         assert job["state"] == "succeeded", job
