@@ -60,12 +60,12 @@ COMMANDS: dict[str, tuple[str, str]] = {
     ),
     "plan": ("_plan", "Rank candidate tap points by the expected joint-parameter variance (Fisher information)."),
     "serve": ("_serve", "Run the HTTP API and web catalogue (FastAPI + uvicorn) over the joint database."),
+    "worker": ("_worker", "Run jobs of the HTTP service (predict, lobes, diagnose, identify) from the PostgreSQL queue."),
     "joints": ("_store", "List, inspect, label, deprecate, diff, export and import catalogued joints."),
     "keys": ("_store", "Ed25519 keys to sign exported bundles and verify imported ones."),
     "db": ("_db", "Database administration: migrations, integrity check, garbage collection."),
     "campaign": ("_campaign", "Scaffold a measurement campaign from a folder of files, or check one."),
     "tokens": ("_serve", "API tokens of the HTTP service: create, list, revoke."),
-    "worker": ("_worker", "Run jobs of the HTTP service (predict, lobes, diagnose, identify) from the PostgreSQL queue."),
 }
 
 
