@@ -201,6 +201,18 @@ class JobRows:
         return "queued"
 
 
+class RowReads:
+    """What both queues read the same way: a job's row and the owner's jobs (``self.rows``)."""
+
+    rows: JobRows
+
+    def get(self, job_id: str):
+        return self.rows.row(job_id)
+
+    def list(self, owner: str | None, kind: str | None = None, state: str | None = None):
+        return self.rows.list(owner, kind, state)
+
+
 def _alive(pid: int) -> bool:
     if pid == os.getpid():
         return True
