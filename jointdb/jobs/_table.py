@@ -192,6 +192,10 @@ class JobRows:
     def recover(self, job_id: str, attempts: int, why: str) -> str:
         """A job whose worker stopped mid-run: queued again (resumed) or, after
         :data:`MAX_ATTEMPTS` runs, failed with the reason. Returns the new state."""
+        if self.row(job_id)._mapping["cancel_requested"]:  # it was being cancelled: it stays cancelled
+            self.set(job_id, only_if=("running",), state="cancelled", finished=now(),
+                     message=one_line(f"cancelled ({why})"))
+            return "cancelled"
         if attempts >= MAX_ATTEMPTS:
             self.set(job_id, only_if=("running",), state="failed", finished=now(),
                      error=one_line(f"{why}; gave up after {attempts} attempts"), message="failed")

@@ -340,3 +340,21 @@ def test_diagnose_job_equals_the_cli(deployment, tmp_path):
     assert got["best"]["name"] == want["best"]["name"]
     for key, value in want["best"]["values"].items():
         assert got["best"]["values"][key] == pytest.approx(value, rel=1e-6), key
+
+
+def test_identify_from_individual_files(deployment):
+    """The campaign file and the files it names uploaded side by side (no archive): packed and checked
+    as an archive, identified; a file name with a folder is refused."""
+    folder = ROOT / "fixtures" / "campaigns" / "th-steel-30nm"
+    files = [("file", (p.name, p.read_bytes(), "application/octet-stream")) for p in sorted(folder.iterdir())
+             if p.is_file()]
+    with deployment.client("writer") as c:
+        r = c.post("/api/v1/jobs/identify", files=[*files, ("file", ("../x.json", b"{}", "application/json"))])
+        assert r.status_code == 422 and "plain file names" in r.json()["error"], r.text
+        r = c.post("/api/v1/jobs/identify", files=files)
+        assert r.status_code == 202, r.text
+        job = wait(c, r.json()["id"])
+        assert job["state"] == "succeeded", job
+        assert job["result"]["campaign"] == json.loads((folder / "campaign.json").read_text())["name"]
+        assert c.post(f"/api/v1/jobs/{job['id']}/discard").json() == {"id": job["id"], "discarded": True}
+        assert c.post(f"/api/v1/jobs/{job['id']}/catalogue", json={}).status_code == 409
