@@ -358,3 +358,32 @@ def test_identify_from_individual_files(deployment):
         assert job["result"]["campaign"] == json.loads((folder / "campaign.json").read_text())["name"]
         assert c.post(f"/api/v1/jobs/{job['id']}/discard").json() == {"id": job["id"], "discarded": True}
         assert c.post(f"/api/v1/jobs/{job['id']}/catalogue", json={}).status_code == 409
+
+
+def test_browser_session_needs_same_origin_and_csrf_header(deployment):
+    """A signed-in browser session may use the jobs API: reads with its cookie, POSTs only from this
+    site with the page's CSRF token in X-CSRF-Token (a cross-site form cannot set that header)."""
+    import re
+
+    csrf_re = re.compile(r'name="csrf" value="([0-9a-f]{64})"')
+    with httpx.Client(base_url=deployment.server.url, follow_redirects=False, timeout=60) as web:
+        page = web.get("/ui/signin")
+        r = web.post("/ui/signin", data={"csrf": csrf_re.search(page.text).group(1),
+                                         "token": deployment.tokens["reader"]})
+        assert r.status_code == 303
+        csrf = csrf_re.search(web.get("/ui/joints").text).group(1)
+        cookie = {"Cookie": f"jointdb_session={web.cookies.get('jointdb_session', path='/ui')}"}
+    body = {"stack": _stack()}
+    with httpx.Client(base_url=deployment.server.url, timeout=60, headers=cookie) as api:
+        assert api.get("/api/v1/jobs").status_code == 200
+        r = api.post("/api/v1/jobs/predict", json=body)
+        assert r.status_code == 403 and "X-CSRF-Token" in r.json()["error"]
+        r = api.post("/api/v1/jobs/predict", json=body, headers={"X-CSRF-Token": csrf,
+                                                                 "Origin": "https://evil.example"})
+        assert r.status_code == 403
+        r = api.post("/api/v1/jobs/predict", json=body, headers={"X-CSRF-Token": csrf})
+        assert r.status_code == 202, r.text
+        job = wait(api, r.json()["id"])
+        assert job["owner"] == "reader-owner" and job["state"] == "succeeded"
+    with httpx.Client(base_url=deployment.server.url, timeout=60) as anonymous:
+        assert anonymous.get(f"/api/v1/jobs/{job['id']}").status_code == 401
