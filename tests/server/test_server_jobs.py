@@ -273,8 +273,11 @@ def test_identify_review_catalogue(deployment):
         review = job["result"]
         assert review["campaign"] == "th-er32-carbide-080nm" and review["conditions"]["torque_nm"] == 80
         assert review["contradictions"] and "75" in review["contradictions"][0]
-        units = {(p["k_unit"], p["c_unit"]) for p in review["parameters"]}
-        assert units <= {("N/m", "N·s/m"), ("N·m/rad", "N·m·s/rad")} and len(review["parameters"]) >= 2
+        units = {p["dof"]: (p["k_unit"], p["c_unit"]) for p in review["parameters"]}
+        assert units == {"3x": ("N/m", "N·s/m"), "3ry": ("N·m/rad", "N·m·s/rad")}, units
+        # σ from the output-error fit, relative to the value as the verdict's "largest standard error 2.3% (c 3ry)"
+        worst = max(p[f"{q}_sigma"] / p[q] for p in review["parameters"] for q in ("k", "c"))
+        assert any(f"{100 * worst:.1f}%" in line for line in review["verdict"]), (worst, review["verdict"])
         assert all(p["k"] > 0 for p in review["parameters"])
         assert review["curves"]["assembly"]["entries"] and review["curves"]["joint"]["dofs"]
         r = c.post(f"/api/v1/jobs/{job['id']}/catalogue", json={"name": "TH-job", "label": "reviewed"})
