@@ -312,6 +312,13 @@ def test_cli_predict_over_server_equals_the_database(deployment, tmp_path):
     assert runs["server"]["joints"] == runs["db"]["joints"]
     assert any(j.get("joint", "").startswith("TH-job") for j in runs["server"]["joints"]), runs["server"]["joints"]
     assert runs["server"]["prediction"] == runs["db"]["prediction"]
+    assert runs["db"]["band"] is not None  # the identified joint carries its covariance
+    with deployment.client() as c:  # the predict job gives what the CLI gives: prediction, band, sensitivity
+        job = wait(c, submit(c, "predict", {"stack": stack})[0])
+    assert job["state"] == "succeeded", job
+    assert job["result"]["prediction"] == runs["db"]["prediction"]
+    assert job["result"]["band"] == runs["db"]["band"]
+    assert job["result"]["joint_choice_sensitivity"] == runs["db"]["joint_choice_sensitivity"]
 
 
 def test_diagnose_job_equals_the_cli(deployment, tmp_path):
