@@ -5,13 +5,12 @@ from __future__ import annotations
 import warnings
 from typing import Any
 
-import numpy as np
 from fastapi import APIRouter, Depends
 
 from jointdb.errors import InputError
-from jointdb.io import frf_from_json, frf_json
+from jointdb.io import frf_json
 from jointdb.server._deps import reader, repo, version_json
-from jointdb.server._schemas import LobesIn, NearestIn, PredictIn
+from jointdb.server._schemas import LobesJobIn, NearestIn, PredictIn
 
 router = APIRouter(tags=["query"])
 
@@ -50,36 +49,44 @@ def interpolate(body: NearestIn, r=Depends(repo), _who=reader) -> dict[str, Any]
             "warnings": notes, "frf": frf_json(ij.frf)}
 
 
-@router.post("/predict", summary="Tool-tip FRF of a tool / holder / spindle stack")
+@router.post("/predict", summary="Tool-tip FRF of a stack (with band and joint-choice sensitivity)")
 def predict(body: PredictIn, r=Depends(repo), _who=reader) -> dict[str, Any]:
-    """Joints from the catalogue (pinned, nearest or explicit); the stack must carry its
-    spindle model inline (a server reads no client files)."""
-    from jointdb import usecases
-    from jointdb.stack import MeasuredSpindle, ModelledSpindle, stack_from_dict
+    """As ``jointdb predict --json``: joints from the catalogue (pinned, nearest or explicit), the
+    tip FRF and the rigid-joint tip, the 5–95 % band from the joints' covariance, the change with
+    the next-nearest joints. The stack must carry its spindle model inline (a server reads no client
+    files). Takes seconds to a minute: prefer ``POST /api/v1/jobs/predict``."""
+    from jointdb.jobs._run import run_predict
 
-    spec = stack_from_dict(body.stack)
-    sp = spec.spindle
-    if isinstance(sp, MeasuredSpindle) or (isinstance(sp, ModelledSpindle) and isinstance(sp.model, str)):
-        raise InputError("stack.spindle: refers to a file; send the spindle model inline (the server reads "
-                         "no client files)")
-    result = usecases.predict_stack(spec, r)
-    pred = result.prediction
-    return {"stack": spec.name, "joints": [j.row() for j in result.joints.values()], "prediction": pred.summary(),
-            "notes": list(pred.notes), "tip_frf": frf_json(pred.tip)}
+    result, _ = run_predict(body.model_dump(mode="json"), r, lambda fraction, message: None)
+    return result
 
 
-@router.post("/lobes", summary="Stability lobes from a tool-tip FRF (milling ZOA or turning)")
-def lobes(body: LobesIn, r=Depends(repo), _who=reader) -> dict[str, Any]:
-    from jointdb.usecases import stability_lobes
+@router.post("/lobes", summary="Stability lobes from a tool-tip FRF (milling ZOA or SD, or turning)")
+def lobes(body: LobesJobIn, _who=reader) -> dict[str, Any]:
+    """As ``jointdb lobes --json``: method, summary (floor, deepest pocket), rows (depth in m), best
+    speeds and notes — a kt/kr/kf given in N/mm² (e.g. ``kt: 796``) is recognised, converted to N/m²
+    and said so in ``notes``. Refinement (``refine`` rounds) as the CLI. SD can take minutes: prefer
+    ``POST /api/v1/jobs/lobes``."""
+    from jointdb.jobs._run import run_lobes
 
-    if (body.frf is None) == (body.joint is None):
-        raise InputError("give either frf (JSON) or joint and version")
-    if body.frf is not None:
-        frf = frf_from_json(body.frf.model_dump())
-    else:
-        frf = r.load_frf(r.get(body.joint, body.version))
-    res = stability_lobes(frf, body.op, rpm_min=body.rpm_min, rpm_max=body.rpm_max, n_speeds=body.n_speeds,
-                          kf=body.kf, teeth=body.teeth, kt=body.kt, kr=body.kr, immersion=body.immersion, up=body.up)
-    rows = [{k: (None if isinstance(v, float) and not np.isfinite(v) else v) for k, v in row.items()}
-            for row in res.table()]
-    return {"method": res.method, "rows": rows}
+    result, _ = run_lobes(check_lobes(body), None, lambda fraction, message: None)
+    return result
+
+
+def check_lobes(body: LobesJobIn) -> dict[str, Any]:
+    """The checks a lobes request gets before any work (field-named 422s)."""
+    from jointdb.jobs._run import tip_frf_input
+
+    payload = body.model_dump(mode="json")
+    if body.joint is not None or body.frf is None:
+        raise InputError("joint: a catalogued joint FRF describes an interface, not a tool tip; lobes need the "
+                         "tool-tip FRF of a stack as frf (run a predict job and send its tip_frf)"
+                         if body.joint is not None else "frf: give the tool-tip FRF (JSON)")
+    tip_frf_input(payload.get("frf"))
+    if not body.rpm_min < body.rpm_max:
+        raise InputError("rpm_min must be < rpm_max")
+    if body.op == "milling" and (body.kt is None or body.kr is None):
+        raise InputError("kt, kr: milling needs both cutting coefficients (N/m²)")
+    if body.op == "turning" and body.kf is None:
+        raise InputError("kf: turning needs the cutting coefficient (N/m²)")
+    return payload
