@@ -21,8 +21,12 @@ Stacks (:mod:`jointdb.usecases._stack`)
     INTERPOLATION_POOL    -- how many nearest versions an interpolated joint is chosen from
     predict_stack         -- resolve, then predict the tool-tip FRF (:class:`StackPrediction`)
     predict_with_joints   -- predict the tool-tip FRF with joints already resolved
-Lobes (:mod:`jointdb.usecases._lobes`)
+Lobes (:mod:`jointdb.usecases._lobes`, :mod:`jointdb.usecases._lobe_report`)
     stability_lobes       -- milling (ZOA) or turning lobes of a tool-tip FRF over a speed grid
+    lobes_report          -- lobes as the API and the jobs give them: method, refinement, summary, notes
+    lobe_summary          -- floor, deepest pocket, flips and folds of a lobe result
+    best_speeds           -- the speeds of the deepest stable pockets
+    coefficients_si       -- cutting coefficients in N/m² (N/mm² recognised and converted, with a note)
 Files (:mod:`jointdb.usecases._files`)
     load_stack            -- a stack file with the spindle FRF / model file it names
     read_frf_file, write_frf_file, frf_format -- FRF files by suffix (UFF58, HDF5, CSV; ``FRF_SUFFIXES``)

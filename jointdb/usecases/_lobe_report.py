@@ -23,7 +23,26 @@ PLAUSIBLE_N_PER_M2 = (1e7, 1e11)
 
 def coefficients_si(notes: list[str], **coefficients: float | None) -> dict[str, float | None]:
     """The cutting coefficients in N/m²: a value below :data:`N_PER_MM2_BELOW` is taken as N/mm²
-    and converted, with a note appended to ``notes``; an implausibly large one gets a warning."""
+    and converted, with a note appended to ``notes``; an implausibly large one gets a warning.
+
+    Parameters
+    ----------
+    notes
+        List the notes (one line each) are appended to; changed in place.
+    **coefficients
+        Each coefficient by name (``kt``, ``kr``, ...) in N/m², or N/mm² when below
+        :data:`N_PER_MM2_BELOW`; None when not given.
+
+    Returns
+    -------
+    dict
+        The same names with the values in N/m² (None stays None).
+
+    Raises
+    ------
+    InputError
+        A value that is not finite.
+    """
     out: dict[str, float | None] = {}
     lo, hi = PLAUSIBLE_N_PER_M2
     for name, value in coefficients.items():
@@ -46,7 +65,22 @@ def coefficients_si(notes: list[str], **coefficients: float | None) -> dict[str,
 def lobe_summary(res, n_base: int) -> dict:
     """Summary of a lobe result in SI units: the smallest limiting depth (the floor on this grid),
     the deepest pocket, counts of speeds, flips and folds. Folds (multiplier +1) are not chatter
-    limits and are left out of the floor and the pocket."""
+    limits and are left out of the floor and the pocket.
+
+    Parameters
+    ----------
+    res
+        A :class:`jointdb.stability.LobeResult`.
+    n_base
+        Number of speeds of the grid before refinement (the rest were added by it).
+
+    Returns
+    -------
+    dict
+        ``method``, ``speeds``, ``speeds_added_by_refinement``, ``speed_range_rpm`` and, when a
+        limit exists, ``min_depth_m`` with its speed [rpm], chatter frequency [Hz] and kind,
+        ``best_pocket_depth_m`` with its speed; counts of flip, fold and no-limit speeds.
+    """
     from jointdb.stability import plottable_depth
 
     d = plottable_depth(res)
@@ -65,7 +99,20 @@ def lobe_summary(res, n_base: int) -> dict:
 
 
 def best_speeds(res, count: int = 5) -> list[dict[str, float]]:
-    """The ``count`` speeds of the deepest stable pockets (local maxima of the limiting depth)."""
+    """The ``count`` speeds of the deepest stable pockets (local maxima of the limiting depth).
+
+    Parameters
+    ----------
+    res
+        A :class:`jointdb.stability.LobeResult`.
+    count
+        Most pockets returned.
+
+    Returns
+    -------
+    list of dict
+        ``{"spindle_speed_rpm", "depth_m"}`` per pocket, in increasing speed.
+    """
     from jointdb.stability import plottable_depth
 
     d = np.asarray(plottable_depth(res), float)
