@@ -21,7 +21,7 @@ Stacks (:mod:`jointdb.usecases._stack`)
     predict_with_joints   -- predict the tool-tip FRF with joints already resolved
 Lobes (:mod:`jointdb.usecases._lobes`)
     stability_lobes       -- milling (ZOA) or turning lobes of a tool-tip FRF over a speed grid
-Parts (:mod:`jointdb.usecases._parts`; spindles, holders, tools as catalogued records)
+Parts (:mod:`jointdb.usecases._parts`, :mod:`jointdb.usecases._partfiles`; spindles, holders, tools as catalogued records)
     resolve_stack_parts   -- a stack document's ``{"part": "name@version"}`` references made inline
     stack_from_document   -- a stack document (parts resolved, recorded in ``spec.parts``) -> StackSpec
     part_from_files       -- what ``jointdb parts add`` reads: model / FRF / stack / part files
@@ -51,14 +51,8 @@ from jointdb.usecases._files import (
     write_joint_file,
 )
 from jointdb.usecases._lobes import stability_lobes
-from jointdb.usecases._parts import (
-    PartInput,
-    add_part_from_files,
-    part_from_files,
-    part_refs,
-    resolve_stack_parts,
-    stack_from_document,
-)
+from jointdb.usecases._partfiles import PartInput, add_part_from_files, part_from_files
+from jointdb.usecases._parts import part_refs, resolve_stack_parts, stack_from_document
 from jointdb.usecases._stack import (
     INTERPOLATION_POOL,
     JointResolution,
