@@ -26,6 +26,7 @@ Parts (:mod:`jointdb.usecases._parts`, :mod:`jointdb.usecases._partfiles`; spind
     stack_from_document   -- a stack document (parts resolved, recorded in ``spec.parts``) -> StackSpec
     part_from_files       -- what ``jointdb parts add`` reads: model / FRF / stack / part files
     add_part_from_files   -- read and catalogue a part
+    catalogue_bundled_parts -- the bundled example stack's spindles, holder and tool (the demo does it)
 Files (:mod:`jointdb.usecases._files`)
     load_stack            -- a stack file with the spindle FRF / model file it names
     read_frf_file, write_frf_file, frf_format -- FRF files by suffix (UFF58, HDF5, CSV)
@@ -51,7 +52,13 @@ from jointdb.usecases._files import (
     write_joint_file,
 )
 from jointdb.usecases._lobes import stability_lobes
-from jointdb.usecases._partfiles import PartInput, add_part_from_files, part_from_files
+from jointdb.usecases._partfiles import (
+    BUNDLED_PARTS,
+    PartInput,
+    add_part_from_files,
+    catalogue_bundled_parts,
+    part_from_files,
+)
 from jointdb.usecases._parts import part_refs, resolve_stack_parts, stack_from_document
 from jointdb.usecases._stack import (
     INTERPOLATION_POOL,
@@ -78,7 +85,9 @@ __all__ = [
     "write_frf_file",
     "write_joint_file",
     "stability_lobes",
+    "BUNDLED_PARTS",
     "PartInput",
+    "catalogue_bundled_parts",
     "add_part_from_files",
     "part_from_files",
     "part_refs",

@@ -10,7 +10,7 @@ from pathlib import Path
 from typing import Any
 
 from jointdb._jsonfile import read_json_file
-from jointdb.errors import InputError
+from jointdb.errors import InputError, NotFoundError
 from jointdb.frf import FRF
 from jointdb.usecases._files import read_frf_file
 
@@ -112,3 +112,47 @@ def add_part_from_files(store, name: str, kind: str, *, attributes: Mapping[str,
     part = part_from_files(kind, **files)
     return store.add_part(name, kind, part.payload, frf=part.frf, attributes=attributes,
                           provenance=part.provenance, author=author, label=label)
+
+
+#: The parts of the bundled example stack (``jointdb/data/catalogue``), as the demo catalogues them:
+#: ``(name, kind, source, attributes)``; source: ``stack:<slot>`` of demo-stack.json or ``model:<file>:<point>``.
+BUNDLED_PARTS = (
+    ("carbide-end-mill-12mm-4fl", "tool", "stack:tool",
+     {"description": "12 mm 4-flute carbide end mill, 90 mm long, 30 mm fluted"}),
+    ("er32-collet-chuck-hsk63", "holder", "stack:holder",
+     {"family": "ER32", "taper": "HSK-A63", "bore_mm": 12.0,
+      "description": "steel ER32 collet chuck on HSK-A63, 70 mm (12 mm bore, 40 mm deep)"}),
+    ("demo-mill-spindle", "spindle", "stack:spindle",
+     {"machine": "demo-mill", "taper": "HSK-A63",
+      "description": "spindle shaft on two bearing sets, y 25 % softer than x (3-D frame model)"}),
+    ("test-rig-spindle", "spindle", "model:models/spindle-alone.json:nose",
+     {"machine": "holder-spindle test rig", "description": "the test rig's spindle shaft alone (planar model)"}),
+)
+
+
+def catalogue_bundled_parts(store, catalogue_dir: Path | str, *, author: str | None = None) -> list:
+    """Catalogue the bundled example parts (:data:`BUNDLED_PARTS`) from ``catalogue_dir`` (the bundled
+    ``catalogue`` folder, or ``DIR`` of ``jointdb examples DIR`` with its ``stacks``/``models``).
+
+    Identical content adds nothing, so running it again is harmless. Returns ``[(PartVersion, created)]``.
+    """
+    root = Path(catalogue_dir)
+    stack = root / "demo-stack.json"
+    if not stack.is_file():
+        stack = root / "stacks" / "demo-stack.json"
+    out = []
+    for name, kind, source, attributes in BUNDLED_PARTS:
+        what, _, rest = source.partition(":")
+        if what == "stack":
+            part = part_from_files(kind, from_stack=stack)
+        else:
+            file, _, point = rest.rpartition(":")
+            part = part_from_files(kind, model=root / file, point=point)
+        try:
+            before = store.get_part(name).version
+        except NotFoundError:
+            before = 0
+        pv = store.add_part(name, kind, part.payload, frf=part.frf, attributes=attributes,
+                            provenance=part.provenance, author=author)
+        out.append((pv, pv.version > before))
+    return out
