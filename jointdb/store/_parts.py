@@ -45,7 +45,6 @@ PART_KINDS = ("spindle", "holder", "tool")
 ATTRIBUTES = {"machine": ("spindle",), "family": ("holder",), "taper": ("holder", "spindle"),
               "bore_mm": ("holder",), "description": PART_KINDS}
 _NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.+-]{0,199}")
-_HEX64 = re.compile(r"[0-9a-f]{64}")
 _REF = re.compile(r"^\s*([^@\s]+)\s*@\s*([^@\s]+)\s*$")
 
 
@@ -419,16 +418,6 @@ class PartsStore:
         IntegrityError
             The blob is corrupt (never a server path in the message).
         """
-        digest = part.blob_sha256
-        if digest is None:
+        if part.blob_sha256 is None:
             raise NotFoundError(f"part {part.ref} has no FRF set (it is a {part.kind} model)")
-        if not isinstance(digest, str) or not _HEX64.fullmatch(digest):
-            raise IntegrityError(f"part {part.ref}: its FRF digest is not a SHA-256 hex digest - run `jointdb db check`")
-        try:
-            return self.blobs.get(digest)
-        except IntegrityError:
-            raise IntegrityError(f"part {part.ref}: its FRF blob {digest} is corrupt or unreadable; refusing to use "
-                                 "it - run `jointdb db check`") from None
-        except NotFoundError:
-            raise NotFoundError(f"part {part.ref}: its FRF blob {digest} is missing from the blob store - "
-                                "run `jointdb db check`") from None
+        return self._blob(part, part.blob_sha256, "FRF blob")  # verified; never a server path in an error
