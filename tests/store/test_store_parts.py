@@ -278,3 +278,21 @@ def test_app_role_appends_parts_but_cannot_rewrite_them(two_roles):
 
 
 from test_store_roles import two_roles  # noqa: E402,F401  (the two-role PostgreSQL fixture)
+
+
+def test_downgrade_below_0009_is_refused_while_parts_exist(tmp_path):
+    db = tmp_path / "d.sqlite"
+    from jointdb.store import Repository
+
+    with Repository(db) as repo:
+        repo.add_part("em12", "tool", demo_doc()["tool"])
+    rc, out, err = run_cli("db", "downgrade", "--to", "0008", "--yes", "--db", db)
+    assert rc == InputError.exit_code and "holds catalogued parts" in err and "Traceback" not in err
+    with Repository(db) as repo:  # nothing was dropped
+        assert repo.get_part("em12").version == 1 and repo.check().ok
+    empty = tmp_path / "e.sqlite"
+    Repository(empty).close()
+    rc, out, err = run_cli("db", "downgrade", "--to", "0008", "--yes", "--db", empty)
+    assert rc == 0, err
+    rc, out, err = run_cli("db", "upgrade", "--db", empty)
+    assert rc == 0, err
