@@ -296,3 +296,13 @@ def test_downgrade_below_0009_is_refused_while_parts_exist(tmp_path):
     assert rc == 0, err
     rc, out, err = run_cli("db", "upgrade", "--db", empty)
     assert rc == 0, err
+
+
+def test_a_stack_naming_parts_never_creates_a_database(tmp_path):
+    from jointdb import usecases
+
+    missing = tmp_path / "none.sqlite"
+    with pytest.raises(NotFoundError, match="does not exist"):
+        usecases.stack_from_document({**demo_doc(), "tool": {"part": "em12@1"}}, missing)
+    assert not missing.exists()
+    assert usecases.stack_from_document(demo_doc(), missing).parts == ()  # no reference: no database opened
