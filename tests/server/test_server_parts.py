@@ -51,6 +51,8 @@ def test_catalogue_list_show_and_label_over_http(server):
         items = c.get(f"{API}/parts", params={"kind": "holder", "family": "ER32"}).json()["items"]
         assert [(p["name"], p["version"], p["attributes"]["bore_mm"]) for p in items] == [("er32-hsk63", 1, 12.0)]
         assert "payload" not in items[0]
+        assert items[0]["geometry"] == {"length_mm": 70.0, "bore_mm": 12.0, "mouth_diameter_mm": 32.0,
+                                        "material": "steel"}  # the demo holder: 40 + 30 mm, Ø32 mouth, Ø12 bore
         spindles = c.get(f"{API}/parts", params={"machine": "demo-mill"}).json()["items"]
         assert [p["name"] for p in spindles] == ["mill-spindle"]
         versions = c.get(f"{API}/parts/er32-hsk63").json()
