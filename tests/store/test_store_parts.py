@@ -306,3 +306,31 @@ def test_a_stack_naming_parts_never_creates_a_database(tmp_path):
         usecases.stack_from_document({**demo_doc(), "tool": {"part": "em12@1"}}, missing)
     assert not missing.exists()
     assert usecases.stack_from_document(demo_doc(), missing).parts == ()  # no reference: no database opened
+
+
+def test_concurrent_writers_number_part_versions_without_gaps(backend):
+    from concurrent.futures import ThreadPoolExecutor
+
+    doc = demo_doc()
+
+    def write(worker: int) -> list[int]:
+        repo = backend.repo()
+        try:
+            out = []
+            for i in range(3):
+                holder = json.loads(json.dumps(doc["holder"]))
+                holder["loss_factor"] = 0.001 * (1 + worker * 3 + i)  # distinct content: a new version each
+                out.append(repo.add_part("shared-holder", "holder", holder, author=f"w{worker}").version)
+            return out
+        finally:
+            repo.close()
+
+    with ThreadPoolExecutor(4) as pool:
+        numbers = sorted(n for got in pool.map(write, range(4)) for n in got)
+    assert numbers == list(range(1, 13))
+    repo = backend.repo()
+    try:
+        assert [p.version for p in repo.part_history("shared-holder")] == list(range(1, 13))
+        assert repo.check(verify_blobs=False).ok  # one chain entry per row, in commit order
+    finally:
+        repo.close()
