@@ -25,11 +25,11 @@ import typer
 from jointdb.errors import JointdbError
 
 #: The command modules, in the order they register (which is the order of ``jointdb --help``).
-MODULES = ("_models", "_coupling", "_store", "_db", "_predict", "_stability", "_diagnose", "_demo", "_examples",
-           "_campaign", "_plan", "_serve", "_worker")
+MODULES = ("_models", "_coupling", "_store", "_parts", "_db", "_predict", "_stability", "_diagnose", "_demo",
+           "_examples", "_campaign", "_plan", "_serve", "_worker")
 
 #: Commands that use the database itself and have no HTTP counterpart: an explicit ``--server`` is refused
-#: (``joints export|import`` refuse it themselves; catalogue, query, joints ..., predict use the server).
+#: (``joints export|import`` refuse it themselves; catalogue, query, joints ..., parts, predict use the server).
 LOCAL_ONLY = ("db", "tokens", "serve", "worker", "demo")
 
 #: Every top-level command as ``jointdb --help`` lists it: the module that registers it and
@@ -63,6 +63,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "worker": ("_worker", "Run jobs of the HTTP service (predict, lobes, diagnose, identify) from the PostgreSQL queue."),
     "joints": ("_store", "List, inspect, label, deprecate, diff, export and import catalogued joints."),
     "keys": ("_store", "Ed25519 keys to sign exported bundles and verify imported ones."),
+    "parts": ("_parts", "Catalogued stack parts (spindles, holders, tools): add, list, show, label."),
     "db": ("_db", "Database administration: migrations, integrity check, garbage collection."),
     "campaign": ("_campaign", "Scaffold a measurement campaign from a folder of files, or check one."),
     "tokens": ("_serve", "API tokens of the HTTP service: create, list, revoke."),
