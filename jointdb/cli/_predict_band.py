@@ -6,28 +6,26 @@ from jointdb._output import message
 
 
 def band_for(result, n: int = 200, seed: int = 0):
-    """A :class:`jointdb.stack._band.TipBand` when some chosen joint carries an uncertainty record, else None."""
-    from jointdb.errors import InputError
-    from jointdb.stack._band import tip_band
+    """``(TipBand or None, BandTerms)``: the 5–95 % band of the tip from every error term the chosen joints
+    carry (measurement noise, joint choice), and each term alone; the band and which term dominates go to
+    stderr, and when there is no band, the reason."""
+    from jointdb.usecases._stack_band import band_terms
 
-    from jointdb.stack._band import sampleable_uncertainties
-
-    unc, notes = sampleable_uncertainties(result.joints)
-    for note in notes:
+    terms = band_terms(result, n=n, seed=seed)
+    for note in terms.notes:
         message(f"note: {note}")
-    if not unc:
-        return None
-    resolved = {name: r.frf for name, r in result.joints.items() if r.frf is not None}
-    try:
-        b = tip_band(result.spec, resolved, unc, result.prediction.tip.freq, n=n, seed=seed)
-    except InputError as exc:
-        message(f"note: no band: {exc}")
-        return None
+    b = terms.band
+    if b is None:
+        return None, terms
     for row in b.summary():
-        message(f"band ({b.samples} sampled joints of {', '.join(b.interfaces)}): tip peak {row['direction']} "
+        d = row["direction"]
+        parts = ", ".join(f"{t} alone ±{w[d]:.1%}" for t, w in terms.half_width.items() if t != "all" and d in w)
+        message(f"band ({b.samples} samples: {', '.join(b.interfaces)}): tip peak {d} "
                 f"{row['peak_m_per_n_p05']:.4g} – {row['peak_m_per_n_p95']:.4g} m/N (5–95 %), "
-                f"{row['peak_hz_p05']:.5g} – {row['peak_hz_p95']:.5g} Hz")
-    return b
+                f"{row['peak_hz_p05']:.5g} – {row['peak_hz_p95']:.5g} Hz; {parts}")
+    if terms.dominant:
+        message(f"band: the dominant term is {terms.dominant}")
+    return b, terms
 
 
 def choice_sensitivity(result, db, freq, max_alternatives: int = 2) -> list[dict]:
@@ -38,7 +36,7 @@ def choice_sensitivity(result, db, freq, max_alternatives: int = 2) -> list[dict
     base = {r["direction"]: r["peak_m_per_n"] for r in result.prediction.summary()}
     rows = []
     for name, res in result.joints.items():
-        if res.kind != "query" or len(res.candidates) < 2:
+        if res.kind not in ("query", "interpolated") or len(res.candidates) < 2:
             continue
         for cand_name, cand_version, dist in res.candidates[1:1 + max_alternatives]:
             spec = result.spec.replace(interfaces={
@@ -50,6 +48,6 @@ def choice_sensitivity(result, db, freq, max_alternatives: int = 2) -> list[dict
                              "direction": r["direction"], "peak_m_per_n": r["peak_m_per_n"],
                              "peak_hz": r["peak_hz"], "peak_change": float(change)})
             x = [r for r in rows if r["alternative"] == f"{cand_name}@{cand_version}"][0]
-            message(f"{name}: with the next candidate {cand_name}@{cand_version} (distance {dist:.3f}) the tip peak "
+            message(f"{name}: with the candidate {cand_name}@{cand_version} alone (distance {dist:.3f}) the tip peak "
                     f"{x['direction']} would be {x['peak_m_per_n']:.4g} m/N ({x['peak_change']:+.1%})")
     return rows

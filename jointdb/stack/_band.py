@@ -175,7 +175,8 @@ def _interface_samples(name, spec, resolved, f, n, seed, uncertainties, choice, 
 
 
 def tip_band(spec: StackSpec, resolved_joints: Mapping[str, FRF], uncertainties: Mapping[str, Mapping] | None = None,
-             freq=None, n: int = 200, seed: int = 0, choice: Mapping[str, tuple] | None = None) -> TipBand:
+             freq=None, n: int = 200, seed: int = 0, choice: Mapping[str, tuple] | None = None,
+             tip_sigma: float = 0.0) -> TipBand:
     """5/50/95 % band of the tool-tip receptance from sampled joints.
 
     Parameters
@@ -188,6 +189,9 @@ def tip_band(spec: StackSpec, resolved_joints: Mapping[str, FRF], uncertainties:
     choice
         Interface name → ``(relative, scale)`` of its joint-choice error (:func:`choice_perturbed`, arrays on
         the prediction's lines), applied on top of the covariance samples.
+    tip_sigma
+        Relative standard error of the prediction path itself (model form: beams joined at points where the
+        real stack has distributed contact): each sample's tip receptance is scaled by ``exp(tip_sigma ξ)``.
     n, seed
         Ensemble size and random seed.
 
@@ -207,6 +211,8 @@ def tip_band(spec: StackSpec, resolved_joints: Mapping[str, FRF], uncertainties:
     uncertainties = dict(uncertainties or {})
     choice = {k: v for k, v in (choice or {}).items() if v is not None}
     active = set(uncertainties) | set(choice)
+    if tip_sigma > 0:
+        active.add("prediction path")
     if not active:
         raise InputError("no interface joint carries an uncertainty record or a joint-choice error; "
                          "nothing to sample")
@@ -234,6 +240,8 @@ def tip_band(spec: StackSpec, resolved_joints: Mapping[str, FRF], uncertainties:
         for k, plane in enumerate(("x", "y")):
             jt, jh = (None if j is None else j[plane] for j in (joints["tool-holder"], joints["holder-spindle"]))
             full[:, :, k, k] = tool_tip_chain(tool, holder, flat(spindle[plane]), jt, jh)[:, 0, 0].reshape(n, f.size)
+    if tip_sigma > 0:
+        full *= np.exp(tip_sigma * rng.standard_normal(n))[:, None, None, None]
     tips, mags, peaks, peak_hz = {}, {}, {}, {}
     for k, plane in enumerate(("x", "y")):
         tips[plane] = full[:, :, k, k]

@@ -20,7 +20,7 @@ INTERPOLATION_POOL = 64
 #: Calibrated for coverage on the tuning seeds of bench/_stack_truth_b.py (docs/validation/stack-prediction.md,
 #: *Bands*): the leave-one-out removes a catalogued point and so doubles the local grid spacing, while the
 #: straight-line model is fitted through the origin; the factor absorbs both and the prediction path's own error.
-CHOICE_CALIBRATION = 1.0
+CHOICE_CALIBRATION = 0.08
 
 #: How a queried joint was chosen (the wording of docs/stacks.md): the nearest catalogued joint, an
 #: interpolation between the joints whose conditions bracket the request (a simplex of the catalogued grid),

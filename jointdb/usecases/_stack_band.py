@@ -2,8 +2,8 @@
 
 :func:`prediction_band` samples every interface whose joint carries an error estimate — its fit's
 covariance (measurement noise) and, for a queried joint, the leave-one-out joint-choice error
-(:mod:`jointdb.store._loo`, calibrated by :data:`jointdb.usecases._stack.CHOICE_CALIBRATION`) — and
-couples them all (:func:`jointdb.stack._band.tip_band`). :func:`band_terms` also samples each term alone,
+(:mod:`jointdb.store._loo`, calibrated by :data:`jointdb.usecases._stack.CHOICE_CALIBRATION`) — plus the
+prediction path's own model-form error (:data:`MODEL_FORM_SIGMA`), and couples them all (:func:`jointdb.stack._band.tip_band`). :func:`band_terms` also samples each term alone,
 to say which one dominates.
 """
 
@@ -19,7 +19,12 @@ from jointdb.errors import InputError
 __all__ = ["BandTerms", "prediction_band", "band_terms", "TERMS"]
 
 #: The error terms a band can carry, in the order they are reported.
-TERMS = ("measurement noise", "joint choice")
+TERMS = ("measurement noise", "joint choice", "prediction path")
+#: Relative standard error of the prediction path's own tip receptance (model form: three beams joined at two
+#: points where a real stack has distributed contact, a holder model, a spindle receptance). Not estimable from
+#: the catalogue (each per-line joint reproduces its own campaign): calibrated on the tuning seeds of
+#: bench/_stack_truth_b.py, like CHOICE_CALIBRATION (docs/validation/stack-prediction.md, *Bands*).
+MODEL_FORM_SIGMA = 0.025
 
 
 def _inputs(result, terms=TERMS) -> tuple[dict, dict, list[str]]:
@@ -58,13 +63,15 @@ def prediction_band(result, n: int = 200, seed: int = 0, terms=TERMS):
     from jointdb.stack._band import tip_band
 
     unc, sigma, notes = _inputs(result, terms)
-    if not unc and not sigma:
+    tip_sigma = MODEL_FORM_SIGMA if "prediction path" in terms else 0.0
+    if not unc and not sigma and tuple(terms) != ("prediction path",):
         notes.append("no band: no interface joint carries a covariance or a joint-choice error "
                      "(rigid, explicit or pinned joints without an uncertainty record)")
         return None, notes
     resolved = {name: r.frf for name, r in result.joints.items() if r.frf is not None}
     try:
-        b = tip_band(result.spec, resolved, unc, result.prediction.tip.freq, n=n, seed=seed, choice=sigma)
+        b = tip_band(result.spec, resolved, unc, result.prediction.tip.freq, n=n, seed=seed, choice=sigma,
+                     tip_sigma=tip_sigma)
     except InputError as exc:
         notes.append(f"no band: {exc}")
         return None, notes
