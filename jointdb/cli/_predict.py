@@ -52,7 +52,9 @@ def _report_joint_choices(joints) -> None:
             message(f"warning: {res.interface}: the request lies outside the catalogued range of "
                     f"{', '.join(res.outside_range)}; the nearest catalogued edge is used (no extrapolation)")
         for w in res.warnings:
-            if not (res.extrapolating and "outside the catalogued range" in w):  # said just above
+            if w.startswith("note: "):
+                message(f"note: {res.interface}: {w[6:]}")
+            elif not (res.extrapolating and "outside the catalogued range" in w):  # said just above
                 message(f"warning: {res.interface}: {w}")
 
 

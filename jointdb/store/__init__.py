@@ -64,7 +64,7 @@ Blob format and canonical hash: :mod:`jointdb.store._blobs`; bundle format:
 
 from __future__ import annotations
 
-from jointdb.store._nearest import OutsideCatalogueWarning
+from jointdb.store._nearest import OutsideCatalogueWarning, UnvariedConditionWarning
 from jointdb.store._records import DamagedRecordWarning, DamagedVersion
 from jointdb.store._types import (
     KNOWN_MATERIALS,
@@ -89,6 +89,7 @@ __all__ = [
     "CheckReport",
     "BlobStore",
     "OutsideCatalogueWarning",
+    "UnvariedConditionWarning",
     "DamagedRecordWarning",
     "DamagedVersion",
     "JointPage",

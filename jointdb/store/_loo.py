@@ -135,12 +135,15 @@ def _candidates(pool: Sequence[Match], keys: Sequence[str]) -> Candidates:
 def pool_distances(pool: Sequence[Match], request: Conditions) -> list[Match]:
     """The pool re-ranked against ``request`` with the query distance computed over the pool itself
     (same spread normalisation for the request and every left-out joint). Order as given."""
-    from jointdb.store._nearest import rank
+    from jointdb.store._nearest import rank, unvaried_machine_conditions
 
     cand = _candidates(pool, list(request.geometry))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
         _, total, terms, outside = rank(cand, request, len(pool))
+    if pool:
+        for name, _ in unvaried_machine_conditions(pool[0].version.joint_type, cand, outside):
+            outside.remove(name)
     return [Match(m.version, float(total[i]), {k: float(t[i]) for k, t in terms.items()}, bool(outside),
                   tuple(outside)) for i, m in enumerate(pool)]
 

@@ -122,7 +122,7 @@ def resolve_joints(spec: StackSpec, repo=None) -> dict[str, JointResolution]:
     NotFoundError
         A pinned joint/version that does not exist, or no catalogued joint of the queried type.
     """
-    from jointdb.store import Conditions, OutsideCatalogueWarning
+    from jointdb.store import Conditions, OutsideCatalogueWarning, UnvariedConditionWarning
 
     out: dict[str, JointResolution] = {}
     needs_db = any(spec.interfaces[n].kind in ("catalogued", "query") for n in INTERFACE_NAMES)
@@ -150,6 +150,7 @@ def resolve_joints(spec: StackSpec, repo=None) -> dict[str, JointResolution]:
             conditions = Conditions.from_dict(dict(choice.conditions or {}))
             with warnings.catch_warnings(record=True) as caught:
                 warnings.simplefilter("always", OutsideCatalogueWarning)
+                warnings.simplefilter("always", UnvariedConditionWarning)
                 # interpolation picks the joints bracketing the request along the condition axes, and the
                 # joint-choice error is estimated by leave-one-out: both need the catalogued grid around the
                 # request, not only the `neighbours` nearest
@@ -161,6 +162,7 @@ def resolve_joints(spec: StackSpec, repo=None) -> dict[str, JointResolution]:
                         m for m in matches[choice.neighbours:]
                         if m.version.model_kind == kind and tuple(m.version.dofs) == dofs]
             texts = tuple(str(w.message) for w in caught if issubclass(w.category, OutsideCatalogueWarning))
+            texts += tuple(f"note: {w.message}" for w in caught if issubclass(w.category, UnvariedConditionWarning))
             if not matches:
                 raise NotFoundError(f"interfaces.{name}: no catalogued joint of type {choice.joint_type!r}")
             out[name] = _queried(name, choice, handle, matches, conditions, texts)
