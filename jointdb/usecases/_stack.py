@@ -122,7 +122,7 @@ def resolve_joints(spec: StackSpec, repo=None) -> dict[str, JointResolution]:
     NotFoundError
         A pinned joint/version that does not exist, or no catalogued joint of the queried type.
     """
-    from jointdb.store import Conditions, OutsideCatalogueWarning, UnvariedConditionWarning
+    from jointdb.store import Conditions
 
     out: dict[str, JointResolution] = {}
     needs_db = any(spec.interfaces[n].kind in ("catalogued", "query") for n in INTERFACE_NAMES)
@@ -148,21 +148,13 @@ def resolve_joints(spec: StackSpec, repo=None) -> dict[str, JointResolution]:
                                             neighbours=((jv.name, jv.version, 1.0, 0.0),))
                 continue
             conditions = Conditions.from_dict(dict(choice.conditions or {}))
-            with warnings.catch_warnings(record=True) as caught:
-                warnings.simplefilter("always", OutsideCatalogueWarning)
-                warnings.simplefilter("always", UnvariedConditionWarning)
-                # interpolation picks the joints bracketing the request along the condition axes, and the
-                # joint-choice error is estimated by leave-one-out: both need the catalogued grid around the
-                # request, not only the `neighbours` nearest
-                pool = max(choice.neighbours, INTERPOLATION_POOL)
-                matches = handle.nearest(choice.joint_type, conditions, k=pool)
-                if len(matches) > choice.neighbours:  # the pool beyond the nearest: joints it can be mixed with
-                    kind, dofs = matches[0].version.model_kind, tuple(matches[0].version.dofs)
-                    matches = matches[:choice.neighbours] + [
-                        m for m in matches[choice.neighbours:]
-                        if m.version.model_kind == kind and tuple(m.version.dofs) == dofs]
-            texts = tuple(str(w.message) for w in caught if issubclass(w.category, OutsideCatalogueWarning))
-            texts += tuple(f"note: {w.message}" for w in caught if issubclass(w.category, UnvariedConditionWarning))
+            matches, texts = _pool(handle, choice, conditions)
+            added = _stack_conditions(spec, choice.joint_type, conditions, matches)
+            if added is not None:  # the catalogue records the insertion length: the stack's is a condition
+                conditions = added
+                matches, texts = _pool(handle, choice, conditions)
+                texts += (f"note: the stack's insertion length {spec.insertion_length * 1e3:.4g} mm is a condition "
+                          "of the query (geometry.insertion_m, recorded by the catalogued joints)",)
             if not matches:
                 raise NotFoundError(f"interfaces.{name}: no catalogued joint of type {choice.joint_type!r}")
             out[name] = _queried(name, choice, handle, matches, conditions, texts)
@@ -170,6 +162,48 @@ def resolve_joints(spec: StackSpec, repo=None) -> dict[str, JointResolution]:
         if owned and handle is not None:
             handle.close()
     return out
+
+
+#: Conditions a stack supplies to a query of a joint type when the query leaves them out and the catalogued joints
+#: of that type record them: the tool's insertion (clamping) length in the holder bore.
+STACK_CONDITIONS = {"tool-holder": {"insertion_m": lambda spec: spec.insertion_length}}
+
+
+def _stack_conditions(spec, joint_type, conditions, matches):
+    """``conditions`` with the stack's own geometry added (:data:`STACK_CONDITIONS`) where the query leaves
+    it out and some catalogued joint records it; None when nothing is added."""
+    from jointdb.store import Conditions
+
+    extra = {}
+    for key, value_of in STACK_CONDITIONS.get(joint_type, {}).items():
+        if key in conditions.geometry or not any(key in (m.version.conditions.geometry or {}) for m in matches):
+            continue
+        extra[key] = float(value_of(spec))
+    if not extra:
+        return None
+    return Conditions(conditions.materials, conditions.preload_n, conditions.torque_nm,
+                      {**conditions.geometry, **extra}, conditions.extra)
+
+
+def _pool(handle, choice, conditions):
+    """``(matches, warning texts)`` of a query: the nearest joints and, beyond the ``neighbours`` nearest, the
+    pool of joints they can be mixed with (interpolation picks the joints bracketing the request along the
+    condition axes, and the joint-choice error is estimated by leave-one-out: both need the catalogued grid
+    around the request)."""
+    from jointdb.store import OutsideCatalogueWarning, UnvariedConditionWarning
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", OutsideCatalogueWarning)
+        warnings.simplefilter("always", UnvariedConditionWarning)
+        matches = handle.nearest(choice.joint_type, conditions, k=max(choice.neighbours, INTERPOLATION_POOL))
+        if len(matches) > choice.neighbours:
+            kind, dofs = matches[0].version.model_kind, tuple(matches[0].version.dofs)
+            matches = matches[:choice.neighbours] + [
+                m for m in matches[choice.neighbours:]
+                if m.version.model_kind == kind and tuple(m.version.dofs) == dofs]
+    texts = tuple(str(w.message) for w in caught if issubclass(w.category, OutsideCatalogueWarning))
+    texts += tuple(f"note: {w.message}" for w in caught if issubclass(w.category, UnvariedConditionWarning))
+    return matches, texts
 
 
 def _choice_error(handle, pool, conditions, interpolate: bool):
