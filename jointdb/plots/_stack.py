@@ -23,11 +23,17 @@ def joints_legend(resolutions) -> str:
     """
     parts = []
     for name, res in resolutions.items():
-        if res.kind == "interpolated":
+        method = getattr(res, "method", "") or ""
+        used = getattr(res, "neighbours", ()) or ()
+        if res.kind == "interpolated" and used:
+            text = ", ".join(f"{n} v{v} (w={w:.3f})" for n, v, w, _ in used)
+            parts.append(f"{name}: {method or 'interpolated'} {text}")
+        elif res.kind == "interpolated":
             text = res.description.split(" from ", 1)[-1]
             parts.append(f"{name}: interpolated {text}")
         elif res.name:
-            parts.append(f"{name}: {res.name} v{res.version}")
+            parts.append(f"{name}: {res.name} v{res.version}" + (f" ({method})" if method in ("nearest", "edge")
+                                                                  else ""))
         elif res.kind == "explicit":
             parts.append(f"{name}: explicit k, c")
     return "; ".join(parts) or "rigid"
