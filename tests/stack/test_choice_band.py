@@ -122,3 +122,27 @@ def test_every_interpolated_prediction_names_its_joints_and_carries_a_band(catal
     out = usecases.predict_stack(spec_at(d, 400.0, q), str(db)).joints["tool-holder"]
     assert out.method == "edge" and out.outside_range == ("torque_nm",)
     assert out.choice_error is not None and out.choice_error.distance > 0
+
+
+def test_predict_cli_shows_every_choice_and_the_band_terms(catalogue):
+    from typer.testing import CliRunner
+
+    from jointdb.cli import app
+
+    d, db = catalogue
+    q = {"query": {"joint_type": "tool-holder", "materials": ["tungsten-carbide", "steel"], "torque_nm": 100.0,
+                   "interpolate": True}}
+    spec_at(d, 100.0, q)  # writes stack-100.json
+    r = CliRunner().invoke(app, ["predict", str(d / "stack-100.json"), "--db", str(db), "--json"])
+    assert r.exit_code == 0, r.output
+    rep = json.loads(r.stdout)
+    th = rep["joints"][0]
+    assert th["method"] == "simplex interpolation" and len(th["joints_used"]) == 2
+    band = rep["band"]
+    assert band["interfaces"] == ["prediction path", "tool-holder"]
+    assert set(band["peak_half_width"]) == {"all", "measurement noise", "joint choice", "prediction path"}
+    assert band["dominant_term"] in ("joint choice", "prediction path")
+    assert "tool-holder: simplex interpolation: th-080@1 (weight" in r.stderr
+    assert "band: the dominant term is" in r.stderr
+    # every interpolated prediction carries a band; the next candidates' sensitivity is kept
+    assert rep["joint_choice_sensitivity"]
