@@ -178,6 +178,19 @@ def _rel_error(z_hat: np.ndarray, z: np.ndarray) -> np.ndarray:
     return out
 
 
+#: A left-out joint's relative error on a line is capped at this multiple of its median over the lines: a per-line
+#: IRC joint is near singular on a few lines (the substructures' antiresonances), where ``Ẑ⁻¹`` spikes without
+#: telling anything about the joint's level.
+CAP_OVER_MEDIAN = 3.0
+
+
+def _capped(rel: np.ndarray) -> np.ndarray:
+    norm = np.linalg.norm(rel, axis=(1, 2))
+    cap = CAP_OVER_MEDIAN * float(np.median(norm)) if norm.size else 0.0
+    scale = np.where(norm > cap, cap / np.where(norm > 0, norm, 1.0), 1.0)
+    return rel * scale[:, None, None]
+
+
 def leave_one_out(load_frf: Callable[[JointVersion], FRF], pool: Sequence[Match], request: Conditions,
                   method: str = "axes") -> list[LooPoint]:
     """Predict every joint of ``pool`` from the others (module docstring).
@@ -230,7 +243,7 @@ def leave_one_out(load_frf: Callable[[JointVersion], FRF], pool: Sequence[Match]
             grid = own.band(lo, hi).freq
             z_hat, z = _z(frf_hat, grid), _z(own, grid)
             err = _rel_error(z_hat, z)
-            rel = (z - z_hat) @ np.linalg.inv(z_hat)
+            rel = _capped((z - z_hat) @ np.linalg.inv(z_hat))
         except (InputError, NumericalError, np.linalg.LinAlgError):
             continue  # a joint the others cannot be mixed into (no common band, singular): not a sample
         out.append(LooPoint(m.version.name, m.version.version, float(ranked[0].distance), err,

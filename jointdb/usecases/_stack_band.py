@@ -24,7 +24,7 @@ TERMS = ("measurement noise", "joint choice", "prediction path")
 #: points where a real stack has distributed contact, a holder model, a spindle receptance). Not estimable from
 #: the catalogue (each per-line joint reproduces its own campaign): calibrated on the tuning seeds of
 #: bench/_stack_truth_b.py, like CHOICE_CALIBRATION (docs/validation/stack-prediction.md, *Bands*).
-MODEL_FORM_SIGMA = 0.025
+MODEL_FORM_SIGMA = 0.02
 
 
 def _inputs(result, terms=TERMS) -> tuple[dict, dict, list[str]]:
