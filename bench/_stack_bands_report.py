@@ -73,7 +73,8 @@ def section(results: dict, seconds: float) -> str:
              "20 mm × Ø63 flange) and spindle (Ø80/Ø65 shaft on three bearing sets, 5 kg rotor). Its catalogue: "
              f"{len(tb.HS_CAMPAIGNS)} holder–spindle campaigns (10–25 kN) and {len(tb.TH_CAMPAIGNS)} tool–holder "
              "campaigns (machines at 10 and 25 kN; Ø8 / Ø12 / Ø16 at 30 / 70 / 150 N·m), 0.2 % noise. Stacks are "
-             "drawn inside that range (Ø8–16 mm, 30–150 N·m, 10–25 kN, insertion 32–38 mm, fluted or blank); the "
+             "drawn inside that range (Ø8–16 mm, 30–150 N·m, 10–25 kN, insertion 32–38 mm, fluted or blank); "
+             "the "
              f"calibration (joint-choice factor {CHOICE_CALIBRATION:g}, leave-one-out errors capped at "
              f"{CAP_OVER_MEDIAN:g}× their median per line, prediction-path σ {MODEL_FORM_SIGMA:.1%}) was set on the "
              f"tuning seeds {', '.join(map(str, tb.TUNING_SEEDS))} only.", "",

@@ -19,6 +19,7 @@ def journey_bands(spec, resolutions, grid, say: Callable[[str], None], lobe_grid
     """
     from jointdb.stability._band import milling_lobes_band
     from jointdb.stack._band import sampleable_uncertainties, tip_band
+    from jointdb.usecases._stack_band import MODEL_FORM_SIGMA
 
     unc, notes = sampleable_uncertainties(resolutions)
     for note in notes:
@@ -33,9 +34,10 @@ def journey_bands(spec, resolutions, grid, say: Callable[[str], None], lobe_grid
         say("      no band: the chosen joints carry no parameter covariance and no joint-choice error")
         return None, None, {}
     b = tip_band(spec, {n: r.frf for n, r in resolutions.items() if r.frf is not None}, unc, grid,
-                 n=N_TIP_SAMPLES, choice=choice(grid))
+                 n=N_TIP_SAMPLES, choice=choice(grid), tip_sigma=MODEL_FORM_SIGMA)
     for row in b.summary():
-        say(f"      5–95 % band ({b.samples} samples of measurement noise and joint choice at {', '.join(b.interfaces)}): "
+        say(f"      5–95 % band ({b.samples} samples of measurement noise, joint choice, prediction path at "
+            f"{', '.join(b.interfaces)}): "
             "tip peak "
             f"{row['direction']} {row['peak_m_per_n_p05']:.3e} – {row['peak_m_per_n_p95']:.3e} m/N, "
             f"{row['peak_hz_p05']:.0f} – {row['peak_hz_p95']:.0f} Hz")
@@ -44,7 +46,7 @@ def journey_bands(spec, resolutions, grid, say: Callable[[str], None], lobe_grid
     def make(cut, speeds):
         lb = b if lobe_grid is None else tip_band(
             spec, {n: r.frf for n, r in resolutions.items() if r.frf is not None}, unc, lobe_grid, n=N_LOBE_SAMPLES,
-            choice=choice(lobe_grid))
+            choice=choice(lobe_grid), tip_sigma=MODEL_FORM_SIGMA)
         xs, ys = lb.tip_frfs("x")[:N_LOBE_SAMPLES], lb.tip_frfs("y")[:N_LOBE_SAMPLES]
         return milling_lobes_band(xs, ys, cut, speeds)
 

@@ -237,7 +237,8 @@ def _queried(name, choice, handle, matches, conditions, texts) -> JointResolutio
                                neighbours=used, **common)
     method = "edge" if best.extrapolating else "nearest"
     return JointResolution(name, "query", handle.load_frf(best.version), best.version.name, best.version.version,
-                           float(best.distance), description=choice.reference, uncertainty=_uncertainty_of(best.version),
+                           float(best.distance), description=choice.reference,
+                           uncertainty=_uncertainty_of(best.version),
                            method=method, neighbours=((best.version.name, best.version.version, 1.0,
                                                        float(best.distance)),), **common)
 

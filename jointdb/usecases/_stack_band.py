@@ -3,7 +3,8 @@
 :func:`prediction_band` samples every interface whose joint carries an error estimate — its fit's
 covariance (measurement noise) and, for a queried joint, the leave-one-out joint-choice error
 (:mod:`jointdb.store._loo`, calibrated by :data:`jointdb.usecases._stack.CHOICE_CALIBRATION`) — plus the
-prediction path's own model-form error (:data:`MODEL_FORM_SIGMA`), and couples them all (:func:`jointdb.stack._band.tip_band`). :func:`band_terms` also samples each term alone,
+prediction path's own model-form error (:data:`MODEL_FORM_SIGMA`), and couples them all
+(:func:`jointdb.stack._band.tip_band`). :func:`band_terms` also samples each term alone,
 to say which one dominates.
 """
 
