@@ -108,6 +108,10 @@ def main(argv=None) -> None:
         from _stack_bands_report import write_section
 
         write_section(args.report, {seed: res[seed] for seed in seeds}, res["seconds"])
+        import json
+
+        args.report.with_name("stack-bands.json").write_text(
+            json.dumps({str(k): v for k, v in res.items()}, indent=1, default=str) + "\n", encoding="utf-8")
 
 
 if __name__ == "__main__":
