@@ -65,7 +65,8 @@ def prediction_band(result, n: int = 200, seed: int = 0, terms=TERMS):
 
     unc, sigma, notes = _inputs(result, terms)
     tip_sigma = MODEL_FORM_SIGMA if "prediction path" in terms else 0.0
-    if not unc and not sigma and tuple(terms) != ("prediction path",):
+    queried = any(r.kind in ("query", "interpolated") for r in result.joints.values())
+    if not unc and not sigma and not queried and tuple(terms) != ("prediction path",):
         notes.append("no band: no interface joint carries a covariance or a joint-choice error "
                      "(rigid, explicit or pinned joints without an uncertainty record)")
         return None, notes

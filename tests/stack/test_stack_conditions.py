@@ -64,3 +64,35 @@ def test_a_drawbar_force_catalogued_at_one_value_gives_a_note_not_a_warning(db):
     assert not res.extrapolating and "preload_n" not in res.outside_range
     notes = [w for w in res.warnings if w.startswith("note: ")]
     assert any("catalogued at one preload_n only (12000)" in n and "20000" in n for n in notes)
+
+
+def test_an_unvaried_drawbar_force_adds_nothing_to_the_joint_choice_distance(db):
+    d, path = db
+    with_force = _predict(d, path, 0.050, {"torque_nm": 80.0, "preload_n": 20000.0, "interpolate": True})
+    without = _predict(d, path, 0.050, {"torque_nm": 80.0, "interpolate": True})
+    assert with_force.choice_error.distance == pytest.approx(without.choice_error.distance, rel=1e-12)
+    assert with_force.choice_error.distance > 0
+
+
+def test_an_interpolated_joint_without_enough_neighbours_for_leave_one_out_still_gets_a_band(tmp_path):
+    from jointdb import usecases
+    from jointdb.usecases._stack_band import prediction_band
+
+    db = tmp_path / "two.sqlite"
+    with Repository(db) as repo:
+        for t in (40.0, 120.0):
+            k = 3e7 * (t / 80) ** 0.5
+            repo.catalogue(f"th-{t:.0f}", "tool-holder", spring_damper_joint(F, [k, k / 50], [300.0, 3.0],
+                                                                             ["3x", "3ry"]),
+                           Conditions(("tungsten-carbide", "steel"), torque_nm=t), "spring-damper-planar")
+    res = _predict(tmp_path, db, 0.050, {"torque_nm": 80.0, "interpolate": True})
+    assert res.kind == "interpolated" and res.choice_error is None
+    doc = json.loads(STACK.read_text())
+    doc["interfaces"]["tool-holder"] = {"query": {"joint_type": "tool-holder", "torque_nm": 80.0,
+                                                  "interpolate": True}}
+    doc["frequency"] = {"min": 20, "max": 6000, "step": 20}
+    (tmp_path / "s.json").write_text(json.dumps(doc))
+    result = usecases.predict_stack(usecases.load_stack(tmp_path / "s.json"), str(db))
+    band, notes = prediction_band(result, n=50)
+    assert band is not None and band.interfaces == ("prediction path",)
+    assert any("no joint-choice error" in n for n in notes)
