@@ -141,11 +141,10 @@ def pool_distances(pool: Sequence[Match], request: Conditions) -> list[Match]:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
         _, total, terms, outside = rank(cand, request, len(pool))
-    if pool:  # a machine condition the catalogue never varied is no distance from it (a note, not a choice)
+    if pool:  # a machine condition the catalogue never varied is a note, not an edge; its distance still counts:
+        # that no data show a dependence does not show there is none (docs/stacks.md, *Bands*)
         for name, _ in unvaried_machine_conditions(pool[0].version.joint_type, cand, outside):
             outside.remove(name)
-            terms.pop(name, None)
-        total = np.sqrt(sum((t ** 2 for t in terms.values()), np.zeros(len(pool))))
     return [Match(m.version, float(total[i]), {k: float(t[i]) for k, t in terms.items()}, bool(outside),
                   tuple(outside)) for i, m in enumerate(pool)]
 

@@ -66,12 +66,15 @@ def test_a_drawbar_force_catalogued_at_one_value_gives_a_note_not_a_warning(db):
     assert any("catalogued at one preload_n only (12000)" in n and "20000" in n for n in notes)
 
 
-def test_an_unvaried_drawbar_force_adds_nothing_to_the_joint_choice_distance(db):
+def test_an_unvaried_drawbar_force_still_widens_the_joint_choice_error(db):
+    """A note, not an edge — but the request's distance from what the catalogue saw still counts: on truth
+    family B a reduced catalogue with tool–holder joints of a 10 kN machine only puts an 18 kN stack's peak off
+    by tens of per cent (tests/stack/test_band_truth_b.py), which no catalogued data could have shown."""
     d, path = db
     with_force = _predict(d, path, 0.050, {"torque_nm": 80.0, "preload_n": 20000.0, "interpolate": True})
     without = _predict(d, path, 0.050, {"torque_nm": 80.0, "interpolate": True})
-    assert with_force.choice_error.distance == pytest.approx(without.choice_error.distance, rel=1e-12)
-    assert with_force.choice_error.distance > 0
+    assert with_force.choice_error.distance > without.choice_error.distance > 0
+    assert with_force.choice_error.points[0].inside  # the left-out joints are interpolations, not edges
 
 
 def test_an_interpolated_joint_without_enough_neighbours_for_leave_one_out_still_gets_a_band(tmp_path):
