@@ -7,19 +7,19 @@ each catalogued joint ``j`` of the pool is predicted from the *others* exactly a
 request at ``j``'s conditions would be (same axes, same distance, same bracketing
 weights, :func:`jointdb.store._query.interpolate`), and compared with ``j``'s own FRF.
 
-Error measure, per diagonal DOF ``d`` of the joint's dynamic stiffness ``Z = H⁻¹``
-(frequency lines of the common band), separately for the real part (stiffness) and
-the imaginary part (damping)::
+What is kept per left-out joint ``j`` (:class:`LooPoint`): its distance ``d_j`` to the nearest
+other joint (the query distance of :mod:`jointdb.store._query`, computed over the pool), whether
+it lies inside the others' catalogued range (an interpolation) or not (an edge), and
 
-    e_re[d] = ‖Re Ẑ_dd − Re Z_dd‖ / ‖Re Z_dd‖,   e_im[d] likewise
-
-with ``Ẑ`` the prediction from the others (in practice the robust version of :func:`_rel_error`:
-the log of the median ratio over the lines away from zero crossings). Each left-out joint gets its distance ``d_j``
-to the nearest other joint (the query distance of :mod:`jointdb.store._query`,
-computed over the pool), and the error model is a straight line through the origin,
-``σ(δ) = b·δ`` with ``b² = Σ e_j² / Σ d_j²`` (a joint at a catalogued condition
-errs only by its measurement noise; farther away the choice error grows in proportion
-to the distance). The slope is fitted per DOF and part (re / im).
+- ``relative``: the relative error of its dynamic stiffness ``Z = H⁻¹`` per line,
+  ``R_j = (Z_j − Ẑ_j) Ẑ_j⁻¹`` (so ``Z_j = (I + R_j) Ẑ_j``), capped per line at
+  :data:`CAP_OVER_MEDIAN` × its median over the lines. A band draws these patterns
+  (:func:`jointdb.stack._band.choice_perturbed`) with amplitudes scaled by the request's
+  distance over ``d_j`` (:meth:`ChoiceErrorModel.on_grid`);
+- ``error``: a level summary per diagonal DOF, ``|ln|`` of the median ratio of predicted to
+  true Re Z (stiffness) and Im Z (damping) over the lines away from zero crossings; the straight
+  line ``σ(δ) = b·δ`` with ``b² = Σ e_j² / Σ d_j²`` through those is what ``--json`` reports
+  (``choice_error``), a joint at a catalogued condition erring only by its noise.
 
 Pure numerics on the pool the caller already has (``load_frf`` reads the blobs);
 no query is issued here.
