@@ -275,6 +275,9 @@ def main(argv=None) -> int:
                     "spindle_noise_amplification": {t: e.amplification for t, e in spindles.items()}},
                    indent=1, default=str) + "\n", encoding="utf-8")
     text = report(named, outside, heldout, catalogue, spindles, c_named + c_outside, seconds)
+    from _stack_bands_report import kept_section
+
+    text += kept_section(args.out / "stack-prediction.md")  # the bands section (bench_stack_bands.py) stays
     (args.out / "stack-prediction.md").write_text(text, encoding="utf-8")
     print(f"wrote {args.out / 'stack-prediction.md'} ({seconds:.0f} s)")
     return 0

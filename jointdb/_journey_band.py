@@ -1,4 +1,5 @@
-"""The main job's bands: tool-tip and lobe percentiles from the chosen joints' covariance (issue 13)."""
+"""The main job's bands: tool-tip and lobe percentiles from the chosen joints' covariance and the joint-choice
+error estimated from the catalogue by leave-one-out (issues 13 and 22)."""
 
 from __future__ import annotations
 
@@ -18,24 +19,34 @@ def journey_bands(spec, resolutions, grid, say: Callable[[str], None], lobe_grid
     """
     from jointdb.stability._band import milling_lobes_band
     from jointdb.stack._band import sampleable_uncertainties, tip_band
+    from jointdb.usecases._stack_band import MODEL_FORM_SIGMA
 
     unc, notes = sampleable_uncertainties(resolutions)
     for note in notes:
         say(f"      note: {note}")
-    if not unc:
-        say("      no band: the chosen joints carry no parameter covariance")
+
+    def choice(lines):
+        out = {n: r.choice_perturbations(lines) for n, r in resolutions.items()
+               if getattr(r, "choice_error", None) is not None}
+        return {n: c for n, c in out.items() if c is not None}
+
+    if not unc and not choice(grid):
+        say("      no band: the chosen joints carry no parameter covariance and no joint-choice error")
         return None, None, {}
     b = tip_band(spec, {n: r.frf for n, r in resolutions.items() if r.frf is not None}, unc, grid,
-                 n=N_TIP_SAMPLES)
+                 n=N_TIP_SAMPLES, choice=choice(grid), tip_sigma=MODEL_FORM_SIGMA)
     for row in b.summary():
-        say(f"      5–95 % band ({b.samples} joints sampled from {', '.join(b.interfaces)}): tip peak "
+        say(f"      5–95 % band ({b.samples} samples of measurement noise, joint choice, prediction path at "
+            f"{', '.join(b.interfaces)}): "
+            "tip peak "
             f"{row['direction']} {row['peak_m_per_n_p05']:.3e} – {row['peak_m_per_n_p95']:.3e} m/N, "
             f"{row['peak_hz_p05']:.0f} – {row['peak_hz_p95']:.0f} Hz")
     summary = {"tip": b.summary()}
 
     def make(cut, speeds):
         lb = b if lobe_grid is None else tip_band(
-            spec, {n: r.frf for n, r in resolutions.items() if r.frf is not None}, unc, lobe_grid, n=N_LOBE_SAMPLES)
+            spec, {n: r.frf for n, r in resolutions.items() if r.frf is not None}, unc, lobe_grid, n=N_LOBE_SAMPLES,
+            choice=choice(lobe_grid), tip_sigma=MODEL_FORM_SIGMA)
         xs, ys = lb.tip_frfs("x")[:N_LOBE_SAMPLES], lb.tip_frfs("y")[:N_LOBE_SAMPLES]
         return milling_lobes_band(xs, ys, cut, speeds)
 

@@ -164,6 +164,8 @@ def rotations_cmd(
     order: Annotated[str, typer.Option("--order", help="Finite differences: first-order | second-order.")] = "first-order",
     noise: Annotated[float, typer.Option("--noise", help="Relative measurement noise level for the amplification estimate.")] = 0.01,
     trials: Annotated[int, typer.Option("--trials", help="Noisy copies for the amplification estimate.")] = 20,
+    fill: Annotated[str, typer.Option("--fill", help="error | reciprocity: complete a missing H[i,j] of a UFF58 "
+                                      "file from H[j,i] (e.g. G11, G21, G22 measured, G12 not).")] = "error",
     as_json: Annotated[bool, typer.Option("--json", help="Machine-readable report on stdout.")] = False,
 ) -> None:
     """Rotational receptances at a contact point from translational measurements, with noise amplification.
@@ -181,7 +183,9 @@ def rotations_cmd(
     frf_format(out, "--out")
     if not out.parent.is_dir():
         raise InputError(f"--out {out}: directory {out.parent} does not exist")
-    frf = read_frf_file(measured)
+    if fill not in ("error", "reciprocity"):
+        raise InputError(f"--fill {fill!r}: use error or reciprocity")
+    frf = read_frf_file(measured, fill=fill)
     ext = pts = None
     if method == "extension":
         from jointdb.fe import load_model

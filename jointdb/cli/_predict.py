@@ -52,20 +52,26 @@ def _load_stack(stack_file: Path, db: str | None):
 
 
 def _report_joint_choices(joints) -> None:
-    """On stderr: the joint version chosen per interface (and the next ones), extrapolation, warnings."""
+    """On stderr, per interface: how its joint was chosen (method), the joints used with their weights and
+    distances, the next candidates, conditions outside the catalogue, and warnings (docs/stacks.md wording)."""
     from jointdb._output import message
 
     for res in joints:
-        if res.candidates:
-            message(f"{res.interface}: chose {res.name}@{res.version} (distance {res.distance:.3f}; "
-                    + ", ".join(f"{n}@{v} {d:.3f}" for n, v, d in res.candidates[1:]) + " next)"
-                    if len(res.candidates) > 1 else
-                    f"{res.interface}: chose {res.name}@{res.version} (distance {res.distance:.3f})")
+        if not res.neighbours:
+            continue
+        used = ", ".join(f"{n}@{v} (weight {w:.3f}, distance {d:.3f})" for n, v, w, d in res.neighbours)
+        message(f"{res.interface}: {res.method}: {used}")
+        shown = {(n, v) for n, v, _, _ in res.neighbours}
+        nxt = [f"{n}@{v} {d:.3f}" for n, v, d in res.candidates if (n, v) not in shown]
+        if nxt:
+            message(f"{res.interface}: next candidates (distance): {', '.join(nxt)}")
         if res.extrapolating:
             message(f"warning: {res.interface}: the request lies outside the catalogued range of "
-                    f"{', '.join(res.outside_range)}; the joint is extrapolated")
+                    f"{', '.join(res.outside_range)}; the nearest catalogued edge is used (no extrapolation)")
         for w in res.warnings:
-            if not (res.extrapolating and "outside the catalogued range" in w):  # said just above
+            if w.startswith("note: "):
+                message(f"note: {res.interface}: {w[6:]}")
+            elif not (res.extrapolating and "outside the catalogued range" in w):  # said just above
                 message(f"warning: {res.interface}: {w}")
 
 
@@ -127,7 +133,7 @@ def predict(
         message(f"note: {note}")
     from jointdb.cli._predict_band import band_for, choice_sensitivity
 
-    tip_band = band_for(result)
+    tip_band, terms = band_for(result)
     choice = choice_sensitivity(result, source, pred.tip.freq)
     files = {}
     if out is not None:
@@ -145,11 +151,14 @@ def predict(
     if as_json:
         emit({"stack": spec.name, "parts": list(spec.parts), "joints": joints, "prediction": pred.summary(), "notes": list(pred.notes),
               "frequency_hz": [float(pred.tip.freq[0]), float(pred.tip.freq[-1]), int(pred.tip.n_freq)],
-              "files": files, "band": None if tip_band is None else tip_band.to_json(),
+              "files": files, "band": None if tip_band is None else {**tip_band.to_json(), **terms.to_json()},
               "joint_choice_sensitivity": choice}, as_json=True)
         return
-    emit([{"interface": j["interface"], "joint": j["joint"] if j["kind"] != "explicit" else "explicit k, c",
-           "distance": j["distance"], "extrapolating": j["extrapolating"]} for j in joints],
+    emit([{"interface": j["interface"], "method": j["method"],
+           "joints used (weight, distance)": "; ".join(f"{u['joint']} ({u['weight']:.3f}, {u['distance']:.3f})"
+                                                      for u in j["joints_used"])
+           or (j["joint"] if j["kind"] != "explicit" else "explicit k, c"),
+           "outside the catalogue": ", ".join(j["outside_range"]) or "no"} for j in joints],
          title=f"joints of {spec.name}")
     emit([{"dir": r["direction"], "peak (Hz)": r["peak_hz"], "peak (m/N)": r["peak_m_per_n"],
            "rigid peak (Hz)": r["rigid_peak_hz"], "rigid peak (m/N)": r["rigid_peak_m_per_n"]}

@@ -7,13 +7,15 @@ from jointdb._output import message
 
 
 def band_for(result, n: int = 200, seed: int = 0):
-    """A :class:`jointdb.stack._band.TipBand` when some chosen joint carries an uncertainty record, else None."""
+    """``(TipBand or None, BandTerms)``: the 5–95 % band of the tip from every error term the chosen joints
+    carry (measurement noise, joint choice, prediction path), and each term alone; the band and which term
+    dominates go to stderr, and when there is no band, the reason (:func:`jointdb.usecases._tip_band.tip_band_of`)."""
     from jointdb.usecases._tip_band import tip_band_of
 
-    band, notes = tip_band_of(result, n, seed)
+    band, terms, notes = tip_band_of(result, n, seed)
     for note in notes:
-        message(note if note.startswith("band (") else f"note: {note}")
-    return band
+        message(note if note.startswith("band") else f"note: {note}")
+    return band, terms
 
 
 def choice_sensitivity(result, db, freq, max_alternatives: int = 2) -> list[dict]:

@@ -90,14 +90,15 @@ def run_predict(payload: dict, repo, progress: Progress) -> tuple[dict, None]:
     result = usecases.predict_with_joints(spec, joints)
     pred = result.prediction
     progress(0.5, "the band from the joints' covariance")
-    band, band_notes = tip_band_of(result)
+    band, terms, band_notes = tip_band_of(result)
     progress(0.8, "the next-nearest joints")
     sensitivity, choice_notes = choice_sensitivity(result, repo, pred.tip.freq)
     progress(0.95, "writing the result")
     return {"stack": spec.name, "parts": list(spec.parts), "joints": [j.row() for j in joints.values()],
             "prediction": pred.summary(),
             "notes": [*pred.notes, *band_notes, *choice_notes], "tip_frf": frf_json(pred.tip),
-            "rigid_tip_frf": frf_json(pred.rigid), "band": None if band is None else band.to_json(),
+            "rigid_tip_frf": frf_json(pred.rigid),
+            "band": None if band is None else {**band.to_json(), **terms.to_json()},
             "joint_choice_sensitivity": sensitivity}, None
 
 

@@ -85,9 +85,14 @@ def lobes_figure(
     fig, ax = plt.subplots(figsize=(8, 4.8))
     colours = ["C0", "C3", "C2", "C1", "C4"]
     top = 0.0
-    if band is not None:  # 5–95 % of the limiting depth from the joints' parameter covariance
+    if band is not None:  # 5–95 % of the limiting depth: measurement noise, joint choice, prediction path
+        lo, hi = band.critical_depth_m[0], band.critical_depth_m[2]
+        width = (hi - lo) / 2 / band.critical_depth_m[1] if band.critical_depth_m[1] > 0 else 0.0
         ax.fill_between(band.spindle_speed_rpm, band.depth_m[0] * scale, band.depth_m[2] * scale, color="C0",
-                        alpha=0.25, lw=0, label=f"5–95 % band ({band.samples} sampled joints)")
+                        alpha=0.3, lw=0, label=f"5–95 % band ({band.samples} samples), floor ±{width:.1%}")
+        if width < 0.01:  # narrower than the line: say so, or it looks like no band
+            ax.annotate(f"band ±{width:.2%}: narrower than the line", xy=(0.99, 0.02), xycoords="axes fraction",
+                        ha="right", va="bottom", fontsize=8, color="C0")
     for i, res in enumerate(results):
         c = colours[i % len(colours)]
         label = labels[i] if labels else res.method

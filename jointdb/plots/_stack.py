@@ -31,11 +31,17 @@ def joints_legend(resolutions) -> str:
     """
     parts = []
     for name, res in resolutions.items():
-        if res.kind == "interpolated":
+        method = getattr(res, "method", "") or ""
+        used = getattr(res, "neighbours", ()) or ()
+        if res.kind == "interpolated" and used:
+            text = ", ".join(f"{n} v{v} (w={w:.3f})" for n, v, w, _ in used)
+            parts.append(f"{name}: {method or 'interpolated'} {text}")
+        elif res.kind == "interpolated":
             text = res.description.split(" from ", 1)[-1]
             parts.append(f"{name}: interpolated {text}")
         elif res.name:
-            parts.append(f"{name}: {res.name} v{res.version}")
+            parts.append(f"{name}: {res.name} v{res.version}" + (f" ({method})" if method in ("nearest", "edge")
+                                                                  else ""))
         elif res.kind == "explicit":
             parts.append(f"{name}: explicit k, c")
     return "; ".join(parts) or "rigid"
@@ -79,13 +85,16 @@ def save_tip_comparison(path, prediction, *, title: str | None = None,
         ax_m, ax_c = axes[0, col], axes[1, col]
         for name, frf, colour, style in curves:
             h = frf.entry(dof, dof)
-            ax_m.semilogy(frf.freq, np.abs(h), style, color=colour, lw=1.3, label=name)
+            ax_m.semilogy(frf.freq, np.abs(h) * 1e6, style, color=colour, lw=1.3, label=name)
             ax_c.plot(frf.freq, h.real * 1e6, style, color=colour, lw=1.0, label=f"Re, {name}")
             ax_c.plot(frf.freq, h.imag * 1e6, style, color=colour, lw=1.0, alpha=0.5)
-        if band is not None and d in band.magnitude:  # 5–95 % from the joints' parameter covariance
-            ax_m.fill_between(band.freq, band.magnitude[d][0], band.magnitude[d][2], color="C0", alpha=0.25,
-                              lw=0, label=f"5–95 % band ({band.samples} sampled joints)")
-        ax_m.set_ylabel(f"|H_{d}{d}| [m/N]")
+        if band is not None and d in band.magnitude:  # 5–95 %: measurement noise, joint choice, prediction path
+            p05, p50, p95 = band.peak[d]
+            width = (p95 - p05) / 2 / p50 if p50 > 0 else 0.0
+            ax_m.fill_between(band.freq, band.magnitude[d][0] * 1e6, band.magnitude[d][2] * 1e6, color="C0", alpha=0.3,
+                              lw=0, label=f"5–95 % band ({band.samples} samples), peak ±{width:.1%}"
+                              + (" (narrower than the line)" if width < 0.01 else ""))
+        ax_m.set_ylabel(f"|H_{d}{d}| [µm/N]")  # one unit per figure: the panel below is in µm/N too
         ax_m.set_title(f"tool tip, {d} direction")
         ax_m.grid(True, which="both", alpha=0.3)
         ax_c.set_ylabel("Re (dark), Im (light) [µm/N]")

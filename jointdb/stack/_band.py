@@ -1,9 +1,17 @@
-"""Tool-tip prediction bands from the joints' parameter covariance (issue 13, item 3).
+"""Tool-tip prediction bands: measurement noise and joint choice (issues 13 and 22; docs/stacks.md, *Bands*).
 
-Each interface whose catalogued joint carries an uncertainty record (``theta`` and its
-covariance, see :mod:`jointdb.coupling._propagate`) is sampled ``n`` times; every sample of
-the stack is coupled in one batched chain (samples stacked on the frequency axis) and the
-5 / 50 / 95 % percentiles of |H| per line and of the tip peak are returned.
+Two sources of error are sampled, per interface:
+
+- *measurement noise*: a catalogued joint that carries an uncertainty record (``theta`` and its
+  covariance, see :mod:`jointdb.coupling._propagate`) is drawn from it;
+- *joint choice*: a joint taken from the catalogue for conditions it was not identified at is
+  wrong by what the choice (nearest joint or interpolation) cannot know; its relative error in
+  stiffness and damping, estimated from the catalogue by leave-one-out
+  (:mod:`jointdb.store._loo`), scales each sample's dynamic stiffness (:func:`choice_perturbed`).
+
+Every sample of the stack is coupled in one batched chain (samples stacked on the frequency axis;
+both bending planes, cross terms included when the spindle couples them) and the 5 / 50 / 95 %
+percentiles of |H| per line and of the tip peak are returned.
 """
 
 from __future__ import annotations
@@ -42,6 +50,7 @@ class TipBand:
     samples: int
     interfaces: tuple[str, ...]
     tips: Mapping[str, np.ndarray]
+    cross: np.ndarray | None = None  # (n, n_freq, 2, 2) samples over (1x, 1y) when the spindle couples the planes
 
     def summary(self) -> list[dict]:
         return [{"direction": d, "peak_m_per_n_p05": float(self.peak[d][0]),
@@ -59,6 +68,16 @@ class TipBand:
         """The sampled tip receptances of one direction as FRFs (for lobes per sample)."""
         dof = Dof(1, direction)
         return [FRF(self.freq, h[:, None, None], [dof], [dof], "receptance") for h in self.tips[direction]]
+
+    def tip_matrices(self) -> list[FRF]:
+        """The sampled 2×2 tip receptances over (1x, 1y), cross terms included when present."""
+        out = (Dof(1, "x"), Dof(1, "y"))
+        if self.cross is not None:
+            vals = self.cross
+        else:
+            vals = np.zeros((self.samples, self.freq.size, 2, 2), dtype=complex)
+            vals[:, :, 0, 0], vals[:, :, 1, 1] = self.tips["x"], self.tips["y"]
+        return [FRF(self.freq, v, out, out, "receptance") for v in vals]
 
 
 def describes_catalogued_joint(record: Mapping) -> bool:
@@ -99,8 +118,65 @@ def _sampled_planes(record: Mapping, f: np.ndarray, n: int, seed: int, what: str
     return s[:, :, order][:, :, :, order]
 
 
-def tip_band(spec: StackSpec, resolved_joints: Mapping[str, FRF], uncertainties: Mapping[str, Mapping],
-             freq=None, n: int = 200, seed: int = 0) -> TipBand:
+def choice_perturbed(planes: np.ndarray, relative: np.ndarray, scale: np.ndarray,
+                     rng: np.random.Generator) -> np.ndarray:
+    """Joint receptance samples with the joint-choice error applied (docs/stacks.md, *Bands*).
+
+    Each sample draws one of the catalogue's leave-one-out errors ``R_j`` (the relative error per line,
+    ``Z_j = (I + R_j) Ẑ_j``, of a catalogued joint predicted from the others) and a normal amplitude
+    ``t = scale_j ξ``, and applies it to its dynamic stiffness: ``Z' = (I + t R_j) Z``.
+
+    Parameters
+    ----------
+    planes
+        Joint receptance samples ``(n, n_freq, 2, 2)`` over (x, θ).
+    relative
+        ``(m, n_freq, 2, 2)`` leave-one-out relative errors over (x, θ), on the same lines.
+    scale
+        ``(m,)`` standard deviation of the amplitude per error (request's distance over the point's, times
+        the calibration).
+    rng
+        Random generator.
+
+    Returns
+    -------
+    ndarray ``(n, n_freq, 2, 2)``
+    """
+    z = np.linalg.inv(planes)
+    n = z.shape[0]
+    j = rng.integers(relative.shape[0], size=n)
+    t = np.asarray(scale, float)[j] * rng.standard_normal(n)
+    return np.linalg.inv(z + t[:, None, None, None] * (relative[j] @ z))
+
+
+def _interface_samples(name, spec, resolved, f, n, seed, uncertainties, choice, rng):
+    """``None`` (rigid) or per plane ``(n, n_freq, 2, 2)`` samples of one interface's joint."""
+    if name in uncertainties:
+        s = _sampled_planes(uncertainties[name], f, n, seed + 7919 * INTERFACE_NAMES.index(name),
+                            f"interfaces.{name}")
+        planes = {"x": s, "y": s}
+    else:
+        nominal, _ = _joint_planes(name, spec, resolved, f)
+        if nominal is None:
+            return None
+        planes = {p: np.broadcast_to(nominal[p], (n,) + nominal[p].shape) for p in ("x", "y")}
+    choice = (choice or {}).get(name)
+    if choice is None:
+        return planes
+    same = planes["x"] is planes["y"] or np.array_equal(planes["x"], planes["y"])
+    state = rng.bit_generator.state
+    out = {"x": choice_perturbed(planes["x"], *choice, rng)}
+    if same:
+        out["y"] = out["x"]
+    else:
+        rng.bit_generator.state = state  # the same draws in both planes: one joint
+        out["y"] = choice_perturbed(planes["y"], *choice, rng)
+    return out
+
+
+def tip_band(spec: StackSpec, resolved_joints: Mapping[str, FRF], uncertainties: Mapping[str, Mapping] | None = None,
+             freq=None, n: int = 200, seed: int = 0, choice: Mapping[str, tuple] | None = None,
+             tip_sigma: float = 0.0) -> TipBand:
     """5/50/95 % band of the tool-tip receptance from sampled joints.
 
     Parameters
@@ -108,46 +184,70 @@ def tip_band(spec: StackSpec, resolved_joints: Mapping[str, FRF], uncertainties:
     spec, resolved_joints, freq
         As :func:`jointdb.stack.predict_tool_tip`.
     uncertainties
-        Interface name → uncertainty record of its joint (interfaces not named keep their
-        nominal joint).
+        Interface name → uncertainty record of its joint (measurement noise through the fit's
+        covariance); interfaces not named keep their nominal joint.
+    choice
+        Interface name → ``(relative, scale)`` of its joint-choice error (:func:`choice_perturbed`, arrays on
+        the prediction's lines), applied on top of the covariance samples.
+    tip_sigma
+        Relative standard error of the prediction path itself (model form: beams joined at points where the
+        real stack has distributed contact): each sample's tip receptance is scaled by ``exp(tip_sigma ξ)``.
     n, seed
         Ensemble size and random seed.
+
+    Returns
+    -------
+    TipBand
+        Both planes; with a spindle whose FRF couples the planes the chain runs on (x, θx, y, θy) and the
+        samples carry the cross terms (``cross``).
 
     Raises
     ------
     InputError
-        No interface with an uncertainty, or a record that is not a planar spring–damper.
+        Nothing to sample, or a record that is not a planar spring–damper.
     """
-    if not uncertainties:
-        raise InputError("no interface joint carries an uncertainty record; nothing to sample")
+    from jointdb.stack._twoplane import spindle_four, two_plane_tip
+
+    uncertainties = dict(uncertainties or {})
+    choice = {k: v for k, v in (choice or {}).items() if v is not None}
+    active = set(uncertainties) | set(choice)
+    if tip_sigma > 0:
+        active.add("prediction path")
+    if not active:
+        raise InputError("no interface joint carries an uncertainty record or a joint-choice error; "
+                         "nothing to sample")
     f = prediction_grid(spec, freq)
     parts = stack_parts(spec, f)
     node = spec.spindle.node if isinstance(spec.spindle, MeasuredSpindle) else NODES["spindle_nose"]
-    spindle, _ = _planes(parts["spindle"], "spindle FRF", node)
+    spindle, has_y = _planes(parts["spindle"], "spindle FRF", node)
     resolved = dict(resolved_joints or {})
+    rng = np.random.default_rng([seed, 104729])
 
-    def tile(a):
-        return np.broadcast_to(a, (n,) + a.shape).reshape((n * a.shape[0],) + a.shape[1:])
+    def flat(a):
+        a = np.broadcast_to(a, (n,) + a.shape[-3:]) if a.ndim == 3 else a
+        return np.ascontiguousarray(a).reshape((n * f.size,) + a.shape[2:])
 
-    joints = {}
-    for name in INTERFACE_NAMES:
-        if name in uncertainties:
-            s = _sampled_planes(uncertainties[name], f, n, seed + 7919 * INTERFACE_NAMES.index(name),
-                                f"interfaces.{name}")
-            joints[name] = s.reshape((n * f.size, 2, 2))
-        else:
-            planes, _ = _joint_planes(name, spec, resolved, f)
-            joints[name] = None if planes is None else {p: tile(planes[p]) for p in ("x", "y")}
-    tool, holder = tile(parts["tool"].values), tile(parts["holder"].values)
+    joints = {name: _interface_samples(name, spec, resolved, f, n, seed, uncertainties, choice, rng)
+              for name in INTERFACE_NAMES}
+    joints = {k: None if v is None else {p: flat(v[p]) for p in ("x", "y")} for k, v in joints.items()}
+    tool, holder = flat(parts["tool"].values), flat(parts["holder"].values)
+    spindle4 = spindle_four(parts["spindle"], node) if has_y else None
+    full = np.zeros((n, f.size, 2, 2), dtype=complex)
+    if spindle4 is not None:
+        t4 = two_plane_tip(tool, holder, flat(spindle4), joints["tool-holder"], joints["holder-spindle"])
+        full[:] = t4[:, [0, 2]][:, :, [0, 2]].reshape(n, f.size, 2, 2)
+    else:
+        for k, plane in enumerate(("x", "y")):
+            jt, jh = (None if j is None else j[plane] for j in (joints["tool-holder"], joints["holder-spindle"]))
+            full[:, :, k, k] = tool_tip_chain(tool, holder, flat(spindle[plane]), jt, jh)[:, 0, 0].reshape(n, f.size)
+    if tip_sigma > 0:
+        full *= np.exp(tip_sigma * rng.standard_normal(n))[:, None, None, None]
     tips, mags, peaks, peak_hz = {}, {}, {}, {}
-    for plane in ("x", "y"):
-        jt, jh = (j if j is None or isinstance(j, np.ndarray) else j[plane]
-                  for j in (joints["tool-holder"], joints["holder-spindle"]))
-        tip = tool_tip_chain(tool, holder, tile(spindle[plane]), jt, jh)[:, 0, 0].reshape(n, f.size)
-        tips[plane] = tip
-        mag = np.abs(tip)
+    for k, plane in enumerate(("x", "y")):
+        tips[plane] = full[:, :, k, k]
+        mag = np.abs(tips[plane])
         mags[plane] = band(mag, QUANTILES)
-        i = np.argmax(mag, axis=1)
         peaks[plane] = band(mag.max(axis=1), QUANTILES)
-        peak_hz[plane] = band(f[i], QUANTILES)
-    return TipBand(f, mags, peaks, peak_hz, int(n), tuple(sorted(uncertainties)), tips)
+        peak_hz[plane] = band(f[np.argmax(mag, axis=1)], QUANTILES)
+    return TipBand(f, mags, peaks, peak_hz, int(n), tuple(sorted(active)), tips,
+                   full if spindle4 is not None else None)

@@ -65,7 +65,7 @@ schema :mod:`jointdb.store._models`; the nearest-joint distance :mod:`jointdb.st
 
 from __future__ import annotations
 
-from jointdb.store._nearest import OutsideCatalogueWarning
+from jointdb.store._nearest import OutsideCatalogueWarning, UnvariedConditionWarning
 from jointdb.store._records import DamagedRecordWarning, DamagedVersion
 from jointdb.store._types import (
     KNOWN_MATERIALS,
@@ -92,6 +92,7 @@ __all__ = [
     "CheckReport",
     "BlobStore",
     "OutsideCatalogueWarning",
+    "UnvariedConditionWarning",
     "DamagedRecordWarning",
     "DamagedVersion",
     "JointPage",

@@ -51,6 +51,18 @@ class OutsideCatalogueWarning(UserWarning):
     """A nearest-joint request lies outside the catalogued range of some condition."""
 
 
+class UnvariedConditionWarning(UserWarning):
+    """A note: the request names a condition the catalogue never varied for that joint type (one value only),
+    and it describes the machine the joint was identified on rather than the joint (:data:`MACHINE_CONDITIONS`);
+    the joints are used at the requested value, since no data show a dependence on it."""
+
+
+#: Conditions of a joint type that record the machine its campaign ran on, not the joint itself: a tool–holder
+#: joint identified on a spindle at one drawbar force (``preload_n``) is used at another with a note, not an
+#: extrapolation warning, while the catalogue holds that joint type at a single value of it.
+MACHINE_CONDITIONS = {"tool-holder": ("preload_n",)}
+
+
 @dataclass(frozen=True)
 class Selection:
     """Which versions of ``joint_type`` rank (module docstring)."""
@@ -341,14 +353,31 @@ def fetch_versions(reader: Reader, version_ids: list[int], states: Mapping[int, 
     return out
 
 
+def unvaried_machine_conditions(joint_type: str, cand: Candidates, outside: list[str]) -> list[tuple[str, float]]:
+    """``(name, the one catalogued value)`` of the conditions in ``outside`` that describe the machine
+    (:data:`MACHINE_CONDITIONS`) and that the candidates hold at a single value: a note, not an extrapolation."""
+    out = []
+    for name in [n for n in outside if n in MACHINE_CONDITIONS.get(joint_type, ())]:
+        column = {"preload_n": cand.preload, "torque_nm": cand.torque}[name]
+        values = np.unique(column[np.isfinite(column)])
+        if values.size == 1:
+            out.append((name, float(values[0])))
+    return out
+
+
 def matches(reader: Reader, cand: Candidates, req: Conditions, k: int, sel: Selection,
             states: Mapping[int, str] | None = None, stacklevel: int = 3) -> list[Match]:
     """Rank ``cand`` and build the :class:`Match` list (warns when extrapolating)."""
     order, total, terms, outside = rank(cand, req, k)
+    for name, value in unvaried_machine_conditions(sel.joint_type, cand, outside):
+        outside.remove(name)
+        warnings.warn(f"{sel.joint_type} joints are catalogued at one {name} only ({value:g}); they are "
+                      f"used at the requested {getattr(req, name):g} (no data show a dependence on it)",
+                      UnvariedConditionWarning, stacklevel=stacklevel)
     if outside:
         warnings.warn(
             f"request lies outside the catalogued range of {sel.joint_type} joints for: {', '.join(outside)}; "
-            "the nearest joints are extrapolations",
+            "the nearest catalogued joints (the edge) are used, nothing is extrapolated",
             OutsideCatalogueWarning,
             stacklevel=stacklevel,
         )

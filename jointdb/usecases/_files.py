@@ -49,13 +49,16 @@ def frf_format(path: Path | str, option: str = "") -> str:
     return fmt
 
 
-def read_frf_file(path: Path | str) -> FRF:
+def read_frf_file(path: Path | str, fill: str = "error") -> FRF:
     """Read an FRF from UFF58 (``.uff``, ``.unv``), HDF5 (``.h5``, ``.hdf5``) or CSV by suffix.
 
     Parameters
     ----------
     path
         The file.
+    fill
+        For UFF58 records that do not cover every (output, input) pair: ``"reciprocity"``
+        completes a missing H[i, j] from H[j, i] (:func:`jointdb.io.read_frf_uff58`); ``"error"`` refuses.
 
     Returns
     -------
@@ -72,7 +75,7 @@ def read_frf_file(path: Path | str) -> FRF:
     if not p.exists():
         raise NotFoundError(f"FRF file {p} does not exist")
     if fmt == "uff58":
-        return io.read_frf_uff58(p)
+        return io.read_frf_uff58(p, fill=fill)
     if fmt == "hdf5":
         return io.read_frf_hdf5(p)
     return io.read_frf_csv(p)

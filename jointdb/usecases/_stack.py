@@ -16,6 +16,16 @@ from jointdb.usecases._files import load_stack
 #: How many nearest catalogued joints a stack's interpolated query ranks before the interpolation picks the
 #: ones that bracket the request along the condition axes (jointdb.store._interp).
 INTERPOLATION_POOL = 64
+#: The joint-choice error of the band is the leave-one-out error model (jointdb.store._loo) times this factor.
+#: Calibrated for coverage on the tuning seeds of bench/_stack_truth_b.py (docs/validation/stack-prediction.md,
+#: *Bands*): the leave-one-out removes a catalogued point and so doubles the local grid spacing, while the
+#: straight-line model is fitted through the origin; the factor absorbs both and the prediction path's own error.
+CHOICE_CALIBRATION = 0.08
+
+#: How a queried joint was chosen (the wording of docs/stacks.md): the nearest catalogued joint, an
+#: interpolation between the joints whose conditions bracket the request (a simplex of the catalogued grid),
+#: the catalogued edge nearest a request outside the catalogue, or exactly a catalogued condition.
+METHODS = ("pinned", "nearest", "simplex interpolation", "edge", "catalogued condition")
 
 # ------------------------------------------------------------------ joints
 @dataclass(frozen=True, eq=False)
@@ -61,6 +71,19 @@ class JointResolution:
     warnings: tuple[str, ...] = ()
     description: str = ""
     uncertainty: Mapping[str, Any] | None = None  # the version's parameter covariance, if it was fitted with one
+    method: str = ""  # one of METHODS for database joints
+    neighbours: tuple[tuple[str, int, float, float], ...] = ()  # (name, version, weight, distance) used
+    choice_error: Any = None  # jointdb.store._loo.ChoiceErrorModel of a queried joint, if the pool allows one
+
+    def choice_perturbations(self, freq):
+        """``(relative, scale)`` of the joint-choice error on ``freq`` over (x, θ), calibrated
+        (:meth:`jointdb.store._loo.ChoiceErrorModel.on_grid`), or None."""
+        m = self.choice_error
+        if m is None or len(m.dofs) != 2 or m.distance <= 0:
+            return None
+        order = [0, 1] if m.dofs[0].endswith("x") else [1, 0]
+        rel, scale = m.on_grid(freq, order)
+        return rel, CHOICE_CALIBRATION * scale
 
     def row(self) -> dict[str, Any]:
         """A flat row for tables / JSON.
@@ -72,10 +95,19 @@ class JointResolution:
         return {
             "interface": self.interface,
             "kind": self.kind,
+            "method": self.method or self.kind,
             "joint": f"{self.name}@{self.version}" if self.name else self.description,
             "distance": self.distance,
             "per_condition": ", ".join(f"{k}={v:.3g}" for k, v in self.per_condition.items()) or None,
             "extrapolating": self.extrapolating,
+            "outside_range": list(self.outside_range),
+            "joints_used": [{"joint": f"{n}@{v}", "weight": w, "distance": d} for n, v, w, d in self.neighbours],
+            "choice_error": None if self.choice_error is None else {
+                "request_distance": self.choice_error.distance,
+                "stiffness_error_by_dof": dict(zip(self.choice_error.dofs, self.choice_error.sigma[:, 0].tolist())),
+                "damping_error_by_dof": dict(zip(self.choice_error.dofs, self.choice_error.sigma[:, 1].tolist())),
+                "leave_one_out_joints": [f"{p.name}@{p.version}" for p in self.choice_error.points],
+                "calibration": CHOICE_CALIBRATION},
             "warnings": "; ".join(self.warnings) or None,
         }
 
@@ -119,7 +151,7 @@ def resolve_joints(spec: StackSpec, repo=None) -> dict[str, JointResolution]:
     NotFoundError
         A pinned joint/version that does not exist, or no catalogued joint of the queried type.
     """
-    from jointdb.store import Conditions, OutsideCatalogueWarning
+    from jointdb.store import Conditions
 
     out: dict[str, JointResolution] = {}
     needs_db = any(spec.interfaces[n].kind in ("catalogued", "query") for n in INTERFACE_NAMES)
@@ -141,42 +173,103 @@ def resolve_joints(spec: StackSpec, repo=None) -> dict[str, JointResolution]:
                     notes = (f"{jv.name}@{jv.version} is {jv.state}",)
                 out[name] = JointResolution(name, "catalogued", handle.load_frf(jv), jv.name, jv.version, 0.0,
                                             warnings=notes, description=choice.reference,
-                                            uncertainty=_uncertainty_of(jv))
+                                            uncertainty=_uncertainty_of(jv), method="pinned",
+                                            neighbours=((jv.name, jv.version, 1.0, 0.0),))
                 continue
             conditions = Conditions.from_dict(dict(choice.conditions or {}))
-            with warnings.catch_warnings(record=True) as caught:
-                warnings.simplefilter("always", OutsideCatalogueWarning)
-                # interpolation picks the joints bracketing the request along the condition axes: it needs the
-                # catalogued grid around the request, not only the `neighbours` nearest
-                pool = max(choice.neighbours, INTERPOLATION_POOL) if choice.interpolate else choice.neighbours
-                matches = handle.nearest(choice.joint_type, conditions, k=pool)
-                if len(matches) > choice.neighbours:  # the pool beyond the nearest: joints it can be mixed with
-                    kind, dofs = matches[0].version.model_kind, tuple(matches[0].version.dofs)
-                    matches = matches[:choice.neighbours] + [
-                        m for m in matches[choice.neighbours:]
-                        if m.version.model_kind == kind and tuple(m.version.dofs) == dofs]
-            texts = tuple(str(w.message) for w in caught if issubclass(w.category, OutsideCatalogueWarning))
+            matches, texts = _pool(handle, choice, conditions)
+            added = _stack_conditions(spec, choice.joint_type, conditions, matches)
+            if added is not None:  # the catalogue records the insertion length: the stack's is a condition
+                conditions = added
+                matches, texts = _pool(handle, choice, conditions)
+                texts += (f"note: the stack's insertion length {spec.insertion_length * 1e3:.4g} mm is a condition "
+                          "of the query (geometry.insertion_m, recorded by the catalogued joints)",)
             if not matches:
                 raise NotFoundError(f"interfaces.{name}: no catalogued joint of type {choice.joint_type!r}")
-            best = matches[0]
-            cands = tuple((m.version.name, m.version.version, float(m.distance)) for m in matches[:choice.neighbours])
-            if choice.interpolate and len(matches) > 1:
-                joint = handle.interpolate(matches, conditions)
-                out[name] = JointResolution(
-                    name, "interpolated", joint.frf, best.version.name, best.version.version, float(best.distance),
-                    dict(best.per_condition), bool(best.extrapolating), tuple(best.outside_range), cands,
-                    texts, joint.describe(),
-                )
-                continue
-            out[name] = JointResolution(
-                name, "query", handle.load_frf(best.version), best.version.name, best.version.version,
-                float(best.distance), dict(best.per_condition), bool(best.extrapolating),
-                tuple(best.outside_range), cands, texts, choice.reference, _uncertainty_of(best.version),
-            )
+            out[name] = _queried(name, choice, handle, matches, conditions, texts)
     finally:
         if owned and handle is not None:
             handle.close()
     return out
+
+
+#: Conditions a stack supplies to a query of a joint type when the query leaves them out and the catalogued joints
+#: of that type record them: the tool's insertion (clamping) length in the holder bore.
+STACK_CONDITIONS = {"tool-holder": {"insertion_m": lambda spec: spec.insertion_length}}
+
+
+def _stack_conditions(spec, joint_type, conditions, matches):
+    """``conditions`` with the stack's own geometry added (:data:`STACK_CONDITIONS`) where the query leaves
+    it out and some catalogued joint records it; None when nothing is added."""
+    from jointdb.store import Conditions
+
+    extra = {}
+    for key, value_of in STACK_CONDITIONS.get(joint_type, {}).items():
+        if key in conditions.geometry or not any(key in (m.version.conditions.geometry or {}) for m in matches):
+            continue
+        extra[key] = float(value_of(spec))
+    if not extra:
+        return None
+    return Conditions(conditions.materials, conditions.preload_n, conditions.torque_nm,
+                      {**conditions.geometry, **extra}, conditions.extra)
+
+
+def _pool(handle, choice, conditions):
+    """``(matches, warning texts)`` of a query: the nearest joints and, beyond the ``neighbours`` nearest, the
+    pool of joints they can be mixed with (interpolation picks the joints bracketing the request along the
+    condition axes, and the joint-choice error is estimated by leave-one-out: both need the catalogued grid
+    around the request)."""
+    from jointdb.store import OutsideCatalogueWarning, UnvariedConditionWarning
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", OutsideCatalogueWarning)
+        warnings.simplefilter("always", UnvariedConditionWarning)
+        matches = handle.nearest(choice.joint_type, conditions, k=max(choice.neighbours, INTERPOLATION_POOL))
+        if len(matches) > choice.neighbours:
+            kind, dofs = matches[0].version.model_kind, tuple(matches[0].version.dofs)
+            matches = matches[:choice.neighbours] + [
+                m for m in matches[choice.neighbours:]
+                if m.version.model_kind == kind and tuple(m.version.dofs) == dofs]
+    texts = tuple(str(w.message) for w in caught if issubclass(w.category, OutsideCatalogueWarning))
+    texts += tuple(f"note: {w.message}" for w in caught if issubclass(w.category, UnvariedConditionWarning))
+    return matches, texts
+
+
+def _choice_error(handle, pool, conditions, interpolate: bool):
+    """The leave-one-out joint-choice error model of a query (None when the pool has too few joints)."""
+    from jointdb.store._loo import choice_error_model, leave_one_out, pool_distances
+
+    first = pool[0].version
+    pool = [m for m in pool if m.version.model_kind == first.model_kind and tuple(m.version.dofs) == tuple(first.dofs)]
+    points = leave_one_out(handle.load_frf, pool, conditions, "axes" if interpolate else "nearest")
+    here = pool_distances(pool, conditions)
+    nearest = min(here, key=lambda m: m.distance)
+    return choice_error_model(points, nearest.distance, first.dofs, inside=not nearest.extrapolating)
+
+
+def _queried(name, choice, handle, matches, conditions, texts) -> JointResolution:
+    """The resolution of a queried interface: nearest or interpolated joint, with the joints used and the
+    joint-choice error model."""
+    best = matches[0]
+    cands = tuple((m.version.name, m.version.version, float(m.distance)) for m in matches[:choice.neighbours])
+    dist = {(m.version.name, m.version.version): float(m.distance) for m in matches}
+    common = dict(per_condition=dict(best.per_condition), extrapolating=bool(best.extrapolating),
+                  outside_range=tuple(best.outside_range), candidates=cands, warnings=texts,
+                  choice_error=_choice_error(handle, matches, conditions, choice.interpolate))
+    if choice.interpolate and len(matches) > 1:
+        joint = handle.interpolate(matches, conditions)
+        used = tuple((n, v, float(w), dist.get((n, v), float("nan"))) for n, v, w in joint.neighbours)
+        method = ("edge" if best.extrapolating else
+                  "catalogued condition" if len(used) == 1 and used[0][3] <= 1e-12 else "simplex interpolation")
+        return JointResolution(name, "interpolated", joint.frf, best.version.name, best.version.version,
+                               float(best.distance), description=joint.describe(), method=method,
+                               neighbours=used, **common)
+    method = "edge" if best.extrapolating else "nearest"
+    return JointResolution(name, "query", handle.load_frf(best.version), best.version.name, best.version.version,
+                           float(best.distance), description=choice.reference,
+                           uncertainty=_uncertainty_of(best.version),
+                           method=method, neighbours=((best.version.name, best.version.version, 1.0,
+                                                       float(best.distance)),), **common)
 
 
 @dataclass(frozen=True, eq=False)

@@ -6,33 +6,41 @@ from __future__ import annotations
 
 
 def tip_band_of(result, n: int = 200, seed: int = 0):
-    """``(band, notes)``: a :class:`jointdb.stack._band.TipBand` when some chosen joint carries an
-    uncertainty record (else None), and the notes on what was or could not be sampled.
+    """``(band, terms, notes)``: the 5–95 % band of the tool tip from every error term the chosen joints
+    carry — measurement noise, joint choice (leave-one-out over the catalogue) and the prediction
+    path's model error (:func:`jointdb.usecases._stack_band.band_terms`) — each term alone, and the
+    notes that say what was sampled, which term dominates, or why there is no band.
 
     Parameters
     ----------
     result
         A :class:`jointdb.usecases.StackPrediction`.
-    n, seed
-        Sampled joint sets and the seed of the sampling.
-    """
-    from jointdb.errors import InputError
-    from jointdb.stack._band import sampleable_uncertainties, tip_band
+    n
+        Number of sampled joint sets.
+    seed
+        Seed of the sampling.
 
-    unc, notes = sampleable_uncertainties(result.joints)
-    notes = list(notes)
-    if not unc:
-        return None, notes
-    resolved = {name: r.frf for name, r in result.joints.items() if r.frf is not None}
-    try:
-        b = tip_band(result.spec, resolved, unc, result.prediction.tip.freq, n=n, seed=seed)
-    except InputError as exc:
-        return None, [*notes, f"no band: {exc}"]
+    Returns
+    -------
+    tuple
+        ``(TipBand or None, BandTerms, list of str)``.
+    """
+    from jointdb.usecases._stack_band import band_terms
+
+    terms = band_terms(result, n=n, seed=seed)
+    notes = list(terms.notes)
+    b = terms.band
+    if b is None:
+        return None, terms, notes
     for row in b.summary():
-        notes.append(f"band ({b.samples} sampled joints of {', '.join(b.interfaces)}): tip peak {row['direction']} "
+        d = row["direction"]
+        parts = ", ".join(f"{t} alone ±{w[d]:.1%}" for t, w in terms.half_width.items() if t != "all" and d in w)
+        notes.append(f"band ({b.samples} samples: {', '.join(b.interfaces)}): tip peak {d} "
                      f"{row['peak_m_per_n_p05']:.4g} – {row['peak_m_per_n_p95']:.4g} m/N (5–95 %), "
-                     f"{row['peak_hz_p05']:.5g} – {row['peak_hz_p95']:.5g} Hz")
-    return b, notes
+                     f"{row['peak_hz_p05']:.5g} – {row['peak_hz_p95']:.5g} Hz; {parts}")
+    if terms.dominant:
+        notes.append(f"band: the dominant term is {terms.dominant}")
+    return b, terms, notes
 
 
 def choice_sensitivity(result, repo, freq, max_alternatives: int = 2) -> tuple[list[dict], list[str]]:
@@ -44,7 +52,7 @@ def choice_sensitivity(result, repo, freq, max_alternatives: int = 2) -> tuple[l
     base = {r["direction"]: r["peak_m_per_n"] for r in result.prediction.summary()}
     rows, notes = [], []
     for name, res in result.joints.items():
-        if res.kind != "query" or len(res.candidates) < 2:
+        if res.kind not in ("query", "interpolated") or len(res.candidates) < 2:
             continue
         for cand_name, cand_version, dist in res.candidates[1:1 + max_alternatives]:
             spec = result.spec.replace(interfaces={
@@ -56,6 +64,6 @@ def choice_sensitivity(result, repo, freq, max_alternatives: int = 2) -> tuple[l
                              "direction": r["direction"], "peak_m_per_n": r["peak_m_per_n"],
                              "peak_hz": r["peak_hz"], "peak_change": float(change)})
             x = [r for r in rows if r["alternative"] == f"{cand_name}@{cand_version}"][0]
-            notes.append(f"{name}: with the next candidate {cand_name}@{cand_version} (distance {dist:.3f}) the tip "
+            notes.append(f"{name}: with the candidate {cand_name}@{cand_version} alone (distance {dist:.3f}) the tip "
                          f"peak {x['direction']} would be {x['peak_m_per_n']:.4g} m/N ({x['peak_change']:+.1%})")
     return rows, notes

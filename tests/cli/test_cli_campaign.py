@@ -172,3 +172,32 @@ def test_rotations_by_finite_difference_amplify_noise_more_when_the_points_are_c
     missing = run("rotations", tmp_path / "fd.h5", "--method", "finite-difference", "--node", "3",
                   "--out", tmp_path / "x.csv")
     assert missing.returncode != 0 and "--inner" in missing.stderr and "Traceback" not in missing.stderr
+
+
+def test_rotations_fill_reciprocity_completes_a_uff58_file_with_one_cross_entry(tmp_path):
+    """G11, G21, G22 measured (no G12): refused with a hint, then completed by --fill reciprocity; the result
+    equals that of the full matrix."""
+    from jointdb.frf import FRF
+    from jointdb.io import read_frf_hdf5, write_uff58
+    from jointdb.usecases import read_frf_file
+
+    _rotation_rig(tmp_path)
+    full = read_frf_hdf5(tmp_path / "ext.h5")
+    parts = []
+    for k, (o, i) in enumerate(((0, 0), (1, 0), (1, 1))):
+        one = FRF(full.freq, full.values[:, o:o + 1, i:i + 1], [full.outputs[o]], [full.inputs[i]], full.quantity)
+        write_uff58(tmp_path / f"part{k}.uff", one, binary=False, units_dataset=k == 0)
+        parts.append((tmp_path / f"part{k}.uff").read_text())
+    (tmp_path / "ext.uff").write_text("".join(parts))
+    args = ("rotations", tmp_path / "ext.uff", "--extension", tmp_path / "ext.json", "--joint-point", "base",
+            "--points", "p1,p2", "--node", "3", "--trials", "4")
+    refused = run(*args, "--out", tmp_path / "r.h5")
+    assert refused.returncode != 0 and "reciprocity" in refused.stderr and "Traceback" not in refused.stderr
+    done = run(*args, "--out", tmp_path / "a.h5", "--fill", "reciprocity")
+    assert done.returncode == 0, done.stderr
+    ref = run("rotations", tmp_path / "ext.h5", "--extension", tmp_path / "ext.json", "--joint-point", "base",
+              "--points", "p1,p2", "--node", "3", "--trials", "4", "--out", tmp_path / "b.h5")
+    assert ref.returncode == 0, ref.stderr
+    got, want = read_frf_file(tmp_path / "a.h5"), read_frf_file(tmp_path / "b.h5")
+    # ASCII UFF58 keeps ~1e-10 of each value; the extension equations amplify it by their condition (~1e3)
+    np.testing.assert_allclose(got.values, want.values, rtol=1e-6, atol=1e-9 * np.abs(want.values).max())

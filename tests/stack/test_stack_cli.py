@@ -53,7 +53,7 @@ def test_predict_reports_the_chosen_version_and_distance(tmp_path):
     th = json.loads(r.stdout)["joints"][0]
     assert th["joint"] == "th-b@1" and th["kind"] == "query" and th["distance"] > 0
     assert "torque_nm=" in th["per_condition"]
-    assert "tool-holder: chose th-b@1 (distance" in r.stderr
+    assert "tool-holder: nearest: th-b@1 (weight 1.000, distance" in r.stderr
 
 
 def test_bad_stack_file_gives_one_line_naming_the_field(tmp_path):

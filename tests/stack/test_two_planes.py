@@ -89,3 +89,35 @@ def test_fluted_area_ratio_gives_the_fluted_section_its_true_mass_and_round_trip
     doc["tool"]["fluted_area_ratio"] = 1.5
     with pytest.raises(Exception, match="fluted_area_ratio"):
         stack_from_dict(doc)
+
+
+def test_band_samples_carry_the_cross_terms_and_equal_one_by_one_predictions():
+    """Joint-choice samples through a plane-coupling spindle: each sample's 2×2 tip (cross terms included)
+    equals predict_tool_tip with that sample's joint; with no spread the band collapses onto the prediction."""
+    from jointdb.stack._band import choice_perturbed, tip_band
+
+    spec = _spec()
+    frf = _spindle_frf(spec)
+    c, s = np.cos(np.radians(30.0)), np.sin(np.radians(30.0))
+    order = [Dof(5, d) for d in ("x", "y", "rx", "ry")]
+    R = np.zeros((4, 4))
+    R[:2, :2] = R[2:, 2:] = [[c, -s], [s, c]]
+    spec = spec.replace(spindle=MeasuredSpindle("s.uff", 5, FRF(FREQ, R @ frf.block(order, order) @ R.T, order,
+                                                                 order, "receptance")))
+    nominal = predict_tool_tip(spec, freq=FREQ)
+    jdofs = (Dof(3, "x"), Dof(3, "ry"))
+    w = 2 * np.pi * FREQ
+    hj = np.zeros((FREQ.size, 2, 2), complex)
+    hj[:, 0, 0], hj[:, 1, 1] = 1 / (3e7 + 1j * w * 230.0), 1 / (4.5e5 + 1j * w * 1.7)
+    joint = FRF(FREQ, hj, jdofs, jdofs, "receptance")
+    rel = np.zeros((1, FREQ.size, 2, 2), complex)
+    rel[0, :, 0, 0], rel[0, :, 1, 1] = 0.3, -0.2 + 0.1j  # a stiffness and a damping error pattern
+    b0 = tip_band(spec, {"tool-holder": joint}, None, FREQ, n=4, seed=5, choice={"tool-holder": (rel, np.zeros(1))})
+    np.testing.assert_allclose(b0.cross[0], nominal.tip.values, rtol=1e-9, atol=1e-12)
+    b = tip_band(spec, {"tool-holder": joint}, None, FREQ, n=3, seed=5, choice={"tool-holder": (rel, np.ones(1))})
+    assert b.cross is not None and np.abs(b.cross[:, :, 0, 1]).max() > 0
+    rng = np.random.default_rng([5, 104729])  # the draws tip_band makes, in its order
+    samples = choice_perturbed(np.broadcast_to(hj, (3,) + hj.shape), rel, np.ones(1), rng)
+    for k in range(3):
+        one = predict_tool_tip(spec, {"tool-holder": FRF(FREQ, samples[k], jdofs, jdofs, "receptance")}, FREQ)
+        np.testing.assert_allclose(b.cross[k], one.tip.values, rtol=1e-8, atol=1e-12)

@@ -1,0 +1,113 @@
+"""The predictive band of a stack prediction: measurement noise and joint choice, term by term (issue 22).
+
+:func:`prediction_band` samples every interface whose joint carries an error estimate — its fit's
+covariance (measurement noise) and, for a queried joint, the leave-one-out joint-choice error
+(:mod:`jointdb.store._loo`, calibrated by :data:`jointdb.usecases._stack.CHOICE_CALIBRATION`) — plus the
+prediction path's own model-form error (:data:`MODEL_FORM_SIGMA`), and couples them all
+(:func:`jointdb.stack._band.tip_band`). :func:`band_terms` also samples each term alone,
+to say which one dominates.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+import numpy as np
+
+from jointdb.errors import InputError
+
+__all__ = ["BandTerms", "prediction_band", "band_terms", "TERMS"]
+
+#: The error terms a band can carry, in the order they are reported.
+TERMS = ("measurement noise", "joint choice", "prediction path")
+#: Relative standard error of the prediction path's own tip receptance (model form: three beams joined at two
+#: points where a real stack has distributed contact, a holder model, a spindle receptance). Not estimable from
+#: the catalogue (each per-line joint reproduces its own campaign): calibrated on the tuning seeds of
+#: bench/_stack_truth_b.py, like CHOICE_CALIBRATION (docs/validation/stack-prediction.md, *Bands*).
+MODEL_FORM_SIGMA = 0.02
+
+
+def _inputs(result, terms=TERMS) -> tuple[dict, dict, list[str]]:
+    from jointdb.stack._band import sampleable_uncertainties
+
+    unc, notes = sampleable_uncertainties(result.joints) if "measurement noise" in terms else ({}, [])
+    sigma = {}
+    if "joint choice" in terms:
+        for name, r in result.joints.items():
+            s = r.choice_perturbations(result.prediction.tip.freq)
+            if s is not None:
+                sigma[name] = s
+            elif r.kind in ("query", "interpolated") and r.choice_error is None:
+                notes.append(f"{name}: no joint-choice error — fewer than 3 catalogued joints of its kind share the "
+                             "conditions the query names, so leave-one-out cannot estimate one")
+    return unc, sigma, notes
+
+
+def prediction_band(result, n: int = 200, seed: int = 0, terms=TERMS):
+    """``(TipBand or None, notes)`` for a :class:`jointdb.usecases.StackPrediction`.
+
+    Parameters
+    ----------
+    result
+        The prediction with its joint resolutions.
+    n, seed
+        Ensemble size and seed.
+    terms
+        Which error terms to sample (:data:`TERMS`).
+
+    Returns
+    -------
+    (TipBand | None, list[str])
+        None (with a note saying why) when no interface carries an error estimate.
+    """
+    from jointdb.stack._band import tip_band
+
+    unc, sigma, notes = _inputs(result, terms)
+    tip_sigma = MODEL_FORM_SIGMA if "prediction path" in terms else 0.0
+    queried = any(r.kind in ("query", "interpolated") for r in result.joints.values())
+    if not unc and not sigma and not queried and tuple(terms) != ("prediction path",):
+        notes.append("no band: no interface joint carries a covariance or a joint-choice error "
+                     "(rigid, explicit or pinned joints without an uncertainty record)")
+        return None, notes
+    resolved = {name: r.frf for name, r in result.joints.items() if r.frf is not None}
+    try:
+        b = tip_band(result.spec, resolved, unc, result.prediction.tip.freq, n=n, seed=seed, choice=sigma,
+                     tip_sigma=tip_sigma)
+    except InputError as exc:
+        notes.append(f"no band: {exc}")
+        return None, notes
+    return b, notes
+
+
+@dataclass(frozen=True, eq=False)
+class BandTerms:
+    """The band with every term, and with each term alone: ``half_width[term][direction]`` is the relative
+    5–95 % half-width of the tip's dominant peak |H|; ``dominant``: the term with the widest band."""
+
+    band: object
+    notes: tuple[str, ...]
+    half_width: Mapping[str, Mapping[str, float]]
+
+    @property
+    def dominant(self) -> str | None:
+        alone = {t: max(v.values()) for t, v in self.half_width.items() if t != "all" and v}
+        return max(alone, key=alone.get) if alone else None
+
+    def to_json(self) -> dict:
+        return {"peak_half_width": {t: dict(v) for t, v in self.half_width.items()}, "dominant_term": self.dominant}
+
+
+def _half_widths(b) -> dict[str, float]:
+    return {d: float((p[2] - p[0]) / 2 / p[1]) for d, p in b.peak.items()} if b is not None else {}
+
+
+def band_terms(result, n: int = 200, seed: int = 0) -> BandTerms:
+    """The full band and each term's own (:class:`BandTerms`)."""
+    full, notes = prediction_band(result, n, seed)
+    widths = {"all": _half_widths(full)}
+    if full is not None:
+        for term in TERMS:
+            alone, _ = prediction_band(result, n, seed, terms=(term,))
+            widths[term] = _half_widths(alone)
+    return BandTerms(full, tuple(notes), widths)
