@@ -91,3 +91,23 @@ def test_bad_inputs_are_refused_with_a_message():
         simulate_milling(BENCH, cut, 5000.0, 1e-3, runout_m=[0.0])
     with pytest.raises(InputError, match="> 0 rpm"):
         simulate_milling(BENCH, cut, -5.0, 1e-3)
+
+
+def test_demo_tip_agrees_with_semi_discretization():
+    # data/demo-tip.uff: the tool-tip FRF `jointdb demo` predicts (x and y planes, catalogued joints);
+    # the demo's cut (4 teeth, half immersion, down-milling). The same pLSCF modal fit feeds SD and the simulation.
+    from pathlib import Path
+
+    from jointdb.io import read_frf_uff58
+    from jointdb.modal import fit_tool_tip
+
+    model, fits = fit_tool_tip(read_frf_uff58(Path(__file__).parent / "data" / "demo-tip.uff"))
+    assert all(f.quality.nmse_total < 0.01 for f in fits)
+    cut = MillingCut(4, 7.96e8, 0.212 * 7.96e8, 0.5, True)
+    speeds = np.linspace(8000, 26000, 10)
+    sd, below, above = agreement(model, cut, speeds, revolutions=150)
+    assert sum(not s.chatter for s in below) >= 9
+    assert sum(s.chatter for s in above) >= 9
+    for s, fc in zip(above, sd.chatter_freq_hz):
+        if s.chatter:
+            assert abs(s.chatter_freq_hz - fc) <= 0.02 * fc, (s.spindle_speed_rpm, s.chatter_freq_hz, fc)
