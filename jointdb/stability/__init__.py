@@ -12,6 +12,8 @@ Public API
 ``sd_system``, ``monodromy``, ``spectral_radius``, ``critical_depth`` (SD building blocks)
 ``refine_lobes(compute, speeds, *, rounds=3) -> LobeResult`` (adaptive speeds near the envelope's turning points;
 equal to the plain computation at the shared speeds), ``plottable_depth(result)`` (folds and non-finite as NaN)
+``simulate_milling(model, cut, speeds, depths, *, feed_per_tooth_m, revolutions, steps_per_tooth, runout_m)
+-> [SimulationResult]`` (time domain: tool leaving the cut, runout, once-per-period chatter statistic)
 ``LobeResult`` (frozen: spindle_speed_rpm, depth_m, chatter_freq_hz, lobe, kind, lobes, info;
 ``.table()``, ``.min_depth_m``), ``Lobe``, ``mean_directional_matrix``, ``tool_tip_matrix``.
 """
@@ -20,6 +22,7 @@ from jointdb.stability._adaptive import merge_lobe_results, plottable_depth, ref
 from jointdb.stability._cutting import MillingCut, interval_directional_matrices, mean_directional_matrix
 from jointdb.stability._frequency import milling_lobes_zoa, oriented_frf, tlusty_limit, tool_tip_matrix, turning_lobes
 from jointdb.stability._results import Lobe, LobeResult, envelope, lobes_from_transfer
+from jointdb.stability._timedomain import CHATTER_THRESHOLD, SUSTAINED_GROWTH, SimulationResult, simulate_milling
 from jointdb.stability._sd import (
     critical_depth,
     milling_lobes_sd,
@@ -30,6 +33,10 @@ from jointdb.stability._sd import (
 )
 
 __all__ = [
+    "CHATTER_THRESHOLD",
+    "SUSTAINED_GROWTH",
+    "SimulationResult",
+    "simulate_milling",
     "Lobe",
     "LobeResult",
     "MillingCut",

@@ -21,6 +21,8 @@ Stacks (:mod:`jointdb.usecases._stack`)
     predict_with_joints   -- predict the tool-tip FRF with joints already resolved
 Lobes (:mod:`jointdb.usecases._lobes`)
     stability_lobes       -- milling (ZOA) or turning lobes of a tool-tip FRF over a speed grid
+Time domain (:mod:`jointdb.usecases._simulate`)
+    simulate_tip          -- fit the tip's modes and simulate milling cuts (:class:`TipSimulation`)
 Files (:mod:`jointdb.usecases._files`)
     load_stack            -- a stack file with the spindle FRF / model file it names
     read_frf_file, write_frf_file, frf_format -- FRF files by suffix (UFF58, HDF5, CSV)
@@ -46,6 +48,7 @@ from jointdb.usecases._files import (
     write_joint_file,
 )
 from jointdb.usecases._lobes import stability_lobes
+from jointdb.usecases._simulate import TipSimulation, simulate_tip
 from jointdb.usecases._stack import (
     INTERPOLATION_POOL,
     JointResolution,
@@ -56,6 +59,8 @@ from jointdb.usecases._stack import (
 )
 
 __all__ = [
+    "TipSimulation",
+    "simulate_tip",
     "CatalogueOutcome",
     "JointSource",
     "catalogue_campaign",
