@@ -1,0 +1,340 @@
+"""``jointdb optimize``: the stack and cut with the highest stable removal rate across the catalogue.
+
+A plain function over typed inputs (:func:`optimize_stack`) with a progress callback, so a shell or a
+job queue can wrap it. Candidates are every combination of an allowed holder, an overhang on the spec's
+grid, a catalogued clamping torque and a catalogued drawbar force inside the spec's ranges. Each is
+predicted (both planes) and its zero-order lobes computed; per candidate the best speed and depth
+obey stability (less the margin), the flute length, and the spindle's power and torque.
+
+Fast path (:func:`evaluate_candidates`): the substructures are computed once per content — the spindle
+once, tool and holder once per (holder, overhang), each joint once per condition — and the receptance
+coupling runs over all the candidates of one (holder, overhang) at once (a leading candidate axis
+broadcast through :func:`jointdb.stack.tool_tip_chain`). :func:`evaluate_brute_force` is the
+straightforward loop (``predict_stack`` + ``stability_lobes`` per candidate), the reference the tests
+compare it with.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from jointdb.errors import InputError, NotFoundError
+from jointdb.frf import FRF, Dof, Quantity
+
+Progress = Callable[[int, int, str], None]
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """One stack to evaluate: holder name, overhang (gauge length) [m], clamping torque [N·m], drawbar [N]."""
+
+    holder: str
+    overhang_m: float
+    torque_nm: float
+    drawbar_n: float
+
+
+@dataclass(frozen=True, eq=False)
+class CandidateResult:
+    """A candidate's lobes and best cut (``best``: speed, depth, removal rate, binding constraint)."""
+
+    candidate: Candidate
+    lobes: Any
+    best: dict
+    joints: dict = field(default_factory=dict)
+    tip: FRF | None = None
+
+    def row(self) -> dict:
+        c = self.candidate
+        return {"holder": c.holder, "overhang_m": c.overhang_m, "torque_nm": c.torque_nm, "drawbar_n": c.drawbar_n,
+                **self.best, **{f"joint_{k}": v for k, v in self.joints.items()}}
+
+
+@dataclass(frozen=True, eq=False)
+class OptimizeProblem:
+    """The parsed spec: the file model, the template stack, and the cut."""
+
+    spec: Any  # jointdb.schemas.optimize.OptimizeSpecFile
+    template: Any  # jointdb.stack.StackSpec
+    cut: Any  # jointdb.stability.MillingCut
+
+
+def load_problem(path: Path | str) -> OptimizeProblem:
+    """Read an optimize spec file and its template stack (InputError naming the field)."""
+    from pydantic import ValidationError
+
+    from jointdb._jsonfile import read_json_file
+    from jointdb.schemas.optimize import OptimizeSpecFile
+    from jointdb.stability import MillingCut
+    from jointdb.usecases._files import load_stack
+
+    p = Path(path)
+    doc = read_json_file(p, "optimize spec")
+    try:
+        spec = OptimizeSpecFile.model_validate(doc)
+    except ValidationError as exc:
+        err = exc.errors()[0]
+        where = ".".join(str(x) for x in err["loc"]) or "(top level)"
+        raise InputError(f"{p.name}: {where}: {err['msg']}") from None
+    template = load_stack(p.parent / spec.stack)
+    kt, kr = spec.cut.coefficients
+    cut = MillingCut(spec.tool.flutes, kt, kr, spec.cut.radial_immersion, spec.cut.down_milling)
+    return OptimizeProblem(spec, template, cut)
+
+
+def _catalogued(repo, joint_type: str, attr: str, lo: float, hi: float, geometry: dict) -> list[float]:
+    """Distinct catalogued values of ``attr`` (torque_nm / preload_n) of a joint type within [lo, hi]."""
+    values = set()
+    for jv in repo.list_joints():
+        cond = jv.conditions
+        if jv.joint_type != joint_type or getattr(cond, attr) is None or jv.state != "active":
+            continue
+        if any(k in cond.geometry and not math.isclose(cond.geometry[k], v, rel_tol=1e-6) for k, v in geometry.items()):
+            continue
+        value = float(getattr(cond, attr))
+        if lo <= value <= hi:
+            values.add(value)
+    return sorted(values)
+
+
+def _holders(problem: OptimizeProblem) -> list:
+    from jointdb.schemas.optimize import HolderChoice
+
+    return problem.spec.holders or [HolderChoice(name="template", holder=None, taper_diameter_m=None)]
+
+
+def _query_geometry(choice) -> dict:
+    return dict((choice.conditions or {}).get("geometry") or {})
+
+
+def enumerate_candidates(problem: OptimizeProblem, repo) -> list[Candidate]:
+    """Every allowed holder × overhang on the grid × catalogued torque × catalogued drawbar force in range.
+
+    Raises
+    ------
+    NotFoundError
+        No catalogued torque or drawbar force inside the spec's ranges.
+    """
+    spec, tpl = problem.spec, problem.template
+    lo, hi = spec.tool.overhang_m
+    n = int(math.floor((hi - lo) / spec.tool.overhang_step_m + 1e-9)) + 1
+    overhangs = [round(lo + k * spec.tool.overhang_step_m, 9) for k in range(max(n, 1))]
+    th_geom = _query_geometry(tpl.interfaces["tool-holder"])
+    torques = _catalogued(repo, "tool-holder", "torque_nm", *spec.torque_nm, th_geom)
+    if not torques:
+        raise NotFoundError(f"no catalogued tool-holder joint with a torque in {list(spec.torque_nm)} N·m")
+    out = []
+    for h in _holders(problem):
+        geom = _query_geometry(tpl.interfaces["holder-spindle"])
+        if h.taper_diameter_m is not None:
+            geom["taper_diameter_m"] = h.taper_diameter_m
+        forces = _catalogued(repo, "holder-spindle", "preload_n", *spec.drawbar_n, geom)
+        if not forces:
+            raise NotFoundError(f"holder {h.name}: no catalogued holder-spindle joint with a drawbar force in "
+                                f"{list(spec.drawbar_n)} N (taper {geom.get('taper_diameter_m')})")
+        out += [Candidate(h.name, g, t, f) for g in overhangs for t in torques for f in forces]
+    return out
+
+
+def candidate_stack(problem: OptimizeProblem, cand: Candidate):
+    """The template stack with the candidate's holder, overhang and interface conditions."""
+    from jointdb.stack import JointChoice, stack_from_dict, stack_to_dict
+
+    tpl = problem.template
+    holder = next(h for h in _holders(problem) if h.name == cand.holder)
+    spec = tpl
+    if holder.holder is not None:
+        doc = stack_to_dict(tpl)
+        doc["holder"] = holder.holder
+        spec = stack_from_dict(doc).replace(spindle=tpl.spindle)
+    if not 0 < cand.overhang_m < spec.tool.length:
+        raise InputError(f"overhang {cand.overhang_m} m: must be inside the tool's length {spec.tool.length} m")
+    th, hs = spec.interfaces["tool-holder"], spec.interfaces["holder-spindle"]
+    if th.kind != "query" or hs.kind != "query":
+        raise InputError("the template stack's interfaces must both be catalogue queries ({\"query\": {...}})")
+    th_c = {**dict(th.conditions), "torque_nm": cand.torque_nm}
+    hs_c = {**dict(hs.conditions), "preload_n": cand.drawbar_n}
+    if holder.taper_diameter_m is not None:
+        hs_c["geometry"] = {**dict(hs_c.get("geometry") or {}), "taper_diameter_m": holder.taper_diameter_m}
+    interfaces = {"tool-holder": JointChoice(**{**th.__dict__, "conditions": th_c}),
+                  "holder-spindle": JointChoice(**{**hs.__dict__, "conditions": hs_c})}
+    return spec.replace(gauge_length=cand.overhang_m, interfaces=interfaces)
+
+
+def best_cut(problem: OptimizeProblem, lobes) -> dict:
+    """The speed and depth of highest removal rate under stability (less the margin), flute length,
+    spindle power and torque; ``binding`` names the constraint that sets the depth there.
+
+    Removal rate ``Q = a · a_e · f_z · N · n/60`` [m³/s]; cutting power ``P = K_t Q`` (linear force law,
+    no edge forces); spindle torque ``P / ω``.
+    """
+    spec, cut = problem.spec, problem.cut
+    n = np.asarray(lobes.spindle_speed_rpm, float)
+    diameter = max(s.diameter for s in problem.template.tool.segments)
+    rate_per_depth = spec.cut.radial_immersion * diameter * spec.cut.feed_per_tooth_m * cut.n_teeth * n / 60.0
+    limits = {"stability": np.where(np.isfinite(lobes.depth_m), lobes.depth_m * (1 - spec.objective.margin),
+                                    np.where(np.isnan(lobes.depth_m), 0.0, np.inf)),
+              "flute length": np.full(n.size, spec.tool.flute_length_m)}
+    if spec.machine.power_w is not None:
+        limits["power"] = spec.machine.power_w / (cut.kt * rate_per_depth)
+    if spec.machine.torque_nm is not None:
+        limits["torque"] = spec.machine.torque_nm * 2 * np.pi * n / 60.0 / (cut.kt * rate_per_depth)
+    names = list(limits)
+    stacked = np.stack([limits[k] for k in names])
+    depth = stacked.min(axis=0)
+    rate = depth * rate_per_depth
+    i = int(np.argmax(rate))
+    return {"spindle_speed_rpm": float(n[i]), "depth_m": float(depth[i]), "removal_rate_m3_s": float(rate[i]),
+            "binding": names[int(np.argmin(stacked[:, i]))], "stability_limit_m": float(lobes.depth_m[i]),
+            "power_w": float(cut.kt * rate[i]), "margin": spec.objective.margin}
+
+
+def _lobes(problem: OptimizeProblem, tip: FRF):
+    from jointdb.usecases._lobes import stability_lobes
+
+    m, c = problem.spec.machine, problem.cut
+    return stability_lobes(tip, "milling", rpm_min=m.speed_rpm[0], rpm_max=m.speed_rpm[1], n_speeds=m.n_speeds,
+                           teeth=c.n_teeth, kt=c.kt, kr=c.kr, immersion=c.radial_immersion, up=not c.down_milling)
+
+
+def _joint_names(joints) -> dict:
+    return {k: (f"{r.name}@{r.version}" if r.name else r.description) for k, r in joints.items()}
+
+
+def evaluate_brute_force(problem: OptimizeProblem, candidates: Sequence[Candidate], repo,
+                         progress: Progress | None = None) -> list[CandidateResult]:
+    """The straightforward loop: ``predict_stack`` + ``stability_lobes`` per candidate (the reference)."""
+    from jointdb.usecases._stack import predict_stack
+
+    out = []
+    for k, cand in enumerate(candidates):
+        pred = predict_stack(candidate_stack(problem, cand), repo)
+        lobes = _lobes(problem, pred.prediction.tip)
+        out.append(CandidateResult(cand, lobes, best_cut(problem, lobes), _joint_names(pred.joints), pred.prediction.tip))
+        if progress:
+            progress(k + 1, len(candidates), "brute force")
+    return out
+
+
+def rank(results: Sequence[CandidateResult]) -> list[CandidateResult]:
+    """Highest removal rate first (stable sort: ties keep the enumeration order)."""
+    return sorted(results, key=lambda r: -r.best["removal_rate_m3_s"])
+
+
+def _freeze(mapping) -> tuple:
+    return tuple(sorted((k, _freeze(v) if isinstance(v, dict) else tuple(v) if isinstance(v, list) else v)
+                        for k, v in dict(mapping).items()))
+
+
+class _SubstructureCache:
+    """Substructure receptances computed once per content: the spindle, tool/holder per (holder, overhang),
+    each interface's joint per (interface, conditions)."""
+
+    def __init__(self, problem: OptimizeProblem, repo):
+        from jointdb.stack import NODES, MeasuredSpindle, prediction_grid, stack_parts
+        from jointdb.stack._predict import _planes
+        from jointdb.stack._twoplane import spindle_four
+
+        self.problem, self.repo = problem, repo
+        tpl = problem.template
+        self.freq = prediction_grid(tpl)
+        sp = stack_parts(tpl, self.freq)["spindle"]
+        node = tpl.spindle.node if isinstance(tpl.spindle, MeasuredSpindle) else NODES["spindle_nose"]
+        self.spindle, has_y = _planes(sp, "spindle FRF", node)
+        self.coupled_planes = has_y and spindle_four(sp, node) is not None
+        self.parts: dict = {}
+        self.joints: dict = {}
+
+    def tool_holder(self, spec, cand: Candidate):
+        from jointdb.stack import holder_model, tool_model
+
+        key = (cand.holder, cand.overhang_m)
+        if key not in self.parts:
+            self.parts[key] = (tool_model(spec).frf(self.freq, ["tip", "base"]).values,
+                               holder_model(spec).frf(self.freq, ["nose", "base"]).values)
+        return self.parts[key]
+
+    def joint(self, spec, name: str):
+        """(planes dict or None, resolution) of one interface of ``spec``."""
+        from jointdb.stack._predict import _joint_planes
+        from jointdb.usecases._stack import resolve_joints
+
+        key = (name, _freeze(spec.interfaces[name].conditions or {}))
+        if key not in self.joints:
+            for other, res in resolve_joints(spec, self.repo).items():
+                okey = (other, _freeze(spec.interfaces[other].conditions or {}))
+                planes, _ = _joint_planes(other, spec, {other: res.frf} if res.frf is not None else {}, self.freq)
+                self.joints.setdefault(okey, (planes, res))
+        return self.joints[key]
+
+
+def _tips(cache: _SubstructureCache, group: list, specs: list) -> list[FRF]:
+    """Tool-tip FRFs of candidates sharing tool and holder: the coupling over a leading candidate axis."""
+    from jointdb.stack import tool_tip_chain
+    from jointdb.stack import TIP_NODE
+
+    tool, holder = cache.tool_holder(specs[0], group[0])
+    joints = [[cache.joint(s, n)[0] for n in ("tool-holder", "holder-spindle")] for s in specs]
+    v = np.zeros((len(group), cache.freq.size, 2, 2), dtype=complex)
+    for k, plane in enumerate(("x", "y")):
+        stacked = []
+        for j in range(2):
+            col = [jj[j] for jj in joints]
+            if all(c is None for c in col):
+                stacked.append(None)
+            elif any(c is None for c in col):
+                raise InputError("candidates mix rigid and catalogued joints at one interface")
+            else:
+                stacked.append(np.stack([c[plane] for c in col]))
+        tip = tool_tip_chain(tool[None], holder[None], cache.spindle[plane][None], stacked[0], stacked[1])
+        v[:, :, k, k] = tip[:, :, 0, 0]
+    out = (Dof(TIP_NODE, "x"), Dof(TIP_NODE, "y"))
+    return [FRF(cache.freq, v[i], out, out, Quantity.RECEPTANCE) for i in range(len(group))]
+
+
+def evaluate_candidates(problem: OptimizeProblem, candidates: Sequence[Candidate], repo,
+                        progress: Progress | None = None, cache: _SubstructureCache | None = None
+                        ) -> list[CandidateResult]:
+    """Predict and rate every candidate (the fast path; equal to :func:`evaluate_brute_force`).
+
+    Parameters
+    ----------
+    problem
+        From :func:`load_problem`.
+    candidates
+        From :func:`enumerate_candidates` (any subset, any order).
+    repo
+        The joint store (a :class:`jointdb.store.Repository`).
+    progress
+        Called as ``progress(done, total, message)`` after each group of candidates.
+
+    Returns
+    -------
+    list of CandidateResult
+        In the order of ``candidates``.
+    """
+    cache = cache or _SubstructureCache(problem, repo)
+    if cache.coupled_planes:  # the two-plane chain over cross terms: no batched path, use the reference
+        return evaluate_brute_force(problem, candidates, repo, progress)
+    groups: dict = {}
+    for i, c in enumerate(candidates):
+        groups.setdefault((c.holder, c.overhang_m), []).append(i)
+    results: list = [None] * len(candidates)
+    done = 0
+    for idx in groups.values():
+        group = [candidates[i] for i in idx]
+        specs = [candidate_stack(problem, c) for c in group]
+        for i, cand, spec, tip in zip(idx, group, specs, _tips(cache, group, specs)):
+            lobes = _lobes(problem, tip)
+            names = _joint_names({n: cache.joint(spec, n)[1] for n in ("tool-holder", "holder-spindle")})
+            results[i] = CandidateResult(cand, lobes, best_cut(problem, lobes), names, tip)
+        done += len(idx)
+        if progress:
+            progress(done, len(candidates), f"{group[0].holder}, overhang {group[0].overhang_m * 1e3:g} mm")
+    return results
