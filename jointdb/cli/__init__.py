@@ -26,7 +26,7 @@ from jointdb.errors import JointdbError
 
 #: The command modules, in the order they register (which is the order of ``jointdb --help``).
 MODULES = ("_models", "_coupling", "_store", "_db", "_predict", "_stability", "_diagnose", "_demo", "_examples",
-           "_campaign", "_plan", "_serve", "_simulate")
+           "_campaign", "_plan", "_serve", "_simulate", "_optimize")
 
 #: Every top-level command as ``jointdb --help`` lists it: the module that registers it and
 #: the first paragraph of its help.
@@ -46,6 +46,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "predict": ("_predict", "Predict the tool-tip FRF of a tool / holder / spindle stack (three-component RC)."),
     "modal-fit": ("_stability", "Fit modes to an FRF (pLSCF poles + LSFD residues) and report the fit quality."),
     "lobes": ("_stability", "Stability lobes from a tool-tip FRF (turning: Tlusty; milling: ZOA or SD)."),
+    "optimize": ("_optimize", "Find the holder, overhang, torque, drawbar force, speed and depth of highest stable removal rate."),
     "simulate": ("_simulate", "Simulate milling in the time domain: chatter or not, chatter frequency, forces, vibration, SLE."),
     "diagnose": ("_diagnose", "Locate where a model and recordings disagree, name the missing physics, refit."),
     "diagnose-bench": ("_diagnose", "Run the concealed-effect benchmark: generate, diagnose, score per effect."),

@@ -21,6 +21,8 @@ Stacks (:mod:`jointdb.usecases._stack`)
     predict_with_joints   -- predict the tool-tip FRF with joints already resolved
 Lobes (:mod:`jointdb.usecases._lobes`)
     stability_lobes       -- milling (ZOA) or turning lobes of a tool-tip FRF over a speed grid
+Optimize (:mod:`jointdb.usecases._optimize`)
+    load_problem, optimize_stack -- the stack and cut of highest stable removal rate (:class:`OptimizeOutcome`)
 Time domain (:mod:`jointdb.usecases._simulate`)
     simulate_tip          -- fit the tip's modes and simulate milling cuts (:class:`TipSimulation`)
 Files (:mod:`jointdb.usecases._files`)
@@ -48,6 +50,7 @@ from jointdb.usecases._files import (
     write_joint_file,
 )
 from jointdb.usecases._lobes import stability_lobes
+from jointdb.usecases._optimize import OptimizeOutcome, load_problem, optimize_stack
 from jointdb.usecases._simulate import TipSimulation, simulate_tip
 from jointdb.usecases._stack import (
     INTERPOLATION_POOL,
@@ -59,6 +62,9 @@ from jointdb.usecases._stack import (
 )
 
 __all__ = [
+    "OptimizeOutcome",
+    "load_problem",
+    "optimize_stack",
     "TipSimulation",
     "simulate_tip",
     "CatalogueOutcome",

@@ -338,3 +338,53 @@ def evaluate_candidates(problem: OptimizeProblem, candidates: Sequence[Candidate
         if progress:
             progress(done, len(candidates), f"{group[0].holder}, overhang {group[0].overhang_m * 1e3:g} mm")
     return results
+
+
+@dataclass(frozen=True, eq=False)
+class OptimizeOutcome:
+    """Ranked candidates (best first), and the time-domain check of the best one (``checks``: at the
+    recommended cut and at 1.1× its stability limit, each a :class:`jointdb.stability.SimulationResult`)."""
+
+    ranked: list
+    checks: tuple = ()
+    notes: tuple = ()
+
+
+def optimize_stack(problem: OptimizeProblem, repo, *, progress: Progress | None = None, simulate: bool = True,
+                   revolutions: int = 120) -> OptimizeOutcome:
+    """Enumerate, evaluate and rank the candidates; check the best one in the time domain.
+
+    Parameters
+    ----------
+    problem
+        From :func:`load_problem`.
+    repo
+        The joint store.
+    progress
+        ``progress(done, total, message)``.
+    simulate
+        Run :func:`jointdb.usecases.simulate_tip` on the best candidate at its recommended cut and at
+        1.1× the zero-order limit at that speed.
+    revolutions
+        Simulated revolutions.
+
+    Returns
+    -------
+    OptimizeOutcome
+    """
+    candidates = enumerate_candidates(problem, repo)
+    ranked = rank(evaluate_candidates(problem, candidates, repo, progress))
+    notes = []
+    checks: tuple = ()
+    best = ranked[0]
+    if simulate and best.best["removal_rate_m3_s"] > 0 and math.isfinite(best.best["stability_limit_m"]):
+        from jointdb.usecases._simulate import simulate_tip
+
+        n, a, lim = best.best["spindle_speed_rpm"], best.best["depth_m"], best.best["stability_limit_m"]
+        sim = simulate_tip(best.tip, problem.cut, [n, n], [a, 1.1 * lim], revolutions=revolutions,
+                           feed_per_tooth_m=problem.spec.cut.feed_per_tooth_m)
+        checks = sim.results
+        verdicts = ["chatter" if r.chatter else "stable" for r in checks]
+        notes.append(f"time domain at {n:.0f} rpm: recommended {a * 1e3:.3g} mm {verdicts[0]}; "
+                     f"1.1× the limit ({1.1 * lim * 1e3:.3g} mm) {verdicts[1]}")
+    return OptimizeOutcome(ranked, checks, tuple(notes))
