@@ -23,6 +23,7 @@ def _write_outputs(out: Path, problem, outcome) -> list[Path]:
     from jointdb.io._atomic import atomic_path
     from jointdb.plots._optimize import plot_pareto, plot_rate_vs_overhang
     from jointdb.plots._lobes import plot_lobes
+    from jointdb.usecases._optimize import pareto_front
 
     out.mkdir(parents=True, exist_ok=True)
     rows = [r.row() for r in outcome.ranked]
@@ -32,7 +33,7 @@ def _write_outputs(out: Path, problem, outcome) -> list[Path]:
     files.append(plot_lobes(best.lobes, out / "best-lobes.png",
                             title=f"Best stack: {best.candidate.holder}, overhang {best.candidate.overhang_m * 1e3:g} mm"))
     files.append(plot_rate_vs_overhang(outcome.ranked, out / "rate-vs-overhang.png"))
-    files.append(plot_pareto(problem, outcome.ranked, out / "pareto-rate-vs-margin.png"))
+    files.append(plot_pareto(*pareto_front(problem, outcome.ranked), out / "pareto-rate-vs-margin.png"))
     if outcome.checks:
         from jointdb.plots._simulate import plot_simulation
 

@@ -32,22 +32,12 @@ def plot_rate_vs_overhang(results, path) -> Path:
     return save_figure(fig, path)
 
 
-def plot_pareto(problem, results, path, margins=None) -> Path:
-    """Pareto front: the highest removal rate any candidate reaches when a fraction ``margin`` of the
-    limiting depth is held back, for margins 0–50 %."""
-    from dataclasses import replace
-
-    from jointdb.usecases._optimize import best_cut
-
-    margins = np.linspace(0, 0.5, 11) if margins is None else np.asarray(margins)
-    front = []
-    for m in margins:
-        spec = problem.spec.model_copy(update={"objective": problem.spec.objective.model_copy(update={"margin": float(m)})})
-        prob = replace(problem, spec=spec)
-        front.append(max(best_cut(prob, r.lobes)["removal_rate_m3_s"] for r in results))
+def plot_pareto(margins, rates, path) -> Path:
+    """Pareto front: the highest removal rate [m³/s] any candidate reaches against the fraction of the
+    limiting depth held back (``margins``), from :func:`jointdb.usecases._optimize.pareto_front`."""
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(7, 4.5))
-    ax.plot(margins * 100, np.array(front) * 6e7, "o-")
+    ax.plot(np.asarray(margins) * 100, np.asarray(rates) * 6e7, "o-")
     ax.set_xlabel("stability margin held back [% of the limiting depth]")
     ax.set_ylabel("best removal rate [cm³/min]")
     ax.grid(True, alpha=0.3)

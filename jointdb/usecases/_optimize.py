@@ -222,6 +222,20 @@ def evaluate_brute_force(problem: OptimizeProblem, candidates: Sequence[Candidat
     return out
 
 
+def pareto_front(problem: OptimizeProblem, results: Sequence[CandidateResult], margins=None):
+    """``(margins, rates)``: the highest removal rate [m³/s] of any candidate when a fraction ``margin`` of
+    the limiting depth is held back (default margins 0–50 %), from each candidate's zero-order lobes."""
+    from dataclasses import replace
+
+    margins = np.linspace(0, 0.5, 11) if margins is None else np.asarray(margins, dtype=float)
+    rates = []
+    for m in margins:
+        objective = problem.spec.objective.model_copy(update={"margin": float(m)})
+        prob = replace(problem, spec=problem.spec.model_copy(update={"objective": objective}))
+        rates.append(max(best_cut(prob, r.lobes)["removal_rate_m3_s"] for r in results))
+    return margins, np.array(rates)
+
+
 def rank(results: Sequence[CandidateResult]) -> list[CandidateResult]:
     """Highest removal rate first (stable sort: ties keep the enumeration order)."""
     return sorted(results, key=lambda r: -r.best["removal_rate_m3_s"])
