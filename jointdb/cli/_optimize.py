@@ -60,6 +60,9 @@ def optimize(
     no_simulate: Annotated[bool, typer.Option("--no-simulate", help="Skip the time-domain check of the best stack.")] = False,
     out: Annotated[Optional[Path], typer.Option("--out", help="Directory for ranking.csv, result.json and the figures.")] = None,
     as_json: Annotated[bool, typer.Option("--json", help="Machine-readable output (SI units).")] = False,
+    scheduler: Annotated[str, typer.Option("--scheduler", help="Where candidates are evaluated: local (a Dask local "
+                                           "cluster), in-process, or a Dask scheduler ADDRESS (tcp://host:8786).")] = "local",
+    workers: Annotated[int, typer.Option("--workers", help="Workers of the local cluster.")] = 2,
 ) -> None:
     """Find the holder, overhang, torque, drawbar force, speed and depth of highest stable removal rate.
 
@@ -76,6 +79,8 @@ def optimize(
     from jointdb.store import Repository
     from jointdb.usecases import load_problem, optimize_stack
 
+    if not 1 <= workers <= 256:
+        raise InputError(f"--workers must be between 1 and 256, got {workers}")
     if not 1 <= top <= 100_000:
         raise InputError(f"--top must be between 1 and 100000, got {top}")
     problem = load_problem(spec_file)
@@ -89,7 +94,8 @@ def optimize(
 
     repo = Repository(db)
     try:
-        outcome = optimize_stack(problem, repo, progress=report, simulate=not no_simulate)
+        outcome = optimize_stack(problem, repo, progress=report, simulate=not no_simulate, scheduler=scheduler,
+                                 n_workers=workers)
     finally:
         repo.close()
     for line in outcome.notes:

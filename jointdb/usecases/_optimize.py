@@ -63,6 +63,7 @@ class OptimizeProblem:
     spec: Any  # jointdb.schemas.optimize.OptimizeSpecFile
     template: Any  # jointdb.stack.StackSpec
     cut: Any  # jointdb.stability.MillingCut
+    source: Path | None = None  # the spec file (a Dask worker loads the problem from it)
 
 
 def load_problem(path: Path | str) -> OptimizeProblem:
@@ -85,7 +86,7 @@ def load_problem(path: Path | str) -> OptimizeProblem:
     template = load_stack(p.parent / spec.stack)
     kt, kr = spec.cut.coefficients
     cut = MillingCut(spec.tool.flutes, kt, kr, spec.cut.radial_immersion, spec.cut.down_milling)
-    return OptimizeProblem(spec, template, cut)
+    return OptimizeProblem(spec, template, cut, p.resolve())
 
 
 def _catalogued(repo, joint_type: str, attr: str, lo: float, hi: float, geometry: dict) -> list[float]:
@@ -241,119 +242,6 @@ def rank(results: Sequence[CandidateResult]) -> list[CandidateResult]:
     return sorted(results, key=lambda r: -r.best["removal_rate_m3_s"])
 
 
-def _freeze(mapping) -> tuple:
-    return tuple(sorted((k, _freeze(v) if isinstance(v, dict) else tuple(v) if isinstance(v, list) else v)
-                        for k, v in dict(mapping).items()))
-
-
-class _SubstructureCache:
-    """Substructure receptances computed once per content: the spindle, tool/holder per (holder, overhang),
-    each interface's joint per (interface, conditions)."""
-
-    def __init__(self, problem: OptimizeProblem, repo):
-        from jointdb.stack import NODES, MeasuredSpindle, prediction_grid, stack_parts
-        from jointdb.stack._predict import _planes
-        from jointdb.stack._twoplane import spindle_four
-
-        self.problem, self.repo = problem, repo
-        tpl = problem.template
-        self.freq = prediction_grid(tpl)
-        sp = stack_parts(tpl, self.freq)["spindle"]
-        node = tpl.spindle.node if isinstance(tpl.spindle, MeasuredSpindle) else NODES["spindle_nose"]
-        self.spindle, has_y = _planes(sp, "spindle FRF", node)
-        self.coupled_planes = has_y and spindle_four(sp, node) is not None
-        self.parts: dict = {}
-        self.joints: dict = {}
-
-    def tool_holder(self, spec, cand: Candidate):
-        from jointdb.stack import holder_model, tool_model
-
-        key = (cand.holder, cand.overhang_m)
-        if key not in self.parts:
-            self.parts[key] = (tool_model(spec).frf(self.freq, ["tip", "base"]).values,
-                               holder_model(spec).frf(self.freq, ["nose", "base"]).values)
-        return self.parts[key]
-
-    def joint(self, spec, name: str):
-        """(planes dict or None, resolution) of one interface of ``spec``."""
-        from jointdb.stack._predict import _joint_planes
-        from jointdb.usecases._stack import resolve_joints
-
-        key = (name, _freeze(spec.interfaces[name].conditions or {}))
-        if key not in self.joints:
-            for other, res in resolve_joints(spec, self.repo).items():
-                okey = (other, _freeze(spec.interfaces[other].conditions or {}))
-                planes, _ = _joint_planes(other, spec, {other: res.frf} if res.frf is not None else {}, self.freq)
-                self.joints.setdefault(okey, (planes, res))
-        return self.joints[key]
-
-
-def _tips(cache: _SubstructureCache, group: list, specs: list) -> list[FRF]:
-    """Tool-tip FRFs of candidates sharing tool and holder: the coupling over a leading candidate axis."""
-    from jointdb.stack import tool_tip_chain
-    from jointdb.stack import TIP_NODE
-
-    tool, holder = cache.tool_holder(specs[0], group[0])
-    joints = [[cache.joint(s, n)[0] for n in ("tool-holder", "holder-spindle")] for s in specs]
-    v = np.zeros((len(group), cache.freq.size, 2, 2), dtype=complex)
-    for k, plane in enumerate(("x", "y")):
-        stacked = []
-        for j in range(2):
-            col = [jj[j] for jj in joints]
-            if all(c is None for c in col):
-                stacked.append(None)
-            elif any(c is None for c in col):
-                raise InputError("candidates mix rigid and catalogued joints at one interface")
-            else:
-                stacked.append(np.stack([c[plane] for c in col]))
-        tip = tool_tip_chain(tool[None], holder[None], cache.spindle[plane][None], stacked[0], stacked[1])
-        v[:, :, k, k] = tip[:, :, 0, 0]
-    out = (Dof(TIP_NODE, "x"), Dof(TIP_NODE, "y"))
-    return [FRF(cache.freq, v[i], out, out, Quantity.RECEPTANCE) for i in range(len(group))]
-
-
-def evaluate_candidates(problem: OptimizeProblem, candidates: Sequence[Candidate], repo,
-                        progress: Progress | None = None, cache: _SubstructureCache | None = None
-                        ) -> list[CandidateResult]:
-    """Predict and rate every candidate (the fast path; equal to :func:`evaluate_brute_force`).
-
-    Parameters
-    ----------
-    problem
-        From :func:`load_problem`.
-    candidates
-        From :func:`enumerate_candidates` (any subset, any order).
-    repo
-        The joint store (a :class:`jointdb.store.Repository`).
-    progress
-        Called as ``progress(done, total, message)`` after each group of candidates.
-
-    Returns
-    -------
-    list of CandidateResult
-        In the order of ``candidates``.
-    """
-    cache = cache or _SubstructureCache(problem, repo)
-    if cache.coupled_planes:  # the two-plane chain over cross terms: no batched path, use the reference
-        return evaluate_brute_force(problem, candidates, repo, progress)
-    groups: dict = {}
-    for i, c in enumerate(candidates):
-        groups.setdefault((c.holder, c.overhang_m), []).append(i)
-    results: list = [None] * len(candidates)
-    done = 0
-    for idx in groups.values():
-        group = [candidates[i] for i in idx]
-        specs = [candidate_stack(problem, c) for c in group]
-        for i, cand, spec, tip in zip(idx, group, specs, _tips(cache, group, specs)):
-            lobes = _lobes(problem, tip)
-            names = _joint_names({n: cache.joint(spec, n)[1] for n in ("tool-holder", "holder-spindle")})
-            results[i] = CandidateResult(cand, lobes, best_cut(problem, lobes), names, tip)
-        done += len(idx)
-        if progress:
-            progress(done, len(candidates), f"{group[0].holder}, overhang {group[0].overhang_m * 1e3:g} mm")
-    return results
-
-
 @dataclass(frozen=True, eq=False)
 class OptimizeOutcome:
     """Ranked candidates (best first), and the time-domain check of the best one (``checks``: at the
@@ -394,7 +282,8 @@ def confirm_with_sd(problem: OptimizeProblem, results: Sequence[CandidateResult]
 
 
 def optimize_stack(problem: OptimizeProblem, repo, *, progress: Progress | None = None, simulate: bool = True,
-                   confirm: int = 5, revolutions: int = 120) -> OptimizeOutcome:
+                   confirm: int = 5, revolutions: int = 120, scheduler: str | None = "local",
+                   n_workers: int | None = None) -> OptimizeOutcome:
     """Enumerate, evaluate (zero-order lobes) and rank the candidates; confirm the top few by
     semi-discretization at their best speed and re-rank them; check the best one in the time domain.
 
@@ -411,6 +300,8 @@ def optimize_stack(problem: OptimizeProblem, repo, *, progress: Progress | None 
         1.1× its (confirmed) stability limit at that speed.
     confirm
         How many of the best candidates SD confirms (0: none).
+    scheduler, n_workers
+        Where the candidates are evaluated (see :func:`jointdb.usecases._optimize_eval.evaluate_candidates`).
     revolutions
         Simulated revolutions.
 
@@ -418,8 +309,13 @@ def optimize_stack(problem: OptimizeProblem, repo, *, progress: Progress | None 
     -------
     OptimizeOutcome
     """
+    from jointdb.usecases._optimize_eval import evaluate_candidates
+
     candidates = enumerate_candidates(problem, repo)
-    ranked = rank(evaluate_candidates(problem, candidates, repo, progress))
+    ranked = rank(evaluate_candidates(problem, candidates, repo, progress, scheduler=scheduler, n_workers=n_workers))
+    # the best few again with their tip FRFs (the search keeps none: 10 000 tips would not fit in memory)
+    keep = max(confirm, 1)
+    ranked = evaluate_candidates(problem, [r.candidate for r in ranked[:keep]], repo, keep_tips=True) + ranked[keep:]
     notes = []
     if confirm > 0:
         top = rank(confirm_with_sd(problem, ranked[:confirm]))

@@ -13,14 +13,8 @@ import pytest
 
 from jointdb._journey import run_main_job
 from jointdb.store import Repository
-from jointdb.usecases._optimize import (
-    best_cut,
-    enumerate_candidates,
-    evaluate_brute_force,
-    evaluate_candidates,
-    load_problem,
-    rank,
-)
+from jointdb.usecases._optimize import best_cut, enumerate_candidates, evaluate_brute_force, load_problem, rank
+from jointdb.usecases._optimize_eval import evaluate_candidates
 
 ROOT = Path(__file__).resolve().parents[2]
 SPEC = ROOT / "jointdb" / "data" / "catalogue" / "optimize-spec.json"
@@ -51,7 +45,7 @@ def test_fast_ranking_equals_brute_force_to_the_last_digit(catalogue):
     repo, _ = catalogue
     problem = load_problem(SPEC)
     cands = enumerate_candidates(problem, repo)[::3]  # a small grid: 12 candidates
-    fast = evaluate_candidates(problem, cands, repo)
+    fast = evaluate_candidates(problem, cands, repo, keep_tips=True)
     slow = evaluate_brute_force(problem, cands, repo)
     for a, b in zip(fast, slow):
         assert np.array_equal(a.tip.values, b.tip.values)
@@ -85,7 +79,7 @@ def test_optimize_cli_recommends_a_stack_that_the_time_domain_confirms(catalogue
     _, db = catalogue
     env = dict(os.environ, PYTHONPATH=str(ROOT), OPENBLAS_NUM_THREADS="1")
     r = subprocess.run([sys.executable, "-m", "jointdb", "optimize", str(SPEC), "--db", str(db), "--json",
-                        "--out", str(tmp_path / "opt")], capture_output=True, text=True, cwd=ROOT, env=env)
+                        "--out", str(tmp_path / "opt"), "--scheduler", "in-process"], capture_output=True, text=True, cwd=ROOT, env=env)
     assert r.returncode == 0, r.stderr
     doc = json.loads(r.stdout)
     best = doc["ranked"][0]
