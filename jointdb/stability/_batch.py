@@ -74,7 +74,7 @@ def zoa_envelope_batch(freq_hz: np.ndarray, phi: np.ndarray, cut: MillingCut, sp
     ev = _track_branches_batch(np.linalg.eigvals(hbar[None] @ phi))  # (C, F, 2)
     n_c = phi.shape[0]
     # every (candidate, family, lobe) polyline's segments, in the one-candidate envelope's lobe order
-    ns, a0s, a1s, f0s, f1s, lobe_ids, cand_ids = [], [], [], [], [], [], []
+    ns, a0s = [], []
     for fam in range(2):
         n, depth, _ = _lobe_curves(f, ev[:, :, fam], cut.n_teeth, max_lobes)
         ns.append(n)
@@ -92,24 +92,26 @@ def zoa_envelope_batch(freq_hz: np.ndarray, phi: np.ndarray, cut: MillingCut, sp
     counts = np.maximum(i1 - i0, 0)
     rep = np.repeat(np.arange(counts.size), counts)
     col = np.repeat(i0, counts) + (np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts))
-    c_r, l_r, s_r = c_idx[rep], l_idx[rep], seg[rep]
-    p0, p1 = n0v[rep], n1v[rep]
-    dn = p1 - p0
+    a0v, a1v = a0[c_idx, l_idx, seg], a1[c_idx, l_idx, seg]  # gather per segment, then repeat per speed
+    p0, dn = n0v[rep], (n1v - n0v)[rep]
     t = np.where(dn != 0, (s[col] - p0) / np.where(dn != 0, dn, 1.0), 0.0)
-    aa = a0[c_r, l_r, s_r] + t * (a1[c_r, l_r, s_r] - a0[c_r, l_r, s_r])
+    a_lo, s_r = a0v[rep], seg[rep]
+    aa = a_lo + t * (a1v[rep] - a_lo)
     ff = f[s_r] + t * (f[s_r + 1] - f[s_r])
-    # per (candidate, speed): the smallest depth; ties go to the earlier lobe, then the earlier segment
-    flat = c_r * s.size + col
-    order = np.lexsort((s_r, l_r, aa, flat))
+    # per (candidate, speed) the smallest depth; the pairs come in (candidate, lobe, segment) order and the
+    # sort is stable, so ties go to the earlier lobe, then the earlier segment (as in the one-tip envelope)
+    flat = c_idx[rep] * s.size + col
+    order = np.lexsort((aa, flat))
     first = np.ones(order.size, bool)
     first[1:] = flat[order][1:] != flat[order][:-1]
     pick = order[first]
+    l_r = l_idx[rep[pick]]
     depth = np.full(n_c * s.size, np.nan)
     fc = np.full(n_c * s.size, np.nan)
     lobe = np.full(n_c * s.size, -1)
     depth[flat[pick]] = aa[pick]
     fc[flat[pick]] = ff[pick]
-    lobe[flat[pick]] = l_r[pick] % max_lobes
+    lobe[flat[pick]] = l_r % max_lobes
     shape = (n_c, s.size)
     depth = depth.reshape(shape)
     depth[~np.isfinite(depth)] = np.nan
