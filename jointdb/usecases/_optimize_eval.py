@@ -186,8 +186,12 @@ def _client(scheduler: str, n_workers: int | None):
     except ImportError:  # a declared dependency; a broken install says so
         raise InputError("Dask's distributed package is not installed (pip install 'distributed>=2026.8')") from None
     if scheduler == "local":
+        import logging
+
+        # the workers' own shutdown chatter (heartbeats to a scheduler that has closed) is not the user's concern;
+        # a task's error still reaches the caller through its future
         cluster = LocalCluster(n_workers=n_workers or 2, threads_per_worker=1, processes=True,
-                               dashboard_address=None)
+                               dashboard_address=None, silence_logs=logging.CRITICAL)
         return Client(cluster), cluster
     return Client(scheduler), None
 
