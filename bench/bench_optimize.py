@@ -38,7 +38,7 @@ def build(tmp: Path, n: int):
     for name in ("tool-holder", "holder-spindle"):
         doc["interfaces"][name]["query"]["interpolate"] = True
     (tmp / "stack.json").write_text(json.dumps(doc))
-    spec = json.loads((data / "optimize-spec.json").read_text())
+    spec = json.loads((data.parents[2] / "fixtures" / "optimize" / "optimize-spec.json").read_text())
     spec["stack"] = "stack.json"
     (tmp / "spec.json").write_text(json.dumps(spec))
     problem = load_problem(tmp / "spec.json")

@@ -71,7 +71,7 @@ def optimize(
     the best cut obeys stability (less the margin), flute length, spindle power and torque. The best
     stack is then simulated in the time domain at the recommended cut and at 1.1× its limit.
 
-    Example: jointdb optimize ex/stacks/optimize-spec.json --db demo-out/joints.sqlite --out opt
+    Example: jointdb optimize fixtures/optimize/optimize-spec.json --db demo-out/joints.sqlite --out opt
     """
     from jointdb._output import emit, message, progress_line
     from jointdb.cli._store import check_db_target

@@ -50,7 +50,8 @@ from jointdb.usecases._files import (
     write_joint_file,
 )
 from jointdb.usecases._lobes import stability_lobes
-from jointdb.usecases._optimize import OptimizeOutcome, load_problem, optimize_stack
+from jointdb.usecases._optimize import load_problem
+from jointdb.usecases._optimize_run import OptimizeOutcome, optimize_stack
 from jointdb.usecases._simulate import TipSimulation, simulate_tip
 from jointdb.usecases._stack import (
     INTERPOLATION_POOL,

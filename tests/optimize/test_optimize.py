@@ -17,7 +17,7 @@ from jointdb.usecases._optimize import best_cut, enumerate_candidates, evaluate_
 from jointdb.usecases._optimize_eval import evaluate_candidates
 
 ROOT = Path(__file__).resolve().parents[2]
-SPEC = ROOT / "jointdb" / "data" / "catalogue" / "optimize-spec.json"
+SPEC = ROOT / "fixtures" / "optimize" / "optimize-spec.json"
 
 
 @pytest.fixture(scope="module")

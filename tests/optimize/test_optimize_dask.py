@@ -12,7 +12,7 @@ from jointdb.usecases._optimize_eval import evaluate_candidates
 
 pytest.importorskip("distributed")
 
-SPEC = Path(__file__).resolve().parents[2] / "jointdb" / "data" / "catalogue" / "optimize-spec.json"
+SPEC = Path(__file__).resolve().parents[2] / "fixtures" / "optimize" / "optimize-spec.json"
 
 
 def test_local_cluster_equals_in_process(tmp_path):
