@@ -59,9 +59,37 @@ def confirm_with_sd(problem: OptimizeProblem, results: Sequence[CandidateResult]
     return out
 
 
+def _confirm_top(problem: OptimizeProblem, ranked: list, repo, confirm: int, max_confirm: int):
+    """Confirm by SD until the best ``confirm`` of the ranking are all confirmed (or ``max_confirm`` are spent).
+
+    SD only lowers a candidate's rate, so once the best ``confirm`` are confirmed no unconfirmed one below
+    them can overtake them. Returns the re-ranked list and notes.
+    """
+    done, notes = 0, []
+    while confirm > 0 and done < max_confirm:
+        todo = [i for i, r in enumerate(ranked[:confirm]) if "sd_limit_m" not in r.best][: max_confirm - done]
+        if not todo:
+            break
+        # their tip FRFs again (the search keeps none: 10 000 tips would not fit in memory)
+        fresh = evaluate_candidates(problem, [ranked[i].candidate for i in todo], repo, keep_tips=True)
+        for i, r in zip(todo, confirm_with_sd(problem, fresh)):
+            ranked[i] = r
+        done += len(todo)
+        ranked = rank(ranked)
+    if confirm > 0:
+        note = (f"the best {confirm} confirmed by semi-discretization at their best speed (depth = the smaller of "
+                f"the ZOA and SD limits; {done} candidates checked)")
+        if not all("sd_limit_m" in r.best for r in ranked[:confirm]):
+            note += f"; not settled after {max_confirm} checks: unconfirmed candidates (ZOA only) remain among them"
+        notes.append(note)
+    if ranked[0].tip is None:  # the best is unconfirmed (confirm exhausted): its tip for the time-domain check
+        ranked[0] = evaluate_candidates(problem, [ranked[0].candidate], repo, keep_tips=True)[0]
+    return ranked, notes
+
+
 def optimize_stack(problem: OptimizeProblem, repo, *, progress: Progress | None = None, simulate: bool = True,
-                   confirm: int = 5, revolutions: int = 120, scheduler: str | None = "local",
-                   n_workers: int | None = None) -> OptimizeOutcome:
+                   confirm: int = 5, max_confirm: int = 15, revolutions: int = 120,
+                   scheduler: str | None = "local", n_workers: int | None = None) -> OptimizeOutcome:
     """Enumerate, evaluate (zero-order lobes) and rank the candidates; confirm the top few by
     semi-discretization at their best speed and re-rank them; check the best one in the time domain.
 
@@ -76,8 +104,9 @@ def optimize_stack(problem: OptimizeProblem, repo, *, progress: Progress | None 
     simulate
         Run :func:`jointdb.usecases.simulate_tip` on the best candidate at its recommended cut and at
         1.1× its (confirmed) stability limit at that speed.
-    confirm
-        How many of the best candidates SD confirms (0: none).
+    confirm, max_confirm
+        How many of the best candidates must be SD-confirmed (0: none), and at most how many
+        confirmations to spend getting there (see :func:`_confirm_top`).
     scheduler, n_workers
         Where the candidates are evaluated (see :func:`jointdb.usecases._optimize_eval.evaluate_candidates`).
     revolutions
@@ -89,15 +118,7 @@ def optimize_stack(problem: OptimizeProblem, repo, *, progress: Progress | None 
     """
     candidates = enumerate_candidates(problem, repo)
     ranked = rank(evaluate_candidates(problem, candidates, repo, progress, scheduler=scheduler, n_workers=n_workers))
-    # the best few again with their tip FRFs (the search keeps none: 10 000 tips would not fit in memory)
-    keep = max(confirm, 1)
-    ranked = evaluate_candidates(problem, [r.candidate for r in ranked[:keep]], repo, keep_tips=True) + ranked[keep:]
-    notes = []
-    if confirm > 0:
-        top = rank(confirm_with_sd(problem, ranked[:confirm]))
-        ranked = top + ranked[confirm:]
-        notes.append(f"the best {len(top)} confirmed by semi-discretization at their best speed (depth = the "
-                     "smaller of the ZOA and SD limits)")
+    ranked, notes = _confirm_top(problem, ranked, repo, confirm, max_confirm)
     checks: tuple = ()
     best = ranked[0]
     limit = best.best.get("sd_limit_m", best.best["stability_limit_m"])
