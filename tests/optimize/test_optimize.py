@@ -88,3 +88,16 @@ def test_optimize_cli_recommends_a_stack_that_the_time_domain_confirms(catalogue
     assert not rec["chatter"] and above["chatter"]
     for name in ("ranking.csv", "best-lobes.png", "rate-vs-overhang.png", "pareto-rate-vs-margin.png", "result.json"):
         assert (tmp_path / "opt" / name).stat().st_size > 0
+
+
+def test_the_best_five_are_sd_confirmed_and_nothing_unconfirmed_outranks_them(catalogue):
+    from jointdb.usecases import optimize_stack
+
+    repo, _ = catalogue
+    out = optimize_stack(load_problem(SPEC), repo, simulate=False, scheduler="in-process")
+    top = out.ranked[:5]
+    assert all("sd_limit_m" in r.best for r in top)
+    assert all(r.best["depth_m"] <= r.best["sd_limit_m"] * (1 - r.best["margin"]) + 1e-15 for r in top)
+    floor = top[-1].best["removal_rate_m3_s"]
+    assert all(r.best["removal_rate_m3_s"] <= floor for r in out.ranked[5:])
+    assert out.ranked[0].tip is not None
