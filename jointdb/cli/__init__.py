@@ -26,7 +26,7 @@ from jointdb.errors import JointdbError
 
 #: The command modules, in the order they register (which is the order of ``jointdb --help``).
 MODULES = ("_models", "_coupling", "_store", "_parts", "_db", "_predict", "_stability", "_diagnose", "_demo",
-           "_examples", "_campaign", "_plan", "_serve", "_worker")
+           "_examples", "_campaign", "_plan", "_serve", "_worker", "_simulate", "_optimize")
 
 #: Commands that use the database itself and have no HTTP counterpart: an explicit ``--server`` is refused
 #: (``joints export|import`` refuse it themselves; catalogue, query, joints ..., parts, predict use the server).
@@ -61,6 +61,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "plan": ("_plan", "Rank candidate tap points by the expected joint-parameter variance (Fisher information)."),
     "serve": ("_serve", "Run the HTTP API and web catalogue (FastAPI + uvicorn) over the joint database."),
     "worker": ("_worker", "Run jobs of the HTTP service (predict, lobes, diagnose, identify) from the PostgreSQL queue."),
+    "simulate": ("_simulate", "Simulate milling in the time domain: chatter or not, chatter frequency, forces, vibration, SLE."),
+    "optimize": ("_optimize", "Find the holder, overhang, torque, drawbar force, speed and depth of highest stable removal rate."),
     "joints": ("_store", "List, inspect, label, deprecate, diff, export and import catalogued joints."),
     "keys": ("_store", "Ed25519 keys to sign exported bundles and verify imported ones."),
     "parts": ("_parts", "Catalogued stack parts (spindles, holders, tools): add, list, show, label."),

@@ -32,12 +32,21 @@ Building blocks
    monodromy                     -- Floquet transition matrix over one tooth period
    spectral_radius               -- largest |Floquet multiplier| (stable when < 1)
    critical_depth                -- smallest depth with spectral radius 1 at one speed
+
+Time domain
+-----------
+   simulate_milling              -- regenerative milling of a tip modal model in time: tool leaving the cut,
+                                    runout, once-per-period chatter statistic, forces, SLE
+   SimulationResult              -- one simulated cut (chatter verdict, chatter frequency, forces, vibration)
+   CHATTER_THRESHOLD             -- the sampling statistic above which a cut is called chatter
+   SUSTAINED_GROWTH              -- growth of the sampled vibration that marks chatter
 """
 
 from jointdb.stability._adaptive import merge_lobe_results, plottable_depth, refine_lobes
 from jointdb.stability._cutting import MillingCut, interval_directional_matrices, mean_directional_matrix
 from jointdb.stability._frequency import milling_lobes_zoa, oriented_frf, tlusty_limit, tool_tip_matrix, turning_lobes
 from jointdb.stability._results import Lobe, LobeResult, envelope, lobes_from_transfer
+from jointdb.stability._timedomain import CHATTER_THRESHOLD, SUSTAINED_GROWTH, SimulationResult, simulate_milling
 from jointdb.stability._sd import (
     critical_depth,
     milling_lobes_sd,
@@ -48,6 +57,10 @@ from jointdb.stability._sd import (
 )
 
 __all__ = [
+    "CHATTER_THRESHOLD",
+    "SUSTAINED_GROWTH",
+    "SimulationResult",
+    "simulate_milling",
     "Lobe",
     "LobeResult",
     "MillingCut",

@@ -71,13 +71,15 @@ def tool_tip_chain(tool, holder, spindle, joint_th=None, joint_hs=None) -> np.nd
         Tool–holder and holder–spindle joint receptances ``(n_freq, 2, 2)`` or
         ``None`` (rigid).
 
+    Any leading axes before ``n_freq`` broadcast (e.g. a candidate axis: many stacks coupled at once).
+
     Returns
     -------
-    ndarray ``(n_freq, 2, 2)``
+    ndarray ``(..., n_freq, 2, 2)``
         ``G_11`` at the tip (x, θ):
         ``G_33 = H_33 − H_34 (H_44 + S_55 + J_hs)⁻¹ H_43`` then
         ``G_11 = h_11 − h_12 (h_22 + G_33 + J_th)⁻¹ h_21``.
     """
     t, h = np.asarray(tool), np.asarray(holder)
-    g33 = attach(h[:, :2, :2], h[:, :2, 2:], h[:, 2:, :2], h[:, 2:, 2:], spindle, joint_hs)
-    return attach(t[:, :2, :2], t[:, :2, 2:], t[:, 2:, :2], t[:, 2:, 2:], g33, joint_th)
+    g33 = attach(h[..., :2, :2], h[..., :2, 2:], h[..., 2:, :2], h[..., 2:, 2:], spindle, joint_hs)
+    return attach(t[..., :2, :2], t[..., :2, 2:], t[..., 2:, :2], t[..., 2:, 2:], g33, joint_th)

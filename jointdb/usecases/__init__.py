@@ -33,6 +33,10 @@ Parts (:mod:`jointdb.usecases._parts`, :mod:`jointdb.usecases._partfiles`; spind
     part_from_files       -- what ``jointdb parts add`` reads: model / FRF / stack / part files
     add_part_from_files   -- read and catalogue a part
     catalogue_bundled_parts -- the bundled example stack's spindles, holder and tool (the demo does it)
+Optimize (:mod:`jointdb.usecases._optimize`)
+    load_problem, optimize_stack -- the stack and cut of highest stable removal rate (:class:`OptimizeOutcome`)
+Time domain (:mod:`jointdb.usecases._simulate`)
+    simulate_tip          -- fit the tip's modes and simulate milling cuts (:class:`TipSimulation`)
 Files (:mod:`jointdb.usecases._files`)
     load_stack            -- a stack file with the spindle FRF / model file it names
     read_frf_file, write_frf_file, frf_format -- FRF files by suffix (UFF58, HDF5, CSV; ``FRF_SUFFIXES``)
@@ -67,6 +71,9 @@ from jointdb.usecases._partfiles import (
     part_from_files,
 )
 from jointdb.usecases._parts import part_refs, resolve_stack_parts, stack_from_document
+from jointdb.usecases._optimize import load_problem
+from jointdb.usecases._optimize_run import OptimizeOutcome, optimize_stack
+from jointdb.usecases._simulate import TipSimulation, simulate_tip
 from jointdb.usecases._stack import (
     INTERPOLATION_POOL,
     JointResolution,
@@ -77,6 +84,11 @@ from jointdb.usecases._stack import (
 )
 
 __all__ = [
+    "OptimizeOutcome",
+    "load_problem",
+    "optimize_stack",
+    "TipSimulation",
+    "simulate_tip",
     "CatalogueOutcome",
     "JointSource",
     "catalogue_campaign",

@@ -1,0 +1,120 @@
+"""CLI: ``jointdb optimize SPEC`` — the stack and cut of highest stable removal rate (thin: use case + render)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated, Optional
+
+import typer
+
+
+def _people_row(rank: int, r) -> dict:
+    b, c = r.best, r.candidate
+    return {"rank": rank, "holder": c.holder, "overhang_mm": c.overhang_m * 1e3, "torque_nm": c.torque_nm,
+            "drawbar_kn": c.drawbar_n / 1e3, "speed_rpm": round(b["spindle_speed_rpm"]), "depth_mm": b["depth_m"] * 1e3,
+            "rate_cm3_min": b["removal_rate_m3_s"] * 6e7, "binding": b["binding"],
+            "limit_by": "ZOA+SD" if "sd_limit_m" in b else "ZOA",
+            "joints": f"{r.joints.get('tool-holder')}, {r.joints.get('holder-spindle')}"}
+
+
+def _write_outputs(out: Path, problem, outcome) -> list[Path]:
+    """ranking.csv, result.json and the figures in ``out``."""
+    from jointdb._output import to_jsonable, write_rows
+    from jointdb.io._atomic import atomic_path
+    from jointdb.plots._optimize import plot_pareto, plot_rate_vs_overhang
+    from jointdb.plots._lobes import plot_lobes
+    from jointdb.usecases._optimize import pareto_front
+
+    out.mkdir(parents=True, exist_ok=True)
+    rows = [r.row() for r in outcome.ranked]
+    files = [out / "ranking.csv"]
+    write_rows(files[0], rows, kind="optimize")
+    best = outcome.ranked[0]
+    files.append(plot_lobes(best.lobes, out / "best-lobes.png",
+                            title=f"Best stack: {best.candidate.holder}, overhang {best.candidate.overhang_m * 1e3:g} mm"))
+    files.append(plot_rate_vs_overhang(outcome.ranked, out / "rate-vs-overhang.png"))
+    files.append(plot_pareto(*pareto_front(problem, outcome.ranked), out / "pareto-rate-vs-margin.png"))
+    if outcome.checks:
+        from jointdb.plots._simulate import plot_simulation
+
+        for name, sim in zip(("recommended", "above-limit"), outcome.checks):
+            files.append(plot_simulation(sim, out / f"simulate-{name}.png"))
+    import json
+
+    with atomic_path(out / "result.json") as tmp:
+        Path(tmp).write_text(json.dumps(to_jsonable(_json(outcome)), indent=1))
+    files.append(out / "result.json")
+    return files
+
+
+def _json(outcome) -> dict:
+    return {"ranked": [r.row() for r in outcome.ranked],
+            "checks": [s.summary() for s in outcome.checks], "notes": list(outcome.notes)}
+
+
+def optimize(
+    spec_file: Annotated[Path, typer.Argument(help="Optimize spec (JSON, format jointdb-optimize/1).")],
+    db: Annotated[Optional[str], typer.Option("--db", help="Joint database URL or SQLite path "
+                                              "(default: $JOINTDB_URL or the per-user database).")] = None,
+    top: Annotated[int, typer.Option("--top", help="Rows of the ranking to print.")] = 10,
+    no_simulate: Annotated[bool, typer.Option("--no-simulate", help="Skip the time-domain check of the best stack.")] = False,
+    out: Annotated[Optional[Path], typer.Option("--out", help="Directory for ranking.csv, result.json and the figures.")] = None,
+    as_json: Annotated[bool, typer.Option("--json", help="Machine-readable output (SI units).")] = False,
+    scheduler: Annotated[str, typer.Option("--scheduler", help="Where candidates are evaluated: local (a Dask local "
+                                           "cluster), in-process, or a Dask scheduler ADDRESS (tcp://host:8786).")] = "local",
+    workers: Annotated[int, typer.Option("--workers", help="Workers of the local cluster.")] = 2,
+) -> None:
+    """Find the holder, overhang, torque, drawbar force, speed and depth of highest stable removal rate.
+
+    Candidates are every allowed holder × overhang × catalogued clamping torque × catalogued drawbar
+    force in the spec's ranges; each tip is predicted (both planes), its zero-order lobes computed, and
+    the best cut obeys stability (less the margin), flute length, spindle power and torque. The best
+    stack is then simulated in the time domain at the recommended cut and at 1.1× its limit.
+
+    Example: jointdb optimize fixtures/optimize/optimize-spec.json --db demo-out/joints.sqlite --out opt
+    """
+    from jointdb._output import emit, message, progress_line
+    from jointdb.cli._store import check_db_target
+    from jointdb.errors import InputError
+    from jointdb.store import Repository
+    from jointdb.usecases import load_problem, optimize_stack
+
+    if not 1 <= workers <= 256:
+        raise InputError(f"--workers must be between 1 and 256, got {workers}")
+    if not 1 <= top <= 100_000:
+        raise InputError(f"--top must be between 1 and 100000, got {top}")
+    problem = load_problem(spec_file)
+    check_db_target(db)
+    import time
+
+    start = time.monotonic()
+
+    def report(done: int, total: int, what: str) -> None:
+        message(progress_line(f"candidates ({what})", done, total, time.monotonic() - start))
+
+    repo = Repository(db)
+    try:
+        outcome = optimize_stack(problem, repo, progress=report, simulate=not no_simulate, scheduler=scheduler,
+                                 n_workers=workers)
+    finally:
+        repo.close()
+    for line in outcome.notes:
+        message(line)
+    if out is not None:
+        for f in _write_outputs(out, problem, outcome):
+            message(f"wrote {f}")
+    if as_json:
+        emit(_json(outcome), as_json=True)
+        return
+    b = outcome.ranked[0]
+    message(f"recommended: holder {b.candidate.holder}, overhang {b.candidate.overhang_m * 1e3:g} mm, clamping torque "
+            f"{b.candidate.torque_nm:g} N·m, drawbar {b.candidate.drawbar_n / 1e3:g} kN, "
+            f"{b.best['spindle_speed_rpm']:.0f} rpm, depth {b.best['depth_m'] * 1e3:.3g} mm "
+            f"({b.best['removal_rate_m3_s'] * 6e7:.3g} cm³/min, bound by {b.best['binding']})")
+    emit([_people_row(i + 1, r) for i, r in enumerate(outcome.ranked[:top])],
+         title=f"Best {min(top, len(outcome.ranked))} of {len(outcome.ranked)} candidate stacks (highest stable removal rate)")
+
+
+def register(app: typer.Typer) -> None:
+    """Add ``optimize`` to the app."""
+    app.command("optimize")(optimize)

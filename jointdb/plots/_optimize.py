@@ -1,0 +1,45 @@
+"""Figures of ``jointdb optimize``: removal rate against overhang per holder, Pareto front of rate vs margin."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from jointdb.plots._frf import _pyplot, save_figure
+
+__all__ = ["plot_rate_vs_overhang", "plot_pareto"]
+
+
+def plot_rate_vs_overhang(results, path) -> Path:
+    """Best removal rate [cm³/min] against overhang [mm], one line per holder (best over torques and forces)."""
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    holders = sorted({r.candidate.holder for r in results})
+    for h in holders:
+        best: dict = {}
+        for r in results:
+            if r.candidate.holder == h:
+                g = r.candidate.overhang_m
+                best[g] = max(best.get(g, 0.0), r.best["removal_rate_m3_s"])
+        g = np.array(sorted(best))
+        ax.plot(g * 1e3, [best[x] * 6e7 for x in g], "o-", label=h)
+    ax.set_xlabel("overhang (gauge length) [mm]")
+    ax.set_ylabel("best stable removal rate [cm³/min]")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    return save_figure(fig, path)
+
+
+def plot_pareto(margins, rates, path) -> Path:
+    """Pareto front: the highest removal rate [m³/s] any candidate reaches against the fraction of the
+    limiting depth held back (``margins``), from :func:`jointdb.usecases._optimize.pareto_front`."""
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    ax.plot(np.asarray(margins) * 100, np.asarray(rates) * 6e7, "o-")
+    ax.set_xlabel("stability margin held back [% of the limiting depth]")
+    ax.set_ylabel("best removal rate [cm³/min]")
+    ax.grid(True, alpha=0.3)
+    fig.tight_layout()
+    return save_figure(fig, path)

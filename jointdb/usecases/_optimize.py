@@ -1,0 +1,242 @@
+"""``jointdb optimize``: the stack and cut with the highest stable removal rate across the catalogue.
+
+A plain function over typed inputs (:func:`optimize_stack`) with a progress callback, so a shell or a
+job queue can wrap it. Candidates are every combination of an allowed holder, an overhang on the spec's
+grid, a catalogued clamping torque and a catalogued drawbar force inside the spec's ranges. Each is
+predicted (both planes) and its zero-order lobes computed; per candidate the best speed and depth
+obey stability (less the margin), the flute length, and the spindle's power and torque.
+
+Fast path (:func:`evaluate_candidates`): the substructures are computed once per content — the spindle
+once, tool and holder once per (holder, overhang), each joint once per condition — and the receptance
+coupling runs over all the candidates of one (holder, overhang) at once (a leading candidate axis
+broadcast through :func:`jointdb.stack.tool_tip_chain`). :func:`evaluate_brute_force` is the
+straightforward loop (``predict_stack`` + ``stability_lobes`` per candidate), the reference the tests
+compare it with.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from jointdb.errors import InputError, NotFoundError
+from jointdb.frf import FRF, Dof, Quantity
+
+Progress = Callable[[int, int, str], None]
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """One stack to evaluate: holder name, overhang (gauge length) [m], clamping torque [N·m], drawbar [N]."""
+
+    holder: str
+    overhang_m: float
+    torque_nm: float
+    drawbar_n: float
+
+
+@dataclass(frozen=True, eq=False)
+class CandidateResult:
+    """A candidate's lobes and best cut (``best``: speed, depth, removal rate, binding constraint)."""
+
+    candidate: Candidate
+    lobes: Any
+    best: dict
+    joints: dict = field(default_factory=dict)
+    tip: FRF | None = None
+
+    def row(self) -> dict:
+        c = self.candidate
+        return {"holder": c.holder, "overhang_m": c.overhang_m, "torque_nm": c.torque_nm, "drawbar_n": c.drawbar_n,
+                **self.best, **{f"joint_{k}": v for k, v in self.joints.items()}}
+
+
+@dataclass(frozen=True, eq=False)
+class OptimizeProblem:
+    """The parsed spec: the file model, the template stack, and the cut."""
+
+    spec: Any  # jointdb.schemas.optimize.OptimizeSpecFile
+    template: Any  # jointdb.stack.StackSpec
+    cut: Any  # jointdb.stability.MillingCut
+    source: Path | None = None  # the spec file (a Dask worker loads the problem from it)
+
+
+def load_problem(path: Path | str) -> OptimizeProblem:
+    """Read an optimize spec file and its template stack (InputError naming the field)."""
+    from pydantic import ValidationError
+
+    from jointdb._jsonfile import read_json_file
+    from jointdb.schemas.optimize import OptimizeSpecFile
+    from jointdb.stability import MillingCut
+    from jointdb.usecases._files import load_stack
+
+    p = Path(path)
+    doc = read_json_file(p, "optimize spec")
+    try:
+        spec = OptimizeSpecFile.model_validate(doc)
+    except ValidationError as exc:
+        err = exc.errors()[0]
+        where = ".".join(str(x) for x in err["loc"]) or "(top level)"
+        raise InputError(f"{p.name}: {where}: {err['msg']}") from None
+    template = load_stack(p.parent / spec.stack)
+    kt, kr = spec.cut.coefficients
+    cut = MillingCut(spec.tool.flutes, kt, kr, spec.cut.radial_immersion, spec.cut.down_milling)
+    return OptimizeProblem(spec, template, cut, p.resolve())
+
+
+def _catalogued(repo, joint_type: str, attr: str, lo: float, hi: float, geometry: dict) -> list[float]:
+    """Distinct catalogued values of ``attr`` (torque_nm / preload_n) of a joint type within [lo, hi]."""
+    values = set()
+    for jv in repo.list_joints():
+        cond = jv.conditions
+        if jv.joint_type != joint_type or getattr(cond, attr) is None or jv.state != "active":
+            continue
+        if any(k in cond.geometry and not math.isclose(cond.geometry[k], v, rel_tol=1e-6) for k, v in geometry.items()):
+            continue
+        value = float(getattr(cond, attr))
+        if lo <= value <= hi:
+            values.add(value)
+    return sorted(values)
+
+
+def _holders(problem: OptimizeProblem) -> list:
+    from jointdb.schemas.optimize import HolderChoice
+
+    return problem.spec.holders or [HolderChoice(name="template", holder=None, taper_diameter_m=None)]
+
+
+def _query_geometry(choice) -> dict:
+    return dict((choice.conditions or {}).get("geometry") or {})
+
+
+def enumerate_candidates(problem: OptimizeProblem, repo) -> list[Candidate]:
+    """Every allowed holder × overhang on the grid × catalogued torque × catalogued drawbar force in range.
+
+    Raises
+    ------
+    NotFoundError
+        No catalogued torque or drawbar force inside the spec's ranges.
+    """
+    spec, tpl = problem.spec, problem.template
+    lo, hi = spec.tool.overhang_m
+    n = int(math.floor((hi - lo) / spec.tool.overhang_step_m + 1e-9)) + 1
+    overhangs = [round(lo + k * spec.tool.overhang_step_m, 9) for k in range(max(n, 1))]
+    th_geom = _query_geometry(tpl.interfaces["tool-holder"])
+    torques = _catalogued(repo, "tool-holder", "torque_nm", *spec.torque_nm, th_geom)
+    if not torques:
+        raise NotFoundError(f"no catalogued tool-holder joint with a torque in {list(spec.torque_nm)} N·m")
+    out = []
+    for h in _holders(problem):
+        geom = _query_geometry(tpl.interfaces["holder-spindle"])
+        if h.taper_diameter_m is not None:
+            geom["taper_diameter_m"] = h.taper_diameter_m
+        forces = _catalogued(repo, "holder-spindle", "preload_n", *spec.drawbar_n, geom)
+        if not forces:
+            raise NotFoundError(f"holder {h.name}: no catalogued holder-spindle joint with a drawbar force in "
+                                f"{list(spec.drawbar_n)} N (taper {geom.get('taper_diameter_m')})")
+        out += [Candidate(h.name, g, t, f) for g in overhangs for t in torques for f in forces]
+    return out
+
+
+def candidate_stack(problem: OptimizeProblem, cand: Candidate):
+    """The template stack with the candidate's holder, overhang and interface conditions."""
+    from jointdb.stack import JointChoice, stack_from_dict, stack_to_dict
+
+    tpl = problem.template
+    holder = next(h for h in _holders(problem) if h.name == cand.holder)
+    spec = tpl
+    if holder.holder is not None:
+        doc = stack_to_dict(tpl)
+        doc["holder"] = holder.holder
+        spec = stack_from_dict(doc).replace(spindle=tpl.spindle)
+    if not 0 < cand.overhang_m < spec.tool.length:
+        raise InputError(f"overhang {cand.overhang_m} m: must be inside the tool's length {spec.tool.length} m")
+    th, hs = spec.interfaces["tool-holder"], spec.interfaces["holder-spindle"]
+    if th.kind != "query" or hs.kind != "query":
+        raise InputError("the template stack's interfaces must both be catalogue queries ({\"query\": {...}})")
+    th_c = {**dict(th.conditions), "torque_nm": cand.torque_nm}
+    hs_c = {**dict(hs.conditions), "preload_n": cand.drawbar_n}
+    if holder.taper_diameter_m is not None:
+        hs_c["geometry"] = {**dict(hs_c.get("geometry") or {}), "taper_diameter_m": holder.taper_diameter_m}
+    interfaces = {"tool-holder": JointChoice(**{**th.__dict__, "conditions": th_c}),
+                  "holder-spindle": JointChoice(**{**hs.__dict__, "conditions": hs_c})}
+    return spec.replace(gauge_length=cand.overhang_m, interfaces=interfaces)
+
+
+def best_cut(problem: OptimizeProblem, lobes) -> dict:
+    """The speed and depth of highest removal rate under stability (less the margin), flute length,
+    spindle power and torque; ``binding`` names the constraint that sets the depth there.
+
+    Removal rate ``Q = a · a_e · f_z · N · n/60`` [m³/s]; cutting power ``P = K_t Q`` (linear force law,
+    no edge forces); spindle torque ``P / ω``.
+    """
+    spec, cut = problem.spec, problem.cut
+    n = np.asarray(lobes.spindle_speed_rpm, float)
+    diameter = max(s.diameter for s in problem.template.tool.segments)
+    rate_per_depth = spec.cut.radial_immersion * diameter * spec.cut.feed_per_tooth_m * cut.n_teeth * n / 60.0
+    limits = {"stability": np.where(np.isfinite(lobes.depth_m), lobes.depth_m * (1 - spec.objective.margin),
+                                    np.where(np.isnan(lobes.depth_m), 0.0, np.inf)),
+              "flute length": np.full(n.size, spec.tool.flute_length_m)}
+    if spec.machine.power_w is not None:
+        limits["power"] = spec.machine.power_w / (cut.kt * rate_per_depth)
+    if spec.machine.torque_nm is not None:
+        limits["torque"] = spec.machine.torque_nm * 2 * np.pi * n / 60.0 / (cut.kt * rate_per_depth)
+    names = list(limits)
+    stacked = np.stack([limits[k] for k in names])
+    depth = stacked.min(axis=0)
+    rate = depth * rate_per_depth
+    i = int(np.argmax(rate))
+    return {"spindle_speed_rpm": float(n[i]), "depth_m": float(depth[i]), "removal_rate_m3_s": float(rate[i]),
+            "binding": names[int(np.argmin(stacked[:, i]))], "stability_limit_m": float(lobes.depth_m[i]),
+            "power_w": float(cut.kt * rate[i]), "margin": spec.objective.margin}
+
+
+def _lobes(problem: OptimizeProblem, tip: FRF):
+    from jointdb.usecases._lobes import stability_lobes
+
+    m, c = problem.spec.machine, problem.cut
+    return stability_lobes(tip, "milling", rpm_min=m.speed_rpm[0], rpm_max=m.speed_rpm[1], n_speeds=m.n_speeds,
+                           teeth=c.n_teeth, kt=c.kt, kr=c.kr, immersion=c.radial_immersion, up=not c.down_milling)
+
+
+def _joint_names(joints) -> dict:
+    return {k: (f"{r.name}@{r.version}" if r.name else r.description) for k, r in joints.items()}
+
+
+def evaluate_brute_force(problem: OptimizeProblem, candidates: Sequence[Candidate], repo,
+                         progress: Progress | None = None) -> list[CandidateResult]:
+    """The straightforward loop: ``predict_stack`` + ``stability_lobes`` per candidate (the reference)."""
+    from jointdb.usecases._stack import predict_stack
+
+    out = []
+    for k, cand in enumerate(candidates):
+        pred = predict_stack(candidate_stack(problem, cand), repo)
+        lobes = _lobes(problem, pred.prediction.tip)
+        out.append(CandidateResult(cand, lobes, best_cut(problem, lobes), _joint_names(pred.joints), pred.prediction.tip))
+        if progress:
+            progress(k + 1, len(candidates), "brute force")
+    return out
+
+
+def pareto_front(problem: OptimizeProblem, results: Sequence[CandidateResult], margins=None):
+    """``(margins, rates)``: the highest removal rate [m³/s] of any candidate when a fraction ``margin`` of
+    the limiting depth is held back (default margins 0–50 %), from each candidate's zero-order lobes."""
+    from dataclasses import replace
+
+    margins = np.linspace(0, 0.5, 11) if margins is None else np.asarray(margins, dtype=float)
+    rates = []
+    for m in margins:
+        objective = problem.spec.objective.model_copy(update={"margin": float(m)})
+        prob = replace(problem, spec=problem.spec.model_copy(update={"objective": objective}))
+        rates.append(max(best_cut(prob, r.lobes)["removal_rate_m3_s"] for r in results))
+    return margins, np.array(rates)
+
+
+def rank(results: Sequence[CandidateResult]) -> list[CandidateResult]:
+    """Highest removal rate first (stable sort: ties keep the enumeration order)."""
+    return sorted(results, key=lambda r: -r.best["removal_rate_m3_s"])

@@ -1,0 +1,135 @@
+"""``optimize_stack``: enumerate, evaluate and rank the candidates, confirm the best by semi-discretization,
+check the best in the time domain (the use case the CLI and a job queue call)."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from jointdb.usecases._optimize import (
+    CandidateResult,
+    OptimizeProblem,
+    Progress,
+    best_cut,
+    enumerate_candidates,
+    rank,
+)
+from jointdb.usecases._optimize_eval import evaluate_candidates
+
+
+@dataclass(frozen=True, eq=False)
+class OptimizeOutcome:
+    """Ranked candidates (best first), and the time-domain check of the best one (``checks``: at the
+    recommended cut and at 1.1× its stability limit, each a :class:`jointdb.stability.SimulationResult`)."""
+
+    ranked: list
+    checks: tuple = ()
+    notes: tuple = ()
+
+
+def confirm_with_sd(problem: OptimizeProblem, results: Sequence[CandidateResult], n_intervals: int = 40
+                    ) -> list[CandidateResult]:
+    """Semi-discretization at each result's best speed: the depth becomes the smaller of the zero-order and
+    SD limits (less the margin) under the same other limits; ``best`` gains ``sd_limit_m``.
+
+    The zero-order approximation can overrate the pockets of few-tooth, partial-immersion cuts; SD on the
+    tip's fitted modes is the check (docs/theory.md §5).
+    """
+    from dataclasses import replace
+
+    from jointdb.modal import fit_tool_tip
+    from jointdb.stability import milling_lobes_sd
+
+    out = []
+    for r in results:
+        n = r.best["spindle_speed_rpm"]
+        model, _ = fit_tool_tip(r.tip)
+        sd = float(milling_lobes_sd(model, problem.cut, [n], n_intervals=n_intervals).depth_m[0])
+        lobes = r.lobes
+        i = int(np.argmin(np.abs(lobes.spindle_speed_rpm - n)))
+        depth = np.array(lobes.depth_m, dtype=float)
+        depth[i] = min(depth[i], sd) if np.isfinite(depth[i]) else sd
+        one = replace(lobes, spindle_speed_rpm=lobes.spindle_speed_rpm[i:i + 1], depth_m=depth[i:i + 1],
+                      chatter_freq_hz=lobes.chatter_freq_hz[i:i + 1], lobe=lobes.lobe[i:i + 1], kind=lobes.kind[i:i + 1])
+        best = {**best_cut(problem, one), "zoa_limit_m": float(lobes.depth_m[i]), "sd_limit_m": sd}
+        out.append(replace(r, best=best))
+    return out
+
+
+def _confirm_top(problem: OptimizeProblem, ranked: list, repo, confirm: int, max_confirm: int):
+    """Confirm by SD until the best ``confirm`` of the ranking are all confirmed (or ``max_confirm`` are spent).
+
+    SD only lowers a candidate's rate, so once the best ``confirm`` are confirmed no unconfirmed one below
+    them can overtake them. Returns the re-ranked list and notes.
+    """
+    done, notes = 0, []
+    while confirm > 0 and done < max_confirm:
+        todo = [i for i, r in enumerate(ranked[:confirm]) if "sd_limit_m" not in r.best][: max_confirm - done]
+        if not todo:
+            break
+        # their tip FRFs again (the search keeps none: 10 000 tips would not fit in memory)
+        fresh = evaluate_candidates(problem, [ranked[i].candidate for i in todo], repo, keep_tips=True)
+        for i, r in zip(todo, confirm_with_sd(problem, fresh)):
+            ranked[i] = r
+        done += len(todo)
+        ranked = rank(ranked)
+    if confirm > 0:
+        note = (f"the best {confirm} confirmed by semi-discretization at their best speed (depth = the smaller of "
+                f"the ZOA and SD limits; {done} candidates checked)")
+        if not all("sd_limit_m" in r.best for r in ranked[:confirm]):
+            note += f"; not settled after {max_confirm} checks: unconfirmed candidates (ZOA only) remain among them"
+        notes.append(note)
+    if ranked[0].tip is None:  # the best is unconfirmed (confirm exhausted): its tip for the time-domain check
+        ranked[0] = evaluate_candidates(problem, [ranked[0].candidate], repo, keep_tips=True)[0]
+    return ranked, notes
+
+
+def optimize_stack(problem: OptimizeProblem, repo, *, progress: Progress | None = None, simulate: bool = True,
+                   confirm: int = 5, max_confirm: int = 15, revolutions: int = 120,
+                   scheduler: str | None = "local", n_workers: int | None = None) -> OptimizeOutcome:
+    """Enumerate, evaluate (zero-order lobes) and rank the candidates; confirm the top few by
+    semi-discretization at their best speed and re-rank them; check the best one in the time domain.
+
+    Parameters
+    ----------
+    problem
+        From :func:`load_problem`.
+    repo
+        The joint store.
+    progress
+        ``progress(done, total, message)``.
+    simulate
+        Run :func:`jointdb.usecases.simulate_tip` on the best candidate at its recommended cut and at
+        1.1× its (confirmed) stability limit at that speed.
+    confirm, max_confirm
+        How many of the best candidates must be SD-confirmed (0: none), and at most how many
+        confirmations to spend getting there (see :func:`_confirm_top`).
+    scheduler, n_workers
+        Where the candidates are evaluated (see :func:`jointdb.usecases._optimize_eval.evaluate_candidates`).
+    revolutions
+        Simulated revolutions.
+
+    Returns
+    -------
+    OptimizeOutcome
+    """
+    candidates = enumerate_candidates(problem, repo)
+    ranked = rank(evaluate_candidates(problem, candidates, repo, progress, scheduler=scheduler, n_workers=n_workers))
+    ranked, notes = _confirm_top(problem, ranked, repo, confirm, max_confirm)
+    checks: tuple = ()
+    best = ranked[0]
+    limit = best.best.get("sd_limit_m", best.best["stability_limit_m"])
+    if simulate and best.best["removal_rate_m3_s"] > 0 and math.isfinite(limit):
+        from jointdb.usecases._simulate import simulate_tip
+
+        n, a = best.best["spindle_speed_rpm"], best.best["depth_m"]
+        sim = simulate_tip(best.tip, problem.cut, [n, n], [a, 1.1 * limit], revolutions=revolutions,
+                           feed_per_tooth_m=problem.spec.cut.feed_per_tooth_m)
+        checks = sim.results
+        verdicts = ["chatter" if r.chatter else "stable" for r in checks]
+        notes.append(f"time domain at {n:.0f} rpm: recommended {a * 1e3:.3g} mm {verdicts[0]}; "
+                     f"1.1× the limit ({1.1 * limit * 1e3:.3g} mm) {verdicts[1]}")
+    return OptimizeOutcome(ranked, checks, tuple(notes))
