@@ -98,7 +98,16 @@ class SimulationResult:
     surface_location_error_m: float
 
     def summary(self) -> dict:
-        """Scalars for tables and JSON (SI units)."""
+        """Scalars for tables and JSON (SI units).
+
+        Returns
+        -------
+        dict
+            ``spindle_speed_rpm`` [rpm], ``depth_m`` [m], ``chatter`` (bool), ``statistic`` and
+            ``growth`` (dimensionless), ``chatter_freq_hz`` [Hz] (NaN if none), ``max_force_n`` [N],
+            ``vibration_pp_x_m`` and ``vibration_pp_y_m`` (peak-to-peak tip vibration [m]) and
+            ``surface_location_error_m`` [m] (NaN for slotting); the attributes of the same names.
+        """
         return {
             "spindle_speed_rpm": self.spindle_speed_rpm, "depth_m": self.depth_m, "chatter": self.chatter,
             "statistic": self.statistic, "growth": self.growth, "chatter_freq_hz": self.chatter_freq_hz,

@@ -57,6 +57,9 @@ def attach(h_ii, h_ic, h_ci, h_cc, g_cc_behind, h_joint=None) -> np.ndarray:
 def tool_tip_chain(tool, holder, spindle, joint_th=None, joint_hs=None) -> np.ndarray:
     """Tool-tip 2×2 receptance of tool + holder + spindle (docs/theory.md §4).
 
+    Any leading axes before ``n_freq`` broadcast (e.g. a candidate axis: many stacks coupled at
+    once).
+
     Parameters
     ----------
     tool
@@ -70,8 +73,6 @@ def tool_tip_chain(tool, holder, spindle, joint_th=None, joint_hs=None) -> np.nd
     joint_th, joint_hs
         Tool–holder and holder–spindle joint receptances ``(n_freq, 2, 2)`` or
         ``None`` (rigid).
-
-    Any leading axes before ``n_freq`` broadcast (e.g. a candidate axis: many stacks coupled at once).
 
     Returns
     -------

@@ -294,6 +294,11 @@ class StackSpec:
     frequency
         The default prediction grid (:class:`FrequencyGrid`); a measured spindle FRF's own
         grid is used when it is not given.
+    parts
+        Provenance, not compared: the catalogued parts the stack was assembled from, one mapping
+        per slot (``slot``, ``part`` as ``name@version``, ``ref`` as written, ``kind``,
+        ``record_sha256``, ``blob_sha256``); empty for a stack written out in full. Set by the
+        application layer that resolved the references (:func:`jointdb.usecases.resolve_stack_parts`).
     """
 
     name: str
@@ -303,9 +308,6 @@ class StackSpec:
     gauge_length: float
     interfaces: Mapping[str, JointChoice]
     frequency: FrequencyGrid | None = None
-    #: provenance: the catalogued parts the stack was assembled from, one mapping per slot (``slot``,
-    #: ``part`` as ``name@version``, ``ref`` as written, ``kind``, ``record_sha256``, ``blob_sha256``),
-    #: set by the application layer that resolved them (:func:`jointdb.usecases.resolve_stack_parts`)
     parts: tuple = field(default=(), compare=False)
 
     @property

@@ -27,11 +27,17 @@ Records
    known_materials         -- built-in names plus ``JOINTDB_MATERIALS``
    register_material       -- accept a new material name for this process
 
+Parts (spindles, holders, tools)
+--------------------------------
+   PartVersion             -- one immutable version of a part: payload, attributes, provenance
+   PART_KINDS              -- ``spindle``, ``holder``, ``tool``
+
 Queries and listings
 --------------------
    Match                   -- one answer of ``Repository.nearest``: version, distance, extrapolation
    InterpolatedJoint       -- a joint FRF interpolated between catalogued neighbours
    OutsideCatalogueWarning -- a request outside the catalogued range of a condition
+   UnvariedConditionWarning -- a note: a machine condition the catalogue never varied
    JointPage               -- one page of ``Repository.list_page`` with its ``next`` cursor
    DamagedVersion          -- a version a listing skipped, and why
    DamagedRecordWarning    -- a list skipped damaged rows

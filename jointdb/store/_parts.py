@@ -81,7 +81,32 @@ def parse_part_ref(ref: Any) -> tuple[str, int | str]:
 
 @dataclass(frozen=True)
 class PartVersion:
-    """One immutable version of a part (see the module docstring); ``labels`` point at it now."""
+    """One immutable version of a part (see the module docstring); ``labels`` point at it now.
+
+    Parameters
+    ----------
+    name, kind
+        The part's name and kind (one of :data:`PART_KINDS`: ``spindle``, ``holder``, ``tool``).
+    version, uuid
+        Version number (1 for the first, +1 per change of content) and a random UUID (text).
+    created_at, author
+        When (timezone-aware, UTC) and by whom it was catalogued.
+    attributes
+        What it is found by: ``machine`` (spindles), ``family``, ``taper``, ``bore_mm`` [mm]
+        (holders), ``description``.
+    payload
+        The part's object of a stack file (lengths in m): a tool's or holder's ``material`` and
+        ``segments``; a spindle's ``{"model": {beam model}, "point": name}`` or, measured, ``{"node": N}``.
+    blob_sha256
+        Content hash of a measured spindle's FRF set in the blob store; None for a model.
+    provenance, parent_version
+        Input files with their SHA-256, method, software version; the version this one follows
+        (None for version 1).
+    record_sha256
+        SHA-256 of the version's content, recomputed and compared on every read.
+    labels
+        The labels pointing at this version when it was read, sorted.
+    """
 
     name: str
     kind: str
@@ -105,7 +130,16 @@ class PartVersion:
     def geometry(self) -> dict[str, Any]:
         """What a page or table shows of the payload, in mm: a tool's diameter, length and fluted length;
         a holder's length, bore and mouth diameter; a spindle's source (``model`` at a point, or
-        ``measured`` at a node)."""
+        ``measured`` at a node).
+
+        Returns
+        -------
+        dict
+            A tool: ``diameter_mm`` (of the first segment), ``length_mm``, ``fluted_length_mm``,
+            ``material``; a holder: ``length_mm``, ``bore_mm`` and ``mouth_diameter_mm`` (of the first
+            segment), ``material``; a spindle: ``source`` (``"measured"`` with ``node``, or ``"model"``
+            with ``point`` and ``model_name``); empty for a tool or holder without segments.
+        """
         p = self.payload
         segs = p.get("segments") if isinstance(p.get("segments"), list) else []
         mm = [s for s in segs if isinstance(s, Mapping)]
@@ -127,7 +161,13 @@ class PartVersion:
         return {}
 
     def to_dict(self) -> dict[str, Any]:
-        """The record as JSON-ready values (times as ISO 8601 UTC)."""
+        """The record as JSON-ready values (times as ISO 8601 UTC).
+
+        Returns
+        -------
+        dict
+            Every field under its name (``labels`` as a list), plus ``geometry`` (:meth:`geometry`).
+        """
         return {"name": self.name, "kind": self.kind, "version": self.version, "uuid": self.uuid,
                 "created_at": self.created_at.isoformat(), "author": self.author,
                 "attributes": dict(self.attributes), "payload": dict(self.payload),
@@ -346,7 +386,31 @@ class PartsStore:
 
     @_db.with_db_errors
     def label_part(self, name: str, version: int, label: str, author: str | None = None) -> PartVersion:
-        """Point ``label`` of a part at ``version`` (created or moved; audited)."""
+        """Point ``label`` of a part at ``version`` (created or moved; audited).
+
+        Parameters
+        ----------
+        name
+            The part.
+        version
+            The version number (>= 1) the label is to point at.
+        label
+            The label: 1-100 letters, digits, ``.``, ``_`` or ``-`` (e.g. ``released``).
+        author
+            Who moves it (default: ``JOINTDB_AUTHOR`` or the login), recorded in the audit log.
+
+        Returns
+        -------
+        PartVersion
+            That version, its ``labels`` including ``label``.
+
+        Raises
+        ------
+        InputError
+            A bad label or version number.
+        NotFoundError
+            Unknown part or version.
+        """
         label = check_label(label)
         actor = current_actor(author)
         if isinstance(version, bool) or not isinstance(version, int) or version < 1:
@@ -369,8 +433,24 @@ class PartsStore:
     def get_part(self, name: str, version: int | None = None, label: str | None = None) -> PartVersion:
         """One version of a part, its record verified: pinned, by ``label``, or (default) the latest.
 
+        Parameters
+        ----------
+        name
+            The part.
+        version
+            A version number (None: see ``label``).
+        label
+            A label pointing at the version (None, with ``version`` None too: the latest version).
+
+        Returns
+        -------
+        PartVersion
+            With the labels that point at it.
+
         Raises
         ------
+        InputError
+            Both ``version`` and ``label``, or a version that is not a whole number.
         NotFoundError
             Unknown part, version or label.
         IntegrityError
@@ -397,13 +477,49 @@ class PartsStore:
             return verified_part(part, row, self._part_labels(s, part.id).get(row.version, ()))
 
     def resolve_part(self, ref: str) -> PartVersion:
-        """The version a ``name@version`` / ``name@label`` reference names (:func:`parse_part_ref`)."""
+        """The version a ``name@version`` / ``name@label`` reference names (:func:`parse_part_ref`).
+
+        Parameters
+        ----------
+        ref
+            ``"name@3"`` (a version number) or ``"name@released"`` (a label).
+
+        Returns
+        -------
+        PartVersion
+            As :meth:`get_part` returns it (record verified).
+
+        Raises
+        ------
+        InputError
+            Not ``name@version`` or ``name@label``.
+        NotFoundError
+            Unknown part, version or label.
+        """
         name, tail = parse_part_ref(ref)
         return self.get_part(name, version=tail) if isinstance(tail, int) else self.get_part(name, label=tail)
 
     @_db.with_db_errors
     def part_history(self, name: str) -> list[PartVersion]:
-        """Every version of a part, oldest first, each verified."""
+        """Every version of a part, oldest first, each verified.
+
+        Parameters
+        ----------
+        name
+            The part.
+
+        Returns
+        -------
+        list of PartVersion
+            Version 1 first, each with the labels pointing at it.
+
+        Raises
+        ------
+        NotFoundError
+            Unknown part.
+        IntegrityError
+            A version whose stored record does not match its hash.
+        """
         with self.storage.read() as s:
             part = _part_row(s, name)
             labels = self._part_labels(s, part.id)
@@ -414,7 +530,27 @@ class PartsStore:
     @_db.with_db_errors
     def list_parts(self, kind: str | None = None, *, family: str | None = None,
                    machine: str | None = None) -> list[PartVersion]:
-        """The latest version of every part (by name), optionally of one kind, holder family or machine."""
+        """The latest version of every part (by name), optionally of one kind, holder family or machine.
+
+        Parameters
+        ----------
+        kind
+            Only parts of this kind (spindle / holder / tool; None: all).
+        family
+            Only parts whose latest version has this ``family`` attribute (holders, e.g. ``ER32``).
+        machine
+            Only parts whose latest version has this ``machine`` attribute (spindles).
+
+        Returns
+        -------
+        list of PartVersion
+            One per part, sorted by name, each verified and with its labels.
+
+        Raises
+        ------
+        InputError
+            An unknown kind, or a filter that is not plain text of at most 200 characters.
+        """
         newest = (select(PartVersionRow.part_id, func.max(PartVersionRow.version).label("v"))
                   .group_by(PartVersionRow.part_id).subquery())
         q = (select(PartRow, PartVersionRow).join(PartVersionRow, PartVersionRow.part_id == PartRow.id)
@@ -434,6 +570,17 @@ class PartsStore:
 
     def load_part_frf(self, part: PartVersion) -> FRF:
         """A measured spindle's FRF set, read from its blob and verified against its digest.
+
+        Parameters
+        ----------
+        part
+            A version from :meth:`get_part` (or another part read) whose ``blob_sha256`` is set.
+
+        Returns
+        -------
+        FRF
+            The spindle-nose receptance set ``(n_freq, n_out, n_in)``, DOFs ``Nx``, ``Nry`` (and
+            ``Ny``, ``Nrx`` when measured), as catalogued.
 
         Raises
         ------

@@ -28,11 +28,14 @@ Lobes (:mod:`jointdb.usecases._lobes`, :mod:`jointdb.usecases._lobe_report`)
     best_speeds           -- the speeds of the deepest stable pockets
     coefficients_si       -- cutting coefficients in N/m² (N/mm² recognised and converted, with a note)
 Parts (:mod:`jointdb.usecases._parts`, :mod:`jointdb.usecases._partfiles`; spindles, holders, tools as catalogued records)
+    part_refs             -- the slots of a stack document that name a catalogued part
     resolve_stack_parts   -- a stack document's ``{"part": "name@version"}`` references made inline
     stack_from_document   -- a stack document (parts resolved, recorded in ``spec.parts``) -> StackSpec
     part_from_files       -- what ``jointdb parts add`` reads: model / FRF / stack / part files
+    PartInput             -- what it returns: payload, measured spindle FRF, provenance
     add_part_from_files   -- read and catalogue a part
     catalogue_bundled_parts -- the bundled example stack's spindles, holder and tool (the demo does it)
+    BUNDLED_PARTS         -- those parts: name, kind, source, attributes
 Optimize (:mod:`jointdb.usecases._optimize`)
     load_problem, optimize_stack -- the stack and cut of highest stable removal rate (:class:`OptimizeOutcome`)
 Time domain (:mod:`jointdb.usecases._simulate`)

@@ -67,7 +67,28 @@ class OptimizeProblem:
 
 
 def load_problem(path: Path | str) -> OptimizeProblem:
-    """Read an optimize spec file and its template stack (InputError naming the field)."""
+    """Read an optimize spec file and its template stack (InputError naming the field).
+
+    Parameters
+    ----------
+    path
+        The optimize spec JSON file (:class:`jointdb.schemas.optimize.OptimizeSpecFile`); the stack
+        file it names is relative to it.
+
+    Returns
+    -------
+    OptimizeProblem
+        The validated spec, the template :class:`jointdb.stack.StackSpec`, the
+        :class:`jointdb.stability.MillingCut` (flutes, cutting coefficients in N/m², radial
+        immersion, down or up milling) and the spec file's resolved path.
+
+    Raises
+    ------
+    InputError
+        Naming the file and the field.
+    NotFoundError
+        A missing spec or stack file (or a file the stack names).
+    """
     from pydantic import ValidationError
 
     from jointdb._jsonfile import read_json_file

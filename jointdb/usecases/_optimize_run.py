@@ -22,8 +22,20 @@ from jointdb.usecases._optimize_eval import evaluate_candidates
 
 @dataclass(frozen=True, eq=False)
 class OptimizeOutcome:
-    """Ranked candidates (best first), and the time-domain check of the best one (``checks``: at the
-    recommended cut and at 1.1× its stability limit, each a :class:`jointdb.stability.SimulationResult`)."""
+    """Ranked candidates (best first), and the time-domain check of the best one.
+
+    Parameters
+    ----------
+    ranked
+        Every candidate's result (``CandidateResult``: candidate, lobes, ``best`` cut, joints), highest
+        removal rate [m³/s] first; those confirmed by semi-discretization carry ``best["sd_limit_m"]``.
+    checks
+        The time-domain check of the best candidate, each a :class:`jointdb.stability.SimulationResult`:
+        at the recommended cut and at 1.1× its stability limit at that speed; empty when not simulated
+        (``simulate=False``, no stable cut, or no finite limit).
+    notes
+        Messages for the user (how many were confirmed, the time-domain verdicts).
+    """
 
     ranked: list
     checks: tuple = ()

@@ -26,7 +26,20 @@ def _sha256(path: Path) -> str:
 
 @dataclass(frozen=True)
 class PartInput:
-    """What ``jointdb parts add`` catalogues: a payload, a measured spindle's FRF, the provenance."""
+    """What ``jointdb parts add`` catalogues: a payload, a measured spindle's FRF, the provenance.
+
+    Parameters
+    ----------
+    kind
+        ``spindle``, ``holder`` or ``tool``.
+    payload
+        The part's object of a stack file (lengths in m); a measured spindle: ``{"node": N}``.
+    frf
+        A measured spindle's nose FRF set (receptance, ``(n_freq, n_out, n_in)``); None otherwise.
+    provenance
+        ``method`` (``parts-add``), ``input_files`` (name -> SHA-256 of each file read) and, for a
+        part taken from a stack file, ``parameters``.
+    """
 
     kind: str
     payload: Mapping[str, Any]
@@ -108,7 +121,30 @@ def _stack_spindle(stack: Path, payload: dict, prov: dict) -> dict:
 
 def add_part_from_files(store, name: str, kind: str, *, attributes: Mapping[str, Any] | None = None,
                         label: str | None = None, author: str | None = None, **files):
-    """Read a part (:func:`part_from_files`) and catalogue it in ``store``; the :class:`PartVersion`."""
+    """Read a part (:func:`part_from_files`) and catalogue it in ``store``.
+
+    Parameters
+    ----------
+    store
+        The joint store (:class:`jointdb.store.Repository` or :class:`jointdb.client.RemoteRepository`).
+    name, kind
+        The part's name and kind (spindle / holder / tool).
+    attributes, label, author
+        As :meth:`jointdb.store.Repository.add_part`.
+    **files
+        The source, exactly one: ``model`` and ``point``, ``frf`` and ``node``, ``from_stack`` or
+        ``file`` (see :func:`part_from_files`).
+
+    Returns
+    -------
+    PartVersion
+        The new version, or the latest one when its content is identical.
+
+    Raises
+    ------
+    InputError, NotFoundError
+        A bad or missing source file, or a part the store refuses (naming the field).
+    """
     part = part_from_files(kind, **files)
     return store.add_part(name, kind, part.payload, frf=part.frf, attributes=attributes,
                           provenance=part.provenance, author=author, label=label)
@@ -134,7 +170,22 @@ def catalogue_bundled_parts(store, catalogue_dir: Path | str, *, author: str | N
     """Catalogue the bundled example parts (:data:`BUNDLED_PARTS`) from ``catalogue_dir`` (the bundled
     ``catalogue`` folder, or ``DIR`` of ``jointdb examples DIR`` with its ``stacks``/``models``).
 
-    Identical content adds nothing, so running it again is harmless. Returns ``[(PartVersion, created)]``.
+    Identical content adds nothing, so running it again is harmless.
+
+    Parameters
+    ----------
+    store
+        The joint store (:class:`jointdb.store.Repository` or :class:`jointdb.client.RemoteRepository`).
+    catalogue_dir
+        The folder holding ``demo-stack.json`` (or ``stacks/demo-stack.json``) and ``models/``.
+    author
+        Who catalogues them (default: ``JOINTDB_AUTHOR`` or the login; a server records the token's owner).
+
+    Returns
+    -------
+    list of tuple
+        ``(PartVersion, created)`` per entry of :data:`BUNDLED_PARTS`, in that order; ``created`` is
+        False when the part's latest version already had this content.
     """
     root = Path(catalogue_dir)
     stack = root / "demo-stack.json"

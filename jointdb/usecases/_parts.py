@@ -29,6 +29,17 @@ SLOTS = {"tool": "tool", "holder": "holder", "spindle": "spindle"}
 def part_refs(doc: Any) -> dict[str, str]:
     """``slot -> reference`` of the slots of a stack document that name a part (``{"part": ref}``).
 
+    Parameters
+    ----------
+    doc
+        A parsed stack document (anything else names no part).
+
+    Returns
+    -------
+    dict of str to str
+        ``tool`` / ``holder`` / ``spindle`` -> the reference as written (``"name@version"`` or
+        ``"name@label"``, not yet checked); empty when no slot names a part.
+
     Raises
     ------
     InputError
@@ -114,10 +125,29 @@ def stack_from_document(doc: Any, store=None):
     """A :class:`jointdb.stack.StackSpec` from a parsed stack document whose parts may be catalogued
     references (resolved with :func:`resolve_stack_parts`; recorded in ``spec.parts``).
 
+    Parameters
+    ----------
+    doc
+        A parsed stack document (``jointdb-stack/1``).
+    store
+        Where named parts are read from: a joint store, a database URL or path, or None (the default
+        database); opened only when the document names a part.
+
+    Returns
+    -------
+    StackSpec
+        With a measured spindle's FRF set from its part's verified blob, and ``parts`` the provenance
+        of each part used (empty when none is named).
+
     Raises
     ------
     InputError
-        Naming the field, as :func:`jointdb.stack.stack_from_dict`.
+        Naming the field, as :func:`jointdb.stack.stack_from_dict`; a malformed reference or a part
+        of another kind than its slot.
+    NotFoundError
+        An unknown part, version or label.
+    IntegrityError
+        A part's record or blob that fails verification.
     """
     from jointdb.stack import MeasuredSpindle, stack_from_dict
 

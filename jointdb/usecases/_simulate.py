@@ -12,8 +12,14 @@ from jointdb.frf import FRF
 class TipSimulation:
     """Simulated cuts of one tool tip, with the modal model they ran on.
 
-    ``results``: one :class:`jointdb.stability.SimulationResult` per cut; ``model``: the tool-tip
-    :class:`jointdb.modal.ModalModel`; ``fit_quality``: NMSE of the modal fit per direction.
+    Parameters
+    ----------
+    results
+        One :class:`jointdb.stability.SimulationResult` per (speed, depth), in the order given.
+    model
+        The tool-tip :class:`jointdb.modal.ModalModel` (x/y) the cuts were simulated on.
+    fit_quality
+        Normalised mean square error of the modal fit per direction (DOF label -> NMSE, dimensionless).
     """
 
     results: tuple

@@ -56,6 +56,15 @@ class JointResolution:
         One line saying what was used.
     uncertainty
         The version's parameter covariance, if it was fitted with one.
+    method
+        How a database joint was chosen, one of ``METHODS`` (``pinned``, ``nearest``, ``simplex
+        interpolation``, ``edge``, ``catalogued condition``); empty otherwise.
+    neighbours
+        The catalogued versions used, ``(name, version, weight, distance)``: weight 1 for a single
+        joint, the interpolation weights otherwise; empty for a rigid or explicit joint.
+    choice_error
+        The leave-one-out joint-choice error model of a queried joint
+        (:class:`jointdb.store._loo.ChoiceErrorModel`), or None when the pool allows none.
     """
 
     interface: str
@@ -77,7 +86,21 @@ class JointResolution:
 
     def choice_perturbations(self, freq):
         """``(relative, scale)`` of the joint-choice error on ``freq`` over (x, θ), calibrated
-        (:meth:`jointdb.store._loo.ChoiceErrorModel.on_grid`), or None."""
+        (:meth:`jointdb.store._loo.ChoiceErrorModel.on_grid`), or None.
+
+        Parameters
+        ----------
+        freq : ndarray, shape (n_freq,)
+            Frequency lines [Hz] of the prediction.
+
+        Returns
+        -------
+        tuple or None
+            ``relative`` ``(m, n_freq, 2, 2)`` complex: each left-out joint's relative error of the
+            dynamic stiffness, DOFs in the order (x, θ); ``scale`` ``(m,)``: the request's distance over
+            that joint's, times ``CHOICE_CALIBRATION``. None without an error model, for a joint of
+            other than two DOFs, or a request on a catalogued condition (distance 0).
+        """
         m = self.choice_error
         if m is None or len(m.dofs) != 2 or m.distance <= 0:
             return None
