@@ -27,11 +27,11 @@ they validate.
 from __future__ import annotations
 
 import json
-from typing import Any
+from typing import Any, Callable
 
 from jointdb.errors import InputError
 
-__all__ = ["SCHEMAS", "validate", "json_schema", "schema_files", "SCHEMA_FILES"]
+__all__ = ["SCHEMAS", "parse", "validate", "Wording", "json_schema", "schema_files", "SCHEMA_FILES"]
 
 #: kind -> "module:Class"
 SCHEMAS: dict[str, str] = {
@@ -80,12 +80,26 @@ def _is_branch(part: Any) -> bool:
 
 def _loc(loc: tuple[Any, ...]) -> str:
     out = ""
+    tag_next = False  # a tagged union names the tag of the branch after its marker: not a field
     for part in loc:
         if isinstance(part, int):
             out += f"[{part}]"
+        elif tag_next:
+            tag_next = False
+        elif "tagged-union[" in str(part):
+            tag_next = True
         elif not _is_branch(part):
             out += ("." if out else "") + str(part)
     return out or "top level"
+
+
+def _field(err: dict[str, Any]) -> str:
+    """The field an error is about; a tag no branch of a tagged union has is the tag field's fault."""
+    loc = _loc(tuple(err.get("loc", ())))
+    if err.get("type") == "union_tag_invalid":
+        tag = str((err.get("ctx") or {}).get("discriminator", "")).strip("'")
+        loc = f"{loc}.{tag}" if loc != "top level" else tag
+    return loc
 
 
 _TEXT = {
@@ -108,20 +122,26 @@ _TEXT = {
 _BOUNDS = {"greater_than": ">", "greater_than_equal": ">=", "less_than": "<", "less_than_equal": "<="}
 
 
+def _shown(value: Any) -> str:
+    return json.dumps(value)[:60] if isinstance(value, (int, float, str, bool)) or value is None \
+        else type(value).__name__
+
+
 def _message(err: dict[str, Any]) -> str:
     kind = err.get("type", "")
     if kind in ("extra_forbidden", "missing"):
         return _TEXT[kind]
     if kind == "value_error":  # a rule of the model itself, already in words
         return str(err.get("msg", "invalid")).removeprefix("Value error, ")
-    value = err.get("input")
-    shown = json.dumps(value)[:60] if isinstance(value, (int, float, str, bool)) or value is None else type(value).__name__
+    shown = _shown(err.get("input"))
     ctx = err.get("ctx") or {}
     if kind in _BOUNDS:
         bound = next(iter(ctx.values()), "?")
         text = f"must be {_BOUNDS[kind]} {bound:g}" if isinstance(bound, (int, float)) else f"must be {_BOUNDS[kind]} {bound}"
     elif kind == "literal_error":
         text = f"must be one of {ctx.get('expected', '?')}"
+    elif kind == "union_tag_invalid":
+        text, shown = f"must be one of {ctx.get('expected_tags', '?')}", _shown(ctx.get("tag"))
     elif kind == "too_short":
         text = f"needs at least {ctx.get('min_length', '?')} item(s)"
     elif kind == "too_long":
@@ -131,16 +151,58 @@ def _message(err: dict[str, Any]) -> str:
     return f"{text}, got {shown}"
 
 
-def validate(kind: str, data: Any, where: str = "") -> Any:
+#: A reader's own wording of a schema error: ``(field, error) -> "field: text"`` or None (the
+#: default wording). ``error`` is pydantic's error dict; for a value that fits none of the forms
+#: of a union its ``type`` is ``"union_none"``.
+Wording = Callable[[str, dict[str, Any]], "str | None"]
+
+
+def _explain(kind: str, errors: list[dict[str, Any]], wording: Wording | None) -> str:
+    """The most specific problem of a failed validation as one line ``"<field>: <reason>"``."""
+    locs = [_field(e) for e in errors]
+    # the most specific problem: the deepest field reached (a union branch that got furthest)
+    depth = [loc.count(".") + loc.count("[") if loc != "top level" else -1 for loc in locs]
+    specific = [e.get("type") not in ("missing", "extra_forbidden") for e in errors]
+    best = max(range(len(errors)), key=lambda k: (depth[k], specific[k], -k))
+    # several union branches failing on the value itself: none of the forms fits
+    same = [k for k in range(len(errors)) if locs[k] == locs[best] and specific[k]]
+    err = dict(errors[best], type="union_none") if len(same) > 1 else errors[best]
+    own = wording(locs[best], err) if wording is not None else None
+    if own is not None:
+        return own
+    if len(same) > 1:
+        return (f"{locs[best]}: fits none of the allowed forms (see docs/schemas/{SCHEMA_FILES[kind]}), "
+                f"got {_shown(err.get('input'))}")
+    return f"{locs[best]}: {_message(err)}"
+
+
+def parse(kind: str, data: Any, where: str = "", wording: Wording | None = None) -> Any:
     """Validate a parsed JSON document against the schema of ``kind``; return the pydantic model.
+
+    Parameters
+    ----------
+    kind : str
+        A key of :data:`SCHEMAS` (``"model"``, ``"stack"``, ``"campaign"`` ...).
+    data : Any
+        The parsed JSON document.
+    where : str
+        Prefix of the error message (the file name), empty for none.
+    wording : callable, optional
+        The reader's own wording of an error, ``(field, error) -> "field: text"`` or None
+        for the default; lets a reader keep the messages its users know.
+
+    Returns
+    -------
+    pydantic.BaseModel
+        The validated document (frozen).
 
     Raises
     ------
     InputError
         One line ``"<where>: <field>: <reason>"`` for the most specific problem,
-        e.g. ``stack.json: tool.segments[0].length: Input should be greater than
-        or equal to 1e-06, got -0.01``. Where a field may take several forms
-        (a joint choice, a material) and the value fits none, the line says so.
+        e.g. ``stack.json: tool.segments[0].length: must be >= 1e-06, got -0.01``.
+        Where a field may take several forms (a joint choice, a material) and the
+        value fits none, the line says so.
     """
     from pydantic import ValidationError
 
@@ -148,22 +210,33 @@ def validate(kind: str, data: Any, where: str = "") -> Any:
     try:
         return model.model_validate(data)
     except ValidationError as exc:
-        errors = exc.errors(include_url=False)
-        locs = [_loc(tuple(e.get("loc", ()))) for e in errors]
-        # the most specific problem: the deepest field reached (a union branch that got furthest)
-        depth = [loc.count(".") + loc.count("[") if loc != "top level" else -1 for loc in locs]
-        specific = [e.get("type") not in ("missing", "extra_forbidden") for e in errors]
-        best = max(range(len(errors)), key=lambda k: (depth[k], specific[k], -k))
-        # several union branches failing on the value itself: none of the forms fits
-        same = [k for k in range(len(errors)) if locs[k] == locs[best] and specific[k]]
-        prefix = f"{where}: " if where else ""
-        if len(same) > 1:
-            value = errors[best].get("input")
-            shown = json.dumps(value)[:60] if isinstance(value, (int, float, str, bool)) or value is None \
-                else type(value).__name__
-            raise InputError(f"{prefix}{locs[best]}: fits none of the allowed forms (see docs/schemas/"
-                             f"{SCHEMA_FILES[kind]}), got {shown}") from None
-        raise InputError(f"{prefix}{locs[best]}: {_message(errors[best])}") from None
+        text = _explain(kind, exc.errors(include_url=False), wording)
+        raise InputError(f"{where}: {text}" if where else text) from None
+
+
+def validate(kind: str, data: Any, where: str = "") -> Any:
+    """Validate a parsed JSON document against the schema of ``kind`` in the schema's own words.
+
+    Parameters
+    ----------
+    kind : str
+        A key of :data:`SCHEMAS`.
+    data : Any
+        The parsed JSON document.
+    where : str
+        Prefix of the error message (the file name), empty for none.
+
+    Returns
+    -------
+    pydantic.BaseModel
+        The validated document.
+
+    Raises
+    ------
+    InputError
+        As :func:`parse` without a reader's wording.
+    """
+    return parse(kind, data, where)
 
 
 def json_schema(kind: str) -> dict[str, Any]:
