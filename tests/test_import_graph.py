@@ -51,13 +51,14 @@ LAYERS = {
     "jointdb.stability": "core",
     "jointdb.diagnose": "core",
     "jointdb.diagnose_bench": "core",
+    "jointdb.schemas": "core",  # the file schemas (pydantic): the model and stack readers parse with them
     # files, wire formats, the store and its HTTP implementation
     "jointdb.io": "store",
     "jointdb.store": "store",
     "jointdb.migrations": "store",  # the Alembic environment, shipped in the wheel as jointdb/migrations
     "jointdb.client": "store",  # the store over HTTP: imports no server code
     "jointdb.plots": "store",
-    "jointdb.schemas": "store",
+    "jointdb.schemas.__main__": "store",  # writes the published files (io's atomic write)
     "jointdb._output": "store",  # tables / JSON on stdout, atomic output files
     "jointdb._mdtable": "store",
     # application layer: the use cases (a campaign reads its files and identifies)

@@ -46,7 +46,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from jointdb._jsonfile import read_json_file
-from jointdb._limits import LENGTH_RANGE, check_model_limits
+from jointdb._limits import check_model_limits
 from jointdb.errors import InputError
 from jointdb.fe._ingredients import (
     Clamp,
@@ -96,8 +96,6 @@ def _wording(field: str, err: dict[str, Any]) -> str | None:
     material = re.fullmatch(r"(.*)\.(E|nu|rho)", field)
     if material and kind in ("greater_than", "greater_than_equal", "less_than", "less_than_equal"):
         return f"{material.group(1)}: {material.group(2)} {_MATERIAL_RANGE[material.group(2)]}, got {value:g}"
-    if kind == "greater_than_equal" and (err.get("ctx") or {}).get("ge") == LENGTH_RANGE[0]:
-        return f"{field}: must be > 0, got {value:g}"  # a length or diameter (the range below 1 µm: _limits)
     if kind == "union_none" and field.endswith(".contact"):
         return f'{field}: must be "rigid" or a contact layer {{"stiffness_per_length": ...}}, got {value!r}'
     if kind == "union_none" and field.endswith("material"):
