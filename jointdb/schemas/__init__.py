@@ -32,7 +32,7 @@ from typing import Any, Callable
 from jointdb._limits import LENGTH_RANGE
 from jointdb.errors import InputError
 
-__all__ = ["SCHEMAS", "parse", "validate", "Wording", "json_schema", "schema_files", "SCHEMA_FILES"]
+__all__ = ["SCHEMAS", "parse", "validate", "describe_error", "Wording", "json_schema", "schema_files", "SCHEMA_FILES"]
 
 #: kind -> "module:Class"
 SCHEMAS: dict[str, str] = {
@@ -180,6 +180,25 @@ def _explain(kind: str, errors: list[dict[str, Any]], wording: Wording | None) -
     return f"{locs[best]}: {_message(err)}"
 
 
+def describe_error(exc: Any, kind: str, wording: Wording | None = None) -> str:
+    """One line ``"<field>: <reason>"`` for a pydantic ``ValidationError`` of a model of ``kind``.
+
+    Parameters
+    ----------
+    exc : pydantic.ValidationError
+        The error of validating a document (or a part of one) of that kind.
+    kind : str
+        A key of :data:`SCHEMAS`; names the published schema where no form of a union fits.
+    wording : callable, optional
+        A reader's own wording, as for :func:`parse`.
+
+    Returns
+    -------
+    str
+    """
+    return _explain(kind, exc.errors(include_url=False), wording)
+
+
 def parse(kind: str, data: Any, where: str = "", wording: Wording | None = None) -> Any:
     """Validate a parsed JSON document against the schema of ``kind``; return the pydantic model.
 
@@ -214,7 +233,7 @@ def parse(kind: str, data: Any, where: str = "", wording: Wording | None = None)
     try:
         return model.model_validate(data)
     except ValidationError as exc:
-        text = _explain(kind, exc.errors(include_url=False), wording)
+        text = describe_error(exc, kind, wording)
         raise InputError(f"{where}: {text}" if where else text) from None
 
 

@@ -12,6 +12,7 @@ from typing import Any, Literal, Optional
 
 from pydantic import BaseModel, ConfigDict, Field
 
+from jointdb.errors import InputError
 from jointdb.schemas.campaign import Conditions as CampaignConditions
 
 
@@ -20,7 +21,21 @@ class Strict(BaseModel):
 
 
 class ConditionsIn(CampaignConditions):
-    """A joint's conditions, as in a campaign file (materials, torque, preload, geometry, extra)."""
+    """A joint's conditions, as in a campaign file (materials, torque, preload, geometry, extra).
+
+    Built in Python (a web form's fields), a value out of range is an :class:`InputError`
+    naming the field, as the repository's own rules would give.
+    """
+
+    def __init__(self, **data: Any) -> None:
+        from pydantic import ValidationError
+
+        from jointdb.schemas import describe_error
+
+        try:
+            super().__init__(**data)
+        except ValidationError as exc:
+            raise InputError(f"conditions.{describe_error(exc, 'campaign')}") from None
 
     def to_conditions(self):
         """The store's :class:`~jointdb.store.Conditions` of these conditions."""
