@@ -41,8 +41,8 @@ from typing import Any
 
 import numpy as np
 
-from jointdb._jsonfile import read_json_file
-from jointdb._limits import check_lines
+from jointdb.schemas._jsonfile import read_json_file
+from jointdb.schemas._limits import check_lines
 from jointdb.errors import InputError
 from jointdb.frf import FRF, Dof, Quantity, dofs
 

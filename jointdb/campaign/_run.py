@@ -230,7 +230,7 @@ def identify_campaign(c: Campaign) -> IdentifyOutcome:
 
 def joint_attrs(out: IdentifyOutcome) -> dict:
     """Metadata stored with the joint FRF in the HDF5 exchange file."""
-    from jointdb._output import to_jsonable
+    from jointdb.io._jsonable import to_jsonable
 
     rep = to_jsonable(out.report())
     method = (out.quality or {}).get("method", "irc")

@@ -5,7 +5,7 @@ Part A (structural model): build a tool model from the model file bundled in
 write it (UFF58 + CSV) and a Bode plot into ``OUT/tool-model/``. Each step is
 one small function taking and returning a :class:`DemoState` (:data:`STEPS`).
 
-Part B (the journey, :func:`jointdb._journey.run_main_job`): identify and
+Part B (the journey, :func:`jointdb.usecases._demo.run_main_job`): identify and
 catalogue the bundled campaigns, query the nearest joint for a new stack,
 predict its tool-tip FRF and draw its stability lobes, into ``OUT/``.
 """
@@ -43,7 +43,7 @@ class DemoState:
 
 
 def _say(text: str) -> None:
-    from jointdb._output import message
+    from jointdb.cli._output import message
 
     message(text)
 
@@ -81,7 +81,7 @@ def step_model(state: DemoState) -> DemoState:
 
 def step_modes(state: DemoState) -> DemoState:
     """2. Natural frequencies (printed as a table) and modes.json."""
-    from jointdb._output import emit
+    from jointdb.cli._output import emit
     from jointdb.cli._models import mode_rows
 
     modes = state.model.modes(6)
@@ -153,9 +153,9 @@ STEPS: list[Callable[[DemoState], DemoState]] = [step_model, step_modes, step_ti
 def run_demo(out: Path, model_path: Path | None = None, db_url: str | None = None) -> tuple[DemoState, Any]:
     """Run part A (:data:`STEPS`) into ``out/tool-model`` and part B (the journey) into ``out``.
 
-    Returns the structural-model state and the :class:`jointdb._journey.JourneyResult`.
+    Returns the structural-model state and the :class:`jointdb.usecases._demo.JourneyResult`.
     """
-    from jointdb._journey import run_main_job
+    from jointdb.usecases._demo import run_main_job
 
     out = Path(out)
     if out.exists() and not out.is_dir():

@@ -2,7 +2,7 @@
 
 Thin: files are read here, the numerics live in :mod:`jointdb.diagnose`, the
 benchmark in :mod:`jointdb.diagnose_bench`; output goes through
-:mod:`jointdb._output`. Nothing is written unless the diagnosis succeeded.
+:mod:`jointdb.cli._output`. Nothing is written unless the diagnosis succeeded.
 """
 
 from __future__ import annotations
@@ -140,7 +140,7 @@ def _read_with_gaps(path: Path, sets: list, bad: dict):
 
 def _write_augmented(result, nominal, out: Path) -> list[str]:
     """Write the augmented model(s) as JSON (one per level when they differ); the files written."""
-    from jointdb._output import message
+    from jointdb.cli._output import message
     from jointdb.fe import model_to_dict
 
     written: list[str] = []
@@ -162,7 +162,7 @@ def _write_augmented(result, nominal, out: Path) -> list[str]:
 
 def _render_diagnosis(result) -> None:
     """The verdict, the ranked explanations, the modes before, the per-level tables."""
-    from jointdb._output import emit
+    from jointdb.cli._output import emit
 
     emit(result.verdict)
     emit(result.table()[:8], title="ranked explanations (BIC; ΔBIC vs the nominal model)")
@@ -194,7 +194,7 @@ def diagnose_cmd(
 
     Example: jointdb diagnose tool.json tap-tip.uff --map 1=tip,2=flute,3=shank --plots figs --out tool-fixed.json
     """
-    from jointdb._output import emit, message
+    from jointdb.cli._output import emit, message
     from jointdb.diagnose import diagnose
     from jointdb.diagnose_bench import single_blas_thread
     from jointdb.fe import load_model
@@ -247,7 +247,7 @@ def _run_cases(jobs: list, t0: float) -> list:
     import sys
     import time
 
-    from jointdb._output import message, progress, progress_line
+    from jointdb.cli._output import message, progress, progress_line
     from jointdb.diagnose_bench import generate_case, run_case, single_blas_thread
 
     results = []
@@ -270,7 +270,7 @@ def _render_bench(bench, per: list, rows: list, cols: list, m) -> None:
     """Per effect, the confusion matrix and the summary lines, for people."""
     import statistics
 
-    from jointdb._output import emit
+    from jointdb.cli._output import emit
 
     cols_show = ["effect", "cases", "named_first_pct", "top3_pct", "median_improvement",
                  "improved_3x_when_named_pct", "median_mismatch_before_pct", "median_mismatch_after_pct",
@@ -309,7 +309,7 @@ def diagnose_bench_cmd(
 
     Example: jointdb diagnose-bench --cases 20 --seed 1000
     """
-    from jointdb._output import emit, message, write_rows
+    from jointdb.cli._output import emit, message, write_rows
     from jointdb.cli._options import check_out
     from jointdb.diagnose_bench import EFFECTS
 
@@ -359,7 +359,7 @@ def register(app: typer.Typer) -> None:
 
 
 def _write_cases(directory: Path, effects, seed: int) -> None:
-    from jointdb._output import message
+    from jointdb.cli._output import message
     from jointdb.diagnose_bench import generate_case
     from jointdb.io import write_uff58
 

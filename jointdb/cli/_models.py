@@ -1,6 +1,6 @@
 """CLI: structural models — ``jointdb modes`` and ``jointdb frf``.
 
-Thin: parse options, call :mod:`jointdb.fe`, render with :mod:`jointdb._output`;
+Thin: parse options, call :mod:`jointdb.fe`, render with :mod:`jointdb.cli._output`;
 file writers (:mod:`jointdb.io`) and plots (:mod:`jointdb.plots._frf`) are
 imported only inside the commands that need them.
 """
@@ -15,7 +15,7 @@ import typer
 
 from jointdb.cli._options import LegacyPlotOpt, PlotsOpt, plot_file, plots_dir
 
-from jointdb._limits import check_lines
+from jointdb.schemas._limits import check_lines
 from jointdb.errors import InputError
 
 
@@ -118,12 +118,12 @@ def modes_cmd(
     modes = model.modes(n)
     rows = mode_rows(modes)
     if out is not None:
-        from jointdb._output import message, write_rows
+        from jointdb.cli._output import message, write_rows
 
         write_rows(out, rows, kind="modes", meta={"model": model.name or model_file.name, "theory": model.theory})
         message(f"wrote {out}")
     if as_json:
-        from jointdb._output import emit
+        from jointdb.cli._output import emit
 
         emit(
             {
@@ -137,7 +137,7 @@ def modes_cmd(
             as_json=True,
         )
         return
-    from jointdb._output import emit
+    from jointdb.cli._output import emit
 
     title = f"{model.name or model_file.name} — {model.theory}, {model.kind}, {len(modes.dof_labels)} DOF"
     emit(rows, columns=["mode", "freq_hz", "type"], title=title)
@@ -170,7 +170,7 @@ def frf_cmd(
 
     Example: jointdb frf fixtures/models/end-mill-in-holder.json --points tip --fmax 8000 --df 2 --out tip.uff --plots figs
     """
-    from jointdb._output import emit, message
+    from jointdb.cli._output import emit, message
     from jointdb.fe import load_model, rigid_body_count
     from jointdb.frf import Quantity
 

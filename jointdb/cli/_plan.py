@@ -25,7 +25,7 @@ def register(app: typer.Typer) -> None:
 
         Example: jointdb plan fixtures/campaigns/th-steel-30nm/campaign.json --measurements 2 --target 0.02
         """
-        from jointdb._output import emit
+        from jointdb.cli._output import emit
         from jointdb.campaign import load_campaign
         from jointdb.campaign._plan import plan_campaign
         from jointdb.errors import InputError

@@ -17,7 +17,7 @@ from jointdb.cli._options import LegacyPlotOpt, PlotsOpt, plot_file, plots_dir
 
 def _frequency_override(spec, fmin, fmax, df):
     """The prediction's lines when --fmin/--fmax/--df override the stack file's grid, else None."""
-    from jointdb._limits import check_lines
+    from jointdb.schemas._limits import check_lines
     from jointdb.errors import InputError
     from jointdb.stack import FrequencyGrid, prediction_grid
 
@@ -36,7 +36,7 @@ def _frequency_override(spec, fmin, fmax, df):
 
 def _report_joint_choices(joints) -> None:
     """On stderr: the joint version chosen per interface (and the next ones), extrapolation, warnings."""
-    from jointdb._output import message
+    from jointdb.cli._output import message
 
     for res in joints:
         if res.candidates:
@@ -79,7 +79,7 @@ def predict(
     Example: jointdb predict fixtures/stacks/endmill-modelled-spindle.json --out tip.uff --plots figs
     """
     from jointdb import usecases
-    from jointdb._output import emit, message
+    from jointdb.cli._output import emit, message
     from jointdb.errors import InputError
 
     plot = plots_dir(plots, plot, one_file=True)

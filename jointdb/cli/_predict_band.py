@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from jointdb._output import message
+from jointdb.cli._output import message
 
 
 def band_for(result, n: int = 200, seed: int = 0):

@@ -8,7 +8,7 @@ from typing import Optional
 import numpy as np
 import typer
 
-from jointdb._output import emit, message, progress, write_rows
+from jointdb.cli._output import emit, message, progress, write_rows
 from jointdb.cli._options import (
     LegacyPlotOpt,
     PlotsOpt,

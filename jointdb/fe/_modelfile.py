@@ -45,8 +45,8 @@ import re
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from jointdb._jsonfile import read_json_file
-from jointdb._limits import check_model_limits
+from jointdb.schemas._jsonfile import read_json_file
+from jointdb.schemas._limits import check_model_limits
 from jointdb.errors import InputError
 from jointdb.fe._ingredients import (
     Clamp,
@@ -226,7 +226,7 @@ def model_from_dict(data: Any) -> BeamModel:
     ------
     InputError
         Naming the exact field that is wrong, e.g. ``segments[1].outer_diameter: must be > 0, got 0``,
-        or a resource limit exceeded (segments, elements, magnitudes; see :mod:`jointdb._limits`).
+        or a resource limit exceeded (segments, elements, magnitudes; see :mod:`jointdb.schemas._limits`).
     """
     from jointdb.schemas import parse
 

@@ -29,7 +29,7 @@ from __future__ import annotations
 import json
 from typing import Any, Callable
 
-from jointdb._limits import LENGTH_RANGE
+from jointdb.schemas._limits import LENGTH_RANGE
 from jointdb.errors import InputError
 
 __all__ = ["SCHEMAS", "parse", "validate", "describe_error", "Wording", "json_schema", "schema_files", "SCHEMA_FILES"]
@@ -137,7 +137,7 @@ def _message(err: dict[str, Any]) -> str:
     shown = _shown(err.get("input"))
     ctx = err.get("ctx") or {}
     if kind == "greater_than_equal" and ctx.get("ge") == LENGTH_RANGE[0] and isinstance(err.get("input"), (int, float)) \
-            and err["input"] <= 0:  # a length or diameter; the range above 0 is jointdb._limits' to report
+            and err["input"] <= 0:  # a length or diameter; the range above 0 is jointdb.schemas._limits' to report
         return f"must be > 0, got {shown}"
     if kind in _BOUNDS:
         bound = next(iter(ctx.values()), "?")

@@ -15,7 +15,7 @@ from __future__ import annotations
 import re
 from typing import TYPE_CHECKING, Any
 
-from jointdb._limits import LENGTH_RANGE, check_elements, check_model_limits
+from jointdb.schemas._limits import LENGTH_RANGE, check_elements, check_model_limits
 from jointdb.errors import InputError
 from jointdb.stack._spec import (
     FORMAT,
@@ -61,7 +61,7 @@ def _wording(field: str, err: dict[str, Any]) -> str | None:
         bound = next(iter((err.get("ctx") or {}).values()))
         op = _BOUNDS[kind]
         if kind == "greater_than_equal" and bound == LENGTH_RANGE[0] and value <= 0:
-            op, bound = ">", 0  # a length or diameter; the range above 0 is jointdb._limits' to report
+            op, bound = ">", 0  # a length or diameter; the range above 0 is jointdb.schemas._limits' to report
         return f"{field}: must be {op} {bound:g} (got {value:g})"
     if kind == "too_short" and field.endswith("segments"):
         return f"{field}: must be a non-empty list"

@@ -26,7 +26,7 @@ from typing import Any
 
 import numpy as np
 
-from jointdb._limits import check_text
+from jointdb.schemas._limits import check_text
 from jointdb.errors import InputError, IntegrityError, JointdbError, NotFoundError
 from jointdb.frf import FRF
 from jointdb.store._blobformat import frf_sha256, read_frf_group

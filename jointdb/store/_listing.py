@@ -32,7 +32,7 @@ from types import SimpleNamespace
 from sqlalchemy import and_, exists, false, func, literal, or_, select, true
 from sqlalchemy.orm import aliased
 
-from jointdb._limits import control_character
+from jointdb.schemas._limits import control_character
 from jointdb.errors import InputError, IntegrityError
 from jointdb.store._models import JointRow, LabelRow, QueryVersionRow, VersionRow
 from jointdb.store._records import DamagedVersion, to_version

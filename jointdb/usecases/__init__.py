@@ -6,7 +6,7 @@ between the store / io / numeric core below and the shells above (``jointdb.cli`
 the logic lives here, once, so the CLI and the service cannot drift apart (they import
 this package, never each other). Measurement campaigns (reading, identification,
 coupling) are the sibling package :mod:`jointdb.campaign`; the demo's job is
-:mod:`jointdb._journey`, which calls these functions.
+:mod:`jointdb.usecases._demo`, which calls these functions.
 
 Campaigns (:mod:`jointdb.usecases._catalogue`; planning a campaign is :func:`jointdb.campaign._plan.plan_campaign`)
     identify              -- read, check and identify a campaign file (IRC)

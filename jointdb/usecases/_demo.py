@@ -65,7 +65,7 @@ def bundled_catalogue(stack: ExitStack) -> Path:
 
 
 def _write_json(path: Path, data: Any) -> Path:
-    from jointdb._output import to_jsonable
+    from jointdb.io._jsonable import to_jsonable
     from jointdb.io._atomic import atomic_path
 
     with atomic_path(path) as tmp:  # like every other output file: whole or not at all
@@ -271,7 +271,7 @@ def _predict(repo, spec, resolutions, result: JourneyResult, say: Callable[[str]
     """Step 3: the tool-tip FRF with the chosen joints and with rigid ones, the cross-check with
     interpolated joints, the uncertainty bands; ``tip.uff``, ``tip.csv``, ``tip-vs-rigid.png``."""
     from jointdb import io
-    from jointdb._journey_band import journey_bands
+    from jointdb.usecases._demo_band import journey_bands
     from jointdb.plots._stack import joints_legend, save_tip_comparison
     from jointdb.stack import prediction_grid
     from jointdb.usecases import predict_with_joints
