@@ -70,33 +70,6 @@ def write_frf_file(path: Path, frf, *, binary: bool = False) -> str:
     return frf_format(path)
 
 
-def mode_rows(modes) -> list[dict]:
-    """One row per mode: number, frequency [Hz], and its dominant motion."""
-    labels = modes.dof_labels
-    dirs = np.array([d.direction for d in labels])
-    families = {
-        "bending x-z": np.isin(dirs, ["x", "ry"]),
-        "bending y-z": np.isin(dirs, ["y", "rx"]),
-        "axial": dirs == "z",
-        "torsion": dirs == "rz",
-    }
-    planar = not families["axial"].any()
-    rows = []
-    for k, f in enumerate(modes.freq_hz):
-        shape = modes.shapes[:, k]
-        if k < modes.n_rigid:
-            kind = "rigid body"
-        elif planar:
-            kind = "bending"
-        else:
-            share = {name: float(np.sum(shape[mask] ** 2)) for name, mask in families.items()}
-            total = sum(share.values()) or 1.0
-            name = max(share, key=share.get)
-            kind = name if share[name] / total > 0.9 else "mixed"
-        rows.append({"mode": k + 1, "freq_hz": float(f), "type": kind})
-    return rows
-
-
 def modes_cmd(
     model_file: Annotated[Path, typer.Argument(metavar="MODEL.json", help="Beam model description (JSON).")],
     n: Annotated[int, typer.Option("--n", help="Number of lowest modes.")] = 10,
@@ -116,6 +89,8 @@ def modes_cmd(
     check_out(out, (".csv", ".json", ".h5", ".hdf5"))
     model = load_model(model_file)
     modes = model.modes(n)
+    from jointdb.usecases import mode_rows
+
     rows = mode_rows(modes)
     if out is not None:
         from jointdb.cli._output import message, write_rows

@@ -19,6 +19,9 @@ Stacks (:mod:`jointdb.usecases._stack`)
     resolve_joints        -- each interface's joint from the catalogue (:class:`JointResolution`)
     predict_stack         -- resolve, then predict the tool-tip FRF (:class:`StackPrediction`)
     predict_with_joints   -- predict the tool-tip FRF with joints already resolved
+The demo (:mod:`jointdb.usecases._tool_model`, :mod:`jointdb.usecases._demo`)
+    run_demo              -- part A (tool model, modes, tip FRF, files) then the main job
+    mode_rows             -- one row per mode: number, frequency [Hz], dominant motion
 Lobes (:mod:`jointdb.usecases._lobes`)
     stability_lobes       -- milling (ZOA) or turning lobes of a tool-tip FRF over a speed grid
 Files (:mod:`jointdb.usecases._files`)
@@ -46,6 +49,7 @@ from jointdb.usecases._files import (
     write_joint_file,
 )
 from jointdb.usecases._lobes import stability_lobes
+from jointdb.usecases._tool_model import mode_rows, run_demo
 from jointdb.usecases._stack import (
     INTERPOLATION_POOL,
     JointResolution,
@@ -77,4 +81,6 @@ __all__ = [
     "predict_stack",
     "predict_with_joints",
     "resolve_joints",
+    "mode_rows",
+    "run_demo",
 ]

@@ -176,14 +176,14 @@ def run_main_job(
 
 def _catalogue(repo, cat: Path, result: JourneyResult, say: Callable[[str], None]) -> None:
     """Step 1: identify and catalogue every bundled campaign (one row each, ``catalogue.csv``)."""
-    from jointdb import usecases
+    from jointdb.usecases import _catalogue
 
     campaigns = sorted((cat / "campaigns").glob("*/campaign.json"))
     kinds = _joint_types(campaigns)
     say(f"[1/4] identify and catalogue {len(campaigns)} campaigns "
         f"({', '.join(f'{n} {t}' for t, n in kinds.items())}; IRC, docs/theory.md §2a)")
     for path in campaigns:
-        outcome = usecases.catalogue_campaign(repo, path)
+        outcome = _catalogue.catalogue_campaign(repo, path)
         row = {"joint_type": outcome.campaign.joint_type, **outcome.row(),
                **_condition_columns(outcome.campaign.conditions)}
         truth_file = path.parent / "truth.json"
@@ -203,17 +203,17 @@ def _catalogue(repo, cat: Path, result: JourneyResult, say: Callable[[str], None
 
 def _query(repo, cat: Path, result: JourneyResult, say: Callable[[str], None]):
     """Step 2: read the new stack and choose the nearest catalogued joint at each interface."""
-    from jointdb import usecases
+    from jointdb.usecases import _files, _stack
     from jointdb.plots._stack import save_joint_distances
     from jointdb.stack import stack_to_dict
 
     out = result.out_dir
-    spec = usecases.load_stack(cat / "demo-stack.json")
+    spec = _files.load_stack(cat / "demo-stack.json")
     result.files.append(_write_json(out / "stack.json", stack_to_dict(spec)))
     say(f"[2/4] new stack: {spec.name}")
     say(f"      tool {spec.tool.length * 1e3:.0f} mm ({spec.gauge_length * 1e3:.0f} mm gauge, "
         f"{spec.insertion_length * 1e3:.0f} mm inserted), holder {spec.holder.length * 1e3:.0f} mm")
-    resolutions = usecases.resolve_joints(spec, repo)
+    resolutions = _stack.resolve_joints(spec, repo)
     for res in resolutions.values():
         row = res.row()
         result.joints.append({**row, "candidates": [list(c) for c in res.candidates]})
@@ -274,7 +274,7 @@ def _predict(repo, spec, resolutions, result: JourneyResult, say: Callable[[str]
     from jointdb.usecases._demo_band import journey_bands
     from jointdb.plots._stack import joints_legend, save_tip_comparison
     from jointdb.stack import prediction_grid
-    from jointdb.usecases import predict_with_joints
+    from jointdb.usecases._stack import predict_with_joints
 
     out = result.out_dir
     say("[3/4] predict the tool-tip FRF (three-component receptance coupling, docs/theory.md §4)")
@@ -304,7 +304,7 @@ def _predict(repo, spec, resolutions, result: JourneyResult, say: Callable[[str]
 def _cross_check(repo, spec, resolutions, grid, result: JourneyResult, say: Callable[[str], None]) -> list:
     """The same stack with the queried joints interpolated between the catalogued conditions (when a
     query had neighbours): ``[(legend, tip FRF)]`` for the comparison plot, or ``[]``."""
-    from jointdb import usecases
+    from jointdb.usecases import _stack
     from jointdb.plots._stack import joints_legend
 
     queried = {n for n, r in resolutions.items() if r.kind == "query" and len(r.candidates) > 1}
@@ -314,8 +314,8 @@ def _cross_check(repo, spec, resolutions, grid, result: JourneyResult, say: Call
         n: dataclasses.replace(c, interpolate=True, neighbours=2) if n in queried else c
         for n, c in spec.interfaces.items()
     })
-    ires = usecases.resolve_joints(ispec, repo)
-    ipred = usecases.predict_with_joints(ispec, ires, grid).prediction
+    ires = _stack.resolve_joints(ispec, repo)
+    ipred = _stack.predict_with_joints(ispec, ires, grid).prediction
     irow = ipred.summary()[0]
     result.interpolated = {"joints": {n: ires[n].description for n in queried}, **irow}
     say("      cross-check, both queried interfaces interpolated:" if len(queried) > 1 else "      cross-check:")
