@@ -105,10 +105,10 @@ async def _measure(repo, requests: list[dict]) -> dict[str, list[float]]:
     return times
 
 
-def run_backend(label: str, url: str, per_joint: int, n_requests: int) -> list[str]:
+def run_backend(label: str, url: str, per_joint: int, n_requests: int, blobs: Path) -> list[str]:
     from jointdb.store import Repository
 
-    repo = Repository(url)
+    repo = Repository(url, blobs=blobs)  # no blob is read: a listing touches rows only
     try:
         t0 = time.perf_counter()
         bulk_fill(repo, N_VERSIONS, per_joint)
@@ -142,7 +142,7 @@ def _pg_url(args) -> str | None:
     return url
 
 
-def run_pg(base: str, per_joint: int, n_requests: int) -> list[str]:
+def run_pg(base: str, per_joint: int, n_requests: int, blobs: Path) -> list[str]:
     """The PostgreSQL row in a schema of its own, dropped afterwards."""
     import sqlalchemy as sa
 
@@ -154,7 +154,7 @@ def run_pg(base: str, per_joint: int, n_requests: int) -> list[str]:
         conn.exec_driver_sql(f"CREATE SCHEMA {schema}")
     sep = "&" if "?" in base else "?"
     try:
-        return run_backend("PostgreSQL", f"{base}{sep}options=-csearch_path%3D{schema}", per_joint, n_requests)
+        return run_backend("PostgreSQL", f"{base}{sep}options=-csearch_path%3D{schema}", per_joint, n_requests, blobs)
     finally:
         with admin.begin() as conn:  # the DDL guard a migration installed would refuse the drop: it goes first
             for name in event_trigger_names(schema):
@@ -173,12 +173,13 @@ def main(argv=None) -> None:
     print(f"bench_listing  {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}  load average "
           f"{' '.join(f'{x:.1f}' for x in os.getloadavg())} on {os.cpu_count()} cores")
     with tempfile.TemporaryDirectory() as tmp:
-        for line in run_backend("SQLite", f"sqlite:///{Path(tmp) / 'cat.sqlite'}", args.per_joint, args.requests):
-            print(line)
-    pg = _pg_url(args)
-    if pg:
-        for line in run_pg(pg, args.per_joint, args.requests):
-            print(line)
+        for line in run_backend("SQLite", f"sqlite:///{Path(tmp) / 'cat.sqlite'}", args.per_joint, args.requests,
+                                Path(tmp) / "blobs"):
+            print(line, flush=True)
+        pg = _pg_url(args)
+        if pg:
+            for line in run_pg(pg, args.per_joint, args.requests, Path(tmp) / "pg-blobs"):
+                print(line, flush=True)
 
 
 if __name__ == "__main__":
