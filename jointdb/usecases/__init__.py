@@ -19,6 +19,8 @@ Stacks (:mod:`jointdb.usecases._stack`)
     resolve_joints        -- each interface's joint from the catalogue (:class:`JointResolution`)
     predict_stack         -- resolve, then predict the tool-tip FRF (:class:`StackPrediction`)
     predict_with_joints   -- predict the tool-tip FRF with joints already resolved
+Planning (:mod:`jointdb.usecases._plan`)
+    plan_measurements     -- rank a campaign's candidate tap points (:class:`CampaignPlan`)
 The demo (:mod:`jointdb.usecases._tool_model`, :mod:`jointdb.usecases._demo`)
     run_demo              -- part A (tool model, modes, tip FRF, files) then the main job
     mode_rows             -- one row per mode: number, frequency [Hz], dominant motion
@@ -49,6 +51,7 @@ from jointdb.usecases._files import (
     write_joint_file,
 )
 from jointdb.usecases._lobes import stability_lobes
+from jointdb.usecases._plan import CampaignPlan, plan_measurements
 from jointdb.usecases._tool_model import mode_rows, run_demo
 from jointdb.usecases._stack import (
     INTERPOLATION_POOL,
@@ -83,4 +86,6 @@ __all__ = [
     "resolve_joints",
     "mode_rows",
     "run_demo",
+    "CampaignPlan",
+    "plan_measurements",
 ]
