@@ -19,6 +19,9 @@ Stacks (:mod:`jointdb.usecases._stack`)
     resolve_joints        -- each interface's joint from the catalogue (:class:`JointResolution`)
     predict_stack         -- resolve, then predict the tool-tip FRF (:class:`StackPrediction`)
     predict_with_joints   -- predict the tool-tip FRF with joints already resolved
+Diagnosis (:mod:`jointdb.usecases._diagnose`)
+    diagnose_recordings   -- where a model and recordings disagree, the missing physics, refit
+    read_recording        -- a recorded FRF (UFF58) with its coherence; NaN/Inf lines kept as gaps
 Planning (:mod:`jointdb.usecases._plan`)
     plan_measurements     -- rank a campaign's candidate tap points (:class:`CampaignPlan`)
 The demo (:mod:`jointdb.usecases._tool_model`, :mod:`jointdb.usecases._demo`)
@@ -51,6 +54,7 @@ from jointdb.usecases._files import (
     write_joint_file,
 )
 from jointdb.usecases._lobes import stability_lobes
+from jointdb.usecases._diagnose import diagnose_recordings, read_recording
 from jointdb.usecases._plan import CampaignPlan, plan_measurements
 from jointdb.usecases._tool_model import mode_rows, run_demo
 from jointdb.usecases._stack import (
@@ -88,4 +92,6 @@ __all__ = [
     "run_demo",
     "CampaignPlan",
     "plan_measurements",
+    "diagnose_recordings",
+    "read_recording",
 ]
