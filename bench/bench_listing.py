@@ -18,7 +18,7 @@ Pages start after a random joint (keyset cursor), every 4th is the first page, e
 filtered on a joint type. Reported: p50 and p99 in ms and each path's p50 over the bare SQL's.
 Goal: p99 <= 50 ms for ``list_page`` and for the HTTP page, on both backends.
 
-Run: ``PYTHONPATH=. .venv/bin/python bench/bench_listing.py [--requests 300] [--per-joint 1] [--no-pg]``
+Run: ``PYTHONPATH=. .venv/bin/python bench/bench_listing.py [--requests 300] [--per-joint 1] [--no-pg] [--no-sqlite]``
 """
 
 from __future__ import annotations
@@ -108,7 +108,7 @@ async def _measure(repo, requests: list[dict]) -> dict[str, list[float]]:
 def run_backend(label: str, url: str, per_joint: int, n_requests: int, blobs: Path) -> list[str]:
     from jointdb.store import Repository
 
-    repo = Repository(url, blobs=blobs)  # no blob is read: a listing touches rows only
+    repo = Repository(url, blobs=blobs, auto_create=True)  # no blob is read: a listing touches rows only
     try:
         t0 = time.perf_counter()
         bulk_fill(repo, N_VERSIONS, per_joint)
@@ -169,12 +169,14 @@ def main(argv=None) -> None:
     ap.add_argument("--requests", type=int, default=300)
     ap.add_argument("--per-joint", type=int, default=1, help="versions per joint (1: 100,000 joints)")
     ap.add_argument("--no-pg", action="store_true")
+    ap.add_argument("--no-sqlite", action="store_true")
     args = ap.parse_args(argv)
     print(f"bench_listing  {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}  load average "
           f"{' '.join(f'{x:.1f}' for x in os.getloadavg())} on {os.cpu_count()} cores")
     with tempfile.TemporaryDirectory() as tmp:
-        for line in run_backend("SQLite", f"sqlite:///{Path(tmp) / 'cat.sqlite'}", args.per_joint, args.requests,
-                                Path(tmp) / "blobs"):
+        sqlite = [] if args.no_sqlite else run_backend("SQLite", f"sqlite:///{Path(tmp) / 'cat.sqlite'}",
+                                                       args.per_joint, args.requests, Path(tmp) / "blobs")
+        for line in sqlite:
             print(line, flush=True)
         pg = _pg_url(args)
         if pg:
