@@ -10,18 +10,23 @@ kind               model                           file
 ``bundle-states``  :class:`JointStates`            a bundled joint's labels and states
 =================  ==============================  ==========================================
 
-The schemas describe structure, types, units and single-field ranges; the
-readers add what a schema cannot say (cross references such as an interface
-naming a substructure, files that must exist, element counts after meshing,
-tool lengths against holder bores). :func:`validate` checks a parsed document
-and raises one :class:`~jointdb.errors.InputError` line that names the file
-and the field. The JSON Schemas under ``docs/schemas/`` are generated from
-these models by ``python -m jointdb.schemas DIR`` and let an editor complete
-and check the files (``"$schema"`` is not needed: map the schema to the file
-pattern in the editor).
+The schemas are the readers' first step: :func:`jointdb.fe.model_from_dict`,
+:func:`jointdb.stack.stack_from_dict`, :func:`jointdb.campaign.load_campaign` and the
+bundle reader parse a document with :func:`parse` and then check only what a schema
+cannot say (cross references such as an interface naming a substructure, files that
+must exist, element counts after meshing, tool lengths against holder bores). The
+schemas describe structure, types, units and single-field ranges. :func:`validate`
+checks a parsed document and raises one :class:`~jointdb.errors.InputError` line that
+names the file and the field; a reader passes its own ``wording`` to keep the messages
+its users know. The JSON Schemas under ``docs/schemas/`` are generated from these
+models by ``python -m jointdb.schemas DIR`` (a test checks the published files equal
+the generated ones) and let an editor complete and check the files (``"$schema"`` is
+not needed: map the schema to the file pattern in the editor). The input limits
+(:mod:`jointdb.schemas._limits`) and the bounded JSON file reader
+(:mod:`jointdb.schemas._jsonfile`) live here too.
 
-Importing this module imports pydantic; the file readers import it only when
-they validate.
+Importing this package does not import pydantic: a kind's model is imported when a
+document of that kind is parsed.
 """
 
 from __future__ import annotations
