@@ -26,7 +26,7 @@ import numpy as np
 
 
 def build(tmp: Path, n: int):
-    from jointdb._journey import run_main_job
+    from jointdb.usecases._demo import run_main_job
     from jointdb.stack import stack_to_dict
     from jointdb.store import Repository
     from jointdb.usecases import load_stack

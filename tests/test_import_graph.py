@@ -42,8 +42,6 @@ LAYERS = {
     "jointdb": "core",  # the package root (__version__, FRF re-export)
     "jointdb.frf": "core",
     "jointdb.errors": "core",
-    "jointdb._limits": "core",
-    "jointdb._jsonfile": "core",  # the bounded JSON reader fe._modelfile uses
     "jointdb.fe": "core",
     "jointdb.coupling": "core",
     "jointdb.modal": "core",
@@ -51,22 +49,18 @@ LAYERS = {
     "jointdb.stability": "core",
     "jointdb.diagnose": "core",
     "jointdb.diagnose_bench": "core",
+    "jointdb.schemas": "core",  # the file schemas (pydantic), input limits, the bounded JSON reader: the core readers use them
     # files, wire formats, the store and its HTTP implementation
     "jointdb.io": "store",
     "jointdb.store": "store",
     "jointdb.migrations": "store",  # the Alembic environment, shipped in the wheel as jointdb/migrations
     "jointdb.client": "store",  # the store over HTTP: imports no server code
     "jointdb.plots": "store",
-    "jointdb.schemas": "store",
-    "jointdb._output": "store",  # tables / JSON on stdout, atomic output files
-    "jointdb._mdtable": "store",
+    "jointdb.schemas.__main__": "store",  # writes the published files (io's atomic write)
     # application layer: the use cases (a campaign reads its files and identifies)
     "jointdb.usecases": "application",  # the application package: the use cases the shells call
     "jointdb.campaign": "application",
     "jointdb.jobs": "application",  # the job queue (procrastinate / in-process) and what each kind of job runs
-    "jointdb._journey": "application",
-    "jointdb._journey_band": "application",
-    "jointdb._examples": "application",
     # the shells
     "jointdb.cli": "cli",
     "jointdb.__main__": "cli",

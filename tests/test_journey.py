@@ -7,7 +7,7 @@ import json
 import numpy as np
 import pytest
 
-from jointdb._journey import run_main_job
+from jointdb.usecases._demo import run_main_job
 from jointdb.io import read_frf_csv, read_frf_uff58
 from jointdb.store import Repository
 

@@ -79,7 +79,7 @@ def test_tip_legend_names_versions_and_weights():
 
 @pytest.fixture(scope="module")
 def demo_db(tmp_path_factory):
-    from jointdb._journey import run_main_job
+    from jointdb.usecases._demo import run_main_job
 
     out = tmp_path_factory.mktemp("journey")
     result = run_main_job(out, say=lambda s: None)

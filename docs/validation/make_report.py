@@ -563,7 +563,7 @@ def main(argv=None) -> int:
     say("See `bench/bench_coupling.py` and `bench/bench_irc.py` (they print times and ratios against the textbook "
         "implementations in the same process); results of one run are in `bench_results.txt` beside this report.")
     (out / "coupling.md").write_text("\n".join(LINES) + "\n", encoding="utf-8")
-    from jointdb._output import to_jsonable
+    from jointdb.io._jsonable import to_jsonable
 
     (out / "coupling_results.json").write_text(json.dumps(to_jsonable(R), indent=2) + "\n", encoding="utf-8")
     print(f"wrote {out / 'coupling.md'}", file=sys.stderr)

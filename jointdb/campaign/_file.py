@@ -41,8 +41,8 @@ from typing import Any
 
 import numpy as np
 
-from jointdb._jsonfile import read_json_file
-from jointdb._limits import check_lines
+from jointdb.schemas._jsonfile import read_json_file
+from jointdb.schemas._limits import check_lines
 from jointdb.errors import InputError
 from jointdb.frf import FRF, Dof, Quantity, dofs
 
@@ -249,6 +249,46 @@ def _conditions(cpath: Path, raw: Any) -> dict[str, Any]:
     return dict(raw)
 
 
+def _model_options(cpath: Path, model: str, raw: dict, interface: dict) -> dict:
+    """The options of the joint model (``planar``, ``n_point`` or ``matrix``), checked against the interface."""
+    a_dofs, b_dofs = interface["a_dofs"], interface["b_dofs"]
+    key = {"planar": "planar", "n-point": "n_point", "matrix": "matrix"}[model]
+    mopts = raw.get(key) or {}
+    if model == "planar":
+        if len(a_dofs) != 2 or a_dofs[0].node != a_dofs[1].node or b_dofs[0].node != b_dofs[1].node:
+            raise _err(cpath, "interface", "the planar model needs one point per side: a translation and a rotation")
+        if not isinstance(mopts.get("b_tip"), int):
+            raise _err(cpath, "planar.b_tip", "must be the node number of B's free end (tip)")
+    elif model == "n-point":
+        mopts = dict(mopts, internal=_dof_list(cpath, "n_point.internal", mopts.get("internal")))
+    else:
+        m = mopts.get("measured")
+        if not isinstance(m, list) or not all(isinstance(x, list) and len(x) == 2 for x in m):
+            raise _err(cpath, "matrix.measured", "must be a list of [substructure, DOF] pairs")
+        for i, (n, _) in enumerate(m):
+            if n not in (interface["a"], interface["b"]):
+                raise _err(cpath, f"matrix.measured[{i}]", f"substructure {n!r} is not part of the interface")
+        mopts = dict(mopts, measured=[(n, Dof.parse(d)) for n, d in m])
+    return mopts
+
+
+def _validation(cpath: Path, validation: Any, subs: dict, root: "str | os.PathLike | None") -> dict | None:
+    """The held-out validation set: substructures that replace some of the campaign's, and measurements."""
+    if validation is not None:
+        vsubs = _substructures(cpath, "validation.substructures", validation.get("substructures"), root)
+        for n in vsubs:
+            if n not in subs:
+                raise _err(cpath, f"validation.substructures.{n}", "replaces no substructure of the campaign")
+        vm = validation.get("measurements")
+        if not isinstance(vm, list) or not vm:
+            raise _err(cpath, "validation.measurements", "must be a non-empty list of UFF58 files")
+        validation = {
+            "substructures": vsubs,
+            "measurements": tuple(_file(cpath, f"validation.measurements[{i}]", m, root) for i, m in enumerate(vm)),
+        }
+    return validation
+
+
 def load_campaign(path: "str | Path", *, root: "str | Path | None" = None) -> Campaign:
     """Read and check a campaign file (structure, names, DOFs, that files exist).
 
@@ -308,37 +348,9 @@ def load_campaign(path: "str | Path", *, root: "str | Path | None" = None) -> Ca
                 and 0 <= band[0] < band[1]):
             raise _err(cpath, "band", "must be [fmin, fmax] in Hz with fmin < fmax")
         band = (float(band[0]), float(band[1]))
-    key = {"planar": "planar", "n-point": "n_point", "matrix": "matrix"}[model]
-    mopts = raw.get(key) or {}
-    if model == "planar":
-        if len(a_dofs) != 2 or a_dofs[0].node != a_dofs[1].node or b_dofs[0].node != b_dofs[1].node:
-            raise _err(cpath, "interface", "the planar model needs one point per side: a translation and a rotation")
-        if not isinstance(mopts.get("b_tip"), int):
-            raise _err(cpath, "planar.b_tip", "must be the node number of B's free end (tip)")
-    elif model == "n-point":
-        mopts = dict(mopts, internal=_dof_list(cpath, "n_point.internal", mopts.get("internal")))
-    else:
-        m = mopts.get("measured")
-        if not isinstance(m, list) or not all(isinstance(x, list) and len(x) == 2 for x in m):
-            raise _err(cpath, "matrix.measured", "must be a list of [substructure, DOF] pairs")
-        for i, (n, _) in enumerate(m):
-            if n not in (interface["a"], interface["b"]):
-                raise _err(cpath, f"matrix.measured[{i}]", f"substructure {n!r} is not part of the interface")
-        mopts = dict(mopts, measured=[(n, Dof.parse(d)) for n, d in m])
+    mopts = _model_options(cpath, model, raw, interface)
     opts = raw.get("options") or {}
-    validation = raw.get("validation")
-    if validation is not None:
-        vsubs = _substructures(cpath, "validation.substructures", validation.get("substructures"), root)
-        for n in vsubs:
-            if n not in subs:
-                raise _err(cpath, f"validation.substructures.{n}", "replaces no substructure of the campaign")
-        vm = validation.get("measurements")
-        if not isinstance(vm, list) or not vm:
-            raise _err(cpath, "validation.measurements", "must be a non-empty list of UFF58 files")
-        validation = {
-            "substructures": vsubs,
-            "measurements": tuple(_file(cpath, f"validation.measurements[{i}]", m, root) for i, m in enumerate(vm)),
-        }
+    validation = _validation(cpath, raw.get("validation"), subs, root)
     couple = raw.get("couple") or {}
     conditions = _conditions(cpath, raw.get("conditions", {}))
     return Campaign(

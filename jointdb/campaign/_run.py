@@ -281,7 +281,7 @@ def joint_attrs(out: IdentifyOutcome) -> dict:
     dict
         JSON-ready: kind, joint model, campaign, joint type, conditions, interface, report.
     """
-    from jointdb._output import to_jsonable
+    from jointdb.io._jsonable import to_jsonable
 
     rep = to_jsonable(out.report())
     method = (out.quality or {}).get("method", "irc")

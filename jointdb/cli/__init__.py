@@ -3,7 +3,7 @@
 Each command group lives in its own module (``_models``, ``_coupling``,
 ``_store``, ``_db``, ``_stability``, ``_predict``, ``_diagnose``, ``_demo``) and
 registers itself on a Typer app; this keeps every file readable in one sitting
-(one module per command group rather than one ``cli.py``, for that reason). Output goes through :mod:`jointdb._output`.
+(one module per command group rather than one ``cli.py``, for that reason). Output goes through :mod:`jointdb.cli._output`.
 
 User errors (:class:`jointdb.errors.JointdbError`) become one line on stderr
 and the error class's exit code, with no traceback.
@@ -107,7 +107,7 @@ def _new_app() -> typer.Typer:
     ) -> None:
         """jointdb: joint identification (IRC), a versioned joint database, tool-tip
         prediction (RC), chatter stability lobes and model/measurement diagnosis."""
-        from jointdb._output import configure_logging
+        from jointdb.cli._output import configure_logging
 
         configure_logging(verbose, quiet)
         if server:

@@ -76,7 +76,7 @@ def init_cmd(
     Example: jointdb campaign init tests-2026-11/ --type tool-holder --material carbide
     --material steel --torque 40
     """
-    from jointdb._output import message
+    from jointdb.cli._output import message
     from jointdb.campaign._scaffold import scaffold_campaign
 
     if not folder.is_dir():
@@ -137,7 +137,7 @@ def check_cmd(
     "campaign c.json: interface.b_dofs: substructure 'tool' has no DOF(s) 7x".
     Example: jointdb campaign check tests-2026-11/campaign.json
     """
-    from jointdb._output import emit, message
+    from jointdb.cli._output import emit, message
     from jointdb.campaign._scaffold import check_campaign
 
     report = check_campaign(file)
@@ -176,7 +176,7 @@ def rotations_cmd(
     Example: jointdb rotations ext.uff --extension ext.json --joint-point base --points p1,p2
     --node 3 --out holder.uff
     """
-    from jointdb._output import emit, message
+    from jointdb.cli._output import emit, message
     from jointdb.usecases import frf_format, read_frf_file, write_frf_file
     from jointdb.campaign._rotations import estimate_rotations
 

@@ -42,7 +42,7 @@ def identify_cmd(
 
     Example: jointdb identify fixtures/campaigns/th-steel-30nm/campaign.json --out joint.h5 --plots figs
     """
-    from jointdb._output import emit, message
+    from jointdb.cli._output import emit, message
     from jointdb.campaign import joint_attrs
     from jointdb.usecases import identify
 
@@ -58,7 +58,7 @@ def identify_cmd(
     write_frf_hdf5(out, result.result.joint, joint_attrs(result))
     written = [str(out)]
     if report is not None:
-        from jointdb._output import to_jsonable
+        from jointdb.io._jsonable import to_jsonable
         from jointdb.io._atomic import atomic_path
 
         with atomic_path(report) as tmp:  # never a half-written report
@@ -114,7 +114,7 @@ def couple_cmd(
 
     Example: jointdb couple fixtures/campaigns/th-steel-30nm/campaign.json --joint joint.h5 --plots figs
     """
-    from jointdb._output import emit, message
+    from jointdb.cli._output import emit, message
     from jointdb.campaign import load_campaign
     from jointdb.campaign import couple_campaign
 

@@ -12,7 +12,7 @@ from typing import Annotated, Optional
 
 import typer
 
-from jointdb._output import emit, message
+from jointdb.cli._output import emit, message
 from jointdb.cli._store import BlobsOpt, DbOpt, JsonOpt, _repo, check_db_target
 from jointdb.errors import InputError, IntegrityError
 

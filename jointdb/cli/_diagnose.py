@@ -1,8 +1,9 @@
 """CLI: ``jointdb diagnose`` (model vs recordings) and ``jointdb diagnose-bench``.
 
-Thin: files are read here, the numerics live in :mod:`jointdb.diagnose`, the
+Thin: the use case :func:`jointdb.usecases.diagnose_recordings` reads the files and diagnoses (the
+numerics live in :mod:`jointdb.diagnose`); the
 benchmark in :mod:`jointdb.diagnose_bench`; output goes through
-:mod:`jointdb._output`. Nothing is written unless the diagnosis succeeded.
+:mod:`jointdb.cli._output`. Nothing is written unless the diagnosis succeeded.
 """
 
 from __future__ import annotations
@@ -42,105 +43,9 @@ def _parse_floats(text: str | None, option: str) -> list[float]:
         raise InputError(f"{option} {text!r}: expected comma-separated numbers") from None
 
 
-def _read_recording(path: Path):
-    """FRF and (if the file has coherence records, UFF58 function type 6) the coherence.
-
-    A file whose dataset-58 records hold NaN/Inf values (which the UFF reader
-    refuses) is read with those lines marked non-finite, so that diagnosis
-    names them or, with ``--mask-nonfinite``, gives them zero weight.
-    """
-    from jointdb.diagnose import Measurement
-    from jointdb.io import read_coherence_uff58, read_frf_uff58
-
-    if not path.exists():
-        from jointdb.errors import NotFoundError
-
-        raise NotFoundError(f"recording {path}: no such file")
-    try:
-        frf = read_frf_uff58(path)
-    except InputError:
-        gaps = _nonfinite_records(path)
-        if gaps is None:
-            raise
-        return _read_with_gaps(path, *gaps)
-    coh = read_coherence_uff58(path, frf)  # None when the file has no coherence records
-    return Measurement(frf=frf, coherence=coh, label=path.name)
-
-
-def _nonfinite_records(path: Path):
-    """``(datasets, {dataset index: non-finite value lines})`` of a universal file, or None if it has none."""
-    import numpy as np
-    import pyuff
-
-    try:
-        sets = pyuff.UFF(str(path)).read_sets()
-    except Exception:  # pyuff raises bare Exception for every failure: the reader's own message stands
-        return None
-    sets = [sets] if isinstance(sets, dict) else list(sets)
-    bad = {}
-    for k, d in enumerate(sets):
-        if int(d.get("type", 0)) != 58:
-            continue
-        x, y = np.asarray(d.get("x"), dtype=float), np.asarray(d.get("data"))
-        if x.shape != y.shape or not np.issubdtype(y.dtype, np.number):
-            return None
-        if not np.all(np.isfinite(x)):
-            line = int(np.flatnonzero(~np.isfinite(x))[0]) + 1
-            raise InputError(f"{path}: dataset #{k + 1}: the frequency of line {line} is {x[line - 1]}; "
-                             "a line without a frequency cannot be used: fix the file")
-        if not np.all(np.isfinite(y)):
-            bad[k] = np.flatnonzero(~np.isfinite(y))
-    return (sets, bad) if bad else None
-
-
-def _read_with_gaps(path: Path, sets: list, bad: dict):
-    """Read a universal file with NaN/Inf values through the ordinary reader (units, signs, grouping)
-    by way of a copy with those values zeroed, and mark them non-finite again in the result."""
-    import tempfile
-
-    import numpy as np
-    import pyuff
-
-    from jointdb.diagnose import Measurement
-    from jointdb.frf import Dof
-    from jointdb.io import read_coherence_uff58, read_frf_uff58
-
-    clean = []
-    for k, d in enumerate(sets):
-        if k in bad:
-            d = dict(d)
-            d["data"] = np.where(np.isfinite(d["data"]), d["data"], 0)
-        clean.append(d)
-    with tempfile.TemporaryDirectory() as tmp:
-        copy = Path(tmp) / path.name
-        try:
-            pyuff.UFF(str(copy)).write_sets(clean, mode="overwrite")
-            frf = read_frf_uff58(copy)
-            coh = read_coherence_uff58(copy, frf)
-        except InputError as exc:
-            raise InputError(str(exc).replace(str(copy), str(path))) from None
-    values = frf.values.copy()
-    coh = None if coh is None else coh.copy()
-    oi = {d: i for i, d in enumerate(frf.outputs)}
-    ii = {d: i for i, d in enumerate(frf.inputs)}
-    for k, lines in bad.items():
-        d = sets[k]
-        try:
-            out, inp = Dof.from_uff(d["rsp_node"], d["rsp_dir"])[0], Dof.from_uff(d["ref_node"], d["ref_dir"])[0]
-        except (InputError, KeyError):
-            continue  # a record the reader does not place in the FRF matrix
-        if out in oi and inp in ii:
-            if int(d.get("func_type", 0)) == 6:
-                if coh is not None:
-                    coh[lines, oi[out], ii[inp]] = np.nan
-            else:
-                values[lines, oi[out], ii[inp]] = np.nan
-    return Measurement.from_arrays(frf.freq, values, frf.outputs, frf.inputs, frf.quantity, coh, label=path.name)
-
-
 def _write_augmented(result, nominal, out: Path) -> list[str]:
     """Write the augmented model(s) as JSON (one per level when they differ); the files written."""
-    from jointdb._output import message
+    from jointdb.cli._output import message
     from jointdb.fe import model_to_dict
 
     written: list[str] = []
@@ -162,7 +67,7 @@ def _write_augmented(result, nominal, out: Path) -> list[str]:
 
 def _render_diagnosis(result) -> None:
     """The verdict, the ranked explanations, the modes before, the per-level tables."""
-    from jointdb._output import emit
+    from jointdb.cli._output import emit
 
     emit(result.verdict)
     emit(result.table()[:8], title="ranked explanations (BIC; ΔBIC vs the nominal model)")
@@ -194,10 +99,8 @@ def diagnose_cmd(
 
     Example: jointdb diagnose tool.json tap-tip.uff --map 1=tip,2=flute,3=shank --plots figs --out tool-fixed.json
     """
-    from jointdb._output import emit, message
-    from jointdb.diagnose import diagnose
-    from jointdb.diagnose_bench import single_blas_thread
-    from jointdb.fe import load_model
+    from jointdb.cli._output import emit, message
+    from jointdb.usecases import diagnose_recordings
 
     if out is not None and out.suffix.lower() != ".json":
         raise InputError(f"--out {out}: the augmented model is written as JSON; use a .json name")
@@ -205,24 +108,13 @@ def diagnose_cmd(
         raise InputError(f"--out {out}: directory {out.parent} does not exist")
     if plots is not None and plots.exists() and not plots.is_dir():
         raise InputError(f"--plots {plots}: exists and is not a directory")
-    nominal = load_model(model)
-    ms = [_read_recording(p) for p in recordings]
-    lv = _parse_floats(levels, "--levels")
-    if lv and len(lv) != len(ms):
-        raise InputError(f"--levels gives {len(lv)} values for {len(ms)} recordings")
-    if len(ms) > 1 and not lv:
-        message("several recordings and no --levels: taking them as levels 1, 2, … in the order given")
-        lv = [float(i + 1) for i in range(len(ms))]
-    if lv:
-        import dataclasses
-
-        ms = [dataclasses.replace(m, level=v) for m, v in zip(ms, lv)]
     b = _parse_floats(band, "--band")
     if band and len(b) != 2:
         raise InputError(f"--band {band!r}: write FMIN:FMAX, e.g. 100:5000")
-    with single_blas_thread():
-        result = diagnose(nominal, ms, mapping=_parse_map(mapping), band=tuple(b) if b else (None, None),
-                          combinations=not no_combinations, mask_nonfinite=mask_nonfinite)
+    result, nominal = diagnose_recordings(model, recordings, mapping=_parse_map(mapping),
+                                          levels=_parse_floats(levels, "--levels"), band=b,
+                                          combinations=not no_combinations, mask_nonfinite=mask_nonfinite,
+                                          say=message)
     for note in result.observation.notes:
         message(f"note: {note}")
     written = _write_augmented(result, nominal, out) if out is not None else []
@@ -247,7 +139,7 @@ def _run_cases(jobs: list, t0: float) -> list:
     import sys
     import time
 
-    from jointdb._output import message, progress, progress_line
+    from jointdb.cli._output import message, progress, progress_line
     from jointdb.diagnose_bench import generate_case, run_case, single_blas_thread
 
     results = []
@@ -270,7 +162,7 @@ def _render_bench(bench, per: list, rows: list, cols: list, m) -> None:
     """Per effect, the confusion matrix and the summary lines, for people."""
     import statistics
 
-    from jointdb._output import emit
+    from jointdb.cli._output import emit
 
     cols_show = ["effect", "cases", "named_first_pct", "top3_pct", "median_improvement",
                  "improved_3x_when_named_pct", "median_mismatch_before_pct", "median_mismatch_after_pct",
@@ -309,7 +201,7 @@ def diagnose_bench_cmd(
 
     Example: jointdb diagnose-bench --cases 20 --seed 1000
     """
-    from jointdb._output import emit, message, write_rows
+    from jointdb.cli._output import emit, message, write_rows
     from jointdb.cli._options import check_out
     from jointdb.diagnose_bench import EFFECTS
 
@@ -359,7 +251,7 @@ def register(app: typer.Typer) -> None:
 
 
 def _write_cases(directory: Path, effects, seed: int) -> None:
-    from jointdb._output import message
+    from jointdb.cli._output import message
     from jointdb.diagnose_bench import generate_case
     from jointdb.io import write_uff58
 

@@ -7,7 +7,7 @@ from typing import Annotated
 
 import typer
 
-from jointdb._output import emit, message
+from jointdb.cli._output import emit, message
 
 
 def register(app: typer.Typer) -> None:
@@ -25,7 +25,7 @@ def register(app: typer.Typer) -> None:
         installation (the files are package data).
         Example: jointdb examples ex ; jointdb identify ex/campaigns/th-er32-steel-040nm/campaign.json --out joint.h5
         """
-        from jointdb._examples import copy_examples
+        from jointdb.usecases._examples import copy_examples
 
         files = copy_examples(out)
         message(f"copied {len(files)} example files to {out}")

@@ -7,7 +7,7 @@ from typing import Annotated
 
 import typer
 
-from jointdb._output import emit
+from jointdb.cli._output import emit
 
 
 def register(app: typer.Typer) -> None:

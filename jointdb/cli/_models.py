@@ -1,6 +1,6 @@
 """CLI: structural models — ``jointdb modes`` and ``jointdb frf``.
 
-Thin: parse options, call :mod:`jointdb.fe`, render with :mod:`jointdb._output`;
+Thin: parse options, call :mod:`jointdb.fe`, render with :mod:`jointdb.cli._output`;
 file writers (:mod:`jointdb.io`) and plots (:mod:`jointdb.plots._frf`) are
 imported only inside the commands that need them.
 """
@@ -15,7 +15,7 @@ import typer
 
 from jointdb.cli._options import LegacyPlotOpt, PlotsOpt, plot_file, plots_dir
 
-from jointdb._limits import check_lines
+from jointdb.schemas._limits import check_lines
 from jointdb.errors import InputError
 
 
@@ -70,33 +70,6 @@ def write_frf_file(path: Path, frf, *, binary: bool = False) -> str:
     return frf_format(path)
 
 
-def mode_rows(modes) -> list[dict]:
-    """One row per mode: number, frequency [Hz], and its dominant motion."""
-    labels = modes.dof_labels
-    dirs = np.array([d.direction for d in labels])
-    families = {
-        "bending x-z": np.isin(dirs, ["x", "ry"]),
-        "bending y-z": np.isin(dirs, ["y", "rx"]),
-        "axial": dirs == "z",
-        "torsion": dirs == "rz",
-    }
-    planar = not families["axial"].any()
-    rows = []
-    for k, f in enumerate(modes.freq_hz):
-        shape = modes.shapes[:, k]
-        if k < modes.n_rigid:
-            kind = "rigid body"
-        elif planar:
-            kind = "bending"
-        else:
-            share = {name: float(np.sum(shape[mask] ** 2)) for name, mask in families.items()}
-            total = sum(share.values()) or 1.0
-            name = max(share, key=share.get)
-            kind = name if share[name] / total > 0.9 else "mixed"
-        rows.append({"mode": k + 1, "freq_hz": float(f), "type": kind})
-    return rows
-
-
 def modes_cmd(
     model_file: Annotated[Path, typer.Argument(metavar="MODEL.json", help="Beam model description (JSON).")],
     n: Annotated[int, typer.Option("--n", help="Number of lowest modes.")] = 10,
@@ -116,14 +89,16 @@ def modes_cmd(
     check_out(out, (".csv", ".json", ".h5", ".hdf5"))
     model = load_model(model_file)
     modes = model.modes(n)
+    from jointdb.usecases import mode_rows
+
     rows = mode_rows(modes)
     if out is not None:
-        from jointdb._output import message, write_rows
+        from jointdb.cli._output import message, write_rows
 
         write_rows(out, rows, kind="modes", meta={"model": model.name or model_file.name, "theory": model.theory})
         message(f"wrote {out}")
     if as_json:
-        from jointdb._output import emit
+        from jointdb.cli._output import emit
 
         emit(
             {
@@ -137,7 +112,7 @@ def modes_cmd(
             as_json=True,
         )
         return
-    from jointdb._output import emit
+    from jointdb.cli._output import emit
 
     title = f"{model.name or model_file.name} — {model.theory}, {model.kind}, {len(modes.dof_labels)} DOF"
     emit(rows, columns=["mode", "freq_hz", "type"], title=title)
@@ -170,7 +145,7 @@ def frf_cmd(
 
     Example: jointdb frf fixtures/models/end-mill-in-holder.json --points tip --fmax 8000 --df 2 --out tip.uff --plots figs
     """
-    from jointdb._output import emit, message
+    from jointdb.cli._output import emit, message
     from jointdb.fe import load_model, rigid_body_count
     from jointdb.frf import Quantity
 

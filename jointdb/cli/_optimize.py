@@ -19,7 +19,8 @@ def _people_row(rank: int, r) -> dict:
 
 def _write_outputs(out: Path, problem, outcome) -> list[Path]:
     """ranking.csv, result.json and the figures in ``out``."""
-    from jointdb._output import to_jsonable, write_rows
+    from jointdb.cli._output import write_rows
+    from jointdb.io._jsonable import to_jsonable
     from jointdb.io._atomic import atomic_path
     from jointdb.plots._optimize import plot_pareto, plot_rate_vs_overhang
     from jointdb.plots._lobes import plot_lobes
@@ -73,7 +74,7 @@ def optimize(
 
     Example: jointdb optimize fixtures/optimize/optimize-spec.json --db demo-out/joints.sqlite --out opt
     """
-    from jointdb._output import emit, message, progress_line
+    from jointdb.cli._output import emit, message, progress_line
     from jointdb.cli._store import check_db_target
     from jointdb.errors import InputError
     from jointdb.store import Repository

@@ -69,7 +69,7 @@ def deprecation_note() -> None:
     """Tell the user (stderr) that ``--plot`` is deprecated, if it was used; once."""
     global _legacy_used
     if _legacy_used:
-        from jointdb._output import message
+        from jointdb.cli._output import message
 
         message("note: --plot is deprecated; use --plots DIR (the figures get fixed names in DIR)")
         _legacy_used = False

@@ -11,7 +11,7 @@ from typing import Annotated, Any, Optional
 
 import typer
 
-from jointdb._output import emit, message
+from jointdb.cli._output import emit, message
 from jointdb.cli._store import BlobsOpt, DbOpt, JsonOpt, _repo
 
 KINDS_HELP = "spindle, holder or tool"

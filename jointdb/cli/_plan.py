@@ -25,21 +25,15 @@ def register(app: typer.Typer) -> None:
 
         Example: jointdb plan fixtures/campaigns/th-steel-30nm/campaign.json --measurements 2 --target 0.02
         """
-        from jointdb._output import emit
-        from jointdb.campaign import load_campaign
-        from jointdb.campaign._plan import plan_campaign
-        from jointdb.errors import InputError
+        from jointdb.cli._output import emit
+        from jointdb.usecases import plan_measurements
 
-        if not (0 < noise < 1) or not (0 < target < 1):
-            raise InputError(f"--noise and --target must be in (0, 1), got {noise:g}, {target:g}")
-        if not 1 <= points <= 6:
-            raise InputError(f"--measurements must be 1..6, got {points}")
-        c = load_campaign(campaign)
         tg = [t.strip() for t in targets.split(",")] if targets else None
-        plan, current = plan_campaign(c, n_measurements=points, noise=noise, target=target,
-                                      criterion=criterion.upper(), targets=tg)
+        result = plan_measurements(campaign, n_measurements=points, noise=noise, target=target, criterion=criterion,
+                                   targets=tg)
+        plan, current = result.plan, result.current
         if as_json:
-            emit({"campaign": c.name, "criterion": plan.criterion, "noise": plan.noise, "target": plan.target,
+            emit({"campaign": result.campaign, "criterion": plan.criterion, "noise": plan.noise, "target": plan.target,
                   "targets": plan.targets, "current": current, "ranked": plan.rows}, as_json=True)
             return
         rows = []
@@ -49,5 +43,5 @@ def register(app: typer.Typer) -> None:
             row.update({f"σ {n}": f"{r['std_rel'][n]:.2%}" for n in plan.targets})
             row[f"averages for {plan.target:.0%}"] = r["averages"]
             rows.append(row)
-        emit(rows, title=f"{c.name}: candidate measurements, best first ({plan.criterion}-optimal, "
+        emit(rows, title=f"{result.campaign}: candidate measurements, best first ({plan.criterion}-optimal, "
                          f"{plan.noise:.0%} noise per average)")

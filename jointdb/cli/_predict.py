@@ -17,7 +17,7 @@ from jointdb.cli._options import LegacyPlotOpt, PlotsOpt, plot_file, plots_dir
 
 def _frequency_override(spec, fmin, fmax, df):
     """The prediction's lines when --fmin/--fmax/--df override the stack file's grid, else None."""
-    from jointdb._limits import check_lines
+    from jointdb.schemas._limits import check_lines
     from jointdb.errors import InputError
     from jointdb.stack import FrequencyGrid, prediction_grid
 
@@ -37,8 +37,8 @@ def _frequency_override(spec, fmin, fmax, df):
 def _load_stack(stack_file: Path, db: str | None):
     """The stack of a file; catalogued parts it names are read from --db (or --server) and reported."""
     from jointdb import usecases
-    from jointdb._jsonfile import read_json_file
-    from jointdb._output import message
+    from jointdb.schemas._jsonfile import read_json_file
+    from jointdb.cli._output import message
 
     if not usecases.part_refs(read_json_file(stack_file, "stack file")):
         return usecases.load_stack(stack_file)
@@ -54,7 +54,7 @@ def _load_stack(stack_file: Path, db: str | None):
 def _report_joint_choices(joints) -> None:
     """On stderr, per interface: how its joint was chosen (method), the joints used with their weights and
     distances, the next candidates, conditions outside the catalogue, and warnings (docs/stacks.md wording)."""
-    from jointdb._output import message
+    from jointdb.cli._output import message
 
     for res in joints:
         if not res.neighbours:
@@ -103,7 +103,7 @@ def predict(
     Example: jointdb predict fixtures/stacks/endmill-modelled-spindle.json --out tip.uff --plots figs
     """
     from jointdb import usecases
-    from jointdb._output import emit, message
+    from jointdb.cli._output import emit, message
     from jointdb.errors import InputError
 
     plot = plots_dir(plots, plot, one_file=True)

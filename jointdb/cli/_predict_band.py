@@ -3,7 +3,7 @@ computed by :mod:`jointdb.usecases._tip_band` (which the API's predict uses too)
 
 from __future__ import annotations
 
-from jointdb._output import message
+from jointdb.cli._output import message
 
 
 def band_for(result, n: int = 200, seed: int = 0):

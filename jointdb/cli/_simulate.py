@@ -7,7 +7,7 @@ from typing import Optional
 
 import typer
 
-from jointdb._output import emit, message, write_rows
+from jointdb.cli._output import emit, message, write_rows
 from jointdb.cli._options import PlotsOpt
 from jointdb.errors import InputError
 

@@ -8,7 +8,7 @@ from typing import Optional
 import numpy as np
 import typer
 
-from jointdb._output import emit, message, progress, write_rows
+from jointdb.cli._output import emit, message, progress, write_rows
 from jointdb.cli._options import (
     LegacyPlotOpt,
     PlotsOpt,
@@ -85,23 +85,6 @@ def _fit_tip_model(frf, frf_y, n_modes, band, max_order):
             + f"; NMSE {fit.quality.nmse_total:.2e}, FRAC {fit.quality.frac_min:.4f}"
         )
     return model, fits
-
-
-def _sd_lobes_with_progress(model, cut, speeds: np.ndarray, n_intervals: int, n_chunks: int = 25):
-    """``stability.milling_lobes_sd`` in chunks of speeds, with a progress bar on a terminal.
-
-    Each speed is solved independently (same start depth, which depends only on
-    the model and the cut), so the result equals one call over all speeds.
-    """
-    from jointdb.stability import LobeResult, milling_lobes_sd
-
-    chunks = np.array_split(speeds, min(n_chunks, speeds.size))
-    parts = [milling_lobes_sd(model, cut, chunk, n_intervals=n_intervals)
-             for chunk in progress(chunks, total=len(chunks), description="lobes (SD)")]
-    info = dict(parts[0].info)
-    info["evaluations"] = int(sum(p.info.get("evaluations", 0) for p in parts))
-    return LobeResult(parts[0].method, *(np.concatenate([getattr(p, a) for p in parts]) for a in
-                      ("spindle_speed_rpm", "depth_m", "chatter_freq_hz", "lobe", "kind")), (), info)
 
 
 #: Formats of ``lobes --out`` (by suffix).
@@ -265,29 +248,29 @@ def lobes(
                         kf=kf, kt=kt, kr=kr, immersion=immersion)
     plot = plots_dir(plots, plot, one_file=True)
     check_out(out, LOBE_FORMATS)
-    speeds = np.linspace(rpm_min, rpm_max, n_speeds)
     from jointdb.cli._tip_inputs import coefficient_warnings, read_tool_tip
+    from jointdb.usecases import stability_lobes
 
     frf, notes = read_tool_tip(frf_file)
     frf = _node_select(frf, node)
     frf2 = _node_select(read_frf_file(frf_y), node) if frf_y is not None else None
     notes += coefficient_warnings(kf=kf, kt=kt, kr=kr)
+    grid = dict(rpm_min=rpm_min, rpm_max=rpm_max, n_speeds=n_speeds, refine=refine)
     if op_l == "turning":
-        res, title = _turning_lobes(frf, frf2, frf_file, frf_y, kf, orientation, speeds, refine, notes)
+        if kf is None:
+            raise InputError("turning needs --kf (cutting coefficient in N/m²)")
+        frf, mu = _turning_inputs(frf, frf2, frf_file, frf_y, orientation, notes)
+        res = stability_lobes(frf, "turning", kf=kf, orientation=mu, **grid)
+        title = f"Turning lobes, K_f = {kf:g} N/m²"
     else:
         if kt is None or kr is None:
             raise InputError("milling needs --kt and --kr (cutting coefficients in N/m²)")
-        from jointdb import stability
-
-        cut = stability.MillingCut(teeth, kt, kr, immersion, not up)
         cross_terms = _cross_terms_choice(frf, cross_terms, method_l, notes)
-        if method_l == "zoa":
-            res = stability.refine_lobes(lambda s: stability.milling_lobes_zoa(
-                frf, cut, frf2, cross_terms=cross_terms, spindle_speed_rpm=s), speeds, rounds=refine)
-        else:
-            model, _ = _fit_tip_model(frf, frf2, modes, band, max_order)
-            res = stability.refine_lobes(lambda s: _sd_lobes_with_progress(model, cut, s, intervals),
-                                         speeds, rounds=refine)
+        model = _fit_tip_model(frf, frf2, modes, band, max_order)[0] if method_l == "sd" else None
+        res = stability_lobes(frf, "milling", teeth=teeth, kt=kt, kr=kr, immersion=immersion, up=up, frf_y=frf2,
+                              cross_terms=cross_terms, method=method_l, tip_model=model, intervals=intervals,
+                              progress=lambda chunks: progress(chunks, total=len(chunks), description="lobes (SD)"),
+                              **grid)
         title = (f"Milling lobes ({method_l.upper()}), {teeth} teeth, a/D = {immersion:g}, "
                  f"{'up' if up else 'down'}-milling")
     _render_lobes(res, lobe_summary(res, n_speeds), notes, title, plot=plot, out=out, as_json=as_json, table=table)
@@ -315,23 +298,18 @@ def _check_lobe_options(op, method, rpm_min, rpm_max, n_speeds, teeth, intervals
         raise InputError(f"--refine must be between 0 and 10 rounds, got {refine}")
 
 
-def _turning_lobes(frf, frf2, frf_file: Path, frf_y, kf, orientation, speeds, refine: int, notes: list):
-    """Turning lobes (Tlusty) over the translational driving points; notes are appended to ``notes``."""
-    from jointdb import stability
+def _turning_inputs(frf, frf2, frf_file: Path, frf_y, orientation, notes: list):
+    """The turning FRF over the translational driving points and the directional factors; notes are
+    appended to ``notes``."""
     from jointdb.cli._tip_inputs import turning_frf
 
-    if kf is None:
-        raise InputError("turning needs --kf (cutting coefficient in N/m²)")
     frf = _translational(frf, frf_file)
     frf, more = turning_frf(frf, frf2, frf_y)
     notes += more
     if orientation is None and len(frf.outputs) > 1:
         notes.append(f"note: turning with {len(frf.outputs)} driving points and no --orientation: "
                      "each weighted 1 (give --orientation for the cut's directional factors)")
-    mu = _floats(orientation, "--orientation")
-    res = stability.refine_lobes(lambda s: stability.turning_lobes(frf, kf, mu, spindle_speed_rpm=s),
-                                 speeds, rounds=refine)
-    return res, f"Turning lobes, K_f = {kf:g} N/m²"
+    return frf, _floats(orientation, "--orientation")
 
 
 def _cross_terms_choice(frf, cross_terms: Optional[bool], method_l: str, notes: list) -> bool:

@@ -1,6 +1,6 @@
 """CLI for the joint database: ``catalogue``, ``joints ...``, ``query`` (``db ...``: :mod:`jointdb.cli._db`).
 
-Thin: parse options, call :mod:`jointdb.store`, render with :func:`jointdb._output.emit`.
+Thin: parse options, call :mod:`jointdb.store`, render with :func:`jointdb.cli._output.emit`.
 Every command takes ``--db URL`` (or a SQLite path; default ``JOINTDB_URL`` or
 the per-user database) and ``--json``.
 """
@@ -14,7 +14,7 @@ from typing import Annotated, Any, Optional
 
 import typer
 
-from jointdb._output import emit, message
+from jointdb.cli._output import emit, message
 from jointdb.errors import InputError, IntegrityError, NotFoundError
 
 DbOpt = Annotated[
@@ -292,7 +292,7 @@ def query(
         rows.append(row)
     result: Any = rows
     if out is not None:
-        from jointdb._output import write_rows
+        from jointdb.cli._output import write_rows
 
         write_rows(out, rows, kind="matches", meta={"joint_type": joint_type, "request": req.to_dict()})
         message(f"wrote {out} ({len(rows)} matches)")

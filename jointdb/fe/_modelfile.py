@@ -41,12 +41,12 @@ field, e.g. ``segments[1].outer_diameter: must be > 0, got -0.01``.
 
 from __future__ import annotations
 
-import math
+import re
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from jointdb._jsonfile import read_json_file
-from jointdb._limits import check_model_limits
+from jointdb.schemas._jsonfile import read_json_file
+from jointdb.schemas._limits import check_model_limits
 from jointdb.errors import InputError
 from jointdb.fe._ingredients import (
     Clamp,
@@ -61,44 +61,46 @@ from jointdb.fe._joints import Contact, Insertion, Joint
 from jointdb.fe._materials import MATERIALS, Material
 from jointdb.fe._model import BeamModel, NamedPoint, Segment
 
+if TYPE_CHECKING:  # the schema (pydantic) is imported when a file is read, not with jointdb.fe
+    from jointdb.schemas import model as schema
+
 __all__ = ["load_model", "model_from_dict", "model_to_dict", "FORMAT"]
 
 FORMAT = "jointdb-beam-model/1"
 
-_TOP = {
-    "format", "name", "description", "kind", "theory", "max_element_length", "materials", "segments",
-    "points", "clamps", "supports", "point_masses", "damping", "source", "joints", "insertions",
-}
-_DAMPING = {
-    "modal": (ModalDamping, {"zeta"}),
-    "rayleigh": (RayleighDamping, {"alpha", "beta"}),
-    "hysteretic": (HystereticDamping, {"eta"}),
-}
+_DAMPING_TYPES = ("modal", "rayleigh", "hysteretic")
+_BOUND = {"greater_than": ">", "greater_than_equal": ">="}
+_MATERIAL_RANGE = {"E": "must be > 0 Pa", "rho": "must be > 0 kg/m^3", "nu": "must be in (-1, 0.5)"}
 
 
 def _fail(path: str, reason: str) -> InputError:
     return InputError(f"{path}: {reason}")
 
 
-def _obj(value: Any, path: str) -> dict:
-    if not isinstance(value, dict):
-        raise _fail(path, f"must be an object, got {type(value).__name__}")
-    return value
-
-
-def _list(value: Any, path: str) -> list:
-    if not isinstance(value, list):
-        raise _fail(path, f"must be a list, got {type(value).__name__}")
-    return value
-
-
-def _keys(d: dict, path: str, allowed: set, required: set = frozenset()) -> None:
-    for key in d:
-        if key not in allowed:
-            raise _fail(f"{path}.{key}" if path else key, f"unknown field (expected one of: {', '.join(sorted(allowed))})")
-    for key in sorted(required):
-        if key not in d:
-            raise _fail(f"{path}.{key}" if path else key, "is required")
+def _wording(field: str, err: dict[str, Any]) -> str | None:
+    """This reader's words for a schema error (the messages the model file always gave)."""
+    kind, value = err.get("type"), err.get("input")
+    if field == "format" and kind == "literal_error":
+        return f"format: unsupported format {value!r} (this jointdb reads {FORMAT!r})"
+    if field == "segments" and kind == "too_short":
+        return "segments: needs at least one segment"
+    if kind == "union_tag_invalid":
+        tag = (err.get("ctx") or {}).get("tag")
+        return f"{field}: must be one of {', '.join(_DAMPING_TYPES)}, got {tag!r}"
+    if re.fullmatch(r"points\[\d+\]\.node", field) and kind != "missing":
+        return f"{field}: must be an integer >= 0, got {value!r}"
+    if re.search(r"\.zeta(\[\d+\])?$", field) and kind not in ("missing", "union_none"):
+        return f"{field}: must be a number >= 0, got {value!r}"
+    if kind == "finite_number":
+        return f"{field}: must be finite, got {value!r}"
+    material = re.fullmatch(r"(.*)\.(E|nu|rho)", field)
+    if material and kind in ("greater_than", "greater_than_equal", "less_than", "less_than_equal"):
+        return f"{material.group(1)}: {material.group(2)} {_MATERIAL_RANGE[material.group(2)]}, got {value:g}"
+    if kind == "union_none" and field.endswith(".contact"):
+        return f'{field}: must be "rigid" or a contact layer {{"stiffness_per_length": ...}}, got {value!r}'
+    if kind == "union_none" and field.endswith("material"):
+        return f"{field}: must be a material name or an object with E, nu, rho, got {value!r}"
+    return None
 
 
 def _build(cls, path: str, **kwargs):
@@ -110,7 +112,9 @@ def _build(cls, path: str, **kwargs):
         raise _fail(path, str(exc)) from None
 
 
-def _material(value: Any, path: str, named: dict[str, Material], default_name: str = "custom"):
+def _material(value: "str | schema.InlineMaterial", path: str, named: dict[str, Material],
+              default_name: str = "custom") -> "str | Material":
+    """A library name, a name the file defines, or the constants of an inline material."""
     if isinstance(value, str):
         key = value.strip().lower()
         if key in named:
@@ -119,103 +123,66 @@ def _material(value: Any, path: str, named: dict[str, Material], default_name: s
             return key
         known = ", ".join(sorted(set(MATERIALS) | set(named)))
         raise _fail(path, f"unknown material {value!r} (known: {known}; or give {{E, nu, rho}})")
-    if isinstance(value, dict):
-        _keys(value, path, {"name", "E", "nu", "rho"}, {"E", "nu", "rho"})
-        for key in ("E", "nu", "rho"):
-            v = value[key]
-            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
-                raise _fail(f"{path}.{key}", f"must be a finite number, got {v!r}")
-        try:
-            return Material(str(value.get("name", default_name)), value["E"], value["nu"], value["rho"])
-        except InputError as exc:
-            raise _fail(path, str(exc).split(": ", 1)[-1]) from None
-    raise _fail(path, f"must be a material name or an object with E, nu, rho, got {value!r}")
+    try:
+        return Material(value.name or default_name, value.E, value.nu, value.rho)
+    except InputError as exc:
+        raise _fail(path, str(exc).split(": ", 1)[-1]) from None
 
 
-def _materials(d: dict) -> dict[str, Material]:
+def _materials(doc: "schema.BeamModelFile") -> dict[str, Material]:
     """The file's ``materials``: a new material {E, nu, rho} (named by its key) or an alias of a library one."""
     named: dict[str, Material] = {}
-    for key, spec in _obj(d.get("materials", {}), "materials").items():
+    for key, spec in doc.materials.items():
         mat = _material(spec, f"materials.{key}", {}, default_name=str(key))
         named[str(key).strip().lower()] = mat if isinstance(mat, Material) else MATERIALS[mat]
     return named
 
 
-def _segments(d: dict, named: dict[str, Material]) -> list[Segment]:
-    segments = []
-    for i, s in enumerate(_list(d["segments"], "segments")):
-        p = f"segments[{i}]"
-        s = _obj(s, p)
-        _keys(s, p, {"length", "outer_diameter", "inner_diameter", "material", "label"}, {"length", "outer_diameter"})
-        mat = _material(s.get("material", "steel"), f"{p}.material", named)
-        segments.append(
-            _build(Segment, p, length=s["length"], outer_diameter=s["outer_diameter"],
-                   inner_diameter=s.get("inner_diameter", 0.0), material=mat)
-        )
-    if not segments:
-        raise _fail("segments", "needs at least one segment")
-    return segments
+def _segments(doc: "schema.BeamModelFile", named: dict[str, Material]) -> list[Segment]:
+    return [_build(Segment, f"segments[{i}]", length=s.length, outer_diameter=s.outer_diameter,
+                   inner_diameter=s.inner_diameter, material=_material(s.material, f"segments[{i}].material", named))
+            for i, s in enumerate(doc.segments)]
 
 
-def _points(d: dict) -> list[NamedPoint]:
-    points = []
-    for i, pt in enumerate(_list(d.get("points", []), "points")):
-        p = f"points[{i}]"
-        pt = _obj(pt, p)
-        _keys(pt, p, {"name", "position", "node"}, {"name", "position", "node"})
-        points.append(_build(NamedPoint, p, name=pt["name"], position=pt["position"], node=pt["node"]))
-    return points
+def _points(doc: "schema.BeamModelFile") -> list[NamedPoint]:
+    return [_build(NamedPoint, f"points[{i}]", name=pt.name, position=pt.position, node=pt.node)
+            for i, pt in enumerate(doc.points)]
 
 
-def _clamp(c: dict, p: str, named: dict[str, Material]) -> Clamp:
-    _keys(c, p, {"position", "directions"}, {"position"})
-    dirs = c.get("directions")
-    if dirs is not None:
-        dirs = tuple(_list(dirs, f"{p}.directions"))
-    return _build(Clamp, p, position=c["position"], directions=dirs)
+def _clamp(c: "schema.Clamp", p: str, named: dict[str, Material]) -> Clamp:
+    return _build(Clamp, p, position=c.position, directions=None if c.directions is None else tuple(c.directions))
 
 
-def _support(s: dict, p: str, named: dict[str, Material]) -> Support:
-    _keys(s, p, {"position", "stiffness", "damping"}, {"position"})
-    return _build(Support, p, position=s["position"], stiffness=s.get("stiffness", {}), damping=s.get("damping", {}))
+def _support(s: "schema.Support", p: str, named: dict[str, Material]) -> Support:
+    return _build(Support, p, position=s.position, stiffness=dict(s.stiffness), damping=dict(s.damping))
 
 
-def _point_mass(m: dict, p: str, named: dict[str, Material]) -> PointMass:
-    _keys(m, p, {"position", "mass", "rotary_inertia", "polar_inertia", "label"}, {"position", "mass"})
-    return _build(PointMass, p, position=m["position"], mass=m["mass"],
-                  rotary_inertia=m.get("rotary_inertia", 0.0), polar_inertia=m.get("polar_inertia", 0.0))
+def _point_mass(m: "schema.PointMass", p: str, named: dict[str, Material]) -> PointMass:
+    return _build(PointMass, p, position=m.position, mass=m.mass, rotary_inertia=m.rotary_inertia or 0.0,
+                  polar_inertia=m.polar_inertia or 0.0)
 
 
-def _joint(j: dict, p: str, named: dict[str, Material]) -> Joint:
-    _keys(j, p, {"position", "stiffness", "damping", "loss_factor", "label"}, {"position", "stiffness"})
-    return _build(Joint, p, position=j["position"], stiffness=j["stiffness"], damping=j.get("damping", {}),
-                  loss_factor=j.get("loss_factor", 0.0), label=str(j.get("label", "")))
+def _joint(j: "schema.Joint", p: str, named: dict[str, Material]) -> Joint:
+    return _build(Joint, p, position=j.position, stiffness=dict(j.stiffness), damping=dict(j.damping or {}),
+                  loss_factor=j.loss_factor or 0.0, label=j.label or "")
 
 
-def _insertion(s: dict, p: str, named: dict[str, Material]) -> Insertion:
-    _keys(s, p, {"start", "end", "outer_diameter", "inner_diameter", "material", "joined_at", "contact", "label"},
-          {"start", "end", "outer_diameter"})
-    contact = s.get("contact", "rigid")
-    if isinstance(contact, dict):
-        _keys(contact, f"{p}.contact", {"stiffness_per_length", "loss_factor"}, {"stiffness_per_length"})
-        contact = _build(Contact, f"{p}.contact", stiffness_per_length=contact["stiffness_per_length"],
-                         loss_factor=contact.get("loss_factor", 0.0))
-    return _build(Insertion, p, start=s["start"], end=s["end"], outer_diameter=s["outer_diameter"],
-                  inner_diameter=s.get("inner_diameter", 0.0),
-                  material=_material(s.get("material", "steel"), f"{p}.material", named),
-                  joined_at=s.get("joined_at", "end"), contact=contact, label=str(s.get("label", "")))
+def _insertion(s: "schema.Insertion", p: str, named: dict[str, Material]) -> Insertion:
+    contact: Any = s.contact
+    if not isinstance(contact, str):
+        contact = _build(Contact, f"{p}.contact", stiffness_per_length=dict(contact.stiffness_per_length),
+                         loss_factor=contact.loss_factor or 0.0)
+    return _build(Insertion, p, start=s.start, end=s.end, outer_diameter=s.outer_diameter,
+                  inner_diameter=s.inner_diameter, material=_material(s.material, f"{p}.material", named),
+                  joined_at=s.joined_at, contact=contact, label=s.label or "")
 
 
-def _damping(dm: dict, p: str, named: dict[str, Material]):
-    kind = dm.get("type")
-    if not isinstance(kind, str) or kind not in _DAMPING:  # a list or object is not a name (and not hashable)
-        raise _fail(f"{p}.type", f"must be one of {', '.join(_DAMPING)}, got {kind!r}")
-    cls, fields = _DAMPING[kind]
-    _keys(dm, p, fields | {"type"}, fields - {"alpha", "beta"})
-    kwargs = {k: dm[k] for k in fields if k in dm}
-    if "zeta" in kwargs and isinstance(kwargs["zeta"], list):
-        kwargs["zeta"] = tuple(kwargs["zeta"])
-    return _build(cls, p, **kwargs)
+def _damping(dm: Any, p: str, named: dict[str, Material]):
+    if dm.type == "modal":
+        return _build(ModalDamping, p, zeta=tuple(dm.zeta) if isinstance(dm.zeta, list) else dm.zeta)
+    if dm.type == "rayleigh":
+        return _build(RayleighDamping, p, alpha=dm.alpha, beta=dm.beta)
+    return _build(HystereticDamping, p, eta=dm.eta)
 
 
 #: The ingredient lists of a model file, in the order they are read, and the reader of one entry.
@@ -223,23 +190,27 @@ _INGREDIENTS = (("clamps", _clamp), ("supports", _support), ("point_masses", _po
                 ("insertions", _insertion), ("damping", _damping))
 
 
-def _ingredients(d: dict, named: dict[str, Material]) -> tuple[list, list[str]]:
+def _ingredients(doc: "schema.BeamModelFile", named: dict[str, Material]) -> tuple[list, list[str]]:
     """Every ingredient of the file and the field path of each (``clamps[0]``, ``damping[1]`` ...)."""
     ingredients: list = []
     paths: list[str] = []
     for key, read in _INGREDIENTS:
-        entries = d.get(key, [])
-        if key == "damping" and isinstance(entries, dict):  # one damping model may stand alone
+        entries = getattr(doc, key)
+        if key == "damping" and not isinstance(entries, list):  # one damping model may stand alone
             entries = [entries]
-        for i, entry in enumerate(_list(entries, key)):
-            p = f"{key}[{i}]"
-            ingredients.append(read(_obj(entry, p), p, named))
-            paths.append(p)
+        for i, entry in enumerate(entries):
+            ingredients.append(read(entry, f"{key}[{i}]", named))
+            paths.append(f"{key}[{i}]")
     return ingredients, paths
 
 
 def model_from_dict(data: Any) -> BeamModel:
     """Build a :class:`BeamModel` from a parsed model description (see module docstring).
+
+    The structure, JSON types and single-field ranges are those of the published schema
+    (:class:`jointdb.schemas.model.BeamModelFile`, ``docs/schemas/beam-model.schema.json``),
+    which reads the document; this function adds what a schema cannot say (materials by
+    name, positions inside the model, a damper only where there is a spring).
 
     Parameters
     ----------
@@ -255,28 +226,22 @@ def model_from_dict(data: Any) -> BeamModel:
     ------
     InputError
         Naming the exact field that is wrong, e.g. ``segments[1].outer_diameter: must be > 0, got 0``,
-        or a resource limit exceeded (segments, elements, magnitudes; see :mod:`jointdb._limits`).
+        or a resource limit exceeded (segments, elements, magnitudes; see :mod:`jointdb.schemas._limits`).
     """
-    d = _obj(data, "model")
-    check_model_limits(d)  # sizes, magnitudes and element count before anything is built
-    _keys(d, "", _TOP, {"segments"})
-    fmt = d.get("format", FORMAT)
-    if fmt != FORMAT:
-        raise _fail("format", f"unsupported format {fmt!r} (this jointdb reads {FORMAT!r})")
-    named = _materials(d)
-    segments = _segments(d, named)
-    points = _points(d)
-    ingredients, paths = _ingredients(d, named)
+    from jointdb.schemas import parse
+
+    if not isinstance(data, dict):
+        raise _fail("model", f"must be an object, got {type(data).__name__}")
+    check_model_limits(data)  # sizes, magnitudes and element count before anything is built
+    doc = parse("model", data, wording=_wording)
+    named = _materials(doc)
+    segments = _segments(doc, named)
+    points = _points(doc)
+    ingredients, paths = _ingredients(doc, named)
     try:
-        return BeamModel(
-            segments=tuple(segments),
-            points=tuple(points),
-            ingredients=tuple(ingredients),
-            theory=d.get("theory", "timoshenko"),
-            kind=d.get("kind", "planar"),
-            max_element_length=d.get("max_element_length", 0.005),
-            name=str(d.get("name", "")),
-        )
+        return BeamModel(segments=tuple(segments), points=tuple(points), ingredients=tuple(ingredients),
+                         theory=doc.theory, kind=doc.kind, max_element_length=doc.max_element_length,
+                         name=doc.name or "")
     except FieldError as exc:
         field = exc.field
         if field.startswith("ingredients["):

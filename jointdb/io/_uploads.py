@@ -182,7 +182,7 @@ def _unpack_member(archive: str, zf: zipfile.ZipFile, info: zipfile.ZipInfo, des
 
 def _find_campaign(archive: str, into: Path, files: list[Path]) -> Path:
     """The one campaign file among the unpacked JSON files."""
-    from jointdb._limits import MAX_JSON_BYTES
+    from jointdb.schemas._limits import MAX_JSON_BYTES
 
     campaigns = []
     for p in files:

@@ -113,7 +113,7 @@ def _contradictions(campaign_file: Path, recorded: dict, form: dict | None) -> l
 
 def identify_review(tmp: Path, payload: dict, upload: bytes, progress) -> tuple[dict[str, Any], bytes]:
     """Unpack, identify, and return ``(review, joint file bytes)`` (see the module's docstring)."""
-    from jointdb._output import to_jsonable
+    from jointdb.io._jsonable import to_jsonable
     from jointdb.campaign import joint_attrs
     from jointdb.io import write_frf_hdf5
     from jointdb.usecases import identify

@@ -124,7 +124,7 @@ def run_diagnose(payload: dict, repo, progress: Progress) -> tuple[dict, None]:
     band = tuple(payload.get("band") or (None, None))
     progress(0.05, "diagnosing")
     result = diagnose(model, ms, mapping=mapping, band=band, combinations=bool(payload.get("combinations", True)))
-    from jointdb._output import to_jsonable
+    from jointdb.io._jsonable import to_jsonable
 
     return to_jsonable(result.to_dict() | {"input_notes": list(result.observation.notes)}), None
 

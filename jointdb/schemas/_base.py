@@ -6,7 +6,7 @@ from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
-from jointdb._limits import LENGTH_RANGE
+from jointdb.schemas._limits import LENGTH_RANGE
 
 __all__ = ["Strict", "Finite", "NonNeg", "Positive", "Length", "Position", "Direction", "DirectionMap", "Name",
            "DofLabel"]
@@ -22,7 +22,7 @@ class Strict(BaseModel):
 Finite = Annotated[float, Field(allow_inf_nan=False, ge=-1e300, le=1e300)]
 NonNeg = Annotated[float, Field(allow_inf_nan=False, ge=0.0, le=1e300)]
 Positive = Annotated[float, Field(allow_inf_nan=False, gt=0.0, le=1e300)]
-#: a length or diameter in m, within the physical range of jointdb._limits
+#: a length or diameter in m, within the physical range of jointdb.schemas._limits
 Length = Annotated[float, Field(allow_inf_nan=False, ge=LENGTH_RANGE[0], le=LENGTH_RANGE[1],
                                 description="m")]
 #: a position along the axis in m

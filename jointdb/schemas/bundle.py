@@ -64,4 +64,4 @@ class JointStates(Strict):
     """A bundled joint's labels (label -> version) and its state changes, in order."""
 
     labels: dict[str, Annotated[int, Field(ge=1)]]
-    states: list[State]
+    states: list[State] = Field(max_length=100_000)

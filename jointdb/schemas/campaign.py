@@ -38,8 +38,8 @@ class Interface(Strict):
 
 
 class Conditions(Strict):
-    materials: list[Annotated[str, Field(min_length=1)]] | None = Field(
-        default=None, description="interface materials, names the catalogue knows (extensible: JOINTDB_MATERIALS)")
+    materials: list[Annotated[str, Field(min_length=1, max_length=100)]] | None = Field(
+        default=None, max_length=10, description="interface materials, names the catalogue knows (extensible: JOINTDB_MATERIALS)")
     torque_nm: NonNeg | None = Field(default=None, description="tightening torque, N·m")
     preload_n: NonNeg | None = Field(default=None, description="axial preload, N")
     geometry: dict[str, NonNeg] | None = Field(default=None, description="geometry numbers in SI, e.g. diameter_m")

@@ -8,6 +8,7 @@ from pydantic import Field
 
 from jointdb.schemas._base import Length, Name, NonNeg, Positive, Strict
 from jointdb.schemas.model import BeamModelFile
+from jointdb.stack._spec import KOPS_VO_RATIO
 
 __all__ = ["StackFile"]
 
@@ -23,7 +24,9 @@ class Tool(Strict):
 
     material: str = "carbide"
     segments: list[ToolSegment] = Field(min_length=1, max_length=1000)
-    fluted_ratio: Annotated[float, Field(allow_inf_nan=False, gt=0.0, le=1.0)] = 0.656
+    fluted_ratio: Annotated[float, Field(allow_inf_nan=False, gt=0.0, le=1.0)] = Field(
+        default=KOPS_VO_RATIO, description="equivalent diameter of a fluted section over the cutter diameter "
+                                           "(Kops & Vo)")
     fluted_area_ratio: Annotated[float, Field(allow_inf_nan=False, gt=0.0, le=1.0)] | None = Field(
         default=None, description="cross-section area of a fluted section over that of the full diameter (its true "
                                   "mass); default: the stiffness-equivalent diameter's area")
@@ -107,7 +110,12 @@ class FrequencyGrid(Strict):
 
 
 class StackFile(Strict):
-    """A tool / holder / spindle stack; the tool-tip FRF is predicted by three-component RC."""
+    """A tool / holder / spindle stack; the tool-tip FRF is predicted by three-component RC.
+
+    Each substructure (``tool``, ``holder``, ``spindle``) is one field typed by its own
+    model; another way of giving one (a catalogued part) is one more branch of that
+    field's union, read by the matching function of :mod:`jointdb.stack._stackfile`.
+    """
 
     format: Literal["jointdb-stack/1"] = "jointdb-stack/1"
     name: str = "stack"

@@ -1,5 +1,10 @@
 """Request bodies (pydantic): types are checked before anything reaches the repository,
-whose own rules (materials, names, labels, model kinds) are then applied unchanged."""
+whose own rules (materials, names, labels, model kinds) are then applied unchanged.
+
+What a file kind already describes is not described again: the conditions of a joint are
+the campaign file's (:class:`jointdb.schemas.campaign.Conditions`), a stack to predict is
+read by the stack file's schema and reader (:func:`jointdb.stack.stack_from_dict`).
+"""
 
 from __future__ import annotations
 
@@ -7,23 +12,37 @@ from typing import Any, Literal, Optional
 
 from pydantic import BaseModel, ConfigDict, Field
 
+from jointdb.errors import InputError
+from jointdb.schemas.campaign import Conditions as CampaignConditions
+
 
 class Strict(BaseModel):
     model_config = ConfigDict(extra="forbid")
 
 
-class ConditionsIn(Strict):
-    materials: list[str] = Field(default_factory=list, max_length=10, description="Interface materials.")
-    preload_n: Optional[float] = Field(None, description="Preload [N].")
-    torque_nm: Optional[float] = Field(None, description="Tightening torque [N·m].")
-    geometry: dict[str, float] = Field(default_factory=dict, description="Geometry numbers in SI, e.g. diameter_m.")
-    extra: dict[str, Any] = Field(default_factory=dict, description="Free-form details (not ranked).")
+class ConditionsIn(CampaignConditions):
+    """A joint's conditions, as in a campaign file (materials, torque, preload, geometry, extra).
+
+    Built in Python (a web form's fields), a value out of range is an :class:`InputError`
+    naming the field, as the repository's own rules would give.
+    """
+
+    def __init__(self, **data: Any) -> None:
+        from pydantic import ValidationError
+
+        from jointdb.schemas import describe_error
+
+        try:
+            super().__init__(**data)
+        except ValidationError as exc:
+            raise InputError(f"conditions.{describe_error(exc, 'campaign')}") from None
 
     def to_conditions(self):
+        """The store's :class:`~jointdb.store.Conditions` of these conditions."""
         from jointdb.store import Conditions
 
-        return Conditions(tuple(self.materials), self.preload_n, self.torque_nm, dict(self.geometry),
-                          dict(self.extra))
+        return Conditions(tuple(self.materials or ()), self.preload_n, self.torque_nm, dict(self.geometry or {}),
+                          dict(self.extra or {}))
 
 
 class NearestIn(Strict):
@@ -70,8 +89,9 @@ class DeprecateIn(Strict):
 
 
 class PredictIn(Strict):
-    stack: dict[str, Any] = Field(..., description="A stack description (format jointdb-stack/1) with its "
-                                  "spindle model inline.")
+    stack: dict[str, Any] = Field(..., description="A stack description (format jointdb-stack/1, schema "
+                                  "docs/schemas/stack.schema.json) with its spindle model inline; read by the stack "
+                                  "file reader, whose errors name the field.")
 
 
 class FrfIn(Strict):

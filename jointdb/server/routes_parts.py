@@ -172,7 +172,7 @@ async def add_part(request: Request, response: Response, r=Depends(repo), who=wr
 def _json_fields(raw: bytes) -> dict[str, Any]:
     from pydantic import ValidationError
 
-    from jointdb._limits import check_json_text
+    from jointdb.schemas._limits import check_json_text
     from jointdb.io import frf_from_json
 
     try:
@@ -209,7 +209,7 @@ def _sha256(data: bytes) -> str:
 
 
 def _json_text(value: Any, field: str) -> Any:
-    from jointdb._limits import check_json_text
+    from jointdb.schemas._limits import check_json_text
 
     if value is None:
         return None

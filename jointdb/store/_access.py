@@ -22,7 +22,7 @@ from sqlalchemy.exc import IntegrityError as DBIntegrityError
 from sqlalchemy.exc import OperationalError
 from sqlalchemy.orm import Session
 
-from jointdb._limits import control_character
+from jointdb.schemas._limits import control_character
 from jointdb.errors import ConflictError, InputError, NotFoundError
 from jointdb.store._models import JointRow
 from jointdb.store._reports import _is_transient, _is_unique_violation

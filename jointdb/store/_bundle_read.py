@@ -26,7 +26,7 @@ from typing import Any
 
 import numpy as np
 
-from jointdb._limits import check_text
+from jointdb.schemas._limits import check_text
 from jointdb.errors import InputError, IntegrityError, JointdbError, NotFoundError
 from jointdb.frf import FRF
 from jointdb.store._blobformat import frf_sha256, read_frf_group
@@ -129,78 +129,114 @@ def _json(text: str, where: str) -> Any:
         raise InputError(f"{where}: not valid JSON ({exc.msg} at line {exc.lineno})") from None
 
 
+_STATE_KEYS = "version, state, reason, author, at"
+
+
+def _record_wording(field: str, err: dict[str, Any]) -> str | None:
+    """The bundle reader's words for a version record the schema refuses."""
+    kind, value = err.get("type"), str(err.get("input"))[:40]
+    if field in ("version", "parent_version", "n_freq"):
+        return f"{field} must be a whole number >= 1, got {value!r}"
+    if field == "uuid":
+        return f"uuid {value!r} is not a UUID"
+    if field == "blob_sha256":
+        return "blob_sha256 is not a SHA-256 hex digest"
+    if field.startswith("raw_blobs"):
+        return "raw_blobs must map simple names to SHA-256 hex digests"
+    if field == "provenance" or (field.startswith("provenance.") and kind in ("missing", "extra_forbidden")):
+        return "provenance must have input_files, method, parameters, software_version"
+    if field == "record" or field == "top level":
+        return "record must be a JSON object"
+    return None
+
+
+def _states_wording(field: str, err: dict[str, Any]) -> str | None:
+    """The bundle reader's words for labels and states the schema refuses."""
+    kind, value = err.get("type"), str(err.get("input"))[:40]
+    if field == "labels":
+        return "labels must be a JSON object {label: version}"
+    if field.startswith("labels."):
+        return f"label {field[len('labels.'):]!r} version must be a whole number >= 1, got {value!r}"
+    if field == "states":
+        return f"states must be a JSON list (at most {MAX_STATES})"
+    state = re.fullmatch(r"states\[(\d+)\](?:\.(\w+))?", field)
+    if state:
+        w = f"state {int(state.group(1)) + 1}"
+        key = state.group(2)
+        if key is None or kind in ("missing", "extra_forbidden"):
+            return f"{w} must have exactly {_STATE_KEYS}"
+        if key == "state":
+            return f"{w}: state must be 'active' or 'deprecated', got {value!r}"
+        if key == "version":
+            return f"{w}: version must be a whole number >= 1, got {value!r}"
+    return None
+
+
 def _check_record(record: Any, name: str, jt: str, frf: FRF, label: str) -> None:
-    """The record is a well-formed catalogue entry describing ``frf``."""
-    if not isinstance(record, dict):
-        raise InputError(f"{label}: record must be a JSON object")
-    version = _int(record.get("version"), f"{label}: version", 1, 10**9)
+    """The record is a well-formed catalogue entry describing ``frf``.
+
+    Its structure and JSON types are the schema's (:class:`jointdb.schemas.bundle.VersionRecord`,
+    ``docs/schemas/bundle-record.schema.json``); what follows checks what a schema cannot say:
+    canonical forms, the FRF it describes, version numbers in order.
+    """
+    from jointdb.schemas import parse
+
+    parse("bundle-record", record, label, wording=_record_wording)
+    version = _int(record["version"], f"{label}: version", 1, 10**9)
     try:
-        uuidlib.UUID(str(record.get("uuid")))
+        uuidlib.UUID(record["uuid"])
     except ValueError:
-        raise InputError(f"{label}: uuid {str(record.get('uuid'))[:40]!r} is not a UUID") from None
-    parse_time(record.get("created_at"), f"{label}: created_at")
-    _text(record.get("author"), f"{label}: author")
-    cond = record.get("conditions")
-    if not isinstance(cond, dict) or Conditions.from_dict(cond).to_dict() != cond:
+        raise InputError(f"{label}: uuid {record['uuid'][:40]!r} is not a UUID") from None
+    parse_time(record["created_at"], f"{label}: created_at")
+    _text(record["author"], f"{label}: author")
+    cond = record["conditions"]
+    if Conditions.from_dict(cond).to_dict() != cond:
         raise InputError(f"{label}: conditions are not in the catalogue's form (materials, preload_n, torque_nm, "
                          "geometry, extra)")
-    if check_model_kind(record.get("model_kind"), frf) != record.get("model_kind"):
-        raise InputError(f"{label}: model kind {record.get('model_kind')!r} is not in canonical form")
+    if check_model_kind(record["model_kind"], frf) != record["model_kind"]:
+        raise InputError(f"{label}: model kind {record['model_kind']!r} is not in canonical form")
     described = {"dofs": list(dof_strings(frf.outputs)), "quantity": frf.quantity.value, "n_freq": frf.n_freq,
                  "freq_min_hz": float(frf.freq[0]), "freq_max_hz": float(frf.freq[-1])}
     for key, value in described.items():
-        if record.get(key) != value:
-            raise InputError(f"{label}: {key} {str(record.get(key))[:60]!r} does not describe the FRF ({value!r})")
-    prov = record.get("provenance")
-    if not isinstance(prov, dict) or set(prov) != {"input_files", "method", "parameters", "software_version"}:
-        raise InputError(f"{label}: provenance must have input_files, method, parameters, software_version")
-    if not isinstance(prov["parameters"], dict) or not isinstance(prov["input_files"], dict):
-        raise InputError(f"{label}: provenance parameters and input_files must be JSON objects")
+        if record[key] != value:
+            raise InputError(f"{label}: {key} {str(record[key])[:60]!r} does not describe the FRF ({value!r})")
+    prov = record["provenance"]
     checked = Provenance(method=prov["method"], parameters=prov["parameters"], input_files=prov["input_files"])
     if checked.method != prov["method"] or dict(checked.input_files) != prov["input_files"]:
         raise InputError(f"{label}: provenance is not in canonical form")
     _text(prov["software_version"], f"{label}: software_version", 50)
-    parent = record.get("parent_version")
-    if parent is not None:
-        _int(parent, f"{label}: parent_version", 1, version - 1)
-    quality = record.get("quality")
-    if not isinstance(quality, dict) or as_quality(quality) != quality:
+    if record["parent_version"] is not None:
+        _int(record["parent_version"], f"{label}: parent_version", 1, version - 1)
+    if as_quality(record["quality"]) != record["quality"]:
         raise InputError(f"{label}: quality must map names to finite numbers")
-    if not isinstance(record.get("blob_sha256"), str) or not _HEX64.fullmatch(record["blob_sha256"]):
-        raise InputError(f"{label}: blob_sha256 is not a SHA-256 hex digest")
-    raw = record.get("raw_blobs")
-    if not isinstance(raw, dict) or not all(
-        isinstance(k, str) and _RAW_KEY.fullmatch(k) and isinstance(d, str) and _HEX64.fullmatch(d)
-        for k, d in raw.items()
-    ):
+    if not all(_RAW_KEY.fullmatch(k) for k in record["raw_blobs"]):
         raise InputError(f"{label}: raw_blobs must map simple names to SHA-256 hex digests")
-    if record.get("name") != name or record.get("joint_type") != jt:
+    if record["name"] != name or record["joint_type"] != jt:
         raise IntegrityError(f"{label}: record names another joint")
 
 
 def _check_labels(labels: Any, n: int, where: str) -> dict[str, int]:
-    if not isinstance(labels, dict):
-        raise InputError(f"{where}: labels must be a JSON object {{label: version}}")
-    out = {}
+    """A joint's labels: the schema's structure (:class:`jointdb.schemas.bundle.JointStates`), then
+    canonical label text and versions that exist (1..n)."""
+    from jointdb.schemas import parse
+
+    parse("bundle-states", {"labels": labels, "states": []}, where, wording=_states_wording)
     for label, version in labels.items():
-        text = check_label(label)
-        if text != label:
+        if check_label(label) != label:
             raise InputError(f"{where}: label {label!r} has surrounding spaces")
-        out[label] = _int(version, f"{where}: label {label!r} version", 1, n)
-    return out
+        _int(version, f"{where}: label {label!r} version", 1, n)
+    return labels
 
 
 def _check_states(states: Any, n: int, where: str) -> list[dict[str, Any]]:
-    if not isinstance(states, list) or len(states) > MAX_STATES:
-        raise InputError(f"{where}: states must be a JSON list (at most {MAX_STATES})")
+    """A joint's state changes: the schema's structure, then versions that exist, text and times."""
+    from jointdb.schemas import parse
+
+    parse("bundle-states", {"labels": {}, "states": states}, where, wording=_states_wording)
     for i, st in enumerate(states):
         w = f"{where}: state {i + 1}"
-        if not isinstance(st, dict) or set(st) != {"version", "state", "reason", "author", "at"}:
-            raise InputError(f"{w} must have exactly version, state, reason, author, at")
         if st["version"] is not None:
             _int(st["version"], f"{w}: version", 1, n)
-        if st["state"] not in ("active", "deprecated"):
-            raise InputError(f"{w}: state must be 'active' or 'deprecated', got {str(st['state'])[:40]!r}")
         check_text(st["reason"], f"{w}: reason")  # text, at most 10000 characters, no control characters
         _text(st["author"], f"{w}: author")
         parse_time(st["at"], f"{w}: at")

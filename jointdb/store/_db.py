@@ -229,6 +229,18 @@ def _sqlite_engine(url: str) -> tuple[Engine, Engine]:
     return engine, engine.execution_options(sqlite_begin="IMMEDIATE")
 
 
+def _without_jit(options: "str | tuple[str, ...] | None") -> str:
+    """The libpq ``options`` of a PostgreSQL URL plus ``-c jit=off``.
+
+    The store's statements are short (a page of 50, one version, a count over the query
+    index); PostgreSQL's JIT compiler, which starts above a planner cost these reach on a large
+    catalogue, spends 0.5–0.9 s compiling a statement that runs in milliseconds
+    (bench/bench_listing.py, docs/validation/performance.md).
+    """
+    given = " ".join(options) if isinstance(options, tuple) else (options or "")
+    return f"{given} -c jit=off".strip()
+
+
 def make_engines(url: str, pool_size: int | None = None) -> tuple[Engine, Engine]:
     """``(read_engine, write_engine)`` for a URL; identical for PostgreSQL.
 
@@ -245,13 +257,15 @@ def make_engines(url: str, pool_size: int | None = None) -> tuple[Engine, Engine
     with db_errors(url):
         if is_sqlite(url):
             return _sqlite_engine(url)
-        kwargs: dict = {"pool_pre_ping": True}
+        query = make_url(url).query
+        connect_args: dict = {"options": _without_jit(query.get("options"))}
+        if "connect_timeout" not in query:
+            connect_args["connect_timeout"] = PG_CONNECT_TIMEOUT_S
+        kwargs: dict = {"pool_pre_ping": True, "connect_args": connect_args}
         if pool_size is not None:
             if not 1 <= int(pool_size) <= 1000:
                 raise InputError(f"pool_size must be 1..1000, got {pool_size}")
             kwargs |= {"pool_size": int(pool_size), "max_overflow": max(2, int(pool_size) // 2)}
-        if "connect_timeout" not in make_url(url).query:
-            kwargs["connect_args"] = {"connect_timeout": PG_CONNECT_TIMEOUT_S}
         engine = create_engine(url, **kwargs)
     return engine, engine
 

@@ -12,7 +12,7 @@ from typing import Any
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
-from jointdb._limits import check_text
+from jointdb.schemas._limits import check_text
 from jointdb.store import _db
 from jointdb.store._access import joint_row
 from jointdb.store._index import bump, refresh_joints

@@ -32,7 +32,7 @@ from types import SimpleNamespace
 from sqlalchemy import and_, exists, false, func, literal, or_, select, true
 from sqlalchemy.orm import aliased
 
-from jointdb._limits import control_character
+from jointdb.schemas._limits import control_character
 from jointdb.errors import InputError, IntegrityError
 from jointdb.store._models import JointRow, LabelRow, QueryVersionRow, VersionRow
 from jointdb.store._records import DamagedVersion, to_version
@@ -131,6 +131,16 @@ def _filters(qv, j, *, joint_type, materials, label, include_deprecated, state, 
     return terms
 
 
+def count_statement(**filters):
+    """The number of versions a listing's filters match. The joints table is joined only when a
+    filter needs it (part of the name): counting the whole catalogue reads the index alone."""
+    qv, j = aliased(QueryVersionRow), aliased(JointRow)
+    stmt = select(func.count()).select_from(qv)
+    if filters.get("name_contains"):
+        stmt = stmt.join(j, j.id == qv.joint_id)
+    return stmt.where(*_filters(qv, j, **filters))
+
+
 def page_statement(dialect: str, *, after: str | None, offset: int, limit: int | None, **filters):
     """The one SELECT of a page: version columns, joint name and type, standing, labels, total."""
     qv, j, v, lab = QueryVersionRow, JointRow, VersionRow, aliased(LabelRow)
@@ -138,9 +148,7 @@ def page_statement(dialect: str, *, after: str | None, offset: int, limit: int |
     agg = func.string_agg if dialect == "postgresql" else func.group_concat
     labels = (select(agg(lab.label, literal(","))).where(lab.joint_id == qv.joint_id, lab.version == qv.version)
               .scalar_subquery())
-    qv_c, j_c = aliased(QueryVersionRow), aliased(JointRow)
-    total = (select(func.count()).select_from(qv_c).join(j_c, j_c.id == qv_c.joint_id)
-             .where(*_filters(qv_c, j_c, **filters)).scalar_subquery())
+    total = count_statement(**filters).scalar_subquery()
     stmt = (select(j.name, j.joint_type, qv.deprecated, labels.label("labels"), total.label("total"),
                    *[getattr(v, c) for c in _VERSION_COLUMNS])
             .select_from(qv).join(j, j.id == qv.joint_id).join(v, v.id == qv.version_id)
@@ -201,8 +209,6 @@ def list_page(conn, *, joint_type=None, materials=(), label=None, include_deprec
     rows = rows[:int(limit)] if limit is not None else rows
     total = int(rows[0].total) if rows else 0
     if not rows and (start is not None or offset):  # past the end: the total is still asked for
-        total = conn.execute(select(func.count()).select_from(QueryVersionRow).join(
-            JointRow, JointRow.id == QueryVersionRow.joint_id)
-            .where(*_filters(QueryVersionRow, JointRow, **filters))).scalar_one()
+        total = conn.execute(count_statement(**filters)).scalar_one()
     items, damaged = read_rows(rows)
     return JointPage(tuple(items), tuple(damaged), total, encode_cursor(rows[-1].name) if more else None)

@@ -32,7 +32,7 @@ from typing import Any
 from sqlalchemy import func, select
 from sqlalchemy.orm import Session
 
-from jointdb._limits import check_stored_json, check_text, control_character
+from jointdb.schemas._limits import check_stored_json, check_text, control_character
 from jointdb.errors import ConflictError, InputError, IntegrityError, NotFoundError
 from jointdb.frf import FRF
 from jointdb.store import _db
@@ -215,13 +215,14 @@ def _check_payload(kind: str, payload: Any, frf: FRF | None) -> dict[str, Any]:
     payload = dict(payload)
     check_stored_json(payload, "payload")
     if kind == "tool":
-        sf._tool(payload, "payload")
+        sf.substructure_from_dict("tool", payload, "payload")
     elif kind == "holder":
-        sf._holder(payload, "payload")
+        sf.substructure_from_dict("holder", payload, "payload")
     elif frf is not None:  # a measured spindle: the FRF set is the blob, the payload names its node
         if set(payload) - {"node", "file"} or "node" not in payload:
             raise InputError("payload: a measured spindle's payload is {\"node\": N} (the FRF is stored as a blob)")
-        spindle = sf._spindle({"file": str(payload.get("file", "frf")), "node": payload["node"]}, "payload")
+        spindle = sf.substructure_from_dict("spindle", {"file": str(payload.get("file", "frf")), "node": payload["node"]},
+                                            "payload")
         labels = {str(d) for d in frf.outputs}
         if f"{spindle.node}x" not in labels or f"{spindle.node}ry" not in labels:
             raise InputError(f"frf: the spindle-nose FRF needs DOFs {spindle.node}x and {spindle.node}ry "
@@ -232,7 +233,7 @@ def _check_payload(kind: str, payload: Any, frf: FRF | None) -> dict[str, Any]:
                              "one is stored with its FRF (no file paths are read)")
         from jointdb.fe import model_from_dict
 
-        sp = sf._spindle(payload, "payload")
+        sp = sf.substructure_from_dict("spindle", payload, "payload")
         model = model_from_dict(dict(sp.model))
         if sp.point not in {p.name for p in model.points}:
             raise InputError(f"payload.point: the model has no point {sp.point!r}")

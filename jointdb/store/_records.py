@@ -11,7 +11,7 @@ from dataclasses import dataclass
 from datetime import datetime, timezone
 from typing import TYPE_CHECKING, Any
 
-from jointdb._limits import MAX_FIELD_BYTES, check_stored_json, check_text
+from jointdb.schemas._limits import MAX_FIELD_BYTES, check_stored_json, check_text
 from jointdb.errors import InputError, IntegrityError
 from jointdb.store._types import Conditions, JointVersion, Provenance
 
@@ -158,7 +158,7 @@ def _item_ok(value: Any, kind: str | None) -> bool:
 def stored_problem(row: Any) -> str | None:
     """Why a stored version row cannot be used (None when its fields have the catalogue's shapes and
     limits): a JSON column that is not JSON, of the wrong shape, or beyond the record limits of
-    :mod:`jointdb._limits` (e.g. nested deeper than a write accepts today)."""
+    :mod:`jointdb.schemas._limits` (e.g. nested deeper than a write accepts today)."""
     for column, container, kind in _SHAPES:
         value = getattr(row, column, None)
         if isinstance(value, DamagedJSON):

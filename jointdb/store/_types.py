@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 from datetime import datetime
 from typing import Any
 
-from jointdb import _limits
+from jointdb.schemas import _limits
 from jointdb.errors import InputError
 from jointdb.frf import FRF, Dof, Quantity
 

@@ -6,7 +6,7 @@ between the store / io / numeric core below and the shells above (``jointdb.cli`
 the logic lives here, once, so the CLI and the service cannot drift apart (they import
 this package, never each other). Measurement campaigns (reading, identification,
 coupling) are the sibling package :mod:`jointdb.campaign`; the demo's job is
-:mod:`jointdb._journey`, which calls these functions.
+:mod:`jointdb.usecases._demo`, which calls these functions.
 
 Campaigns (:mod:`jointdb.usecases._catalogue`; planning a campaign is :func:`jointdb.campaign._plan.plan_campaign`)
     identify              -- read, check and identify a campaign file (IRC)
@@ -21,6 +21,14 @@ Stacks (:mod:`jointdb.usecases._stack`)
     INTERPOLATION_POOL    -- how many nearest versions an interpolated joint is chosen from
     predict_stack         -- resolve, then predict the tool-tip FRF (:class:`StackPrediction`)
     predict_with_joints   -- predict the tool-tip FRF with joints already resolved
+Diagnosis (:mod:`jointdb.usecases._diagnose`)
+    diagnose_recordings   -- where a model and recordings disagree, the missing physics, refit
+    read_recording        -- a recorded FRF (UFF58) with its coherence; NaN/Inf lines kept as gaps
+Planning (:mod:`jointdb.usecases._plan`)
+    plan_measurements     -- rank a campaign's candidate tap points (:class:`CampaignPlan`)
+The demo (:mod:`jointdb.usecases._tool_model`, :mod:`jointdb.usecases._demo`)
+    run_demo              -- part A (tool model, modes, tip FRF, files) then the main job
+    mode_rows             -- one row per mode: number, frequency [Hz], dominant motion
 Lobes (:mod:`jointdb.usecases._lobes`, :mod:`jointdb.usecases._lobe_report`)
     stability_lobes       -- milling (ZOA) or turning lobes of a tool-tip FRF over a speed grid
     lobes_report          -- lobes as the API and the jobs give them: method, refinement, summary, notes
@@ -77,6 +85,9 @@ from jointdb.usecases._parts import part_refs, resolve_stack_parts, stack_from_d
 from jointdb.usecases._optimize import load_problem
 from jointdb.usecases._optimize_run import OptimizeOutcome, optimize_stack
 from jointdb.usecases._simulate import TipSimulation, simulate_tip
+from jointdb.usecases._diagnose import diagnose_recordings, read_recording
+from jointdb.usecases._plan import CampaignPlan, plan_measurements
+from jointdb.usecases._tool_model import mode_rows, run_demo
 from jointdb.usecases._stack import (
     INTERPOLATION_POOL,
     JointResolution,
@@ -125,4 +136,10 @@ __all__ = [
     "predict_stack",
     "predict_with_joints",
     "resolve_joints",
+    "mode_rows",
+    "run_demo",
+    "CampaignPlan",
+    "plan_measurements",
+    "diagnose_recordings",
+    "read_recording",
 ]

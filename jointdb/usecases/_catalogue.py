@@ -288,7 +288,7 @@ def catalogue_inputs(joint_file: Path | str, given=None, *, joint_type: str | No
         A file without joint type or model kind (and none given), a conflict of
         conditions, or any value the catalogue would refuse.
     """
-    from jointdb._output import to_jsonable
+    from jointdb.io._jsonable import to_jsonable
     from jointdb.store import Conditions, Provenance
     from jointdb.store._types import check_joint_type, check_model_kind
 

@@ -7,7 +7,7 @@ import json
 from pathlib import Path
 from typing import Any
 
-from jointdb._jsonfile import read_json_file
+from jointdb.schemas._jsonfile import read_json_file
 from jointdb.errors import InputError, NotFoundError
 from jointdb.frf import FRF
 from jointdb.stack import MeasuredSpindle, ModelledSpindle, StackSpec

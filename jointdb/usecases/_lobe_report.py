@@ -250,6 +250,6 @@ def _milling(frf, cut, method, speeds, refine, cross_terms, notes, report, *, in
 
 
 def _jsonable(value):
-    from jointdb._output import to_jsonable
+    from jointdb.io._jsonable import to_jsonable
 
     return to_jsonable(value)

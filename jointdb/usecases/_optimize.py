@@ -91,7 +91,7 @@ def load_problem(path: Path | str) -> OptimizeProblem:
     """
     from pydantic import ValidationError
 
-    from jointdb._jsonfile import read_json_file
+    from jointdb.schemas._jsonfile import read_json_file
     from jointdb.schemas.optimize import OptimizeSpecFile
     from jointdb.stability import MillingCut
     from jointdb.usecases._files import load_stack

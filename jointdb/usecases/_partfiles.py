@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from jointdb._jsonfile import read_json_file
+from jointdb.schemas._jsonfile import read_json_file
 from jointdb.errors import InputError, NotFoundError
 from jointdb.frf import FRF
 from jointdb.usecases._files import read_frf_file

@@ -136,13 +136,12 @@ class JointResolution:
 
 
 def _open_repo(repo_or_url):
-    """``(repository, owned)``: a repository as given, or one opened on a URL / path (``None``: the default),
-    which the caller closes."""
-    from jointdb.store import Repository
+    """``(store, owned)``: a store as given, or one opened on a server address, database URL or path
+    (``None``: the default) by :func:`jointdb.store.open_store`, which the caller closes."""
+    from jointdb.store import open_store
 
-    if repo_or_url is None or isinstance(repo_or_url, (str, Path)):
-        return Repository(repo_or_url), True
-    return repo_or_url, False
+    store = open_store(repo_or_url)
+    return store, store is not repo_or_url
 
 
 def _uncertainty_of(version) -> Mapping[str, Any] | None:

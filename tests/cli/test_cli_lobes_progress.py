@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from jointdb.cli._stability import _sd_lobes_with_progress
+from jointdb.usecases._lobes import sd_lobes_in_chunks as _sd_lobes_with_progress
 from jointdb.modal import ModalModel
 from jointdb.stability import MillingCut, milling_lobes_sd
 

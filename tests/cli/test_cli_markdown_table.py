@@ -1,4 +1,4 @@
-"""Piped tables written without Rich (jointdb._mdtable) are exactly what Rich writes, and Rich
+"""Piped tables written without Rich (jointdb.cli._mdtable) are exactly what Rich writes, and Rich
 still writes every table this module does not take."""
 
 import io
@@ -8,8 +8,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-import jointdb._output as output
-from jointdb._mdtable import _NARROW, render
+import jointdb.cli._output as output
+from jointdb.cli._mdtable import _NARROW, render
 
 
 def _emit(monkeypatch, data, rich: bool, **kw) -> str:

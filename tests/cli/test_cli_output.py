@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from jointdb._output import header, progress_line, write_rows
+from jointdb.cli._output import header, progress_line, write_rows
 from jointdb.frf import FRF
 from jointdb.io import write_frf_hdf5
 
@@ -97,7 +97,7 @@ def test_headers_carry_units():
 
 def test_piped_table_is_plain_and_untruncated():
     long = "th-er32-carbide-" + "x" * 150
-    code = ("from jointdb._output import emit; "
+    code = ("from jointdb.cli._output import emit; "
             f"emit([{{'name': {long!r}, 'torque_nm': 40.0, 'materials': 'tungsten-carbide + steel'}}], title='t')")
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env={**ENV, "COLUMNS": "80"})
     assert r.returncode == 0, r.stderr
@@ -105,14 +105,14 @@ def test_piped_table_is_plain_and_untruncated():
     assert "torque [N·m]" in r.stdout
     assert not any(ch in r.stdout for ch in "┏┃│└")  # plain ASCII (Markdown) table, no box drawing
     assert "\x1b[" not in r.stdout  # no colour codes in a pipe
-    code = "from jointdb._output import emit; emit({'max |H[1x,1x]|': '4.5e-06 at 1888 Hz'})"
+    code = "from jointdb.cli._output import emit; emit({'max |H[1x,1x]|': '4.5e-06 at 1888 Hz'})"
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=ENV)
     row = next(x for x in r.stdout.splitlines() if "max" in x)
     assert row.replace("\\|", "").count("|") == 3  # a | inside a cell is escaped: still two columns
 
 
 def test_piped_progress_prints_lines_with_counts_and_eta():
-    code = ("import time\nfrom jointdb._output import progress\n"
+    code = ("import time\nfrom jointdb.cli._output import progress\n"
             "for _ in progress(range(4), description='cases', min_interval_s=0.0):\n    time.sleep(0.01)\n")
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=ENV)
     lines = [x for x in r.stderr.splitlines() if x.startswith("cases:")]
@@ -209,7 +209,7 @@ def test_verbose_and_quiet_set_the_logging_level(tip_h5, tmp_path):
 
 
 def test_configure_logging_levels():
-    from jointdb._output import configure_logging
+    from jointdb.cli._output import configure_logging
 
     logger = logging.getLogger("jointdb")
     try:

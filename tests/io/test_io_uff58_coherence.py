@@ -92,7 +92,7 @@ def test_negative_direction_coherence_keeps_its_sign_and_missing_pair_is_named(t
 
 def test_diagnose_reader_takes_the_written_coherence(tmp_path):
     """The `jointdb diagnose` CLI reads coherence records into Measurement.coherence."""
-    from jointdb.cli._diagnose import _read_recording
+    from jointdb.usecases._diagnose import read_recording as _read_recording
 
     frf = make_frf(np.arange(1, 21) * 50.0, digits12=True)
     coh = _coh(frf)

@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from jointdb._journey import run_main_job
+from jointdb.usecases._demo import run_main_job
 from jointdb.store import Repository
 from jointdb.usecases._optimize import best_cut, enumerate_candidates, evaluate_brute_force, load_problem, rank
 from jointdb.usecases._optimize_eval import evaluate_candidates

@@ -5,7 +5,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from jointdb._journey import run_main_job
+from jointdb.usecases._demo import run_main_job
 from jointdb.store import Repository
 from jointdb.usecases._optimize import enumerate_candidates, load_problem
 from jointdb.usecases._optimize_eval import evaluate_candidates

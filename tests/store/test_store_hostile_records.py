@@ -230,7 +230,7 @@ def test_a_corrupt_blob_is_named_by_its_version_not_its_path(tmp_path):
 
 def test_a_row_an_older_version_wrote_beyond_todays_limits_is_reported_not_served(repo, monkeypatch):
     """Depth 300 was accepted before issue 20 (and then broke every list): read back, it is damaged."""
-    from jointdb import _limits
+    from jointdb.schemas import _limits
 
     _catalogue(repo, "A")
     with monkeypatch.context() as m:

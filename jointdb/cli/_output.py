@@ -11,8 +11,6 @@ modules log through ``logging.getLogger(__name__)`` and never print.
 
 from __future__ import annotations
 
-import dataclasses
-import enum
 import json
 import logging
 import math
@@ -23,36 +21,6 @@ from pathlib import Path
 from typing import Any, TypeVar
 
 T = TypeVar("T")
-
-
-def to_jsonable(obj: Any) -> Any:
-    """Convert numpy scalars/arrays, dataclasses, enums, paths and complex numbers to JSON types."""
-    import numpy as np  # here, not at import: ``jointdb --help`` and the CLI's start-up stay numpy-free
-
-    if dataclasses.is_dataclass(obj) and not isinstance(obj, type):
-        return {f.name: to_jsonable(getattr(obj, f.name)) for f in dataclasses.fields(obj)}
-    if isinstance(obj, Mapping):
-        return {str(k): to_jsonable(v) for k, v in obj.items()}
-    if isinstance(obj, enum.Enum):
-        return obj.value
-    if isinstance(obj, Path):
-        return str(obj)
-    if isinstance(obj, np.ndarray):
-        return to_jsonable(obj.tolist())
-    if isinstance(obj, (np.integer,)):
-        return int(obj)
-    if isinstance(obj, (np.floating, float)):
-        value = float(obj)
-        return value if math.isfinite(value) else None
-    if isinstance(obj, (complex, np.complexfloating)):
-        return {"re": to_jsonable(obj.real), "im": to_jsonable(obj.imag)}
-    if isinstance(obj, (np.bool_,)):
-        return bool(obj)
-    if isinstance(obj, (list, tuple, set, frozenset)):
-        return [to_jsonable(v) for v in obj]
-    if isinstance(obj, (str, int, bool)) or obj is None:
-        return obj
-    return str(obj)
 
 
 #: Column-name suffixes of SI quantities and the unit shown in table headers (longest first).
@@ -117,6 +85,8 @@ def emit(
         Optional table title (ignored for JSON).
     """
     if as_json:
+        from jointdb.io._jsonable import to_jsonable  # here: the table path stays numpy- and io-free
+
         sys.stdout.write(json.dumps(to_jsonable(data), indent=2) + "\n")
         return
     if not isinstance(data, str) and not sys.stdout.isatty():  # the same Markdown table, without Rich if simple
@@ -161,8 +131,8 @@ def emit(
 
 
 def _markdown_table(data: Any, columns: Sequence[str] | None, title: str | None) -> str | None:
-    """What :func:`emit` prints for piped output via Rich, from :mod:`jointdb._mdtable` (None: ask Rich)."""
-    from jointdb._mdtable import render
+    """What :func:`emit` prints for piped output via Rich, from :mod:`jointdb.cli._mdtable` (None: ask Rich)."""
+    from jointdb.cli._mdtable import render
 
     def esc(text: str) -> str:
         return text.replace("|", "\\|")
@@ -285,6 +255,7 @@ def write_rows(path: Path, rows: Sequence[Mapping[str, Any]], *, columns: Sequen
 
     from jointdb.errors import InputError
     from jointdb.io._atomic import atomic_path
+    from jointdb.io._jsonable import to_jsonable
 
     path = Path(path)
     suffix = path.suffix.lower()

@@ -66,7 +66,7 @@ def bundled_catalogue(stack: ExitStack) -> Path:
 
 
 def _write_json(path: Path, data: Any) -> Path:
-    from jointdb._output import to_jsonable
+    from jointdb.io._jsonable import to_jsonable
     from jointdb.io._atomic import atomic_path
 
     with atomic_path(path) as tmp:  # like every other output file: whole or not at all
@@ -178,14 +178,14 @@ def run_main_job(
 
 def _catalogue(repo, cat: Path, result: JourneyResult, say: Callable[[str], None]) -> None:
     """Step 1: identify and catalogue every bundled campaign (one row each, ``catalogue.csv``)."""
-    from jointdb import usecases
+    from jointdb.usecases import _catalogue, _partfiles
 
     campaigns = sorted((cat / "campaigns").glob("*/campaign.json"))
     kinds = _joint_types(campaigns)
     say(f"[1/4] identify and catalogue {len(campaigns)} campaigns "
         f"({', '.join(f'{n} {t}' for t, n in kinds.items())}; IRC, docs/theory.md §2a)")
     for path in campaigns:
-        outcome = usecases.catalogue_campaign(repo, path)
+        outcome = _catalogue.catalogue_campaign(repo, path)
         row = {"joint_type": outcome.campaign.joint_type, **outcome.row(),
                **_condition_columns(outcome.campaign.conditions)}
         truth_file = path.parent / "truth.json"
@@ -201,7 +201,7 @@ def _catalogue(repo, cat: Path, result: JourneyResult, say: Callable[[str], None
             f"c_x={row['c_x_ns_per_m']:.0f} N·s/m{vs_truth}  "
             f"{'new version' if row['new'] else 'identical to v' + str(outcome.version.version) + ', nothing written'}")
     result.files.append(_write_csv(result.out_dir / "catalogue.csv", result.catalogued))
-    for part, created in usecases.catalogue_bundled_parts(repo, cat):  # what the stack is assembled from
+    for part, created in _partfiles.catalogue_bundled_parts(repo, cat):  # what the stack is assembled from
         say(f"      part {part.ref:<30} {part.kind:<8} {_attributes(part.attributes)}  "
             f"{'new version' if created else 'identical, nothing written'}")
 
@@ -213,24 +213,24 @@ def _attributes(attributes: dict) -> str:
 
 def _query(repo, cat: Path, result: JourneyResult, say: Callable[[str], None]):
     """Step 2: read the new stack and choose the nearest catalogued joint at each interface."""
-    from jointdb import usecases
+    from jointdb.usecases import _partfiles, _parts, _stack
     from jointdb.plots._stack import save_joint_distances
     from jointdb.stack import stack_to_dict
 
     out = result.out_dir
     # the new stack, assembled from the catalogued parts by name and version (exactly the bundled stack file)
     doc = json.loads((cat / "demo-stack.json").read_text(encoding="utf-8"))
-    for name, kind, source, _ in usecases.BUNDLED_PARTS:
+    for name, kind, source, _ in _partfiles.BUNDLED_PARTS:
         if source.startswith("stack:"):
             doc[kind] = {"part": f"{name}@{repo.get_part(name).version}"}
-    spec = usecases.stack_from_document(doc, repo)
+    spec = _parts.stack_from_document(doc, repo)
     result.parts = list(spec.parts)
     result.files.append(_write_json(out / "stack.json", stack_to_dict(spec)))
     say(f"[2/4] new stack: {spec.name}")
     say("      from catalogued parts: " + ", ".join(f"{p['slot']} {p['part']}" for p in spec.parts))
     say(f"      tool {spec.tool.length * 1e3:.0f} mm ({spec.gauge_length * 1e3:.0f} mm gauge, "
         f"{spec.insertion_length * 1e3:.0f} mm inserted), holder {spec.holder.length * 1e3:.0f} mm")
-    resolutions = usecases.resolve_joints(spec, repo)
+    resolutions = _stack.resolve_joints(spec, repo)
     for res in resolutions.values():
         row = res.row()
         result.joints.append({**row, "candidates": [list(c) for c in res.candidates]})
@@ -288,10 +288,10 @@ def _predict(repo, spec, resolutions, result: JourneyResult, say: Callable[[str]
     """Step 3: the tool-tip FRF with the chosen joints and with rigid ones, the cross-check with
     interpolated joints, the uncertainty bands; ``tip.uff``, ``tip.csv``, ``tip-vs-rigid.png``."""
     from jointdb import io
-    from jointdb._journey_band import journey_bands
+    from jointdb.usecases._demo_band import journey_bands
     from jointdb.plots._stack import joints_legend, save_tip_comparison
     from jointdb.stack import prediction_grid
-    from jointdb.usecases import predict_with_joints
+    from jointdb.usecases._stack import predict_with_joints
 
     out = result.out_dir
     say("[3/4] predict the tool-tip FRF (three-component receptance coupling, docs/theory.md §4)")
@@ -321,7 +321,7 @@ def _predict(repo, spec, resolutions, result: JourneyResult, say: Callable[[str]
 def _cross_check(repo, spec, resolutions, grid, result: JourneyResult, say: Callable[[str], None]) -> list:
     """The same stack with the queried joints interpolated between the catalogued conditions (when a
     query had neighbours): ``[(legend, tip FRF)]`` for the comparison plot, or ``[]``."""
-    from jointdb import usecases
+    from jointdb.usecases import _stack
     from jointdb.plots._stack import joints_legend
 
     queried = {n for n, r in resolutions.items() if r.kind == "query" and len(r.candidates) > 1}
@@ -331,8 +331,8 @@ def _cross_check(repo, spec, resolutions, grid, result: JourneyResult, say: Call
         n: dataclasses.replace(c, interpolate=True, neighbours=2) if n in queried else c
         for n, c in spec.interfaces.items()
     })
-    ires = usecases.resolve_joints(ispec, repo)
-    ipred = usecases.predict_with_joints(ispec, ires, grid).prediction
+    ires = _stack.resolve_joints(ispec, repo)
+    ipred = _stack.predict_with_joints(ispec, ires, grid).prediction
     irow = ipred.summary()[0]
     result.interpolated = {"joints": {n: ires[n].description for n in queried}, **irow}
     say("      cross-check, both queried interfaces interpolated:" if len(queried) > 1 else "      cross-check:")

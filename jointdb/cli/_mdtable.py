@@ -1,6 +1,6 @@
 """The Markdown table of piped output, written without Rich when that is safe (start-up time).
 
-:func:`jointdb._output.emit` prints tables with Rich; when stdout is not a terminal the
+:func:`jointdb.cli._output.emit` prints tables with Rich; when stdout is not a terminal the
 table is a Markdown table (``box.MARKDOWN``, no width limit) and Rich adds no colour.
 Importing Rich costs a one-shot command like ``jointdb query`` a sixth of its start-up,
 so this module writes the same text for the cases where it is simple: every character
@@ -21,7 +21,7 @@ from collections.abc import Sequence
 _NARROW = frozenset("–—‘’“”…•€™")
 #: environment variables with which Rich may write colour or terminal codes to a pipe
 _RICH_ENV = ("FORCE_COLOR", "TTY_COMPATIBLE", "TTY_INTERACTIVE", "JUPYTER_COLUMNS", "JUPYTER_LINES")
-#: the console width :func:`jointdb._output.emit` gives Rich for piped output
+#: the console width :func:`jointdb.cli._output.emit` gives Rich for piped output
 WIDTH = 10_000
 
 

@@ -11,7 +11,7 @@ import os
 from pathlib import Path
 from typing import Any
 
-from jointdb._limits import MAX_JSON_BYTES, check_json_numbers, check_json_text
+from jointdb.schemas._limits import MAX_JSON_BYTES, check_json_numbers, check_json_text
 from jointdb.errors import InputError, NotFoundError
 
 
@@ -31,7 +31,7 @@ def read_json_file(path: str | os.PathLike, what: str) -> Any:
         If the file does not exist.
     InputError
         If it cannot be read, is not UTF-8 text, is not valid JSON (with line and column), or
-        exceeds a limit of :mod:`jointdb._limits` (size, nesting depth, a number that is NaN,
+        exceeds a limit of :mod:`jointdb.schemas._limits` (size, nesting depth, a number that is NaN,
         infinite or beyond ±1e300).
     """
     p = Path(path)
