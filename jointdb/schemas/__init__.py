@@ -279,12 +279,28 @@ def validate(kind: str, data: Any, where: str = "") -> Any:
 
 
 def json_schema(kind: str) -> dict[str, Any]:
-    """The JSON Schema (draft 2020-12) of a file kind, as published under docs/schemas/."""
+    """The JSON Schema (draft 2020-12) of a file kind, as published under docs/schemas/.
+
+    Parameters
+    ----------
+    kind
+        A key of :data:`SCHEMAS`.
+
+    Returns
+    -------
+    dict
+    """
     schema = _model(kind).model_json_schema(by_alias=True)
     return {"$schema": "https://json-schema.org/draft/2020-12/schema", "$id": _IDS[kind], **schema}
 
 
 def schema_files() -> dict[str, str]:
-    """File name -> text of every published schema (sorted keys, two-space indent, final newline)."""
+    """Every published schema as text (sorted keys, two-space indent, final newline).
+
+    Returns
+    -------
+    dict
+        File name under ``docs/schemas/`` -> JSON text.
+    """
     return {SCHEMA_FILES[k]: json.dumps(json_schema(k), indent=2, sort_keys=True, ensure_ascii=False) + "\n"
             for k in SCHEMAS}

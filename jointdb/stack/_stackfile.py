@@ -303,7 +303,18 @@ def _joint_to_obj(j: JointChoice) -> Any:
 
 
 def stack_to_dict(spec: StackSpec) -> dict[str, Any]:
-    """The JSON document of a stack (inverse of :func:`stack_from_dict`)."""
+    """The JSON document of a stack (inverse of :func:`stack_from_dict`).
+
+    Parameters
+    ----------
+    spec
+        The :class:`StackSpec`.
+
+    Returns
+    -------
+    dict
+        The ``jointdb-stack/1`` document (SI units).
+    """
     doc: dict[str, Any] = {
         "format": FORMAT,
         "name": spec.name,

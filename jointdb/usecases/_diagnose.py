@@ -18,6 +18,23 @@ def read_recording(path: Path):
     A file whose dataset-58 records hold NaN/Inf values (which the UFF reader
     refuses) is read with those lines marked non-finite, so that diagnosis
     names them or, with ``--mask-nonfinite``, gives them zero weight.
+
+    Parameters
+    ----------
+    path
+        A UFF58 file of recorded FRFs (and optionally coherences).
+
+    Returns
+    -------
+    jointdb.diagnose.Measurement
+        The recording with its coherence (or None) and non-finite lines marked.
+
+    Raises
+    ------
+    NotFoundError
+        The file does not exist.
+    InputError
+        The file cannot be read as UFF58.
     """
     from jointdb.diagnose import Measurement
     from jointdb.io import read_coherence_uff58, read_frf_uff58

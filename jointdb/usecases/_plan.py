@@ -15,9 +15,16 @@ __all__ = ["CampaignPlan", "plan_measurements"]
 class CampaignPlan:
     """The ranked candidate measurements of a campaign and the information of its own ones.
 
-    ``plan`` is the :class:`jointdb.campaign.MeasurementPlan` (``rows`` best first, ``targets``,
-    ``criterion``, ``noise``, ``target``); ``current`` the campaign's own measurements as a row
-    (``measurements``, ``std_rel``, ``averages``), empty when it has none.
+    Parameters
+    ----------
+    campaign
+        The campaign file's name.
+    plan
+        The :class:`jointdb.campaign.MeasurementPlan` (``rows`` best first, ``targets``,
+        ``criterion``, ``noise``, ``target``).
+    current
+        The campaign's own measurements as a row (``measurements``, ``std_rel``, ``averages``),
+        empty when it has none.
     """
 
     campaign: str

@@ -183,7 +183,18 @@ def run_demo(out: Path, model_path: Path | None = None, db_url: str | None = Non
 
 
 def mode_rows(modes) -> list[dict]:
-    """One row per mode: number, frequency [Hz], and its dominant motion."""
+    """One row per mode: number, frequency [Hz], and its dominant motion.
+
+    Parameters
+    ----------
+    modes
+        Normal modes of a beam model (:func:`jointdb.fe.normal_modes`).
+
+    Returns
+    -------
+    list of dict
+        ``mode`` (from 1), ``freq_hz`` and ``type``, the dominant motion (bending plane, axial or torsion).
+    """
     labels = modes.dof_labels
     dirs = np.array([d.direction for d in labels])
     families = {
