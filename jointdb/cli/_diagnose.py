@@ -134,7 +134,9 @@ def _read_with_gaps(path: Path, sets: list, bad: dict):
                 if coh is not None:
                     coh[lines, oi[out], ii[inp]] = np.nan
             else:
-                values[lines, oi[out], ii[inp]] = np.nan
+                # keep what the file held: an Inf is named as an Inf, a NaN as a NaN
+                raw = np.asarray(d["data"])[lines]
+                values[lines, oi[out], ii[inp]] = np.where(np.isinf(raw), np.inf, np.nan)
     return Measurement.from_arrays(frf.freq, values, frf.outputs, frf.inputs, frf.quantity, coh, label=path.name)
 
 
@@ -191,6 +193,16 @@ def diagnose_cmd(
     as_json: Annotated[bool, typer.Option("--json", help="Machine-readable result on stdout.")] = False,
 ) -> None:
     """Locate where a model and recordings disagree, name the missing physics, refit.
+
+    "Explained" (explained: true in --json) means one candidate physics (or a pair) lowers the BIC by at
+    least 10, brings the mismatch over the whole recorded band down at least 1.5x, and has its key
+    parameters identified (1 sigma at most 0.5x the value). Otherwise nothing is named and --out is not
+    written; the verdict says what the recording shows and, for a change it cannot identify, which
+    measurement would.
+
+    Exit codes: 0 diagnosis done (explained or not: read "explained"); 2 bad input (a file, an option,
+    NaN/Inf or all-zero values, a recording outside the model's frequency range); 3 a file not found;
+    6 a numerical failure.
 
     Example: jointdb diagnose tool.json tap-tip.uff --map 1=tip,2=flute,3=shank --plots figs --out tool-fixed.json
     """

@@ -192,6 +192,10 @@ def _correlation_inflation(r: np.ndarray, ev: ModelEvaluator) -> float:
     return float(min(tau, max(ev.n / 4.0, 1.0)))
 
 
+#: σ (in the fit's coordinates: log space for logarithmic parameters) given to a parameter with a flat
+#: profile (the residual does not change with it): far beyond any identification threshold.
+FLAT_SIGMA = 1e3
+
 #: Contiguous frequency blocks for the delete-one-block jackknife (model-form spread).
 JACKKNIFE_BLOCKS = 5
 
@@ -362,6 +366,10 @@ def fit_candidate(ev: ModelEvaluator, nominal, cand, start: dict | None = None, 
         su = np.sqrt(np.clip(np.diag(cov), 0, None))
     except np.linalg.LinAlgError:  # pragma: no cover
         su = np.full(p, np.nan)
+    # a parameter the residual does not feel at all (a flat profile: e.g. a stiffness far beyond what the
+    # recordings resolve) gets no σ from the pseudo-inverse; give it one that says "not resolved"
+    col = np.linalg.norm(J, axis=0)
+    su = np.where(col > 1e-9 * max(float(col.max(initial=0.0)), 1e-300), su, FLAT_SIGMA)
     for q, x, s in zip(params, res.x, su):
         v = q.from_u(x)
         sigmas[q.name] = float(abs(v) * s) if q.log else float(q.scale * s)

@@ -83,6 +83,8 @@ class CaseResult:
     top_improvement: float = 1.0   # nominal / best-ranked mismatch on the fit lines, accepted or not
     position: float | None = None  # position [m] stated by the selected explanation's primary candidate
     placed: bool | None = None     # position within tolerance of the hidden joint (None: nothing to place)
+    unresolved: str = ""           # family of a best fit left unnamed because its key parameters are not identified
+    verdict: str = ""
 
     @property
     def first(self) -> bool:
@@ -183,6 +185,7 @@ def run_case(case: BenchCase) -> CaseResult:
         sigmas={} if best is None else dict(best.sigmas),
         top_improvement=(d.nominal.mismatch / d.ranking[0].mismatch) if d.ranking else 1.0,
         position=position, placed=placed,
+        unresolved="" if d.unresolved is None else first_family(d.unresolved), verdict=d.verdict,
     )
 
 

@@ -214,7 +214,7 @@ def test_levels_given_out_of_order_are_tracked_from_the_lowest():
     t = a.tracks[0]
     assert a.order == (1, 2, 0)
     assert t.freq_hz[0] == pytest.approx(2185, rel=1e-3) and t.freq_change < 0 and t.zeta_ratio > 1
-    assert a.summary().startswith("mode 1: 2305")
+    assert a.summary().startswith("the 2305 Hz mode: 2305")
 
 
 def test_level_independent_sets_with_different_noise_are_not_flagged():

@@ -1,0 +1,105 @@
+"""Identifiability before naming: a candidate whose key parameters the recordings do not pin down is
+not named as the answer.
+
+A parameter is *identified* when its reported 1σ — the linearised statistical σ scaled by χ²_red (the
+misfit beyond the noise) and by the residual's correlation length, combined with the model-form
+spread of a jackknife over frequency blocks (:mod:`jointdb.diagnose._fit`) — is at most
+:data:`IDENTIFIED` × its value, and it does not sit at a bound of its fit range (a parameter at a bound
+has a one-sided, flat likelihood: the data only say "at least" or "at most"). A candidate is
+identified when all its *key* parameters are (:attr:`Param.key`); of key parameters sharing an
+``either`` group one suffices (a joint rigid in translation but compliant in rotation is identified by
+its rotational stiffness; the other is shown as "not resolved").
+"""
+
+from __future__ import annotations
+
+from jointdb.diagnose.physics._candidate import IDENTIFIED
+
+__all__ = ["IDENTIFIED", "unidentified", "identify_advice", "damping_grows", "DAMPING_GROWTH"]
+
+#: An amplitude-dependent explanation of damping that grows with level must itself lose at least this
+#: factor more energy per cycle (loss factor) at the highest level than at the lowest.
+DAMPING_GROWTH = 1.1
+
+
+def unidentified(fit) -> dict[str, float]:
+    """The key parameters of ``fit`` that are not identified: ``{name: σ / |value|}`` (inf at a bound).
+
+    Parameters
+    ----------
+    fit
+        A :class:`jointdb.diagnose._fit.Fit` with ``sigmas`` (SI) set.
+
+    Returns
+    -------
+    dict
+        Empty when the candidate is identified.
+    """
+    params = fit.candidate.params if fit.candidate is not None else ()
+    rel = {}
+    for q in params:
+        if not q.key:
+            continue
+        r = q.relative_sigma(fit.values[q.name], fit.sigmas.get(q.name))
+        rel[q.name] = float("inf") if q.name in fit.at_bound else r
+    bad = {k: v for k, v in rel.items() if v > IDENTIFIED}
+    groups: dict[tuple, list[str]] = {}
+    for q in params:
+        if q.key and q.either:
+            prefix = q.name.split(".")[0] if "." in q.name else ""
+            groups.setdefault((prefix, q.either), []).append(q.name)
+    for names in groups.values():
+        if any(rel[n] <= IDENTIFIED for n in names):
+            for n in names:
+                bad.pop(n, None)
+    return bad
+
+
+def identify_advice(fit, n_points: int, n_levels: int) -> str:
+    """The measurement that would identify ``fit``'s parameters, in words."""
+    c = fit.candidate.parts[0] if hasattr(fit.candidate, "parts") else fit.candidate
+    fam = fit.family.split(" + ")[0]
+    pos = getattr(c, "position", None)
+    if fam == "softening_joint":
+        return ("record at more excitation levels, spanning at least ×10 in force, so that the stiffness loss "
+                "and the damping growth are both seen to level off")
+    if fam.startswith("joint"):
+        where = f"z = {pos * 1e3:.0f} mm" if pos is not None else "the suspected interface"
+        return (f"record the response at two points a few mm apart on each side of {where} (the kink in the "
+                "mode shape there separates the joint's translational and rotational stiffness)"
+                + ("" if n_points > 1 else "; one recorded point cannot"))
+    if fam == "sensor_mass":
+        return "repeat the tap test with the sensor moved or replaced by a lighter one"
+    if fam == "fluted_diameter":
+        return "measure the section's diameter, or record a point on each side of the section"
+    if fam in ("gain", "delay"):
+        return "check the measurement chain with a calibrated reference (a known mass or a back-to-back test)"
+    return "add a measurement point where this candidate changes the FRF most, or another excitation level"
+
+
+def damping_grows(fit) -> bool:
+    """Whether ``fit``'s loss factor grows from the lowest to the highest excitation level.
+
+    A level-dependent candidate whose loss cannot grow (a loss-growth parameter at the bound of its
+    range, or a loss at the highest level below :data:`DAMPING_GROWTH` × the lowest's) cannot be the
+    explanation of recorded damping that grows with level. Candidates without a per-level state
+    (``state(values, level)``) do not grow.
+    """
+    cand = fit.candidate
+    parts = cand.parts if hasattr(cand, "parts") else (cand,)
+    prefixes = ("a.", "b.") if hasattr(cand, "parts") else ("",)
+    for part, pre in zip(parts, prefixes):
+        state = getattr(part, "state", None)
+        levels = getattr(part, "levels", None)
+        if state is None or not levels:
+            continue
+        if any(n.startswith(pre) and n[len(pre):] in ("eta_max",) for n in fit.at_bound):
+            continue
+        vals = {k[len(pre):]: v for k, v in fit.values.items() if k.startswith(pre)}
+        etas = [state(vals, lv)[1] for lv in range(len(levels))]
+        known = all(x is not None for x in levels)
+        lo, hi = (int(min(range(len(levels)), key=lambda i: levels[i])),
+                  int(max(range(len(levels)), key=lambda i: levels[i]))) if known else (0, len(levels) - 1)
+        if etas[hi] >= DAMPING_GROWTH * etas[lo]:
+            return True
+    return False
