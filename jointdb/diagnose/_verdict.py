@@ -19,13 +19,16 @@ def shift_text(sig: Signature) -> str:
     low, high, same = [], [], []
     for p in sig.pairs:
         s = 100 * p.shift
-        (same if abs(s) < 0.7 else low if s < 0 else high).append((mode_name(p.model.freq_hz), abs(s)))
+        # named by the recorded frequency (what the engineer sees in the data), the model's in brackets
+        (same if abs(s) < 0.7 else low if s < 0 else high).append((mode_name(p.recorded.freq_hz), abs(s),
+                                                                     p.model.freq_hz))
 
     def grp(items, word):
-        vals = [v for _, v in items]
+        vals = [v for _, v, _ in items]
         rng = f"{min(vals):.1f} %" if len(vals) == 1 or max(vals) - min(vals) < 0.3 else \
             f"{min(vals):.1f}–{max(vals):.1f} %"
-        return f"{_names(items)} {'is' if len(items) == 1 else 'are'} {rng} {word}"
+        model = ", ".join(f"{fm:.0f}" for _, _, fm in items)
+        return f"{_names(items)} ({model} Hz in the model) {'is' if len(items) == 1 else 'are'} {rng} {word}"
 
     parts = []
     if low:
@@ -37,7 +40,7 @@ def shift_text(sig: Signature) -> str:
     text = "; ".join(parts)
     # damping only where the recording visibly departs from the model around that mode (a ratio of two
     # half-power estimates on a mode that matches is noise, not an effect)
-    damp = [(mode_name(p.model.freq_hz), p.damping_ratio) for p in sig.pairs
+    damp = [(mode_name(p.recorded.freq_hz), p.damping_ratio) for p in sig.pairs
             if np.isfinite(p.damping_ratio) and p.mismatch >= SHOWS and not 0.7 <= p.damping_ratio <= 1.4]
     if damp:
         text += "; recorded damping is " + ", ".join(f"×{d:.2g} the model's at {m}" for m, d in damp)
@@ -64,8 +67,8 @@ def mode_name(freq_hz: float) -> str:
 
 
 def _names(items) -> str:
-    """``the 98 Hz mode`` / ``the 98 and 410 Hz modes`` from ``[(mode_name, value), …]``."""
-    names = [m for m, _ in items]
+    """``the 98 Hz mode`` / ``the 98 and 410 Hz modes`` from ``[(mode_name, …), …]``."""
+    names = [it[0] for it in items]
     if len(names) == 1:
         return names[0]
     hz = [n.removeprefix("the ").removesuffix(" mode") for n in names]
