@@ -12,7 +12,7 @@ import numpy as np
 from jointdb.diagnose._compare import Signature, find_peaks, signature
 from jointdb.diagnose._data import Measurement, Observation, prepare
 from jointdb.diagnose._fit import Fit, ModelEvaluator, fit_candidate, jackknife_spread, nominal_fit
-from jointdb.diagnose._identify import damping_grows, identify_advice, unidentified
+from jointdb.diagnose._identify import combination_note, damping_grows, identify_advice, unidentified
 from jointdb.diagnose._verdict import (
     explained_verdict,
     levels_text,
@@ -336,7 +336,7 @@ def diagnose(model, measurements: Sequence[Measurement], mapping: Mapping[int, s
     else:
         verdict, alternative, advice = explained_verdict(best, ok, found.level_table, obs, where, mis0, mis1,
                                                          CLOSE_CALL)
-        verdict += rank_text(best, _next_ranked(best, fits), rules.eligible, unresolved)
+        verdict += combination_note(best) + rank_text(best, _next_ranked(best, fits), rules.eligible, unresolved)
     return Diagnosis(
         explained=best is not None, verdict=verdict, best=best, ranking=fits, nominal=nominal, before=before,
         after=found.after, mismatch_before=mis0, mismatch_after=mis1, augmented=found.augmented,

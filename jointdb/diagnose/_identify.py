@@ -13,9 +13,11 @@ its rotational stiffness; the other is shown as "not resolved").
 
 from __future__ import annotations
 
+import numpy as np
+
 from jointdb.diagnose.physics._candidate import IDENTIFIED
 
-__all__ = ["IDENTIFIED", "unidentified", "identify_advice", "damping_grows", "DAMPING_GROWTH"]
+__all__ = ["IDENTIFIED", "unidentified", "identify_advice", "damping_grows", "DAMPING_GROWTH", "combination_note"]
 
 #: An amplitude-dependent explanation of damping that grows with level must itself lose at least this
 #: factor more energy per cycle (loss factor) at the highest level than at the lowest.
@@ -49,10 +51,60 @@ def unidentified(fit) -> dict[str, float]:
             prefix = q.name.split(".")[0] if "." in q.name else ""
             groups.setdefault((prefix, q.either), []).append(q.name)
     for names in groups.values():
-        if any(rel[n] <= IDENTIFIED for n in names):
+        if any(rel[n] <= IDENTIFIED for n in names) or _combination_identified(fit, names):
             for n in names:
                 bad.pop(n, None)
     return bad
+
+
+def _relative_cov(fit, names: list[str]) -> np.ndarray | None:
+    """Covariance of the relative errors ``δv/|v|`` of ``names`` (statistical, with the model-form
+    variance added on the diagonal), or None without a covariance."""
+    if fit.cov_u is None:
+        return None
+    params = list(fit.candidate.params)
+    idx = [next(i for i, q in enumerate(params) if q.name == n) for n in names]
+    d = []
+    for i in idx:
+        q = params[i]
+        v = abs(fit.values[q.name])
+        d.append(1.0 if q.log else (q.scale / v if v > 0 else np.inf))
+    d = np.asarray(d)
+    if not np.all(np.isfinite(d)):
+        return None
+    cov = np.asarray(fit.cov_u)[np.ix_(idx, idx)] * np.outer(d, d)
+    model = np.array([(fit.sigmas_model.get(n, 0.0) / abs(fit.values[n])) if fit.values[n] else 0.0
+                      for n in names])
+    return cov + np.diag(model**2)
+
+
+def _combination_identified(fit, names: list[str]) -> bool:
+    """True if some combination of the group's parameters is identified although none is alone:
+    the best-determined direction of their relative covariance has σ ≤ IDENTIFIED (e.g. a contact's
+    equivalent stiffness and length trade off, their product — the joint's stiffness — does not)."""
+    if len(names) < 2 or any(n in fit.at_bound for n in names):
+        return False
+    cov = _relative_cov(fit, names)
+    if cov is None or not np.all(np.isfinite(cov)):
+        return False
+    lam = float(np.linalg.eigvalsh(0.5 * (cov + cov.T))[0])
+    return np.sqrt(max(lam, 0.0)) <= IDENTIFIED
+
+
+def combination_note(fit) -> str:
+    """A sentence when a named fit's group is identified only as a combination (else ``""``)."""
+    params = fit.candidate.params if fit.candidate is not None else ()
+    groups: dict[tuple, list] = {}
+    for q in params:
+        if q.key and q.either:
+            groups.setdefault((q.name.split(".")[0] if "." in q.name else "", q.either), []).append(q)
+    notes = []
+    for qs in groups.values():
+        alone = [q.relative_sigma(fit.values[q.name], fit.sigmas.get(q.name)) <= IDENTIFIED for q in qs]
+        if not any(alone) and _combination_identified(fit, [q.name for q in qs]):
+            notes.append(" and ".join(q.label for q in qs))
+    return "".join(f" The {n} trade off against each other: only their combination (the joint's overall "
+                   "stiffness) is identified." for n in notes)
 
 
 def identify_advice(fit, n_points: int, n_levels: int) -> str:

@@ -158,3 +158,24 @@ def test_the_verdict_says_why_rank_one_beats_the_next():
     text = rank_text(best, worse, lambda f: True)
     assert text == " The next ranked, an amplitude-dependent joint, leaves 9.0 % on the fit lines against 3.0 %."
     assert "cannot follow the recorded change" in rank_text(best, worse, lambda f: f is best)
+
+
+class _Contact(Candidate):
+    family = "joint_compliance"
+    explanation = "a compliant contact over an insertion"
+    params = (Param("k_contact", "N/m²", 1e10, 1e14, 1e12, equivalent=True, either="contact"),
+              Param("insertion", "m", 0.005, 0.08, 0.03, equivalent=True, either="contact"))
+
+
+def test_equivalent_parameters_that_trade_off_are_identified_by_their_combination_only():
+    from jointdb.diagnose._identify import combination_note
+
+    # k' and L each ±100 % (log σ 1), correlation −0.99: their product is known to ±14 % — named, and said so
+    cov = np.array([[1.0, -0.99], [-0.99, 1.0]])
+    f = _fit(_Contact(), {"k_contact": 4.7e12, "insertion": 0.0215}, {"k_contact": 4.7e12, "insertion": 0.0215})
+    f.cov_u = cov
+    assert unidentified(f) == {}
+    assert "equivalent k_contact and equivalent insertion trade off" in combination_note(f)
+    # uncorrelated, both ±100 %: nothing is identified
+    f.cov_u = np.eye(2)
+    assert set(unidentified(f)) == {"k_contact", "insertion"} and combination_note(f) == ""

@@ -225,9 +225,9 @@ class InterfaceContact(_Located):
                                 f"insertion: the ⌀{d * 1e3:.3g} mm part continues inside its neighbour at "
                                 f"{site.location} and rests on a contact layer, instead of a rigid connection")
             ps.append(Param("insertion", "m", 0.5 * d, hi, min(2.5 * d, 0.7 * hi), show=1e3, show_unit="mm",
-                            equivalent=True))
+                            equivalent=True, either="contact"))
         ps.insert(0, Param("k_contact", "N/m²", 1e10, 1e14, 1e12, show=1e-9, show_unit="GN/m²", starts=(2e11, 5e12),
-                           equivalent=True))
+                           equivalent=True, either="contact"))
         if damped:
             ps.append(Param("eta_joint", "-", 1e-3, 2.0, 0.1, starts=(0.4,), plausible=(1e-3, 1.0)))
         self.params = tuple(ps)
