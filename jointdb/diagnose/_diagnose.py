@@ -11,8 +11,17 @@ import numpy as np
 
 from jointdb.diagnose._compare import Signature, find_peaks, signature
 from jointdb.diagnose._data import Measurement, Observation, prepare
-from jointdb.diagnose._fit import Fit, ModelEvaluator, fit_candidate, jackknife_spread, nominal_fit
-from jointdb.diagnose._identify import combination_note, damping_grows, identify_advice, unidentified
+from jointdb.diagnose._fit import Fit, ModelEvaluator, fit_candidate, nominal_fit
+from jointdb.diagnose._identify import (
+    combination_note,
+    damping_grows,
+    identified,
+    identify_advice,
+    model_form_sigmas,
+    next_ranked,
+    unidentified,
+)
+from jointdb.diagnose._validity import check_beam_range
 from jointdb.diagnose._verdict import (
     explained_verdict,
     levels_text,
@@ -287,7 +296,7 @@ def diagnose(model, measurements: Sequence[Measurement], mapping: Mapping[int, s
     modes = model.modes(8).freq_hz
     kw = {"mask_nonfinite": True} if mask_nonfinite else {}
     obs = prepare(model, measurements, mapping, band, model_freqs=modes, **kw)
-    obs = _check_beam_range(obs, model)
+    obs = check_beam_range(obs, model)
     ev = ModelEvaluator(obs)
     full = ModelEvaluator(obs, full=True, method="direct")
     H0_full = full.predict(model)
@@ -306,7 +315,7 @@ def diagnose(model, measurements: Sequence[Measurement], mapping: Mapping[int, s
     best, found, unresolved = None, _Found(), None
     if ok:
         best, fits = _settle_best(ev, model, ok, fits, rules)
-        best, unresolved = _identified(ev, model, best, ok, fits, rules)
+        best, unresolved = identified(ev, model, best, ok, fits, rules, CLOSE_CALL)
         if best is not None:
             found = _apply_best(model, best, obs, full, levels_data)
     # rank 1 is what the verdict talks about: the named fit, else the unidentified one, else the best
@@ -336,7 +345,7 @@ def diagnose(model, measurements: Sequence[Measurement], mapping: Mapping[int, s
     else:
         verdict, alternative, advice = explained_verdict(best, ok, found.level_table, obs, where, mis0, mis1,
                                                          CLOSE_CALL)
-        verdict += combination_note(best) + rank_text(best, _next_ranked(best, fits), rules.eligible, unresolved)
+        verdict += combination_note(best) + rank_text(best, next_ranked(best, fits), rules.eligible, unresolved)
     return Diagnosis(
         explained=best is not None, verdict=verdict, best=best, ranking=fits, nominal=nominal, before=before,
         after=found.after, mismatch_before=mis0, mismatch_after=mis1, augmented=found.augmented,
@@ -346,55 +355,6 @@ def diagnose(model, measurements: Sequence[Measurement], mapping: Mapping[int, s
         levels_data=levels_data, levels_model=levels_model, alternative=alternative, advice=advice,
         unresolved=unresolved,
     )
-
-
-#: A beam model represents bending while the bending wavelength is at least this many section diameters
-#: (Timoshenko's shear and rotary-inertia corrections hold to a wavelength of a few diameters; shorter
-#: waves are three-dimensional: cross-section and Lamb-type modes a beam model does not have).
-BEAM_WAVELENGTH_DIAMETERS = 4.0
-
-
-def beam_limit_hz(model) -> tuple[float, str]:
-    """The highest frequency [Hz] a beam model represents, and the section that sets it (in words).
-
-    For each segment, ``f = (2π / (n D))² √(EI/ρA) / (2π)``: the frequency at which its bending
-    wavelength ``λ = 2π (EI/ρA)^¼ / √ω`` falls to ``n D`` (``n`` =
-    :data:`BEAM_WAVELENGTH_DIAMETERS`, ``D`` its outer diameter); the lowest over the segments.
-    """
-    from jointdb.fe import get_material
-
-    best, where, z = float("inf"), "", 0.0
-    for seg in model.segments:
-        m = get_material(seg.material)
-        do, di = seg.outer_diameter, seg.inner_diameter
-        area = np.pi * (do**2 - di**2) / 4
-        ei = m.E * np.pi * (do**4 - di**4) / 64
-        f = (2 * np.pi / (BEAM_WAVELENGTH_DIAMETERS * do)) ** 2 * np.sqrt(ei / (m.rho * area)) / (2 * np.pi)
-        if f < best:
-            best = float(f)
-            where = f"the ⌀{do * 1e3:.3g} mm {m.name} section at z = {z * 1e3:.0f}–{(z + seg.length) * 1e3:.0f} mm"
-        z += seg.length
-    return best, where
-
-
-def _check_beam_range(obs: Observation, model) -> Observation:
-    """InputError when the whole recording lies above the frequency a beam model can represent; a note
-    when part of it does."""
-    limit, where = beam_limit_hz(model)
-    lo, hi = float(obs.full_freq[0]), float(obs.full_freq[-1])
-    if lo > limit:
-        raise InputError(
-            f"the recording ({lo:g}–{hi:g} Hz) lies above {limit:.0f} Hz, where the bending wavelength of {where} "
-            f"falls below {BEAM_WAVELENGTH_DIAMETERS:g} diameters: a beam model cannot represent it; "
-            "record (or choose with --band) a range below that, or compare with a 3-D model"
-        )
-    if hi > limit:
-        import dataclasses
-
-        obs = dataclasses.replace(obs, notes=obs.notes + (
-            f"lines above {limit:.0f} Hz lie beyond what a beam model represents (bending wavelength of {where} "
-            f"below {BEAM_WAVELENGTH_DIAMETERS:g} diameters): read the mismatch there with care",))
-    return obs
 
 
 def _check_shared_resonance(obs: Observation, modes: np.ndarray, before: Signature) -> None:
@@ -516,7 +476,7 @@ def _settle_best(ev: ModelEvaluator, model, ok: list[Fit], fits: list[Fit], rule
     near = [f for f in ok if f.mismatch <= OCCAM_TOLERANCE * best.mismatch]
     best = min(near, key=lambda f: (bool(f.implausible), f.p, f.score))
     fits = [best] + [f for f in fits if f is not best]
-    _model_form_sigmas(ev, model, best, fits, rules)
+    model_form_sigmas(ev, model, best, fits, rules)
     # an amplitude-dependent joint with known forces: refine by harmonic balance line by line (the
     # selection used the per-level describing function at the linear peak, which is ~20x cheaper)
     refine = getattr(best.candidate, "refined", None)
@@ -530,51 +490,6 @@ def _settle_best(ev: ModelEvaluator, model, ok: list[Fit], fits: list[Fit], rule
             fits = [rf] + fits
             best = rf
     return best, fits
-
-
-def _next_ranked(best: Fit, fits: list[Fit]) -> Fit | None:
-    """The first ranked fit after ``best`` that is another explanation (not its own unrefined start)."""
-    base = best.name.removesuffix("+hb")
-    return next((f for f in fits if f is not best and f.name != base), None)
-
-
-def _model_form_sigmas(ev: ModelEvaluator, model, fit: Fit, fits: list[Fit], rules: _Rules) -> None:
-    """Honest uncertainty of a fit: statistical (χ²_red, τ) ⊕ model-form (jackknife over frequency blocks,
-    and the spread across the accepted variants of the same physics, e.g. a sensor as point mass, with
-    rotary inertia, with an offset: RMS deviation of their estimates of a shared parameter)."""
-    fit.sigmas_model = jackknife_spread(ev, model, fit)
-    if fit.candidate.slot:
-        rivals = [g for g in fits if g is not fit and g.candidate.slot == fit.candidate.slot
-                  and rules.passes(g, rules.nominal)]
-        for k in fit.values:
-            dev = [g.values[k] - fit.values[k] for g in rivals if k in g.values]
-            if dev:
-                v = float(np.sqrt(np.mean(np.square(dev))))
-                fit.sigmas_model[k] = float(np.hypot(fit.sigmas_model.get(k, 0.0), v))
-    fit.sigmas = {k: float(np.hypot(v, fit.sigmas_model.get(k, 0.0))) for k, v in fit.sigmas_stat.items()}
-
-
-#: Accepted alternatives (within CLOSE_CALL of the selected one) tried when the selected one is not identified.
-IDENTIFY_TRIES = 2
-
-
-def _identified(ev: ModelEvaluator, model, best: Fit, ok: list[Fit], fits: list[Fit], rules: _Rules):
-    """``(named, unresolved)``: the selected fit if its key parameters are identified; else an accepted,
-    nearly as good alternative that is (``unresolved`` = the selected one), else ``(None, selected)``."""
-    if not unidentified(best):
-        return best, None
-    tried = 0
-    for f in ok:
-        if f is best or f.mismatch > CLOSE_CALL * best.mismatch or not rules.eligible(f):
-            continue
-        if tried == IDENTIFY_TRIES:
-            break
-        tried += 1
-        if not f.sigmas_model:
-            _model_form_sigmas(ev, model, f, fits, rules)
-        if not unidentified(f):
-            return f, best
-    return None, best
 
 
 @dataclass

@@ -15,9 +15,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from jointdb.diagnose._fit import jackknife_spread
 from jointdb.diagnose.physics._candidate import IDENTIFIED
 
-__all__ = ["IDENTIFIED", "unidentified", "identify_advice", "damping_grows", "DAMPING_GROWTH", "combination_note"]
+__all__ = ["IDENTIFIED", "unidentified", "identify_advice", "damping_grows", "DAMPING_GROWTH", "combination_note",
+           "identified", "model_form_sigmas", "next_ranked"]
 
 #: An amplitude-dependent explanation of damping that grows with level must itself lose at least this
 #: factor more energy per cycle (loss factor) at the highest level than at the lowest.
@@ -155,3 +157,48 @@ def damping_grows(fit) -> bool:
         if etas[hi] >= DAMPING_GROWTH * etas[lo]:
             return True
     return False
+
+
+def next_ranked(best, fits: list):
+    """The first ranked fit after ``best`` that is another explanation (not its own unrefined start)."""
+    base = best.name.removesuffix("+hb")
+    return next((f for f in fits if f is not best and f.name != base), None)
+
+
+def model_form_sigmas(ev, model, fit, fits: list, rules) -> None:
+    """Honest uncertainty of a fit: statistical (χ²_red, τ) ⊕ model-form (jackknife over frequency blocks,
+    and the spread across the accepted variants of the same physics, e.g. a sensor as point mass, with
+    rotary inertia, with an offset: RMS deviation of their estimates of a shared parameter)."""
+    fit.sigmas_model = jackknife_spread(ev, model, fit)
+    if fit.candidate.slot:
+        rivals = [g for g in fits if g is not fit and g.candidate.slot == fit.candidate.slot
+                  and rules.passes(g, rules.nominal)]
+        for k in fit.values:
+            dev = [g.values[k] - fit.values[k] for g in rivals if k in g.values]
+            if dev:
+                v = float(np.sqrt(np.mean(np.square(dev))))
+                fit.sigmas_model[k] = float(np.hypot(fit.sigmas_model.get(k, 0.0), v))
+    fit.sigmas = {k: float(np.hypot(v, fit.sigmas_model.get(k, 0.0))) for k, v in fit.sigmas_stat.items()}
+
+
+#: Accepted alternatives (within close_call of the selected one) tried when the selected one is not identified.
+IDENTIFY_TRIES = 2
+
+
+def identified(ev, model, best, ok: list, fits: list, rules, close_call: float):
+    """``(named, unresolved)``: the selected fit if its key parameters are identified; else an accepted,
+    nearly as good alternative that is (``unresolved`` = the selected one), else ``(None, selected)``."""
+    if not unidentified(best):
+        return best, None
+    tried = 0
+    for f in ok:
+        if f is best or f.mismatch > close_call * best.mismatch or not rules.eligible(f):
+            continue
+        if tried == IDENTIFY_TRIES:
+            break
+        tried += 1
+        if not f.sigmas_model:
+            model_form_sigmas(ev, model, f, fits, rules)
+        if not unidentified(f):
+            return f, best
+    return None, best

@@ -171,7 +171,8 @@ class LevelAnalysis:
 
     def summary(self) -> str:
         """One line per mode, levels from lowest to highest, e.g.
-        ``the 2305 Hz mode: 2305 ± 1 → 2260 ± 1 → 2185 ± 2 Hz, ζ 1.1 → 1.4 → 2.0 % (changes with level: …)``."""
+        ``the 2305 Hz mode: 2305 ± 1 → 2260 ± 1 → 2185 ± 2 Hz, ζ 1.1 → 1.4 → 2.0 % (changes with level:
+        …)``."""
         lines = []
         o = list(self.order)
         for t in self.tracks:

@@ -244,7 +244,7 @@ def test_an_all_zero_frf_is_refused_in_one_line_without_a_numpy_warning(case):
 
 
 def test_a_recording_above_what_a_beam_model_represents_is_refused_with_the_criterion():
-    from jointdb.diagnose._diagnose import BEAM_WAVELENGTH_DIAMETERS, beam_limit_hz
+    from jointdb.diagnose._validity import BEAM_WAVELENGTH_DIAMETERS, beam_limit_hz
 
     c = generate_case("interface_none", 0)
     model = model_from_dict(c.model)
