@@ -9,6 +9,11 @@ has a one-sided, flat likelihood: the data only say "at least" or "at most"). A 
 identified when all its *key* parameters are (:attr:`Param.key`); of key parameters sharing an
 ``either`` group one suffices (a joint rigid in translation but compliant in rotation is identified by
 its rotational stiffness; the other is shown as "not resolved").
+
+A joint's loss factor is not key: whether the joint has damping of its own is decided by model
+comparison (the damped variant is selected only if it beats the undamped one by more than the
+parsimony tolerance); how much is shown with its σ, or as "not resolved" when the damped variants of
+the same place (point joint, contact layer) disagree about it.
 """
 
 from __future__ import annotations

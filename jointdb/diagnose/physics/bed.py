@@ -55,7 +55,7 @@ class DistributedJoint(AtClamp, Candidate):
               Param("insertion", "m", 0.5 * d, 4.0 * d, 2.5 * d, show=1e3, show_unit="mm", equivalent=True,
                     either="contact")]
         if damped:
-            ps.append(Param("eta_joint", "-", 1e-3, 2.0, 0.1, starts=(0.5,)))
+            ps.append(Param("eta_joint", "-", 1e-3, 2.0, 0.1, starts=(0.5,), key=False))
         self.params = tuple(ps)
 
     def apply(self, model, values, level=0):

@@ -170,7 +170,7 @@ class InterfaceJoint(_Located):
               Param("k_ry", "N·m/rad", 0.03 * kr, 1e4 * kr, 10 * kr, show=1e-3, show_unit="kN·m/rad",
                     starts=(1 * kr, 300 * kr), either="stiffness")]
         if damped:
-            ps.append(Param("eta_joint", "-", 1e-3, 2.0, 0.1, starts=(0.4,), plausible=(1e-3, 1.0)))
+            ps.append(Param("eta_joint", "-", 1e-3, 2.0, 0.1, starts=(0.4,), plausible=(1e-3, 1.0), key=False))
         self.params = tuple(ps)
 
     def joint(self, values, scale: float = 1.0, eta: float | None = None) -> Joint:
@@ -229,7 +229,7 @@ class InterfaceContact(_Located):
         ps.insert(0, Param("k_contact", "N/m²", 1e10, 1e14, 1e12, show=1e-9, show_unit="GN/m²", starts=(2e11, 5e12),
                            equivalent=True, either="contact"))
         if damped:
-            ps.append(Param("eta_joint", "-", 1e-3, 2.0, 0.1, starts=(0.4,), plausible=(1e-3, 1.0)))
+            ps.append(Param("eta_joint", "-", 1e-3, 2.0, 0.1, starts=(0.4,), plausible=(1e-3, 1.0), key=False))
         self.params = tuple(ps)
         self.planes = _planes(model)
 

@@ -69,7 +69,7 @@ class DampedJoint(CompliantJoint):
         self.omega1 = omega1
         self.explanation = (f"a compliant joint with its own damping at the clamp (z = {clamp.position:g} m) "
                             "instead of a rigid, undamped one")
-        self.params = self.params + (Param("eta_joint", "-", 1e-3, 2.0, 0.1, starts=(0.5,)),)
+        self.params = self.params + (Param("eta_joint", "-", 1e-3, 2.0, 0.1, starts=(0.5,), key=False),)
 
     def apply(self, model, values, level=0):
         model = without_ingredient(model, self.clamp)
