@@ -345,7 +345,10 @@ def diagnose(model, measurements: Sequence[Measurement], mapping: Mapping[int, s
     else:
         verdict, alternative, advice = explained_verdict(best, ok, found.level_table, obs, where, mis0, mis1,
                                                          CLOSE_CALL)
-        verdict += combination_note(best) + rank_text(best, next_ranked(best, fits), rules.eligible, unresolved)
+        nxt = next_ranked(best, fits)
+        # a close alternative is already named with the measurement that separates it
+        verdict += combination_note(best) + rank_text(best, None if nxt is alternative else nxt, rules.eligible,
+                                                      unresolved)
     return Diagnosis(
         explained=best is not None, verdict=verdict, best=best, ranking=fits, nominal=nominal, before=before,
         after=found.after, mismatch_before=mis0, mismatch_after=mis1, augmented=found.augmented,
