@@ -30,7 +30,8 @@ def test_the_artefacts_are_there(diagnosed):
     clean, case, _ = diagnosed
     a, b = clean.recordings[0], case.recordings[0]
     assert np.abs(b.frf.values).max() < np.abs(a.frf.values).max()          # leakage lowers the peak
-    assert b.coherence.min() < 0.7 <= a.coherence.min() or b.coherence.min() < a.coherence.min()
+    # coherence dips at the antiresonances: more lines below 0.75 than the clean chain has
+    assert (b.coherence < 0.75).sum() > (a.coherence < 0.75).sum()
 
 
 def test_an_amplitude_dependent_joint_is_named_with_damping_growing_and_stiffness_falling(diagnosed):
