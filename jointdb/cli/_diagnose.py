@@ -97,6 +97,16 @@ def diagnose_cmd(
 ) -> None:
     """Locate where a model and recordings disagree, name the missing physics, refit.
 
+    "Explained" (explained: true in --json) means one candidate physics (or a pair) lowers the BIC by at
+    least 10, brings the mismatch over the whole recorded band down at least 1.5x, and has its key
+    parameters identified (1 sigma at most 0.5x the value). Otherwise nothing is named and --out is not
+    written; the verdict says what the recording shows and, for a change it cannot identify, which
+    measurement would.
+
+    Exit codes: 0 diagnosis done (explained or not: read "explained"); 2 bad input (a file, an option,
+    NaN/Inf or all-zero values, a recording outside the model's frequency range); 3 a file not found;
+    6 a numerical failure.
+
     Example: jointdb diagnose tool.json tap-tip.uff --map 1=tip,2=flute,3=shank --plots figs --out tool-fixed.json
     """
     from jointdb.cli._output import emit, message

@@ -161,30 +161,40 @@ def find_peaks(freq, values, weight) -> list[Peak]:
     return out
 
 
-def pair_modes(model_peaks, rec_peaks, max_ratio=1.35):
-    """Greedy pairing of model and recorded peaks by log-frequency distance.
+#: Two peaks are the same mode only if their deflection shapes at the recorded points agree this well (MAC).
+MIN_MAC = 0.5
 
-    Parameters
-    ----------
-    model_peaks, rec_peaks
-        :class:`Peak` s of the model and of the recording.
-    max_ratio
-        Peaks further apart than this frequency ratio are not paired.
 
-    Returns
-    -------
-    pairs : list of (int, int)
-        Indices ``(model, recorded)``, by model order.
-    extra : list of float
-        Strong unpaired recorded peaks [Hz] (>= 10 % of the strongest).
-    missing : list of float
-        Strong unpaired model peaks [Hz].
+def mac(a: np.ndarray, b: np.ndarray) -> float:
+    """Modal assurance criterion ``|aᴴb|² / (|a|² |b|²)`` of two complex shapes (1 for parallel, 0 orthogonal)."""
+    den = float(np.vdot(a, a).real * np.vdot(b, b).real)
+    return float(abs(np.vdot(a, b)) ** 2 / den) if den > 0 else 0.0
+
+
+def pair_modes(model_peaks, rec_peaks, max_ratio=1.35, model_shapes=None, rec_shapes=None):
+    """Greedy pairing by frequency and shape; returns (pairs, extra, missing).
+
+    Candidates within ``max_ratio`` in frequency are paired closest first; with
+    shapes (the FRF entries at each peak's line, one vector per peak) a pair
+    also needs a MAC ≥ :data:`MIN_MAC`, and the distance is
+    ``|ln(f_r/f_m)| + 0.1 (1 − MAC)`` (so of two recorded peaks at similar
+    distance the one with the model's shape wins).
     """
-    cand = sorted(((abs(np.log(r.freq_hz / m.freq_hz)), a, b) for a, m in enumerate(model_peaks)
-                   for b, r in enumerate(rec_peaks)), key=lambda t: t[0])
+    shaped = bool(model_shapes) and bool(rec_shapes) and np.size(model_shapes[0]) > 1
+    cand = []
+    for a, m in enumerate(model_peaks):
+        for b, r in enumerate(rec_peaks):
+            d = abs(np.log(r.freq_hz / m.freq_hz))
+            if shaped:
+                c = mac(np.ravel(model_shapes[a]), np.ravel(rec_shapes[b]))
+                if c < MIN_MAC:
+                    continue
+                d += 0.1 * (1 - c)
+            cand.append((d, a, b))
+    cand.sort(key=lambda t: t[0])
     used_m, used_r, pairs = set(), set(), []
     for d, a, b in cand:
-        if d > np.log(max_ratio) or a in used_m or b in used_r:
+        if d > np.log(max_ratio) + (0.1 if shaped else 0.0) or a in used_m or b in used_r:
             continue
         used_m.add(a)
         used_r.add(b)
@@ -295,11 +305,13 @@ def signature(ev, H_model: np.ndarray) -> Signature:
         a, b = divmod(k, len(obs.in_points))
         hm, hr, ww = H_model[0, :, a, b], rec[0, :, a, b], w[0, :, a, b] > 0
         hm, hr = hm[ww], hr[ww]
-        frac[name] = float(np.abs(np.vdot(hm, hr)) ** 2 / (np.vdot(hm, hm).real * np.vdot(hr, hr).real))
+        den = float(np.vdot(hm, hm).real * np.vdot(hr, hr).real)
+        frac[name] = float(np.abs(np.vdot(hm, hr)) ** 2 / den) if den > 0 else float("nan")
 
     mpk = find_peaks(freq, H_model[0], np.ones_like(w[0]))
     rpk = find_peaks(freq, rec[0], w[0])
-    idx, extra, missing = pair_modes(mpk, rpk)
+    idx, extra, missing = pair_modes(mpk, rpk, model_shapes=[H_model[0, p.index] for p in mpk],
+                                     rec_shapes=[rec[0, p.index] for p in rpk])
     pairs = []
     for order, (a, b) in enumerate(idx):
         m, r = mpk[a], rpk[b]

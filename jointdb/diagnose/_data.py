@@ -282,6 +282,15 @@ def _note_zeros(frf: FRF, label: str, notes: list[str], skip: np.ndarray | None 
         zero &= ~skip
     if not zero.any():
         return
+    above = frf.freq > 0
+    dead = [(o, i) for o in range(zero.shape[1]) for i in range(zero.shape[2])
+            if above.any() and zero[above, o, i].all()]
+    if dead:
+        what = "every FRF" if len(dead) == zero.shape[1] * zero.shape[2] else \
+            ", ".join(f"FRF {frf.outputs[o]}/{frf.inputs[i]}" for o, i in dead[:4]) + \
+            (f" and {len(dead) - 4} more" if len(dead) > 4 else "")
+        raise InputError(f"{label}: {what} is exactly 0 at every line (a disconnected channel or an empty "
+                         "record); nothing to compare: record it again or leave that FRF out of the file")
     entries = [(o, i) for o in range(zero.shape[1]) for i in range(zero.shape[2]) if zero[:, o, i].any()]
     notes.append(f"{label}: {int(zero.sum())} value(s) exactly 0 get zero weight (some UFF writers store a NaN "
                  "as 0): " + "; ".join(f"FRF {frf.outputs[o]}/{frf.inputs[i]} at "

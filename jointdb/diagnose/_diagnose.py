@@ -11,13 +11,25 @@ import numpy as np
 
 from jointdb.diagnose._compare import Signature, find_peaks, signature
 from jointdb.diagnose._data import Measurement, Observation, prepare
-from jointdb.diagnose._fit import Fit, ModelEvaluator, fit_candidate, jackknife_spread, nominal_fit
+from jointdb.diagnose._fit import Fit, ModelEvaluator, fit_candidate, nominal_fit
+from jointdb.diagnose._identify import (
+    combination_note,
+    damping_grows,
+    identified,
+    identify_advice,
+    model_form_sigmas,
+    next_ranked,
+    unidentified,
+)
+from jointdb.diagnose._validity import check_beam_range
 from jointdb.diagnose._verdict import (
     explained_verdict,
     levels_text,
     not_better_verdict,
+    rank_text,
     shift_text,
     unexplained_verdict,
+    unidentified_verdict,
 )
 from jointdb.diagnose.physics import Combination, Context, candidates_for
 from jointdb.diagnose.physics.interface import screen_sites
@@ -120,6 +132,9 @@ class Diagnosis:
     #: a close second explanation (another physics within CLOSE_CALL of the best) and how to separate them
     alternative: Fit | None = None
     advice: str = ""
+    #: the best-fitting explanation when its key parameters are not identified (it is then not named, or
+    #: a nearly as good identified one is); see :mod:`jointdb.diagnose._identify`
+    unresolved: Fit | None = None
 
     @property
     def location(self) -> str | None:
@@ -150,11 +165,11 @@ class Diagnosis:
         for rank, f in enumerate(self.ranking, 1):
             rows.append({
                 "rank": rank, "explanation": f.name,
-                "parameters": "; ".join(f"{q.name}={q.fmt(f.values[q.name], f.sigmas.get(q.name))}"
+                "parameters": "; ".join(q.shown(f.values[q.name], f.sigmas.get(q.name))
                                         for q in f.candidate.params) if f.candidate else "",
                 "dBIC": round(f.bic - self.nominal.bic, 1),
                 "plausible": not f.implausible,
-                "mismatch %": round(100 * f.mismatch, 2),
+                "fit-line mismatch %": round(100 * f.mismatch, 2),
                 "gain x": round(self.nominal.mismatch / f.mismatch, 2) if f.mismatch > 0 else None,
             })
         return rows
@@ -187,6 +202,7 @@ class Diagnosis:
                 "residual_correlation_lines": b.tau, "parameters_at_bound": b.at_bound},
             "ranking": [{"rank": r["rank"], "explanation": r["explanation"], "family": f.family,
                          "values": f.values, "sigmas": f.sigmas, "delta_bic": r["dBIC"],
+                         "fit_line_mismatch": f.mismatch,
                          "mismatch": f.mismatch, "improvement": r["gain x"]}
                         for r, f in zip(self.table(), self.ranking)],
             "modes": [{"mode": p.mode, "f_model_hz": p.model.freq_hz, "f_recorded_hz": p.recorded.freq_hz,
@@ -204,6 +220,10 @@ class Diagnosis:
                 "name": self.alternative.name, "family": self.alternative.family,
                 "description": self.alternative.describe(), "mismatch": self.alternative.mismatch,
                 "separating_measurement": self.advice},
+            "unresolved": None if self.unresolved is None else {
+                "name": self.unresolved.name, "family": self.unresolved.family,
+                "values": self.unresolved.values, "sigmas": self.unresolved.sigmas,
+                "not_identified": unidentified(self.unresolved)},
             "chain_correction": self.chain_correction,
             "seconds": self.seconds,
         }
@@ -324,6 +344,7 @@ def diagnose(model, measurements: Sequence[Measurement], mapping: Mapping[int, s
     modes = model.modes(8).freq_hz
     kw = {"mask_nonfinite": True} if mask_nonfinite else {}
     obs = prepare(model, measurements, mapping, band, model_freqs=modes, **kw)
+    obs = check_beam_range(obs, model)
     ev = ModelEvaluator(obs)
     full = ModelEvaluator(obs, full=True, method="direct")
     H0_full = full.predict(model)
@@ -332,16 +353,24 @@ def diagnose(model, measurements: Sequence[Measurement], mapping: Mapping[int, s
     nominal = nominal_fit(ev, model)
     nominal.score = nominal.bic
     levels_data = _level_analysis(obs)
-    rules = _Rules(nominal, levels_data is not None and levels_data.differs)
+    rules = _Rules(nominal, levels_data is not None and levels_data.differs,
+                   levels_data is not None and levels_data.damping_grows)
     cands = _candidates(model, obs, modes, before, families, rules.level_dependent)
     fits = _fit_singles(ev, model, cands, _prefit_targets(full), rules)
     if combinations and fits:
         fits = _fit_pairs(ev, model, fits, rules)
     ok = [f for f in fits if rules.eligible(f) and rules.passes(f, nominal)]
-    best, found = None, _Found()
+    best, found, unresolved = None, _Found(), None
     if ok:
         best, fits = _settle_best(ev, model, ok, fits, rules)
-        found = _apply_best(model, best, obs, full, levels_data)
+        best, unresolved = identified(ev, model, best, ok, fits, rules, CLOSE_CALL)
+        if best is not None:
+            found = _apply_best(model, best, obs, full, levels_data)
+    # rank 1 is what the verdict talks about: the named fit, else the unidentified one, else the best
+    # fit that could explain these recordings (with level dependence: an amplitude-dependent one)
+    top = best or unresolved
+    fits = ([top] if top is not None else []) + sorted((f for f in fits if f is not top),
+                                                        key=lambda f: (not rules.eligible(f), f.score))
     mis0 = full.mismatch(np.asarray(H0_full))
     mis1 = full.mismatch(np.asarray(found.H_full)) if found.H_full is not None else mis0
     levels_model = _model_level_analysis(full, np.asarray(found.H_full), obs, levels_data) \
@@ -353,12 +382,21 @@ def diagnose(model, measurements: Sequence[Measurement], mapping: Mapping[int, s
         verdict = not_better_verdict(best, where, mis0, mis1, MIN_IMPROVEMENT)
         best, found, levels_model = None, _Found(), None
         mis1 = mis0
+    elif unresolved is not None and best is None:
+        verdict = unidentified_verdict(unresolved, unidentified(unresolved), where, mis0,
+                                       identify_advice(unresolved, len(set(obs.out_points)), len(obs.levels)))
     elif best is None:
-        runner = next((f for f in fits if rules.eligible(f)), fits[0] if fits else None)
+        runner = fits[0] if fits else None
         verdict = unexplained_verdict(fits, runner, rules.nominal.mismatch, rules.level_dependent, where, mis0)
+        if runner is not None and rules.level_dependent and not rules.eligible(runner):
+            verdict += f" ({runner.candidate.explanation} cannot change with the excitation level.)"
     else:
         verdict, alternative, advice = explained_verdict(best, ok, found.level_table, obs, where, mis0, mis1,
                                                          CLOSE_CALL)
+        nxt = next_ranked(best, fits)
+        # a close alternative is already named with the measurement that separates it
+        verdict += combination_note(best) + rank_text(best, None if nxt is alternative else nxt, rules.eligible,
+                                                      unresolved)
     return Diagnosis(
         explained=best is not None, verdict=verdict, best=best, ranking=fits, nominal=nominal, before=before,
         after=found.after, mismatch_before=mis0, mismatch_after=mis1, augmented=found.augmented,
@@ -366,6 +404,7 @@ def diagnose(model, measurements: Sequence[Measurement], mapping: Mapping[int, s
         seconds=time.perf_counter() - t0, H_before=np.asarray(H0_full),
         H_after=None if found.H_full is None else np.asarray(found.H_full),
         levels_data=levels_data, levels_model=levels_model, alternative=alternative, advice=advice,
+        unresolved=unresolved,
     )
 
 
@@ -387,10 +426,15 @@ class _Rules:
     nominal: Fit
     #: the recordings differ across levels beyond noise
     level_dependent: bool
+    #: ... and their damping grows with the level
+    damping_grows: bool = False
 
     def eligible(self, f: Fit) -> bool:
-        # when the levels disagree beyond noise, only an explanation that accounts for all of them may win
-        return not self.level_dependent or f.candidate.per_level
+        # when the levels disagree beyond noise, only an explanation that accounts for all of them may win;
+        # when the recorded damping grows with the level, only one whose damping grows with it
+        if not self.level_dependent:
+            return True
+        return f.candidate.per_level and (not self.damping_grows or damping_grows(f))
 
     @staticmethod
     def passes(f: Fit, ref: Fit) -> bool:
@@ -483,19 +527,7 @@ def _settle_best(ev: ModelEvaluator, model, ok: list[Fit], fits: list[Fit], rule
     near = [f for f in ok if f.mismatch <= OCCAM_TOLERANCE * best.mismatch]
     best = min(near, key=lambda f: (bool(f.implausible), f.p, f.score))
     fits = [best] + [f for f in fits if f is not best]
-    # honest uncertainty of the selected explanation: statistical (χ²_red, τ) ⊕ model-form (jackknife)
-    best.sigmas_model = jackknife_spread(ev, model, best)
-    # model-form spread across the accepted variants of the same physics (e.g. a sensor as point mass,
-    # with rotary inertia, with an offset): RMS deviation of their estimates of a shared parameter
-    if best.candidate.slot:
-        rivals = [g for g in fits if g is not best and g.candidate.slot == best.candidate.slot
-                  and rules.passes(g, rules.nominal)]
-        for k in best.values:
-            dev = [g.values[k] - best.values[k] for g in rivals if k in g.values]
-            if dev:
-                v = float(np.sqrt(np.mean(np.square(dev))))
-                best.sigmas_model[k] = float(np.hypot(best.sigmas_model.get(k, 0.0), v))
-    best.sigmas = {k: float(np.hypot(v, best.sigmas_model.get(k, 0.0))) for k, v in best.sigmas_stat.items()}
+    model_form_sigmas(ev, model, best, fits, rules)
     # an amplitude-dependent joint with known forces: refine by harmonic balance line by line (the
     # selection used the per-level describing function at the linear peak, which is ~20x cheaper)
     refine = getattr(best.candidate, "refined", None)

@@ -254,6 +254,9 @@ class Fit:
     score: float = float("nan")
     #: parameters outside their plausible range: {name: distance in units of the range width}
     implausible: dict = field(default_factory=dict)
+    #: statistical covariance of the fitted coordinates (log space for logarithmic parameters), in the
+    #: candidate's parameter order; None if not computed
+    cov_u: np.ndarray | None = None
 
     @property
     def name(self) -> str:
@@ -309,6 +312,10 @@ def _correlation_inflation(r: np.ndarray, ev: ModelEvaluator) -> float:
         tau += 2 * rho
     return float(min(tau, max(ev.n / 4.0, 1.0)))
 
+
+#: σ (in the fit's coordinates: log space for logarithmic parameters) given to a parameter with a flat
+#: profile (the residual does not change with it): far beyond any identification threshold.
+FLAT_SIGMA = 1e3
 
 #: Contiguous frequency blocks for the delete-one-block jackknife (model-form spread).
 JACKKNIFE_BLOCKS = 5
@@ -496,11 +503,15 @@ def fit_candidate(ev: ModelEvaluator, nominal, cand, start: dict | None = None, 
         cov = np.linalg.pinv(J.T @ J) * (rss / dof) * inflate
         su = np.sqrt(np.clip(np.diag(cov), 0, None))
     except np.linalg.LinAlgError:  # pragma: no cover
-        su = np.full(p, np.nan)
+        cov, su = None, np.full(p, np.nan)
+    # a parameter the residual does not feel at all (a flat profile: e.g. a stiffness far beyond what the
+    # recordings resolve) gets no σ from the pseudo-inverse; give it one that says "not resolved"
+    col = np.linalg.norm(J, axis=0)
+    su = np.where(col > 1e-9 * max(float(col.max(initial=0.0)), 1e-300), su, FLAT_SIGMA)
     for q, x, s in zip(params, res.x, su):
         v = q.from_u(x)
         sigmas[q.name] = float(abs(v) * s) if q.log else float(q.scale * s)
     at_bound = [q.name for q, x, a, b in zip(params, res.x, lo, hi) if min(x - a, b - x) < 1e-3]
     H = ev.predict(nominal, cand, values)
     return Fit(cand, values, sigmas, rss, ev.n, p, _bic(rss, ev.n, p), ev.mismatch(H), ev.mismatch(H, True),
-               nfev, at_bound, chi2_red=rss / dof, tau=inflate, sigmas_stat=dict(sigmas))
+               nfev, at_bound, chi2_red=rss / dof, tau=inflate, sigmas_stat=dict(sigmas), cov_u=cov)

@@ -114,6 +114,9 @@ class ModeTrack:
     differs_freq: bool
     differs_zeta: bool
     fits: tuple = ()
+    #: indices of levels whose local fit is off the trend of its neighbouring levels (a spike, see
+    #: :func:`level_outliers`): left out of the level-dependence test and reported
+    outliers: tuple = ()
 
     @property
     def differs(self) -> bool:
@@ -163,9 +166,15 @@ class LevelAnalysis:
         """True if any tracked mode changes with level beyond noise and the practical floor."""
         return any(t.differs for t in self.tracks)
 
+    @property
+    def damping_grows(self) -> bool:
+        """True if some tracked mode's damping changes with level beyond noise and grows (lowest → highest)."""
+        return any(t.differs_zeta and t.zeta_ratio > 1 for t in self.tracks)
+
     def summary(self) -> str:
         """One line per mode, levels from lowest to highest, e.g.
-        ``mode 1: 2305 ± 1 → 2260 ± 1 → 2185 ± 2 Hz, ζ 1.1 → 1.4 → 2.0 % (changes with level: …)``.
+        ``the 2305 Hz mode: 2305 ± 1 → 2260 ± 1 → 2185 ± 2 Hz, ζ 1.1 → 1.4 → 2.0 % (changes with level:
+        …)``.
 
         Returns
         -------
@@ -184,7 +193,11 @@ class LevelAnalysis:
                 verdict = " (changes with level: " + ", ".join(parts) + ")"
             else:
                 verdict = " (same at every level within noise)"
-            lines.append(f"mode {t.mode}: {f} Hz, ζ {z} %{verdict}")
+            lines.append(f"the {t.freq_hz[o[0]]:.4g} Hz mode: {f} Hz, ζ {z} %{verdict}")
+            for k in t.outliers:
+                name = self.levels[k] if self.levels[k] is not None else f"#{k + 1}"
+                lines.append(f"  level {name}: {t.freq_hz[k]:.5g} Hz, ζ {_pct(t.zeta[k])} % is off the trend of "
+                             "its neighbouring levels (an outlier of that recording): left out of the test")
         if self.skipped:
             lines.append("not followed (too few recorded lines around the peak at some level): "
                          + ", ".join(f"{f:.0f}" for f in self.skipped) + " Hz")
@@ -211,9 +224,37 @@ class LevelAnalysis:
                 "entry": list(t.entry), "p_freq": t.p_freq, "p_zeta": t.p_zeta,
                 "freq_change": t.freq_change, "zeta_ratio": t.zeta_ratio,
                 "differs": t.differs, "differs_freq": t.differs_freq, "differs_zeta": t.differs_zeta,
-                "band_hz": [list(fi.band) for fi in t.fits],
+                "band_hz": [list(fi.band) for fi in t.fits], "outlier_levels": list(t.outliers),
             } for t in self.tracks],
         }
+
+
+#: A level is an outlier when its frequency departs from both neighbouring levels, in the same direction,
+#: by more than OUTLIER_SIGMAS combined σ and more than OUTLIER_STEP × the step between those neighbours.
+OUTLIER_SIGMAS = 4.0
+OUTLIER_STEP = 3.0
+
+
+def level_outliers(f: np.ndarray, sf: np.ndarray, order: Sequence[int]) -> tuple[int, ...]:
+    """Indices of levels whose frequency is a spike off its neighbours' trend (interior levels, ≥ 4 levels).
+
+    A real amplitude dependence is a trend: each level lies between (or near) its neighbours. A level that
+    lies above both neighbours (or below both) by more than ``OUTLIER_SIGMAS`` σ and by more than
+    ``OUTLIER_STEP`` × the neighbours' own difference is a fault of that recording (a leaked line, a
+    double hit), not physics.
+    """
+    o = list(order)
+    if len(o) < 4:
+        return ()
+    out = []
+    for j in range(1, len(o) - 1):
+        a, k, b = o[j - 1], o[j], o[j + 1]
+        up, down = f[k] - max(f[a], f[b]), min(f[a], f[b]) - f[k]
+        dev = max(up, down)
+        s = float(np.sqrt(sf[k] ** 2 + max(sf[a], sf[b]) ** 2))
+        if dev > OUTLIER_SIGMAS * s and dev > OUTLIER_STEP * abs(f[a] - f[b]):
+            out.append(k)
+    return tuple(out)
 
 
 def _chi2(x: np.ndarray, s: np.ndarray) -> tuple[float, float]:
@@ -327,10 +368,12 @@ def track_modes(freq: np.ndarray, values: np.ndarray, weight: np.ndarray | None,
         e = np.unravel_index(int(np.argmax(fits[first].peak_entries)), fits[first].peak_entries.shape)
         peak = np.array([fi.peak_entries[e] for fi in fits])
         amp = peak * np.array([float(v) for v in levels]) if known else peak
-        c_f, p_f = _chi2(f, sf)
-        c_z, p_z = _chi2(np.log(z), sz / z)
-        spread_f = float(f.max() / f.min() - 1)
-        spread_z = float(z.max() / z.min())
+        bad = level_outliers(f, sf, order)
+        keep = np.array([k not in bad for k in range(n_lv)])
+        c_f, p_f = _chi2(f[keep], sf[keep])
+        c_z, p_z = _chi2(np.log(z[keep]), (sz / z)[keep])
+        spread_f = float(f[keep].max() / f[keep].min() - 1)
+        spread_z = float(z[keep].max() / z[keep].min())
         tracks.append(ModeTrack(
             mode=m + 1, freq_hz=f, sigma_freq_hz=sf, zeta=z, sigma_zeta=sz, peak=peak, amplitude=amp,
             amplitude_unit="m" if known else "m/N", entry=(int(e[0]), int(e[1])),
@@ -339,5 +382,5 @@ def track_modes(freq: np.ndarray, values: np.ndarray, weight: np.ndarray | None,
             spread_freq=spread_f, spread_zeta=spread_z,
             differs_freq=bool(n_lv > 1 and p_f < P_LEVELS and spread_f > FREQ_FLOOR),
             differs_zeta=bool(n_lv > 1 and p_z < P_LEVELS and spread_z > ZETA_FLOOR),
-            fits=tuple(fits)))
+            fits=tuple(fits), outliers=bad))
     return LevelAnalysis(tracks=tuple(tracks), levels=tuple(levels), order=order, skipped=tuple(skipped))

@@ -8,7 +8,8 @@ import numpy as np
 from jointdb.diagnose._compare import Signature
 
 __all__ = ["shift_text", "separating_measurement", "where_text", "implausibility_text", "levels_text",
-           "level_table_text", "explained_verdict", "unexplained_verdict", "not_better_verdict"]
+           "level_table_text", "explained_verdict", "unexplained_verdict", "not_better_verdict", "rank_text",
+           "unidentified_verdict"]
 
 
 def shift_text(sig: Signature) -> str:
@@ -18,14 +19,16 @@ def shift_text(sig: Signature) -> str:
     low, high, same = [], [], []
     for p in sig.pairs:
         s = 100 * p.shift
-        (same if abs(s) < 0.7 else low if s < 0 else high).append((p.mode, abs(s)))
+        # named by the recorded frequency (what the engineer sees in the data), the model's in brackets
+        (same if abs(s) < 0.7 else low if s < 0 else high).append((mode_name(p.recorded.freq_hz), abs(s),
+                                                                     p.model.freq_hz))
 
     def grp(items, word):
-        modes = ", ".join(str(m) for m, _ in items)
-        vals = [v for _, v in items]
+        vals = [v for _, v, _ in items]
         rng = f"{min(vals):.1f} %" if len(vals) == 1 or max(vals) - min(vals) < 0.3 else \
             f"{min(vals):.1f}–{max(vals):.1f} %"
-        return f"mode{'s' if len(items) > 1 else ''} {modes} {'is' if len(items) == 1 else 'are'} {rng} {word}"
+        model = ", ".join(f"{fm:.0f}" for _, _, fm in items)
+        return f"{_names(items)} ({model} Hz in the model) {'is' if len(items) == 1 else 'are'} {rng} {word}"
 
     parts = []
     if low:
@@ -33,16 +36,17 @@ def shift_text(sig: Signature) -> str:
     if high:
         parts.append(grp(high, "high in the recording"))
     if same:
-        m = ", ".join(str(m) for m, _ in same)
-        parts.append(f"mode{'s' if len(same) > 1 else ''} {m} {'is' if len(same) == 1 else 'are'} "
-                     "unchanged in frequency")
+        parts.append(f"{_names(same)} {'is' if len(same) == 1 else 'are'} unchanged in frequency")
     text = "; ".join(parts)
-    damp = [p.damping_ratio for p in sig.pairs if np.isfinite(p.damping_ratio)]
-    if damp and (max(damp) > 1.4 or min(damp) < 0.7):
-        text += "; recorded damping is " + ", ".join(f"×{d:.2g}" for d in damp) + " the model's (by mode)"
-    if abs(sig.gain_db) > 0.5:
+    # damping only where the recording visibly departs from the model around that mode (a ratio of two
+    # half-power estimates on a mode that matches is noise, not an effect)
+    damp = [(mode_name(p.recorded.freq_hz), p.damping_ratio) for p in sig.pairs
+            if np.isfinite(p.damping_ratio) and p.mismatch >= SHOWS and not 0.7 <= p.damping_ratio <= 1.4]
+    if damp:
+        text += "; recorded damping is " + ", ".join(f"×{d:.2g} the model's at {m}" for m, d in damp)
+    if abs(sig.gain_db) > 0.5 and sig.overall >= SHOWS:
         text += f"; away from resonances the recording is {sig.gain_db:+.1f} dB off"
-    if sig.delay_r2 > 0.5 and abs(sig.delay_s) > 3e-6:
+    if sig.delay_r2 > 0.5 and abs(sig.delay_s) > 3e-6 and sig.overall >= SHOWS:
         text += f"; its phase drifts in proportion to frequency (≈ {sig.delay_s * 1e6:.0f} µs)"
     if sig.extra_peaks:
         text += "; extra recorded peak(s) at " + ", ".join(f"{f:.0f}" for f in sig.extra_peaks) + " Hz"
@@ -51,6 +55,24 @@ def shift_text(sig: Signature) -> str:
             + " Hz"
     return text
 
+
+
+#: A mismatch (weighted RMS |log ratio|) below this is not "shown" by the recording: no effect is stated.
+SHOWS = 0.08
+
+
+def mode_name(freq_hz: float) -> str:
+    """``the 98 Hz mode`` (whole hertz; 2 significant figures below 10 Hz)."""
+    return f"the {freq_hz:.0f} Hz mode" if freq_hz >= 10 else f"the {freq_hz:.2g} Hz mode"
+
+
+def _names(items) -> str:
+    """``the 98 Hz mode`` / ``the 98 and 410 Hz modes`` from ``[(mode_name, …), …]``."""
+    names = [it[0] for it in items]
+    if len(names) == 1:
+        return names[0]
+    hz = [n.removeprefix("the ").removesuffix(" mode") for n in names]
+    return "the " + ", ".join(h.removesuffix(" Hz") for h in hz[:-1]) + " and " + hz[-1] + " modes"
 
 
 def where_text(candidate) -> str:
@@ -105,7 +127,9 @@ def implausibility_text(fit) -> str:
             continue
         lo, hi = q.plausible
         unit = q.show_unit or q.unit
-        parts.append(f"{name} {q.fmt(fit.values[name])}, plausible {lo * q.show:.3g}–{hi * q.show:.3g} {unit}")
+        # enough digits that the value visibly lies outside the range it is compared with
+        v = fit.values[name] * q.show
+        parts.append(f"{name} {v:.4g} {unit}, plausible {lo * q.show:.4g}–{hi * q.show:.4g} {unit}")
     return " (outside the physically plausible range: " + "; ".join(parts) + ")"
 
 
@@ -121,7 +145,9 @@ def levels_text(analysis) -> str:
     for t in moving:
         f = " → ".join(f"{t.freq_hz[k]:.5g}" for k in o)
         z = " → ".join(f"{100 * t.zeta[k]:.3g}" for k in o)
-        parts.append(f"mode {t.mode} {f} Hz, ζ {z} %")
+        parts.append(f"{mode_name(t.freq_hz[o[0]])} {f} Hz, ζ {z} %" + "".join(
+            f" (level {analysis.levels[k] if analysis.levels[k] is not None else k + 1}: {t.freq_hz[k]:.5g} Hz "
+            "is off its neighbours' trend, an outlier left out)" for k in t.outliers))
     return "; with rising excitation level " + "; ".join(parts)
 
 
@@ -174,7 +200,7 @@ def explained_verdict(best, ok: list, level_table: list, obs, where: str, mis0: 
     alternative, advice = None, ""
     lv = level_table_text(level_table)
     verdict = (f"{where[0].upper() + where[1:]}. Best explained by {best.describe()}"
-               f"{implausibility_text(best)}; mismatch {100 * mis0:.1f} % → {100 * mis1:.1f} %.{lv}")
+               f"{implausibility_text(best)}; whole-band mismatch {100 * mis0:.1f} % → {100 * mis1:.1f} %.{lv}")
     rivals = [f for f in ok if f is not best and f.candidate.slot != best.candidate.slot
               and f.family.split(" + ")[0] != best.family.split(" + ")[0]
               and f.mismatch <= close_call * best.mismatch]
@@ -185,3 +211,49 @@ def explained_verdict(best, ok: list, level_table: list, obs, where: str, mis0: 
                     f"(mismatch {100 * alternative.mismatch:.1f} % against {100 * best.mismatch:.1f} % on the "
                     f"fit lines); to tell them apart, {advice}.")
     return verdict, alternative, advice
+
+
+def _kind_phrase(fit) -> str:
+    """What kind of change a fit adds, in a few words ("a joint compliance", "an added mass", …)."""
+    fam = fit.family.split(" + ")[0]
+    return {"joint_compliance": "a joint compliance", "joint_damping": "a damped joint compliance",
+            "softening_joint": "an amplitude-dependent joint", "sensor_mass": "an added mass",
+            "fluted_diameter": "a change of section", "gain": "a gain error", "delay": "a time delay"}.get(
+        fam, "a change")
+
+
+def unidentified_verdict(fit, bad: dict, where: str, mis0: float, advice: str) -> str:
+    """The verdict when the best explanation's key parameters are not identified: say what size of change
+    sits where, that it is not identifiable, and which measurement would identify it."""
+    loc = where_text(fit.candidate)
+    params = {q.name: q for q in fit.candidate.params}
+    what = "; ".join(f"{params[n].label} {params[n].fmt(fit.values[n])}"
+                     + (" at the bound of its range" if not np.isfinite(r) else f" ± {100 * r:.0f} %")
+                     for n, r in bad.items())
+    return (f"The recording differs from the model ({where}; mismatch {100 * mis0:.1f} %). "
+            f"{_kind_phrase(fit)[0].upper() + _kind_phrase(fit)[1:]} of this size{loc or ' somewhere here'} "
+            f"would bring the fit lines to {100 * fit.mismatch:.1f} %, but it is not identifiable from these "
+            f"measurements ({what}), so nothing is named. To identify it, {advice}.")
+
+
+def rank_text(best, nxt, eligible, unresolved=None) -> str:
+    """One sentence: why the named explanation (rank 1) ranks above the next one."""
+    out = ""
+    if unresolved is not None and unresolved is not best:
+        out += (f" It is named instead of {unresolved.candidate.explanation}, which fits slightly better "
+                "but whose parameters these measurements do not identify.")
+    if nxt is None or nxt is unresolved:
+        return out
+    b, n = 100 * best.mismatch, 100 * nxt.mismatch
+    if not eligible(nxt):
+        why = "cannot follow the recorded change with the excitation level"
+    elif nxt.implausible and not best.implausible:
+        why = "needs physically implausible values"
+    elif n > b:
+        why = f"leaves {n:.1f} % on the fit lines against {b:.1f} %"
+    elif nxt.p > best.p:
+        why = (f"fits the lines only slightly better ({n:.1f} % against {b:.1f} %) with {nxt.p} parameters "
+               f"against {best.p}: not enough to justify them")
+    else:
+        why = f"scores lower (ΔBIC {nxt.score - best.score:+.0f})"
+    return out + f" The next ranked, {nxt.candidate.explanation}, {why}."

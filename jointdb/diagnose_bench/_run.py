@@ -83,6 +83,10 @@ class CaseResult:
     top_improvement: float = 1.0   # nominal / best-ranked mismatch on the fit lines, accepted or not
     position: float | None = None  # position [m] stated by the selected explanation's primary candidate
     placed: bool | None = None     # position within tolerance of the hidden joint (None: nothing to place)
+    unresolved: str = ""           # family of a best fit left unnamed because its key parameters are not identified
+    verdict: str = ""
+    key_unidentified: tuple = ()   # key parameters of the named fit that are not identified (should be empty)
+    equivalent: tuple = ()         # parameters of the named fit that are an equivalent model's (labelled so)
 
     @property
     def first(self) -> bool:
@@ -147,6 +151,7 @@ class BenchResult:
 def run_case(case: BenchCase) -> CaseResult:
     """Diagnose one generated case and score it."""
     from jointdb.diagnose import Measurement, diagnose
+    from jointdb.diagnose._identify import unidentified
     from jointdb.fe import model_from_dict
 
     model = model_from_dict(case.model)
@@ -183,6 +188,10 @@ def run_case(case: BenchCase) -> CaseResult:
         sigmas={} if best is None else dict(best.sigmas),
         top_improvement=(d.nominal.mismatch / d.ranking[0].mismatch) if d.ranking else 1.0,
         position=position, placed=placed,
+        unresolved="" if d.unresolved is None else first_family(d.unresolved), verdict=d.verdict,
+        key_unidentified=() if best is None else tuple(unidentified(best)),
+        equivalent=() if best is None else tuple(q.name.removeprefix("a.") for q in best.candidate.params
+                                                 if q.equivalent),
     )
 
 

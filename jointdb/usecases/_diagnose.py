@@ -121,7 +121,9 @@ def _read_with_gaps(path: Path, sets: list, bad: dict):
                 if coh is not None:
                     coh[lines, oi[out], ii[inp]] = np.nan
             else:
-                values[lines, oi[out], ii[inp]] = np.nan
+                # keep what the file held: an Inf is named as an Inf, a NaN as a NaN
+                raw = np.asarray(d["data"])[lines]
+                values[lines, oi[out], ii[inp]] = np.where(np.isinf(raw), np.inf, np.nan)
     return Measurement.from_arrays(frf.freq, values, frf.outputs, frf.inputs, frf.quantity, coh, label=path.name)
 
 

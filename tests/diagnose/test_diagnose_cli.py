@@ -76,12 +76,12 @@ def test_diagnose_bench_rejects_unknown_effect():
     assert res.returncode == 2 and "unknown gremlins" in res.stderr
 
 
-def _nan_in_first_value(src, dst):
+def _nan_in_first_value(src, dst, text="NaN"):
     """Copy a UFF58 file written by write_uff58 with the first value of its first FRF record set to NaN
     (as a text field, the way some acquisition software exports a dropped line)."""
     lines = src.read_text().split("\n")
     k = next(i for i, line in enumerate(lines) if line.strip().startswith("13    0    0    0")) + 2
-    lines[k] = f"{'NaN':>20s}" + lines[k][20:]
+    lines[k] = f"{text:>20s}" + lines[k][20:]
     dst.write_text("\n".join(lines))
 
 
@@ -136,3 +136,21 @@ def test_diagnose_command_writes_a_backbone_for_several_levels(tmp_path):
     assert "backbone.png" in [p.name for p in (tmp_path / "figs").iterdir()]
     assert (tmp_path / "figs" / "backbone.png").stat().st_size > 10_000
     assert "recorded modes per excitation level" in res.stdout and "changes with level" in res.stdout
+
+
+def test_diagnose_command_names_a_literal_inf_as_inf(files):
+    d, case = files
+    _nan_in_first_value(d / "tap.uff", d / "tap-inf.uff", text="inf")
+    f0 = case.recordings[0].frf.freq[0]
+    res = subprocess.run(JOINTDB + ["diagnose", str(d / "model.json"), str(d / "tap-inf.uff")],
+                         capture_output=True, text=True)
+    assert res.returncode == 2 and res.stderr.strip().count("\n") == 0, res.stderr
+    assert f"tap-inf.uff: FRF 1x/1x: 1 non-finite value (Inf) at line 1 ({f0:g} Hz)" in res.stderr
+
+
+def test_diagnose_help_defines_explained_and_lists_exit_codes():
+    res = subprocess.run(JOINTDB + ["diagnose", "--help"], capture_output=True, text=True)
+    text = " ".join(res.stdout.split())
+    assert res.returncode == 0
+    assert '"Explained" (explained: true in --json) means' in text and "1.5x" in text and "identified" in text
+    assert "Exit codes: 0 diagnosis done" in text and "2 bad input" in text and "3 a file not found" in text

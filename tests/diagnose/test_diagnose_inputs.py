@@ -216,3 +216,48 @@ def test_recordings_on_different_grids_say_what_was_dropped(case):
     # the same grid: no note
     same = prepare(model, [Measurement(r.frf, level=1.0), Measurement(r.frf, level=2.0)])
     assert same.notes == ()
+
+
+def test_an_all_zero_frf_is_refused_in_one_line_without_a_numpy_warning(case):
+    import warnings
+
+    c, model = case
+    r = c.recordings[0]
+    v = r.frf.values.copy()
+    v[:, 1, 0] = 0.0
+    one = Measurement(FRF(r.frf.freq, v, r.frf.outputs, r.frf.inputs, "receptance"), label="tap.uff")
+    every = Measurement(FRF(r.frf.freq, np.zeros_like(v), r.frf.outputs, r.frf.inputs, "receptance"),
+                        label="dead.uff")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(InputError) as exc:
+            diagnose(model, [one])
+        assert str(exc.value).startswith("tap.uff: FRF 2x/1x is exactly 0 at every line")
+        assert "\n" not in str(exc.value)
+        with pytest.raises(InputError, match=r"^dead\.uff: every FRF is exactly 0 at every line"):
+            diagnose(model, [every])
+        # a few exact zeros are a note (zero weight), not a refusal
+        v[:, 1, 0] = r.frf.values[:, 1, 0]
+        v[10, 1, 0] = 0.0
+        obs = prepare(model, [Measurement(FRF(r.frf.freq, v, r.frf.outputs, r.frf.inputs, "receptance"))])
+    assert any("exactly 0 get zero weight" in n for n in obs.notes)
+
+
+def test_a_recording_above_what_a_beam_model_represents_is_refused_with_the_criterion():
+    from jointdb.diagnose._validity import BEAM_WAVELENGTH_DIAMETERS, beam_limit_hz
+
+    c = generate_case("interface_none", 0)
+    model = model_from_dict(c.model)
+    limit, where = beam_limit_hz(model)
+    # the holder (⌀40–50 mm solid steel) sets it: the bending wavelength 2π (EI/ρA)^¼/√ω equals 4 D where
+    # ω = (2π/(4D))² √(EI/ρA), with √(EI/ρA) = (D/4) √(E/ρ) for a solid section (≈ 12.7 kHz for D = 40 mm)
+    d = float(where.split("⌀")[1].split(" mm")[0]) * 1e-3
+    assert limit == pytest.approx((2 * np.pi / (BEAM_WAVELENGTH_DIAMETERS * d)) ** 2 * d / 4
+                                  * np.sqrt(210e9 / 7850) / (2 * np.pi), rel=0.05)
+    f = np.linspace(20000.0, 30000.0, 401)
+    H = model.frf(f, points=["tip"], directions=["x"]).values
+    with pytest.raises(InputError) as exc:
+        diagnose(model, [Measurement(FRF(f, H, ("1x",), ("1x",), "receptance"), label="hf.uff")])
+    text = str(exc.value)
+    assert "\n" not in text and "20000–30000 Hz" in text and f"{limit:.0f} Hz" in text
+    assert "bending wavelength" in text and "4 diameters" in text

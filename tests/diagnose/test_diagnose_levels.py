@@ -200,7 +200,7 @@ def test_level_dependent_set_is_flagged_with_the_right_signs():
     assert m2.amplitude_unit == "m" and np.all(np.diff(m2.amplitude) > 0)
     assert m2.amplitude[0] == pytest.approx(m2.peak[0] * 0.5)
     line = a.summary().splitlines()[1]
-    assert line.startswith("mode 2: 2305") and "→" in line and "changes with level" in line
+    assert line.startswith("the 2305 Hz mode: 2305") and "→" in line and "changes with level" in line
     assert "ζ 1.1 → 1.4 → 2.0 %" in line
     d = a.to_dict()
     assert d["differs"] is True and d["modes"][1]["differs_freq"] is True and len(d["modes"][1]["freq_hz"]) == 3
@@ -214,7 +214,7 @@ def test_levels_given_out_of_order_are_tracked_from_the_lowest():
     t = a.tracks[0]
     assert a.order == (1, 2, 0)
     assert t.freq_hz[0] == pytest.approx(2185, rel=1e-3) and t.freq_change < 0 and t.zeta_ratio > 1
-    assert a.summary().startswith("mode 1: 2305")
+    assert a.summary().startswith("the 2305 Hz mode: 2305")
 
 
 def test_level_independent_sets_with_different_noise_are_not_flagged():

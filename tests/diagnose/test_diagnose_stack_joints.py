@@ -88,3 +88,25 @@ def test_explained_never_goes_with_an_improvement_below_the_threshold(effect, se
     else:
         assert d.mismatch_after == d.mismatch_before and "Nothing is added" in d.verdict or \
             "no physics is added" in d.verdict
+
+
+@pytest.mark.parametrize("effect, seed", [("interface_joint", 0), ("interface_joint", 1), ("interface_softening", 0)])
+def test_what_is_named_has_its_key_parameters_identified(effect, seed):
+    """Nothing is named whose key parameter has σ > 0.5× its value (of an either-group, one suffices);
+    values of an equivalent model say so."""
+    from jointdb.diagnose._identify import IDENTIFIED, unidentified
+
+    case, d = _diagnosed(effect, seed)
+    assert d.explained, d.verdict
+    assert unidentified(d.best) == {}
+    params = d.best.candidate.params
+    for q in params:
+        rel = q.relative_sigma(d.best.values[q.name], d.best.sigmas.get(q.name))
+        if q.key and not q.either:
+            assert rel <= IDENTIFIED, (q.name, d.best.values[q.name], d.best.sigmas.get(q.name))
+    either = [q for q in params if q.key and q.either]
+    if either:
+        assert min(q.relative_sigma(d.best.values[q.name], d.best.sigmas.get(q.name)) for q in either) <= IDENTIFIED
+    for q in params:
+        if q.equivalent:
+            assert f"equivalent {q.name}" in d.verdict

@@ -10,7 +10,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["Param", "Context", "Candidate", "Combination", "register", "candidates_for", "REGISTRY"]
+__all__ = ["Param", "Context", "Candidate", "Combination", "register", "candidates_for", "REGISTRY", "IDENTIFIED"]
+
+#: A parameter counts as identified when its reported 1σ (statistical and model-form) is at most this
+#: fraction of its value; beyond it the value is shown as "not resolved" and, for a key parameter, the
+#: candidate is not named (see :mod:`jointdb.diagnose._identify`).
+IDENTIFIED = 0.5
 
 
 @dataclass(frozen=True)
@@ -48,6 +53,15 @@ class Param:
     show_unit: str = ""
     starts: tuple[float, ...] = ()
     plausible: tuple[float, float] | None = None
+    #: the value is that of an equivalent (lumped) model, not a measurable property of the part: it is
+    #: reported as "equivalent <name>" (e.g. a contact's length over which a uniform layer does what the
+    #: real, non-uniform pressure does)
+    equivalent: bool = False
+    #: a key parameter must be identified (σ ≤ IDENTIFIED × value) for the candidate to be named;
+    #: key parameters sharing a non-empty ``either`` group need only one of them identified (a joint
+    #: stiff in translation but compliant in rotation is identified by its rotational stiffness)
+    key: bool = True
+    either: str = ""
 
     def implausibility(self, value: float) -> float:
         """Distance of ``value`` outside the plausible range, in units of that range's width
@@ -71,6 +85,23 @@ class Param:
             x, a, b = value, lo, hi
         width = max(b - a, 1e-12)
         return float(max(a - x, x - b, 0.0) / width)
+
+    @property
+    def label(self) -> str:
+        """The name as the verdict shows it (``equivalent insertion`` for an equivalent model's value)."""
+        return f"equivalent {self.name}" if self.equivalent else self.name
+
+    def shown(self, value: float, sigma: float | None) -> str:
+        """``name = value ± σ unit``, or ``name ≈ value unit (not resolved …)`` when σ > IDENTIFIED × value."""
+        if sigma is not None and self.relative_sigma(value, sigma) > IDENTIFIED:
+            return f"{self.label} ≈ {self.fmt(value)} (not resolved by these measurements)"
+        return f"{self.label} = {self.fmt(value, sigma)}"
+
+    def relative_sigma(self, value: float, sigma: float | None) -> float:
+        """σ / |value| (inf when σ is unknown or the value is 0)."""
+        if sigma is None or not np.isfinite(sigma) or value == 0:
+            return float("inf")
+        return float(abs(sigma) / abs(value))
 
     def to_u(self, value: float) -> float:
         """The optimiser's coordinate of a value (``log(value/start)``, or scaled offset).
@@ -124,6 +155,7 @@ class Param:
         str
         """
         unit = self.show_unit or self.unit
+        unit = "" if unit == "-" else unit
         v = value * self.show
         if sigma is None or not np.isfinite(sigma):
             return f"{v:.3g} {unit}".strip()
@@ -217,8 +249,7 @@ class Candidate:
         -------
         str
         """
-        sigmas = sigmas or {}
-        parts = ", ".join(f"{p.name} = {p.fmt(values[p.name], sigmas.get(p.name))}" for p in self.params)
+        parts = ", ".join(p.shown(values[p.name], (sigmas or {}).get(p.name)) for p in self.params)
         return f"{self.explanation} ({parts})" if parts else self.explanation
 
     def __repr__(self) -> str:
@@ -260,7 +291,7 @@ class Combination(Candidate):
         sigmas = sigmas or {}
         texts = []
         for k, c, v in zip("ab", self.parts, self._split(values)):
-            s = {p.name: sigmas.get(f"{k}.{p.name}") for p in c.params}
+            s = {p.name: sigmas[f"{k}.{p.name}"] for p in c.params if f"{k}.{p.name}" in sigmas}
             texts.append(c.describe(v, s))
         return " together with ".join(texts)
 

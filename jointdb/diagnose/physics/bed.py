@@ -50,10 +50,12 @@ class DistributedJoint(AtClamp, Candidate):
                             f"(z = {clamp.position:g} m) and rests on a bed of springs"
                             f"{' with its own damping' if damped else ''} over the insertion length, "
                             "instead of a rigid clamp")
-        ps = [Param("k_bed", "N/m²", 1e10, 1e14, 1e12, show=1e-9, show_unit="GN/m²", starts=(2e11, 5e12)),
-              Param("insertion", "m", 0.5 * d, 4.0 * d, 2.5 * d, show=1e3, show_unit="mm")]
+        ps = [Param("k_bed", "N/m²", 1e10, 1e14, 1e12, show=1e-9, show_unit="GN/m²", starts=(2e11, 5e12),
+                    equivalent=True, either="contact"),
+              Param("insertion", "m", 0.5 * d, 4.0 * d, 2.5 * d, show=1e3, show_unit="mm", equivalent=True,
+                    either="contact")]
         if damped:
-            ps.append(Param("eta_joint", "-", 1e-3, 2.0, 0.1, starts=(0.5,)))
+            ps.append(Param("eta_joint", "-", 1e-3, 2.0, 0.1, starts=(0.5,), key=False))
         self.params = tuple(ps)
 
     def apply(self, model, values, level=0):

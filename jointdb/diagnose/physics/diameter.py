@@ -14,6 +14,8 @@ from __future__ import annotations
 
 import dataclasses
 
+import numpy as np
+
 from jointdb.diagnose.physics._candidate import Candidate, Param, register
 from jointdb.diagnose.physics._util import full_clamps
 from jointdb.fe import Material, get_material
@@ -22,13 +24,17 @@ from jointdb.fe import Material, get_material
 class EffectiveDiameter(Candidate):
     family = "fluted_diameter"
 
-    def __init__(self, index, segment, free_end: bool = False):
+    def __init__(self, index, segment, free_end: bool = False, start: float = 0.0):
         self.index = index
         self.slot = f"diameter[{index}]"
-        self.name = f"diameter@segment{index}"
+        z0, z1 = start * 1e3, (start + segment.length) * 1e3
+        self.name = f"diameter@z={z0:.0f}-{z1:.0f}mm"
         self.d0 = segment.outer_diameter
-        self.explanation = (f"a wrong effective diameter of segment {index} "
-                            f"(nominal {segment.outer_diameter * 1e3:.3g} mm, e.g. a fluted section)")
+        what = f"⌀{segment.outer_diameter * 1e3:.3g} mm {get_material(segment.material).name}"
+        self.location = (f"the free end (the fluted part), z = {z0:.0f}–{z1:.0f} mm" if free_end
+                         else f"the section at z = {z0:.0f}–{z1:.0f} mm")
+        self.explanation = (f"a wrong effective diameter of {self.location} (nominal {what}"
+                            + (", e.g. flutes)" if free_end else ")"))
         # a fluted section (at the free end: the cutting part) can have an effective diameter far
         # from its nominal; a plain turned or ground section is within a few per cent of its drawing
         band = FLUTED_BAND if free_end else PLAIN_BAND
@@ -66,5 +72,6 @@ def _free_end_segment(model) -> int | None:
 @register
 def _factory(ctx):
     tip = _free_end_segment(ctx.model)
-    return [EffectiveDiameter(i, s, free_end=(tip is None or i == tip)) for i, s in
+    starts = np.concatenate([[0.0], np.cumsum([s.length for s in ctx.model.segments])])
+    return [EffectiveDiameter(i, s, free_end=(tip is None or i == tip), start=float(starts[i])) for i, s in
             enumerate(ctx.model.segments)]

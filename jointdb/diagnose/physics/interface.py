@@ -166,11 +166,11 @@ class InterfaceJoint(_Located):
                             "instead of a rigid connection")
         kx, kr = _reference_stiffness(model, site)
         ps = [Param("k_x", "N/m", 0.3 * kx, 1e5 * kx, 100 * kx, show=1e-6, show_unit="N/µm",
-                    starts=(10 * kx, 3000 * kx)),
+                    starts=(10 * kx, 3000 * kx), either="stiffness"),
               Param("k_ry", "N·m/rad", 0.03 * kr, 1e4 * kr, 10 * kr, show=1e-3, show_unit="kN·m/rad",
-                    starts=(1 * kr, 300 * kr))]
+                    starts=(1 * kr, 300 * kr), either="stiffness")]
         if damped:
-            ps.append(Param("eta_joint", "-", 1e-3, 2.0, 0.1, starts=(0.4,), plausible=(1e-3, 1.0)))
+            ps.append(Param("eta_joint", "-", 1e-3, 2.0, 0.1, starts=(0.4,), plausible=(1e-3, 1.0), key=False))
         self.params = tuple(ps)
 
     def joint(self, values, scale: float = 1.0, eta: float | None = None) -> Joint:
@@ -224,10 +224,12 @@ class InterfaceContact(_Located):
             self.explanation = (f"a compliant contact{' with its own damping' if damped else ''} over an "
                                 f"insertion: the ⌀{d * 1e3:.3g} mm part continues inside its neighbour at "
                                 f"{site.location} and rests on a contact layer, instead of a rigid connection")
-            ps.append(Param("insertion", "m", 0.5 * d, hi, min(2.5 * d, 0.7 * hi), show=1e3, show_unit="mm"))
-        ps.insert(0, Param("k_contact", "N/m²", 1e10, 1e14, 1e12, show=1e-9, show_unit="GN/m²", starts=(2e11, 5e12)))
+            ps.append(Param("insertion", "m", 0.5 * d, hi, min(2.5 * d, 0.7 * hi), show=1e3, show_unit="mm",
+                            equivalent=True, either="contact"))
+        ps.insert(0, Param("k_contact", "N/m²", 1e10, 1e14, 1e12, show=1e-9, show_unit="GN/m²", starts=(2e11, 5e12),
+                           equivalent=True, either="contact"))
         if damped:
-            ps.append(Param("eta_joint", "-", 1e-3, 2.0, 0.1, starts=(0.4,), plausible=(1e-3, 1.0)))
+            ps.append(Param("eta_joint", "-", 1e-3, 2.0, 0.1, starts=(0.4,), plausible=(1e-3, 1.0), key=False))
         self.params = tuple(ps)
         self.planes = _planes(model)
 

@@ -28,10 +28,10 @@ def joint_params(model, clamp, dirs):
     out = []
     if "x" in dirs:
         out.append(Param("k_x", "N/m", 1.0 * kx, 1e5 * kx, 300 * kx, show=1e-6, show_unit="N/µm",
-                         starts=(30 * kx, 3000 * kx)))
+                         starts=(30 * kx, 3000 * kx), either="stiffness"))
     if "ry" in dirs:
         out.append(Param("k_ry", "N·m/rad", 0.1 * kr, 1e4 * kr, 30 * kr, show=1e-3, show_unit="kN·m/rad",
-                         starts=(3 * kr, 300 * kr)))
+                         starts=(3 * kr, 300 * kr), either="stiffness"))
     return tuple(out)
 
 
@@ -69,7 +69,7 @@ class DampedJoint(CompliantJoint):
         self.omega1 = omega1
         self.explanation = (f"a compliant joint with its own damping at the clamp (z = {clamp.position:g} m) "
                             "instead of a rigid, undamped one")
-        self.params = self.params + (Param("eta_joint", "-", 1e-3, 2.0, 0.1, starts=(0.5,)),)
+        self.params = self.params + (Param("eta_joint", "-", 1e-3, 2.0, 0.1, starts=(0.5,), key=False),)
 
     def apply(self, model, values, level=0):
         model = without_ingredient(model, self.clamp)

@@ -45,15 +45,20 @@ def _known_levels(levels) -> bool:
 def _law_params(levels) -> tuple[bool, list]:
     """Whether the describing-function law applies (levels known) and its parameters after the stiffness."""
     law = _known_levels(levels)
-    extra = [Param("eta_0", "-", 1e-3, 1.0, 0.05, starts=(0.2,), plausible=(1e-3, 1.0))]
+    extra = [Param("eta_0", "-", 1e-3, 1.0, 0.05, starts=(0.2,), plausible=(1e-3, 1.0), key=False)]
     if law:
         lv = np.asarray(levels, dtype=float)
-        extra += [Param("force_slip", "N", lv.min() / 30, lv.max() * 30, float(np.sqrt(lv.min() * lv.max()))),
-                  Param("s_max", "-", 0.0, 0.95, 0.3, log=False),
-                  Param("eta_max", "-", 1e-3, 1.5, 0.1, starts=(0.4,), plausible=(1e-3, 1.0))]
+        # the law is an equivalent (describing-function) model of the contact: its parameters are equivalent ones
+        extra += [Param("force_slip", "N", lv.min() / 30, lv.max() * 30, float(np.sqrt(lv.min() * lv.max())),
+                        equivalent=True, key=False),
+                  # the law's saturation values extrapolate beyond the recorded levels: shown, not key (the
+                  # per-level stiffness and loss the levels did reach are in the level table)
+                  Param("s_max", "-", 0.0, 0.95, 0.3, log=False, equivalent=True, key=False),
+                  Param("eta_max", "-", 1e-3, 1.5, 0.1, starts=(0.4,), plausible=(1e-3, 1.0), equivalent=True,
+                        key=False)]
     else:
-        extra += [Param(f"s_{i + 1}", "-", 0.2, 1.5, 0.95) for i in range(1, len(levels))]
-        extra += [Param(f"eta_{i + 1}", "-", 1e-3, 1.0, 0.1) for i in range(1, len(levels))]
+        extra += [Param(f"s_{i + 1}", "-", 0.2, 1.5, 0.95, key=False) for i in range(1, len(levels))]
+        extra += [Param(f"eta_{i + 1}", "-", 1e-3, 1.0, 0.1, key=False) for i in range(1, len(levels))]
     return law, extra
 
 

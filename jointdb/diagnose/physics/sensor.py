@@ -25,12 +25,12 @@ class SensorMass(Candidate):
         # tap-test accelerometers weigh 0.2–30 g (with cable and mount); 0.2 kg is not a sensor
         ps = [Param("mass", "kg", 1e-4, 0.2, 0.005, show=1e3, show_unit="g", starts=(0.03,), plausible=(1e-4, 0.04))]
         if inertia:
-            ps.append(Param("rotary_inertia", "kg·m²", 1e-10, 1e-4, 1e-6, show=1e9, show_unit="g·mm²"))
+            ps.append(Param("rotary_inertia", "kg·m²", 1e-10, 1e-4, 1e-6, show=1e9, show_unit="g·mm²", key=False))
         if offset:
             # a sensor has a size: its centre of mass sits up to ~10 mm from the measured point
             lo, hi = max(-0.010, -position), min(0.010, (length or position) - position)
             start = min(max(0.0, lo + 0.2 * (hi - lo)), hi - 0.2 * (hi - lo))
-            ps.append(Param("offset", "m", lo, hi, start, log=False, show=1e3, show_unit="mm"))
+            ps.append(Param("offset", "m", lo, hi, start, log=False, show=1e3, show_unit="mm", key=False))
             self.name = f"sensor_mass_offset@{point}"
             self.explanation = (f"an unmodelled sensor of finite size (added mass and rotary inertia, centre of "
                                 f"mass offset along the axis) at point {point!r}")
