@@ -179,6 +179,25 @@ def pair_modes(model_peaks, rec_peaks, max_ratio=1.35, model_shapes=None, rec_sh
     also needs a MAC ≥ :data:`MIN_MAC`, and the distance is
     ``|ln(f_r/f_m)| + 0.1 (1 − MAC)`` (so of two recorded peaks at similar
     distance the one with the model's shape wins).
+
+    Parameters
+    ----------
+    model_peaks, rec_peaks
+        :class:`Peak` s of the model and of the recording.
+    max_ratio
+        Peaks further apart than this frequency ratio are not paired.
+    model_shapes, rec_shapes
+        Optional: one shape vector per peak (the FRF entries at its line); with both,
+        a pair also needs a MAC of at least :data:`MIN_MAC`.
+
+    Returns
+    -------
+    pairs : list of (int, int)
+        Indices ``(model, recorded)``, by model order.
+    extra : list of float
+        Strong unpaired recorded peaks [Hz] (>= 10 % of the strongest).
+    missing : list of float
+        Strong unpaired model peaks [Hz].
     """
     shaped = bool(model_shapes) and bool(rec_shapes) and np.size(model_shapes[0]) > 1
     cand = []

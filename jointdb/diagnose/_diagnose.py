@@ -108,6 +108,9 @@ class Diagnosis:
         A close second explanation (another physics within ``CLOSE_CALL`` of the best), or None.
     advice
         How to separate the best explanation from the alternative (which measurement to add).
+    unresolved
+        The best-fitting explanation when its key parameters are not identified (it is then not
+        named, or a nearly as good identified one is; :mod:`jointdb.diagnose._identify`), or None.
     """
 
     explained: bool

@@ -230,6 +230,9 @@ class Fit:
         Ranking criterion: the BIC with its gain shrunk for implausible parameters.
     implausible
         Parameters outside their plausible range: name → distance in range widths.
+    cov_u
+        Statistical covariance of the fitted coordinates (log space for logarithmic parameters), in
+        the candidate's parameter order; None if not computed.
     """
 
     candidate: object

@@ -92,6 +92,9 @@ class ModeTrack:
         ``p < P_LEVELS`` and the spread beyond ``FREQ_FLOOR`` (``ZETA_FLOOR``).
     fits
         The :class:`ModalFit` per level.
+    outliers
+        Indices of levels whose local fit is off the trend of its neighbouring levels (a spike, see
+        :func:`level_outliers`): left out of the level-dependence test and reported.
     """
 
     mode: int

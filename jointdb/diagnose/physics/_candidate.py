@@ -41,6 +41,15 @@ class Param:
     plausible
         The physically plausible range (default: the fit bounds); a fitted value outside it
         is reported and penalised (:meth:`implausibility`).
+    equivalent
+        The value is that of an equivalent (lumped) model, not a measurable property of the part:
+        reported as "equivalent <name>" (e.g. a contact's length over which a uniform layer does
+        what the real, non-uniform pressure does).
+    key
+        A key parameter must be identified (σ ≤ ``IDENTIFIED`` × value) for the candidate to be named.
+    either
+        Key parameters sharing a non-empty ``either`` group need only one of them identified (a joint
+        stiff in translation but compliant in rotation is identified by its rotational stiffness).
     """
 
     name: str
@@ -92,13 +101,37 @@ class Param:
         return f"equivalent {self.name}" if self.equivalent else self.name
 
     def shown(self, value: float, sigma: float | None) -> str:
-        """``name = value ± σ unit``, or ``name ≈ value unit (not resolved …)`` when σ > IDENTIFIED × value."""
+        """``name = value ± σ unit``, or ``name ≈ value unit (not resolved …)`` when σ > IDENTIFIED × value.
+
+        Parameters
+        ----------
+        value
+            The fitted value, SI.
+        sigma
+            Its standard deviation, SI, or None.
+
+        Returns
+        -------
+        str
+        """
         if sigma is not None and self.relative_sigma(value, sigma) > IDENTIFIED:
             return f"{self.label} ≈ {self.fmt(value)} (not resolved by these measurements)"
         return f"{self.label} = {self.fmt(value, sigma)}"
 
     def relative_sigma(self, value: float, sigma: float | None) -> float:
-        """σ / |value| (inf when σ is unknown or the value is 0)."""
+        """σ / |value| (inf when σ is unknown or the value is 0).
+
+        Parameters
+        ----------
+        value
+            The fitted value, SI.
+        sigma
+            Its standard deviation, SI, or None.
+
+        Returns
+        -------
+        float
+        """
         if sigma is None or not np.isfinite(sigma) or value == 0:
             return float("inf")
         return float(abs(sigma) / abs(value))
