@@ -233,141 +233,18 @@ def signout(request: Request):
     return resp
 
 
-@router.get("/joints")
-@_handle
-def joints(request: Request):
-    from jointdb.server.routes_joints import filter_versions
-
-    _reader(request)
-    p = request.query_params
-    f = {k: p.get(k) for k in ("type", "material", "torque_min", "torque_max", "q", "active_only")}
-    offset = max(0, int(p.get("offset", "0") or 0)) if (p.get("offset", "0") or "0").isdigit() else 0
-    found = filter_versions(request.app.state.repo, f["type"] or None,
-                            [m for m in (f["material"] or "").replace("+", ",").split(",") if m.strip()], None,
-                            not f["active_only"], _float(f["torque_min"], "torque from"),
-                            _float(f["torque_max"], "torque to"), None, None, f["q"] or None)
-    limit = 50
-    items = [version_json(v) for v in found[offset:offset + limit]]
-    query = {k: v for k, v in f.items() if v}
-    nxt = f"/ui/joints?{urlencode({**query, 'offset': offset + limit})}" if offset + limit < len(found) else None
-    prev = f"/ui/joints?{urlencode({**query, 'offset': max(0, offset - limit)})}" if offset else None
-    return _page(request, "joints.html", title="joints", items=items, total=len(found), offset=offset, f=f,
-                 next=nxt, prev=prev)
-
-
-@router.get("/joints/{name}")
-@_handle
-def joint(request: Request, name: str):
-    from jointdb.server._svg import frf_svg
-    from jointdb.server.routes_joints import joint_name
-
-    who = _reader(request)
-    r = request.app.state.repo
-    version = request.query_params.get("version")
-    jv = r.get(joint_name(name), int(version) if version and version.isdigit() else None)
-    svg = frf_svg([(f"v{jv.version}", r.load_frf(jv))], f"{jv.name} v{jv.version} ({jv.quantity})")
-    refusal = None  # a writer who may not change this joint sees why instead of the forms
-    if who is not None and who.allows("writer"):
-        try:
-            check_may_change(r, who, jv.name, "label or deprecate")
-        except NotPermittedError as exc:
-            refusal = str(exc)
-    return _page(request, "joint.html", title=jv.name, v=version_json(jv), svg=svg,
-                 history=[version_json(h) for h in r.history(jv.name)], audit=r.audit(jv.name, limit=200),
-                 notice=request.query_params.get("notice"), refusal=refusal)
-
-
-@router.get("/joints/{name}/overlay")
-@_handle
-def overlay(request: Request, name: str):
-    from jointdb.server._svg import frf_svg
-    from jointdb.server.routes_joints import joint_name
-
-    _reader(request)
-    r = request.app.state.repo
-    try:
-        a, b = int(request.query_params.get("a", "")), int(request.query_params.get("b", ""))
-    except ValueError:
-        raise InputError("choose two version numbers a and b") from None
-    name = joint_name(name)
-    va, vb = r.get(name, a), r.get(name, b)
-    svg = frf_svg([(f"v{a}", r.load_frf(va)), (f"v{b}", r.load_frf(vb))], f"{name}: v{a} (solid) and v{b} (dashed)")
-    return _page(request, "overlay.html", title=f"{name} overlay", name=name, a=a, b=b, svg=svg,
-                 diff=r.diff(name, a, b))
-
-
-@router.get("/joints/{name}/versions/{version}/frf")
-@_handle
-def download(request: Request, name: str, version: int):
-    from jointdb.server.routes_frf import FORMATS, _cached, etag
-    from jointdb.server.routes_joints import joint_name
-
-    _reader(request)
-    r = request.app.state.repo
-    fmt = request.query_params.get("format", "hdf5")
-    if fmt not in FORMATS:
-        raise InputError(f"format {fmt[:20]!r} must be one of {', '.join(FORMATS)}")
-    jv = r.get(joint_name(name), version)
-    media, suffix = FORMATS[fmt]
-    safe = "".join(ch if ch.isalnum() or ch in "-_." else "_" for ch in jv.name)
-    # a signed-in download is not kept in the browser's cache (a shared computer would still
-    # have it after sign-out); open reads are public and never change: cached for a year
-    cache = "public, max-age=31536000, immutable" if request.app.state.settings.open_reads else "no-store"
-    return Response(_cached(r, jv.name, version, jv.record_sha256, fmt), media_type=media,
-                    headers={"ETag": etag(jv.record_sha256, fmt), "Cache-Control": cache,
-                             "Content-Disposition": f'attachment; filename="{safe}-v{version}{suffix}"'})
-
-
-@router.post("/joints/{name}/{action}")
-@_handle
-def write(request: Request, name: str, action: str):
-    from jointdb.server.routes_joints import joint_name
-
-    form = _form(request)
-    who = _writer_form(request, form)
-    r = request.app.state.repo
-    name = joint_name(name)
-    version = form.get("version", "").strip()
-    if version and not version.isdigit():
-        raise InputError(f"version {version[:20]!r} must be a number")
-    if action not in ("label", "deprecate"):
-        raise InputError(f"unknown action {action[:20]!r}")
-    check_may_change(r, who, name, action)
-    if action == "label":
-        r.label(name, int(version or 0), form.get("label", ""), author=who.name)
-        notice = f"label {form.get('label')} now points at v{version}"
-    else:
-        r.deprecate(name, int(version) if version else None, reason=form.get("reason", ""), author=who.name)
-        notice = f"deprecated {'v' + version if version else 'the joint'}"
-    return RedirectResponse(f"/ui/joints/{quote(name, safe='')}?{urlencode({'notice': notice})}", status_code=303)
-
-
-@router.get("/nearest")
-@_handle
-def nearest(request: Request):
-    from jointdb.server._schemas import ConditionsIn, NearestIn
-    from jointdb.server.routes_query import match_json, run_nearest
-
-    _reader(request)
-    p = request.query_params
-    q = {"joint_type": p.get("joint_type", ""), "materials": p.get("materials", ""),
-         "torque_nm": p.get("torque_nm", ""), "preload_n": p.get("preload_n", ""), "k": p.get("k", "3")}
-    matches, notes = None, []
-    if q["joint_type"]:
-        k = q["k"] if q["k"].isdigit() else "3"
-        body = NearestIn(joint_type=q["joint_type"], k=max(1, min(50, int(k))), conditions=ConditionsIn(
-            materials=[m for m in q["materials"].replace("+", ",").split(",") if m.strip()],
-            torque_nm=_float(q["torque_nm"], "torque"), preload_n=_float(q["preload_n"], "preload")))
-        found, notes = run_nearest(request.app.state.repo, body)
-        matches = [match_json(m) for m in found]
-    return _page(request, "nearest.html", title="nearest joint", q=q, matches=matches, warnings=notes)
-
-
 def mount(app) -> None:
     """Add the pages, the bundled static files and ``/docs`` (Swagger UI from the package) to
     ``app``. FastAPI's own ``/docs``, ``/docs/oauth2-redirect`` and ``/redoc`` pages load
     their scripts from a CDN with inline code: they are replaced (``/docs``) or removed."""
+    from jointdb.server import web_catalogue  # noqa: F401 - its pages join ``router``
+
     app.include_router(router)
+
+    @app.get("/", include_in_schema=False)
+    def root() -> RedirectResponse:
+        return RedirectResponse("/ui/joints", status_code=303)
+
     app.mount("/ui/static", StaticFiles(directory=str(HERE / "static")), name="static")
     cdn_pages = {app.docs_url, app.redoc_url, app.swagger_ui_oauth2_redirect_url} - {None}
     app.router.routes[:] = [rt for rt in app.router.routes if getattr(rt, "path", None) not in cdn_pages]
