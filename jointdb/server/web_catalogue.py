@@ -35,15 +35,17 @@ def _diameter(c: dict) -> float | None:
 
 def _facets(versions: list[dict]) -> dict[str, list[str]]:
     """The values of the catalogue to choose from (types, materials, tapers, labels)."""
-    types, mats, tapers, labels = set(), set(), set(), set()
+    types, mats, tapers, labels, combos = set(), set(), set(), set(), set()
     for v in versions:
         types.add(v["joint_type"])
         mats.update(v["conditions"]["materials"])
+        combos.add(" + ".join(v["conditions"]["materials"]))
         taper = (v["conditions"].get("extra") or {}).get("taper")
         if isinstance(taper, str):
             tapers.add(taper)
         labels.update(v["labels"])
-    return {"types": sorted(types), "materials": sorted(mats), "tapers": sorted(tapers), "labels": sorted(labels)}
+    return {"types": sorted(types), "materials": sorted(mats), "tapers": sorted(tapers), "labels": sorted(labels),
+            "combos": sorted(c for c in combos if c)}
 
 
 def _range(p, key: str) -> tuple[float | None, float | None]:
@@ -212,14 +214,15 @@ def overlay(request: Request, name: str):
         raise InputError("choose two version numbers a and b") from None
     name = joint_name(name)
     va, vb = r.get(name, a), r.get(name, b)
-    plots = wf.frf_plots([(f"v{a}", r.load_frf(va)), (f"v{b}", r.load_frf(vb))], f"{name} v{a} and v{b}")
+    fa, fb = r.load_frf(va), r.load_frf(vb)
+    plots = wf.frf_plots([(f"v{a}", fa), (f"v{b}", fb)], f"{name} v{a} and v{b}")
     d = r.diff(name, a, b)
     ja, jb = version_json(va), version_json(vb)
     conds = _merge_rows(wf.condition_rows(ja["conditions"], ja["joint_type"]),
                         wf.condition_rows(jb["conditions"], jb["joint_type"]))
     return _page(request, "overlay.html", title=f"{name} overlay", name=name, a=a, b=b, plots=_plots_json(plots),
                  diff=d, conds=conds, provenance=_merge_rows(_provenance_rows(ja), _provenance_rows(jb)),
-                 kc=_merge_kc(wf.kc_rows(ja)[0], wf.kc_rows(jb)[0]), colours=wf.COLOURS)
+                 kc=_merge_kc(wf.kc_rows(ja, fa)[0], wf.kc_rows(jb, fb)[0]), colours=wf.COLOURS)
 
 
 def _merge_kc(a: list[dict], b: list[dict]) -> list[tuple[str, str, str, bool]]:
@@ -324,7 +327,7 @@ def _nearest_body(q: dict[str, str], p):
     force = _float(q["force_kn"], "drawbar force / preload [kN]")
     k = q["k"] if q["k"].isdigit() else "3"
     return NearestIn(joint_type=q["joint_type"], k=max(1, min(50, int(k))), conditions=ConditionsIn(
-        materials=[m for m in p.getlist("materials") if m.strip()], torque_nm=_float(q["torque_nm"], "torque [N·m]"),
+        materials=[m.strip() for m in q["materials"].split("+") if m.strip()], torque_nm=_float(q["torque_nm"], "torque [N·m]"),
         preload_n=None if force is None else force * 1000.0, geometry=geometry))
 
 
@@ -338,15 +341,16 @@ def nearest(request: Request):
     facets = _facets([version_json(v) for v in r.list_page(limit=None).items])
     q = {k: p.get(k, d) for k, d in (("joint_type", ""), ("torque_nm", ""), ("force_kn", ""), ("diameter_mm", ""),
                                      ("diameter_key", "shank_diameter_m"), ("k", "3"))}
-    q["materials"] = p.getlist("materials")
+    q["materials"] = p.get("materials", "")
     matches, notes, error = None, [], None
     if q["joint_type"]:
-        unknown = [m for m in q["materials"] if m not in facets["materials"]]
+        unknown = [m.strip() for m in q["materials"].split("+") if m.strip() not in facets["materials"] + [""]]
         try:
             if unknown:
                 raise InputError(f"no catalogued joint has the material {unknown[0][:40]!r}; choose among "
                                  f"{', '.join(facets['materials'])}")
             found, notes = run_nearest(r, _nearest_body(q, p))
+            notes = [wf.humanise_text(n) for n in notes]
             matches = [(match_json(m), _row(version_json(m.version)), per_condition_text(m.per_condition)) for m in found]
         except InputError as exc:  # the form stays, with the message
             error = str(exc)

@@ -55,6 +55,13 @@ def humanise(key: str) -> str:
     return base.replace("_", " ").replace(".", " ")
 
 
+def humanise_text(text: str) -> str:
+    """A message of the store with its condition keys in words (``preload_n`` → drawbar force / preload)."""
+    import re
+
+    return re.sub(r"\b(?:geometry\.|extra\.)?[a-z]+(?:_[a-z]+)*_(?:m|n|nm)\b", lambda m: humanise(m.group(0)), text)
+
+
 def condition_rows(conditions: dict, joint_type: str | None = None) -> list[tuple[str, str]]:
     """``(what, value with unit)`` rows of a version's conditions; absent values are left out."""
     c = conditions or {}

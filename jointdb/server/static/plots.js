@@ -103,6 +103,8 @@
     return state;
   }
 
+  var instances = [];
+
   function drawAll(root) {
     (root || document).querySelectorAll("script.plot-data").forEach(function (el) {
       var spec = JSON.parse(el.textContent);
@@ -111,11 +113,11 @@
         target = document.createElement("div");
         el.parentNode.insertBefore(target, el.nextSibling);
       }
-      draw(spec, target);
+      instances.push(draw(spec, target));
     });
   }
 
-  window.jointdbPlots = {draw: draw, drawAll: drawAll, fmt: fmt};
+  window.jointdbPlots = {draw: draw, drawAll: drawAll, fmt: fmt, instances: instances};
   if (document.readyState === "loading") document.addEventListener("DOMContentLoaded", function () { drawAll(); });
   else drawAll();
 })();
