@@ -142,8 +142,8 @@ def kc_rows(v: dict, frf=None) -> tuple[list[dict], str]:
         return [], "no constant (k, c) representation of this joint FRF"
     for d, k, c in zip(fit.dofs, fit.k, fit.c):
         ku, cu = _units(str(d))
-        rows[str(d)] = {"dof": str(d), "k": f"{num(k)} {ku}", "k_sigma": "not recorded", "k_rel": "–",
-                        "c": f"{num(c)} {cu}", "c_sigma": "not recorded", "c_rel": "–"}
+        rows[str(d)] = {"dof": str(d), "k": f"{num(k)} {ku}", "k_sigma": "(σ not recorded)", "k_rel": "–",
+                        "c": f"{num(c)} {cu}", "c_sigma": "(σ not recorded)", "c_rel": "–"}
     lo, hi = fit.band_hz
     return list(rows.values()), f"constant (k, c) fitted to the stored joint FRF, {num(lo)}–{num(hi)} Hz (no σ recorded)"
 

@@ -19,6 +19,18 @@
     return String(Number(v.toPrecision(4)));
   }
 
+  function tick(v) { return v === null || v === undefined ? "" : fmt(v); }
+
+  function ticks(log) {  // on a log axis only 1, 2 and 5 times a power of ten are labelled
+    return function (u, vals) {
+      return vals.map(function (v) {
+        if (!log || v === null || v <= 0) return tick(v);
+        var m = Math.round(v / Math.pow(10, Math.floor(Math.log10(v) + 1e-9)));
+        return (m === 1 || m === 2 || m === 5) ? tick(v) : "";
+      });
+    };
+  }
+
   function unitOf(label) {
     var m = /\[([^\]]+)\]\s*$/.exec(label || "");
     return m ? m[1] : "";
@@ -44,8 +56,8 @@
     return {
       width: width, height: spec.height || 300, series: series,
       scales: {x: {time: false, distr: xlog ? 3 : 1}, y: {distr: ylog ? 3 : 1}},
-      axes: [{label: spec.x, labelSize: 28, size: 42, values: function (u, ticks) { return ticks.map(fmt); }},
-             {label: spec.y, labelSize: 28, size: 78, values: function (u, ticks) { return ticks.map(fmt); }}],
+      axes: [{label: spec.x, labelSize: 28, size: 42, values: ticks(xlog)},
+             {label: spec.y, labelSize: 28, size: 78, values: ticks(ylog)}],
       cursor: {drag: {x: true, y: false}},
       legend: {live: true}
     };
