@@ -1,13 +1,16 @@
-"""The web catalogue under ``/ui``: server-rendered pages (Jinja2), SVG plots drawn on the
-server, CSS bundled in the package (works with no internet); and ``/docs``, Swagger UI served
-from the package (no CDN).
+"""The web pages under ``/ui``: server-rendered (Jinja2), interactive plots drawn in the browser
+by uPlot, CSS and scripts bundled in the package (works with no internet; see
+:mod:`jointdb.server.web_catalogue` for the catalogue pages, :mod:`jointdb.server.web_flow`
+for the upload / design / lobes pages); and ``/docs``, Swagger UI served from the package.
 
 Sign-in: the token is posted once from a form and exchanged for a server-side session
 (:func:`jointdb.store._tokens.open_session`): the cookie holds only a random session id
 (256 bits; the database keeps its SHA-256), never the token. Signing out revokes the
 session in the database; an unknown, revoked, idle or expired session (or one whose token
-was revoked) is signed out. Cookies are HttpOnly, SameSite=Strict, scoped to ``/ui`` and
-``Secure`` unless the server runs on loopback without TLS (:class:`Settings`).
+was revoked) is signed out. Cookies are HttpOnly, SameSite=Strict, ``Secure`` unless the
+server runs on loopback without TLS (:class:`Settings`); the session cookie is scoped to the
+whole site, so the pages' scripts call the JSON API with it
+(:func:`jointdb.server._deps.session_identity`: writes need the ``X-CSRF-Token`` header).
 
 CSRF: every form carries a token checked before anything is done, and a browser POST
 whose ``Origin`` is another site (or ``null``) is refused. The sign-in form's token is bound
@@ -22,16 +25,16 @@ import hmac
 import secrets
 from pathlib import Path
 from typing import Any
-from urllib.parse import parse_qs, quote, urlencode, urlsplit
+from urllib.parse import parse_qs
 
 from fastapi import APIRouter, Request
 from fastapi.responses import HTMLResponse, RedirectResponse, Response
 from fastapi.staticfiles import StaticFiles
 from fastapi.templating import Jinja2Templates
 
-from jointdb.errors import InputError, JointdbError, NotPermittedError
-from jointdb.server._deps import SESSION_COOKIE, version_json
-from jointdb.store._tokens import check_may_change, close_session, open_session, session_user
+from jointdb.errors import InputError, JointdbError
+from jointdb.server._deps import SESSION_COOKIE, same_origin, session_csrf
+from jointdb.store._tokens import close_session, open_session, session_user
 
 HERE = Path(__file__).parent
 templates = Jinja2Templates(directory=str(HERE / "templates"))
@@ -62,12 +65,11 @@ def _mac(key: str, purpose: bytes) -> str:
     return hmac.new(key.encode(), purpose, hashlib.sha256).hexdigest()
 
 
-def _csrf(session_id: str | None) -> str:
-    """The CSRF token of a session's forms (bound to the session id, which only the HttpOnly cookie holds)."""
-    return _mac(session_id, b"jointdb-csrf") if session_id else ""
+#: The CSRF token of a session's forms (bound to the session id, which only the HttpOnly cookie holds).
+_csrf = session_csrf
 
 
-def _set_cookie(request: Request, resp: Response, name: str, value: str, max_age: int, path: str = "/ui") -> None:
+def _set_cookie(request: Request, resp: Response, name: str, value: str, max_age: int, path: str = "/") -> None:
     resp.set_cookie(name, value, httponly=True, samesite="strict", path=path, max_age=max_age,
                     secure=request.app.state.settings.cookie_secure)
 
@@ -107,11 +109,7 @@ def _same_origin(request: Request) -> None:
 
     The host is the request's ``Host`` or, behind a proxy that rewrites it, the proxy's
     ``X-Forwarded-Host`` (a cross-site form cannot set that header)."""
-    origin = request.headers.get("origin")
-    if origin is None:
-        return
-    hosts = {request.headers.get("host"), request.headers.get("x-forwarded-host", "").split(",")[0].strip()}
-    if origin == "null" or urlsplit(origin).netloc not in hosts - {None, ""}:
+    if not same_origin(request):
         raise PermissionError("this form was sent from another site; open the page on this server and try again")
 
 
@@ -165,7 +163,7 @@ def _respond(fn, request: Request, *args, **kwargs) -> Response:
         status, text = client_error(exc, request.scope.get("state", {}).get("request_id"))
         resp = _page(request, "signin.html" if status == 401 else "base.html", status, error=text)
     if getattr(request.state, "stale_session", False):
-        resp.delete_cookie(SESSION_COOKIE, path="/ui", httponly=True, samesite="strict",
+        resp.delete_cookie(SESSION_COOKIE, path="/", httponly=True, samesite="strict",
                            secure=request.app.state.settings.cookie_secure)
     return resp
 
@@ -228,7 +226,7 @@ def signout(request: Request):
         raise InputError("the form's CSRF token does not match your session")
     close_session(request.app.state.repo, sid)
     resp = RedirectResponse("/ui/signin", status_code=303)
-    resp.delete_cookie(SESSION_COOKIE, path="/ui", httponly=True, samesite="strict",
+    resp.delete_cookie(SESSION_COOKIE, path="/", httponly=True, samesite="strict",
                        secure=request.app.state.settings.cookie_secure)
     return resp
 
