@@ -1,7 +1,7 @@
 """The catalogue pages under ``/ui``: the joint list with facets built from the data, a joint's
 page (k, c ± σ, verdict, conditions in engineering units, interactive plots, versions, labels),
 the overlay of two versions, downloads, label / deprecate with a confirmation step and an
-undo, and the nearest-joint form. Sessions, CSRF and error pages: :mod:`jointdb.server.web`.
+undo, and the nearest-joint form. Sessions, CSRF and error pages: :mod:`jointdb.server.web_core`.
 """
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ from fastapi.responses import RedirectResponse, Response
 from jointdb.errors import InputError, NotPermittedError
 from jointdb.server import web_format as wf
 from jointdb.server._deps import version_json
-from jointdb.server.web import _float, _form, _handle, _page, _reader, _writer_form, router
+from jointdb.server.web_core import _float, _form, _handle, _page, _reader, _writer_form, router
 from jointdb.store._tokens import check_may_change
 
 PAGE = 50
