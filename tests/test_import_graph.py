@@ -63,6 +63,7 @@ LAYERS = {
     # application layer: the use cases (a campaign reads its files and identifies)
     "jointdb.usecases": "application",  # the application package: the use cases the shells call
     "jointdb.campaign": "application",
+    "jointdb.jobs": "application",  # the job queue (procrastinate / in-process) and what each kind of job runs
     "jointdb._journey": "application",
     "jointdb._journey_band": "application",
     "jointdb._examples": "application",

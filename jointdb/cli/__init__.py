@@ -26,7 +26,7 @@ from jointdb.errors import JointdbError
 
 #: The command modules, in the order they register (which is the order of ``jointdb --help``).
 MODULES = ("_models", "_coupling", "_store", "_db", "_predict", "_stability", "_diagnose", "_demo", "_examples",
-           "_campaign", "_plan", "_serve")
+           "_campaign", "_plan", "_serve", "_worker")
 
 #: Every top-level command as ``jointdb --help`` lists it: the module that registers it and
 #: the first paragraph of its help.
@@ -61,6 +61,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "db": ("_db", "Database administration: migrations, integrity check, garbage collection."),
     "campaign": ("_campaign", "Scaffold a measurement campaign from a folder of files, or check one."),
     "tokens": ("_serve", "API tokens of the HTTP service: create, list, revoke."),
+    "worker": ("_worker", "Run jobs of the HTTP service (predict, lobes, diagnose, identify) from the PostgreSQL queue."),
 }
 
 

@@ -48,6 +48,7 @@ def db_upgrade(
     check_db_target(db, create=True)
     rev = upgrade(db, to)
     out = {"database": safe_url(resolve_url(db)), "revision": rev}
+    out |= _job_queue_schema(resolve_url(db))
     if app_role:
         from jointdb.store import _db
         from jointdb.store._roles import grant_app_role
@@ -57,10 +58,37 @@ def db_upgrade(
         try:
             with _db.db_errors(url), write.begin() as conn:
                 grant_app_role(conn, app_role, create=create_role)
+                if out.get("job_queue"):
+                    from jointdb.jobs._pg import grant_queue
+
+                    grant_queue(conn, app_role)  # the service and the workers write the queue's tables
         finally:
             write.dispose()
         out["app_role"] = app_role
     emit(out, as_json=as_json)
+
+
+def _job_queue_schema(url: str) -> dict:
+    """PostgreSQL: the job queue's tables (procrastinate's schema and ``jointdb_jobs``), applied here by
+    the owner role so that the application role needs no CREATE (docs/service.md, Jobs)."""
+    from jointdb.store._db import is_sqlite
+
+    if is_sqlite(url):
+        return {}
+    try:
+        import procrastinate  # noqa: F401 - the postgres extra
+    except ImportError:  # procrastinate not installed: the job routes answer 503 until it is
+        return {"job_queue": None}
+    from jointdb.jobs._pg import ensure_schema
+    from jointdb.store import _db
+
+    _, write = _db.make_engines(url)
+    try:
+        with _db.db_errors(url):
+            ensure_schema(write)
+    finally:
+        write.dispose()
+    return {"job_queue": "procrastinate"}
 
 
 def db_downgrade(

@@ -71,7 +71,8 @@ def predict(
     Each interface's joint is taken from the stack file: rigid, explicit (k, c),
     a pinned catalogued joint name@version, or the nearest catalogued joint to
     the given conditions. The chosen versions, their distances and any
-    extrapolation are reported.
+    extrapolation are reported. With `jointdb --server URL` (and no --db) the
+    catalogued joints are read from that server; the coupling runs here.
 
     With --plots DIR, DIR/tip-vs-rigid.png compares the prediction with rigid
     joints (the legend names the joint versions and interpolation weights).
@@ -92,9 +93,17 @@ def predict(
     freq = _frequency_override(spec, fmin, fmax, df)
     from jointdb.cli._store import check_db_target
 
+    source = db
     if any(j.kind in ("catalogued", "query") for j in spec.interfaces.values()):  # only then is a db read
-        check_db_target(db)  # after every option is checked; a mistyped --db is not found, not created empty
-    result = usecases.predict_stack(spec, db, freq)
+        import os
+
+        if db is None and os.environ.get("JOINTDB_SERVER"):  # jointdb --server URL: joints read over HTTP
+            from jointdb.cli._store import _repo
+
+            source = _repo(None)
+        else:
+            check_db_target(db)  # after every option is checked; a mistyped --db is not found, not created empty
+    result = usecases.predict_stack(spec, source, freq)
     pred = result.prediction
     _report_joint_choices(result.joints.values())
     for note in pred.notes:
@@ -102,7 +111,7 @@ def predict(
     from jointdb.cli._predict_band import band_for, choice_sensitivity
 
     tip_band = band_for(result)
-    choice = choice_sensitivity(result, db, pred.tip.freq)
+    choice = choice_sensitivity(result, source, pred.tip.freq)
     files = {}
     if out is not None:
         usecases.write_frf_file(out, pred.tip)

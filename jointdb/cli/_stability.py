@@ -115,24 +115,10 @@ def lobe_rows_mm(res) -> list[dict]:
 
 
 def lobe_summary(res, n_base: int) -> dict:
-    """Summary of a lobe result in SI units: the smallest limiting depth (the floor on this grid),
-    the deepest pocket, counts of speeds, flips and folds. Folds (multiplier +1) are not chatter limits
-    and are left out of the floor and the pocket."""
-    from jointdb.stability import plottable_depth
+    """The lobe summary (SI) of :func:`jointdb.usecases.lobe_summary`, which the API gives too."""
+    from jointdb.usecases import lobe_summary as summary
 
-    d = plottable_depth(res)
-    out: dict = {"method": res.method, "speeds": int(res.spindle_speed_rpm.size),
-                 "speeds_added_by_refinement": int(res.spindle_speed_rpm.size - n_base),
-                 "speed_range_rpm": [float(res.spindle_speed_rpm[0]), float(res.spindle_speed_rpm[-1])]}
-    if np.isfinite(d).any():
-        i = int(np.nanargmin(d))
-        j = int(np.nanargmax(d))
-        out |= {"min_depth_m": float(d[i]), "min_depth_speed_rpm": float(res.spindle_speed_rpm[i]),
-                "min_depth_chatter_freq_hz": float(res.chatter_freq_hz[i]), "min_depth_kind": str(res.kind[i]),
-                "best_pocket_depth_m": float(d[j]), "best_pocket_speed_rpm": float(res.spindle_speed_rpm[j])}
-    out |= {"flip_speeds": int(np.sum(res.kind == "flip")), "fold_speeds_not_limits": int(np.sum(res.kind == "fold")),
-            "no_limit_speeds": int(np.sum(~np.isfinite(res.depth_m)))}
-    return out
+    return summary(res, n_base)
 
 
 def _summary_for_people(summary: dict) -> dict:

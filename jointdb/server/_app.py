@@ -110,14 +110,41 @@ def _lifespan(settings: Settings, repo):
 
             app.state.repo = Repository(settings.url, blobs=settings.blobs, auto_create=False)
         log.info(json.dumps({"event": "startup", "database": _safe(app.state.repo.url)}))
+        _start_jobs(app)
         try:
             yield
         finally:
+            if getattr(app.state, "jobs", None) is not None:
+                app.state.jobs.stop()
             if own:
                 app.state.repo.close()
             log.info(json.dumps({"event": "shutdown"}))
 
     return lifespan
+
+
+def _start_jobs(app: FastAPI) -> None:
+    """The job queue (:mod:`jointdb.jobs`): in-process worker threads on SQLite (``JOINTDB_JOB_THREADS``,
+    default 1; 0: none, jobs wait for a server that runs them), procrastinate on PostgreSQL (the jobs run
+    in ``jointdb worker`` processes). A queue that cannot start leaves the job routes answering 503."""
+    from jointdb.jobs import open_queue
+
+    try:
+        threads = int(os.environ.get("JOINTDB_JOB_THREADS", "1"))
+        q = open_queue(app.state.repo, concurrency=max(threads, 1))
+        if threads > 0 or q.backend != "in-process":
+            q.start()
+        else:
+            from jointdb.jobs._table import ensure_table
+
+            ensure_table(app.state.repo.write_engine)
+        app.state.jobs = q
+        import jointdb.stack  # noqa: F401 - checked at submission; loaded now, not by the first request
+
+        log.info(json.dumps({"event": "jobs", "backend": q.backend, "threads": threads}))
+    except Exception as exc:  # noqa: BLE001 - the catalogue still serves; the job routes say 503
+        app.state.jobs = None
+        log.error(json.dumps({"event": "jobs_unavailable", "error": _one_line(f"{type(exc).__name__}: {exc}")}))
 
 
 async def _jointdb_error(request: Request, exc: JointdbError):
@@ -180,9 +207,9 @@ def readyz(request: Request):
 
 def _install_routes(app: FastAPI) -> None:
     """The API under ``/api/v1``, the web pages, the checkpoint and the health probes."""
-    from jointdb.server import routes_admin, routes_frf, routes_joints, routes_query, routes_writes, web
+    from jointdb.server import routes_admin, routes_frf, routes_jobs, routes_joints, routes_query, routes_writes, web
 
-    for module in (routes_joints, routes_frf, routes_query, routes_writes, routes_admin):
+    for module in (routes_joints, routes_frf, routes_query, routes_writes, routes_admin, routes_jobs):
         app.include_router(module.router, prefix="/api/v1")
     web.mount(app)
     from jointdb.server.routes_chain import install as install_checkpoints  # GET /api/v1/checkpoint

@@ -100,6 +100,49 @@ class LobesIn(Strict):
     n_speeds: int = Field(300, ge=2, le=5000)
 
 
+class LobesJobIn(LobesIn):
+    """``POST /api/v1/lobes`` and lobes jobs: the CLI's method, refinement and SD options too."""
+
+    method: Literal["zoa", "sd"] = Field("zoa", description="Milling: zero-order approximation or "
+                                         "semi-discretization.")
+    refine: int = Field(3, ge=0, le=10, description="Rounds of extra speeds near the lobes' minima and pockets.")
+    intervals: int = Field(40, ge=2, le=2000, description="SD: intervals per tooth period.")
+    modes: Optional[int] = Field(None, ge=1, le=400, description="SD: modes to fit per direction.")
+    band: Optional[list[float]] = Field(None, min_length=2, max_length=2, description="SD: modal-fit band "
+                                        "[FMIN, FMAX] in Hz.")
+    max_order: int = Field(30, ge=2, le=400, description="SD: highest pLSCF order.")
+    cross_terms: Optional[bool] = Field(None, description="ZOA: use the x–y cross FRFs (default: when present).")
+
+
+class DiagnoseIn(Strict):
+    model: dict[str, Any] = Field(..., description="The nominal beam model (as a model file, JSON).")
+    recordings: list[FrfIn] = Field(..., min_length=1, max_length=20, description="Recorded FRFs, one per "
+                                    "excitation level.")
+    map: dict[str, str] = Field(default_factory=dict, description="Recording node -> model point, e.g. "
+                                "{\"1\": \"tip\"}.")
+    levels: Optional[list[float]] = Field(None, description="Excitation level of each recording [N].")
+    band: Optional[list[float]] = Field(None, min_length=2, max_length=2, description="[FMIN, FMAX] in Hz.")
+    combinations: bool = Field(True, description="Also fit pairs of explanations.")
+
+
+class IdentifyIn(Strict):
+    filename: str = Field("campaign.zip", max_length=200, description="Name of the campaign archive (.zip).")
+    file_b64: str = Field(..., description="The campaign archive (.zip), base64.")
+    name: Optional[str] = Field(None, max_length=200, description="Joint name to suggest (default: the "
+                                "campaign's name).")
+    conditions: ConditionsIn = Field(default_factory=ConditionsIn, description="Conditions from the upload form: "
+                                     "contradictions with the campaign's are flagged in the review.")
+
+
+class JobCatalogueIn(Strict):
+    name: Optional[str] = Field(None, max_length=200, description="Joint name (default: the campaign's).")
+    label: Optional[str] = Field(None, max_length=100)
+    conditions: ConditionsIn = Field(default_factory=ConditionsIn, description="Override / complete the "
+                                     "campaign's conditions (a contradiction needs force).")
+    parent: Optional[int] = Field(None, ge=1)
+    force: bool = False
+
+
 class TokenIn(Strict):
     name: str = Field(..., max_length=100, description="Owner: recorded in the audit log for the token's writes.")
     role: Literal["reader", "writer", "admin"]

@@ -5,13 +5,12 @@ from __future__ import annotations
 import warnings
 from typing import Any
 
-import numpy as np
 from fastapi import APIRouter, Depends
 
 from jointdb.errors import InputError
-from jointdb.io import frf_from_json, frf_json
+from jointdb.io import frf_json
 from jointdb.server._deps import reader, repo, version_json
-from jointdb.server._schemas import LobesIn, NearestIn, PredictIn
+from jointdb.server._schemas import LobesJobIn, NearestIn, PredictIn
 
 router = APIRouter(tags=["query"])
 
@@ -68,18 +67,14 @@ def predict(body: PredictIn, r=Depends(repo), _who=reader) -> dict[str, Any]:
             "notes": list(pred.notes), "tip_frf": frf_json(pred.tip)}
 
 
-@router.post("/lobes", summary="Stability lobes from a tool-tip FRF (milling ZOA or turning)")
-def lobes(body: LobesIn, r=Depends(repo), _who=reader) -> dict[str, Any]:
-    from jointdb.usecases import stability_lobes
+@router.post("/lobes", summary="Stability lobes from a tool-tip FRF (milling ZOA or SD, or turning)")
+def lobes(body: LobesJobIn, _who=reader) -> dict[str, Any]:
+    """As ``jointdb lobes --json``: method, summary (floor, deepest pocket), rows (depth in m), best
+    speeds and notes — a kt/kr/kf given in N/mm² (e.g. ``kt: 796``) is recognised, converted to N/m²
+    and said so in ``notes``. Refinement (``refine`` rounds) as the CLI. SD can take minutes: prefer
+    ``POST /api/v1/jobs/lobes``."""
+    from jointdb.jobs._run import run_lobes
+    from jointdb.server.routes_jobs import check_lobes
 
-    if (body.frf is None) == (body.joint is None):
-        raise InputError("give either frf (JSON) or joint and version")
-    if body.frf is not None:
-        frf = frf_from_json(body.frf.model_dump())
-    else:
-        frf = r.load_frf(r.get(body.joint, body.version))
-    res = stability_lobes(frf, body.op, rpm_min=body.rpm_min, rpm_max=body.rpm_max, n_speeds=body.n_speeds,
-                          kf=body.kf, teeth=body.teeth, kt=body.kt, kr=body.kr, immersion=body.immersion, up=body.up)
-    rows = [{k: (None if isinstance(v, float) and not np.isfinite(v) else v) for k, v in row.items()}
-            for row in res.table()]
-    return {"method": res.method, "rows": rows}
+    result, _ = run_lobes(check_lobes(body), None, lambda fraction, message: None)
+    return result

@@ -16,6 +16,9 @@ HEAD_REVISION = "0008"
 BUSY_TIMEOUT_S = 30.0
 SQLITE_MAGIC = b"SQLite format 3\x00"
 #: Tables of the jointdb schema (besides ``alembic_version``).
+#: Tables of jointdb kept outside the Alembic history: the job queue of the in-process worker
+#: (:mod:`jointdb.jobs._table`, created on first use by ``jointdb serve``).
+OUTSIDE_ALEMBIC = frozenset({"jointdb_jobs"})
 SCHEMA_TABLES = frozenset({"joints", "joint_versions", "joint_states", "labels", "audit_log",
                            "query_versions", "query_geometry", "query_stamp", "api_tokens", "frf_blobs",
                            "history_chain", "web_sessions", "idempotency_keys"})
@@ -85,7 +88,7 @@ def check_jointdb_sqlite(path: Path) -> None:
     if "alembic_version" not in tables:
         what = f"tables: {', '.join(sorted(tables)[:5])}" if tables else "no tables"
         raise InputError(f"{path} is a SQLite database but not a jointdb database ({what}); refusing to touch it")
-    foreign = tables - SCHEMA_TABLES - {"alembic_version"}
+    foreign = tables - SCHEMA_TABLES - {"alembic_version"} - OUTSIDE_ALEMBIC
     if foreign:
         raise InputError(f"{path} has tables jointdb does not know ({', '.join(sorted(foreign)[:5])}); "
                          "refusing to touch it")

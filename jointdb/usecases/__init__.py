@@ -45,6 +45,7 @@ from jointdb.usecases._files import (
     write_frf_file,
     write_joint_file,
 )
+from jointdb.usecases._lobe_report import best_speeds, coefficients_si, lobe_summary, lobes_report
 from jointdb.usecases._lobes import stability_lobes
 from jointdb.usecases._stack import (
     INTERPOLATION_POOL,
@@ -71,6 +72,10 @@ __all__ = [
     "write_frf_file",
     "write_joint_file",
     "stability_lobes",
+    "lobes_report",
+    "lobe_summary",
+    "best_speeds",
+    "coefficients_si",
     "INTERPOLATION_POOL",
     "JointResolution",
     "StackPrediction",

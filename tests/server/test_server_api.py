@@ -166,7 +166,7 @@ def test_predict_and_lobes(catalogued):
         assert tip["units"][0][0] == "m/N" and len(tip["freq_hz"]) == 146
         x = dict(tip)  # the JSON form of an FRF is accepted back as is
         lobes = c.post("/api/v1/lobes", json={"frf": x, "teeth": 4, "kt": 6e8, "kr": 2e8, "immersion": 0.5,
-                                              "n_speeds": 40})
+                                              "n_speeds": 40, "refine": 0})
         assert lobes.status_code == 200, lobes.text
         rows = lobes.json()["rows"]
         assert len(rows) == 40 and all(r["depth_m"] is None or r["depth_m"] > 0 for r in rows)

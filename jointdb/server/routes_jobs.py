@@ -1,0 +1,252 @@
+"""Job routes: long work answered at once with 202 and a job URL (issue 21; docs/service.md, Jobs).
+
+``POST /api/v1/jobs/{kind}`` (predict, lobes, diagnose: JSON as the synchronous routes;
+identify: a multipart upload of a campaign archive, or JSON with it in base64) checks the
+input, queues the job and answers **202** with ``{"id", "url", "state"}`` and a ``Location``
+header. ``GET /api/v1/jobs/{id}`` shows state, progress, message, one-line error and the
+result; ``GET /api/v1/jobs`` lists the caller's jobs, newest first; ``POST
+/api/v1/jobs/{id}/cancel`` cancels. An identify job's result is reviewed, then
+``POST /api/v1/jobs/{id}/catalogue`` (writer) stores the joint as a new version, or
+``POST /api/v1/jobs/{id}/discard`` drops it.
+
+Who: a token (``Authorization: Bearer``) or a signed-in browser session; a session's POST
+must come from this site and carry the page's CSRF token in ``X-CSRF-Token``. A job is
+shown only to the one who submitted it, or to an admin. Identify and catalogue need writer.
+"""
+
+from __future__ import annotations
+
+import base64
+import binascii
+import hmac
+import json
+import tempfile
+from pathlib import Path
+from typing import Any, Optional
+
+from fastapi import APIRouter, HTTPException, Query, Request, Response, Security
+
+from jointdb.errors import InputError, NotFoundError
+from jointdb.server._deps import BEARER, bearer, identify, version_json
+from jointdb.server._schemas import DiagnoseIn, IdentifyIn, JobCatalogueIn, LobesJobIn, PredictIn
+
+router = APIRouter(tags=["jobs"])
+JobId = str
+_ACCEPTED = {202: {"description": "Queued: the job's id, URL and state (and a Location header)."}}
+
+
+def _caller(role: str):
+    """A dependency: who asks (token or browser session with CSRF on POST), with ``role``."""
+
+    def dependency(request: Request, _scheme=Security(BEARER)):
+        token = bearer(request)
+        if token is not None:
+            info = identify(request, token)
+        else:
+            from jointdb.server.web import _csrf, _same_origin, _session
+
+            sid, info = _session(request)
+            if info is None:
+                raise HTTPException(401, f"this request needs a {role} token (Authorization: Bearer <token>) or "
+                                         "a signed-in session", headers={"WWW-Authenticate": "Bearer"})
+            if request.method == "POST":
+                try:
+                    _same_origin(request)
+                except PermissionError as exc:
+                    raise HTTPException(403, str(exc)) from None
+                if not hmac.compare_digest(request.headers.get("x-csrf-token", ""), _csrf(sid)):
+                    raise HTTPException(403, "the X-CSRF-Token header does not match your session; reload the "
+                                             "page and try again")
+        if not info.allows(role):
+            raise HTTPException(403, f"the token of {info.name} has role {info.role}; this request needs {role}")
+        return info
+
+    return Security(dependency)
+
+
+reader = _caller("reader")
+writer = _caller("writer")
+
+
+def queue(request: Request):
+    q = getattr(request.app.state, "jobs", None)
+    if q is None:
+        raise HTTPException(503, "the job queue is not running on this server")
+    return q
+
+
+def _own(request: Request, job_id: str, who):
+    """The job's row when ``who`` submitted it or is an admin (404 otherwise: no oracle of other jobs)."""
+    if not (0 < len(job_id) <= 32 and job_id.isalnum()):
+        raise NotFoundError(f"no job {job_id[:40]}")
+    row = queue(request).get(job_id)
+    if row._mapping["owner"] != who.name and not who.allows("admin"):
+        raise NotFoundError(f"no job {job_id}")
+    return row
+
+
+def _accepted(response: Response, job_id: str) -> dict[str, Any]:
+    url = f"/api/v1/jobs/{job_id}"
+    response.status_code = 202
+    response.headers["Location"] = url
+    return {"id": job_id, "url": url, "state": "queued"}
+
+
+@router.post("/jobs/predict", status_code=202, responses=_ACCEPTED, summary="Predict a stack's tool tip (job)")
+def submit_predict(body: PredictIn, request: Request, response: Response, who=reader) -> dict[str, Any]:
+    """Body as ``POST /api/v1/predict``; the result as its answer (plus ``rigid_tip_frf``)."""
+    from jointdb.stack import stack_from_dict
+
+    stack_from_dict(body.stack)  # a bad stack is a 422 now, not a failed job later
+    return _accepted(response, queue(request).submit("predict", who.name, body.model_dump(mode="json")))
+
+
+@router.post("/jobs/lobes", status_code=202, responses=_ACCEPTED, summary="Stability lobes (job; ZOA or SD)")
+def submit_lobes(body: LobesJobIn, request: Request, response: Response, who=reader) -> dict[str, Any]:
+    """Body as ``POST /api/v1/lobes``; the result holds summary, rows, best speeds and notes."""
+    payload = check_lobes(body)
+    return _accepted(response, queue(request).submit("lobes", who.name, payload))
+
+
+def check_lobes(body: LobesJobIn) -> dict[str, Any]:
+    """The checks a lobes request gets before any work (field-named 422s)."""
+    from jointdb.jobs._run import tip_frf_input
+
+    payload = body.model_dump(mode="json")
+    if body.joint is not None or body.frf is None:
+        raise InputError("joint: a catalogued joint FRF describes an interface, not a tool tip; lobes need the "
+                         "tool-tip FRF of a stack as frf (run a predict job and send its tip_frf)"
+                         if body.joint is not None else "frf: give the tool-tip FRF (JSON)")
+    tip_frf_input(payload)
+    if not body.rpm_min < body.rpm_max:
+        raise InputError("rpm_min must be < rpm_max")
+    if body.op == "milling" and (body.kt is None or body.kr is None):
+        raise InputError("kt, kr: milling needs both cutting coefficients (N/m²)")
+    if body.op == "turning" and body.kf is None:
+        raise InputError("kf: turning needs the cutting coefficient (N/m²)")
+    return payload
+
+
+@router.post("/jobs/diagnose", status_code=202, responses=_ACCEPTED, summary="Diagnose a model against recordings (job)")
+def submit_diagnose(body: DiagnoseIn, request: Request, response: Response, who=reader) -> dict[str, Any]:
+    """``jointdb diagnose``: model JSON, recorded FRFs (JSON), levels, point map."""
+    from jointdb.fe import model_from_dict
+
+    model_from_dict(body.model)
+    return _accepted(response, queue(request).submit("diagnose", who.name, body.model_dump(mode="json")))
+
+
+async def _identify_input(request: Request) -> tuple[dict[str, Any], bytes]:
+    """The upload (multipart: ``file`` + form fields ``name``, ``conditions`` JSON; or JSON IdentifyIn)."""
+    ctype = request.headers.get("content-type", "")
+    if ctype.startswith("multipart/form-data"):
+        form = await request.form(max_files=1, max_fields=20)
+        upload = form.get("file")
+        if upload is None or isinstance(upload, str):
+            raise InputError("file: attach the campaign archive (.zip) as the form field 'file'")
+        data = await upload.read()
+        raw_conditions = form.get("conditions") or "{}"
+        try:
+            conditions = json.loads(raw_conditions) if isinstance(raw_conditions, str) else {}
+        except ValueError:
+            raise InputError("conditions: must be a JSON object") from None
+        body = IdentifyIn(filename=upload.filename or "campaign.zip", file_b64="", name=form.get("name") or None,
+                          conditions=conditions if isinstance(conditions, dict) else {})
+    else:
+        try:
+            body = IdentifyIn.model_validate_json(await request.body())
+        except ValueError as exc:
+            raise InputError(f"body: {' '.join(str(exc).split())[:200]}") from None
+        try:
+            data = base64.b64decode(body.file_b64, validate=True)
+        except (binascii.Error, ValueError):
+            raise InputError("file_b64 is not valid base64") from None
+    return {"filename": Path(body.filename).name, "name": body.name,
+            "conditions": body.conditions.to_conditions().to_dict()}, data
+
+
+@router.post("/jobs/identify", status_code=202, responses=_ACCEPTED,
+             summary="Identify an uploaded campaign (job; writer)")
+async def submit_identify(request: Request, response: Response, who=writer) -> dict[str, Any]:
+    """A campaign archive (.zip: the campaign file and the files it names); the archive is checked
+    now (422 naming the member), identified by a worker; review the result, then catalogue."""
+    from starlette.concurrency import run_in_threadpool
+
+    payload, data = await _identify_input(request)
+    if not data:
+        raise InputError("file: the upload is empty")
+    if not payload["filename"].lower().endswith(".zip"):
+        raise InputError(f"filename {payload['filename'][:60]!r}: upload a campaign archive (.zip)")
+    await run_in_threadpool(_check_archive, payload["filename"], data)
+    job_id = await run_in_threadpool(queue(request).submit, "identify", who.name, payload, data)
+    return _accepted(response, job_id)
+
+
+def _check_archive(filename: str, data: bytes) -> None:
+    from jointdb.jobs._review import unpack_upload
+
+    with tempfile.TemporaryDirectory(prefix="jointdb-upload-") as tmp:
+        unpack_upload(Path(tmp), filename, data)
+
+
+@router.get("/jobs", summary="The caller's jobs, newest first")
+def list_jobs(request: Request, who=reader, kind: Optional[str] = Query(None, max_length=20),
+              state: Optional[str] = Query(None, max_length=20)) -> dict[str, Any]:
+    from jointdb.jobs import job_json
+
+    return {"items": [job_json(r) for r in queue(request).list(who.name, kind, state)]}
+
+
+@router.get("/jobs/{job_id}", summary="A job: state, progress, message, error, result")
+def get_job(job_id: JobId, request: Request, who=reader) -> dict[str, Any]:
+    from jointdb.jobs import job_json
+
+    return job_json(_own(request, job_id, who))
+
+
+@router.post("/jobs/{job_id}/cancel", status_code=202, summary="Cancel a job")
+def cancel_job(job_id: JobId, request: Request, who=reader) -> dict[str, Any]:
+    """A queued job is cancelled at once; a running one stops at its next step."""
+    _own(request, job_id, who)
+    state = queue(request).cancel(job_id)
+    return {"id": job_id, "url": f"/api/v1/jobs/{job_id}", "state": state}
+
+
+def _reviewable(request: Request, job_id: str, who):
+    row = _own(request, job_id, who)
+    m = row._mapping
+    if m["kind"] != "identify":
+        raise InputError(f"job {job_id} is a {m['kind']} job; only identify jobs are catalogued")
+    if m["state"] != "succeeded":
+        raise InputError(f"job {job_id} is {m['state']}; catalogue it once it has succeeded")
+    if m["outcome"]:
+        from jointdb.errors import ConflictError
+
+        raise ConflictError(f"job {job_id} was already {json.loads(m['outcome']).get('action', 'handled')}")
+    return row
+
+
+@router.post("/jobs/{job_id}/catalogue", status_code=201, summary="Catalogue an identify job's joint (writer)")
+def catalogue_job(job_id: JobId, request: Request, response: Response, body: JobCatalogueIn | None = None,
+                  who=writer) -> dict[str, Any]:
+    """The identified joint as a new version (name, label, conditions may be given); 201, or 200 with
+    ``"identical": true`` when the latest version holds the same joint."""
+    from jointdb.jobs._review import catalogue_job as catalogue
+
+    row = _reviewable(request, job_id, who)
+    body = body or JobCatalogueIn()
+    overrides = body.model_dump(mode="json")
+    overrides["conditions"] = body.conditions.to_conditions().to_dict()
+    outcome = catalogue(request.app.state.repo, row, overrides, who.name)
+    v = outcome.version
+    queue(request).rows.set(job_id, outcome=json.dumps({"action": "catalogued", "name": v.name,
+                                                        "version": v.version}))
+    response.status_code = 201 if outcome.created else 200
+    return {**version_json(v), "identical": not outcome.created, "job": job_id}
+
+
+@router.post("/jobs/{job_id}/discard", summary="Discard an identify job's joint")
+def discard_job(job_id: JobId, request: Request, who=reader) -> dict[str, Any]:
+    _reviewable(request, job_id, who)
+    queue(request).rows.set(job_id, outcome=json.dumps({"action": "discarded"}), artifact=None, upload=None)
+    return {"id": job_id, "discarded": True}

@@ -1,0 +1,308 @@
+"""Jobs on a real queue against live processes (issue 21): ``jointdb serve`` on the SQLite
+default (in-process worker) and on PostgreSQL with a separate ``jointdb worker`` process
+(procrastinate). POST answers 202 fast; a job's result equals the use case's / the CLI's on
+the same inputs; cancel works; ``kill -9`` of the server or the worker mid-job leaves the job
+resumed (run again) or failed with a reason, never lost."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import httpx
+import numpy as np
+import pytest
+
+from server_helpers import _pg_schema, drop_pg_schema, make_tokens, pg_base_url, start_server, stop_server
+
+ROOT = Path(__file__).resolve().parents[2]
+CUT = {"teeth": 4, "kt": 6e8, "kr": 2e8, "immersion": 0.5, "rpm_min": 2000.0, "rpm_max": 20000.0}
+
+
+def _stack() -> dict:
+    stacks = ROOT / "fixtures" / "stacks"
+    stack = json.loads((stacks / "endmill-catalogued-joint.json").read_text())
+    stack["spindle"]["model"] = json.loads((stacks / stack["spindle"]["model"]).read_text())  # inline
+    stack["interfaces"]["tool-holder"] = "rigid"
+    stack["frequency"] = {"min": 100.0, "max": 3000.0, "step": 20.0}
+    return stack
+
+
+def start_worker(db: str, blobs: Path, log: Path) -> subprocess.Popen:
+    env = {**os.environ, "OPENBLAS_NUM_THREADS": "1"}
+    with open(log, "ab") as fh:
+        return subprocess.Popen([sys.executable, "-m", "jointdb", "worker", "--db", db, "--blobs", str(blobs),
+                                 "--heartbeat", "1", "--stalled-after", "3"], stdout=fh, stderr=subprocess.STDOUT,
+                                env=env, cwd=ROOT)
+
+
+class Deployment:
+    def __init__(self, backend: str, db: str, tmp: Path):
+        self.backend, self.db, self.tmp = backend, db, tmp
+        self.blobs = tmp / "blobs"
+        self.tokens = make_tokens(db, self.blobs)
+        self.server = start_server(db, self.blobs, tmp / "server.log")
+        self.worker = start_worker(db, self.blobs, tmp / "worker.log") if backend == "postgresql" else None
+
+    def client(self, role="reader") -> httpx.Client:
+        return httpx.Client(base_url=self.server.url, timeout=60,
+                            headers={"Authorization": f"Bearer {self.tokens[role]}"})
+
+    def restart_server(self):
+        self.server = start_server(self.db, self.blobs, self.tmp / "server.log")
+
+    def restart_worker(self):
+        self.worker = start_worker(self.db, self.blobs, self.tmp / "worker.log")
+
+    def stop(self):
+        stop_server(self.server)
+        if self.worker is not None and self.worker.poll() is None:
+            self.worker.send_signal(signal.SIGTERM)
+            try:
+                self.worker.wait(timeout=30)
+            except subprocess.TimeoutExpired:
+                self.worker.kill()
+
+
+@pytest.fixture(scope="module", params=["sqlite", "postgresql"])
+def deployment(request, tmp_path_factory):
+    from jointdb.store import upgrade
+
+    tmp = tmp_path_factory.mktemp(f"jobs-{request.param}")
+    cleanup = None
+    if request.param == "sqlite":
+        db = f"sqlite:///{tmp / 'j.sqlite'}"
+    else:
+        engine, schema, db = _pg_schema(pg_base_url())
+        cleanup = (engine, schema)
+    try:
+        upgrade(db)
+        dep = Deployment(request.param, db, tmp)
+        yield dep
+        dep.stop()
+    finally:
+        if cleanup:
+            drop_pg_schema(*cleanup)
+            cleanup[0].dispose()
+
+
+def submit(c: httpx.Client, kind: str, body: dict) -> tuple[str, float]:
+    t0 = time.perf_counter()
+    r = c.post(f"/api/v1/jobs/{kind}", json=body)
+    elapsed = time.perf_counter() - t0
+    assert r.status_code == 202, r.text
+    out = r.json()
+    assert out["state"] == "queued" and r.headers["location"] == out["url"] == f"/api/v1/jobs/{out['id']}"
+    return out["id"], elapsed
+
+
+def wait(c: httpx.Client, job_id: str, until=("succeeded", "failed", "cancelled"), timeout=240.0) -> dict:
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        try:
+            job = c.get(f"/api/v1/jobs/{job_id}").json()
+        except httpx.HTTPError:  # a server being restarted
+            time.sleep(0.3)
+            continue
+        if job["state"] in until:
+            return job
+        time.sleep(0.2)
+    raise AssertionError(f"job {job_id} still {job['state']} ({job['message']}) after {timeout} s")
+
+
+def running(c, job_id) -> dict:
+    """Wait until the job is running and has reported progress (it is mid-work)."""
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline:
+        job = c.get(f"/api/v1/jobs/{job_id}").json()
+        if job["state"] == "running" and job["progress"] > 0.06:
+            return job
+        assert job["state"] in ("queued", "running"), job
+        time.sleep(0.1)
+    raise AssertionError(f"job {job_id} never got going: {job}")
+
+
+def test_predict_and_sd_lobes_jobs_equal_the_cli(deployment, tmp_path):
+    from jointdb import usecases
+    from jointdb.io import frf_from_json, frf_json, write_frf_hdf5
+    from jointdb.stack import stack_from_dict
+
+    stack = _stack()
+    with deployment.client() as c:
+        submit(c, "predict", {"stack": stack})  # the process's first request opens its connections
+        pid, t_predict = submit(c, "predict", {"stack": stack})
+        job = wait(c, pid)
+        assert job["state"] == "succeeded", job
+        assert job["progress"] == 1.0 and job["error"] is None and job["started"] and job["finished"]
+        local = usecases.predict_stack(stack_from_dict(stack), None).prediction
+        tip = job["result"]["tip_frf"]
+        want = frf_json(local.tip)
+        np.testing.assert_allclose(tip["real"], want["real"], rtol=1e-12, atol=0)
+        np.testing.assert_allclose(tip["imag"], want["imag"], rtol=1e-12, atol=0)
+        assert job["result"]["prediction"] == json.loads(json.dumps(local.summary()))
+
+        body = {"frf": tip, "method": "sd", "n_speeds": 24, "refine": 0, **CUT}
+        lid, t_lobes = submit(c, "lobes", body)
+        job = wait(c, lid)
+        assert job["state"] == "succeeded", job
+        assert t_predict < 0.2 and t_lobes < 0.2, (t_predict, t_lobes)
+        path = tmp_path / "tip.h5"
+        write_frf_hdf5(path, frf_from_json(tip), {})
+        cli = subprocess.run([sys.executable, "-m", "jointdb", "lobes", str(path), "--method", "sd", "--teeth", "4",
+                              "--kt", "6e8", "--kr", "2e8", "--immersion", "0.5", "--n-speeds", "24", "--refine", "0",
+                              "--json"], capture_output=True, text=True, cwd=ROOT,
+                             env={**os.environ, "OPENBLAS_NUM_THREADS": "1"})
+        assert cli.returncode == 0, cli.stderr
+        want = json.loads(cli.stdout)
+        got = job["result"]
+        assert got["summary"].keys() == want["summary"].keys()
+        for key, value in want["summary"].items():
+            assert got["summary"][key] == (pytest.approx(value, rel=1e-9) if isinstance(value, float) else value), key
+        np.testing.assert_allclose([r["depth_m"] for r in got["rows"]], [r["depth_m"] for r in want["rows"]],
+                                   rtol=1e-9)
+        # the listing shows the caller's jobs, newest first; another reader does not see them
+        items = c.get("/api/v1/jobs", params={"kind": "lobes"}).json()["items"]
+        assert items[0]["id"] == lid and all(j["kind"] == "lobes" for j in items)
+    with deployment.client("writer") as other:
+        assert other.get(f"/api/v1/jobs/{lid}").status_code == 404
+        assert all(j["id"] != lid for j in other.get("/api/v1/jobs").json()["items"])
+    with deployment.client("admin") as admin:
+        assert admin.get(f"/api/v1/jobs/{lid}").json()["state"] == "succeeded"
+
+
+def test_cancel_a_running_job(deployment):
+    tip = _tip(deployment)
+    with deployment.client() as c:
+        jid, _ = submit(c, "lobes", {"frf": tip, "method": "sd", "n_speeds": 300, "refine": 0, **CUT})
+        running(c, jid)
+        r = c.post(f"/api/v1/jobs/{jid}/cancel")
+        assert r.status_code == 202
+        job = wait(c, jid, timeout=60)
+        assert job["state"] == "cancelled" and job["result"] is None, job
+
+
+def _tip(deployment) -> dict:
+    with deployment.client() as c:
+        jid, _ = submit(c, "predict", {"stack": _stack()})
+        return wait(c, jid)["result"]["tip_frf"]
+
+
+def test_kill_9_mid_job_resumes_it(deployment):
+    """SQLite: the server runs the job, is killed and restarted. PostgreSQL: the worker is killed and
+    another started; then the server is killed while a job waits. The job runs again to the end."""
+    tip = _tip(deployment)
+    with deployment.client() as c:
+        jid, _ = submit(c, "lobes", {"frf": tip, "method": "sd", "n_speeds": 60, "refine": 0, **CUT})
+        first = running(c, jid)
+    victim = deployment.server.proc if deployment.backend == "sqlite" else deployment.worker
+    victim.send_signal(signal.SIGKILL)
+    victim.wait()
+    if deployment.backend == "sqlite":
+        deployment.restart_server()
+    else:
+        deployment.restart_worker()
+    with deployment.client() as c:
+        job = wait(c, jid)
+        assert job["state"] == "succeeded", job
+        assert job["attempts"] == first["attempts"] + 1 == 2
+        if deployment.backend == "postgresql":  # the server killed: the queue is in the database
+            jid2, _ = submit(c, "predict", {"stack": _stack()})
+    if deployment.backend == "postgresql":
+        deployment.server.proc.send_signal(signal.SIGKILL)
+        deployment.server.proc.wait()
+        deployment.restart_server()
+        with deployment.client() as c:
+            assert wait(c, jid2)["state"] == "succeeded"
+
+
+def test_job_input_errors_are_field_named_422s(deployment):
+    tip = _tip(deployment)
+    with deployment.client() as c:
+        bad = dict(tip, real=[row[:1] for row in tip["real"]])
+        r = c.post("/api/v1/jobs/lobes", json={"frf": bad, **CUT})
+        assert r.status_code == 422 and r.json()["error"].startswith("frf.real"), r.text
+        r = c.post("/api/v1/lobes", json={"joint": "TH-0", "version": 1, **CUT})
+        assert r.status_code == 422 and "tool-tip FRF" in r.json()["error"], r.text
+        r = c.post("/api/v1/lobes", json={"frf": tip, **dict(CUT, kt=796.0), "n_speeds": 20, "refine": 0})
+        assert r.status_code == 200, r.text
+        out = r.json()
+        assert any("N/mm²" in n and "7.96e+08" in n for n in out["notes"])
+        assert out["coefficients_n_per_m2"]["kt"] == 7.96e8 and out["summary"]["speeds"] == 20
+        assert c.post("/api/v1/jobs/identify", json={"file_b64": ""}).status_code == 403  # reader
+        assert c.get("/api/v1/jobs/" + "0" * 32).status_code == 404
+
+
+def _campaign_zip(name: str = "th-er32-carbide-080nm") -> bytes:
+    """A bundled campaign zipped as it lies: campaigns/<name>/… beside models/ (its ../../models paths
+    stay inside the archive)."""
+    import io
+    import zipfile
+
+    base = ROOT / "fixtures" / "bundled" / "catalogue"
+    buf = io.BytesIO()
+    with zipfile.ZipFile(buf, "w", zipfile.ZIP_DEFLATED) as zf:
+        for path in sorted([*(base / "campaigns" / name).rglob("*"), *(base / "models").rglob("*")]):
+            if path.is_file():
+                zf.write(path, path.relative_to(base).as_posix())
+    return buf.getvalue()
+
+
+def test_identify_review_catalogue(deployment):
+    data = _campaign_zip()
+    with deployment.client("reader") as reader:
+        r = reader.post("/api/v1/jobs/identify", files={"file": ("c.zip", data, "application/zip")})
+        assert r.status_code == 403  # identify needs a writer
+    with deployment.client("writer") as c:
+        r = c.post("/api/v1/jobs/identify", files={"file": ("bad.zip", b"not a zip", "application/zip")})
+        assert r.status_code == 422 and "not a zip" in r.json()["error"]
+        t0 = time.perf_counter()
+        r = c.post("/api/v1/jobs/identify", files={"file": ("th.zip", data, "application/zip")},
+                   data={"conditions": json.dumps({"torque_nm": 75.0})})
+        assert r.status_code == 202, r.text
+        assert time.perf_counter() - t0 < 2.0
+        job = wait(c, r.json()["id"])
+        assert job["state"] == "succeeded", job
+        review = job["result"]
+        assert review["campaign"] == "th-er32-carbide-080nm" and review["conditions"]["torque_nm"] == 80
+        assert review["contradictions"] and "75" in review["contradictions"][0]
+        units = {(p["k_unit"], p["c_unit"]) for p in review["parameters"]}
+        assert units <= {("N/m", "N·s/m"), ("N·m/rad", "N·m·s/rad")} and len(review["parameters"]) >= 2
+        assert all(p["k"] > 0 for p in review["parameters"])
+        assert review["curves"]["assembly"]["entries"] and review["curves"]["joint"]["dofs"]
+        r = c.post(f"/api/v1/jobs/{job['id']}/catalogue", json={"name": "TH-job", "label": "reviewed"})
+        assert r.status_code == 201, r.text
+        v = r.json()
+        assert v["name"] == "TH-job" and v["version"] == 1 and "reviewed" in v["labels"]
+        assert v["conditions"]["torque_nm"] == 80 and v["provenance"]["author"] == "writer-owner"
+        assert v["provenance"]["parameters"]["job"] == job["id"]
+        assert c.get("/api/v1/joints/TH-job").json()["version"] == 1
+        assert c.post(f"/api/v1/jobs/{job['id']}/catalogue", json={}).status_code == 409
+        assert c.post(f"/api/v1/jobs/{job['id']}/discard").status_code == 409
+
+
+def test_cli_predict_over_server_equals_the_database(deployment, tmp_path):
+    """`jointdb --server URL predict` reads the catalogued joints from the server (the joint catalogued
+    by the identify job above) and answers what `--db` answers."""
+    stack = _stack()
+    stack["interfaces"]["tool-holder"] = {"query": {"joint_type": "tool-holder", "torque_nm": 80.0,
+                                                    "materials": ["tungsten-carbide", "steel"], "neighbours": 1}}
+    path = tmp_path / "stack.json"
+    path.write_text(json.dumps(stack))
+    env = {**os.environ, "OPENBLAS_NUM_THREADS": "1", "JOINTDB_TOKEN": deployment.tokens["reader"]}
+    env.pop("JOINTDB_URL", None)
+    runs = {}
+    for how, args in (("server", ["--server", deployment.server.url, "predict"]),
+                      ("db", ["predict", "--db", deployment.db])):
+        out = subprocess.run([sys.executable, "-m", "jointdb", *args, str(path), "--json"], capture_output=True,
+                             text=True, cwd=ROOT, env=env if how == "server" else {**env, "JOINTDB_BLOBS": str(
+                                 deployment.blobs)})
+        assert out.returncode == 0, out.stderr
+        runs[how] = json.loads(out.stdout)
+    assert runs["server"]["joints"] == runs["db"]["joints"]
+    assert any(j.get("joint", "").startswith("TH-job") for j in runs["server"]["joints"]), runs["server"]["joints"]
+    assert runs["server"]["prediction"] == runs["db"]["prediction"]
