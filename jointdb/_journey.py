@@ -53,6 +53,7 @@ class JourneyResult:
     prediction: list[dict[str, Any]] = field(default_factory=list)
     interpolated: dict[str, Any] = field(default_factory=dict)
     lobes: dict[str, Any] = field(default_factory=dict)
+    parts: list[dict[str, Any]] = field(default_factory=list)
     files: list[Path] = field(default_factory=list)
 
 
@@ -160,6 +161,7 @@ def run_main_job(
             "database": url,
             "catalogued": result.catalogued,
             "joints": result.joints,
+            "parts": result.parts,
             "prediction": result.prediction,
             "interpolated_cross_check": result.interpolated,
             "notes": list(tip.pred.notes),
@@ -199,6 +201,14 @@ def _catalogue(repo, cat: Path, result: JourneyResult, say: Callable[[str], None
             f"c_x={row['c_x_ns_per_m']:.0f} N·s/m{vs_truth}  "
             f"{'new version' if row['new'] else 'identical to v' + str(outcome.version.version) + ', nothing written'}")
     result.files.append(_write_csv(result.out_dir / "catalogue.csv", result.catalogued))
+    for part, created in usecases.catalogue_bundled_parts(repo, cat):  # what the stack is assembled from
+        say(f"      part {part.ref:<30} {part.kind:<8} {_attributes(part.attributes)}  "
+            f"{'new version' if created else 'identical, nothing written'}")
+
+
+def _attributes(attributes: dict) -> str:
+    return ", ".join(f"{k} {v:g}" if isinstance(v, float) else f"{k} {v}" for k, v in attributes.items()
+                     if k != "description")
 
 
 def _query(repo, cat: Path, result: JourneyResult, say: Callable[[str], None]):
@@ -208,9 +218,16 @@ def _query(repo, cat: Path, result: JourneyResult, say: Callable[[str], None]):
     from jointdb.stack import stack_to_dict
 
     out = result.out_dir
-    spec = usecases.load_stack(cat / "demo-stack.json")
+    # the new stack, assembled from the catalogued parts by name and version (exactly the bundled stack file)
+    doc = json.loads((cat / "demo-stack.json").read_text(encoding="utf-8"))
+    for name, kind, source, _ in usecases.BUNDLED_PARTS:
+        if source.startswith("stack:"):
+            doc[kind] = {"part": f"{name}@{repo.get_part(name).version}"}
+    spec = usecases.stack_from_document(doc, repo)
+    result.parts = list(spec.parts)
     result.files.append(_write_json(out / "stack.json", stack_to_dict(spec)))
     say(f"[2/4] new stack: {spec.name}")
+    say("      from catalogued parts: " + ", ".join(f"{p['slot']} {p['part']}" for p in spec.parts))
     say(f"      tool {spec.tool.length * 1e3:.0f} mm ({spec.gauge_length * 1e3:.0f} mm gauge, "
         f"{spec.insertion_length * 1e3:.0f} mm inserted), holder {spec.holder.length * 1e3:.0f} mm")
     resolutions = usecases.resolve_joints(spec, repo)

@@ -25,8 +25,8 @@ import typer
 from jointdb.errors import JointdbError
 
 #: The command modules, in the order they register (which is the order of ``jointdb --help``).
-MODULES = ("_models", "_coupling", "_store", "_db", "_predict", "_stability", "_diagnose", "_demo", "_examples",
-           "_campaign", "_plan", "_serve", "_worker")
+MODULES = ("_models", "_coupling", "_store", "_parts", "_db", "_predict", "_stability", "_diagnose", "_demo",
+           "_examples", "_campaign", "_plan", "_serve", "_worker")
 
 #: Every top-level command as ``jointdb --help`` lists it: the module that registers it and
 #: the first paragraph of its help.
@@ -58,6 +58,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "serve": ("_serve", "Run the HTTP API and web catalogue (FastAPI + uvicorn) over the joint database."),
     "joints": ("_store", "List, inspect, label, deprecate, diff, export and import catalogued joints."),
     "keys": ("_store", "Ed25519 keys to sign exported bundles and verify imported ones."),
+    "parts": ("_parts", "Catalogued stack parts (spindles, holders, tools): add, list, show, label."),
     "db": ("_db", "Database administration: migrations, integrity check, garbage collection."),
     "campaign": ("_campaign", "Scaffold a measurement campaign from a folder of files, or check one."),
     "tokens": ("_serve", "API tokens of the HTTP service: create, list, revoke."),

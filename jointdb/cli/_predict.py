@@ -34,6 +34,23 @@ def _frequency_override(spec, fmin, fmax, df):
     return prediction_grid(spec, grid.lines())
 
 
+def _load_stack(stack_file: Path, db: str | None):
+    """The stack of a file; catalogued parts it names are read from --db (or --server) and reported."""
+    from jointdb import usecases
+    from jointdb._jsonfile import read_json_file
+    from jointdb._output import message
+
+    if not usecases.part_refs(read_json_file(stack_file, "stack file")):
+        return usecases.load_stack(stack_file)
+    from jointdb.cli._store import _repo
+
+    with _repo(db) as store:
+        spec = usecases.load_stack(stack_file, store)
+    for used in spec.parts:
+        message(f"{used['slot']}: part {used['part']}" + (f" ({used['ref']})" if used["ref"] != used["part"] else ""))
+    return spec
+
+
 def _report_joint_choices(joints) -> None:
     """On stderr: the joint version chosen per interface (and the next ones), extrapolation, warnings."""
     from jointdb._output import message
@@ -89,7 +106,7 @@ def predict(
             raise InputError(f"{label} {str(path)!r}: directory {str(path.parent)!r} does not exist")
     if out is not None:
         usecases.frf_format(out, "--out")
-    spec = usecases.load_stack(stack_file)
+    spec = _load_stack(stack_file, db)
     freq = _frequency_override(spec, fmin, fmax, df)
     from jointdb.cli._store import check_db_target
 
@@ -126,7 +143,7 @@ def predict(
         message(f"wrote {plot}")
     joints = [r.row() for r in result.joints.values()]
     if as_json:
-        emit({"stack": spec.name, "joints": joints, "prediction": pred.summary(), "notes": list(pred.notes),
+        emit({"stack": spec.name, "parts": list(spec.parts), "joints": joints, "prediction": pred.summary(), "notes": list(pred.notes),
               "frequency_hz": [float(pred.tip.freq[0]), float(pred.tip.freq[-1]), int(pred.tip.n_freq)],
               "files": files, "band": None if tip_band is None else tip_band.to_json(),
               "joint_choice_sensitivity": choice}, as_json=True)

@@ -57,6 +57,13 @@ class ModelledSpindle(Strict):
 PinnedRef = Annotated[str, Field(pattern=r"^\s*[^@\s]+\s*@\s*[^@\s]+\s*$", description="name@version or name@label")]
 
 
+class PartRef(Strict):
+    """A catalogued part (``jointdb parts``) in place of the inline object, resolved from the database."""
+
+    part: Annotated[str, Field(pattern=r"^\s*[^@\s]+\s*@\s*[^@\s]+\s*$",
+                               description="a catalogued part: name@version or name@label")]
+
+
 class RigidChoice(Strict):
     rigid: Literal[True]
 
@@ -104,9 +111,9 @@ class StackFile(Strict):
 
     format: Literal["jointdb-stack/1"] = "jointdb-stack/1"
     name: str = "stack"
-    tool: Tool
-    holder: Holder
-    spindle: Union[MeasuredSpindle, ModelledSpindle]
+    tool: Union[Tool, PartRef]
+    holder: Union[Holder, PartRef]
+    spindle: Union[MeasuredSpindle, ModelledSpindle, PartRef]
     gauge_length: Positive | None = Field(default=None, description="tool length outside the holder, m")
     insertion_length: NonNeg | None = Field(default=None, description="tool length inside the holder, m")
     interfaces: Interfaces

@@ -207,9 +207,10 @@ def readyz(request: Request):
 
 def _install_routes(app: FastAPI) -> None:
     """The API under ``/api/v1``, the web pages, the checkpoint and the health probes."""
-    from jointdb.server import routes_admin, routes_frf, routes_jobs, routes_joints, routes_query, routes_writes, web
+    from jointdb.server import (routes_admin, routes_frf, routes_jobs, routes_joints, routes_parts, routes_query,
+                                routes_writes, web)
 
-    for module in (routes_joints, routes_frf, routes_query, routes_writes, routes_admin, routes_jobs):
+    for module in (routes_joints, routes_frf, routes_query, routes_writes, routes_parts, routes_admin, routes_jobs):
         app.include_router(module.router, prefix="/api/v1")
     web.mount(app)
     from jointdb.server.routes_chain import install as install_checkpoints  # GET /api/v1/checkpoint

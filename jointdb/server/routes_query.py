@@ -52,18 +52,21 @@ def interpolate(body: NearestIn, r=Depends(repo), _who=reader) -> dict[str, Any]
 @router.post("/predict", summary="Tool-tip FRF of a tool / holder / spindle stack")
 def predict(body: PredictIn, r=Depends(repo), _who=reader) -> dict[str, Any]:
     """Joints from the catalogue (pinned, nearest or explicit); the stack must carry its
-    spindle model inline (a server reads no client files)."""
+    spindle model inline (a server reads no client files) or name catalogued parts
+    (``{"part": "name@version"}`` for tool, holder, spindle; listed in ``parts``)."""
     from jointdb import usecases
-    from jointdb.stack import MeasuredSpindle, ModelledSpindle, stack_from_dict
+    from jointdb.stack import MeasuredSpindle, ModelledSpindle
 
-    spec = stack_from_dict(body.stack)
+    spec = usecases.stack_from_document(body.stack, r)
     sp = spec.spindle
-    if isinstance(sp, MeasuredSpindle) or (isinstance(sp, ModelledSpindle) and isinstance(sp.model, str)):
+    if (isinstance(sp, MeasuredSpindle) and sp.frf is None) or (isinstance(sp, ModelledSpindle)
+                                                                 and isinstance(sp.model, str)):
         raise InputError("stack.spindle: refers to a file; send the spindle model inline (the server reads "
                          "no client files)")
     result = usecases.predict_stack(spec, r)
     pred = result.prediction
-    return {"stack": spec.name, "joints": [j.row() for j in result.joints.values()], "prediction": pred.summary(),
+    return {"stack": spec.name, "parts": list(spec.parts), "joints": [j.row() for j in result.joints.values()],
+            "prediction": pred.summary(),
             "notes": list(pred.notes), "tip_frf": frf_json(pred.tip)}
 
 

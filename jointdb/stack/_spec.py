@@ -223,6 +223,10 @@ class StackSpec:
     gauge_length: float
     interfaces: Mapping[str, JointChoice]
     frequency: FrequencyGrid | None = None
+    #: provenance: the catalogued parts the stack was assembled from, one mapping per slot (``slot``,
+    #: ``part`` as ``name@version``, ``ref`` as written, ``kind``, ``record_sha256``, ``blob_sha256``),
+    #: set by the application layer that resolved them (:func:`jointdb.usecases.resolve_stack_parts`)
+    parts: tuple = field(default=(), compare=False)
 
     @property
     def insertion_length(self) -> float:

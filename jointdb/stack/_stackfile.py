@@ -292,6 +292,10 @@ def stack_from_dict(doc: Any) -> StackSpec:
     for key in ("tool", "holder", "spindle", "interfaces"):
         if key not in doc:
             raise _fail(key, "required field is missing")
+    for key in ("tool", "holder", "spindle"):  # {"part": "name@version"}: resolved by the application layer
+        if isinstance(doc[key], Mapping) and "part" in doc[key]:
+            raise _fail(f"{key}.part", "a catalogued part is resolved from the database first "
+                                       "(jointdb.usecases.stack_from_document; `jointdb predict` does it)")
     if "gauge_length" not in doc and "insertion_length" not in doc:
         raise _fail("gauge_length", "required field is missing (or give insertion_length)")
     tool = _tool(doc["tool"], "tool")

@@ -80,6 +80,8 @@ from jointdb.store._types import (
 
 __all__ = [
     "Repository",
+    "PartVersion",
+    "PART_KINDS",
     "Conditions",
     "Provenance",
     "JointVersion",
@@ -119,6 +121,7 @@ _LAZY = {
     "write_frf_file": "_blobs", "JointPage": "_listing", "Catalogued": "_reports",
     "JointStore": "_protocol", "LocalJointStore": "_protocol", "BlobStoreProtocol": "_protocol",
     "open_store": "_open", "owned_store": "_open",
+    "PartVersion": "_parts", "PART_KINDS": "_parts",
 }
 
 

@@ -1,6 +1,7 @@
 """Tamper-evident history: an append-only hash chain over every history row, and signed checkpoints.
 
-Every row of the history tables (joints, versions, state changes, audit rows) gets one
+Every row of the history tables (joints, versions, state changes, audit rows, parts and part
+versions) gets one
 entry of the table ``history_chain`` (migration ``0006``) in the transaction that writes it,
 in commit order::
 
@@ -37,13 +38,14 @@ from sqlalchemy import JSON, BigInteger, Integer, String, UniqueConstraint, even
 from sqlalchemy.orm import Mapped, Session, mapped_column
 
 from jointdb.errors import InputError, IntegrityError
-from jointdb.store._models import AuditRow, Base, JointRow, StateRow, VersionRow
+from jointdb.store._models import AuditRow, Base, JointRow, PartRow, PartVersionRow, StateRow, VersionRow
 
 ZERO = "0" * 64
 CHECKPOINT_FORMAT = "jointdb-checkpoint/1"
 SIGNED_PREFIX = b"jointdb-checkpoint-signature-v1\n"
 #: kind -> mapped class, in the order the rows of one transaction are appended
-KINDS = {"joint": JointRow, "version": VersionRow, "state": StateRow, "audit": AuditRow}
+KINDS = {"joint": JointRow, "version": VersionRow, "state": StateRow, "audit": AuditRow,
+         "part": PartRow, "part_version": PartVersionRow}  # parts: migration 0009
 _KIND_OF = {cls: kind for kind, cls in KINDS.items()}
 _PENDING = "jointdb_chain_pending"
 
@@ -175,9 +177,12 @@ def _forget_pending(session: Session, previous_transaction) -> None:
 def build_chain(conn) -> int:
     """Append every history row not yet in the chain, kind by kind in id order (migration ``0006``
     for existing databases). Returns the number of entries appended."""
+    from sqlalchemy import inspect
+
     chain = ChainRow.__table__
     have = {(k, i) for k, i in conn.execute(select(chain.c.kind, chain.c.row_id))}
-    rows = [(kind, i) for kind, cls in KINDS.items()
+    tables = set(inspect(conn).get_table_names())  # migration 0006 runs before the tables of later kinds exist
+    rows = [(kind, i) for kind, cls in KINDS.items() if cls.__tablename__ in tables
             for (i,) in conn.execute(select(cls.__table__.c.id).order_by(cls.__table__.c.id)) if (kind, i) not in have]
     if rows:
         _append(conn, rows)

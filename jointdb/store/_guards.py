@@ -11,8 +11,9 @@ from __future__ import annotations
 
 from sqlalchemy import Connection, text
 
-HISTORY = ("joints", "joint_versions", "joint_states", "audit_log", "history_chain")  # history_chain: 0006
-TRUNCATE_GUARDED = HISTORY + ("labels",)
+HISTORY = ("joints", "joint_versions", "joint_states", "audit_log", "history_chain",  # history_chain: 0006
+           "parts", "part_versions")  # 0009
+TRUNCATE_GUARDED = HISTORY + ("labels", "part_labels")
 
 
 def expected_sqlite_triggers() -> list[str]:

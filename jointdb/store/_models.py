@@ -10,6 +10,8 @@ Tables
                     joint or one of its versions; the latest row wins.
 ``labels``          mutable named pointers (``released``, ``default``) to versions.
 ``audit_log``       append-only: who did what, when.
+``parts``, ``part_versions``  spindles, holders and tools of stacks (migration ``0009``):
+                    immutable versions like the joints', with ``part_labels``.
 ``query_*``         derived (migration ``0004``): the ranking conditions and current
                     standing of every version, for the nearest query; rebuilt from
                     the tables above in the transactions that change them.
@@ -266,9 +268,70 @@ class IdempotencyRow(Base):
     created_at: Mapped[datetime] = mapped_column(UTCDateTime())
 
 
-IMMUTABLE = (JointRow, VersionRow, StateRow, AuditRow)
-#: Tables the database itself protects with UPDATE/DELETE triggers (migration 0002).
-IMMUTABLE_TABLES = ("joints", "joint_versions", "joint_states", "audit_log")
+class PartRow(Base):
+    """A part of a stack (migration 0009): a spindle, holder or tool, by name. Immutable."""
+
+    __tablename__ = "parts"
+    __table_args__ = (CheckConstraint("kind IN ('spindle', 'holder', 'tool')", name="kind_known"),)
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    name: Mapped[str] = mapped_column(String(200), unique=True)
+    kind: Mapped[str] = mapped_column(String(20), index=True)
+    created_at: Mapped[datetime] = mapped_column(UTCDateTime())
+    created_by: Mapped[str] = mapped_column(String(200))
+
+
+class PartVersionRow(Base):
+    """One immutable version of a part (migration 0009): its attributes (``machine``; ``family``,
+    ``taper``, ``bore_mm``), its payload (the stack-file object of the part, JSON) and, for a
+    measured spindle, the content-addressed FRF blob of its nose receptances; provenance and the
+    ``record_sha256`` that every read verifies."""
+
+    __tablename__ = "part_versions"
+    __table_args__ = (
+        UniqueConstraint("part_id", "version"),
+        CheckConstraint("version >= 1", name="version_positive"),
+        CheckConstraint("parent_version IS NULL OR parent_version < version", name="parent_before"),
+    )
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    part_id: Mapped[int] = mapped_column(ForeignKey("parts.id", ondelete="RESTRICT"), index=True)
+    version: Mapped[int] = mapped_column(Integer)
+    uuid: Mapped[str] = mapped_column(String(36), unique=True)
+    created_at: Mapped[datetime] = mapped_column(UTCDateTime())
+    author: Mapped[str] = mapped_column(String(200))
+    machine: Mapped[str | None] = mapped_column(String(200), index=True)
+    family: Mapped[str | None] = mapped_column(String(100), index=True)
+    attributes: Mapped[dict] = mapped_column(JSON)
+    payload: Mapped[dict] = mapped_column(JSON)
+    blob_sha256: Mapped[str | None] = mapped_column(String(64), index=True)
+    provenance: Mapped[dict] = mapped_column(JSON)
+    parent_version: Mapped[int | None] = mapped_column(Integer)
+    record_sha256: Mapped[str] = mapped_column(String(64))
+
+
+class PartLabelRow(Base):
+    """A mutable named pointer (``released``, ``default``) at a part version (migration 0009)."""
+
+    __tablename__ = "part_labels"
+    __table_args__ = (
+        UniqueConstraint("part_id", "label"),
+        ForeignKeyConstraint(
+            ["part_id", "version"], ["part_versions.part_id", "part_versions.version"], ondelete="RESTRICT"
+        ),
+    )
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    part_id: Mapped[int] = mapped_column(ForeignKey("parts.id", ondelete="RESTRICT"))
+    label: Mapped[str] = mapped_column(String(100))
+    version: Mapped[int] = mapped_column(Integer)
+    updated_at: Mapped[datetime] = mapped_column(UTCDateTime())
+    updated_by: Mapped[str] = mapped_column(String(200))
+
+
+IMMUTABLE = (JointRow, VersionRow, StateRow, AuditRow, PartRow, PartVersionRow)
+#: Tables the database itself protects with UPDATE/DELETE triggers (migrations 0002, 0009).
+IMMUTABLE_TABLES = ("joints", "joint_versions", "joint_states", "audit_log", "parts", "part_versions")
 
 
 @event.listens_for(Session, "before_flush")

@@ -31,6 +31,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from jointdb.frf import FRF
     from jointdb.store._blobs import BlobInfo, PendingPut
     from jointdb.store._listing import JointPage
+    from jointdb.store._parts import PartVersion
     from jointdb.store._reports import Catalogued, CheckReport, VersionDiff
     from jointdb.store._types import Conditions, InterpolatedJoint, JointVersion, Match, Provenance
 
@@ -155,6 +156,31 @@ class JointStore(Protocol):
 
     def audit(self, name: str | None = None, limit: int = 100) -> list[dict[str, Any]]:
         """The newest audit-log entries (optionally of one joint)."""
+
+    # parts of stacks (spindles, holders, tools; jointdb.store._parts)
+    def add_part(self, name: str, kind: str, payload: Mapping[str, Any], *, frf: FRF | None = None,
+                 attributes: Mapping[str, Any] | None = None, provenance: Mapping[str, Any] | None = None,
+                 author: str | None = None, label: str | None = None) -> PartVersion:
+        """Catalogue a part as a new version (the latest one when identical)."""
+
+    def get_part(self, name: str, version: int | None = None, label: str | None = None) -> PartVersion:
+        """One part version (pinned, by label, or the latest), its record verified."""
+
+    def resolve_part(self, ref: str) -> PartVersion:
+        """The part version a ``name@version`` / ``name@label`` reference names."""
+
+    def part_history(self, name: str) -> list[PartVersion]:
+        """Every version of a part, oldest first."""
+
+    def list_parts(self, kind: str | None = None, *, family: str | None = None,
+                   machine: str | None = None) -> list[PartVersion]:
+        """The latest version of every part (optionally of one kind, holder family or machine)."""
+
+    def label_part(self, name: str, version: int, label: str, author: str | None = None) -> PartVersion:
+        """Point ``label`` of a part at ``version``."""
+
+    def load_part_frf(self, part: PartVersion) -> FRF:
+        """A measured spindle's verified FRF set."""
 
 
 @runtime_checkable

@@ -2,7 +2,8 @@
 
 ``RemoteRepository(url, token)`` implements :class:`jointdb.store.JointStore` (``get``,
 ``history``, ``list_joints``, ``load_frf``, ``diff``, ``audit``, ``nearest``,
-``interpolate``, ``catalogue``, ``catalogue_outcome``, ``label``, ``deprecate``) over HTTP
+``interpolate``, ``catalogue``, ``catalogue_outcome``, ``label``, ``deprecate``; parts:
+``add_part``, ``get_part``, ``list_parts``, ``part_history``, ``label_part``, ``load_part_frf``) over HTTP
 and returns the same value types,
 so ``jointdb --server URL query ...`` (or ``JOINTDB_SERVER=URL``, token from
 ``JOINTDB_TOKEN``) behaves as with a local database. The rules are applied once, by the
@@ -230,6 +231,58 @@ class RemoteRepository:
         body = {"reason": reason, "undo": undo, **({"version": int(version)} if version is not None else {})}
         return [version_from_json(v) for v in self._call("POST", f"/joints/{self._name(name)}/deprecate",
                                                          json=body)["items"]]
+
+    # ----------------------------------------------------------------- parts
+    def add_part(self, name, kind, payload, *, frf=None, attributes=None, provenance=None, author=None,
+                 label=None):
+        """Catalogue a part on the server (the token's owner is the author)."""
+        prov = dict(provenance or {})
+        body = {"name": name, "kind": kind, "payload": dict(payload or {}), "attributes": dict(attributes or {}),
+                "input_files": dict(prov.get("input_files") or {}),
+                **({"method": prov["method"]} if prov.get("method") else {}), **({"label": label} if label else {})}
+        if frf is not None:
+            body["frf"] = frf_json(frf)
+            body["frf"].pop("units", None)
+        return part_from_json(self._call("POST", "/parts", json=body))
+
+    def get_part(self, name, version=None, label=None):
+        if version is not None and label is not None:
+            raise InputError("give a version or a label, not both")
+        if version is None and label is None:
+            return self.part_history(name)[-1]
+        which = str(int(version)) if version is not None else self._name(label)
+        return part_from_json(self._call("GET", f"/parts/{self._name(name)}/{which}"))
+
+    def resolve_part(self, ref):
+        from jointdb.store._parts import parse_part_ref
+
+        name, tail = parse_part_ref(ref)
+        return self.get_part(name, version=tail) if isinstance(tail, int) else self.get_part(name, label=tail)
+
+    def part_history(self, name):
+        """Every version of a part (records with payloads: one request per version)."""
+        items = self._all(f"/parts/{self._name(name)}")
+        return [self.get_part(name, int(d["version"])) for d in items]
+
+    def list_parts(self, kind=None, *, family=None, machine=None):
+        params = {k: v for k, v in (("kind", kind), ("family", family), ("machine", machine)) if v is not None}
+        return [self.get_part(d["name"], int(d["version"])) for d in self._all("/parts", **params)]
+
+    def label_part(self, name, version, label, author=None):
+        return part_from_json(self._call("POST", f"/parts/{self._name(name)}/{int(version)}/labels",
+                                         json={"label": label}))
+
+    def load_part_frf(self, part):
+        return frf_from_json(self._call("GET", f"/parts/{self._name(part.name)}/{int(part.version)}/frf"))
+
+
+def part_from_json(d: dict):
+    """A :class:`jointdb.store.PartVersion` from the API's JSON form of a part version."""
+    from jointdb.store._parts import PartVersion
+
+    return PartVersion(d["name"], d["kind"], int(d["version"]), d["uuid"], datetime.fromisoformat(d["created_at"]),
+                       d["author"], dict(d["attributes"]), dict(d["payload"]), d["blob_sha256"],
+                       dict(d["provenance"]), d["parent_version"], d["record_sha256"], tuple(d["labels"]))
 
 
 def version_from_json(d: dict):

@@ -19,6 +19,7 @@ from jointdb.store._access import Storage, joint_row
 from jointdb.store._blobformat import frf_sha256
 from jointdb.store._catalogue import idempotent_answer, identity_of, precheck, write_version
 from jointdb.store._labels import LabelsAndStates
+from jointdb.store._parts import PartsStore
 from jointdb.store._reports import Catalogued, CheckReport, VersionDiff
 from jointdb.store._models import JointRow, LabelRow, StateRow, VersionRow
 from jointdb.store._listing import JointPage, list_page
@@ -56,7 +57,7 @@ def _report_damaged(found: list[DamagedVersion], into: list | None) -> None:
                       + "; ".join(d.describe() for d in found[:10]), DamagedRecordWarning, stacklevel=3)
 
 
-class Repository(LabelsAndStates):
+class Repository(LabelsAndStates, PartsStore):
     """A joint database: SQL rows (SQLite or PostgreSQL) plus an HDF5 blob store.
 
     Parameters

@@ -23,12 +23,15 @@ from sqlalchemy import text
 
 from jointdb.errors import InputError
 
-HISTORY_TABLES = ("joints", "joint_versions", "joint_states", "audit_log", "history_chain")
+HISTORY_TABLES = ("joints", "joint_versions", "joint_states", "audit_log", "history_chain", "parts",
+                  "part_versions")
 #: table -> privileges of the application role (every other table of the schema: SELECT)
 APP_PRIVILEGES = {
     **{t: "SELECT, INSERT" for t in HISTORY_TABLES},
     "joints": "SELECT, INSERT, UPDATE (id)",
     "labels": "SELECT, INSERT, UPDATE (version, updated_at, updated_by)",
+    "parts": "SELECT, INSERT, UPDATE (id)",  # SELECT ... FOR UPDATE locks a part's row (the trigger refuses UPDATE)
+    "part_labels": "SELECT, INSERT, UPDATE (version, updated_at, updated_by)",
     "query_versions": "SELECT, INSERT, UPDATE, DELETE",
     "query_geometry": "SELECT, INSERT, UPDATE, DELETE",
     "query_stamp": "SELECT, INSERT, UPDATE",

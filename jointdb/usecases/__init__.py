@@ -21,6 +21,12 @@ Stacks (:mod:`jointdb.usecases._stack`)
     predict_with_joints   -- predict the tool-tip FRF with joints already resolved
 Lobes (:mod:`jointdb.usecases._lobes`)
     stability_lobes       -- milling (ZOA) or turning lobes of a tool-tip FRF over a speed grid
+Parts (:mod:`jointdb.usecases._parts`, :mod:`jointdb.usecases._partfiles`; spindles, holders, tools as catalogued records)
+    resolve_stack_parts   -- a stack document's ``{"part": "name@version"}`` references made inline
+    stack_from_document   -- a stack document (parts resolved, recorded in ``spec.parts``) -> StackSpec
+    part_from_files       -- what ``jointdb parts add`` reads: model / FRF / stack / part files
+    add_part_from_files   -- read and catalogue a part
+    catalogue_bundled_parts -- the bundled example stack's spindles, holder and tool (the demo does it)
 Files (:mod:`jointdb.usecases._files`)
     load_stack            -- a stack file with the spindle FRF / model file it names
     read_frf_file, write_frf_file, frf_format -- FRF files by suffix (UFF58, HDF5, CSV)
@@ -47,6 +53,14 @@ from jointdb.usecases._files import (
 )
 from jointdb.usecases._lobe_report import best_speeds, coefficients_si, lobe_summary, lobes_report
 from jointdb.usecases._lobes import stability_lobes
+from jointdb.usecases._partfiles import (
+    BUNDLED_PARTS,
+    PartInput,
+    add_part_from_files,
+    catalogue_bundled_parts,
+    part_from_files,
+)
+from jointdb.usecases._parts import part_refs, resolve_stack_parts, stack_from_document
 from jointdb.usecases._stack import (
     INTERPOLATION_POOL,
     JointResolution,
@@ -76,6 +90,14 @@ __all__ = [
     "lobe_summary",
     "best_speeds",
     "coefficients_si",
+    "BUNDLED_PARTS",
+    "PartInput",
+    "catalogue_bundled_parts",
+    "add_part_from_files",
+    "part_from_files",
+    "part_refs",
+    "resolve_stack_parts",
+    "stack_from_document",
     "INTERPOLATION_POOL",
     "JointResolution",
     "StackPrediction",

@@ -10,7 +10,7 @@ from typing import Any
 from jointdb._jsonfile import read_json_file
 from jointdb.errors import InputError, NotFoundError
 from jointdb.frf import FRF
-from jointdb.stack import MeasuredSpindle, ModelledSpindle, StackSpec, stack_from_dict
+from jointdb.stack import MeasuredSpindle, ModelledSpindle, StackSpec
 
 #: ``joint_model`` of a campaign / `jointdb identify` file -> model kind of the catalogue
 MODEL_KINDS = {"planar": "spring-damper-planar", "n-point": "n-point-translational", "matrix": "full-matrix"}
@@ -73,24 +73,30 @@ def write_frf_file(path: Path | str, frf: FRF, *, binary: bool = False, round_fr
     return p
 
 
-def load_stack(path: Path | str) -> StackSpec:
+def load_stack(path: Path | str, repo=None) -> StackSpec:
     """Read and validate a stack file; load a measured spindle FRF or a spindle model file it references.
+
+    Catalogued parts it names (``{"part": "name@version"}``) are read from ``repo`` (a store, or a
+    database URL / path; ``None``: the default database), opened only then, and recorded in
+    ``spec.parts`` (:func:`jointdb.usecases.resolve_stack_parts`).
 
     Raises
     ------
     InputError
         Naming the stack file and the field (``stack.json: tool.segments[1].length: must be > 0``).
     NotFoundError
-        Missing stack / spindle files.
+        Missing stack / spindle files, or a part, version or label the database does not hold.
     """
+    from jointdb.usecases._parts import stack_from_document
+
     p = Path(path)
     doc = read_json_file(p, "stack file")
     try:
-        spec = stack_from_dict(doc)
+        spec = stack_from_document(doc, repo)
     except InputError as exc:
         raise InputError(f"{p.name}: {exc}") from None
     sp = spec.spindle
-    if isinstance(sp, MeasuredSpindle):
+    if isinstance(sp, MeasuredSpindle) and sp.frf is None:
         frf = read_frf_file(p.parent / sp.file)
         spec = spec.replace(spindle=MeasuredSpindle(sp.file, sp.node, frf))
     elif isinstance(sp, ModelledSpindle) and isinstance(sp.model, str):
