@@ -91,7 +91,7 @@ def mount(app) -> None:
     """Add the pages, the bundled static files and ``/docs`` (Swagger UI from the package) to
     ``app``. FastAPI's own ``/docs``, ``/docs/oauth2-redirect`` and ``/redoc`` pages load
     their scripts from a CDN with inline code: they are replaced (``/docs``) or removed."""
-    from jointdb.server import web_catalogue  # noqa: F401 - its pages join ``router``
+    from jointdb.server import web_catalogue, web_flow  # noqa: F401 - their pages join ``router``
 
     app.include_router(router)
 

@@ -2,7 +2,7 @@
  *
  * Every <script type="application/json" class="plot-data"> block holds one plot:
  *   {"id", "title", "x": "frequency [Hz]", "y": "|H| [m/N]", "log": true|false, "xlog": false,
- *    "series": [{"label", "x": [...], "y": [...], "colour", "dash": [...], "fill"?: "below"}]}
+ *    "ymin"?: 0, "series": [{"label", "x": [...], "y": [...], "colour", "dash": [...], "fill"?: css colour}]}
  * and is drawn into the element named by its data-target (or a new <div> after it).
  * Drag to zoom (x), double-click or "reset zoom" to zoom out; the legend under the plot
  * reads out the frequency and every series' value at the cursor; buttons switch each axis
@@ -55,7 +55,9 @@
     });
     return {
       width: width, height: spec.height || 300, series: series,
-      scales: {x: {time: false, distr: xlog ? 3 : 1}, y: {distr: ylog ? 3 : 1}},
+      scales: {x: {time: false, distr: xlog ? 3 : 1},
+               y: spec.ymin === undefined || ylog ? {distr: ylog ? 3 : 1}
+                 : {distr: 1, range: function (u, lo, hi) { return [spec.ymin, hi > spec.ymin ? hi * 1.05 : spec.ymin + 1]; }}},
       axes: [{label: spec.x, labelSize: 28, size: 42, values: ticks(xlog)},
              {label: spec.y, labelSize: 28, size: 78, values: ticks(ylog)}],
       cursor: {drag: {x: true, y: false}},
