@@ -8,22 +8,15 @@ folder the test prints."""
 from __future__ import annotations
 
 import json
-import shutil
 
 import pytest
 
 from server_helpers import joint_upload
+from web_helpers import ARGS, CHROMIUM, WIDTH, Shots
 
-CHROMIUM = shutil.which("chromium")
 pytestmark = pytest.mark.skipif(CHROMIUM is None, reason="chromium is not installed (apt-get install chromium; "
                                                          ".ci/run installs it)")
 sync_api = pytest.importorskip("playwright.sync_api", reason="the playwright package is not installed")
-
-ARGS = ["--no-sandbox", "--disable-gpu", "--disable-background-networking", "--disable-component-update",
-        "--disable-sync", "--no-first-run"]
-WIDTH = 1400
-#: Raw keys and Python values a page must never show.
-RAW = ("None", "shank_diameter_m", "taper_diameter_m", "preload_n", "torque_nm", "JOINTDB_", "register_material")
 
 
 @pytest.fixture(scope="module")
@@ -32,27 +25,6 @@ def browser():
         b = p.chromium.launch(executable_path=CHROMIUM, args=ARGS)
         yield b
         b.close()
-
-
-class Shots:
-    """Check a page at 1400 px (no horizontal scroll, no raw values) and keep its screenshot."""
-
-    def __init__(self, page, folder):
-        self.page, self.folder, self.names = page, folder, []
-        folder.mkdir(parents=True, exist_ok=True)
-        print(f"screenshots: {folder}")
-
-    def check(self, name: str) -> str:
-        page = self.page
-        page.wait_for_load_state("networkidle")
-        width = page.evaluate("document.documentElement.scrollWidth")
-        assert width <= WIDTH, f"{name}: the page is {width} px wide at a {WIDTH} px window"
-        text = page.inner_text("body")
-        for raw in RAW:
-            assert raw not in text, f"{name}: shows {raw!r}"
-        page.screenshot(path=str(self.folder / f"{len(self.names):02d}-{name}.png"), full_page=True)
-        self.names.append(name)
-        return text
 
 
 def _catalogue(server, tmp_path):
