@@ -1,5 +1,5 @@
-"""The shop flow in a real browser on a live ``jointdb serve`` (SQLite default, in-process job
-worker): sign in as a writer → upload a bundled campaign (zipped as it lies) → the identify job
+"""The shop flow in a real browser on a live ``jointdb serve`` — on the SQLite default (in-process
+job worker) and on PostgreSQL with a separate ``jointdb worker`` process (procrastinate): sign in as a writer → upload a bundled campaign (zipped as it lies) → the identify job
 completes → the review shows k, c ± σ with units and the verdict, flags the contradiction of the
 upload form → catalogue → design a stack from catalogued parts → the nearest joints (the one just
 catalogued among them) → predict as a job → lobes as a job → downloads. Every page is checked at
@@ -46,7 +46,33 @@ def _prepare(server) -> None:
             usecases.catalogue_campaign(repo, root / "campaigns" / camp / "campaign.json", author="writer-owner")
 
 
-@pytest.mark.parametrize("server", ["sqlite"], indirect=True)
+@pytest.fixture(scope="module", params=["sqlite", "postgresql"])
+def server(request, tmp_path_factory):
+    """A live deployment as tests/server/test_server_jobs.py starts it (PostgreSQL: with a worker process)."""
+    from server_helpers import _pg_schema, drop_pg_schema, pg_base_url
+    from test_server_jobs import Deployment
+
+    from jointdb.store import upgrade
+
+    tmp = tmp_path_factory.mktemp(f"shop-{request.param}")
+    cleanup = None
+    if request.param == "sqlite":
+        db = f"sqlite:///{tmp / 'j.sqlite'}"
+    else:
+        engine, schema, db = _pg_schema(pg_base_url())
+        cleanup = (engine, schema)
+    try:
+        upgrade(db)
+        dep = Deployment(request.param, db, tmp)
+        dep.server.tokens = dep.tokens
+        yield dep.server
+        dep.stop()
+    finally:
+        if cleanup:
+            drop_pg_schema(*cleanup)
+            cleanup[0].dispose()
+
+
 def test_shop_flow_in_a_browser(server, tmp_path):
     _prepare(server)
     archive = tmp_path / f"{UPLOADED}.zip"
