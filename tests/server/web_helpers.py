@@ -1,5 +1,6 @@
 """Helpers of the browser tests (imported by name): chromium for Playwright, and the 1400-px check
-of a page (no horizontal scroll, no raw value such as "None", a screenshot in a named folder)."""
+of a page (no horizontal scroll, no raw value such as "None", a screenshot in a named folder: under
+the test's tmp_path, or under ``$JOINTDB_WEB_SCREENSHOTS`` when set)."""
 
 from __future__ import annotations
 
@@ -18,6 +19,11 @@ class Shots:
     """Check a page at 1400 px (no horizontal scroll, no raw values) and keep its screenshot."""
 
     def __init__(self, page, folder):
+        import os
+        from pathlib import Path
+
+        if os.environ.get("JOINTDB_WEB_SCREENSHOTS"):  # keep them (e.g. for docs/images/web)
+            folder = Path(os.environ["JOINTDB_WEB_SCREENSHOTS"]) / folder.name
         self.page, self.folder, self.names = page, folder, []
         folder.mkdir(parents=True, exist_ok=True)
         print(f"screenshots: {folder}")
