@@ -66,6 +66,7 @@ def test_catalogue_pages_in_a_browser(server, browser, tmp_path):
     page = browser.new_page(viewport={"width": WIDTH, "height": 900})
     errors = []
     page.on("pageerror", lambda e: errors.append(str(e)))
+    page.on("console", lambda m: errors.append(m.text) if m.type == "error" and "status of 422" not in m.text else None)
     shots = Shots(page, tmp_path / "screenshots")
     page.goto(f"{server.url}/")
     assert page.url.endswith("/ui/signin")  # / leads to the catalogue, which needs a token by default

@@ -82,6 +82,7 @@ def test_shop_flow_in_a_browser(server, tmp_path):
         page = browser.new_page(viewport={"width": WIDTH, "height": 900}, accept_downloads=True)
         errors: list[str] = []
         page.on("pageerror", lambda e: errors.append(str(e)))
+        page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)  # CSP refusals too
         shots = Shots(page, tmp_path / "shop-flow-screenshots")
         page.goto(f"{server.url}/")
         page.fill("#token", server.tokens["writer"])
