@@ -28,6 +28,10 @@ from jointdb.errors import JointdbError
 MODULES = ("_models", "_coupling", "_store", "_parts", "_db", "_predict", "_stability", "_diagnose", "_demo",
            "_examples", "_campaign", "_plan", "_serve", "_worker")
 
+#: Commands that use the database itself and have no HTTP counterpart: an explicit ``--server`` is refused
+#: (``joints export|import`` refuse it themselves; catalogue, query, joints ..., predict use the server).
+LOCAL_ONLY = ("db", "tokens", "serve", "worker", "demo")
+
 #: Every top-level command as ``jointdb --help`` lists it: the module that registers it and
 #: the first paragraph of its help.
 COMMANDS: dict[str, tuple[str, str]] = {
@@ -56,13 +60,13 @@ COMMANDS: dict[str, tuple[str, str]] = {
     ),
     "plan": ("_plan", "Rank candidate tap points by the expected joint-parameter variance (Fisher information)."),
     "serve": ("_serve", "Run the HTTP API and web catalogue (FastAPI + uvicorn) over the joint database."),
+    "worker": ("_worker", "Run jobs of the HTTP service (predict, lobes, diagnose, identify) from the PostgreSQL queue."),
     "joints": ("_store", "List, inspect, label, deprecate, diff, export and import catalogued joints."),
     "keys": ("_store", "Ed25519 keys to sign exported bundles and verify imported ones."),
     "parts": ("_parts", "Catalogued stack parts (spindles, holders, tools): add, list, show, label."),
     "db": ("_db", "Database administration: migrations, integrity check, garbage collection."),
     "campaign": ("_campaign", "Scaffold a measurement campaign from a folder of files, or check one."),
     "tokens": ("_serve", "API tokens of the HTTP service: create, list, revoke."),
-    "worker": ("_worker", "Run jobs of the HTTP service (predict, lobes, diagnose, identify) from the PostgreSQL queue."),
 }
 
 
@@ -85,6 +89,7 @@ def _new_app() -> typer.Typer:
 
     @app_.callback()
     def _root(
+        ctx: typer.Context,
         verbose: int = typer.Option(0, "-v", "--verbose", count=True, show_default=False,
                                     help="More log messages on stderr (-v: info, -vv: debug)."),
         quiet: bool = typer.Option(False, "-q", "--quiet", help="Only warnings and errors on stderr; no progress."),
@@ -107,6 +112,12 @@ def _new_app() -> typer.Typer:
             import os
 
             os.environ["JOINTDB_SERVER"] = server
+            command = ctx.invoked_subcommand
+            if command in LOCAL_ONLY:
+                from jointdb.errors import InputError
+
+                raise InputError(f"`jointdb {command}` does not work over --server: it needs the database itself "
+                                 "(give --db URL, or run it where the database is)")
 
     return app_
 

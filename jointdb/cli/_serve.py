@@ -33,7 +33,10 @@ def serve(
     """Run the HTTP API and web catalogue (FastAPI + uvicorn) over the joint database.
 
     Tokens: `jointdb tokens create --name NAME --role writer`. PostgreSQL: run
-    `jointdb db upgrade --db URL` first. Stops gracefully on SIGTERM/SIGINT (requests
+    `jointdb db upgrade --db URL` first. Jobs (POST /api/v1/jobs/...: identify,
+    predict, lobes, diagnose): on SQLite this server runs them itself (threads:
+    $JOINTDB_JOB_THREADS, default 1); on PostgreSQL it only queues them and one or
+    more `jointdb worker` processes (any host, same database) run them. Stops gracefully on SIGTERM/SIGINT (requests
     in flight finish; a write either commits whole or not at all).
     Example: jointdb serve --db postgresql+psycopg://host/jointdb --blobs /srv/blobs --workers 4 --port 8000
     """

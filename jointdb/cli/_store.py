@@ -75,6 +75,21 @@ def _repo(db: str | None, blobs: Path | None = None, *, create: bool = False):
     return Repository(db, blobs=blobs, auto_create=None if create else False)
 
 
+def refuse_server(db: str | None, command: str) -> None:
+    """A command that needs the database itself says so over ``--server`` (instead of using a local one)."""
+    import os
+
+    if db is None and os.environ.get("JOINTDB_SERVER"):
+        raise InputError(f"`jointdb {command}` does not work over --server (the API has no such call); "
+                         "give --db URL (run it where the database is)")
+
+
+def _local_repo(db: str | None, blobs: Path | None, command: str, *, create: bool = False):
+    """:func:`_repo` for a command that needs the database itself: refused over ``--server``."""
+    refuse_server(db, command)
+    return _repo(db, blobs, create=create)
+
+
 def _check_output(path: Path | None) -> None:
     """Refuse an output file whose directory does not exist before any work (or warning) is done."""
     if path is not None and not path.parent.is_dir():
@@ -419,7 +434,7 @@ def export(
         from jointdb.store._signing import load_private_key
 
         key = load_private_key(sign)  # before anything is read or written
-    counts = _repo(db, blobs).export(names or None, bundle, sign_key=key)
+    counts = _local_repo(db, blobs, "joints export").export(names or None, bundle, sign_key=key)
     emit({"bundle": str(bundle), **counts}, as_json=as_json)
 
 
@@ -445,6 +460,7 @@ def import_(
     from jointdb.store._signing import load_public_key
 
     keys = [load_public_key(p) for p in trust or []]
+    refuse_server(db, "joints import")
     check_db_target(db, create=True)  # a bad --db is reported before the bundle is read
     verified = read_bundle(bundle, keys, require_signature)
     summary = _repo(db, blobs, create=True).import_(verified, author=author, force=force)

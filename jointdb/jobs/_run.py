@@ -36,11 +36,11 @@ class Progress:
             raise Cancelled("cancelled while running")
 
 
-def tip_frf_input(body: dict, field: str = "frf"):
-    """An FRF sent as JSON, with a field-named error for any shape problem (never a numpy message)."""
+def tip_frf_input(data, field: str = "frf"):
+    """An FRF sent as JSON (``data``, the request's ``field``), with a field-named error for any shape
+    problem (never a numpy message)."""
     from jointdb.io import frf_from_json
 
-    data = body.get(field)
     if not isinstance(data, dict):
         raise InputError(f"{field}: an FRF object (freq_hz, outputs, inputs, real, imag) is needed")
     for part in ("real", "imag"):
@@ -49,7 +49,11 @@ def tip_frf_input(body: dict, field: str = "frf"):
         except (ValueError, TypeError):
             raise InputError(f"{field}.{part}: must be a full (n_freq, n_outputs, n_inputs) array of numbers "
                              "(rows of unequal length were given)") from None
-    return frf_from_json(data)
+    try:
+        return frf_from_json(data)
+    except InputError as exc:  # io names the field "frf"; the request may have called it otherwise
+        text = str(exc)
+        raise InputError(field + text[3:] if text.startswith("frf") and field != "frf" else text) from None
 
 
 def run_lobes(payload: dict, repo, progress: Progress) -> tuple[dict, None]:
@@ -58,7 +62,7 @@ def run_lobes(payload: dict, repo, progress: Progress) -> tuple[dict, None]:
     if payload.get("joint") is not None:
         raise InputError("joint: a catalogued joint FRF describes an interface, not a tool tip; lobes need the "
                          "tool-tip FRF of a stack (run a predict job and send its tip_frf as frf)")
-    frf = tip_frf_input(payload)
+    frf = tip_frf_input(payload.get("frf"))
     keys = ("op", "method", "teeth", "kt", "kr", "kf", "immersion", "up", "rpm_min", "rpm_max", "n_speeds",
             "refine", "intervals", "modes", "band", "max_order", "cross_terms")
     args = {k: payload[k] for k in keys if payload.get(k) is not None}
@@ -97,8 +101,7 @@ def run_diagnose(payload: dict, repo, progress: Progress) -> tuple[dict, None]:
     recs = payload.get("recordings") or []
     if not isinstance(recs, list) or not recs:
         raise InputError("recordings: give one or more recorded FRFs (JSON), one per excitation level")
-    ms = [Measurement(tip_frf_input({"frf": r}, f"recordings[{i}]") if isinstance(r, dict) else
-                      tip_frf_input({}, f"recordings[{i}]")) for i, r in enumerate(recs)]
+    ms = [Measurement(tip_frf_input(r, f"recordings[{i}]")) for i, r in enumerate(recs)]
     levels = payload.get("levels") or []
     if levels and len(levels) != len(ms):
         raise InputError(f"levels: {len(levels)} values for {len(ms)} recordings")

@@ -104,27 +104,10 @@ def submit_predict(body: PredictIn, request: Request, response: Response, who=re
 @router.post("/jobs/lobes", status_code=202, responses=_ACCEPTED, summary="Stability lobes (job; ZOA or SD)")
 def submit_lobes(body: LobesJobIn, request: Request, response: Response, who=reader) -> dict[str, Any]:
     """Body as ``POST /api/v1/lobes``; the result holds summary, rows, best speeds and notes."""
+    from jointdb.server.routes_query import check_lobes
+
     payload = check_lobes(body)
     return _accepted(response, queue(request).submit("lobes", who.name, payload))
-
-
-def check_lobes(body: LobesJobIn) -> dict[str, Any]:
-    """The checks a lobes request gets before any work (field-named 422s)."""
-    from jointdb.jobs._run import tip_frf_input
-
-    payload = body.model_dump(mode="json")
-    if body.joint is not None or body.frf is None:
-        raise InputError("joint: a catalogued joint FRF describes an interface, not a tool tip; lobes need the "
-                         "tool-tip FRF of a stack as frf (run a predict job and send its tip_frf)"
-                         if body.joint is not None else "frf: give the tool-tip FRF (JSON)")
-    tip_frf_input(payload)
-    if not body.rpm_min < body.rpm_max:
-        raise InputError("rpm_min must be < rpm_max")
-    if body.op == "milling" and (body.kt is None or body.kr is None):
-        raise InputError("kt, kr: milling needs both cutting coefficients (N/m²)")
-    if body.op == "turning" and body.kf is None:
-        raise InputError("kf: turning needs the cutting coefficient (N/m²)")
-    return payload
 
 
 @router.post("/jobs/diagnose", status_code=202, responses=_ACCEPTED, summary="Diagnose a model against recordings (job)")

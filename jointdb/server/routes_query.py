@@ -77,7 +77,25 @@ def lobes(body: LobesJobIn, _who=reader) -> dict[str, Any]:
     and said so in ``notes``. Refinement (``refine`` rounds) as the CLI. SD can take minutes: prefer
     ``POST /api/v1/jobs/lobes``."""
     from jointdb.jobs._run import run_lobes
-    from jointdb.server.routes_jobs import check_lobes
 
     result, _ = run_lobes(check_lobes(body), None, lambda fraction, message: None)
     return result
+
+
+def check_lobes(body: LobesJobIn) -> dict[str, Any]:
+    """The checks a lobes request gets before any work (field-named 422s)."""
+    from jointdb.jobs._run import tip_frf_input
+
+    payload = body.model_dump(mode="json")
+    if body.joint is not None or body.frf is None:
+        raise InputError("joint: a catalogued joint FRF describes an interface, not a tool tip; lobes need the "
+                         "tool-tip FRF of a stack as frf (run a predict job and send its tip_frf)"
+                         if body.joint is not None else "frf: give the tool-tip FRF (JSON)")
+    tip_frf_input(payload.get("frf"))
+    if not body.rpm_min < body.rpm_max:
+        raise InputError("rpm_min must be < rpm_max")
+    if body.op == "milling" and (body.kt is None or body.kr is None):
+        raise InputError("kt, kr: milling needs both cutting coefficients (N/m²)")
+    if body.op == "turning" and body.kf is None:
+        raise InputError("kf: turning needs the cutting coefficient (N/m²)")
+    return payload

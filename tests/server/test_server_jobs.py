@@ -134,7 +134,8 @@ def test_predict_and_sd_lobes_jobs_equal_the_cli(deployment, tmp_path):
 
     stack = _stack()
     with deployment.client() as c:
-        submit(c, "predict", {"stack": stack})  # the process's first request opens its connections
+        warm, _ = submit(c, "predict", {"stack": stack})  # the process's first request opens its connections
+        wait(c, warm)
         pid, t_predict = submit(c, "predict", {"stack": stack})
         job = wait(c, pid)
         assert job["state"] == "succeeded", job
@@ -150,6 +151,8 @@ def test_predict_and_sd_lobes_jobs_equal_the_cli(deployment, tmp_path):
         lid, t_lobes = submit(c, "lobes", body)
         job = wait(c, lid)
         assert job["state"] == "succeeded", job
+        print(f"\n{deployment.backend}: POST /jobs/predict {t_predict * 1e3:.1f} ms, POST /jobs/lobes (SD) "
+              f"{t_lobes * 1e3:.1f} ms")
         assert t_predict < 0.2 and t_lobes < 0.2, (t_predict, t_lobes)
         path = tmp_path / "tip.h5"
         write_frf_hdf5(path, frf_from_json(tip), {})
@@ -306,3 +309,34 @@ def test_cli_predict_over_server_equals_the_database(deployment, tmp_path):
     assert runs["server"]["joints"] == runs["db"]["joints"]
     assert any(j.get("joint", "").startswith("TH-job") for j in runs["server"]["joints"]), runs["server"]["joints"]
     assert runs["server"]["prediction"] == runs["db"]["prediction"]
+
+
+def test_diagnose_job_equals_the_cli(deployment, tmp_path):
+    """A diagnose job on a seeded bench case (a compliant joint hidden in the recording) gives the
+    verdict and the fitted values of `jointdb diagnose --json` on the same model and recording."""
+    if deployment.backend != "sqlite":
+        pytest.skip("one backend is enough for this (about a minute per run); the queue is tested on both")
+    from jointdb.diagnose_bench import generate_case
+    from jointdb.io import frf_json, write_uff58
+
+    from jointdb.io import read_frf_uff58
+
+    case = generate_case("joint_compliance", 1000)
+    write_uff58(tmp_path / "rec.uff", case.recordings[0].frf)
+    rec = read_frf_uff58(tmp_path / "rec.uff")  # the job gets exactly what the CLI reads
+    with deployment.client() as c:
+        jid, elapsed = submit(c, "diagnose", {"model": case.model, "recordings": [frf_json(rec)],
+                                              "combinations": False})
+        job = wait(c, jid, timeout=400)
+    assert job["state"] == "succeeded", job
+    (tmp_path / "model.json").write_text(json.dumps(case.model))
+    cli = subprocess.run([sys.executable, "-m", "jointdb", "diagnose", str(tmp_path / "model.json"),
+                          str(tmp_path / "rec.uff"), "--no-combinations", "--json"], capture_output=True, text=True,
+                         cwd=ROOT, env={**os.environ, "OPENBLAS_NUM_THREADS": "1"})
+    assert cli.returncode == 0, cli.stderr
+    want = json.loads(cli.stdout)
+    got = job["result"]
+    assert got["verdict"] == want["verdict"] and got["explained"] == want["explained"]
+    assert got["best"]["name"] == want["best"]["name"]
+    for key, value in want["best"]["values"].items():
+        assert got["best"]["values"][key] == pytest.approx(value, rel=1e-6), key
