@@ -248,8 +248,8 @@ class RemoteRepository:
     def get_part(self, name, version=None, label=None):
         if version is not None and label is not None:
             raise InputError("give a version or a label, not both")
-        if version is None and label is None:
-            return self.part_history(name)[-1]
+        if version is None and label is None:  # the latest: the newest entry of the versions list
+            version = int(self._all(f"/parts/{self._name(name)}")[-1]["version"])
         which = str(int(version)) if version is not None else self._name(label)
         return part_from_json(self._call("GET", f"/parts/{self._name(name)}/{which}"))
 

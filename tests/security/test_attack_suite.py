@@ -27,6 +27,7 @@ from urllib.parse import quote
 import httpx
 import pytest
 from security_attacks import auth, http_oddities, json_bodies, path_names, query_params
+from security_parts import parts
 from security_run import Result, first, leaks, log_problems, per_class, response_leaks, run
 from security_uploads import archives, campaign_paths, existence_oracle
 from security_web import sign_in, web
@@ -50,7 +51,7 @@ def attacked(target) -> Outcome:
     cookie = sign_in(target.url, target.tokens["writer"])
     rng = random.Random(20)
     attacks = (http_oddities(target) + query_params(target) + path_names(target) + web(target, cookie)
-               + auth(target) + json_bodies(target, rng) + archives(target) + campaign_paths(target))
+               + auth(target) + json_bodies(target, rng) + parts(target) + archives(target) + campaign_paths(target))
     results = run(target, attacks)
     pairs = existence_oracle(target)
     answered = run(target, [x for a, b, _, _ in pairs for x in (a, b)])
