@@ -188,3 +188,37 @@ def _download(page, link: str, name: str, tmp_path):
     dl.value.save_as(str(path))
     assert path.stat().st_size > 100, name
     return path
+
+
+def test_upload_of_the_individual_files(server, tmp_path):
+    """The campaign's files chosen one by one (no archive): the page packs them (a stored zip made in
+    the browser, the campaign's ../../models paths turned into the files' names) and the identify
+    job reads them as the archive would."""
+    if server.db.startswith("postgresql"):
+        pytest.skip("the packing is the browser's; one backend is enough")
+    name = "th-er32-steel-040nm"
+    base = resources.files("jointdb").joinpath("data", "catalogue")
+    with resources.as_file(base) as root:
+        camp = json.loads((root / "campaigns" / name / "campaign.json").read_text())
+        models = sorted({s["model"].rsplit("/", 1)[-1] for s in camp["substructures"].values()})
+        files = [root / "campaigns" / name / "campaign.json", root / "campaigns" / name / "assembly.uff",
+                 *(root / "models" / m for m in models)]
+        with sync_api.sync_playwright() as p:
+            browser = p.chromium.launch(executable_path=CHROMIUM, args=ARGS)
+            page = browser.new_page(viewport={"width": WIDTH, "height": 900})
+            page.goto(f"{server.url}/ui/signin")
+            page.fill("#token", server.tokens["writer"])
+            page.click("#signin")
+            page.goto(f"{server.url}/ui/upload")
+            page.set_input_files("#u-files", [str(f) for f in files])
+            page.click("#u-submit")
+            page.wait_for_url("**/ui/jobs/*")
+            wait_visible(page, "#review", "#job-error")
+            assert page.input_value("#c-name") == name and page.input_value("#c-torque") == "40"
+            assert page.inner_text("#review-contradictions") == ""
+            page.goto(f"{server.url}/ui/upload")  # without the campaign file: said, nothing sent
+            page.set_input_files("#u-files", [str(f) for f in files[1:]])
+            page.click("#u-submit")
+            page.wait_for_selector("#u-error:not([hidden])")
+            assert "campaign file" in page.inner_text("#u-error") and page.url.endswith("/ui/upload")
+            browser.close()

@@ -125,19 +125,104 @@
   }
 
   /* ---------------------------------------------------------------- upload */
+  var CRC = (function () {
+    var t = [];
+    for (var n = 0; n < 256; n++) {
+      var c = n;
+      for (var k = 0; k < 8; k++) c = c & 1 ? 0xEDB88320 ^ (c >>> 1) : c >>> 1;
+      t.push(c >>> 0);
+    }
+    return t;
+  })();
+
+  function crc32(bytes) {
+    var c = 0xFFFFFFFF;
+    for (var i = 0; i < bytes.length; i++) c = CRC[(c ^ bytes[i]) & 0xFF] ^ (c >>> 8);
+    return (c ^ 0xFFFFFFFF) >>> 0;
+  }
+
+  function zip(entries) {  // [{name, bytes}] -> a stored (uncompressed) .zip as a Blob
+    var parts = [], central = [], offset = 0, enc = new TextEncoder();
+    function head(size) { var b = new DataView(new ArrayBuffer(size)); return b; }
+    entries.forEach(function (e) {
+      var name = enc.encode(e.name), crc = crc32(e.bytes), n = e.bytes.length;
+      var l = head(30);
+      [[0, 0x04034b50, 4], [4, 20, 2], [6, 0x0800, 2], [8, 0, 2], [10, 0, 2], [12, 0x21, 2], [14, crc, 4],
+       [18, n, 4], [22, n, 4], [26, name.length, 2], [28, 0, 2]].forEach(function (f) {
+        if (f[2] === 4) l.setUint32(f[0], f[1], true); else l.setUint16(f[0], f[1], true);
+      });
+      var c = head(46);
+      [[0, 0x02014b50, 4], [4, 20, 2], [6, 20, 2], [8, 0x0800, 2], [10, 0, 2], [12, 0, 2], [14, 0x21, 2], [16, crc, 4],
+       [20, n, 4], [24, n, 4], [28, name.length, 2], [30, 0, 2], [32, 0, 2], [34, 0, 2], [36, 0, 2], [38, 0, 4],
+       [42, offset, 4]].forEach(function (f) {
+        if (f[2] === 4) c.setUint32(f[0], f[1], true); else c.setUint16(f[0], f[1], true);
+      });
+      parts.push(l, name, e.bytes);
+      central.push(c, name);
+      offset += 30 + name.length + n;
+    });
+    var size = central.reduce(function (s, x) { return s + x.byteLength; }, 0), end = head(22);
+    [[0, 0x06054b50, 4], [8, entries.length, 2], [10, entries.length, 2], [12, size, 4], [16, offset, 4]]
+      .forEach(function (f) { if (f[2] === 4) end.setUint32(f[0], f[1], true); else end.setUint16(f[0], f[1], true); });
+    return new Blob(parts.concat(central, [end]), {type: "application/zip"});
+  }
+
+  function flatten(value, names) {  // a campaign's file paths -> the uploaded files' own names
+    if (typeof value === "string") {
+      var base = value.split(/[\\/]/).pop();
+      return (value !== base && names.indexOf(base) >= 0) ? base : value;
+    }
+    if (Array.isArray(value)) return value.map(function (v) { return flatten(v, names); });
+    if (value && typeof value === "object") {
+      var out = {};
+      Object.keys(value).forEach(function (k) { out[k] = flatten(value[k], names); });
+      return out;
+    }
+    return value;
+  }
+
+  function archiveOf(files) {  // individual files (a campaign file among them) -> a campaign archive
+    var names = files.map(function (f) { return f.name; });
+    return Promise.all(files.map(function (f) { return f.arrayBuffer(); })).then(function (buffers) {
+      var found = false;
+      var entries = files.map(function (f, i) {
+        var bytes = new Uint8Array(buffers[i]);
+        if (/\.json$/i.test(f.name)) {
+          try {
+            var doc = JSON.parse(new TextDecoder().decode(bytes));
+            if (doc && doc.format === "jointdb-campaign/1") {
+              found = true;
+              bytes = new TextEncoder().encode(JSON.stringify(flatten(doc, names), null, 1));
+            }
+          } catch (err) { /* not JSON: a model file is checked by the server */ }
+        }
+        return {name: f.name, bytes: bytes};
+      });
+      if (!found) {
+        throw new Error("none of the files is a campaign file (format jointdb-campaign/1): add it, or write one "
+                        + "with `jointdb campaign init` on the folder");
+      }
+      return zip(entries);
+    });
+  }
+
   function upload() {
     $("upload-form").addEventListener("submit", function (ev) {
       ev.preventDefault();
       $("u-error").hidden = true;
-      var file = $("u-file").files[0];
-      var fd = new FormData();
+      var file = $("u-file").files[0], files = Array.prototype.slice.call($("u-files").files);
+      var fd = new FormData(), ready;
       try {
-        fd.append("file", file, file.name);
+        if (!file && !files.length) throw new Error("choose a campaign archive (.zip) or the campaign's files");
+        ready = file ? Promise.resolve(file) : archiveOf(files);
         if ($("u-name").value.trim()) fd.append("name", $("u-name").value.trim());
         fd.append("conditions", JSON.stringify(conditionsFrom("u")));
       } catch (err) { fail("u-error")(err); return; }
       $("u-submit").disabled = true;
-      api("POST", "/api/v1/jobs/identify", fd).then(function (job) {
+      ready.then(function (blob) {
+        fd.append("file", blob, file ? file.name : "campaign.zip");
+        return api("POST", "/api/v1/jobs/identify", fd);
+      }).then(function (job) {
         window.location.assign("/ui/jobs/" + encodeURIComponent(job.id));
       }, function (err) { $("u-submit").disabled = false; fail("u-error")(err); });
     });
