@@ -147,6 +147,14 @@ def _design_predict_lobes(page, server, shots, tmp_path) -> None:
     first = page.inner_text("#nearest-th tr:nth-child(2)")
     assert "th-shop-120nm" in first  # 100 N·m: the joint just catalogued is the nearest
     assert "hs-hsk-a63-18kn" in page.inner_text("#nearest-hs tr:nth-child(2)")  # 20 kN drawbar force
+    page.check("#d-interpolate")  # the interpolation's weights: 18 and 24 kN bracket 20 kN
+    page.click("#d-nearest")
+    page.wait_for_selector("#nearest-hs th:has-text('weight')")
+    weights = {r.split("\t")[1]: float(r.split("\t")[3]) for r in page.inner_text("#nearest-hs table").splitlines()[1:]}
+    assert weights["hs-hsk-a63-12kn v1"] == 0 and 0 < weights["hs-hsk-a63-24kn v1"] < weights["hs-hsk-a63-18kn v1"]
+    assert abs(sum(weights.values()) - 1) < 2e-3, weights
+    shots.check("design-nearest")
+    page.uncheck("#d-interpolate")
     page.click("#d-predict")
     wait_visible(page, "#p-result", "#d-error")
     joints = page.inner_text("#p-joints")
