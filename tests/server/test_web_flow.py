@@ -15,6 +15,7 @@ from importlib import resources
 
 import pytest
 
+from test_server_jobs import deployment  # noqa: F401 - the live deployment fixture (both backends)
 from web_helpers import ARGS, CHROMIUM, WIDTH, Shots, wait_visible
 
 pytestmark = pytest.mark.skipif(CHROMIUM is None, reason="chromium is not installed (apt-get install chromium)")
@@ -46,31 +47,12 @@ def _prepare(server) -> None:
             usecases.catalogue_campaign(repo, root / "campaigns" / camp / "campaign.json", author="writer-owner")
 
 
-@pytest.fixture(scope="module", params=["sqlite", "postgresql"])
-def server(request, tmp_path_factory):
-    """A live deployment as tests/server/test_server_jobs.py starts it (PostgreSQL: with a worker process)."""
-    from server_helpers import _pg_schema, drop_pg_schema, pg_base_url
-    from test_server_jobs import Deployment
-
-    from jointdb.store import upgrade
-
-    tmp = tmp_path_factory.mktemp(f"shop-{request.param}")
-    cleanup = None
-    if request.param == "sqlite":
-        db = f"sqlite:///{tmp / 'j.sqlite'}"
-    else:
-        engine, schema, db = _pg_schema(pg_base_url())
-        cleanup = (engine, schema)
-    try:
-        upgrade(db)
-        dep = Deployment(request.param, db, tmp)
-        dep.server.tokens = dep.tokens
-        yield dep.server
-        dep.stop()
-    finally:
-        if cleanup:
-            drop_pg_schema(*cleanup)
-            cleanup[0].dispose()
+@pytest.fixture(scope="module")
+def server(deployment):
+    """The live deployment of the jobs tests: SQLite with the in-process worker, PostgreSQL with a
+    separate ``jointdb worker`` process."""
+    deployment.server.tokens = deployment.tokens
+    return deployment.server
 
 
 def test_shop_flow_in_a_browser(server, tmp_path):
