@@ -48,6 +48,19 @@ def _facets(versions: list[dict]) -> dict[str, list[str]]:
             "combos": sorted(c for c in combos if c)}
 
 
+def _catalogue_facets(r) -> dict[str, list[str]]:
+    return _facets([version_json(v) for v in r.list_page(limit=None).items])
+
+
+def _unknown_material(chosen: list[str], facets: dict) -> str | None:
+    """A friendly message for a material no catalogued joint has (None when all are known)."""
+    unknown = [m for m in chosen if m not in facets["materials"]]
+    if not unknown:
+        return None
+    return (f"no catalogued joint has the material {unknown[0][:40]!r}; choose among "
+            f"{', '.join(facets['materials']) or 'none yet'}")
+
+
 def _range(p, key: str) -> tuple[float | None, float | None]:
     label, unit, factor = RANGES[key]
     lo, hi = (_float(p.get(f"{key}_{end}"), f"{label} {end} [{unit}]") for end in ("min", "max"))
@@ -73,10 +86,8 @@ def _in(x: float | None, lo: float | None, hi: float | None) -> bool:
 def _filtered(r, p, facets: dict) -> tuple[list[dict], str | None]:
     """The versions that pass the form's filters, and a message for a value not in the catalogue."""
     chosen = [m for m in p.getlist("material") if m.strip()]
-    unknown = [m for m in chosen if m not in facets["materials"]]
-    if unknown:
-        return [], (f"no catalogued joint has the material {unknown[0][:40]!r}; choose among "
-                    f"{', '.join(facets['materials']) or 'none yet'}")
+    if _unknown_material(chosen, facets):
+        return [], _unknown_material(chosen, facets)
     torque, force, diameter = _range(p, "torque"), _range(p, "force"), _range(p, "diameter")
     state = p.get("state") or ""
     page = r.list_page(p.get("type") or None, materials=chosen, label=p.get("label") or None,
@@ -95,7 +106,7 @@ def _filtered(r, p, facets: dict) -> tuple[list[dict], str | None]:
 def joints(request: Request):
     _reader(request)
     r, p = request.app.state.repo, request.query_params
-    facets = _facets([version_json(v) for v in r.list_page(limit=None).items])
+    facets = _catalogue_facets(r)
     f = {k: p.get(k, "") for k in ("type", "taper", "label", "state", "q", "torque_min", "torque_max", "force_min",
                                     "force_max", "diameter_min", "diameter_max")}
     f["material"] = p.getlist("material")
@@ -338,17 +349,16 @@ def nearest(request: Request):
 
     _reader(request)
     r, p = request.app.state.repo, request.query_params
-    facets = _facets([version_json(v) for v in r.list_page(limit=None).items])
+    facets = _catalogue_facets(r)
     q = {k: p.get(k, d) for k, d in (("joint_type", ""), ("torque_nm", ""), ("force_kn", ""), ("diameter_mm", ""),
                                      ("diameter_key", "shank_diameter_m"), ("k", "3"))}
     q["materials"] = p.get("materials", "")
     matches, notes, error = None, [], None
     if q["joint_type"]:
-        unknown = [m.strip() for m in q["materials"].split("+") if m.strip() not in facets["materials"] + [""]]
+        unknown = _unknown_material([m.strip() for m in q["materials"].split("+") if m.strip()], facets)
         try:
             if unknown:
-                raise InputError(f"no catalogued joint has the material {unknown[0][:40]!r}; choose among "
-                                 f"{', '.join(facets['materials'])}")
+                raise InputError(unknown)
             found, notes = run_nearest(r, _nearest_body(q, p))
             notes = [wf.humanise_text(n) for n in notes]
             matches = [(match_json(m), _row(version_json(m.version)), per_condition_text(m.per_condition)) for m in found]
