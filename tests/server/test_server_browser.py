@@ -134,6 +134,9 @@ def test_catalogue_pages_in_a_browser(server, browser, tmp_path):
 
     _label_and_deprecate(page, server, shots)
 
+    page.goto(f"{server.url}/ui/nearest?joint_type=tool-holder&materials=stel&torque_nm=40")  # a typo: the form stays
+    assert "'stel'" in page.inner_text("#error") and page.input_value("#q-torque") == "40"
+    shots.check("nearest-unknown-material")
     page.goto(f"{server.url}/ui/nearest")
     shots.check("nearest-form")
     page.select_option("#q-type", "holder-spindle")
