@@ -136,6 +136,8 @@ def _provenance_rows(v: dict) -> list[tuple[str, str]]:
             ("software", f"jointdb {p.get('software_version') or '–'}"), ("catalogued", v["created_at"][:19].replace("T", " ") + " UTC")]
     if params.get("campaign"):
         rows.append(("campaign", str(params["campaign"])))
+    if params.get("job"):
+        rows.append(("identify job", str(params["job"])))
     iface = params.get("interface") or {}
     if iface:
         rows.append(("interface", f"{iface.get('a')} {' '.join(iface.get('a_dofs', []))} ↔ "

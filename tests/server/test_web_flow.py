@@ -115,6 +115,7 @@ def _upload_and_review(page, server, shots, archive) -> str:
     assert "th-shop-120nm" in page.inner_text("#joint-name") and "reviewed" in page.inner_text("#joint-name")
     assert "clamping torque\t120 N·m" in page.inner_text("#conditions")
     assert server.repo().get("th-shop-120nm").provenance.parameters["job"] == job_id
+    assert f"identify job\t{job_id}" in page.inner_text("#provenance")
     shots.check("catalogued-joint")
     return job_id
 
