@@ -19,7 +19,7 @@ import time
 from sqlalchemy import select, update
 
 from jointdb.jobs._execute import execute
-from jointdb.jobs._table import JOBS, JobRows, ensure_table, now, worker_name
+from jointdb.jobs._table import JOBS, JobRows, RowReads, ensure_table, now, worker_name
 
 log = logging.getLogger("jointdb.jobs")
 STALE_AFTER_S = 120.0
@@ -27,7 +27,7 @@ RECOVER_EVERY_S = 10.0
 HEARTBEAT_EVERY_S = 5.0
 
 
-class LocalQueue:
+class LocalQueue(RowReads):
     """A :class:`jointdb.jobs.JobQueue` run by threads of this process (SQLite).
 
     Parameters
@@ -56,12 +56,6 @@ class LocalQueue:
         job_id = self.rows.insert(kind, owner, payload, upload)
         self._wake.set()
         return job_id
-
-    def get(self, job_id: str):
-        return self.rows.row(job_id)
-
-    def list(self, owner: str | None, kind: str | None = None, state: str | None = None):
-        return self.rows.list(owner, kind, state)
 
     def cancel(self, job_id: str) -> str:
         return self.rows.request_cancel(job_id)

@@ -23,7 +23,7 @@ import logging
 from sqlalchemy import text
 
 from jointdb.errors import InputError
-from jointdb.jobs._table import JobRows, ensure_table, one_line, worker_name
+from jointdb.jobs._table import JobRows, RowReads, ensure_table, one_line, worker_name
 
 log = logging.getLogger("jointdb.jobs")
 TASK = "jointdb.run_job"
@@ -103,7 +103,7 @@ def make_app(url: str, repo=None, sync: bool = False):
     return app
 
 
-class ProcrastinateQueue:
+class ProcrastinateQueue(RowReads):
     """A :class:`jointdb.jobs.JobQueue` whose jobs run in ``jointdb worker`` processes (PostgreSQL)."""
 
     backend = "procrastinate"
@@ -130,12 +130,6 @@ class ProcrastinateQueue:
             raise
         self.rows.set(job_id, queue_id=queue_id)
         return job_id
-
-    def get(self, job_id: str):
-        return self.rows.row(job_id)
-
-    def list(self, owner: str | None, kind: str | None = None, state: str | None = None):
-        return self.rows.list(owner, kind, state)
 
     def cancel(self, job_id: str) -> str:
         state = self.rows.request_cancel(job_id)

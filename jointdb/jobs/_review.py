@@ -34,7 +34,9 @@ def unpack_upload(tmp: Path, filename: str, data: bytes) -> Path:
 
 
 def _unit(dof: str, what: str) -> str:
-    rot = dof.startswith("r") or dof.split(":")[-1].startswith("r")
+    from jointdb.frf import Dof
+
+    rot = Dof.parse(dof).is_rotation
     return {"k": "N·m/rad" if rot else "N/m", "c": "N·m·s/rad" if rot else "N·s/m"}[what]
 
 
@@ -52,7 +54,7 @@ def _curves(outcome) -> dict[str, Any]:
             if o not in rec.outputs or inp not in rec.inputs:
                 continue
             ri, rj = rec.outputs.index(o), rec.inputs.index(inp)
-            entries.append({"entry": f"{o}/{inp}", "unit": "m/N" if not o.is_rotation else "rad/(N·m)",
+            entries.append({"entry": f"{o}/{inp}", "unit": f"{'rad' if o.is_rotation else 'm'}/{'(N·m)' if inp.is_rotation else 'N'}",
                             "measured": np.abs(m.values[idx, i, j]).tolist(),
                             "recoupled": np.abs(rec.values[idx, ri, rj]).tolist(),
                             "rigid": np.abs(rig.values[idx, ri, rj]).tolist() if o in rig.outputs else None})

@@ -74,20 +74,31 @@ def run_lobes(payload: dict, repo, progress: Progress) -> tuple[dict, None]:
 def run_predict(payload: dict, repo, progress: Progress) -> tuple[dict, None]:
     from jointdb import usecases
     from jointdb.io import frf_json
-    from jointdb.stack import MeasuredSpindle, ModelledSpindle, stack_from_dict
+    from jointdb.stack import MeasuredSpindle, ModelledSpindle
 
-    spec = stack_from_dict(payload.get("stack"))
+    spec = usecases.stack_from_document(payload.get("stack"), repo)  # catalogued parts resolved (spec.parts)
     sp = spec.spindle
-    if isinstance(sp, MeasuredSpindle) or (isinstance(sp, ModelledSpindle) and isinstance(sp.model, str)):
+    if (isinstance(sp, MeasuredSpindle) and sp.frf is None) or (isinstance(sp, ModelledSpindle)
+                                                                 and isinstance(sp.model, str)):
         raise InputError("stack.spindle: refers to a file; send the spindle model inline (the server reads "
                          "no client files)")
+    from jointdb.usecases._tip_band import choice_sensitivity, tip_band_of
+
     progress(0.05, "choosing the joints")
     joints = usecases.resolve_joints(spec, repo)
     progress(0.3, "coupling the stack")
-    pred = usecases.predict_with_joints(spec, joints).prediction
+    result = usecases.predict_with_joints(spec, joints)
+    pred = result.prediction
+    progress(0.5, "the band from the joints' covariance")
+    band, band_notes = tip_band_of(result)
+    progress(0.8, "the next-nearest joints")
+    sensitivity, choice_notes = choice_sensitivity(result, repo, pred.tip.freq)
     progress(0.95, "writing the result")
-    return {"stack": spec.name, "joints": [j.row() for j in joints.values()], "prediction": pred.summary(),
-            "notes": list(pred.notes), "tip_frf": frf_json(pred.tip), "rigid_tip_frf": frf_json(pred.rigid)}, None
+    return {"stack": spec.name, "parts": list(spec.parts), "joints": [j.row() for j in joints.values()],
+            "prediction": pred.summary(),
+            "notes": [*pred.notes, *band_notes, *choice_notes], "tip_frf": frf_json(pred.tip),
+            "rigid_tip_frf": frf_json(pred.rigid), "band": None if band is None else band.to_json(),
+            "joint_choice_sensitivity": sensitivity}, None
 
 
 def run_diagnose(payload: dict, repo, progress: Progress) -> tuple[dict, None]:

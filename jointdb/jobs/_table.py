@@ -192,6 +192,10 @@ class JobRows:
     def recover(self, job_id: str, attempts: int, why: str) -> str:
         """A job whose worker stopped mid-run: queued again (resumed) or, after
         :data:`MAX_ATTEMPTS` runs, failed with the reason. Returns the new state."""
+        if self.row(job_id)._mapping["cancel_requested"]:  # it was being cancelled: it stays cancelled
+            self.set(job_id, only_if=("running",), state="cancelled", finished=now(),
+                     message=one_line(f"cancelled ({why})"))
+            return "cancelled"
         if attempts >= MAX_ATTEMPTS:
             self.set(job_id, only_if=("running",), state="failed", finished=now(),
                      error=one_line(f"{why}; gave up after {attempts} attempts"), message="failed")
@@ -199,6 +203,18 @@ class JobRows:
         self.set(job_id, only_if=("running",), state="queued", worker=None,
                  message=one_line(f"resumed: {why} (attempt {attempts} of {MAX_ATTEMPTS})"))
         return "queued"
+
+
+class RowReads:
+    """What both queues read the same way: a job's row and the owner's jobs (``self.rows``)."""
+
+    rows: JobRows
+
+    def get(self, job_id: str):
+        return self.rows.row(job_id)
+
+    def list(self, owner: str | None, kind: str | None = None, state: str | None = None):
+        return self.rows.list(owner, kind, state)
 
 
 def _alive(pid: int) -> bool:

@@ -123,17 +123,20 @@ async def _identify_input(request: Request) -> tuple[dict[str, Any], bytes]:
     """The upload (multipart: ``file`` + form fields ``name``, ``conditions`` JSON; or JSON IdentifyIn)."""
     ctype = request.headers.get("content-type", "")
     if ctype.startswith("multipart/form-data"):
-        form = await request.form(max_files=1, max_fields=20)
-        upload = form.get("file")
-        if upload is None or isinstance(upload, str):
-            raise InputError("file: attach the campaign archive (.zip) as the form field 'file'")
-        data = await upload.read()
+        form = await request.form(max_files=200, max_fields=20)
+        uploads = [u for u in form.getlist("file") if not isinstance(u, str)]
+        if not uploads:
+            raise InputError("file: attach the campaign archive (.zip), or the campaign file and the files it "
+                             "names, as form fields 'file'")
+        upload = uploads[0]
+        data = await upload.read() if len(uploads) == 1 else await _zip_of(uploads)
         raw_conditions = form.get("conditions") or "{}"
         try:
             conditions = json.loads(raw_conditions) if isinstance(raw_conditions, str) else {}
         except ValueError:
             raise InputError("conditions: must be a JSON object") from None
-        body = IdentifyIn(filename=upload.filename or "campaign.zip", file_b64="", name=form.get("name") or None,
+        body = IdentifyIn(filename=(upload.filename or "campaign.zip") if len(uploads) == 1 else "campaign.zip",
+                          file_b64="", name=form.get("name") or None,
                           conditions=conditions if isinstance(conditions, dict) else {})
     else:
         try:
@@ -146,6 +149,24 @@ async def _identify_input(request: Request) -> tuple[dict[str, Any], bytes]:
             raise InputError("file_b64 is not valid base64") from None
     return {"filename": Path(body.filename).name, "name": body.name,
             "conditions": body.conditions.to_conditions().to_dict()}, data
+
+
+async def _zip_of(uploads) -> bytes:
+    """Individual uploaded files (the campaign file and the files it names, side by side) as one
+    archive, which then gets every check of an uploaded archive (names, sizes, one campaign file)."""
+    import io
+    import zipfile
+
+    buf = io.BytesIO()
+    with zipfile.ZipFile(buf, "w", zipfile.ZIP_DEFLATED) as zf:
+        for u in uploads:
+            name = u.filename or ""
+            if not name or "/" in name or "\\" in name or name.startswith(".") or not name.isprintable():
+                raise InputError(f"file {name[:60]!r}: upload plain file names (no folders)")
+            if name in zf.namelist():
+                raise InputError(f"file {name[:60]!r} is uploaded twice")
+            zf.writestr(name, await u.read())
+    return buf.getvalue()
 
 
 @router.post("/jobs/identify", status_code=202, responses=_ACCEPTED,

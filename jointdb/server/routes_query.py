@@ -49,25 +49,17 @@ def interpolate(body: NearestIn, r=Depends(repo), _who=reader) -> dict[str, Any]
             "warnings": notes, "frf": frf_json(ij.frf)}
 
 
-@router.post("/predict", summary="Tool-tip FRF of a tool / holder / spindle stack")
+@router.post("/predict", summary="Tool-tip FRF of a stack (with band and joint-choice sensitivity)")
 def predict(body: PredictIn, r=Depends(repo), _who=reader) -> dict[str, Any]:
-    """Joints from the catalogue (pinned, nearest or explicit); the stack must carry its
-    spindle model inline (a server reads no client files) or name catalogued parts
-    (``{"part": "name@version"}`` for tool, holder, spindle; listed in ``parts``)."""
-    from jointdb import usecases
-    from jointdb.stack import MeasuredSpindle, ModelledSpindle
+    """As ``jointdb predict --json``: joints from the catalogue (pinned, nearest or explicit), the
+    tip FRF and the rigid-joint tip, the 5–95 % band from the joints' covariance, the change with
+    the next-nearest joints. The stack must carry its spindle model inline (a server reads no client
+    files) or name catalogued parts (``{"part": "name@version"}`` for tool, holder, spindle; listed in
+    ``parts``). Takes seconds to a minute: prefer ``POST /api/v1/jobs/predict``."""
+    from jointdb.jobs._run import run_predict
 
-    spec = usecases.stack_from_document(body.stack, r)
-    sp = spec.spindle
-    if (isinstance(sp, MeasuredSpindle) and sp.frf is None) or (isinstance(sp, ModelledSpindle)
-                                                                 and isinstance(sp.model, str)):
-        raise InputError("stack.spindle: refers to a file; send the spindle model inline (the server reads "
-                         "no client files)")
-    result = usecases.predict_stack(spec, r)
-    pred = result.prediction
-    return {"stack": spec.name, "parts": list(spec.parts), "joints": [j.row() for j in result.joints.values()],
-            "prediction": pred.summary(),
-            "notes": list(pred.notes), "tip_frf": frf_json(pred.tip)}
+    result, _ = run_predict(body.model_dump(mode="json"), r, lambda fraction, message: None)
+    return result
 
 
 @router.post("/lobes", summary="Stability lobes from a tool-tip FRF (milling ZOA or SD, or turning)")

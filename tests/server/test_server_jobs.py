@@ -273,8 +273,11 @@ def test_identify_review_catalogue(deployment):
         review = job["result"]
         assert review["campaign"] == "th-er32-carbide-080nm" and review["conditions"]["torque_nm"] == 80
         assert review["contradictions"] and "75" in review["contradictions"][0]
-        units = {(p["k_unit"], p["c_unit"]) for p in review["parameters"]}
-        assert units <= {("N/m", "N·s/m"), ("N·m/rad", "N·m·s/rad")} and len(review["parameters"]) >= 2
+        units = {p["dof"]: (p["k_unit"], p["c_unit"]) for p in review["parameters"]}
+        assert units == {"3x": ("N/m", "N·s/m"), "3ry": ("N·m/rad", "N·m·s/rad")}, units
+        # σ from the output-error fit, relative to the value as the verdict's "largest standard error 2.3% (c 3ry)"
+        worst = max(p[f"{q}_sigma"] / p[q] for p in review["parameters"] for q in ("k", "c"))
+        assert any(f"{100 * worst:.1f}%" in line for line in review["verdict"]), (worst, review["verdict"])
         assert all(p["k"] > 0 for p in review["parameters"])
         assert review["curves"]["assembly"]["entries"] and review["curves"]["joint"]["dofs"]
         r = c.post(f"/api/v1/jobs/{job['id']}/catalogue", json={"name": "TH-job", "label": "reviewed"})
@@ -309,6 +312,13 @@ def test_cli_predict_over_server_equals_the_database(deployment, tmp_path):
     assert runs["server"]["joints"] == runs["db"]["joints"]
     assert any(j.get("joint", "").startswith("TH-job") for j in runs["server"]["joints"]), runs["server"]["joints"]
     assert runs["server"]["prediction"] == runs["db"]["prediction"]
+    assert runs["db"]["band"] is not None  # the identified joint carries its covariance
+    with deployment.client() as c:  # the predict job gives what the CLI gives: prediction, band, sensitivity
+        job = wait(c, submit(c, "predict", {"stack": stack})[0])
+    assert job["state"] == "succeeded", job
+    assert job["result"]["prediction"] == runs["db"]["prediction"]
+    assert job["result"]["band"] == runs["db"]["band"]
+    assert job["result"]["joint_choice_sensitivity"] == runs["db"]["joint_choice_sensitivity"]
 
 
 def test_diagnose_job_equals_the_cli(deployment, tmp_path):
@@ -340,3 +350,50 @@ def test_diagnose_job_equals_the_cli(deployment, tmp_path):
     assert got["best"]["name"] == want["best"]["name"]
     for key, value in want["best"]["values"].items():
         assert got["best"]["values"][key] == pytest.approx(value, rel=1e-6), key
+
+
+def test_identify_from_individual_files(deployment):
+    """The campaign file and the files it names uploaded side by side (no archive): packed and checked
+    as an archive, identified; a file name with a folder is refused."""
+    folder = ROOT / "fixtures" / "campaigns" / "th-steel-30nm"
+    files = [("file", (p.name, p.read_bytes(), "application/octet-stream")) for p in sorted(folder.iterdir())
+             if p.is_file()]
+    with deployment.client("writer") as c:
+        r = c.post("/api/v1/jobs/identify", files=[*files, ("file", ("../x.json", b"{}", "application/json"))])
+        assert r.status_code == 422 and "plain file names" in r.json()["error"], r.text
+        r = c.post("/api/v1/jobs/identify", files=files)
+        assert r.status_code == 202, r.text
+        job = wait(c, r.json()["id"])
+        assert job["state"] == "succeeded", job
+        assert job["result"]["campaign"] == json.loads((folder / "campaign.json").read_text())["name"]
+        assert c.post(f"/api/v1/jobs/{job['id']}/discard").json() == {"id": job["id"], "discarded": True}
+        assert c.post(f"/api/v1/jobs/{job['id']}/catalogue", json={}).status_code == 409
+
+
+def test_browser_session_needs_same_origin_and_csrf_header(deployment):
+    """A signed-in browser session may use the jobs API: reads with its cookie, POSTs only from this
+    site with the page's CSRF token in X-CSRF-Token (a cross-site form cannot set that header)."""
+    import re
+
+    csrf_re = re.compile(r'name="csrf" value="([0-9a-f]{64})"')
+    with httpx.Client(base_url=deployment.server.url, follow_redirects=False, timeout=60) as web:
+        page = web.get("/ui/signin")
+        r = web.post("/ui/signin", data={"csrf": csrf_re.search(page.text).group(1),
+                                         "token": deployment.tokens["reader"]})
+        assert r.status_code == 303
+        csrf = csrf_re.search(web.get("/ui/joints").text).group(1)
+        cookie = {"Cookie": f"jointdb_session={web.cookies.get('jointdb_session', path='/ui')}"}
+    body = {"stack": _stack()}
+    with httpx.Client(base_url=deployment.server.url, timeout=60, headers=cookie) as api:
+        assert api.get("/api/v1/jobs").status_code == 200
+        r = api.post("/api/v1/jobs/predict", json=body)
+        assert r.status_code == 403 and "X-CSRF-Token" in r.json()["error"]
+        r = api.post("/api/v1/jobs/predict", json=body, headers={"X-CSRF-Token": csrf,
+                                                                 "Origin": "https://evil.example"})
+        assert r.status_code == 403
+        r = api.post("/api/v1/jobs/predict", json=body, headers={"X-CSRF-Token": csrf})
+        assert r.status_code == 202, r.text
+        job = wait(api, r.json()["id"])
+        assert job["owner"] == "reader-owner" and job["state"] == "succeeded"
+    with httpx.Client(base_url=deployment.server.url, timeout=60) as anonymous:
+        assert anonymous.get(f"/api/v1/jobs/{job['id']}").status_code == 401
