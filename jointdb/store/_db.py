@@ -320,6 +320,8 @@ DOWNGRADE_DROPS = {
     "0006": "the history chain (tamper evidence; checkpoints signed before no longer verify)",
     "0007": "the stored answers to idempotency keys (a retry after the downgrade may make a second version)",
     "0008": "the web catalogue's sign-in sessions (everyone signs in again) and the teams of API tokens",
+    "0009": "the parts tables (spindles, holders, tools; refused while any part is catalogued: its rows are in "
+            "the history chain)",
 }
 
 

@@ -45,7 +45,6 @@ PART_KINDS = ("spindle", "holder", "tool")
 ATTRIBUTES = {"machine": ("spindle",), "family": ("holder",), "taper": ("holder", "spindle"),
               "bore_mm": ("holder",), "description": PART_KINDS}
 _NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.+-]{0,199}")
-_HEX64 = re.compile(r"[0-9a-f]{64}")
 _REF = re.compile(r"^\s*([^@\s]+)\s*@\s*([^@\s]+)\s*$")
 
 
@@ -103,6 +102,30 @@ class PartVersion:
         """``name@version``."""
         return f"{self.name}@{self.version}"
 
+    def geometry(self) -> dict[str, Any]:
+        """What a page or table shows of the payload, in mm: a tool's diameter, length and fluted length;
+        a holder's length, bore and mouth diameter; a spindle's source (``model`` at a point, or
+        ``measured`` at a node)."""
+        p = self.payload
+        segs = p.get("segments") if isinstance(p.get("segments"), list) else []
+        mm = [s for s in segs if isinstance(s, Mapping)]
+        if self.kind == "tool" and mm:
+            return {"diameter_mm": 1e3 * float(mm[0].get("diameter", 0.0)),
+                    "length_mm": 1e3 * sum(float(s.get("length", 0.0)) for s in mm),
+                    "fluted_length_mm": 1e3 * sum(float(s.get("length", 0.0)) for s in mm if s.get("fluted")),
+                    "material": p.get("material", "carbide")}
+        if self.kind == "holder" and mm:
+            return {"length_mm": 1e3 * sum(float(s.get("length", 0.0)) for s in mm),
+                    "bore_mm": 1e3 * float(mm[0].get("inner_diameter", 0.0)),
+                    "mouth_diameter_mm": 1e3 * float(mm[0].get("outer_diameter", 0.0)),
+                    "material": p.get("material", "steel")}
+        if self.kind == "spindle":
+            if self.blob_sha256 is not None:
+                return {"source": "measured", "node": p.get("node")}
+            model = p.get("model") if isinstance(p.get("model"), Mapping) else {}
+            return {"source": "model", "point": p.get("point"), "model_name": model.get("name", "")}
+        return {}
+
     def to_dict(self) -> dict[str, Any]:
         """The record as JSON-ready values (times as ISO 8601 UTC)."""
         return {"name": self.name, "kind": self.kind, "version": self.version, "uuid": self.uuid,
@@ -110,7 +133,7 @@ class PartVersion:
                 "attributes": dict(self.attributes), "payload": dict(self.payload),
                 "blob_sha256": self.blob_sha256, "provenance": dict(self.provenance),
                 "parent_version": self.parent_version, "record_sha256": self.record_sha256,
-                "labels": list(self.labels)}
+                "labels": list(self.labels), "geometry": self.geometry()}
 
 
 def part_record(name: str, kind: str, row: Any) -> dict[str, Any]:
@@ -419,16 +442,6 @@ class PartsStore:
         IntegrityError
             The blob is corrupt (never a server path in the message).
         """
-        digest = part.blob_sha256
-        if digest is None:
+        if part.blob_sha256 is None:
             raise NotFoundError(f"part {part.ref} has no FRF set (it is a {part.kind} model)")
-        if not isinstance(digest, str) or not _HEX64.fullmatch(digest):
-            raise IntegrityError(f"part {part.ref}: its FRF digest is not a SHA-256 hex digest - run `jointdb db check`")
-        try:
-            return self.blobs.get(digest)
-        except IntegrityError:
-            raise IntegrityError(f"part {part.ref}: its FRF blob {digest} is corrupt or unreadable; refusing to use "
-                                 "it - run `jointdb db check`") from None
-        except NotFoundError:
-            raise NotFoundError(f"part {part.ref}: its FRF blob {digest} is missing from the blob store - "
-                                "run `jointdb db check`") from None
+        return self._blob(part, part.blob_sha256, "FRF blob")  # verified; never a server path in an error

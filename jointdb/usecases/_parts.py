@@ -50,11 +50,12 @@ def part_refs(doc: Any) -> dict[str, str]:
 
 
 def _open(store):
-    """``(store, owned)``: a store as given, or a :class:`jointdb.store.Repository` on a URL / path / None."""
+    """``(store, owned)``: a store as given, or a :class:`jointdb.store.Repository` on a URL / path / None
+    (an existing database: reading a stack never creates one)."""
     if store is None or isinstance(store, (str, Path)):
         from jointdb.store import Repository
 
-        return Repository(store), True
+        return Repository(store, auto_create=False), True
     return store, False
 
 

@@ -117,7 +117,10 @@ def downgrade() -> None:
     # breaks the chain, so it is refused while any part exists
     bind = op.get_bind()
     if bind.exec_driver_sql("SELECT count(*) FROM parts").scalar():
-        raise RuntimeError("jointdb: the database holds parts; downgrading below 0009 would remove their history")
+        from jointdb.errors import InputError
+
+        raise InputError("the database holds catalogued parts; downgrading below 0009 would remove their history "
+                         "(the history chain covers them), so it is refused")
     if bind.dialect.name == "sqlite":
         for table in HISTORY:
             for event in ("update", "delete", "replace"):

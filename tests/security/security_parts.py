@@ -60,7 +60,8 @@ def parts(target) -> list[Attack]:
         out.append(Attack("HDF5 files", f"part FRF file {what}", "POST", post, "writer", JSON, json_body(body)))
     for n in NAMES:
         for route in (f"/parts/{n}", f"/parts/{n}/1", f"/parts/{n}/released", f"/parts/{n}/1/frf"):
-            out.append(Attack("path traversal and names", f"part {n[:24]}", "GET", f"{API}{route}"))
+            # as for joints: a name that normalises to another path may be redirected; any answer below 500
+            out.append(Attack("path traversal and names", f"part {n[:24]}", "GET", f"{API}{route}", expect="ok"))
         out.append(Attack("path traversal and names", f"label part {n[:24]}", "POST", f"{API}/parts/{n}/1/labels",
                           "writer", JSON, json_body({"label": "x"})))
     for role in ("reader", None):

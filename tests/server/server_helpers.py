@@ -34,6 +34,16 @@ _pg_schema, drop_pg_schema, pg_base_url = (_store_conftest._pg_schema, _store_co
 spring_joint = _load("jointdb_store_helpers", _STORE / "store_helpers.py").spring_joint
 
 
+def one_line_4xx(r, status=None) -> str:
+    """The one-line error of a 4xx answer (``status``: exactly that one)."""
+    assert 400 <= r.status_code < 500, (r.status_code, r.text)
+    if status is not None:
+        assert r.status_code == status, (r.status_code, r.text)
+    msg = r.json()["error"]
+    assert msg and "\n" not in msg and "Traceback" not in msg
+    return msg
+
+
 def free_port() -> int:
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))

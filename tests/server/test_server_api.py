@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from server_helpers import joint_upload
+from server_helpers import one_line_4xx as _one_line_4xx
 
 
 @pytest.fixture(scope="module")
@@ -75,15 +76,6 @@ def test_nearest_and_interpolate(catalogued):
         ij = c.post("/api/v1/query/interpolate", json={**body, "k": 2}).json()
         assert ij["label"] == "interpolated" and {n["name"] for n in ij["neighbours"]} == {"TH-1", "TH-2"}
         assert abs(sum(n["weight"] for n in ij["neighbours"]) - 1) < 1e-12
-
-
-def _one_line_4xx(r, status=None):
-    assert 400 <= r.status_code < 500, (r.status_code, r.text)
-    if status is not None:
-        assert r.status_code == status, (r.status_code, r.text)
-    msg = r.json()["error"]
-    assert msg and "\n" not in msg and "Traceback" not in msg
-    return msg
 
 
 def test_bad_requests_are_4xx_with_one_line(catalogued, tmp_path):

@@ -9,21 +9,12 @@ import json
 from pathlib import Path
 
 import numpy as np
-import pytest
+from server_helpers import one_line_4xx as _one_line_4xx
 
 ROOT = Path(__file__).resolve().parents[2]
 DEMO = json.loads((ROOT / "jointdb" / "data" / "catalogue" / "demo-stack.json").read_text())
 EXPLICIT = {"tool-holder": {"k": [8e7, 6e5], "c": [120.0, 4.0]}, "holder-spindle": {"k": [3e8, 2e6], "c": [300.0, 9.0]}}
 API = "/api/v1"
-
-
-def _one_line_4xx(r, status=None) -> str:
-    assert 400 <= r.status_code < 500, (r.status_code, r.text)
-    if status is not None:
-        assert r.status_code == status, (r.status_code, r.text)
-    msg = r.json()["error"]
-    assert msg and "\n" not in msg and "Traceback" not in msg
-    return msg
 
 
 def _nose_frf(node: int = 7):
@@ -60,6 +51,8 @@ def test_catalogue_list_show_and_label_over_http(server):
         items = c.get(f"{API}/parts", params={"kind": "holder", "family": "ER32"}).json()["items"]
         assert [(p["name"], p["version"], p["attributes"]["bore_mm"]) for p in items] == [("er32-hsk63", 1, 12.0)]
         assert "payload" not in items[0]
+        assert items[0]["geometry"] == {"length_mm": 70.0, "bore_mm": 12.0, "mouth_diameter_mm": 32.0,
+                                        "material": "steel"}  # the demo holder: 40 + 30 mm, Ø32 mouth, Ø12 bore
         spindles = c.get(f"{API}/parts", params={"machine": "demo-mill"}).json()["items"]
         assert [p["name"] for p in spindles] == ["mill-spindle"]
         versions = c.get(f"{API}/parts/er32-hsk63").json()
@@ -163,3 +156,29 @@ def test_client_and_predict_from_parts(server):
     out = r.json()
     assert [p["part"] for p in out["parts"]] == ["c-tool@1", "c-holder@1", "c-spindle@1"]
     assert np.array_equal(frf_from_json(out["tip_frf"]).values, local.tip.values)
+
+
+def test_cli_parts_against_the_server(server, tmp_path):
+    import os
+    import subprocess
+    import sys
+
+    env = {**os.environ, "JOINTDB_TOKEN": server.tokens["writer"]}
+
+    def cli(*args):
+        out = subprocess.run([sys.executable, "-m", "jointdb", "--server", server.url, *map(str, args)],
+                             capture_output=True, text=True, env=env, timeout=120)
+        return out.returncode, out.stdout, out.stderr
+
+    stack = ROOT / "jointdb" / "data" / "catalogue" / "demo-stack.json"
+    rc, out, err = cli("parts", "add", "holder", "cli-holder", "--from-stack", stack, "--family", "ER16", "--json")
+    assert rc == 0, err
+    assert json.loads(out)["author"] == "writer-owner"  # the token's owner, whatever the client says
+    rc, out, err = cli("parts", "label", "cli-holder@1", "released")
+    assert rc == 0, err
+    rc, out, err = cli("parts", "list", "--family", "ER16", "--json")
+    assert rc == 0 and [(p["name"], p["labels"]) for p in json.loads(out)] == [("cli-holder", ["released"])]
+    rc, out, err = cli("parts", "show", "cli-holder@released", "--json")
+    assert rc == 0 and json.loads(out)["payload"] == DEMO["holder"]
+    rc, out, err = cli("parts", "show", "no-such-part")
+    assert rc != 0 and err.startswith("error:") and "no part named" in err and "Traceback" not in err

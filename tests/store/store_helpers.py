@@ -72,26 +72,46 @@ def assert_one_line_error(result, code: int, contains: str = "") -> str:
     return lines[0]
 
 
-def alter_version_row(url: str, sql: str) -> None:
+def alter_version_row(url: str, sql: str, table: str = "joint_versions") -> None:
     """Change a history row behind jointdb's back (what an adversary with full rights could do):
-    the guards are removed first, then ``sql`` runs."""
+    the guards of ``table`` are removed first, then ``sql`` runs."""
     import sqlalchemy as sa
 
     engine = sa.create_engine(url)
     try:
         with engine.begin() as conn:
             if conn.dialect.name == "sqlite":
-                conn.exec_driver_sql("DROP TRIGGER joint_versions_no_update")
+                conn.exec_driver_sql(f"DROP TRIGGER {table}_no_update")
             else:
                 from jointdb.store._guards import event_trigger_names
 
                 schema = conn.exec_driver_sql("SELECT current_schema()").scalar()
                 for name in event_trigger_names(schema):
                     conn.exec_driver_sql(f'DROP EVENT TRIGGER IF EXISTS "{name}"')
-                conn.exec_driver_sql("ALTER TABLE joint_versions DISABLE TRIGGER joint_versions_immutable")
+                conn.exec_driver_sql(f"ALTER TABLE {table} DISABLE TRIGGER {table}_immutable")
             conn.exec_driver_sql(sql)
     finally:
         engine.dispose()
+
+
+def refused_statements(url: str, statements: list[str]) -> list[str]:
+    """Run each SQL statement in its own transaction; the ones the database ALLOWED (each refusal must be
+    a permission, ownership or immutability error)."""
+    import sqlalchemy as sa
+
+    engine = sa.create_engine(url)
+    allowed = []
+    try:
+        for sql in statements:
+            try:
+                with engine.begin() as conn:
+                    conn.exec_driver_sql(sql)
+                allowed.append(sql)
+            except sa.exc.DBAPIError as exc:
+                assert "permission denied" in str(exc) or "must be owner" in str(exc) or "immutable" in str(exc), sql
+    finally:
+        engine.dispose()
+    return allowed
 
 
 def run_main(capsys, *args):

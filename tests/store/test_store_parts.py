@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import sqlalchemy as sa
-from store_helpers import reseal, run_cli
+from store_helpers import alter_version_row, refused_statements, reseal, run_cli
 
 from jointdb.errors import ConflictError, InputError, IntegrityError, NotFoundError
 
@@ -127,20 +127,9 @@ def test_a_rewritten_record_is_refused_on_read_and_reported(backend):
     repo = backend.repo()
     try:
         add_demo_parts(repo, demo_doc())
-        engine = sa.create_engine(backend.url)
-        with engine.begin() as conn:  # an adversary with the owner's rights: guards off, then a rewrite
-            if conn.dialect.name == "sqlite":
-                conn.exec_driver_sql("DROP TRIGGER part_versions_no_update")
-            else:
-                from jointdb.store._guards import event_trigger_names
-
-                schema = conn.exec_driver_sql("SELECT current_schema()").scalar()
-                for name in event_trigger_names(schema):
-                    conn.exec_driver_sql(f'DROP EVENT TRIGGER IF EXISTS "{name}"')
-                conn.exec_driver_sql("ALTER TABLE part_versions DISABLE TRIGGER part_versions_immutable")
-            conn.exec_driver_sql("UPDATE part_versions SET attributes = '{\"family\": \"ER40\", \"bore_mm\": 16.0}' "
-                                 "WHERE family = 'ER32'")
-        engine.dispose()
+        alter_version_row(backend.url, "UPDATE part_versions SET attributes = "
+                                       "'{\"family\": \"ER40\", \"bore_mm\": 16.0}' WHERE family = 'ER32'",
+                          table="part_versions")
         with pytest.raises(IntegrityError, match="er32-hsk63 v1.*does not match its hash"):
             repo.get_part("er32-hsk63", 1)
         with pytest.raises(IntegrityError):
@@ -171,7 +160,7 @@ def test_measured_spindle_blob_is_verified_on_read(repo):
         v[10, 0, 0, 0] *= 1.0000001
         f["values"][...] = v
     reseal(path)  # ... and the file's own whole-file checksum forged too: the content hash still catches it
-    with pytest.raises(IntegrityError, match="ms@1: its FRF blob .* corrupt"):
+    with pytest.raises(IntegrityError, match="ms v1: its FRF blob .* corrupt"):
         repo.load_part_frf(repo.get_part("ms"))
     assert any("part ms v1" in p for p in repo.check().problems)
 
@@ -281,22 +270,67 @@ def test_app_role_appends_parts_but_cannot_rewrite_them(two_roles):
         assert repo.check(verify_blobs=True).ok
     finally:
         repo.close()
-    engine = sa.create_engine(two_roles.app_url)
-    allowed = []
-    try:
-        for sql in ("UPDATE parts SET name = 'x'", "DELETE FROM parts", "TRUNCATE parts",
-                    "UPDATE part_versions SET author = 'x'", "DELETE FROM part_versions", "TRUNCATE part_versions",
-                    "ALTER TABLE part_versions DISABLE TRIGGER ALL", "DROP TABLE part_versions",
-                    "UPDATE part_labels SET part_id = part_id", "DELETE FROM part_labels", "TRUNCATE part_labels"):
-            try:
-                with engine.begin() as conn:
-                    conn.exec_driver_sql(sql)
-                allowed.append(sql)
-            except sa.exc.DBAPIError as exc:
-                assert "permission denied" in str(exc) or "must be owner" in str(exc) or "immutable" in str(exc), sql
-    finally:
-        engine.dispose()
-    assert allowed == []
+    assert refused_statements(two_roles.app_url, [
+        "UPDATE parts SET name = 'x'", "DELETE FROM parts", "TRUNCATE parts",
+        "UPDATE part_versions SET author = 'x'", "DELETE FROM part_versions", "TRUNCATE part_versions",
+        "ALTER TABLE part_versions DISABLE TRIGGER ALL", "DROP TABLE part_versions",
+        "UPDATE part_labels SET part_id = part_id", "DELETE FROM part_labels", "TRUNCATE part_labels"]) == []
 
 
 from test_store_roles import two_roles  # noqa: E402,F401  (the two-role PostgreSQL fixture)
+
+
+def test_downgrade_below_0009_is_refused_while_parts_exist(tmp_path):
+    db = tmp_path / "d.sqlite"
+    from jointdb.store import Repository
+
+    with Repository(db) as repo:
+        repo.add_part("em12", "tool", demo_doc()["tool"])
+    rc, out, err = run_cli("db", "downgrade", "--to", "0008", "--yes", "--db", db)
+    assert rc == InputError.exit_code and "holds catalogued parts" in err and "Traceback" not in err
+    with Repository(db) as repo:  # nothing was dropped
+        assert repo.get_part("em12").version == 1 and repo.check().ok
+    empty = tmp_path / "e.sqlite"
+    Repository(empty).close()
+    rc, out, err = run_cli("db", "downgrade", "--to", "0008", "--yes", "--db", empty)
+    assert rc == 0, err
+    rc, out, err = run_cli("db", "upgrade", "--db", empty)
+    assert rc == 0, err
+
+
+def test_a_stack_naming_parts_never_creates_a_database(tmp_path):
+    from jointdb import usecases
+
+    missing = tmp_path / "none.sqlite"
+    with pytest.raises(NotFoundError, match="does not exist"):
+        usecases.stack_from_document({**demo_doc(), "tool": {"part": "em12@1"}}, missing)
+    assert not missing.exists()
+    assert usecases.stack_from_document(demo_doc(), missing).parts == ()  # no reference: no database opened
+
+
+def test_concurrent_writers_number_part_versions_without_gaps(backend):
+    from concurrent.futures import ThreadPoolExecutor
+
+    doc = demo_doc()
+
+    def write(worker: int) -> list[int]:
+        repo = backend.repo()
+        try:
+            out = []
+            for i in range(3):
+                holder = json.loads(json.dumps(doc["holder"]))
+                holder["loss_factor"] = 0.001 * (1 + worker * 3 + i)  # distinct content: a new version each
+                out.append(repo.add_part("shared-holder", "holder", holder, author=f"w{worker}").version)
+            return out
+        finally:
+            repo.close()
+
+    with ThreadPoolExecutor(4) as pool:
+        numbers = sorted(n for got in pool.map(write, range(4)) for n in got)
+    assert numbers == list(range(1, 13))
+    repo = backend.repo()
+    try:
+        assert [p.version for p in repo.part_history("shared-holder")] == list(range(1, 13))
+        assert repo.check(verify_blobs=False).ok  # one chain entry per row, in commit order
+    finally:
+        repo.close()

@@ -11,7 +11,7 @@ import uuid
 
 import pytest
 import sqlalchemy as sa
-from store_helpers import planar_conditions, run_cli, spring_joint
+from store_helpers import planar_conditions, refused_statements, run_cli, spring_joint
 
 HISTORY = ("joints", "joint_versions", "joint_states", "audit_log", "history_chain")
 
@@ -69,7 +69,6 @@ def test_the_app_role_writes_but_cannot_rewrite_history(two_roles):
         assert repo.check(verify_blobs=False).ok
     finally:
         repo.close()
-    engine = sa.create_engine(two_roles.app_url)
     attacks = []
     for table in HISTORY:
         column = "kind" if table == "history_chain" else "id" if table != "joint_versions" else "torque_nm"
@@ -78,18 +77,7 @@ def test_the_app_role_writes_but_cannot_rewrite_history(two_roles):
                     f"ALTER TABLE {table} DISABLE TRIGGER ALL", f"ALTER TABLE {table} RENAME TO {table}_old",
                     f"ALTER TABLE {table} ADD COLUMN x int", f"DROP TABLE {table}"]
     attacks += ["UPDATE labels SET joint_id = joint_id", "TRUNCATE labels", "DELETE FROM labels"]
-    allowed = []
-    try:
-        for sql in attacks:
-            try:
-                with engine.begin() as conn:
-                    conn.exec_driver_sql(sql)
-                allowed.append(sql)
-            except sa.exc.DBAPIError as exc:
-                assert "permission denied" in str(exc) or "must be owner" in str(exc) or "immutable" in str(exc), sql
-    finally:
-        engine.dispose()
-    assert allowed == []
+    assert refused_statements(two_roles.app_url, attacks) == []
 
 
 def test_serve_refuses_the_owner_and_a_superuser_but_not_the_app_role(two_roles, tmp_path):
