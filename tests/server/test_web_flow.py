@@ -121,6 +121,8 @@ def _upload_and_review(page, server, shots, archive) -> str:
 
 
 def _design_predict_lobes(page, server, shots, tmp_path) -> None:
+    from jointdb.server.web_format import num
+
     page.click("#nav-design")
     page.wait_for_selector("#d-holder option[value^='er32-collet-chuck-hsk63@']", state="attached")
     page.select_option("#d-spindle", "demo-mill-spindle@1")
@@ -146,6 +148,11 @@ def _design_predict_lobes(page, server, shots, tmp_path) -> None:
     summary = page.inner_text("#p-summary")
     assert summary.count("\n") == 2 and "x\t" in summary and "y\t" in summary  # both planes
     assert page.locator("#p-plots .uplot").count() == 2
+    with server.client("writer") as c:  # the band the page shows is the job's
+        job = c.get(f"/api/v1/jobs/{page.get_attribute('#p-job', 'href').rsplit('/', 1)[1]}").json()["result"]
+    band = page.inner_text("#p-band")
+    assert job["band"] and band.count("\n") == len(job["band"]["peaks"]) == 2
+    assert F"{num(job['band']['peaks'][0]['peak_m_per_n_p95'])}" in band
     shots.check("design-predicted")
     for link, name in (("#p-csv", "tip-frf.csv"), ("#p-json", "prediction.json"), ("#p-png", "tip-frf.png")):
         _download(page, link, name, tmp_path)

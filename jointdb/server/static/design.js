@@ -146,7 +146,12 @@
       return [j.interface, j.joint || "", j.distance === null ? "–" : F.eng(j.distance, 3), j.kind + (j.extrapolating ? " (extrapolating)" : "")];
     }));
     F.table($("p-parts"), ["part", "version", "kind"], used.map(function (p) { return [p.name, "v" + p.version, p.kind]; }));
-    var notes = (r.notes || []).concat(r.band ? [] : ["band: the predict job's answer carries no uncertainty band yet"]);
+    (r.joint_choice_sensitivity || []).forEach(function (x) {  // what the next-nearest joint would change
+      $("p-joints").append(F.el("tr")); var tr = $("p-joints").lastChild;
+      [x.interface, "next: " + x.alternative, F.eng(x.distance, 3), "peak " + x.direction + " " +
+       (x.peak_change >= 0 ? "+" : "") + F.eng(100 * x.peak_change, 2) + " %"].forEach(function (t) { tr.append(F.el("td", t)); });
+    });
+    var notes = (r.notes || []).concat(r.band ? [] : ["no band: none of the chosen joints carries a parameter covariance"]);
     $("p-notes").textContent = notes.join(" · ");
     $("p-notes").hidden = !notes.length;
     var holder = $("p-plots"), tip = entries(r.tip_frf), rigid = entries(r.rigid_tip_frf), f = r.tip_frf.freq_hz;
@@ -159,8 +164,25 @@
         phase.push({label: "tip " + e.label + " " + set[1] + " [deg]", x: f, y: e.phase, colour: set[2], dash: dash});
       });
     });
-    F.plot(holder, {id: "tip-mag", title: "tool tip, x plane solid, y plane dashed", x: "frequency [Hz]", y: "|H| [m/N]",
-                    log: true, series: mag});
+    if (r.band) {  // the 5–95 % band from the chosen joints' parameter covariance
+      Object.keys(r.band.magnitude_m_per_n).forEach(function (d, i) {
+        var m = r.band.magnitude_m_per_n[d];
+        [["p05", "5 %"], ["p95", "95 %"]].forEach(function (q) {
+          mag.push({label: "tip " + d + " band " + q[1] + " [m/N]", x: r.band.frequency_hz, y: m[q[0]], colour: "#8a99aa",
+                    dash: i === 0 ? [2, 2] : [6, 2, 2, 2]});
+        });
+      });
+      F.table($("p-band"), ["plane", "peak |H| 5 % [m/N]", "median", "95 %", "peak frequency 5–95 % [Hz]"],
+              r.band.peaks.map(function (b) {
+                return [b.direction, F.eng(b.peak_m_per_n_p05, 4), F.eng(b.peak_m_per_n_p50, 4), F.eng(b.peak_m_per_n_p95, 4),
+                        F.eng(b.peak_hz_p05) + "–" + F.eng(b.peak_hz_p95)];
+              }));
+      $("p-band-text").textContent = "5–95 % band from " + r.band.samples + " joints sampled from the parameter "
+        + "covariance of " + r.band.interfaces.join(", ") + ":";
+    }
+    $("p-band-box").hidden = !r.band;
+    F.plot(holder, {id: "tip-mag", title: "tool tip, x plane solid, y plane dashed" + (r.band ? "; grey: 5–95 % band" : ""),
+                    x: "frequency [Hz]", y: "|H| [m/N]", log: true, series: mag});
     F.plot(holder, {id: "tip-phase", title: "tool tip: phase", x: "frequency [Hz]", y: "phase [deg]", log: false, series: phase});
     var csv = ["freq_hz," + tip.map(function (e) { return "abs_" + e.label + "_m_per_n,phase_" + e.label + "_deg"; })
       .concat(rigid.map(function (e) { return "rigid_abs_" + e.label + "_m_per_n"; })).join(",")];
