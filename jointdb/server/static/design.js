@@ -104,6 +104,7 @@
   function predict() {
     $("d-error").hidden = true;
     var used;
+    nearest();  // the candidates shown are those of the stack being predicted
     Promise.all([part($("d-holder").value), part($("d-spindle").value)]).then(function (hs) {
       used = hs;
       return F.api("POST", "/api/v1/jobs/predict", {stack: stack(hs[0], hs[1])});
