@@ -18,8 +18,10 @@
       select.textContent = "";
       if (!j.items.length) option(select, "", "no " + kind + " catalogued yet");
       j.items.forEach(function (p) {
-        var a = p.attributes || {};
-        var what = [a.machine, a.family, a.taper, a.bore_mm ? "bore " + a.bore_mm + " mm" : null]
+        var a = p.attributes || {}, g = p.geometry || {};
+        var what = [a.machine, a.family, a.taper, g.length_mm ? F.eng(g.length_mm, 3) + " mm long" : null,
+                    g.bore_mm || a.bore_mm ? "bore " + F.eng(g.bore_mm || a.bore_mm, 3) + " mm" : null,
+                    g.source === "measured" ? "measured FRF" : null]
           .filter(function (x) { return x; }).join(", ");
         parts[p.name + "@" + p.version] = p;
         option(select, p.name + "@" + p.version, p.name + " v" + p.version + (what ? " — " + what : ""));
@@ -88,8 +90,8 @@
     var total = F.num("d-length", "total length [mm]", 1e-3), gauge = F.num("d-overhang", "overhang [mm]", 1e-3);
     if (!(total > flute && flute > 0)) throw new Error("the total length must exceed the flute length");
     if (spindle.payload.model === undefined) {
-      throw new Error("spindle " + spindle.name + " is a measured FRF set: the predict job takes modelled spindles only "
-                      + "(the server reads no FRF file for a job yet)");
+      throw new Error("spindle " + spindle.name + " is a measured FRF set: a predict job takes a modelled spindle "
+                      + "inline only (its submission does not yet accept part references)");
     }
     var q = queries(holder), interp = $("d-interpolate").checked;
     ["tool-holder", "holder-spindle"].forEach(function (k) { q[k].interpolate = interp; q[k].neighbours = 3; });
