@@ -58,7 +58,9 @@ def predict(body: PredictIn, r=Depends(repo), _who=reader) -> dict[str, Any]:
     ``parts``). Takes seconds to a minute: prefer ``POST /api/v1/jobs/predict``."""
     from jointdb.jobs._run import run_predict
 
-    result, _ = run_predict(body.model_dump(mode="json"), r, lambda fraction, message: None)
+    # the stack as sent (not model_dump: pydantic refuses to serialise a hostile 300-deep stack with a 500;
+    # stack_from_document answers it with a 422 naming the field)
+    result, _ = run_predict({"stack": body.stack}, r, lambda fraction, message: None)
     return result
 
 
