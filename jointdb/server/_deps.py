@@ -3,7 +3,10 @@
 
 from __future__ import annotations
 
+import hashlib
+import hmac
 from typing import Any
+from urllib.parse import urlsplit
 
 from fastapi import Depends, HTTPException, Query, Request, Security
 from fastapi.security import HTTPBearer
@@ -11,6 +14,9 @@ from fastapi.security import HTTPBearer
 from jointdb.store._tokens import TokenInfo, authenticate, check_may_change
 
 SESSION_COOKIE = "jointdb_session"
+#: The header that carries a browser session's CSRF token on the API's writes (the pages send it).
+CSRF_HEADER = "x-csrf-token"
+_SAFE_METHODS = ("GET", "HEAD", "OPTIONS")
 #: The OpenAPI security scheme of the API (the header itself is read by :func:`bearer`).
 BEARER = HTTPBearer(auto_error=False, scheme_name="bearer", bearerFormat="jdb_<id>_<secret>",
                     description="An API token (`jointdb tokens create`), sent as `Authorization: Bearer <token>`.")
@@ -49,11 +55,50 @@ def identify(request: Request, token: str | None) -> TokenInfo | None:
     return info
 
 
+def session_csrf(session_id: str | None) -> str:
+    """The CSRF token of a web session (HMAC keyed with the session id, which only the HttpOnly
+    cookie holds): the pages' forms carry it, and their scripts send it as ``X-CSRF-Token``."""
+    return hmac.new(session_id.encode(), b"jointdb-csrf", hashlib.sha256).hexdigest() if session_id else ""
+
+
+def same_origin(request: Request) -> bool:
+    """False for a browser request sent from another site (``Origin`` of another host, or ``null``)."""
+    origin = request.headers.get("origin")
+    if origin is None:
+        return True
+    hosts = {request.headers.get("host"), request.headers.get("x-forwarded-host", "").split(",")[0].strip()}
+    return origin != "null" and urlsplit(origin).netloc in hosts - {None, ""}
+
+
+def session_identity(request: Request) -> TokenInfo | None:
+    """The signed-in user of a browser session (the pages' scripts call the API with it), or None.
+
+    A write (any method but GET/HEAD/OPTIONS) must carry the session's CSRF token in
+    ``X-CSRF-Token`` and come from this site: a cross-site page can send the cookie
+    (not with SameSite=Strict, but defence in depth) but can neither read nor set that header."""
+    from jointdb.store._tokens import session_user
+
+    sid = request.cookies.get(SESSION_COOKIE)
+    if not sid:
+        return None
+    info = session_user(request.app.state.repo, sid, request.app.state.settings.session_idle_s)
+    if info is None:
+        return None
+    if request.method not in _SAFE_METHODS:
+        if not same_origin(request):
+            raise HTTPException(403, "this request was sent from another site")
+        if not hmac.compare_digest(request.headers.get(CSRF_HEADER, ""), session_csrf(sid)):
+            raise HTTPException(403, "a browser session's write needs its CSRF token in the X-CSRF-Token header")
+    request.state.actor = info.name
+    return info
+
+
 def need(role: str):
     """A dependency: the caller's token must have ``role`` (reads: none when the server has open reads)."""
 
     def dependency(request: Request, _scheme=Security(BEARER)) -> TokenInfo | None:
-        info = identify(request, bearer(request))
+        token = bearer(request)
+        info = identify(request, token) if token is not None else session_identity(request)
         if info is None:
             if role == "reader" and request.app.state.settings.open_reads:
                 return None

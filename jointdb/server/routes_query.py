@@ -54,10 +54,13 @@ def predict(body: PredictIn, r=Depends(repo), _who=reader) -> dict[str, Any]:
     """As ``jointdb predict --json``: joints from the catalogue (pinned, nearest or explicit), the
     tip FRF and the rigid-joint tip, the 5–95 % band from the joints' covariance, the change with
     the next-nearest joints. The stack must carry its spindle model inline (a server reads no client
-    files). Takes seconds to a minute: prefer ``POST /api/v1/jobs/predict``."""
+    files) or name catalogued parts (``{"part": "name@version"}`` for tool, holder, spindle; listed in
+    ``parts``). Takes seconds to a minute: prefer ``POST /api/v1/jobs/predict``."""
     from jointdb.jobs._run import run_predict
 
-    result, _ = run_predict(body.model_dump(mode="json"), r, lambda fraction, message: None)
+    # the stack as sent (not model_dump: pydantic refuses to serialise a hostile 300-deep stack with a 500;
+    # stack_from_document answers it with a 422 naming the field)
+    result, _ = run_predict({"stack": body.stack}, r, lambda fraction, message: None)
     return result
 
 

@@ -1,13 +1,16 @@
-"""The web catalogue under ``/ui``: server-rendered pages (Jinja2), SVG plots drawn on the
-server, CSS bundled in the package (works with no internet); and ``/docs``, Swagger UI served
-from the package (no CDN).
+"""The web pages under ``/ui``: server-rendered (Jinja2), interactive plots drawn in the browser
+by uPlot, CSS and scripts bundled in the package (works with no internet; see
+:mod:`jointdb.server.web_catalogue` for the catalogue pages, :mod:`jointdb.server.web_flow`
+for the upload / design / lobes pages); and ``/docs``, Swagger UI served from the package.
 
 Sign-in: the token is posted once from a form and exchanged for a server-side session
 (:func:`jointdb.store._tokens.open_session`): the cookie holds only a random session id
 (256 bits; the database keeps its SHA-256), never the token. Signing out revokes the
 session in the database; an unknown, revoked, idle or expired session (or one whose token
-was revoked) is signed out. Cookies are HttpOnly, SameSite=Strict, scoped to ``/ui`` and
-``Secure`` unless the server runs on loopback without TLS (:class:`Settings`).
+was revoked) is signed out. Cookies are HttpOnly, SameSite=Strict, ``Secure`` unless the
+server runs on loopback without TLS (:class:`Settings`); the session cookie is scoped to the
+whole site, so the pages' scripts call the JSON API with it
+(:func:`jointdb.server._deps.session_identity`: writes need the ``X-CSRF-Token`` header).
 
 CSRF: every form carries a token checked before anything is done, and a browser POST
 whose ``Origin`` is another site (or ``null``) is refused. The sign-in form's token is bound
@@ -17,167 +20,18 @@ to a pre-session cookie (double submit); the other forms' token to the session i
 
 from __future__ import annotations
 
-import hashlib
 import hmac
-import secrets
-from pathlib import Path
-from typing import Any
-from urllib.parse import parse_qs, quote, urlencode, urlsplit
 
-from fastapi import APIRouter, Request
-from fastapi.responses import HTMLResponse, RedirectResponse, Response
+from fastapi import Request
+from fastapi.responses import HTMLResponse, RedirectResponse
 from fastapi.staticfiles import StaticFiles
-from fastapi.templating import Jinja2Templates
 
-from jointdb.errors import InputError, JointdbError, NotPermittedError
-from jointdb.server._deps import SESSION_COOKIE, version_json
-from jointdb.store._tokens import check_may_change, close_session, open_session, session_user
-
-HERE = Path(__file__).parent
-templates = Jinja2Templates(directory=str(HERE / "templates"))
-router = APIRouter(prefix="/ui", include_in_schema=False)
-#: The pre-session cookie of the sign-in form (its CSRF double submit).
-SIGNIN_COOKIE = "jointdb_signin"
-_NONCE_CHARS = frozenset("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789-_")
-
-
-def _session(request: Request) -> tuple[str | None, Any]:
-    """``(session_id, token info)`` of the request's open session, or ``(None, None)``
-    (then a cookie that was sent is marked to be cleared)."""
-    cached = getattr(request.state, "web_session", None)
-    if cached is not None:
-        return cached
-    sid = request.cookies.get(SESSION_COOKIE)
-    settings = request.app.state.settings
-    info = session_user(request.app.state.repo, sid, settings.session_idle_s) if sid else None
-    if info is not None:
-        request.state.actor = info.name
-    elif sid:
-        request.state.stale_session = True
-    request.state.web_session = (sid if info else None, info)
-    return request.state.web_session
-
-
-def _mac(key: str, purpose: bytes) -> str:
-    return hmac.new(key.encode(), purpose, hashlib.sha256).hexdigest()
-
-
-def _csrf(session_id: str | None) -> str:
-    """The CSRF token of a session's forms (bound to the session id, which only the HttpOnly cookie holds)."""
-    return _mac(session_id, b"jointdb-csrf") if session_id else ""
-
-
-def _set_cookie(request: Request, resp: Response, name: str, value: str, max_age: int, path: str = "/ui") -> None:
-    resp.set_cookie(name, value, httponly=True, samesite="strict", path=path, max_age=max_age,
-                    secure=request.app.state.settings.cookie_secure)
-
-
-def _signin_nonce(request: Request) -> str | None:
-    nonce = request.cookies.get(SIGNIN_COOKIE) or ""
-    return nonce if len(nonce) == 43 and set(nonce) <= _NONCE_CHARS else None
-
-
-class _NeedSignIn(Exception):
-    pass
-
-
-def _page(request: Request, template: str, status: int = 200, **ctx: Any) -> HTMLResponse:
-    sid, who = _session(request)
-    ctx.setdefault("title", template.split(".")[0])
-    nonce = None
-    if template == "signin.html":  # the sign-in form's CSRF token, bound to a pre-session cookie
-        nonce = _signin_nonce(request) or secrets.token_urlsafe(32)
-        ctx["signin_csrf"] = _mac(nonce, b"jointdb-signin")
-    resp = templates.TemplateResponse(request, template, {"who": who, "csrf": _csrf(sid), **ctx},
-                                      status_code=status)
-    if nonce is not None and nonce != _signin_nonce(request):
-        _set_cookie(request, resp, SIGNIN_COOKIE, nonce, 3600, path="/ui/signin")
-    return resp
-
-
-def _reader(request: Request):
-    _, who = _session(request)
-    if who is None and not request.app.state.settings.open_reads:
-        raise _NeedSignIn()
-    return who
-
-
-def _same_origin(request: Request) -> None:
-    """Refuse a browser POST sent from another site (``Origin`` of another host, or ``null``).
-
-    The host is the request's ``Host`` or, behind a proxy that rewrites it, the proxy's
-    ``X-Forwarded-Host`` (a cross-site form cannot set that header)."""
-    origin = request.headers.get("origin")
-    if origin is None:
-        return
-    hosts = {request.headers.get("host"), request.headers.get("x-forwarded-host", "").split(",")[0].strip()}
-    if origin == "null" or urlsplit(origin).netloc not in hosts - {None, ""}:
-        raise PermissionError("this form was sent from another site; open the page on this server and try again")
-
-
-def _form(request: Request) -> dict[str, str]:
-    """The posted form's fields (the body was read by :func:`_handle` before the worker thread)."""
-    _same_origin(request)
-    body = getattr(request.state, "form_body", b"").decode("utf-8", "replace")
-    return {k: v[-1] for k, v in parse_qs(body, keep_blank_values=True).items()}
-
-
-def _writer_form(request: Request, form: dict[str, str]):
-    sid, who = _session(request)
-    if who is None:
-        raise _NeedSignIn()
-    if not hmac.compare_digest(form.get("csrf", ""), _csrf(sid)):
-        raise InputError("the form's CSRF token does not match your session; reload the page and try again")
-    if not who.allows("writer"):
-        raise PermissionError(f"the token of {who.name} has role {who.role}; this needs writer")
-    return who
-
-
-def _handle(fn):
-    """Run the page ``fn`` (a plain function: it calls the synchronous repository) in the
-    thread pool, so a slow database never blocks the event loop; map its errors to the page
-    with a one-line message (or to the sign-in page), and clear the cookie of a session that
-    is no longer open. A POST's body is read here, on the loop, for :func:`_form`."""
-    import functools
-
-    from starlette.concurrency import run_in_threadpool
-
-    @functools.wraps(fn)
-    async def wrapper(request: Request, *args, **kwargs):
-        if request.method == "POST":
-            request.state.form_body = await request.body()
-        return await run_in_threadpool(_respond, fn, request, *args, **kwargs)
-
-    return wrapper
-
-
-def _respond(fn, request: Request, *args, **kwargs) -> Response:
-    """``fn(request, ...)``, its errors as pages (see :func:`_handle`); runs in a worker thread."""
-    try:
-        resp = fn(request, *args, **kwargs)
-    except _NeedSignIn:
-        resp = RedirectResponse("/ui/signin", status_code=303)
-    except PermissionError as exc:
-        resp = _page(request, "base.html", 403, title="not allowed", error=str(exc))
-    except JointdbError as exc:  # the same one-line, scrubbed message the API would give
-        from jointdb.server._safety import client_error
-
-        status, text = client_error(exc, request.scope.get("state", {}).get("request_id"))
-        resp = _page(request, "signin.html" if status == 401 else "base.html", status, error=text)
-    if getattr(request.state, "stale_session", False):
-        resp.delete_cookie(SESSION_COOKIE, path="/ui", httponly=True, samesite="strict",
-                           secure=request.app.state.settings.cookie_secure)
-    return resp
-
-
-def _float(text: str | None, what: str) -> float | None:
-    if text is None or text.strip() == "":
-        return None
-    try:
-        return float(text)
-    except ValueError:
-        raise InputError(f"{what}: {text[:40]!r} is not a number") from None
-
+from jointdb.errors import InputError
+from jointdb.server._deps import SESSION_COOKIE
+from jointdb.server.web_core import (HERE, SIGNIN_COOKIE, _csrf, _form, _handle, _mac, _page, _same_origin,  # noqa: F401
+                                     _session, _set_cookie,
+                                     _signin_nonce, router, templates)
+from jointdb.store._tokens import close_session, open_session
 
 @router.get("")
 @router.get("/")
@@ -228,147 +82,23 @@ def signout(request: Request):
         raise InputError("the form's CSRF token does not match your session")
     close_session(request.app.state.repo, sid)
     resp = RedirectResponse("/ui/signin", status_code=303)
-    resp.delete_cookie(SESSION_COOKIE, path="/ui", httponly=True, samesite="strict",
+    resp.delete_cookie(SESSION_COOKIE, path="/", httponly=True, samesite="strict",
                        secure=request.app.state.settings.cookie_secure)
     return resp
-
-
-@router.get("/joints")
-@_handle
-def joints(request: Request):
-    from jointdb.server.routes_joints import filter_versions
-
-    _reader(request)
-    p = request.query_params
-    f = {k: p.get(k) for k in ("type", "material", "torque_min", "torque_max", "q", "active_only")}
-    offset = max(0, int(p.get("offset", "0") or 0)) if (p.get("offset", "0") or "0").isdigit() else 0
-    found = filter_versions(request.app.state.repo, f["type"] or None,
-                            [m for m in (f["material"] or "").replace("+", ",").split(",") if m.strip()], None,
-                            not f["active_only"], _float(f["torque_min"], "torque from"),
-                            _float(f["torque_max"], "torque to"), None, None, f["q"] or None)
-    limit = 50
-    items = [version_json(v) for v in found[offset:offset + limit]]
-    query = {k: v for k, v in f.items() if v}
-    nxt = f"/ui/joints?{urlencode({**query, 'offset': offset + limit})}" if offset + limit < len(found) else None
-    prev = f"/ui/joints?{urlencode({**query, 'offset': max(0, offset - limit)})}" if offset else None
-    return _page(request, "joints.html", title="joints", items=items, total=len(found), offset=offset, f=f,
-                 next=nxt, prev=prev)
-
-
-@router.get("/joints/{name}")
-@_handle
-def joint(request: Request, name: str):
-    from jointdb.server._svg import frf_svg
-    from jointdb.server.routes_joints import joint_name
-
-    who = _reader(request)
-    r = request.app.state.repo
-    version = request.query_params.get("version")
-    jv = r.get(joint_name(name), int(version) if version and version.isdigit() else None)
-    svg = frf_svg([(f"v{jv.version}", r.load_frf(jv))], f"{jv.name} v{jv.version} ({jv.quantity})")
-    refusal = None  # a writer who may not change this joint sees why instead of the forms
-    if who is not None and who.allows("writer"):
-        try:
-            check_may_change(r, who, jv.name, "label or deprecate")
-        except NotPermittedError as exc:
-            refusal = str(exc)
-    return _page(request, "joint.html", title=jv.name, v=version_json(jv), svg=svg,
-                 history=[version_json(h) for h in r.history(jv.name)], audit=r.audit(jv.name, limit=200),
-                 notice=request.query_params.get("notice"), refusal=refusal)
-
-
-@router.get("/joints/{name}/overlay")
-@_handle
-def overlay(request: Request, name: str):
-    from jointdb.server._svg import frf_svg
-    from jointdb.server.routes_joints import joint_name
-
-    _reader(request)
-    r = request.app.state.repo
-    try:
-        a, b = int(request.query_params.get("a", "")), int(request.query_params.get("b", ""))
-    except ValueError:
-        raise InputError("choose two version numbers a and b") from None
-    name = joint_name(name)
-    va, vb = r.get(name, a), r.get(name, b)
-    svg = frf_svg([(f"v{a}", r.load_frf(va)), (f"v{b}", r.load_frf(vb))], f"{name}: v{a} (solid) and v{b} (dashed)")
-    return _page(request, "overlay.html", title=f"{name} overlay", name=name, a=a, b=b, svg=svg,
-                 diff=r.diff(name, a, b))
-
-
-@router.get("/joints/{name}/versions/{version}/frf")
-@_handle
-def download(request: Request, name: str, version: int):
-    from jointdb.server.routes_frf import FORMATS, encoded_cache, etag, render
-    from jointdb.server.routes_joints import joint_name
-
-    _reader(request)
-    r = request.app.state.repo
-    fmt = request.query_params.get("format", "hdf5")
-    if fmt not in FORMATS:
-        raise InputError(f"format {fmt[:20]!r} must be one of {', '.join(FORMATS)}")
-    jv = r.get(joint_name(name), version)
-    media, suffix = FORMATS[fmt]
-    safe = "".join(ch if ch.isalnum() or ch in "-_." else "_" for ch in jv.name)
-    # a signed-in download is not kept in the browser's cache (a shared computer would still
-    # have it after sign-out); open reads are public and never change: cached for a year
-    cache = "public, max-age=31536000, immutable" if request.app.state.settings.open_reads else "no-store"
-    body = encoded_cache(request).get(jv.record_sha256, fmt, lambda: render(jv, r.load_frf(jv), fmt))
-    return Response(body, media_type=media,
-                    headers={"ETag": etag(jv.record_sha256, fmt), "Cache-Control": cache,
-                             "Content-Disposition": f'attachment; filename="{safe}-v{version}{suffix}"'})
-
-
-@router.post("/joints/{name}/{action}")
-@_handle
-def write(request: Request, name: str, action: str):
-    from jointdb.server.routes_joints import joint_name
-
-    form = _form(request)
-    who = _writer_form(request, form)
-    r = request.app.state.repo
-    name = joint_name(name)
-    version = form.get("version", "").strip()
-    if version and not version.isdigit():
-        raise InputError(f"version {version[:20]!r} must be a number")
-    if action not in ("label", "deprecate"):
-        raise InputError(f"unknown action {action[:20]!r}")
-    check_may_change(r, who, name, action)
-    if action == "label":
-        r.label(name, int(version or 0), form.get("label", ""), author=who.name)
-        notice = f"label {form.get('label')} now points at v{version}"
-    else:
-        r.deprecate(name, int(version) if version else None, reason=form.get("reason", ""), author=who.name)
-        notice = f"deprecated {'v' + version if version else 'the joint'}"
-    return RedirectResponse(f"/ui/joints/{quote(name, safe='')}?{urlencode({'notice': notice})}", status_code=303)
-
-
-@router.get("/nearest")
-@_handle
-def nearest(request: Request):
-    from jointdb.server._schemas import ConditionsIn, NearestIn
-    from jointdb.server.routes_query import match_json, run_nearest
-
-    _reader(request)
-    p = request.query_params
-    q = {"joint_type": p.get("joint_type", ""), "materials": p.get("materials", ""),
-         "torque_nm": p.get("torque_nm", ""), "preload_n": p.get("preload_n", ""), "k": p.get("k", "3")}
-    matches, notes = None, []
-    if q["joint_type"]:
-        k = q["k"] if q["k"].isdigit() else "3"
-        body = NearestIn(joint_type=q["joint_type"], k=max(1, min(50, int(k))), conditions=ConditionsIn(
-            materials=[m for m in q["materials"].replace("+", ",").split(",") if m.strip()],
-            torque_nm=_float(q["torque_nm"], "torque"), preload_n=_float(q["preload_n"], "preload")))
-        found, notes = run_nearest(request.app.state.repo, body)
-        matches = [match_json(m) for m in found]
-    return _page(request, "nearest.html", title="nearest joint", q=q, matches=matches, warnings=notes)
 
 
 def mount(app) -> None:
     """Add the pages, the bundled static files and ``/docs`` (Swagger UI from the package) to
     ``app``. FastAPI's own ``/docs``, ``/docs/oauth2-redirect`` and ``/redoc`` pages load
     their scripts from a CDN with inline code: they are replaced (``/docs``) or removed."""
+    from jointdb.server import web_catalogue, web_flow  # noqa: F401 - their pages join ``router``
+
     app.include_router(router)
+
+    @app.get("/", include_in_schema=False)
+    def root() -> RedirectResponse:
+        return RedirectResponse("/ui/joints", status_code=303)
+
     app.mount("/ui/static", StaticFiles(directory=str(HERE / "static")), name="static")
     cdn_pages = {app.docs_url, app.redoc_url, app.swagger_ui_oauth2_redirect_url} - {None}
     app.router.routes[:] = [rt for rt in app.router.routes if getattr(rt, "path", None) not in cdn_pages]

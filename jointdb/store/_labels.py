@@ -74,6 +74,37 @@ class LabelsAndStates:
                        details={"label": label, "previous_version": old}))
 
     @_db.with_db_errors
+    def unlabel(self, name: str, label: str, author: str | None = None) -> int:
+        """Remove ``label`` from a joint (the undo of a new label); the audit log keeps the
+        version it pointed at. Returns that version.
+
+        Raises
+        ------
+        NotFoundError
+            The joint has no such label.
+        """
+        from jointdb.errors import NotFoundError
+
+        label = check_label(label)
+        actor = current_actor(author)
+        removed: list[int] = []
+
+        def write(s: Session) -> None:
+            joint = joint_row(s, name)
+            row = s.scalar(select(LabelRow).where(LabelRow.joint_id == joint.id, LabelRow.label == label)
+                           .with_for_update())
+            if row is None:
+                raise NotFoundError(f"joint {name!r} has no label {label!r}")
+            removed[:] = [row.version]
+            s.delete(row)
+            s.add(AuditRow(at=utcnow(), actor=actor, action="unlabel", joint_name=name, version=row.version,
+                           details={"label": label, "previous_version": row.version}))
+            bump(s)
+
+        self.storage.retrying(write)
+        return removed[0]
+
+    @_db.with_db_errors
     def deprecate(
         self, name: str, version: int | None = None, reason: str = "", author: str | None = None, undo: bool = False
     ) -> list[JointVersion]:

@@ -323,8 +323,9 @@ def http_oddities(target) -> list[Attack]:
         "HTTP/0.9": "GET /\r\n\r\n", "bad method token": f"G(T / HTTP/1.1\r\nHost: {host}\r\n\r\n",
         "header without colon": f"GET / HTTP/1.1\r\nHost: {host}\r\nBroken\r\n\r\n",
         "NUL in header": f"GET / HTTP/1.1\r\nHost: {host}\r\nX-A: a\x00b\r\n\r\n",
-        "obs-fold header": f"GET / HTTP/1.1\r\nHost: {host}\r\nX-A: a\r\n b\r\n\r\n",
-        "1000 headers": f"GET / HTTP/1.1\r\nHost: {host}\r\n" + "".join(f"X-{i}: {i}\r\n" for i in range(1000)) + "\r\n",
+        # (to the API without a token: "/" now leads to the catalogue, a redirect, not a 404)
+        "obs-fold header": f"GET {API}/joints HTTP/1.1\r\nHost: {host}\r\nX-A: a\r\n b\r\n\r\n",
+        "1000 headers": f"GET {API}/joints HTTP/1.1\r\nHost: {host}\r\n" + "".join(f"X-{i}: {i}\r\n" for i in range(1000)) + "\r\n",
         "64 KiB URL": f"GET {API}/joints?q={'q' * 65536} HTTP/1.1\r\nHost: {host}\r\n\r\n",
         "lone percent": f"GET {API}/joints/% HTTP/1.1\r\nHost: {host}\r\n\r\n",
         "no Host": "GET /api/v1/joints HTTP/1.1\r\n\r\n",

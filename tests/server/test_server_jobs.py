@@ -382,7 +382,7 @@ def test_browser_session_needs_same_origin_and_csrf_header(deployment):
                                          "token": deployment.tokens["reader"]})
         assert r.status_code == 303
         csrf = csrf_re.search(web.get("/ui/joints").text).group(1)
-        cookie = {"Cookie": f"jointdb_session={web.cookies.get('jointdb_session', path='/ui')}"}
+        cookie = {"Cookie": f"jointdb_session={web.cookies.get('jointdb_session')}"}  # (scoped to / on r3-web)
     body = {"stack": _stack()}
     with httpx.Client(base_url=deployment.server.url, timeout=60, headers=cookie) as api:
         assert api.get("/api/v1/jobs").status_code == 200

@@ -45,7 +45,7 @@ def _form_csrf(client: httpx.Client, path: str) -> str:
 
 
 def _session_cookie(client: httpx.Client) -> str:
-    return client.cookies.get("jointdb_session", path="/ui")
+    return client.cookies.get("jointdb_session", path="/")
 
 
 def _new_token(server, name: str, role: str = "writer", team: str | None = None) -> str:
@@ -89,7 +89,7 @@ def test_sign_out_revokes_the_session_on_the_server(server):
     assert r.status_code == 303 and r.headers["location"] == "/ui/signin"
     c.close()
     with _web(server) as replay:  # the old cookie, replayed: signed out
-        replay.cookies.set("jointdb_session", sid, path="/ui")
+        replay.cookies.set("jointdb_session", sid, path="/")
         r = replay.get("/ui/joints")
         assert r.status_code == 303 and r.headers["location"] == "/ui/signin"
         assert 'jointdb_session=""' in r.headers.get("set-cookie", "")  # and the stale cookie is cleared
@@ -138,6 +138,29 @@ def test_sign_in_needs_its_csrf_token(server):
         csrf = CSRF.search(c.get("/ui/signin").text).group(1)
         r = c.post("/ui/signin", data={"token": token, "csrf": csrf}, headers={"Origin": "https://evil.example"})
         assert r.status_code == 403 and "jointdb_session" not in r.headers.get("set-cookie", "")
+
+
+def test_pages_scripts_call_the_api_with_the_session_and_its_csrf_header(server, tmp_path):
+    token = server.tokens["writer"]
+    _catalogue(server, token, tmp_path, "SESSION-API")
+    with closing(_signin(server, token)) as web:
+        csrf = _form_csrf(web, "/ui/joints/SESSION-API")
+        assert web.get("/api/v1/joints/SESSION-API").json()["name"] == "SESSION-API"  # reads: the cookie is enough
+        body = {"version": 1, "label": "by-script"}
+        r = web.post("/api/v1/joints/SESSION-API/labels", json=body)  # a write without the header
+        assert r.status_code == 403 and "X-CSRF-Token" in r.json()["error"]
+        r = web.post("/api/v1/joints/SESSION-API/labels", json=body, headers={"X-CSRF-Token": "0" * 64})
+        assert r.status_code == 403
+        r = web.post("/api/v1/joints/SESSION-API/labels", json=body,
+                     headers={"X-CSRF-Token": csrf, "Origin": "https://evil.example"})
+        assert r.status_code == 403
+        with server.repo() as repo:
+            assert repo.get("SESSION-API").labels == ()
+        r = web.post("/api/v1/joints/SESSION-API/labels", json=body, headers={"X-CSRF-Token": csrf})
+        assert r.status_code == 200 and r.json()["labels"] == ["by-script"]
+        assert web.get("/api/v1/admin/tokens").status_code == 403  # the session has its token's role, no more
+    with _web(server) as anon:  # no session: 401 as before
+        assert anon.get("/api/v1/joints").status_code == 401
 
 
 def test_form_csrf_is_bound_to_the_session_not_the_token(server, tmp_path):
@@ -288,7 +311,7 @@ def test_cookies_flags_on_a_loopback_server(server):
     with _web(server) as c:
         r = c.get("/ui/signin")
         cookie = r.headers["set-cookie"].lower()
-        assert "httponly" in cookie and "samesite=strict" in cookie and "path=/ui" in cookie
+        assert "httponly" in cookie and "samesite=strict" in cookie and "path=/ui/signin" in cookie
         assert "secure" not in cookie  # `jointdb serve` on 127.0.0.1 without TLS
         assert "strict-transport-security" not in r.headers
 
@@ -394,10 +417,11 @@ def test_ui_and_docs_in_a_browser_under_the_csp_offline(server, tmp_path):
         cookie = next(c for c in context.cookies() if c["name"] == "jointdb_session")
         assert cookie["value"] != server.tokens["writer"] and cookie["httpOnly"] and cookie["sameSite"] == "Strict"
         page.goto(f"{server.url}/ui/joints/CSP-1")
-        page.wait_for_selector("#plot svg path.curve")
+        page.wait_for_selector(".plot .uplot canvas")  # the bundled plotting library ran under the CSP
         assert page.evaluate("getComputedStyle(document.querySelector('header')).display") == "flex"  # CSS applied
         page.fill("#label-name", "csp-ok")
         page.click("#label")
+        page.click("#confirm")
         page.wait_for_selector("#notice")
         page.click("#signout")
         page.wait_for_url("**/ui/signin")
