@@ -48,7 +48,7 @@ class ConditionsIn(CampaignConditions):
 class NearestIn(Strict):
     joint_type: str = Field(..., max_length=100, description="Joint type (types are never mixed).")
     conditions: ConditionsIn = Field(default_factory=ConditionsIn)
-    k: int = Field(3, ge=1, le=50, description="Number of nearest versions.")
+    k: int = Field(3, ge=1, le=100, description="Number of nearest versions (a stack prediction asks for 64: the interpolation pool and its leave-one-out neighbours).")
     at: Optional[str] = Field(None, max_length=40, description="Query the catalogue as it was at this ISO time.")
     label: Optional[str] = Field(None, max_length=100, description="Only versions carrying this label.")
     all_versions: bool = Field(False, description="Rank every version, not only the newest of each joint.")

@@ -95,10 +95,12 @@ def _accepted(response: Response, job_id: str) -> dict[str, Any]:
 @router.post("/jobs/predict", status_code=202, responses=_ACCEPTED, summary="Predict a stack's tool tip (job)")
 def submit_predict(body: PredictIn, request: Request, response: Response, who=reader) -> dict[str, Any]:
     """Body as ``POST /api/v1/predict``; the result as its answer (plus ``rigid_tip_frf``)."""
-    from jointdb.stack import stack_from_dict
+    from jointdb.usecases import stack_from_document
 
-    stack_from_dict(body.stack)  # a bad stack is a 422 now, not a failed job later
-    return _accepted(response, queue(request).submit("predict", who.name, body.model_dump(mode="json")))
+    # a bad stack, or a part that is not catalogued, is a 422 now, not a failed job later; the stack is
+    # queued as sent (a hostile deep stack is refused by the reader, not by pydantic's serialiser)
+    stack_from_document(body.stack, request.app.state.repo)
+    return _accepted(response, queue(request).submit("predict", who.name, {"stack": body.stack}))
 
 
 @router.post("/jobs/lobes", status_code=202, responses=_ACCEPTED, summary="Stability lobes (job; ZOA or SD)")

@@ -18,10 +18,31 @@ def _doc() -> dict:
     return json.loads((STACKS / "endmill-modelled-spindle.json").read_text())
 
 
-@pytest.mark.parametrize("path", sorted(STACKS.glob("*.json")), ids=lambda p: p.name)
+def _names_parts(path: Path) -> bool:
+    doc = json.loads(path.read_text())
+    return any(isinstance(doc.get(k), dict) and "part" in doc[k] for k in ("tool", "holder", "spindle"))
+
+
+INLINE = [p for p in sorted(STACKS.glob("*.json")) if not _names_parts(p)]
+BY_PARTS = [p for p in sorted(STACKS.glob("*.json")) if _names_parts(p)]
+
+
+@pytest.mark.parametrize("path", INLINE, ids=lambda p: p.name)
 def test_example_stack_files_are_valid_and_round_trip(path):
     spec = stack_from_dict(json.loads(path.read_text()))
     assert stack_from_dict(stack_to_dict(spec)) == spec
+
+
+@pytest.mark.parametrize("path", BY_PARTS, ids=lambda p: p.name)
+def test_example_stacks_naming_parts_follow_the_schema_and_need_the_database(path):
+    """A stack naming catalogued parts is valid by the schema; the file reader alone refuses it by
+    field, pointing to the use case that resolves parts (tests/store/test_store_parts.py predicts it)."""
+    from jointdb.schemas import validate
+
+    doc = json.loads(path.read_text())
+    validate("stack", doc)
+    with pytest.raises(InputError, match=r"\.part: a catalogued part is resolved from the database first"):
+        stack_from_dict(doc)
 
 
 def test_interface_forms():

@@ -322,7 +322,7 @@ ARGS = [
     ("downgrade-no-yes", ["db", "downgrade"], BAD, "add --yes"),
     ("downgrade-base-no-yes", ["db", "downgrade", "--to", "base"], BAD, "every table and all data"),
     ("downgrade-bogus", ["db", "downgrade", "--to", "bogus", "--yes"], BAD, "unknown revision"),
-    ("downgrade-too-far", ["db", "downgrade", "--to", "-9", "--yes"], BAD, "cannot go 9 steps"),
+    ("downgrade-too-far", ["db", "downgrade", "--to", "-99", "--yes"], BAD, "cannot go 99 steps"),
     ("upgrade-bogus", ["db", "upgrade", "--to", "bogus"], BAD, "bogus"),
     ("gc-no-yes", ["db", "gc"], BAD, "--yes"),
     ("gc-negative-age", ["db", "gc", "--min-age", "-1", "--dry-run"], BAD, "--min-age"),
