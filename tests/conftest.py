@@ -20,6 +20,36 @@ os.environ.setdefault("JOINTDB_QUERY_CACHE", tempfile.mkdtemp(prefix="jointdb-te
 os.environ.setdefault("JOINTDB_CACHE_DIR", tempfile.mkdtemp(prefix="jointdb-test-download-cache-"))
 
 
+def _own_pg_database() -> None:
+    """Under pytest-xdist, each worker process runs its PostgreSQL tests in a database of its own.
+
+    The migrations install DDL guards as event triggers, which are per database: a worker dropping a
+    test schema (and its guard) while another runs DDL in the same database would make the other's
+    statement fail ("cache lookup failed for function"). ``JOINTDB_TEST_PG_URL`` is rewritten to the
+    worker's database (created when missing), which every test and server subprocess then inherits.
+    """
+    worker, url = os.environ.get("PYTEST_XDIST_WORKER"), os.environ.get("JOINTDB_TEST_PG_URL")
+    if not worker or not url:
+        return
+    import sqlalchemy as sa
+    from sqlalchemy.engine import make_url
+
+    name = "jointdb_test_" + "".join(ch for ch in worker if ch.isalnum())
+    engine = sa.create_engine(url, isolation_level="AUTOCOMMIT")
+    try:
+        with engine.connect() as conn:
+            if conn.execute(sa.text("SELECT 1 FROM pg_database WHERE datname = :n"), {"n": name}).first() is None:
+                conn.exec_driver_sql(f'CREATE DATABASE "{name}"')
+    except sa.exc.OperationalError:
+        return  # no server: the PostgreSQL tests say so themselves
+    finally:
+        engine.dispose()
+    os.environ["JOINTDB_TEST_PG_URL"] = make_url(url).set(database=name).render_as_string(hide_password=False)
+
+
+_own_pg_database()
+
+
 def _load_script(relative: str):
     """The repository script ``relative`` (e.g. ``fixtures/make_catalogue.py``) imported as a module under its
     file name (registered in ``sys.modules``, so dataclasses and pickling inside it work)."""

@@ -76,7 +76,21 @@ class LabelsAndStates:
     @_db.with_db_errors
     def unlabel(self, name: str, label: str, author: str | None = None) -> int:
         """Remove ``label`` from a joint (the undo of a new label); the audit log keeps the
-        version it pointed at. Returns that version.
+        version it pointed at.
+
+        Parameters
+        ----------
+        name
+            The joint.
+        label
+            The label to remove.
+        author
+            Who removes it (default: the current actor).
+
+        Returns
+        -------
+        int
+            The version the label pointed at.
 
         Raises
         ------
