@@ -93,14 +93,18 @@ def session_identity(request: Request) -> TokenInfo | None:
     return info
 
 
-def need(role: str):
-    """A dependency: the caller's token must have ``role`` (reads: none when the server has open reads)."""
+def need(role: str, anonymous_reads: bool = True):
+    """A dependency: the caller (API token, or browser session with CSRF on writes) must have ``role``.
+
+    ``anonymous_reads``: with the server's open reads, a reader needs no identity (the
+    dependency gives None); False for what belongs to somebody (jobs), which always needs one.
+    """
 
     def dependency(request: Request, _scheme=Security(BEARER)) -> TokenInfo | None:
         token = bearer(request)
         info = identify(request, token) if token is not None else session_identity(request)
         if info is None:
-            if role == "reader" and request.app.state.settings.open_reads:
+            if anonymous_reads and role == "reader" and request.app.state.settings.open_reads:
                 return None
             raise HTTPException(401, f"this request needs a {role} token (Authorization: Bearer <token>)",
                                 headers={"WWW-Authenticate": "Bearer"})

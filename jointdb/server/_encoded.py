@@ -124,8 +124,11 @@ class EncodedCache:
             return
         try:
             fd, tmp = tempfile.mkstemp(dir=self.folder, prefix=".part-")
+        except OSError:  # the folder went away or is full: serve from memory, try again next time
+            return
+        try:
             with os.fdopen(fd, "wb") as fh:
                 fh.write(hashlib.sha256(data).hexdigest().encode() + b"\n" + data)
             os.replace(tmp, self.folder / key)
-        except OSError:  # a full disk: serve from memory, try again next time
-            Path(tmp).unlink(missing_ok=True) if "tmp" in locals() else None
+        except OSError:  # a full disk: no half-written file is left behind
+            Path(tmp).unlink(missing_ok=True)

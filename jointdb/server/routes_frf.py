@@ -70,6 +70,11 @@ def encoded_cache(request: Request):
     return cache
 
 
+def encoded_frf(request: Request, r, jv, fmt: str) -> bytes:
+    """The bytes of version ``jv``'s FRF in ``fmt``: from the app's cache of encoded files, encoded on a miss."""
+    return encoded_cache(request).get(jv.record_sha256, fmt, lambda: render(jv, r.load_frf(jv), fmt))
+
+
 def etag(record_sha256: str, fmt: str) -> str:
     return f'"{record_sha256[:40]}-{fmt}"'
 
@@ -87,7 +92,7 @@ def download(request: Request, name: Name, version: Annotated[int, Path(ge=1, le
     wanted = [t.strip() for t in request.headers.get("if-none-match", "").split(",")]
     if tag in wanted or "*" in wanted:
         return Response(status_code=304, headers=headers)
-    body = encoded_cache(request).get(jv.record_sha256, format, lambda: render(jv, r.load_frf(jv), format))
+    body = encoded_frf(request, r, jv, format)
     media, suffix = FORMATS[format]
     safe = "".join(ch if ch.isalnum() or ch in "-_." else "_" for ch in name)
     headers["Content-Disposition"] = f'attachment; filename="{safe}-v{version}{suffix}"'

@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import base64
 import binascii
-import hmac
 import json
 import tempfile
 from pathlib import Path
@@ -27,7 +26,7 @@ from typing import Any, Optional
 from fastapi import APIRouter, HTTPException, Query, Request, Response, Security
 
 from jointdb.errors import InputError, NotFoundError
-from jointdb.server._deps import BEARER, bearer, identify, version_json
+from jointdb.server._deps import need, version_json
 from jointdb.server._schemas import DiagnoseIn, IdentifyIn, JobCatalogueIn, LobesJobIn, PredictIn
 
 router = APIRouter(tags=["jobs"])
@@ -35,37 +34,10 @@ JobId = str
 _ACCEPTED = {202: {"description": "Queued: the job's id, URL and state (and a Location header)."}}
 
 
-def _caller(role: str):
-    """A dependency: who asks (token or browser session with CSRF on POST), with ``role``."""
-
-    def dependency(request: Request, _scheme=Security(BEARER)):
-        token = bearer(request)
-        if token is not None:
-            info = identify(request, token)
-        else:
-            from jointdb.server.web import _csrf, _same_origin, _session
-
-            sid, info = _session(request)
-            if info is None:
-                raise HTTPException(401, f"this request needs a {role} token (Authorization: Bearer <token>) or "
-                                         "a signed-in session", headers={"WWW-Authenticate": "Bearer"})
-            if request.method == "POST":
-                try:
-                    _same_origin(request)
-                except PermissionError as exc:
-                    raise HTTPException(403, str(exc)) from None
-                if not hmac.compare_digest(request.headers.get("x-csrf-token", ""), _csrf(sid)):
-                    raise HTTPException(403, "the X-CSRF-Token header does not match your session; reload the "
-                                             "page and try again")
-        if not info.allows(role):
-            raise HTTPException(403, f"the token of {info.name} has role {info.role}; this request needs {role}")
-        return info
-
-    return Security(dependency)
-
-
-reader = _caller("reader")
-writer = _caller("writer")
+#: Who asks: an API token, or a browser session (CSRF and same origin on POST); always someone, since a
+#: job belongs to whoever submitted it (no anonymous reads even on an open-reads server).
+reader = Security(need("reader", anonymous_reads=False))
+writer = Security(need("writer", anonymous_reads=False))
 
 
 def queue(request: Request):

@@ -28,7 +28,7 @@ from fastapi.staticfiles import StaticFiles
 
 from jointdb.errors import InputError
 from jointdb.server._deps import SESSION_COOKIE
-from jointdb.server.web_core import (HERE, SIGNIN_COOKIE, _csrf, _form, _handle, _mac, _page, _same_origin,  # noqa: F401
+from jointdb.server.web_core import (HERE, SIGNIN_COOKIE, _csrf, _form, _handle, _mac, _page,
                                      _session, _set_cookie,
                                      _signin_nonce, router, templates)
 from jointdb.store._tokens import close_session, open_session

@@ -253,7 +253,7 @@ def _merge_rows(a: list[tuple[str, str]], b: list[tuple[str, str]]) -> list[tupl
 @router.get("/joints/{name}/versions/{version}/frf")
 @_handle
 def download(request: Request, name: str, version: int):
-    from jointdb.server.routes_frf import FORMATS, encoded_cache, etag, render
+    from jointdb.server.routes_frf import FORMATS, encoded_frf, etag
     from jointdb.server.routes_joints import joint_name
 
     _reader(request)
@@ -267,8 +267,7 @@ def download(request: Request, name: str, version: int):
     # a signed-in download is not kept in the browser's cache (a shared computer would still
     # have it after sign-out); open reads are public and never change: cached for a year
     cache = "public, max-age=31536000, immutable" if request.app.state.settings.open_reads else "no-store"
-    body = encoded_cache(request).get(jv.record_sha256, fmt, lambda: render(jv, r.load_frf(jv), fmt))
-    return Response(body, media_type=media,
+    return Response(encoded_frf(request, r, jv, fmt), media_type=media,
                     headers={"ETag": etag(jv.record_sha256, fmt), "Cache-Control": cache,
                              "Content-Disposition": f'attachment; filename="{safe}-v{version}{suffix}"'})
 

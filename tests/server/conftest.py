@@ -8,31 +8,16 @@ import pytest
 pytest.importorskip("fastapi", reason="the server extra (fastapi, uvicorn, httpx) is not installed")
 pytest.importorskip("httpx", reason="the server extra (httpx) is not installed")
 
-from server_helpers import _pg_schema, drop_pg_schema, make_tokens, pg_base_url, start_server, stop_server  # noqa: E402
+from server_helpers import make_tokens, migrated_database, start_server, stop_server  # noqa: E402
 
 
 @pytest.fixture(scope="module", params=["sqlite", "postgresql"])
 def server(request, tmp_path_factory):
     """A migrated database with tokens and a running server (one per test module and backend)."""
-    from jointdb.store import upgrade
-
     tmp = tmp_path_factory.mktemp(f"server-{request.param}")
-    cleanup = None
-    if request.param == "sqlite":
-        db = f"sqlite:///{tmp / 'j.sqlite'}"
-    else:
-        engine, schema, db = _pg_schema(pg_base_url())
-        cleanup = (engine, schema)
-    try:
-        upgrade(db)
+    with migrated_database(request.param, tmp) as db:
         tokens = make_tokens(db, tmp / "blobs")
         srv = start_server(db, tmp / "blobs", tmp / "server.log")
         srv.tokens = tokens
         yield srv
         stop_server(srv)
-    finally:
-        if cleanup:
-            drop_pg_schema(*cleanup)
-            cleanup[0].dispose()
-
-

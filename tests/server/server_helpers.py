@@ -4,6 +4,7 @@ stop ``jointdb serve`` on a free local port, tokens per role, joint-file uploads
 from __future__ import annotations
 
 import base64
+import contextlib
 import os
 import signal
 import socket
@@ -42,6 +43,27 @@ def one_line_4xx(r, status=None) -> str:
     msg = r.json()["error"]
     assert msg and "\n" not in msg and "Traceback" not in msg
     return msg
+
+
+@contextlib.contextmanager
+def migrated_database(backend: str, tmp: Path):
+    """The URL of a migrated database: ``"sqlite"`` a file in ``tmp``; ``"postgresql"`` a fresh schema
+    (skipped without ``JOINTDB_TEST_PG_URL``), dropped afterwards."""
+    from jointdb.store import upgrade
+
+    cleanup = None
+    if backend == "sqlite":
+        db = f"sqlite:///{tmp / 'j.sqlite'}"
+    else:
+        engine, schema, db = _pg_schema(pg_base_url())
+        cleanup = (engine, schema)
+    try:
+        upgrade(db)
+        yield db
+    finally:
+        if cleanup:
+            drop_pg_schema(*cleanup)
+            cleanup[0].dispose()
 
 
 def free_port() -> int:

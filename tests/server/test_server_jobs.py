@@ -18,7 +18,7 @@ import httpx
 import numpy as np
 import pytest
 
-from server_helpers import _pg_schema, drop_pg_schema, make_tokens, pg_base_url, start_server, stop_server
+from server_helpers import make_tokens, migrated_database, start_server, stop_server
 
 ROOT = Path(__file__).resolve().parents[2]
 CUT = {"teeth": 4, "kt": 6e8, "kr": 2e8, "immersion": 0.5, "rpm_min": 2000.0, "rpm_max": 20000.0}
@@ -71,24 +71,11 @@ class Deployment:
 
 @pytest.fixture(scope="module", params=["sqlite", "postgresql"])
 def deployment(request, tmp_path_factory):
-    from jointdb.store import upgrade
-
     tmp = tmp_path_factory.mktemp(f"jobs-{request.param}")
-    cleanup = None
-    if request.param == "sqlite":
-        db = f"sqlite:///{tmp / 'j.sqlite'}"
-    else:
-        engine, schema, db = _pg_schema(pg_base_url())
-        cleanup = (engine, schema)
-    try:
-        upgrade(db)
+    with migrated_database(request.param, tmp) as db:
         dep = Deployment(request.param, db, tmp)
         yield dep
         dep.stop()
-    finally:
-        if cleanup:
-            drop_pg_schema(*cleanup)
-            cleanup[0].dispose()
 
 
 def submit(c: httpx.Client, kind: str, body: dict) -> tuple[str, float]:
