@@ -211,7 +211,7 @@ def _substructures(cpath: Path, where: str, raw: Any, root: Path | None = None) 
         w = f"{where}.{name}"
         if not isinstance(spec, dict):
             raise _err(cpath, w, "must be an object with \"model\" or \"uff58\"")
-        unknown = set(spec) - {"model", "uff58", "dofs"}
+        unknown = set(spec) - {"model", "uff58", "dofs", "provenance"}
         if unknown:
             raise _err(cpath, w, f"unknown field(s) {', '.join(sorted(unknown))}")
         if ("model" in spec) == ("uff58" in spec):

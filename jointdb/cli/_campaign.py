@@ -15,6 +15,7 @@ from typing import Annotated, Any, Optional
 
 import typer
 
+from jointdb.cli._store import DbOpt
 from jointdb.errors import InputError
 
 CAMPAIGN_HELP = "Scaffold a measurement campaign from a folder of files, or check one."
@@ -66,7 +67,14 @@ def init_cmd(
     out: Annotated[Optional[Path], typer.Option("--out", help="Campaign file to write (default: FOLDER/campaign.json).")] = None,
     smoothing: Annotated[Optional[int], typer.Option("--smoothing", help="Savitzky-Golay window (odd number of lines) for the identification.")] = None,
     fit_band: Annotated[Optional[str], typer.Option("--fit-band", help="FMIN,FMAX [Hz] of the constant (k, c) fit.")] = None,
-    force: Annotated[bool, typer.Option("--force", help="Overwrite an existing campaign file.")] = False,
+    force: Annotated[bool, typer.Option("--force", help="Overwrite an existing campaign file (and holder-on-spindle.uff).")] = False,
+    spindle: Annotated[Optional[str], typer.Option("--spindle", help="Build A from parts: the catalogued spindle, NAME@VERSION or NAME@LABEL.")] = None,
+    holder: Annotated[Optional[str], typer.Option("--holder", help="Build A from parts: the catalogued holder, NAME@VERSION or NAME@LABEL.")] = None,
+    through_joint: Annotated[Optional[str], typer.Option("--through-joint", help="Build A from parts: the holder-spindle joint, NAME@VERSION, NAME@LABEL or a JSON query (docs/campaigns.md).")] = None,
+    insertion: Annotated[Optional[float], typer.Option("--insertion", help="Build A from parts: clamped shank length in the holder bore [m].")] = None,
+    shank_diameter: Annotated[Optional[float], typer.Option("--shank-diameter", help="Build A from parts: test tool shank diameter [m].")] = None,
+    shank_material: Annotated[Optional[str], typer.Option("--shank-material", help="Build A from parts: test tool material, e.g. carbide.")] = None,
+    db: DbOpt = None,
 ) -> None:
     """Write a campaign file for the UFF58 and model files in FOLDER.
 
@@ -75,6 +83,12 @@ def init_cmd(
     (or takes flags) for the joint type and conditions. Then run `jointdb campaign check`.
     Example: jointdb campaign init tests-2026-11/ --type tool-holder --material carbide
     --material steel --torque 40
+
+    A tool-holder campaign can build A from the catalogue instead: --spindle, --holder and
+    --through-joint (the catalogued taper joint) with the test tool's --insertion,
+    --shank-diameter and --shank-material give FOLDER/holder-on-spindle.uff (the holder
+    with the shank stub on the spindle at the holder nose, x and ry) and record the parts
+    and joint versions in the campaign (docs/campaigns.md).
     """
     from jointdb.cli._output import message
     from jointdb.campaign._scaffold import scaffold_campaign
@@ -96,7 +110,17 @@ def init_cmd(
         preload = _ask(None, "--preload", "preload / drawbar force [N] (empty: none)", float, required=False)
     conditions = {"materials": list(mats or []), "torque_nm": torque, "preload_n": preload,
                   "geometry": _pairs(geometry, "--geometry"), "extra": _pairs(extra, "--extra")}
-    doc, notes = scaffold_campaign(folder, joint_type=jt, conditions=conditions, name=name)
+    built = _substructure_a(folder, force, db, spindle=spindle, holder=holder, through_joint=through_joint,
+                            insertion=insertion, shank_diameter=shank_diameter, shank_material=shank_material)
+    try:
+        doc, notes = scaffold_campaign(folder, joint_type=jt, conditions=conditions, name=name)
+    except InputError:
+        if built is not None:  # ours, written moments ago: a failed init leaves nothing behind
+            built[0].unlink(missing_ok=True)
+        raise
+    if built is not None:
+        doc["substructures"][doc["interface"]["a"]]["provenance"] = dict(built[1].provenance)
+        notes = (*notes, _through_note(built[1].provenance))
     options: dict[str, Any] = {}
     if smoothing is not None:
         if smoothing < 3 or smoothing % 2 == 0:
@@ -125,6 +149,32 @@ def init_cmd(
     if not doc["conditions"]:
         message("note: no conditions given; the joint can be pinned but not found by a query")
     typer.echo(str(target))
+
+
+def _substructure_a(folder: Path, force: bool, db, **given):
+    """``(path, SubstructureA)`` written into FOLDER when the parts options are given; else None."""
+    if all(v is None for v in given.values()):
+        return None
+    flags = {"spindle": "--spindle", "holder": "--holder", "through_joint": "--through-joint",
+             "insertion": "--insertion", "shank_diameter": "--shank-diameter", "shank_material": "--shank-material"}
+    missing = [flags[k] for k, v in given.items() if v is None]
+    if missing:
+        raise InputError(f"{', '.join(missing)}: substructure A from catalogued parts needs "
+                         + ", ".join(flags.values()))
+    from jointdb.cli._store import _repo
+    from jointdb.usecases._substructure_a import through_joint_choice, write_substructure_a
+
+    given["through_joint"] = through_joint_choice(given["through_joint"])
+    with _repo(db) as repo:
+        return write_substructure_a(folder, force=force, store=repo, **given)
+
+
+def _through_note(prov: dict) -> str:
+    """One line: which parts and which taper joint substructure A was built from."""
+    tj = prov["through_joint"]
+    used = ", ".join(f"{u['joint']} (weight {u['weight']:.2f})" for u in tj["joints_used"]) or tj["joint"]
+    return (f"substructure A = {', '.join(p['part'] for p in prov['parts'])} through the holder–spindle joint "
+            f"{used} ({tj['method']}){'; ' + tj['warnings'] if tj['warnings'] else ''}")
 
 
 def check_cmd(

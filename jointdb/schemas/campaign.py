@@ -22,6 +22,10 @@ class Substructure(Strict):
     uff58: FilePath | None = Field(default=None,
                                    description="UFF58 file with the substructure's FRFs (rotations included)")
     dofs: list[DofLabel] | None = None
+    provenance: dict[str, Any] | None = Field(
+        default=None, description="where a derived substructure came from: the catalogued parts and joint "
+                                  "versions `jointdb campaign init --spindle --holder --through-joint` built it from "
+                                  "(recorded, not read by identify)")
 
     @model_validator(mode="after")
     def _one_source(self):
