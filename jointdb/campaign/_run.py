@@ -348,6 +348,30 @@ def load_joint_file(path: Path) -> tuple[FRF, str]:
     return frf, str(model)
 
 
+def _couple_dofs(c: Campaign, subs: dict, key: str, raw) -> list[tuple[str, Dof]]:
+    """``couple.outputs`` / ``couple.inputs`` as ``(substructure, Dof)`` pairs, each one checked by name."""
+    if not isinstance(raw, list) or not raw:
+        raise _err(c.path, f"couple.{key}", 'must be a non-empty list of [substructure, DOF] pairs, e.g. [["tool", "1x"]]')
+    out = []
+    for i, pair in enumerate(raw):
+        where = f"couple.{key}[{i}]"
+        if not (isinstance(pair, list) and len(pair) == 2 and all(isinstance(v, str) for v in pair)):
+            raise _err(c.path, where, f'must be a [substructure, DOF] pair such as ["tool", "1x"], got {pair!r}'[:200])
+        name, label = pair
+        if name not in subs:
+            raise _err(c.path, where, f"unknown substructure {name!r} (have: {', '.join(subs)})")
+        try:
+            dof = Dof.parse(label)
+        except (InputError, ValueError) as exc:
+            raise _err(c.path, where, str(exc)) from None
+        have = set(subs[name].outputs) | set(subs[name].inputs)
+        if dof not in have:
+            raise _err(c.path, where, f"substructure {name!r} has no DOF {dof} (it has "
+                       f"{' '.join(str(d) for d in sorted(have, key=str))})")
+        out.append((name, dof))
+    return out
+
+
 def couple_campaign(c: Campaign, joint_override: Path | None = None) -> dict:
     """Couple the campaign's substructures with a joint; compare with measurements if there are any.
 
@@ -373,10 +397,16 @@ def couple_campaign(c: Campaign, joint_override: Path | None = None) -> dict:
     if spec == "rigid":
         joint, label = None, "rigid"
     elif isinstance(spec, dict):
+        if "k" not in spec or "c" not in spec:
+            raise _err(c.path, "couple.joint", "a spring–damper joint needs \"k\" and \"c\" lists")
+        for key in ("k", "c"):
+            if len(spec[key]) != len(a_dofs):
+                raise _err(c.path, f"couple.joint.{key}", f"has {len(spec[key])} value(s); give one per "
+                           f"interface.a_dofs ({' '.join(map(str, a_dofs))})")
         try:
             joint = spring_damper_joint(freq, spec["k"], spec["c"], a_dofs)
-        except KeyError:
-            raise _err(c.path, "couple.joint", "a spring–damper joint needs \"k\" and \"c\" lists") from None
+        except InputError as exc:
+            raise _err(c.path, "couple.joint", str(exc)) from None
         label = "spring-damper"
     else:
         p = Path(spec) if joint_override is not None else (c.path.parent / spec)
@@ -396,12 +426,11 @@ def couple_campaign(c: Campaign, joint_override: Path | None = None) -> dict:
         label = p.name
     outs_raw = c.couple.get("outputs")
     measured = merge_measurements(c.path, "measurements", c.measurements, c.band) if c.measurements else None
+    if c.couple.get("inputs") and not outs_raw:
+        raise _err(c.path, "couple.inputs", "given without couple.outputs; name the outputs too")
     if outs_raw:
-        try:
-            outs = [(str(n), Dof.parse(d)) for n, d in outs_raw]
-            ins = [(str(n), Dof.parse(d)) for n, d in c.couple.get("inputs", outs_raw)]
-        except (TypeError, ValueError):
-            raise _err(c.path, "couple.outputs", "must be a list of [substructure, DOF] pairs") from None
+        outs = _couple_dofs(c, subs, "outputs", outs_raw)
+        ins = _couple_dofs(c, subs, "inputs", c.couple.get("inputs") or outs_raw)
         try:
             g = couple(subs, _interfaces(c, joint), outs, ins)
         except InputError as exc:

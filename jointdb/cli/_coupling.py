@@ -110,6 +110,11 @@ def couple_cmd(
 ) -> None:
     """Couple a campaign's substructures through a joint (RC) and compare with its measurements.
 
+    What is coupled is the campaign's "couple" section: joint ("rigid", a joint HDF5 file or
+    {"k": [...], "c": [...]} per interface a_dof), outputs and inputs ([substructure, DOF]
+    pairs, rotations allowed; default the measured ones), frequency ({"min", "max", "step"}
+    in Hz; default the measurements' lines). Every field is documented in
+    docs/file-formats.md ("The couple section of a campaign") and checked by name.
     With --plots DIR the coupled (and measured) FRF is drawn in DIR/couple.png.
 
     Example: jointdb couple fixtures/campaigns/th-steel-30nm/campaign.json --joint joint.h5 --plots figs

@@ -6,7 +6,7 @@ from typing import Annotated, Any, Literal
 
 from pydantic import ConfigDict, Field, model_validator
 
-from jointdb.schemas._base import DofLabel, Finite, Name, NonNeg, Strict
+from jointdb.schemas._base import DofLabel, Finite, Name, NonNeg, Positive, Strict
 
 __all__ = ["CampaignFile"]
 
@@ -81,6 +81,42 @@ class Validation(Strict):
     measurements: list[FilePath] = Field(min_length=1)
 
 
+class SpringDamper(Strict):
+    """A joint of independent spring–dampers on the interface's ``a_dofs`` (in their order)."""
+
+    k: list[Positive] = Field(min_length=1, max_length=1000,
+                              description="stiffness per a_dof: N/m (translation), N·m/rad (rotation)")
+    c: list[NonNeg] = Field(min_length=1, max_length=1000,
+                            description="viscous damping per a_dof: N·s/m, N·m·s/rad")
+
+
+class CoupleFrequency(Strict):
+    """Frequency lines of `jointdb couple` when the campaign has no measurements to take them from."""
+
+    min: Positive = Field(description="first line, Hz (> 0: a free part has no static receptance)")
+    max: Positive = Field(description="last line, Hz")
+    step: Positive = Field(description="line spacing, Hz")
+
+
+DofPair = Annotated[list[Annotated[str, Field(min_length=1, max_length=100)]],
+                    Field(min_length=2, max_length=2, description='[substructure, DOF], e.g. ["tool", "1x"]')]
+
+
+class Couple(Strict):
+    """What `jointdb couple` computes (docs/file-formats.md, *The couple section*)."""
+
+    joint: Annotated[str, Field(min_length=1)] | SpringDamper | None = Field(
+        default=None, description='"rigid" (default), a joint HDF5 file from `jointdb identify` (relative to the '
+                                  'campaign file), or {"k": [...], "c": [...]} per a_dof; `--joint FILE` overrides it')
+    outputs: list[DofPair] | None = Field(
+        default=None, max_length=1000, description="response DOFs [substructure, DOF] (rotations allowed, e.g. "
+                                                   '["holder", "3ry"]); default: the measured ones')
+    inputs: list[DofPair] | None = Field(
+        default=None, max_length=1000, description="excitation DOFs [substructure, DOF]; default: the outputs")
+    frequency: CoupleFrequency | None = Field(
+        default=None, description="lines to couple on; default: the measurements' lines")
+
+
 class CampaignFile(Strict):
     """A joint identification test: substructures, interface, measured assembly FRFs, joint model."""
 
@@ -99,4 +135,4 @@ class CampaignFile(Strict):
     matrix: MatrixOptions | None = None
     options: Options | None = None
     validation: Validation | None = None
-    couple: dict[str, Any] | None = Field(default=None, description="options of `jointdb couple`")
+    couple: Couple | None = Field(default=None, description="what `jointdb couple` computes")
