@@ -57,7 +57,7 @@ def through_joint_choice(text: str) -> Any:
     Parameters
     ----------
     text
-        ``NAME@VERSION`` or ``NAME@LABEL`` (a catalogued joint), or a JSON object: a query
+        ``NAME@VERSION`` or ``NAME@LABEL`` (a catalogued joint), ``rigid``, or a JSON object: a query
         (``{"joint_type": "holder-spindle", "preload_n": 18000, ...}``, the nearest catalogued joint),
         ``{"query": {...}}``, or an explicit spring–damper ``{"k": [k_x, k_θ], "c": [c_x, c_θ]}``.
 
@@ -72,6 +72,8 @@ def through_joint_choice(text: str) -> Any:
         Neither a reference nor a JSON object.
     """
     text = text.strip()
+    if text == "rigid":
+        return text
     if text.startswith("{"):
         try:
             obj = json.loads(text)
@@ -81,7 +83,7 @@ def through_joint_choice(text: str) -> Any:
             raise InputError("--through-joint: a JSON value must be an object")
         return obj if ("query" in obj or "k" in obj) else {"query": obj}
     if "@" not in text:
-        raise InputError(f"--through-joint {text!r}: give NAME@VERSION, NAME@LABEL or a JSON query "
+        raise InputError(f"--through-joint {text!r}: give NAME@VERSION, NAME@LABEL, rigid or a JSON query "
                          "such as '{\"joint_type\": \"holder-spindle\", \"preload_n\": 18000}'")
     return text
 

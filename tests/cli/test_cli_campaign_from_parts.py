@@ -1,0 +1,100 @@
+"""``jointdb campaign init --spindle --holder --through-joint``: substructure A of a tool–holder campaign from
+catalogued parts (docs/campaigns.md, *The chain from the command line*).
+
+Known answer: receptance coupling of the holder (with the bonded shank stub) to the spindle through a rigid
+joint equals the monolithic FE model of the same beams on the same mesh (fixtures/make_catalogue.py's
+substructure A) to round-off. The chain through a catalogued joint against the truth is tests/test_campaign_walk.py.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+CAT = ROOT / "jointdb" / "data" / "catalogue"
+CHAIN = ROOT / "fixtures" / "campaigns" / "th-chain-carbide-060nm"
+PARTS = ["--spindle", "rig@1", "--holder", "er32@1", "--insertion", "0.035", "--shank-diameter", "0.012",
+         "--shank-material", "carbide"]
+
+
+def run(*args, cwd=None):
+    return subprocess.run([sys.executable, "-m", "jointdb", *map(str, args)], capture_output=True, text=True,
+                          cwd=cwd, stdin=subprocess.DEVNULL)
+
+
+def _make_catalogue():
+    spec = importlib.util.spec_from_file_location("make_catalogue", ROOT / "fixtures" / "make_catalogue.py")
+    module = importlib.util.module_from_spec(spec)
+    sys.modules["make_catalogue"] = module
+    spec.loader.exec_module(module)
+    return module
+
+
+@pytest.fixture
+def setup(tmp_path):
+    """A database with a spindle (5 mm mesh, as the holder model's) and the demo holder; a test folder."""
+    db = tmp_path / "j.sqlite"
+    spindle = json.loads((CAT / "models" / "spindle-alone.json").read_text())
+    spindle["max_element_length"] = 0.005
+    (tmp_path / "spindle.json").write_text(json.dumps(spindle))
+    r = run("parts", "add", "spindle", "rig", "--model", tmp_path / "spindle.json", "--point", "nose",
+            "--machine", "rig", "--db", db)
+    assert r.returncode == 0, r.stderr
+    r = run("parts", "add", "holder", "er32", "--from-stack", CAT / "demo-stack.json", "--db", db)
+    assert r.returncode == 0, r.stderr
+    folder = tmp_path / "th"
+    folder.mkdir()
+    shutil.copy(CHAIN / "assembly.uff", folder / "assembly.uff")
+    shutil.copy(CAT / "models" / "test-tool-carbide.json", folder / "tool.json")
+    return db, folder
+
+
+def test_rigid_taper_gives_the_monolithic_holder_on_spindle(setup):
+    db, folder = setup
+    r = run("campaign", "init", folder, "--type", "tool-holder", "--torque", "60", "--through-joint", "rigid",
+            *PARTS, "--db", db)
+    assert r.returncode == 0, r.stderr
+    doc = json.loads((folder / "campaign.json").read_text())
+    a = doc["substructures"]["holder-on-spindle"]
+    assert a["uff58"] == "holder-on-spindle.uff" and doc["interface"]["a_dofs"] == ["3x", "3ry"]
+    assert {p["part"] for p in a["provenance"]["parts"]} == {"rig@1", "er32@1"}
+    assert a["provenance"]["through_joint"]["joint"] == "rigid"
+    from jointdb.io import read_frf_uff58
+    from jointdb.stack import stack_from_dict
+
+    got = read_frf_uff58(folder / "holder-on-spindle.uff")
+    mc = _make_catalogue()
+    spec = stack_from_dict(mc.test_stack("carbide"))  # the same holder, a Ø12 carbide shank 35 mm deep
+    ref = mc.substructure_a(spec, 0.005).with_ingredient(mc.HystereticDamping(0.004))
+    want = ref.frf(got.freq, ["nose"], directions=("x", "ry"))
+    assert [str(d) for d in got.outputs] == ["3x", "3ry"]
+    scale = np.abs(want.values).max(axis=0)
+    assert np.max(np.abs(got.values - want.values) / scale) < 1e-8
+    check = run("campaign", "check", folder / "campaign.json")
+    assert check.returncode == 0, check.stderr
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--through-joint", "hs@1", *PARTS[:4]], "--insertion, --shank-diameter, --shank-material"),
+    (["--through-joint", "nosuch@1", *PARTS], "nosuch"),
+    (["--through-joint", "{bad json", *PARTS], "--through-joint: not valid JSON"),
+    (["--through-joint", "hs-without-version", *PARTS], "NAME@VERSION"),
+    (["--through-joint", "rigid", *PARTS[:-6], "--insertion", "0.035", "--shank-diameter", "0.02",
+      "--shank-material", "carbide"], "bore"),
+    (["--through-joint", "rigid", "--spindle", "er32@1", *PARTS[2:]], "spindle"),
+])
+def test_refusals_name_the_option_and_write_nothing(setup, args, message):
+    db, folder = setup
+    before = sorted(p.name for p in folder.iterdir())
+    r = run("campaign", "init", folder, "--type", "tool-holder", "--torque", "60", *args, "--db", db)
+    assert r.returncode != 0 and message in r.stderr, r.stderr
+    assert "Traceback" not in r.stderr
+    assert sorted(p.name for p in folder.iterdir()) == before
