@@ -157,3 +157,9 @@ def test_the_mesh_allowance_is_a_mesh_bias(tmp_path):
     params = _parameters(tmp_path / "report.json")
     for name, t in zip(("k 5x", "k 5ry", "c 5x", "c 5ry"), (*truth["k"], *truth["c"])):
         assert abs(params[name]["value"] - t) <= 3 * params[name]["std_error"], (name, params[name], t)
+
+
+def test_the_chain_fixture_is_reproduced_byte_for_byte(tmp_path, load_script):
+    written = load_script("fixtures/make_chain_campaign.py").write_chain_campaign(tmp_path)
+    for path in written:
+        assert path.read_bytes() == (FIXTURE / path.name).read_bytes(), path.name

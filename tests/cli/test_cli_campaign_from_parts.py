@@ -8,7 +8,6 @@ substructure A) to round-off. The chain through a catalogued joint against the t
 
 from __future__ import annotations
 
-import importlib.util
 import json
 import shutil
 import subprocess
@@ -30,14 +29,6 @@ def run(*args, cwd=None):
                           cwd=cwd, stdin=subprocess.DEVNULL)
 
 
-def _make_catalogue():
-    spec = importlib.util.spec_from_file_location("make_catalogue", ROOT / "fixtures" / "make_catalogue.py")
-    module = importlib.util.module_from_spec(spec)
-    sys.modules["make_catalogue"] = module
-    spec.loader.exec_module(module)
-    return module
-
-
 @pytest.fixture
 def setup(tmp_path):
     """A database with a spindle (5 mm mesh, as the holder model's) and the demo holder; a test folder."""
@@ -57,7 +48,7 @@ def setup(tmp_path):
     return db, folder
 
 
-def test_rigid_taper_gives_the_monolithic_holder_on_spindle(setup):
+def test_rigid_taper_gives_the_monolithic_holder_on_spindle(setup, load_script):
     db, folder = setup
     r = run("campaign", "init", folder, "--type", "tool-holder", "--torque", "60", "--through-joint", "rigid",
             *PARTS, "--db", db)
@@ -71,7 +62,7 @@ def test_rigid_taper_gives_the_monolithic_holder_on_spindle(setup):
     from jointdb.stack import stack_from_dict
 
     got = read_frf_uff58(folder / "holder-on-spindle.uff")
-    mc = _make_catalogue()
+    mc = load_script("fixtures/make_catalogue.py")
     spec = stack_from_dict(mc.test_stack("carbide"))  # the same holder, a Ø12 carbide shank 35 mm deep
     ref = mc.substructure_a(spec, 0.005).with_ingredient(mc.HystereticDamping(0.004))
     want = ref.frf(got.freq, ["nose"], directions=("x", "ry"))
