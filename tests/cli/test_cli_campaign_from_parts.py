@@ -89,3 +89,51 @@ def test_refusals_name_the_option_and_write_nothing(setup, args, message):
     assert r.returncode != 0 and message in r.stderr, r.stderr
     assert "Traceback" not in r.stderr
     assert sorted(p.name for p in folder.iterdir()) == before
+
+
+def _a_file(folder: Path, db: Path, *args) -> tuple[np.ndarray, dict]:
+    """Run init with ``args`` in a fresh copy of ``folder``; substructure A's receptance and provenance."""
+    from jointdb.io import read_frf_uff58
+
+    target = folder.parent / f"{folder.name}-{len(list(folder.parent.iterdir()))}"
+    shutil.copytree(folder, target)
+    r = run("campaign", "init", target, "--type", "tool-holder", "--torque", "60", *args, "--db", db)
+    assert r.returncode == 0, r.stderr
+    doc = json.loads((target / "campaign.json").read_text())
+    return read_frf_uff58(target / "holder-on-spindle.uff").values, doc["substructures"]["holder-on-spindle"]
+
+
+def test_a_measured_spindle_part_gives_the_same_a_as_its_model(setup, tmp_path):
+    """The spindle as a measured nose FRF set (here: its model's, written as a file) instead of a beam model."""
+    db, folder = setup
+    r = run("frf", tmp_path / "spindle.json", "--points", "nose", "--directions", "x,ry", "--fmin", "10",
+            "--fmax", "6000", "--df", "10", "--out", tmp_path / "nose.h5")
+    assert r.returncode == 0, r.stderr
+    r = run("parts", "add", "spindle", "rig-measured", "--frf", tmp_path / "nose.h5", "--node", "5",
+            "--machine", "rig", "--db", db)
+    assert r.returncode == 0, r.stderr
+    model, _ = _a_file(folder, db, "--through-joint", "rigid", *PARTS)
+    measured, prov = _a_file(folder, db, "--through-joint", "rigid", "--spindle", "rig-measured@1", *PARTS[2:])
+    assert {p["part"] for p in prov["provenance"]["parts"]} == {"rig-measured@1", "er32@1"}
+    scale = np.abs(model).max(axis=0)
+    assert np.max(np.abs(measured - model) / scale) < 1e-8
+
+
+def test_a_queried_taper_joint_is_the_nearest_catalogued_one(setup):
+    """--through-joint as a JSON query: chosen as `jointdb predict` chooses, recorded with its method; on a
+    catalogued condition it is that joint, so A equals A through the pinned version."""
+    db, folder = setup
+    for name in ("hs-hsk-a63-18kn", "hs-hsk-a63-24kn"):
+        r = run("catalogue", CAT / "campaigns" / name / "campaign.json", "--name", name, "--db", db)
+        assert r.returncode == 0, r.stderr
+    query = json.dumps({"joint_type": "holder-spindle", "materials": ["steel", "steel"], "preload_n": 18000,
+                        "geometry": {"taper_diameter_m": 0.063}})
+    pinned, _ = _a_file(folder, db, "--through-joint", "hs-hsk-a63-18kn@1", *PARTS)
+    queried, entry = _a_file(folder, db, "--through-joint", query, *PARTS)
+    tj = entry["provenance"]["through_joint"]
+    assert tj["joint"] == "hs-hsk-a63-18kn@1" and tj["distance"] == pytest.approx(0.0, abs=1e-12)
+    assert tj["method"] in ("nearest", "catalogued condition")
+    assert [u["joint"] for u in tj["joints_used"]] == ["hs-hsk-a63-18kn@1"]
+    np.testing.assert_allclose(queried, pinned, rtol=1e-12, atol=0)
+    other, _ = _a_file(folder, db, "--through-joint", "hs-hsk-a63-24kn@1", *PARTS)
+    assert np.max(np.abs(other - pinned)) > 1e-3 * np.max(np.abs(pinned))  # the joint matters
