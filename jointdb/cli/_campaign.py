@@ -235,7 +235,10 @@ def rotations_cmd(
         raise InputError(f"--out {out}: directory {out.parent} does not exist")
     if fill not in ("error", "reciprocity"):
         raise InputError(f"--fill {fill!r}: use error or reciprocity")
-    frf = read_frf_file(measured, fill=fill)
+    try:
+        frf = read_frf_file(measured, fill=fill)
+    except InputError as exc:  # the reader names its Python argument; here it is a flag
+        raise InputError(str(exc).replace("fill='reciprocity'", "--fill reciprocity")) from None
     ext = pts = None
     if method == "extension":
         from jointdb.fe import load_model

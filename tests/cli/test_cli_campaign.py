@@ -192,7 +192,7 @@ def test_rotations_fill_reciprocity_completes_a_uff58_file_with_one_cross_entry(
     args = ("rotations", tmp_path / "ext.uff", "--extension", tmp_path / "ext.json", "--joint-point", "base",
             "--points", "p1,p2", "--node", "3", "--trials", "4")
     refused = run(*args, "--out", tmp_path / "r.h5")
-    assert refused.returncode != 0 and "reciprocity" in refused.stderr and "Traceback" not in refused.stderr
+    assert refused.returncode != 0 and "--fill reciprocity" in refused.stderr and "Traceback" not in refused.stderr
     done = run(*args, "--out", tmp_path / "a.h5", "--fill", "reciprocity")
     assert done.returncode == 0, done.stderr
     ref = run("rotations", tmp_path / "ext.h5", "--extension", tmp_path / "ext.json", "--joint-point", "base",
