@@ -110,6 +110,12 @@ def test_campaign_chain_walk_identifies_both_joints(tmp_path):
     chain = _parameters(work / "th-chain/report.json")
     _check(chain, truth["tool-holder"], 3, TAPER_BUDGET)
 
+    # re-coupled through the identified joint, the test assembly is the measurement up to its noise: the mean
+    # |relative deviation| of a complex Gaussian relative noise of RMS σ is σ·√π/2 ≈ 0.89 σ; allowed 2 σ
+    coupled = json.loads((work / "th-chain/couple.json").read_text())
+    assert coupled["mean_relative_deviation_from_measurement"] <= 2 * truth["noise"], coupled
+    assert coupled["verdict"][0].startswith("OK"), coupled["verdict"]
+
     # A's provenance names the parts and the catalogued taper joint; the catalogued version hashes the campaign
     doc = json.loads((work / "th-chain/campaign.json").read_text())
     a = doc["substructures"][doc["interface"]["a"]]
