@@ -14,7 +14,7 @@ from jointdb.frf import FRF, Dof
 from jointdb.plots._axes import phase_unwrapped, plot_clipped, robust_limits
 from jointdb.plots._frf import _pyplot, _unit, save_figure
 
-__all__ = ["save_kc_plot", "save_comparison_plot"]
+__all__ = ["save_kc_plot", "save_comparison_plot", "comparison_figure"]
 
 
 def save_kc_plot(path: "str | Path", joint: FRF, kc_fit=None, title: str | None = None,
@@ -73,8 +73,24 @@ def save_kc_plot(path: "str | Path", joint: FRF, kc_fit=None, title: str | None 
     return save_figure(fig, path, dpi=110)
 
 
-def save_comparison_plot(path: "str | Path", curves: Sequence[tuple[str, FRF]], pairs=None,
-                         title: str | None = None) -> Path:
+def save_comparison_plot(path: "str | Path", curves: Sequence[tuple[str, FRF]], **kwargs) -> Path:
+    """Write :func:`comparison_figure` of ``curves`` to the image file ``path`` (110 dpi).
+
+    Parameters
+    ----------
+    path
+        Image file to write (``.png``, ``.pdf``, ``.svg``).
+    curves, **kwargs
+        As :func:`comparison_figure` (``pairs``, ``title``).
+
+    Returns
+    -------
+    Path
+    """
+    return save_figure(comparison_figure(curves, **kwargs), path, dpi=110)
+
+
+def comparison_figure(curves: Sequence[tuple[str, FRF]], pairs=None, title: str | None = None):
     """Magnitude (log) and unwrapped phase of several FRFs of the same entries (measured / fitted / rigid).
 
     The phase is continuous along frequency and every curve is put on the first one's branch
@@ -82,8 +98,6 @@ def save_comparison_plot(path: "str | Path", curves: Sequence[tuple[str, FRF]], 
 
     Parameters
     ----------
-    path
-        Image file to write.
     curves
         ``[(label, FRF), ...]`` with the same DOFs; the first is the reference (e.g. the measurement).
     pairs
@@ -93,8 +107,7 @@ def save_comparison_plot(path: "str | Path", curves: Sequence[tuple[str, FRF]], 
 
     Returns
     -------
-    Path
-        ``path``, written.
+    matplotlib.figure.Figure
     """
     from matplotlib.ticker import MultipleLocator
 
@@ -121,4 +134,4 @@ def save_comparison_plot(path: "str | Path", curves: Sequence[tuple[str, FRF]], 
     axes[0, 0].legend(fontsize=8)
     fig.suptitle(title or "assembly FRF")
     fig.tight_layout()
-    return save_figure(fig, path, dpi=110)
+    return fig

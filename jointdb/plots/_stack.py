@@ -13,7 +13,8 @@ import numpy as np
 
 from jointdb.plots._frf import _pyplot, save_figure
 
-__all__ = ["save_tip_comparison", "save_joint_distances", "joints_legend", "rigid_reason"]
+__all__ = ["save_tip_comparison", "tip_comparison_figure", "save_joint_distances", "joint_choice_figure",
+           "joints_legend", "rigid_reason"]
 
 
 def joints_legend(resolutions) -> str:
@@ -79,9 +80,25 @@ def _peak(frf, dof) -> tuple[float, float]:
     return float(mag[k]), float(frf.freq[k])
 
 
-def save_tip_comparison(path, prediction, *, title: str | None = None,
-                        extra: Sequence[tuple[str, object]] = (), label: str = "with catalogued joints",
-                        band=None) -> Path:
+def save_tip_comparison(path, prediction, **kwargs) -> Path:
+    """Write :func:`tip_comparison_figure` of ``prediction`` to the PNG file ``path``.
+
+    Parameters
+    ----------
+    path
+        PNG file to write.
+    prediction, **kwargs
+        As :func:`tip_comparison_figure` (``title``, ``extra``, ``label``, ``band``).
+
+    Returns
+    -------
+    Path
+    """
+    return save_figure(tip_comparison_figure(prediction, **kwargs), path, dpi=120)
+
+
+def tip_comparison_figure(prediction, *, title: str | None = None, extra: Sequence[tuple[str, object]] = (),
+                          label: str = "with catalogued joints", band=None):
     """Tool-tip receptance with the catalogued joints; the rigid-joint comparison in a panel of its own.
 
     Per direction (x, and y when it differs) three panels, all in µm/N: |H| on a linear scale with
@@ -91,8 +108,6 @@ def save_tip_comparison(path, prediction, *, title: str | None = None,
 
     Parameters
     ----------
-    path
-        PNG file to write.
     prediction
         :class:`jointdb.stack.Prediction`.
     title
@@ -108,7 +123,7 @@ def save_tip_comparison(path, prediction, *, title: str | None = None,
 
     Returns
     -------
-    Path
+    matplotlib.figure.Figure
     """
     import textwrap
 
@@ -135,7 +150,7 @@ def save_tip_comparison(path, prediction, *, title: str | None = None,
     for col, d in enumerate(directions):
         if band is not None and d in band.magnitude:
             _note_thin_band(axes[0, col], band, d)
-    return save_figure(fig, path, dpi=120)
+    return fig
 
 
 def _tip_panels(axes, d: str, curves, rigid, band) -> None:
@@ -182,8 +197,25 @@ def _note_thin_band(ax, band, d: str) -> None:
                     xycoords="axes fraction", ha="right", va="top", fontsize=8, color="tab:orange")
 
 
-def save_joint_distances(path, resolutions, *, title: str | None = None,
-                         conditions: Mapping[str, Mapping[str, Any]] | None = None) -> Path:
+def save_joint_distances(path, resolutions, **kwargs) -> Path:
+    """Write :func:`joint_choice_figure` of ``resolutions`` to the PNG file ``path``.
+
+    Parameters
+    ----------
+    path
+        PNG file to write.
+    resolutions, **kwargs
+        As :func:`joint_choice_figure` (``title``, ``conditions``).
+
+    Returns
+    -------
+    Path
+    """
+    return save_figure(joint_choice_figure(resolutions, **kwargs), path, dpi=120)
+
+
+def joint_choice_figure(resolutions, *, title: str | None = None,
+                        conditions: Mapping[str, Mapping[str, Any]] | None = None):
     """The candidate joints of each queried interface by condition distance, on one scale.
 
     One panel per queried interface, all with the same distance axis; each bar carries its value,
@@ -192,8 +224,6 @@ def save_joint_distances(path, resolutions, *, title: str | None = None,
 
     Parameters
     ----------
-    path
-        PNG file to write.
     resolutions
         Interface name → :class:`jointdb.usecases.JointResolution`.
     title
@@ -204,7 +234,7 @@ def save_joint_distances(path, resolutions, *, title: str | None = None,
 
     Returns
     -------
-    Path
+    matplotlib.figure.Figure
     """
     plt = _pyplot()
     queried = [(n, r) for n, r in resolutions.items() if r.candidates]
@@ -219,7 +249,7 @@ def save_joint_distances(path, resolutions, *, title: str | None = None,
         axes[0, 0].set_axis_off()
     fig.suptitle(title or "Joint choice: catalogued joints nearest to the request")
     fig.tight_layout()
-    return save_figure(fig, path, dpi=120)
+    return fig
 
 
 def _choice_panel(ax, res, request: Mapping[str, Any] | None) -> None:
@@ -248,7 +278,7 @@ def _choice_panel(ax, res, request: Mapping[str, Any] | None) -> None:
     terms = getattr(res, "per_condition", None) or {}
     if terms:
         lines += textwrap.wrap("distance of the joint used, by condition: "
-                               + ", ".join(f"{k} {v:.3g}" for k, v in terms.items()), 80)
+                               + ", ".join(f"{_key_name(k)} {v:.3g}" for k, v in terms.items()), 80)
     ax.set_title("\n".join(lines), fontsize=9)
     ax.grid(True, axis="x", alpha=0.3)
 
@@ -264,12 +294,26 @@ def _conditions_text(conditions: Mapping[str, Any]) -> str:
     return ", ".join(shown)
 
 
+#: Condition-key suffixes (SI) → the unit shown and its factor.
+_UNITS = (("_nm", "N·m", 1.0), ("_n", "kN", 1e-3), ("_m", "mm", 1e3))
+
+
+def _key_name(key: str) -> str:
+    """``geometry.shank_diameter_m`` → ``shank diameter``."""
+    key = key.removeprefix("geometry.")
+    for suffix, _, _ in _UNITS:
+        if key.endswith(suffix):
+            key = key[: -len(suffix)]
+            break
+    return key.replace("_", " ")
+
+
 def _condition(key: str, value: Any) -> str:
     if isinstance(value, (list, tuple)):
-        return f"{key} {'/'.join(map(str, value))}"
+        return f"{_key_name(key)} {'/'.join(map(str, value))}"
     if isinstance(value, (int, float)) and not isinstance(value, bool):
-        for suffix, unit, factor in (("_nm", "N·m", 1.0), ("_n", "kN", 1e-3), ("_m", "mm", 1e3)):
+        for suffix, unit, factor in _UNITS:
             if key.endswith(suffix):
-                return f"{key[: -len(suffix)].replace('_', ' ')} {value * factor:g} {unit}"
-        return f"{key.replace('_', ' ')} {value:g}"
-    return f"{key.replace('_', ' ')} {value}"
+                return f"{_key_name(key)} {value * factor:g} {unit}"
+        return f"{_key_name(key)} {value:g}"
+    return f"{_key_name(key)} {value}"
