@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["phase_deg", "phase_unwrapped", "robust_limits", "plot_clipped"]
+__all__ = ["phase_deg", "phase_unwrapped", "robust_limits", "plot_clipped", "percent"]
 
 
 def phase_deg(freq, h) -> tuple[np.ndarray, np.ndarray]:
@@ -129,3 +129,8 @@ def plot_clipped(ax, x, y, limits, **line_kw):
         ax.plot([], [], "^", color=colour, ms=4, label=f"{n} values off scale (at the edge)")
     ax.set_ylim(lo, hi)
     return n
+
+
+def percent(x: float) -> str:
+    """A relative width as a percentage a reader sees as non-zero: ``0.05 → "5.0%"``, ``0.0005 → "0.05%"``."""
+    return f"{x:.1%}" if abs(x) >= 0.01 or x == 0 else f"{100 * x:.2g}%"

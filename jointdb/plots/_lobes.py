@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from jointdb.plots._axes import phase_deg
+from jointdb.plots._axes import percent, phase_deg
 from jointdb.plots._frf import _pyplot, save_figure
 
 __all__ = ["plot_lobes", "lobes_figure", "plot_stabilisation", "plot_modal_fit"]
@@ -161,7 +161,7 @@ def _draw_band(ax, band, scale, depth_unit) -> tuple[float, float]:
     d05, d95 = band.depth_m[0] * scale, band.depth_m[2] * scale
     ax.fill_between(band.spindle_speed_rpm, d05, d95, color="tab:orange", alpha=0.45, lw=0, zorder=1.5,
                     label=f"5–95 % band ({band.samples} samples), floor {lo * scale:#.3g}–{hi * scale:#.3g} "
-                          f"{depth_unit} (±{width:.1%})")
+                          f"{depth_unit} (±{percent(width)})")
     return float(np.nanmedian(d95 - d05)), width
 
 
@@ -171,7 +171,7 @@ def _note_thin_band(ax, median_width: float, relative: float) -> None:
     px_per_unit = ax.get_window_extent().height / (ax.get_ylim()[1] - ax.get_ylim()[0])
     points = median_width * px_per_unit * 72.0 / ax.figure.dpi
     if not np.isfinite(points) or points < 2 * 1.6:
-        ax.annotate(f"band ±{relative:.2%} of the floor: narrower than the line", xy=(0.99, 0.02),
+        ax.annotate(f"band ±{percent(relative)} of the floor: narrower than the line", xy=(0.99, 0.02),
                     xycoords="axes fraction", ha="right", va="bottom", fontsize=8, color="tab:orange")
 
 

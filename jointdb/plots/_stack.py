@@ -11,6 +11,7 @@ from typing import Any
 
 import numpy as np
 
+from jointdb.plots._axes import percent
 from jointdb.plots._frf import _pyplot, save_figure
 
 __all__ = ["save_tip_comparison", "tip_comparison_figure", "save_joint_distances", "joint_choice_figure",
@@ -170,7 +171,7 @@ def _tip_panels(axes, d: str, curves, rigid, band) -> None:
         ax_m.fill_between(band.freq, band.magnitude[d][0] * _UM, band.magnitude[d][2] * _UM, color="tab:orange",
                           alpha=0.45, lw=0, zorder=1.5,
                           label=f"5–95 % band ({band.samples} samples), peak {p05 * _UM:#.3g}–{p95 * _UM:#.3g} µm/N "
-                                f"(±{width:.1%})")
+                                f"(±{percent(width)})")
     ax_m.set_ylim(0, None)
     ax_m.set_ylabel(f"|H_{d}{d}| [µm/N]")
     ax_m.set_title(f"tool tip, {d} direction")
@@ -193,7 +194,7 @@ def _note_thin_band(ax, band, d: str) -> None:
     points = (p95 - p05) * _UM * px_per_unit * 72.0 / ax.figure.dpi
     if points < 2 * 1.4:
         width = (p95 - p05) / 2 / p50 if p50 > 0 else 0.0
-        ax.annotate(f"band ±{width:.2%} at the peak: narrower than the line", xy=(0.99, 0.97),
+        ax.annotate(f"band ±{percent(width)} at the peak: narrower than the line", xy=(0.99, 0.97),
                     xycoords="axes fraction", ha="right", va="top", fontsize=8, color="tab:orange")
 
 
