@@ -13,12 +13,15 @@ FRFs
 Joints and coupling
 -------------------
 - :func:`save_kc_plot` — equivalent stiffness k(ω) and damping c(ω) of a joint FRF.
-- :func:`save_comparison_plot` — several FRFs of the same entries (measured, coupled, rigid).
+- :func:`comparison_figure`, :func:`save_comparison_plot` — several FRFs of the same entries (measured,
+  coupled, rigid), the phase unwrapped on the first one's branch.
 
 Tool-tip prediction
 -------------------
-- :func:`save_tip_comparison` — predicted tool-tip FRF with catalogued joints against rigid joints.
-- :func:`save_joint_distances` — distances of the candidate joints of each queried interface.
+- :func:`tip_comparison_figure`, :func:`save_tip_comparison` — predicted tool-tip FRF in µm/N with its
+  band; rigid joints in a panel of their own, with :func:`rigid_reason`.
+- :func:`joint_choice_figure`, :func:`save_joint_distances` — distances of the candidate joints of each
+  queried interface on one scale, the joints used, the request.
 - :func:`joints_legend` — legend text naming the joints a prediction used.
 
 Stability and modal fits
@@ -35,15 +38,23 @@ Diagnosis
 Axis helpers
 ------------
 - :func:`phase_deg` — phase in degrees, the line broken where it wraps.
+- :func:`phase_unwrapped` — phase in degrees, continuous, on a reference curve's branch.
 - :func:`robust_limits` — axis limits from percentiles (single spikes do not set the scale).
 """
 
-from jointdb.plots._axes import phase_deg, robust_limits
-from jointdb.plots._coupling import save_comparison_plot, save_kc_plot
+from jointdb.plots._axes import phase_deg, phase_unwrapped, robust_limits
+from jointdb.plots._coupling import comparison_figure, save_comparison_plot, save_kc_plot
 from jointdb.plots._diagnose import plot_backbone, plot_diagnosis
 from jointdb.plots._frf import bode_figure, nyquist_figure, save_bode, save_figure, save_nyquist
 from jointdb.plots._lobes import lobes_figure, plot_lobes, plot_modal_fit, plot_stabilisation
-from jointdb.plots._stack import joints_legend, save_joint_distances, save_tip_comparison
+from jointdb.plots._stack import (
+    joint_choice_figure,
+    joints_legend,
+    rigid_reason,
+    save_joint_distances,
+    save_tip_comparison,
+    tip_comparison_figure,
+)
 
 __all__ = [
     "bode_figure",
@@ -53,8 +64,12 @@ __all__ = [
     "save_figure",
     "save_kc_plot",
     "save_comparison_plot",
+    "comparison_figure",
     "save_tip_comparison",
+    "tip_comparison_figure",
+    "rigid_reason",
     "save_joint_distances",
+    "joint_choice_figure",
     "joints_legend",
     "lobes_figure",
     "plot_lobes",
@@ -63,5 +78,6 @@ __all__ = [
     "plot_diagnosis",
     "plot_backbone",
     "phase_deg",
+    "phase_unwrapped",
     "robust_limits",
 ]

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["phase_deg", "robust_limits", "plot_clipped"]
+__all__ = ["phase_deg", "phase_unwrapped", "robust_limits", "plot_clipped", "percent"]
 
 
 def phase_deg(freq, h) -> tuple[np.ndarray, np.ndarray]:
@@ -32,6 +32,46 @@ def phase_deg(freq, h) -> tuple[np.ndarray, np.ndarray]:
     if jumps.size == 0:
         return f, p
     return np.insert(f, jumps, np.nan), np.insert(p, jumps, np.nan)
+
+
+def phase_unwrapped(freq, h, reference: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
+    """Phase of ``h`` in degrees, continuous along frequency (no ±180° wraps), on a shared branch.
+
+    Noisy measured phase near ±180° wraps back and forth; wrapped, it draws as scattered bars,
+    broken, as dashes at both edges. Unwrapped it is one line. The whole curve is then shifted by a
+    multiple of 360° so that it lies on the branch of ``reference`` (the median difference over the
+    common band within ±180°), or, without one, so that its first value is in (−180°, 180°].
+
+    Parameters
+    ----------
+    freq
+        Frequencies [Hz], ``(n,)``, ascending.
+    h
+        Complex FRF values, ``(n,)``.
+    reference
+        ``(freq, phase_deg)`` of a curve already unwrapped, to share its branch; or None.
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        Phase [deg]; NaN where ``h`` is not finite or zero.
+    """
+    f = np.asarray(freq, dtype=float)
+    h = np.asarray(h)
+    ok = np.isfinite(h) & (h != 0)
+    p = np.full(f.size, np.nan)
+    if not ok.any():
+        return p
+    p[ok] = np.degrees(np.unwrap(np.angle(h[ok])))
+    if reference is not None:
+        rf, rp = (np.asarray(v, dtype=float) for v in reference)
+        common = ok & (f >= np.nanmin(rf)) & (f <= np.nanmax(rf))
+        good = np.isfinite(rp)
+        if common.any() and good.sum() > 1:
+            diff = np.nanmedian(p[common] - np.interp(f[common], rf[good], rp[good]))
+            return p - 360.0 * np.round(diff / 360.0)
+    first = p[ok][0]
+    return p - 360.0 * np.ceil((first - 180.0) / 360.0)
 
 
 def robust_limits(y, *, lower_pct: float = 2.0, upper_pct: float = 98.0, margin: float = 0.15,
@@ -89,3 +129,8 @@ def plot_clipped(ax, x, y, limits, **line_kw):
         ax.plot([], [], "^", color=colour, ms=4, label=f"{n} values off scale (at the edge)")
     ax.set_ylim(lo, hi)
     return n
+
+
+def percent(x: float) -> str:
+    """A relative width as a percentage a reader sees as non-zero: ``0.05 → "5.0%"``, ``0.0005 → "0.05%"``."""
+    return f"{x:.1%}" if abs(x) >= 0.01 or x == 0 else f"{100 * x:.2g}%"

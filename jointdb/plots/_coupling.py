@@ -10,11 +10,11 @@ from pathlib import Path
 
 import numpy as np
 
-from jointdb.frf import FRF
-from jointdb.plots._axes import phase_deg, plot_clipped, robust_limits
-from jointdb.plots._frf import _pyplot, save_figure
+from jointdb.frf import FRF, Dof
+from jointdb.plots._axes import phase_unwrapped, plot_clipped, robust_limits
+from jointdb.plots._frf import _pyplot, _unit, save_figure
 
-__all__ = ["save_kc_plot", "save_comparison_plot"]
+__all__ = ["save_kc_plot", "save_comparison_plot", "comparison_figure"]
 
 
 def save_kc_plot(path: "str | Path", joint: FRF, kc_fit=None, title: str | None = None,
@@ -73,43 +73,65 @@ def save_kc_plot(path: "str | Path", joint: FRF, kc_fit=None, title: str | None 
     return save_figure(fig, path, dpi=110)
 
 
-def save_comparison_plot(path: "str | Path", curves: Sequence[tuple[str, FRF]], pairs=None,
-                         title: str | None = None) -> Path:
-    """Magnitude (log) and phase of several FRFs of the same entries (e.g. measured / reconstructed / rigid).
+def save_comparison_plot(path: "str | Path", curves: Sequence[tuple[str, FRF]], **kwargs) -> Path:
+    """Write :func:`comparison_figure` of ``curves`` to the image file ``path`` (110 dpi).
 
     Parameters
     ----------
     path
-        Image file to write.
-    curves
-        ``[(label, FRF), ...]`` with the same DOFs.
-    pairs
-        ``[(output, input), ...]`` entries to draw (default: the first four of the first FRF).
-    title
-        Figure title.
+        Image file to write (``.png``, ``.pdf``, ``.svg``).
+    curves, **kwargs
+        As :func:`comparison_figure` (``pairs``, ``title``).
 
     Returns
     -------
     Path
     """
-    plt = _pyplot()
+    return save_figure(comparison_figure(curves, **kwargs), path, dpi=110)
+
+
+def comparison_figure(curves: Sequence[tuple[str, FRF]], pairs=None, title: str | None = None):
+    """Magnitude (log) and unwrapped phase of several FRFs of the same entries (measured / fitted / rigid).
+
+    The phase is continuous along frequency and every curve is put on the first one's branch
+    (:func:`jointdb.plots._axes.phase_unwrapped`): noise near ±180° draws no wrap artefacts.
+
+    Parameters
+    ----------
+    curves
+        ``[(label, FRF), ...]`` with the same DOFs; the first is the reference (e.g. the measurement).
+    pairs
+        ``[(output, input), ...]`` entries to draw (default: the first four of the first FRF).
+    title
+        Figure title; default ``"assembly FRF"``.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    from matplotlib.ticker import MultipleLocator
+
     ref = curves[0][1]
     if pairs is None:
         pairs = [(o, i) for o in ref.outputs for i in ref.inputs][:4]
-    fig, axes = plt.subplots(2, len(pairs), figsize=(5 * len(pairs), 6), squeeze=False, sharex=True)
+    fig, axes = _pyplot().subplots(2, len(pairs), figsize=(5 * len(pairs), 6), squeeze=False, sharex=True)
     styles = ["-", "--", ":", "-."]
     for j, (o, i) in enumerate(pairs):
+        first = None
         for k, (label, frf) in enumerate(curves):
             h = frf.entry(o, i)
             axes[0, j].semilogy(frf.freq, np.abs(h), styles[k % 4], lw=1.3, label=label)
-            axes[1, j].plot(*phase_deg(frf.freq, h), styles[k % 4], lw=1.1)
+            phase = phase_unwrapped(frf.freq, h, first)
+            first = first or (frf.freq, phase)
+            axes[1, j].plot(frf.freq, phase, styles[k % 4], lw=1.1)
         axes[0, j].set_title(f"H({o}, {i})")
         axes[0, j].grid(True, which="both", alpha=0.3)
+        axes[1, j].yaxis.set_major_locator(MultipleLocator(90))
         axes[1, j].grid(True, alpha=0.3)
         axes[1, j].set_xlabel("frequency [Hz]")
-    axes[0, 0].set_ylabel("|H| [m/N]")
-    axes[1, 0].set_ylabel("phase [deg]")
+    axes[0, 0].set_ylabel(f"|H| [{_unit(ref, *map(Dof.parse, pairs[0]))}]")
+    axes[1, 0].set_ylabel("phase [°], unwrapped")
     axes[0, 0].legend(fontsize=8)
     fig.suptitle(title or "assembly FRF")
     fig.tight_layout()
-    return save_figure(fig, path, dpi=110)
+    return fig

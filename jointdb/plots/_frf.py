@@ -206,14 +206,12 @@ def save_bode(path, frf: FRF, pairs: Sequence[tuple] | None = None, title: str |
 
 
 def save_nyquist(path, frf: FRF, pairs: Sequence[tuple] | None = None, title: str | None = None) -> Path:
-    """Write a Nyquist plot PNG to ``path``.
+    """The Nyquist counterpart of :func:`save_bode`: :func:`nyquist_figure` written to the PNG ``path``.
 
     Parameters
     ----------
-    path
-        PNG file to write.
-    frf, pairs, title
-        As :func:`nyquist_figure`.
+    path, frf, pairs, title
+        As :func:`save_bode` (no overlays).
 
     Returns
     -------

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from jointdb.plots._axes import phase_deg
+from jointdb.plots._axes import percent, phase_deg
 from jointdb.plots._frf import _pyplot, save_figure
 
 __all__ = ["plot_lobes", "lobes_figure", "plot_stabilisation", "plot_modal_fit"]
@@ -40,90 +40,139 @@ def plot_lobes(results, path, **kwargs) -> Path:
 
 def lobes_figure(
     results, *, title: str | None = None, depth_unit: str = "mm", labels: Sequence[str] | None = None,
-    show_lobes: bool = True, depth_max: float | None = None, shade: bool = True, band=None,
+    show_lobes: bool = False, depth_max: float | None = None, shade: bool = True, band=None,
+    flute_length_m: float | None = None, joints: str | None = None,
 ):
     """Stability lobe diagram: limiting depth against spindle speed, the stable region shaded.
 
-    ``results`` is one :class:`~jointdb.stability.LobeResult` or a sequence (overlaid,
-    e.g. ZOA and SD, or with and without joints); the region below the first
-    result's limit is shaded as stable. Flip-type limits are marked. Folds (SD
-    boundaries with a real multiplier +1, not chatter limits) and non-finite
-    depths are not drawn: the line breaks there and the legend counts them.
-    Individual lobes (turning/ZOA) are drawn thin behind the envelope when
-    ``show_lobes``.
+    ``results`` is one :class:`~jointdb.stability.LobeResult` or a sequence (overlaid, e.g. ZOA
+    and SD, or with and without joints); the region below the first result's limit is shaded as
+    stable, without gaps (:func:`jointdb.plots._envelope.shade_depth`). Frequency-domain envelopes
+    are drawn between the FRF lines on fine speeds (:func:`jointdb.plots._envelope.drawn_envelope`),
+    so no lobe is a straight segment. Flip-type limits are marked; folds (SD boundaries with a real
+    multiplier +1, not chatter limits) and non-finite depths break the line and are counted in the
+    legend. The depth axis stops at the flute length, or without one at
+    :data:`~jointdb.plots._envelope.FLOOR_MULTIPLE` × the floor; the title's second line gives the
+    cutting parameters (from the results' ``info``), the third the joints.
 
     Parameters
     ----------
     results
         One :class:`~jointdb.stability.LobeResult` or a sequence of them.
     title
-        Figure title.
+        Figure title (first line).
     depth_unit
         ``"m"``, ``"mm"`` or ``"um"`` on the depth axis.
     labels
         Legend label per result (default: its method).
     show_lobes
-        Draw the individual lobes thin behind the envelope.
+        Also draw the individual lobes, thin, behind the envelope.
     depth_max
-        Upper limit of the depth axis [m] (default: 1.1 × the largest depth drawn).
+        Upper limit of the depth axis [m]; default: see above.
     shade
         Shade the stable region below the first result.
     band
-        A :class:`jointdb.stability._band.LobeBand` (the 5–95 % limiting depth from the
-        joints' parameter covariance), shaded; or None.
+        A :class:`jointdb.stability._band.LobeBand` (5–95 % of the limiting depth), shaded, and
+        annotated when narrower than the envelope's line; or None.
+    flute_length_m
+        The tool's flute length [m]: the depth axis never goes above it. None: unknown.
+    joints
+        The joints used (e.g. :func:`jointdb.plots.joints_legend`), put under the title; or None.
 
     Returns
     -------
     matplotlib.figure.Figure
     """
-    from jointdb.stability import plottable_depth
-
-    plt = _plt()
-    if not isinstance(results, (list, tuple)):
-        results = [results]
-    scale = _UNIT[depth_unit]
-    fig, ax = plt.subplots(figsize=(8, 4.8))
-    colours = ["C0", "C3", "C2", "C1", "C4"]
-    top = 0.0
-    if band is not None:  # 5–95 % of the limiting depth: measurement noise, joint choice, prediction path
-        lo, hi = band.critical_depth_m[0], band.critical_depth_m[2]
-        width = (hi - lo) / 2 / band.critical_depth_m[1] if band.critical_depth_m[1] > 0 else 0.0
-        ax.fill_between(band.spindle_speed_rpm, band.depth_m[0] * scale, band.depth_m[2] * scale, color="C0",
-                        alpha=0.3, lw=0, label=f"5–95 % band ({band.samples} samples), floor ±{width:.1%}")
-        if width < 0.01:  # narrower than the line: say so, or it looks like no band
-            ax.annotate(f"band ±{width:.2%}: narrower than the line", xy=(0.99, 0.02), xycoords="axes fraction",
-                        ha="right", va="bottom", fontsize=8, color="C0")
-    for i, res in enumerate(results):
-        c = colours[i % len(colours)]
-        label = labels[i] if labels else res.method
-        d = plottable_depth(res)
-        n = res.spindle_speed_rpm
-        if shade and i == 0:
-            ax.fill_between(n, 0, np.where(np.isfinite(d), d * scale, 0), where=np.isfinite(d), color=c,
-                            alpha=0.12, lw=0, label=f"stable ({label})" if len(results) > 1 else "stable")
-        if show_lobes and res.lobes:
-            for lobe in res.lobes:
-                ax.plot(lobe.spindle_speed_rpm, lobe.depth_m * scale, color=c, lw=0.4, alpha=0.25)
-        ax.plot(n, d * scale, color=c, lw=1.6, label=label)
-        flip = (res.kind == "flip") & np.isfinite(d)
-        if np.any(flip):
-            ax.plot(n[flip], d[flip] * scale, "v", color=c, ms=3.5, label=f"{label}: flip")
-        folds = int(np.sum(res.kind == "fold"))
-        if folds:
-            ax.plot([], [], " ", label=f"{label}: {folds} fold point{'s' if folds > 1 else ''} (multiplier +1) not drawn")
-        if np.any(np.isfinite(d)):
-            top = max(top, float(np.nanmax(d)) * scale)
-    ax.set_xlim(min(float(r.spindle_speed_rpm.min()) for r in results), max(float(r.spindle_speed_rpm.max()) for r in results))
-    ax.set_ylim(0, depth_max * scale if depth_max else top * 1.1 if top > 0 else 1)
-    ax.set_xlabel("spindle speed [rpm]")
-    ax.set_ylabel(f"limiting depth of cut [{depth_unit}]")
     import textwrap
 
-    ax.set_title("\n".join(textwrap.wrap(title or "Stability lobes", 90)), fontsize=10)
+    from jointdb.plots._envelope import cut_caption, depth_cap, drawn_envelope
+
+    plt = _plt()
+    results = list(results) if isinstance(results, (list, tuple)) else [results]
+    scale = _UNIT[depth_unit]
+    drawn = [drawn_envelope(res) for res in results]
+    floors = [np.nanmin(d) for _, d in drawn if np.any(np.isfinite(d))]
+    flute = None if flute_length_m is None else flute_length_m * scale
+    top, cap_note = depth_cap(np.concatenate([d for _, d in drawn]) * scale, max(floors, default=np.nan) * scale, flute)
+    if depth_max:
+        top, cap_note = depth_max * scale, ""
+    if cap_note:
+        cap_note += f" ({top:.3g} {depth_unit})"
+    fig, ax = plt.subplots(figsize=(8, 6))
+    colours = ["C0", "C3", "C2", "C1", "C4"]
+    for i, (res, (speed, depth)) in enumerate(zip(results, drawn)):
+        _draw_result(ax, res, speed, depth * scale, top, colours[i % len(colours)],
+                     labels[i] if labels else res.method, shade=shade and i == 0, show_lobes=show_lobes,
+                     scale=scale, unit=depth_unit, several=len(results) > 1)
+    if flute is not None and top >= flute:  # the flutes end there: deeper is no cut at all
+        ax.axhspan(flute, 1.08 * flute, color="0.85", lw=0, zorder=3)
+        ax.axhline(flute, color="k", lw=1.0, ls="--", zorder=3, label=f"flute length {flute:.3g} {depth_unit}")
+        top = 1.08 * flute
+    band_width = _draw_band(ax, band, scale, depth_unit) if band is not None else None
+    ax.set_xlim(min(float(r.spindle_speed_rpm.min()) for r in results),
+                max(float(r.spindle_speed_rpm.max()) for r in results))
+    ax.set_ylim(0, top)
+    ax.set_xlabel("spindle speed [rpm]")
+    ax.set_ylabel(f"limiting depth of cut [{depth_unit}]")
+    lines = ["\n".join(textwrap.wrap(title or "Stability lobes", 90))]
+    lines.append(cut_caption(results[0].info, results[0].method) + (f"; {cap_note}" if cap_note else ""))
+    if joints:
+        lines += textwrap.wrap(f"joints: {joints}", 110)
+    ax.set_title(lines[0], fontsize=10, loc="center", pad=6 + 11 * (len(lines) - 1))
+    ax.text(0.5, 1.01, "\n".join(lines[1:]), transform=ax.transAxes, ha="center", va="bottom", fontsize=7.5)
     ax.grid(True, alpha=0.3)
-    ax.legend(loc="upper left", fontsize=8)
+    # below the axes: inside, it hides the lobes (or the shading) of some speed range
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.11), fontsize=7.5, ncol=2, frameon=False)
     fig.tight_layout()
+    if band_width is not None:
+        _note_thin_band(ax, *band_width)
     return fig
+
+
+def _draw_result(ax, res, speed, depth, top, colour, label, *, shade, show_lobes, scale, unit, several) -> None:
+    """One result: shading (gap-free), envelope, flips, the count of folds and clipped pockets."""
+    from jointdb.plots._envelope import shade_depth
+
+    if shade:
+        ax.fill_between(speed, 0, np.minimum(shade_depth(depth, top), top), color=colour, alpha=0.12, lw=0,
+                        label=f"stable ({label})" if several else "stable")
+    if show_lobes and res.lobes:
+        for lobe in res.lobes:
+            ax.plot(lobe.spindle_speed_rpm, lobe.depth_m * scale, color=colour, lw=0.4, alpha=0.25)
+    ax.plot(speed, depth, color=colour, lw=1.6, label=label)
+    d = res.depth_m
+    flip = (res.kind == "flip") & np.isfinite(d)
+    if np.any(flip):
+        ax.plot(res.spindle_speed_rpm[flip], d[flip] * scale, "v", color=colour, ms=3.5, label=f"{label}: flip")
+    folds = int(np.sum(res.kind == "fold"))
+    if folds:
+        ax.plot([], [], " ", label=f"{label}: {folds} fold point{'s' if folds > 1 else ''} (multiplier +1) not drawn")
+    if np.nanmax(np.where(np.isfinite(depth), depth, -np.inf), initial=-np.inf) > top:
+        k = int(np.nanargmax(np.where(np.isfinite(depth), depth, -np.inf)))
+        ax.plot([speed[k]], [top], "^", color=colour, ms=5, clip_on=False,
+                label=f"{label}: highest pocket {depth[k]:.3g} {unit} at {speed[k]:.0f} rpm (above the axis)")
+
+
+def _draw_band(ax, band, scale, depth_unit) -> tuple[float, float]:
+    """The 5–95 % band of the limiting depth in its own colour; returns (median width in axis units,
+    half-width of the floor band relative to its median)."""
+    lo, mid, hi = band.critical_depth_m
+    width = (hi - lo) / 2 / mid if mid > 0 else 0.0
+    d05, d95 = band.depth_m[0] * scale, band.depth_m[2] * scale
+    ax.fill_between(band.spindle_speed_rpm, d05, d95, color="tab:orange", alpha=0.45, lw=0, zorder=1.5,
+                    label=f"5–95 % band ({band.samples} samples), floor {lo * scale:#.3g}–{hi * scale:#.3g} "
+                          f"{depth_unit} (±{percent(width)})")
+    return float(np.nanmedian(d95 - d05)), width
+
+
+def _note_thin_band(ax, median_width: float, relative: float) -> None:
+    """Say so when the band, on this axis, is thinner than two widths of the envelope's line (1.6 pt):
+    else it looks like no band at all."""
+    px_per_unit = ax.get_window_extent().height / (ax.get_ylim()[1] - ax.get_ylim()[0])
+    points = median_width * px_per_unit * 72.0 / ax.figure.dpi
+    if not np.isfinite(points) or points < 2 * 1.6:
+        ax.annotate(f"band ±{percent(relative)} of the floor: narrower than the line", xy=(0.99, 0.02),
+                    xycoords="axes fraction", ha="right", va="bottom", fontsize=8, color="tab:orange")
 
 
 def plot_stabilisation(fit, path, *, frf=None, title: str | None = None) -> Path:
