@@ -143,6 +143,7 @@ def run_main_job(
     -------
     JourneyResult
     """
+    from jointdb.plots._stack import joints_legend
     from jointdb.store import Repository
 
     out = Path(out_dir)
@@ -156,7 +157,7 @@ def run_main_job(
         _catalogue(repo, cat, result, say)
         spec, resolutions = _query(repo, cat, result, say)
         tip = _predict(repo, spec, resolutions, result, say)
-        band_summary = _lobes(spec, tip, result, say, n_speeds, speed_range_rpm)
+        band_summary = _lobes(spec, tip, result, say, n_speeds, speed_range_rpm, joints_legend(resolutions))
         summary = {
             "database": url,
             "catalogued": result.catalogued,
@@ -245,7 +246,8 @@ def _query(repo, cat: Path, result: JourneyResult, say: Callable[[str], None]):
         for w in res.warnings:
             say(f"      warning: {w}")
     result.files.append(_write_json(out / "joint-choice.json", result.joints))
-    result.files.append(save_joint_distances(out / "joint-choice.png", resolutions))
+    requested = {n: dict(c.conditions or {}) for n, c in spec.interfaces.items() if c.kind == "query"}
+    result.files.append(save_joint_distances(out / "joint-choice.png", resolutions, conditions=requested))
     return spec, resolutions
 
 
@@ -345,9 +347,10 @@ def _cross_check(repo, spec, resolutions, grid, result: JourneyResult, say: Call
 
 
 def _lobes(spec, tip: _Tip, result: JourneyResult, say: Callable[[str], None], n_speeds: int,
-           speed_range_rpm: tuple[float, float]) -> dict:
-    """Step 4: milling lobes (ZOA) with the catalogued and with rigid joints; ``lobes.csv``, ``lobes.png``.
-    Returns the band summary (with the lobe band's when there is one)."""
+           speed_range_rpm: tuple[float, float], joints: str) -> dict:
+    """Step 4: milling lobes (ZOA) with the catalogued and with rigid joints; ``lobes.csv``, ``lobes.png``
+    (``joints``: the joint versions named in its caption). Returns the band summary (with the lobe
+    band's when there is one)."""
     from jointdb.plots._lobes import plot_lobes
     from jointdb.stability import MillingCut, milling_lobes_zoa, refine_lobes
 
@@ -383,7 +386,8 @@ def _lobes(spec, tip: _Tip, result: JourneyResult, say: Callable[[str], None], n
     result.files.append(_write_csv(out / "lobes.csv", lobes.table()))
     result.files.append(plot_lobes([lobes, lobes_rigid], out / "lobes.png",
                                    labels=["with catalogued joints", "rigid joints"],
-                                   title=f"Stability lobes: {spec.name}", band=lobe_band))
+                                   title=f"Stability lobes: {spec.name}", band=lobe_band, joints=joints,
+                                   flute_length_m=sum(s.length for s in spec.tool.segments if s.fluted)))
     if lobe_band is not None:
         band_summary["lobes"] = lobe_band.to_json()
         lo, mid, hi = lobe_band.critical_depth_m * 1e3
