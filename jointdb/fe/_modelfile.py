@@ -221,6 +221,7 @@ def model_from_dict(data: Any) -> BeamModel:
     Returns
     -------
     BeamModel
+        The model the document describes, every cross-field rule checked.
 
     Raises
     ------
