@@ -17,19 +17,8 @@ from typing import TYPE_CHECKING, Any
 
 from jointdb.schemas._limits import LENGTH_RANGE, check_elements, check_model_limits
 from jointdb.errors import InputError
-from jointdb.stack._spec import (
-    FORMAT,
-    INTERFACE_NAMES,
-    FrequencyGrid,
-    Holder,
-    HolderSegment,
-    JointChoice,
-    MeasuredSpindle,
-    ModelledSpindle,
-    StackSpec,
-    Tool,
-    ToolSegment,
-)
+from jointdb.stack._spec import FORMAT, INTERFACE_NAMES, FrequencyGrid, Holder, HolderSegment, JointChoice
+from jointdb.stack._spec import MeasuredSpindle, ModelledSpindle, StackSpec, Tool, ToolSegment
 
 if TYPE_CHECKING:  # the schema (pydantic) is imported when a stack is read, not with jointdb.stack
     from jointdb.schemas import stack as schema
