@@ -284,7 +284,7 @@ def model_to_dict(model: BeamModel) -> dict:
     Parameters
     ----------
     model
-        The :class:`BeamModel`.
+        Any :class:`BeamModel`, built in code or read from a file.
 
     Returns
     -------

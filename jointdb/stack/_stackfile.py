@@ -297,7 +297,7 @@ def stack_to_dict(spec: StackSpec) -> dict[str, Any]:
     Parameters
     ----------
     spec
-        The :class:`StackSpec`.
+        A :class:`StackSpec`, built in code or as :func:`stack_from_dict` returns it.
 
     Returns
     -------
