@@ -56,5 +56,9 @@ from jointdb.coupling.rotational import rotations_by_extension, rotations_by_fin
 
 from jointdb.coupling import _output_error, irc, rc, rotational
 
-#: The public names: those of the public submodules, forward coupling first.
-__all__ = [*rc.__all__, *irc.__all__, *_output_error.__all__, *rotational.__all__]
+#: The public names: those of the submodules, forward coupling first.
+__all__: list[str] = []
+__all__ += rc.__all__
+__all__ += irc.__all__
+__all__ += _output_error.__all__
+__all__ += rotational.__all__

@@ -23,7 +23,7 @@ from jointdb.coupling._linalg import (
     inverse,
     savgol_smooth,
 )
-from jointdb.errors import InputError, NumericalError
+from jointdb.errors import InputError
 from jointdb.frf import FRF, Dof, Quantity, dofs
 
 __all__ = ["identify_n_point_joints"]

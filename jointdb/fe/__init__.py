@@ -116,7 +116,9 @@ __all__ = [
     "get_material",
     "Segment",
     "NamedPoint",
-    *_ingredients.__all__,  # Ingredient and its kinds
+]
+__all__ += _ingredients.__all__  # Ingredient and its kinds
+__all__ += [
     "Joint",
     "Insertion",
     "Contact",
