@@ -49,3 +49,21 @@ class NumericalError(JointdbError, ArithmeticError, exit_code=6, http_status=422
 
 class NotPermittedError(JointdbError, PermissionError, exit_code=2, http_status=403):
     """A valid token whose owner may not do this (e.g. label a joint another team catalogued)."""
+
+
+def field_error(where: str, reason: str) -> InputError:
+    """The :class:`InputError` for one field of a file or document: ``"{where}: {reason}"``.
+
+    Parameters
+    ----------
+    where
+        The field's path, e.g. ``"tool.segments[1].length"``.
+    reason
+        What is wrong, e.g. ``"must be > 0, got -0.01"``.
+
+    Returns
+    -------
+    InputError
+        To be raised by the caller.
+    """
+    return InputError(f"{where}: {reason}")
