@@ -10,49 +10,60 @@ from __future__ import annotations
 
 
 class JointdbError(Exception):
-    """Base class of all errors jointdb raises on purpose."""
+    """Base class of all errors jointdb raises on purpose.
+
+    Each kind states its CLI exit code and HTTP status in its class line:
+    ``class InputError(JointdbError, ValueError, exit_code=2, http_status=422)``.
+    """
 
     exit_code = 1
     http_status = 500
 
+    def __init_subclass__(cls, *, exit_code: int | None = None, http_status: int | None = None, **kwargs) -> None:
+        super().__init_subclass__(**kwargs)
+        if exit_code is not None:  # a subclass that names none keeps its parent's
+            cls.exit_code = exit_code
+        if http_status is not None:
+            cls.http_status = http_status
 
-class InputError(JointdbError, ValueError):
+
+class InputError(JointdbError, ValueError, exit_code=2, http_status=422):
     """Bad input: a file, an array, an option or a field that is wrong."""
 
-    exit_code = 2
-    http_status = 422
 
-
-class NotFoundError(JointdbError, LookupError):
+class NotFoundError(JointdbError, LookupError, exit_code=3, http_status=404):
     """A joint, version, label, blob or file that does not exist."""
 
-    exit_code = 3
-    http_status = 404
 
-
-class ConflictError(JointdbError):
+class ConflictError(JointdbError, exit_code=4, http_status=409):
     """A write that would overwrite or contradict what is already stored."""
 
-    exit_code = 4
-    http_status = 409
 
-
-class IntegrityError(JointdbError):
+class IntegrityError(JointdbError, exit_code=5, http_status=500):
     """Stored data failed verification (missing or corrupt blob, bad hash)."""
 
-    exit_code = 5
-    http_status = 500
 
-
-class NumericalError(JointdbError, ArithmeticError):
+class NumericalError(JointdbError, ArithmeticError, exit_code=6, http_status=422):
     """A computation that cannot give a trustworthy answer (singular system, ...)."""
 
-    exit_code = 6
-    http_status = 422
 
-
-class NotPermittedError(JointdbError, PermissionError):
+class NotPermittedError(JointdbError, PermissionError, exit_code=2, http_status=403):
     """A valid token whose owner may not do this (e.g. label a joint another team catalogued)."""
 
-    exit_code = 2
-    http_status = 403
+
+def field_error(where: str, reason: str) -> InputError:
+    """The :class:`InputError` for one field of a file or document: ``"{where}: {reason}"``.
+
+    Parameters
+    ----------
+    where
+        The field's path, e.g. ``"tool.segments[1].length"``.
+    reason
+        What is wrong, e.g. ``"must be > 0, got -0.01"``.
+
+    Returns
+    -------
+    InputError
+        To be raised by the caller.
+    """
+    return InputError(f"{where}: {reason}")

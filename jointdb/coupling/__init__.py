@@ -54,25 +54,11 @@ from jointdb.coupling._output_error import (
 from jointdb.coupling.rc import Interface, JointSubstructure, couple, spring_damper_joint
 from jointdb.coupling.rotational import rotations_by_extension, rotations_by_finite_difference
 
-__all__ = [
-    "Interface",
-    "JointSubstructure",
-    "couple",
-    "spring_damper_joint",
-    "IdentificationResult",
-    "Regularisation",
-    "identify_planar_joint",
-    "identify_n_point_joints",
-    "identify_joint_matrix",
-    "equivalent_stiffness_damping",
-    "fit_constant_kc",
-    "KCFit",
-    "OutputErrorResult",
-    "fit_planar_joint",
-    "fit_n_point_joints",
-    "fit_joint_matrix",
-    "sigma_from_coherence",
-    "mean_and_sigma_of_repeats",
-    "rotations_by_extension",
-    "rotations_by_finite_difference",
-]
+from jointdb.coupling import _output_error, irc, rc, rotational
+
+#: The public names: those of the submodules, forward coupling first.
+__all__: list[str] = []
+__all__ += rc.__all__
+__all__ += irc.__all__
+__all__ += _output_error.__all__
+__all__ += rotational.__all__

@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from jointdb.coupling._linalg import Regularisation
 from jointdb.errors import InputError, NumericalError
 from jointdb.frf import FRF, Dof, Quantity, dofs, reciprocal_index
 
@@ -239,3 +240,35 @@ def fill_bad_lines(values: np.ndarray, bad: np.ndarray, freq: np.ndarray, what: 
             freq[bad], freq[good], flat[good, k].imag
         )
     return out.reshape(values.shape)
+
+
+def solver_settings(reg: Regularisation, smoothing: "int | None", smoothing_order: int, symmetrize: bool) -> dict:
+    """The pseudo-inverse and smoothing options as an identification records them in ``settings``."""
+    return {"regularisation": f"{reg.method}:{reg.rel:g}", "smoothing": smoothing,
+            "smoothing_order": smoothing_order, "symmetrize": symmetrize}
+
+
+def require_determined(cond: np.ndarray, limit: float, matrix: str, remedy: str) -> None:
+    """NumericalError when ``matrix`` is singular at every line (``cond > limit`` everywhere).
+
+    Parameters
+    ----------
+    cond
+        Condition number per line, ``(n_freq,)``.
+    limit
+        The condition number above which a line counts as singular.
+    matrix, remedy
+        What is singular (e.g. ``"H_IC (measured DOFs × contact DOFs)"``) and what follows
+        for the user, for the message.
+    """
+    if np.all(cond > limit):
+        raise NumericalError(f"{matrix} is singular at every line (condition > {limit:g}); {remedy}")
+
+
+def receptances_on_one_grid(assembly: FRF, substructure_a: FRF, substructure_b: FRF) -> tuple:
+    """The common grid and the three FRFs as receptances: ``(freq, G, A, B)`` (InputError naming the one
+    that is not an FRF, cannot be converted or lies on another grid)."""
+    G = as_receptance("assembly", assembly)
+    A = as_receptance("substructure A", substructure_a)
+    B = as_receptance("substructure B", substructure_b)
+    return same_grid({"assembly": G, "substructure A": A, "substructure B": B}), G, A, B

@@ -12,10 +12,19 @@ of ``_LINES`` so that every intermediate array stays in the processor's cache.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from typing import NamedTuple
 
 import numpy as np
 
-from jointdb.coupling._common import IdentificationResult, LazyExtra, as_receptance, fetch, same_grid
+from jointdb.coupling._common import (
+    IdentificationResult,
+    LazyExtra,
+    as_receptance,
+    fetch,
+    require_determined,
+    same_grid,
+    solver_settings,
+)
 from jointdb.coupling._linalg import Regularisation, condition, frobenius, inverse, savgol_smooth
 from jointdb.coupling._multi import _pinv_pair, _sym, _transposed
 from jointdb.errors import InputError, NumericalError
@@ -125,9 +134,51 @@ def _body_blocks(bodies, meas, contacts):
     return h_ii, h_ic, h_ci, h_cc
 
 
-def _solve_by_passes(h_ii, h_ic, h_ci, h_cc, g, rows, span, reg, symmetrize):
+class _Problem(NamedTuple):
+    """One joint-matrix identification, checked and gathered: the grid, the contact DOFs of A and B
+    (``contacts = ad + bd``), the measured ``(name, Dof)`` pairs, each body's four receptance blocks
+    (lists of two), the measured assembly FRFs ``g`` ordered by body, and where body x's measured
+    rows (``rows[x]``) and contact DOFs (``span[x]``) sit."""
+
+    freq: np.ndarray
+    ad: tuple
+    bd: tuple
+    pairs: list
+    blocks: tuple
+    g: np.ndarray
+    rows: list
+    span: list
+
+    @property
+    def contacts(self) -> tuple:
+        return self.ad + self.bd
+
+
+def _problem(assembly, substructures, measured, side_a, side_b, smoothing, smoothing_order) -> _Problem:
+    """Check the inputs (InputError) and gather the blocks of :func:`identify_joint_matrix`;
+    ``side_a``, ``side_b``: ``(name, contact DOFs)``."""
+    (a, a_dofs), (b, b_dofs) = side_a, side_b
+    ad, bd, pairs = _layout(substructures, measured, a, a_dofs, b, b_dofs)
+    G = as_receptance("assembly", assembly)
+    A = as_receptance(f"substructure {a!r}", substructures[a])
+    B = as_receptance(f"substructure {b!r}", substructures[b])
+    freq = same_grid({"assembly": G, f"substructure {a!r}": A, f"substructure {b!r}": B})
+    # Per body x: measured DOFs I_x, contacts C_x, and one gather of its receptance over I_x + C_x.
+    meas = [[d for n, d in pairs if n == a], [d for n, d in pairs if n == b]]
+    blocks = _body_blocks(((a, A), (b, B)), meas, [list(ad), list(bd)])
+    order = meas[0] + meas[1]
+    g = fetch("assembly", G, order, order, "the measured DOFs, directly or by reciprocity", view=True)
+    if smoothing:
+        g = savgol_smooth(g, int(smoothing), smoothing_order)
+    rows = [slice(0, len(meas[0])), slice(len(meas[0]), len(pairs))]
+    span = [slice(0, len(ad)), slice(len(ad), len(ad) + len(bd))]
+    return _Problem(freq, ad, bd, pairs, blocks, g, rows, span)
+
+
+def _solve_by_passes(pb: _Problem, reg: Regularisation, symmetrize: bool):
     """The joint ``H^J``, cond(H_IC)·cond(H_CI), the residual's numerator and denominator per line,
     solved in passes of ``_LINES`` lines; and a function computing cond(P) the same way when asked."""
+    (h_ii, h_ic, h_ci, h_cc), g, rows, span = pb.blocks, pb.g, pb.rows, pb.span
     nf = g.shape[0]
     nc = h_cc[0].shape[1] + h_cc[1].shape[1]
     hj = np.empty((nf, nc, nc), dtype=complex)
@@ -149,19 +200,10 @@ def _solve_by_passes(h_ii, h_ic, h_ci, h_cc, g, rows, span, reg, symmetrize):
 
 
 def identify_joint_matrix(
-    assembly: FRF,
-    substructures: Mapping[str, FRF],
-    measured: Sequence[tuple[str, "Dof | str"]],
-    a: str,
-    a_dofs: Sequence["Dof | str"],
-    b: str,
-    b_dofs: Sequence["Dof | str"],
-    *,
-    regularisation: "Regularisation | str | None" = None,
-    smoothing: int | None = None,
-    smoothing_order: int = 4,
-    symmetrize: bool = True,
-    condition_limit: float = 1e8,
+    assembly: FRF, substructures: Mapping[str, FRF], measured: Sequence[tuple[str, "Dof | str"]],
+    a: str, a_dofs: Sequence["Dof | str"], b: str, b_dofs: Sequence["Dof | str"], *,
+    regularisation: "Regularisation | str | None" = None, smoothing: int | None = None, smoothing_order: int = 4,
+    symmetrize: bool = True, condition_limit: float = 1e8,
 ) -> IdentificationResult:
     """Identify the full receptance matrix of a joint with inertia (docs/theory.md §2c, thesis eq. 6.1–6.15).
 
@@ -243,40 +285,27 @@ def identify_joint_matrix(
     >>> bool(np.max(np.abs(result.joint.values - J.values) / scale) < 1e-6)
     True
     """
-    ad, bd, pairs = _layout(substructures, measured, a, a_dofs, b, b_dofs)
-    nc, L = len(ad) + len(bd), len(pairs)
     reg = Regularisation.parse(regularisation)
-    G = as_receptance("assembly", assembly)
-    A = as_receptance(f"substructure {a!r}", substructures[a])
-    B = as_receptance(f"substructure {b!r}", substructures[b])
-    freq = same_grid({"assembly": G, f"substructure {a!r}": A, f"substructure {b!r}": B})
+    pb = _problem(assembly, substructures, measured, (a, a_dofs), (b, b_dofs), smoothing, smoothing_order)
+    solved = _solve_by_passes(pb, reg, symmetrize)
+    nc, L = len(pb.contacts), len(pb.pairs)
+    require_determined(solved[1], condition_limit, "H_IC (measured DOFs × contact DOFs)",
+                       f"the {L} measured DOFs do not determine the {nc}×{nc} joint — measure other DOFs")
+    settings = {"measured": [f"{n}:{d}" for n, d in pb.pairs], "a": a, "a_dofs": [str(x) for x in pb.ad],
+                "b": b, "b_dofs": [str(x) for x in pb.bd], **solver_settings(reg, smoothing, smoothing_order, symmetrize)}
+    return _result(pb, solved, condition_limit, settings)
 
-    # Per body x: measured DOFs I_x, contacts C_x, and one gather of its receptance over I_x + C_x.
-    meas = [[d for n, d in pairs if n == a], [d for n, d in pairs if n == b]]
-    contacts = [list(ad), list(bd)]
-    h_ii, h_ic, h_ci, h_cc = _body_blocks(((a, A), (b, B)), meas, contacts)
-    order = meas[0] + meas[1]
-    g = fetch("assembly", G, order, order, "the measured DOFs, directly or by reciprocity", view=True)
-    if smoothing:
-        g = savgol_smooth(g, int(smoothing), smoothing_order)
-    rows = [slice(0, len(meas[0])), slice(len(meas[0]), L)]
-    span = [slice(0, len(ad)), slice(len(ad), nc)]
 
-    hj, cond, num, den, condition_p = _solve_by_passes(h_ii, h_ic, h_ci, h_cc, g, rows, span, reg, symmetrize)
-    if np.all(cond > condition_limit):
-        raise NumericalError(
-            f"H_IC (measured DOFs × contact DOFs) is singular at every line (condition > {condition_limit:g}); "
-            f"the {L} measured DOFs do not determine the {nc}×{nc} joint — measure other DOFs"
-        )
+def _result(pb: _Problem, solved: tuple, condition_limit: float, settings: dict) -> IdentificationResult:
+    """Package what :func:`_solve_by_passes` gave (NumericalError if the joint is not finite)."""
+    hj, cond, num, den, condition_p = solved
     if not np.all(np.isfinite(hj)):
         raise NumericalError("the identified joint matrix is not finite at some line; check the measured FRFs")
     ill = cond > condition_limit
     return IdentificationResult(
-        joint=FRF._trusted(freq, hj, ad + bd, ad + bd, Quantity.RECEPTANCE), model="matrix",
+        joint=FRF._trusted(pb.freq, hj, pb.contacts, pb.contacts, Quantity.RECEPTANCE), model="matrix",
         residual=np.sqrt(num) / np.maximum(np.sqrt(den), 1e-300), condition=cond, unreliable=ill,
         flags={"ill_conditioned": ill},
-        extra=LazyExtra({"n_measured": L, "nc": nc}, {"condition_p": condition_p}),
-        settings={"measured": [f"{n}:{d}" for n, d in pairs], "a": a, "a_dofs": [str(x) for x in ad],
-                  "b": b, "b_dofs": [str(x) for x in bd], "regularisation": f"{reg.method}:{reg.rel:g}",
-                  "smoothing": smoothing, "smoothing_order": smoothing_order, "symmetrize": symmetrize},
+        extra=LazyExtra({"n_measured": len(pb.pairs), "nc": hj.shape[1]}, {"condition_p": condition_p}),
+        settings=settings,
     )

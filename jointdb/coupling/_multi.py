@@ -7,7 +7,14 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from jointdb.coupling._common import IdentificationResult, LazyExtra, as_receptance, fetch, same_grid
+from jointdb.coupling._common import (
+    IdentificationResult,
+    LazyExtra,
+    fetch,
+    receptances_on_one_grid,
+    require_determined,
+    solver_settings,
+)
 from jointdb.coupling._linalg import (
     Regularisation,
     condition,
@@ -16,7 +23,7 @@ from jointdb.coupling._linalg import (
     inverse,
     savgol_smooth,
 )
-from jointdb.errors import InputError, NumericalError
+from jointdb.errors import InputError
 from jointdb.frf import FRF, Dof, Quantity, dofs
 
 __all__ = ["identify_n_point_joints"]
@@ -90,10 +97,7 @@ def _rel_residual(rec: np.ndarray, meas: np.ndarray) -> np.ndarray:
 def _n_point_blocks(assembly, substructure_a, substructure_b, I, a, b, smoothing, smoothing_order, symmetrize):
     """The grid, the measured ``G_II`` (smoothed, symmetrised as asked) and A's ``h_II``, ``H_Ia``,
     ``H_aI``, ``H_aa`` and B's ``H_bb``."""
-    G = as_receptance("assembly", assembly)
-    A = as_receptance("substructure A", substructure_a)
-    B = as_receptance("substructure B", substructure_b)
-    freq = same_grid({"assembly": G, "substructure A": A, "substructure B": B})
+    freq, G, A, B = receptances_on_one_grid(assembly, substructure_a, substructure_b)
     g = _measured(G, I, smoothing, smoothing_order, symmetrize)
     h_ii = fetch("substructure A", A, I, I)
     h_ia = fetch("substructure A", A, I, a)
@@ -104,19 +108,10 @@ def _n_point_blocks(assembly, substructure_a, substructure_b, I, a, b, smoothing
 
 
 def identify_n_point_joints(
-    assembly: FRF,
-    substructure_a: FRF,
-    internal: Sequence["Dof | str"],
-    a_contact: Sequence["Dof | str"],
-    substructure_b: FRF,
-    b_contact: Sequence["Dof | str"],
-    *,
-    diagonal: bool = True,
-    regularisation: "Regularisation | str | None" = None,
-    smoothing: int | None = None,
-    smoothing_order: int = 4,
-    symmetrize: bool = True,
-    condition_limit: float = 1e8,
+    assembly: FRF, substructure_a: FRF, internal: Sequence["Dof | str"], a_contact: Sequence["Dof | str"],
+    substructure_b: FRF, b_contact: Sequence["Dof | str"], *, diagonal: bool = True,
+    regularisation: "Regularisation | str | None" = None, smoothing: int | None = None, smoothing_order: int = 4,
+    symmetrize: bool = True, condition_limit: float = 1e8,
 ) -> IdentificationResult:
     """Identify n translational joints between two bodies (docs/theory.md §2b, thesis eq. 5.1–5.10).
 
@@ -193,6 +188,20 @@ def identify_n_point_joints(
     >>> fit.k.round(-2), fit.c.round(3)                                           # N/m, N·s/m
     (array([50000000., 80000000.]), array([300., 500.]))
     """
+    I, a, b = _contacts(internal, a_contact, b_contact)
+    reg = Regularisation.parse(regularisation)
+    freq, g, blocks = _n_point_blocks(
+        assembly, substructure_a, substructure_b, I, a, b, smoothing, smoothing_order, symmetrize)
+    b_inv, cond = _b_inverse(g, blocks, reg)
+    require_determined(cond, condition_limit, "H_Ia (measured internal DOFs × connection DOFs)",
+                       f"the measured points do not determine the {len(a)} joints — measure other points")
+    settings = {"internal": [str(x) for x in I], "a_contact": [str(x) for x in a], "b_contact": [str(x) for x in b],
+                "diagonal": diagonal, **solver_settings(reg, smoothing, smoothing_order, symmetrize)}
+    return _n_point_result(freq, g, blocks, b_inv, cond, (a, diagonal, condition_limit), settings)
+
+
+def _contacts(internal, a_contact, b_contact) -> tuple:
+    """The measured internal DOFs and the paired contact DOFs on A and B, checked (InputError)."""
     I, a, b = dofs(internal), dofs(a_contact), dofs(b_contact)
     if len(a) != len(b):
         raise InputError(f"a_contact has {len(a)} DOFs but b_contact has {len(b)}; they are paired")
@@ -200,22 +209,24 @@ def identify_n_point_joints(
         raise InputError(
             f"{len(I)} measured internal DOFs cannot identify {len(a)} joints; measure at least {len(a)}"
         )
-    reg = Regularisation.parse(regularisation)
-    freq, g, (h_ii, h_ia, h_ai, h_aa, h_bb) = _n_point_blocks(
-        assembly, substructure_a, substructure_b, I, a, b, smoothing, smoothing_order, symmetrize)
-    d = h_ii - g
+    return I, a, b
+
+
+def _b_inverse(g: np.ndarray, blocks: tuple, reg: Regularisation) -> tuple[np.ndarray, np.ndarray]:
+    """Least squares ``B⁻¹ = H_Ia⁺ (h_II − G) H_aI⁺`` per line, and cond(H_Ia)."""
+    h_ii, h_ia, h_ai, _, _ = blocks
     (left,), (right,), cond, _ = _pinv_pair([h_ia], [h_ai], reg)
-    b_inv = left @ d @ right
-    n = len(a)
-    if np.all(cond > condition_limit):
-        raise NumericalError(
-            f"H_Ia (measured internal DOFs × connection DOFs) is singular at every line (condition > "
-            f"{condition_limit:g}); the measured points do not determine the {n} joints — measure other points"
-        )
-    bmat = inverse(b_inv)
-    hj_full = bmat - h_aa - h_bb
+    return left @ (h_ii - g) @ right, cond
+
+
+def _n_point_result(freq, g, blocks, b_inv, cond, options: tuple, settings: dict) -> IdentificationResult:
+    """``H_J = B − H_aa − H_bb`` (its diagonal if ``diagonal``), re-coupled and packaged;
+    ``options``: ``(a, diagonal, condition_limit)``."""
+    a, diagonal, condition_limit = options
+    h_ii, h_ia, h_ai, h_aa, h_bb = blocks
+    hj_full = inverse(b_inv) - h_aa - h_bb
     diag_part, off = _diagonal_part(hj_full)
-    diag_idx = np.arange(n)
+    diag_idx = np.arange(len(a))
     hj = diag_part if diagonal else hj_full
     rec = h_ii - h_ia @ np.linalg.solve(h_aa + h_bb + hj, h_ai)
     passive = np.all(hj[:, diag_idx, diag_idx].imag <= 1e-6 * np.abs(hj[:, diag_idx, diag_idx]), axis=1)
@@ -228,8 +239,5 @@ def identify_n_point_joints(
         unreliable=ill | ~passive,
         flags={"ill_conditioned": ill, "non_passive": ~passive},
         extra=LazyExtra({"full_joint": hj_full, "off_diagonal": off}, {"condition_b": lambda: condition(b_inv)}),
-        settings={"internal": [str(x) for x in I], "a_contact": [str(x) for x in a],
-                  "b_contact": [str(x) for x in b], "diagonal": diagonal,
-                  "regularisation": f"{reg.method}:{reg.rel:g}", "smoothing": smoothing,
-                  "smoothing_order": smoothing_order, "symmetrize": symmetrize},
+        settings=settings,
     )

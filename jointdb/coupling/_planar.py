@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from jointdb.coupling._common import IdentificationResult, as_receptance, fetch, fill_bad_lines, same_grid
+from jointdb.coupling._common import IdentificationResult, fetch, fill_bad_lines, receptances_on_one_grid
 from jointdb.coupling._linalg import pinv, savgol_smooth
 from jointdb.errors import InputError
 from jointdb.frf import FRF, Dof, Quantity
@@ -41,20 +41,9 @@ def _quadratic_roots(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> tuple[np.nd
 
 
 def identify_planar_joint(
-    assembly: FRF,
-    substructure_a: FRF,
-    a_point: int,
-    substructure_b: FRF,
-    b_contact: int,
-    b_tip: int,
-    *,
-    translation: str = "x",
-    rotation: str = "ry",
-    smoothing: int | None = None,
-    smoothing_order: int = 4,
-    passivity_tol: float = 1e-6,
-    condition_limit: float = 1e8,
-    consistency_tol: float = 1e-6,
+    assembly: FRF, substructure_a: FRF, a_point: int, substructure_b: FRF, b_contact: int, b_tip: int, *,
+    translation: str = "x", rotation: str = "ry", smoothing: int | None = None, smoothing_order: int = 4,
+    passivity_tol: float = 1e-6, condition_limit: float = 1e8, consistency_tol: float = 1e-6,
 ) -> IdentificationResult:
     """Identify a planar spring–damper joint ``diag(h_t, h_r)`` (docs/theory.md §2a, thesis eq. 4.12–4.13).
 
@@ -130,52 +119,55 @@ def identify_planar_joint(
     (array([20000000.,   500000.]), array([200.,   5.]))
     """
     t, r = translation, rotation
+    _check_points(t, r, b_contact, b_tip)
+    freq, p3, HB, H33, meas = _blocks(assembly, substructure_a, a_point, substructure_b, b_contact, b_tip, t, r)
+    if smoothing:
+        meas = savgol_smooth(meas, int(smoothing), smoothing_order)
+    eq = _Equations(HB, H33, meas)
+    h_t, h_r, cond, flags, extra = _solve(eq, passivity_tol, consistency_tol, condition_limit)
+    settings = {"a_point": a_point, "b_contact": b_contact, "b_tip": b_tip, "translation": t, "rotation": r,
+                "smoothing": smoothing, "smoothing_order": smoothing_order, "passivity_tol": passivity_tol,
+                "condition_limit": condition_limit, "consistency_tol": consistency_tol}
+    values = np.zeros((freq.size, 2, 2), dtype=complex)
+    values[:, 0, 0], values[:, 1, 1] = h_t, h_r
+    values = fill_bad_lines(values, flags["degenerate"], freq, "planar joint identification")
+    return IdentificationResult(
+        joint=FRF(freq, values, p3, p3, Quantity.RECEPTANCE), model="planar",
+        residual=eq.recouple_residual(values[:, 0, 0], values[:, 1, 1]),
+        condition=np.where(np.isfinite(cond), cond, np.inf), unreliable=np.logical_or.reduce(list(flags.values())),
+        flags=flags, extra=extra, settings=settings,
+    )
+
+
+def _check_points(t: str, r: str, b_contact: int, b_tip: int) -> None:
+    """InputError unless ``t`` is a translation, ``r`` a rotation and the tip another node than the contact."""
     if Dof(0, t).is_rotation or not Dof(0, r).is_rotation:
         raise InputError(f"translation {t!r} must be a translation and rotation {r!r} a rotation direction")
     if b_contact == b_tip:
         raise InputError(f"b_contact and b_tip are both node {b_tip}; the tip must be another node of B")
-    freq, p3, HB, H33, meas = _blocks(assembly, substructure_a, a_point, substructure_b, b_contact, b_tip, t, r)
-    if smoothing:
-        meas = savgol_smooth(meas, int(smoothing), smoothing_order)
 
-    eq = _Equations(HB, H33, meas)
+
+def _solve(eq: "_Equations", passivity_tol: float, consistency_tol: float, condition_limit: float) -> tuple:
+    """The chosen root per line: ``h_t``, ``h_r``, the condition number, the flags (ambiguous,
+    non_passive, inconsistent, ill_conditioned, degenerate) and both roots with the choice."""
     xs, ys, ht, hr = eq.roots()
     passive, consistent, cand_res = eq.judge(ht, hr, passivity_tol, consistency_tol)
     choice, ambiguous = _choose_roots(consistent & passive, cand_res, ht, hr)
-    idx = np.arange(freq.size)
+    idx = np.arange(xs.shape[0])
     h_t = ht[idx, choice]
     h_r = hr[idx, choice]
     degenerate = ~np.isfinite(h_t) | ~np.isfinite(h_r)
     cond = eq.condition(xs[idx, choice], ys[idx, choice])
-    non_passive = ~passive[idx, choice] & ~degenerate
-    inconsistent = ~consistent[idx, choice] & ~degenerate
-    ill = cond > condition_limit
-    values = np.zeros((freq.size, 2, 2), dtype=complex)
-    values[:, 0, 0], values[:, 1, 1] = h_t, h_r
-    values = fill_bad_lines(values, degenerate, freq, "planar joint identification")
-    flags = {"ambiguous": ambiguous, "non_passive": non_passive, "inconsistent": inconsistent,
-             "ill_conditioned": ill, "degenerate": degenerate}
-    return IdentificationResult(
-        joint=FRF(freq, values, p3, p3, Quantity.RECEPTANCE),
-        model="planar",
-        residual=eq.recouple_residual(values[:, 0, 0], values[:, 1, 1]),
-        condition=np.where(np.isfinite(cond), cond, np.inf),
-        unreliable=ambiguous | non_passive | inconsistent | ill | degenerate,
-        flags=flags,
-        extra={"roots_x": xs, "roots_y": ys, "choice": choice},
-        settings={"a_point": a_point, "b_contact": b_contact, "b_tip": b_tip, "translation": t, "rotation": r,
-                  "smoothing": smoothing, "smoothing_order": smoothing_order, "passivity_tol": passivity_tol,
-                  "condition_limit": condition_limit, "consistency_tol": consistency_tol},
-    )
+    flags = {"ambiguous": ambiguous, "non_passive": ~passive[idx, choice] & ~degenerate,
+             "inconsistent": ~consistent[idx, choice] & ~degenerate, "ill_conditioned": cond > condition_limit,
+             "degenerate": degenerate}
+    return h_t, h_r, cond, flags, {"roots_x": xs, "roots_y": ys, "choice": choice}
 
 
 def _blocks(assembly, substructure_a, a_point, substructure_b, b_contact, b_tip, t, r):
     """The grid, A's contact DOFs, B's tip/contact block, A's contact block and the measured
     ``G_11``, ``G_12`` ``(nf, 2)`` (InputError naming what is missing)."""
-    G = as_receptance("assembly", assembly)
-    A = as_receptance("substructure A", substructure_a)
-    B = as_receptance("substructure B", substructure_b)
-    freq = same_grid({"assembly": G, "substructure A": A, "substructure B": B})
+    freq, G, A, B = receptances_on_one_grid(assembly, substructure_a, substructure_b)
     p3 = [Dof(a_point, t), Dof(a_point, r)]
     p1t, p1r, p2t, p2r = Dof(b_tip, t), Dof(b_tip, r), Dof(b_contact, t), Dof(b_contact, r)
     H33 = fetch("substructure A", A, p3, p3, "the contact block incl. rotations is needed")

@@ -93,6 +93,7 @@ of shear deflection:
 1.01
 """
 
+from jointdb.fe import _ingredients
 from jointdb.fe._elements import bar_matrices, bending_matrices, section_properties, shear_coefficient
 from jointdb.fe._ingredients import (
     Clamp,
@@ -115,13 +116,9 @@ __all__ = [
     "get_material",
     "Segment",
     "NamedPoint",
-    "Ingredient",
-    "Clamp",
-    "Support",
-    "PointMass",
-    "ModalDamping",
-    "RayleighDamping",
-    "HystereticDamping",
+]
+__all__ += _ingredients.__all__  # Ingredient and its kinds
+__all__ += [
     "Joint",
     "Insertion",
     "Contact",

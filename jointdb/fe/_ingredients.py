@@ -33,7 +33,6 @@ __all__ = [
     "ModalDamping",
     "RayleighDamping",
     "HystereticDamping",
-    "FieldError",
 ]
 
 
@@ -77,8 +76,23 @@ def _check_directions(directions, mesh: "Mesh", what: str) -> None:
             )
 
 
+class _AtOnePosition(Ingredient):
+    """An ingredient acting at one axial ``position`` [m], where the mesh needs a node."""
+
+    position: float
+
+    def positions(self) -> tuple[float, ...]:
+        """Axial positions [m] where the mesh needs a node: this ingredient's one ``position``.
+
+        Returns
+        -------
+        tuple of float
+        """
+        return (self.position,)
+
+
 @dataclass(frozen=True)
-class Clamp(Ingredient):
+class Clamp(_AtOnePosition):
     """Fix DOFs at one position (all of them by default: a clamped end).
 
     Parameters
@@ -98,15 +112,6 @@ class Clamp(Ingredient):
         if self.directions is not None:
             object.__setattr__(self, "directions", tuple(str(d).lower() for d in self.directions))
 
-    def positions(self) -> tuple[float, ...]:
-        """Axial positions [m] where the mesh needs a node.
-
-        Returns
-        -------
-        tuple of float
-        """
-        return (self.position,)
-
     def apply(self, matrices, mesh):
         node = mesh.node_at(self.position, "clamp")
         dirs = mesh.directions if self.directions is None else self.directions
@@ -117,7 +122,7 @@ class Clamp(Ingredient):
 
 
 @dataclass(frozen=True)
-class Support(Ingredient):
+class Support(_AtOnePosition):
     """Elastic support to ground: springs and viscous dampers on chosen DOFs.
 
     Parameters
@@ -152,15 +157,6 @@ class Support(Ingredient):
     def __hash__(self) -> int:
         return hash((self.position, tuple(sorted(self.stiffness.items())), tuple(sorted(self.damping.items()))))
 
-    def positions(self) -> tuple[float, ...]:
-        """Axial positions [m] where the mesh needs a node.
-
-        Returns
-        -------
-        tuple of float
-        """
-        return (self.position,)
-
     def apply(self, matrices, mesh):
         node = mesh.node_at(self.position, "support")
         what = f"support at {self.position:g} m"
@@ -178,7 +174,7 @@ class Support(Ingredient):
 
 
 @dataclass(frozen=True)
-class PointMass(Ingredient):
+class PointMass(_AtOnePosition):
     """A lumped mass with rotary inertia (sensor, nut, insert) at one position.
 
     Parameters
@@ -203,15 +199,6 @@ class PointMass(Ingredient):
         _number(self, "mass", minimum=0.0)
         _number(self, "rotary_inertia", minimum=0.0)
         _number(self, "polar_inertia", minimum=0.0)
-
-    def positions(self) -> tuple[float, ...]:
-        """Axial positions [m] where the mesh needs a node.
-
-        Returns
-        -------
-        tuple of float
-        """
-        return (self.position,)
 
     def apply(self, matrices, mesh):
         node = mesh.node_at(self.position, "point mass")

@@ -158,9 +158,9 @@ class Mesh:
         -------
         tuple of int
         """
-        for ing, a, b in self.splits:
-            if ing is ingredient:
-                return a, b
+        found = _entry_of(self.splits, ingredient)
+        if found is not None:
+            return found
         raise InputError(f"{type(ingredient).__name__} at {ingredient.positions()} m is not part of this mesh")
 
     def contact_pairs(self, ingredient) -> tuple:
@@ -176,27 +176,24 @@ class Mesh:
         tuple
             Empty when it has no contact layer.
         """
-        for ing, pairs, _ in self.contacts:
-            if ing is ingredient:
-                return pairs
-        return ()
+        found = _entry_of(self.contacts, ingredient)
+        return () if found is None else found[0]
 
     def contact_elements(self, ingredient) -> tuple:
-        """``((inner a, inner b, host a, host b, length [m]), ...)``: the overlap's element pairs.
+        """``((inner a, inner b, host a, host b, length [m]), ...)``: the overlap's element pairs
+        (empty when the insertion has no contact layer).
 
         Parameters
         ----------
         ingredient
-            A :class:`jointdb.fe.Insertion` of the model.
+            The :class:`jointdb.fe.Insertion`, as for :meth:`contact_pairs`.
 
         Returns
         -------
         tuple
         """
-        for ing, _, elems in self.contacts:
-            if ing is ingredient:
-                return elems
-        return ()
+        found = _entry_of(self.contacts, ingredient)
+        return () if found is None else found[1]
 
     def dof_labels(self) -> tuple[Dof, ...]:
         """``Dof(node, direction)`` of every global DOF (the first node that owns it).
@@ -221,3 +218,12 @@ class Mesh:
 def _merge_tol(length: float, max_element_length: float = 0.0) -> float:
     """Positions closer than this share a node (avoids ill-conditioned sliver elements)."""
     return max(1e-9 * max(abs(length), 1e-3), 1e-3 * max_element_length)
+
+
+def _entry_of(entries: tuple, ingredient) -> "tuple | None":
+    """What a ``(ingredient, ...)`` entry of :attr:`Mesh.splits` / :attr:`Mesh.contacts` holds after the
+    ingredient (compared by identity), or None when the ingredient has none."""
+    for ing, *rest in entries:
+        if ing is ingredient:
+            return tuple(rest)
+    return None

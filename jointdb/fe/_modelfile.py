@@ -47,7 +47,7 @@ from typing import TYPE_CHECKING, Any
 
 from jointdb.schemas._jsonfile import read_json_file
 from jointdb.schemas._limits import check_model_limits
-from jointdb.errors import InputError
+from jointdb.errors import InputError, field_error
 from jointdb.fe._ingredients import (
     Clamp,
     FieldError,
@@ -71,10 +71,6 @@ FORMAT = "jointdb-beam-model/1"
 _DAMPING_TYPES = ("modal", "rayleigh", "hysteretic")
 _BOUND = {"greater_than": ">", "greater_than_equal": ">="}
 _MATERIAL_RANGE = {"E": "must be > 0 Pa", "rho": "must be > 0 kg/m^3", "nu": "must be in (-1, 0.5)"}
-
-
-def _fail(path: str, reason: str) -> InputError:
-    return InputError(f"{path}: {reason}")
 
 
 def _wording(field: str, err: dict[str, Any]) -> str | None:
@@ -107,9 +103,9 @@ def _build(cls, path: str, **kwargs):
     try:
         return cls(**kwargs)
     except FieldError as exc:
-        raise _fail(f"{path}.{exc.field}", exc.reason) from None
+        raise field_error(f"{path}.{exc.field}", exc.reason) from None
     except InputError as exc:
-        raise _fail(path, str(exc)) from None
+        raise field_error(path, str(exc)) from None
 
 
 def _material(value: "str | schema.InlineMaterial", path: str, named: dict[str, Material],
@@ -122,11 +118,11 @@ def _material(value: "str | schema.InlineMaterial", path: str, named: dict[str, 
         if key in MATERIALS:
             return key
         known = ", ".join(sorted(set(MATERIALS) | set(named)))
-        raise _fail(path, f"unknown material {value!r} (known: {known}; or give {{E, nu, rho}})")
+        raise field_error(path, f"unknown material {value!r} (known: {known}; or give {{E, nu, rho}})")
     try:
         return Material(value.name or default_name, value.E, value.nu, value.rho)
     except InputError as exc:
-        raise _fail(path, str(exc).split(": ", 1)[-1]) from None
+        raise field_error(path, str(exc).split(": ", 1)[-1]) from None
 
 
 def _materials(doc: "schema.BeamModelFile") -> dict[str, Material]:
@@ -221,6 +217,7 @@ def model_from_dict(data: Any) -> BeamModel:
     Returns
     -------
     BeamModel
+        The model the document describes, every cross-field rule checked.
 
     Raises
     ------
@@ -231,7 +228,7 @@ def model_from_dict(data: Any) -> BeamModel:
     from jointdb.schemas import parse
 
     if not isinstance(data, dict):
-        raise _fail("model", f"must be an object, got {type(data).__name__}")
+        raise field_error("model", f"must be an object, got {type(data).__name__}")
     check_model_limits(data)  # sizes, magnitudes and element count before anything is built
     doc = parse("model", data, wording=_wording)
     named = _materials(doc)
@@ -247,7 +244,7 @@ def model_from_dict(data: Any) -> BeamModel:
         if field.startswith("ingredients["):
             idx = int(field[len("ingredients["): field.index("]")])
             field = paths[idx] + field[field.index("]") + 1:]
-        raise _fail(field, exc.reason) from None
+        raise field_error(field, exc.reason) from None
 
 
 def load_model(path: "str | Path") -> BeamModel:
@@ -283,7 +280,7 @@ def model_to_dict(model: BeamModel) -> dict:
     Parameters
     ----------
     model
-        The :class:`BeamModel`.
+        Any :class:`BeamModel`, built in code or read from a file.
 
     Returns
     -------

@@ -314,12 +314,9 @@ def frf_modal(matrices, freq_hz, dof_index, n_modes: int | None = None, residual
 
     Parameters
     ----------
-    matrices
-        :class:`FEMatrices`.
-    freq_hz
-        Frequencies [Hz], ``(n_freq,)``.
-    dof_index
-        Global DOF indices of outputs = inputs, ``(m,)``.
+    matrices, freq_hz, dof_index
+        As for :func:`frf_direct`: the :class:`FEMatrices`, the frequencies [Hz] ``(n_freq,)``
+        and the global DOF indices of outputs = inputs ``(m,)``.
     n_modes
         Number of lowest modes kept (default: all modes below 2 × max(freq)).
     residual

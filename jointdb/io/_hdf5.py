@@ -191,12 +191,16 @@ def _attr(f, name: str, p: Path):
         raise InputError(f"{p}: attribute {name!r} cannot be read ({exc})") from None
 
 
+def _item(v):
+    """``v``; for a numpy array of shape ``()`` or ``(1,)`` its one element, for a larger one None."""
+    if isinstance(v, np.ndarray):
+        return v.reshape(()).item() if v.shape in ((), (1,)) else None
+    return v
+
+
 def _scalar_text(v) -> str | None:
     """A string attribute's text (str or UTF-8 bytes, numpy scalars included), else ``None``."""
-    if isinstance(v, np.ndarray):
-        if v.shape not in ((), (1,)):
-            return None
-        v = v.reshape(()).item()
+    v = _item(v)
     if isinstance(v, bytes):
         try:
             return v.decode("utf-8")
@@ -207,10 +211,7 @@ def _scalar_text(v) -> str | None:
 
 def _scalar_int(v) -> int | None:
     """An integer attribute's value (a whole number, numpy scalars included), else ``None``."""
-    if isinstance(v, np.ndarray):
-        if v.shape not in ((), (1,)):
-            return None
-        v = v.reshape(()).item()
+    v = _item(v)
     if isinstance(v, (bool, np.bool_)) or not isinstance(v, (int, float, np.integer, np.floating)):
         return None
     if not np.isfinite(v) or int(v) != v:
@@ -308,11 +309,7 @@ def read_frf_hdf5_full(path: str | os.PathLike) -> tuple[FRF, dict]:
         frf = FRF(freq, values, outputs, inputs, quantity)
     except InputError as exc:
         raise InputError(f"{p}: {exc}") from None
-    try:
-        meta = json.loads(meta_text)
-    except (ValueError, RecursionError):  # JSONDecodeError is a ValueError
-        raise InputError(f"{p}: attribute 'metadata' is not valid JSON") from None
-    return frf, meta
+    return frf, _metadata(meta_text, p)
 
 
 def read_frf_hdf5(path: str | os.PathLike) -> FRF:
@@ -321,11 +318,12 @@ def read_frf_hdf5(path: str | os.PathLike) -> FRF:
     Parameters
     ----------
     path
-        The HDF5 file.
+        The HDF5 file (``str`` or path).
 
     Returns
     -------
     FRF
+        ``(n_freq, n_out, n_in)``, in the quantity the file states.
     """
     return read_frf_hdf5_full(path)[0]
 
@@ -340,15 +338,21 @@ def read_frf_hdf5_attrs(path: str | os.PathLike) -> dict:
     Parameters
     ----------
     path
-        The HDF5 file.
+        The HDF5 file; its datasets are not read.
 
     Returns
     -------
     dict
+        The metadata, as JSON gave it back.
     """
     p, f = _open(path)
     with f, _damaged(p):
         text = _attr_str(f, "metadata", p) if "metadata" in f.attrs else "{}"
+    return _metadata(text, p)
+
+
+def _metadata(text: str, p: Path) -> dict:
+    """The ``metadata`` attribute's JSON text as a dict (InputError naming the file if it is not JSON)."""
     try:
         return json.loads(text)
     except (ValueError, RecursionError):  # JSONDecodeError is a ValueError

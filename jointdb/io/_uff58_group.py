@@ -262,14 +262,8 @@ def import_uff58(
     return frf_from_records(records, quantity, file_quantity=file_quantity, fill=fill, source=str(path))
 
 
-def read_frf_uff58(
-    path: str | os.PathLike,
-    quantity: Quantity | str | None = None,
-    *,
-    file_quantity: Quantity | str | None = None,
-    fill: str = "error",
-    assume_si: bool = False,
-) -> FRF:
+def read_frf_uff58(path: str | os.PathLike, quantity: Quantity | str | None = None, *,
+                   file_quantity: Quantity | str | None = None, fill: str = "error", assume_si: bool = False) -> FRF:
     """Read a UFF58 file (ASCII or 58b) into one :class:`~jointdb.frf.FRF`.
 
     Directions are normalised (a −X record is negated and labelled +X), units
@@ -279,16 +273,10 @@ def read_frf_uff58(
 
     Parameters
     ----------
-    path
-        The ``.uff`` / ``.unv`` file (ASCII 58 or binary 58b).
-    quantity
-        Quantity to return (converted exactly); None keeps the file's.
-    file_quantity
-        Quantity of records whose data-type codes do not say.
-    fill
-        ``"error"`` or ``"reciprocity"`` (see :func:`frf_from_records`).
-    assume_si
-        Ignore unit labels and take the values as SI (see :func:`read_uff58`).
+    path, quantity, file_quantity, fill, assume_si
+        As for :func:`import_uff58`: the file, the quantity to return (None: the file's),
+        the quantity of records whose codes do not say, ``"error"`` or ``"reciprocity"``
+        for missing pairs, and whether to ignore unit labels.
 
     Returns
     -------

@@ -140,14 +140,12 @@ def response_factor(label: str, quantity: Quantity, dof: Dof, where: str) -> flo
         if s.endswith(suffix):
             s, power = s[: -len(suffix)], p
             break
-    if s in _LENGTH:
-        kind, factor = "translational", _LENGTH[s]
-    elif s in _ANGLE:
-        kind, factor = "rotational", _ANGLE[s]
-    else:
-        raise InputError(f"{where}: unknown response unit label {label!r}; known: {known_response_units()}")
-    if (kind == "rotational") != dof.is_rotation:
-        raise InputError(f"{where}: response unit {label!r} is {kind} but DOF {dof} is not")
+    factor = _unit_factor(
+        s, (_LENGTH, _ANGLE), dof,
+        lambda: f"{where}: unknown response unit label {label!r}; known: {known_response_units()}",
+        lambda kind: f"{where}: response unit {label!r} is {kind} but DOF {dof} is not",
+        ("translational", "rotational"),
+    )
     if power != quantity.power:
         named = ("displacement", "velocity", "acceleration")[power]
         raise InputError(
@@ -167,15 +165,25 @@ def excitation_factor(label: str, dof: Dof, where: str) -> float:
     s = _norm(label)
     for ch in ("*", ".", "-", "·", "(", ")"):
         s = s.replace(ch, "")
-    if s in _FORCE:
-        kind, factor = "a force", _FORCE[s]
-    elif s in _MOMENT:
-        kind, factor = "a moment", _MOMENT[s]
-    else:
-        raise InputError(f"{where}: unknown excitation unit label {label!r}; known: {known_excitation_units()}")
-    if (kind == "a moment") != dof.is_rotation:
-        raise InputError(f"{where}: excitation unit {label!r} is {kind}, which does not fit DOF {dof}")
-    return factor
+    return _unit_factor(
+        s, (_FORCE, _MOMENT), dof,
+        lambda: f"{where}: unknown excitation unit label {label!r}; known: {known_excitation_units()}",
+        lambda kind: f"{where}: excitation unit {label!r} is {kind}, which does not fit DOF {dof}",
+        ("a force", "a moment"),
+    )
+
+
+def _unit_factor(unit: str, tables: tuple, dof: Dof, unknown, mismatch, kinds: tuple) -> float:
+    """The factor to SI of a normalised unit label, looked up in ``tables`` = ``(translational,
+    rotational)`` and checked against ``dof``'s kind. InputError with ``unknown()`` when the label is in
+    neither table, with ``mismatch(kind)`` (``kind`` from ``kinds``, in the same order) when it does not
+    fit the DOF."""
+    for rotational, table in enumerate(tables):
+        if unit in table:
+            if bool(rotational) != dof.is_rotation:
+                raise InputError(mismatch(kinds[rotational]))
+            return table[unit]
+    raise InputError(unknown())
 
 
 def split_frf_label(label: str) -> tuple[str, str] | None:

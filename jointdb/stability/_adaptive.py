@@ -37,7 +37,7 @@ def plottable_depth(result: LobeResult) -> np.ndarray:
     Parameters
     ----------
     result
-        A :class:`LobeResult`.
+        Lobes from any of the methods (a :class:`LobeResult`), folds included.
 
     Returns
     -------

@@ -291,12 +291,9 @@ def critical_depth(
 
     Parameters
     ----------
-    sys
-        From :func:`sd_system`.
-    spindle_speed_rpm
-        Spindle speed [rpm].
-    n_intervals
-        Intervals per tooth period.
+    sys, spindle_speed_rpm, n_intervals
+        As for :func:`spectral_radius`: the system from :func:`sd_system`, the spindle speed [rpm]
+        and the intervals per tooth period.
     start
         First trial depth [m] (default: half the ZOA-like floor of the model).
     rtol

@@ -65,8 +65,16 @@ def composite_material(holder: Material, tool: Material, outer: float, bore: flo
     return Material(f"{holder.name}+{tool.name}", e_eq, holder.nu, rho_eq)
 
 
-def _damping(eta: float) -> tuple:
-    return (HystereticDamping(eta),) if eta > 0 else ()
+def _part_model(segments: list, ends: tuple, eta: float, max_element_length: float, name: str) -> BeamModel:
+    """The free–free beam model of one part: its segments, its two named points ``(name, z [m],
+    key of NODES)`` and hysteretic damping of loss factor ``eta`` (none when 0)."""
+    return BeamModel(
+        tuple(segments),
+        points=tuple(NamedPoint(point, z, NODES[key]) for point, z, key in ends),
+        ingredients=(HystereticDamping(eta),) if eta > 0 else (),
+        max_element_length=max_element_length,
+        name=name,
+    )
 
 
 def tool_model(spec: StackSpec, max_element_length: float = 0.005) -> BeamModel:
@@ -139,13 +147,8 @@ def tool_model(spec: StackSpec, max_element_length: float = 0.005) -> BeamModel:
             mat = Material(f"{material.name} (fluted)", material.E, material.nu, material.rho * scale)
         segments.append(Segment(length, diameter, 0.0, mat))
         pos += length
-    return BeamModel(
-        tuple(segments),
-        points=(NamedPoint("tip", 0.0, NODES["tip"]), NamedPoint("base", spec.gauge_length, NODES["tool_base"])),
-        ingredients=_damping(tool.loss_factor),
-        max_element_length=max_element_length,
-        name=f"{spec.name}: tool overhang",
-    )
+    ends = (("tip", 0.0, "tip"), ("base", spec.gauge_length, "tool_base"))
+    return _part_model(segments, ends, tool.loss_factor, max_element_length, f"{spec.name}: tool overhang")
 
 
 def _inserted_shank(spec: StackSpec) -> list[tuple[float, float, float]]:
@@ -215,10 +218,5 @@ def holder_model(spec: StackSpec, max_element_length: float = 0.005) -> BeamMode
             raise InputError(f"holder bore {hseg.inner_diameter:g} m is smaller than the tool shank {tool_d:g} m")
         mat = composite_material(h_mat, t_mat, hseg.outer_diameter, hseg.inner_diameter, tool_d)
         segments.append(Segment(b - a, hseg.outer_diameter, 0.0, mat))
-    return BeamModel(
-        tuple(segments),
-        points=(NamedPoint("nose", 0.0, NODES["holder_nose"]), NamedPoint("base", holder.length, NODES["holder_base"])),
-        ingredients=_damping(holder.loss_factor),
-        max_element_length=max_element_length,
-        name=f"{spec.name}: holder with clamped shank",
-    )
+    ends = (("nose", 0.0, "holder_nose"), ("base", holder.length, "holder_base"))
+    return _part_model(segments, ends, holder.loss_factor, max_element_length, f"{spec.name}: holder with clamped shank")

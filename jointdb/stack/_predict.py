@@ -89,6 +89,7 @@ def spindle_model(spec: StackSpec) -> BeamModel:
     Returns
     -------
     BeamModel
+        The spindle's model as given, or read from its dict.
 
     Raises
     ------

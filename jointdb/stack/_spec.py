@@ -49,6 +49,15 @@ INTERFACE_NAMES: tuple[str, str] = ("tool-holder", "holder-spindle")
 
 
 # ------------------------------------------------------------------ parts
+class _Segmented:
+    """A part made of ``segments``, each with a ``length`` [m]."""
+
+    @property
+    def length(self) -> float:
+        """Total length [m]: the sum of the segments' lengths."""
+        return float(sum(s.length for s in self.segments))
+
+
 @dataclass(frozen=True)
 class ToolSegment:
     """One tool section, from the tip.
@@ -70,7 +79,7 @@ class ToolSegment:
 
 
 @dataclass(frozen=True)
-class Tool:
+class Tool(_Segmented):
     """The tool, from its tip towards its shank end.
 
     Parameters
@@ -97,10 +106,6 @@ class Tool:
     loss_factor: float = 0.0
     fluted_area_ratio: float | None = None
 
-    @property
-    def length(self) -> float:
-        return float(sum(s.length for s in self.segments))
-
 
 @dataclass(frozen=True)
 class HolderSegment:
@@ -122,7 +127,7 @@ class HolderSegment:
 
 
 @dataclass(frozen=True)
-class Holder:
+class Holder(_Segmented):
     """The tool holder, from its nose (tool side) towards the spindle.
 
     Parameters
@@ -138,10 +143,6 @@ class Holder:
     segments: tuple[HolderSegment, ...]
     material: str = "steel"
     loss_factor: float = 0.0
-
-    @property
-    def length(self) -> float:
-        return float(sum(s.length for s in self.segments))
 
 
 @dataclass(frozen=True)

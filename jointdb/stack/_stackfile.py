@@ -16,20 +16,9 @@ import re
 from typing import TYPE_CHECKING, Any
 
 from jointdb.schemas._limits import LENGTH_RANGE, check_elements, check_model_limits
-from jointdb.errors import InputError
-from jointdb.stack._spec import (
-    FORMAT,
-    INTERFACE_NAMES,
-    FrequencyGrid,
-    Holder,
-    HolderSegment,
-    JointChoice,
-    MeasuredSpindle,
-    ModelledSpindle,
-    StackSpec,
-    Tool,
-    ToolSegment,
-)
+from jointdb.errors import InputError, field_error
+from jointdb.stack._spec import FORMAT, INTERFACE_NAMES, FrequencyGrid, Holder, HolderSegment, JointChoice
+from jointdb.stack._spec import MeasuredSpindle, ModelledSpindle, StackSpec, Tool, ToolSegment
 
 if TYPE_CHECKING:  # the schema (pydantic) is imported when a stack is read, not with jointdb.stack
     from jointdb.schemas import stack as schema
@@ -39,10 +28,6 @@ __all__ = ["stack_from_dict", "stack_to_dict"]
 _REF_RE = re.compile(r"^\s*([^@\s]+)\s*@\s*([^@\s]+)\s*$")
 _BOUNDS = {"greater_than": ">", "greater_than_equal": ">=", "less_than": "<", "less_than_equal": "<="}
 _SPINDLE_FIELDS = ("spindle.file", "spindle.node", "spindle.model", "spindle.point")
-
-
-def _fail(path: str, text: str) -> InputError:
-    return InputError(f"{path}: {text}")
 
 
 def _wording(field: str, err: dict[str, Any]) -> str | None:
@@ -84,7 +69,7 @@ def _tool(t: "schema.Tool", path: str) -> Tool:
     seen_shank = False
     for i, s in enumerate(segs):
         if s.fluted and seen_shank:
-            raise _fail(f"{path}.segments[{i}].fluted",
+            raise field_error(f"{path}.segments[{i}].fluted",
                         "fluted sections must come first (the tool is described from its tip)")
         seen_shank |= not s.fluted
     return Tool(segs, material=t.material.strip(), fluted_ratio=t.fluted_ratio, loss_factor=t.loss_factor,
@@ -95,7 +80,7 @@ def _holder(h: "schema.Holder", path: str) -> Holder:
     segs = []
     for i, s in enumerate(h.segments):
         if s.inner_diameter >= s.outer_diameter:
-            raise _fail(f"{path}.segments[{i}].inner_diameter",
+            raise field_error(f"{path}.segments[{i}].inner_diameter",
                         f"must be smaller than outer_diameter ({s.inner_diameter:g} >= {s.outer_diameter:g})")
         segs.append(HolderSegment(s.length, s.outer_diameter, s.inner_diameter))
     return Holder(tuple(segs), material=h.material.strip(), loss_factor=h.loss_factor)
@@ -109,14 +94,14 @@ def _spindle(sp: Any, raw: dict[str, Any], path: str) -> MeasuredSpindle | Model
         try:
             check_model_limits(model)
         except InputError as exc:
-            raise _fail(f"{path}.model", str(exc)) from None
+            raise field_error(f"{path}.model", str(exc)) from None
     return ModelledSpindle(model, sp.point.strip())
 
 
 def _pinned(ref: str, path: str) -> JointChoice:
     m = _REF_RE.match(ref)
     if not m:  # pragma: no cover - the schema's pattern is the same
-        raise _fail(path, f"{ref!r} is neither 'rigid' nor a pinned joint 'name@version'")
+        raise field_error(path, f"{ref!r} is neither 'rigid' nor a pinned joint 'name@version'")
     version: int | str = int(m.group(2)) if m.group(2).isdigit() else m.group(2)
     return JointChoice("catalogued", name=m.group(1), version=version)
 
@@ -146,9 +131,9 @@ def _joint(choice: Any, path: str) -> JointChoice:
 def _frequency(f: "schema.FrequencyGrid", path: str) -> FrequencyGrid:
     grid = FrequencyGrid(f.min, f.max, f.step)
     if grid.fmax <= grid.fmin:
-        raise _fail(f"{path}.max", f"must exceed frequency.min ({grid.fmax:g} <= {grid.fmin:g})")
+        raise field_error(f"{path}.max", f"must exceed frequency.min ({grid.fmax:g} <= {grid.fmin:g})")
     if (grid.fmax - grid.fmin) / grid.step > 200_000:
-        raise _fail(f"{path}.step", "gives more than 200000 lines; use a coarser step")
+        raise field_error(f"{path}.step", "gives more than 200000 lines; use a coarser step")
     return grid
 
 
@@ -157,21 +142,21 @@ def _gauge(doc: "schema.StackFile", tool: Tool, holder: Holder) -> float:
     """The gauge length from ``gauge_length`` and/or ``insertion_length``, checked against tool and holder."""
     given = doc.insertion_length
     if doc.gauge_length is None and given is None:
-        raise _fail("gauge_length", "required field is missing (or give insertion_length)")
+        raise field_error("gauge_length", "required field is missing (or give insertion_length)")
     if doc.gauge_length is not None:
         gauge = doc.gauge_length
     else:
         gauge = tool.length - given
         if gauge <= 0:
-            raise _fail("insertion_length", f"must be shorter than the tool ({tool.length:g} m), got {given:g}")
+            raise field_error("insertion_length", f"must be shorter than the tool ({tool.length:g} m), got {given:g}")
     if gauge > tool.length + 1e-12:
-        raise _fail("gauge_length", f"must not exceed the tool length {tool.length:g} m (got {gauge:g})")
+        raise field_error("gauge_length", f"must not exceed the tool length {tool.length:g} m (got {gauge:g})")
     insertion = tool.length - gauge
     if given is not None and abs(given - insertion) > 1e-9:
-        raise _fail("insertion_length", f"{given:g} m disagrees with tool length {tool.length:g} m − "
+        raise field_error("insertion_length", f"{given:g} m disagrees with tool length {tool.length:g} m − "
                                         f"gauge_length {gauge:g} m = {insertion:g} m; give one of them")
     if insertion > holder.length + 1e-12:
-        raise _fail("gauge_length", f"leaves {insertion:g} m of tool inside the holder, longer than the holder "
+        raise field_error("gauge_length", f"leaves {insertion:g} m of tool inside the holder, longer than the holder "
                                     f"({holder.length:g} m)")
     return gauge
 
@@ -185,7 +170,7 @@ def _check_insertion(tool: Tool, holder: Holder, gauge: float) -> None:
         if end <= gauge + 1e-12:
             continue
         if seg.fluted:
-            raise _fail(f"tool.segments[{i}].fluted", "a fluted section reaches inside the holder; "
+            raise field_error(f"tool.segments[{i}].fluted", "a fluted section reaches inside the holder; "
                                                       "increase gauge_length")
         depth_from, depth_to = max(start, gauge) - gauge, end - gauge
         hpos = 0.0
@@ -195,7 +180,7 @@ def _check_insertion(tool: Tool, holder: Holder, gauge: float) -> None:
             if h1 <= depth_from + 1e-12 or h0 >= depth_to - 1e-12:
                 continue
             if hseg.inner_diameter + 1e-12 < seg.diameter:
-                raise _fail(f"holder.segments[{j}].inner_diameter",
+                raise field_error(f"holder.segments[{j}].inner_diameter",
                             f"bore {hseg.inner_diameter * 1e3:g} mm is smaller than the inserted tool shank "
                             f"(tool.segments[{i}].diameter {seg.diameter * 1e3:g} mm)")
 
@@ -221,10 +206,10 @@ def stack_from_dict(doc: Any) -> StackSpec:
     from jointdb.schemas import parse
 
     if not isinstance(doc, dict):
-        raise _fail("stack", f"must be an object, got {type(doc).__name__}")
+        raise field_error("stack", f"must be an object, got {type(doc).__name__}")
     for key in ("tool", "holder", "spindle"):  # {"part": "name@version"}: resolved by the application layer
         if isinstance(doc.get(key), dict) and "part" in doc[key]:
-            raise _fail(f"{key}.part", "a catalogued part is resolved from the database first "
+            raise field_error(f"{key}.part", "a catalogued part is resolved from the database first "
                                        "(jointdb.usecases.stack_from_document; `jointdb predict` does it)")
     parsed = parse("stack", doc, wording=_wording)
     tool = _tool(parsed.tool, "tool")
@@ -275,7 +260,7 @@ def substructure_from_dict(kind: str, obj: Any, path: str) -> Tool | Holder | Me
     if kind not in types:
         raise InputError(f"{path}: kind must be tool, holder or spindle, got {kind!r}")
     if not isinstance(obj, dict):
-        raise _fail(path, f"must be an object, got {type(obj).__name__}")
+        raise field_error(path, f"must be an object, got {type(obj).__name__}")
     try:
         parsed = TypeAdapter(types[kind]).validate_python(obj)
     except ValidationError as exc:
@@ -308,7 +293,7 @@ def stack_to_dict(spec: StackSpec) -> dict[str, Any]:
     Parameters
     ----------
     spec
-        The :class:`StackSpec`.
+        A :class:`StackSpec`, built in code or as :func:`stack_from_dict` returns it.
 
     Returns
     -------

@@ -1,225 +1,22 @@
-"""FRF container, DOF labels and exact quantity conversions.
-
-Contract: frequencies in Hz, float64, strictly
-increasing; values complex128 of shape ``(n_freq, n_out, n_in)``; outputs and
-inputs labelled by :class:`Dof` ``(node, direction)`` with the UFF58 direction
-codes ``x y z rx ry rz`` (1..6); the quantity (receptance, mobility,
-accelerance) is explicit and converted exactly.
-
-Harmonic convention ``x(t) = X exp(+iωt)`` (docs/theory.md §0), so mobility
-``Y = iω H`` and accelerance ``A = −ω² H``.
-"""
+"""The :class:`FRF` container: validated, read-only values on labelled DOFs."""
 
 from __future__ import annotations
 
-import enum
-import re
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from jointdb.errors import InputError
+from jointdb.frf._indexing import _check_labels, _take, reciprocal_index
+from jointdb.frf._labels import Dof, Quantity, dofs
 
-__all__ = ["DIRECTIONS", "Dof", "Quantity", "FRF", "dofs", "reciprocal_index"]
-
-#: Direction names in UFF58 order: code 1..6.
-DIRECTIONS: tuple[str, ...] = ("x", "y", "z", "rx", "ry", "rz")
-
-_DOF_RE = re.compile(r"^\s*(\d+)\s*[:.\s]?\s*([+-]?)\s*(x|y|z|rx|ry|rz)\s*$", re.IGNORECASE)
-
-
-@dataclass(frozen=True, order=True)
-class Dof:
-    """A degree of freedom: a node number and a direction (``x y z rx ry rz``).
-
-    ``str(Dof(12, "rx")) == "12rx"``; :meth:`parse` reads ``"12rx"``, ``"12:rx"``
-    or ``"12 RX"``.
-
-    Parameters
-    ----------
-    node
-        Node number, >= 0.
-    direction
-        ``x``, ``y``, ``z`` (translations) or ``rx``, ``ry``, ``rz`` (rotations); case-insensitive.
-    """
-
-    node: int
-    direction: str
-
-    def __post_init__(self) -> None:
-        if isinstance(self.node, bool) or not isinstance(self.node, (int, np.integer)):
-            raise InputError(f"DOF node must be an integer, got {self.node!r}")
-        if self.node < 0:
-            raise InputError(f"DOF node must be >= 0, got {self.node}")
-        direction = str(self.direction).lower()
-        if direction not in DIRECTIONS:
-            raise InputError(
-                f"unknown DOF direction {self.direction!r}; expected one of {', '.join(DIRECTIONS)}"
-            )
-        object.__setattr__(self, "node", int(self.node))
-        object.__setattr__(self, "direction", direction)
-
-    def __str__(self) -> str:
-        return f"{self.node}{self.direction}"
-
-    @property
-    def uff_code(self) -> int:
-        """UFF58 direction code 1..6."""
-        return DIRECTIONS.index(self.direction) + 1
-
-    @property
-    def is_rotation(self) -> bool:
-        return self.direction.startswith("r")
-
-    @classmethod
-    def parse(cls, text: "str | Dof | tuple[int, str]") -> "Dof":
-        """Read a DOF from ``"12x"``, ``"12:rx"``, ``(12, "rx")`` or a Dof.
-
-        Parameters
-        ----------
-        text
-            The label: text, a ``(node, direction)`` pair or a :class:`Dof` (returned as is).
-
-        Returns
-        -------
-        Dof
-
-        Raises
-        ------
-        InputError
-            If the text names no valid DOF, or carries a sign (signs belong to
-            UFF import, see :meth:`from_uff`).
-        """
-        if isinstance(text, Dof):
-            return text
-        if isinstance(text, tuple) and len(text) == 2:
-            try:
-                node = int(text[0])
-            except (TypeError, ValueError):
-                raise InputError(f"cannot read a DOF from {text!r}: node must be an integer") from None
-            return cls(node, str(text[1]))
-        m = _DOF_RE.match(str(text))
-        if not m:
-            raise InputError(f"cannot read a DOF from {text!r}; write it like '12x' or '3:ry'")
-        if m.group(2) == "-":
-            raise InputError(f"DOF {text!r} has a negative sign; labels are always positive directions")
-        return cls(int(m.group(1)), m.group(3).lower())
-
-    @classmethod
-    def from_uff(cls, node: int, code: int) -> tuple["Dof", int]:
-        """DOF and sign (+1/−1) from a UFF58 node and signed direction code (±1..±6).
-
-        Parameters
-        ----------
-        node
-            UFF node number.
-        code
-            Signed UFF direction code: ±1..±3 translations x y z, ±4..±6 rotations.
-
-        Returns
-        -------
-        dof : Dof
-        sign : int
-            +1 or −1.
-
-        Raises
-        ------
-        InputError
-            For code 0 (scalar) or ``|code| > 6``.
-        """
-        code = int(code)
-        if code == 0 or abs(code) > 6:
-            raise InputError(f"UFF direction code {code} is not a translation or rotation (expected ±1..±6)")
-        return cls(int(node), DIRECTIONS[abs(code) - 1]), (1 if code > 0 else -1)
-
-
-def dofs(labels: Iterable["str | Dof | tuple[int, str]"]) -> tuple[Dof, ...]:
-    """Parse an iterable of DOF labels into a tuple of :class:`Dof`.
-
-    Parameters
-    ----------
-    labels
-        Labels as :meth:`Dof.parse` reads them; a single label is taken as a list of one.
-
-    Returns
-    -------
-    tuple of Dof
-
-    Examples
-    --------
-    >>> from jointdb import dofs
-    >>> [str(d) for d in dofs(["1x", "1:RY", (3, "z")])]
-    ['1x', '1ry', '3z']
-    """
-    if isinstance(labels, (str, Dof)):
-        labels = [labels]
-    return tuple(Dof.parse(label) for label in labels)
-
-
-class Quantity(str, enum.Enum):
-    """What an FRF relates to force: displacement, velocity or acceleration."""
-
-    RECEPTANCE = "receptance"
-    MOBILITY = "mobility"
-    ACCELERANCE = "accelerance"
-
-    @property
-    def power(self) -> int:
-        """Power p of (iω) with ``FRF = (iω)^p · receptance``."""
-        return {"receptance": 0, "mobility": 1, "accelerance": 2}[self.value]
-
-    @classmethod
-    def parse(cls, value: "str | Quantity") -> "Quantity":
-        """A Quantity from its name (case-insensitive) or a Quantity.
-
-        Parameters
-        ----------
-        value
-            ``"receptance"``, ``"mobility"``, ``"accelerance"`` or a :class:`Quantity`.
-
-        Returns
-        -------
-        Quantity
-
-        Raises
-        ------
-        InputError
-            An unknown name.
-        """
-        try:
-            return cls(str(getattr(value, "value", value)).lower())
-        except ValueError:
-            raise InputError(
-                f"unknown FRF quantity {value!r}; expected receptance, mobility or accelerance"
-            ) from None
+__all__ = ["FRF"]
 
 
 def _readonly(a: np.ndarray) -> np.ndarray:
     a.setflags(write=False)
     return a
-
-
-def _check_labels(outputs: tuple, inputs: tuple) -> None:
-    """InputError unless both label tuples are non-empty and free of duplicates."""
-    for name, labels in (("output", outputs), ("input", inputs)):
-        if not labels:
-            raise InputError(f"at least one {name} DOF is needed")
-        if len(set(labels)) != len(labels):
-            seen: set[Dof] = set()
-            dup = next(d for d in labels if d in seen or seen.add(d))  # type: ignore[func-returns-value]
-            raise InputError(f"duplicate {name} DOF {dup}")
-
-
-def _take(values: np.ndarray, rows, cols) -> np.ndarray:
-    """``values[:, rows][:, :, cols]`` in one gather: a new array ``(n_freq, len(rows), len(cols))``.
-
-    Indexing the last two axes together copies only the requested entries
-    (indexing them one after the other first copies whole rows).
-    """
-    r = np.asarray(rows, dtype=np.intp).reshape(-1, 1)
-    c = np.asarray(cols, dtype=np.intp).reshape(1, -1)
-    return values[:, r, c]
 
 
 @dataclass(frozen=True, eq=False)
@@ -299,16 +96,7 @@ class FRF:
         if not np.all(np.isfinite(values)):
             n_bad = int(np.count_nonzero(~np.isfinite(values)))
             raise InputError(f"FRF values contain {n_bad} NaN or inf entries")
-        object.__setattr__(self, "freq", _readonly(freq))
-        object.__setattr__(self, "values", _readonly(values))
-        object.__setattr__(self, "outputs", outputs)
-        object.__setattr__(self, "inputs", inputs)
-        object.__setattr__(self, "quantity", Quantity.parse(self.quantity))
-        object.__setattr__(
-            self,
-            "_index",
-            {"out": {d: i for i, d in enumerate(outputs)}, "in": {d: i for i, d in enumerate(inputs)}},
-        )
+        self._set(_readonly(freq), values, outputs, inputs, Quantity.parse(self.quantity))
 
     @classmethod
     def _trusted(
@@ -331,17 +119,18 @@ class FRF:
                 f"({freq.size}, {len(outputs)}, {len(inputs)})"
             )
         self = object.__new__(cls)
-        object.__setattr__(self, "freq", freq if not freq.flags.writeable else _readonly(freq))
+        self._set(freq if not freq.flags.writeable else _readonly(freq), values, outputs, inputs, quantity)
+        return self
+
+    def _set(self, freq: np.ndarray, values: np.ndarray, outputs: tuple, inputs: tuple, quantity: Quantity) -> None:
+        """Store checked fields on this frozen instance (``values`` made read-only) and index the labels."""
+        object.__setattr__(self, "freq", freq)
         object.__setattr__(self, "values", _readonly(values))
         object.__setattr__(self, "outputs", outputs)
         object.__setattr__(self, "inputs", inputs)
         object.__setattr__(self, "quantity", quantity)
-        object.__setattr__(
-            self,
-            "_index",
-            {"out": {d: i for i, d in enumerate(outputs)}, "in": {d: i for i, d in enumerate(inputs)}},
-        )
-        return self
+        index = {"out": {d: i for i, d in enumerate(outputs)}, "in": {d: i for i, d in enumerate(inputs)}}
+        object.__setattr__(self, "_index", index)
 
     # ----------------------------------------------------------------- basics
     @property
@@ -466,7 +255,7 @@ class FRF:
         Parameters
         ----------
         output, input
-            DOF labels.
+            One DOF label each (text, pair or :class:`Dof`).
 
         Returns
         -------
@@ -489,6 +278,7 @@ class FRF:
         Returns
         -------
         FRF
+            This FRF itself when it already is that quantity, else the values times ``(iω)^p``.
 
         Raises
         ------
@@ -526,6 +316,7 @@ class FRF:
         Returns
         -------
         FRF
+            Same DOFs and quantity, on the lines in the band only.
 
         Raises
         ------
@@ -552,6 +343,7 @@ class FRF:
         Returns
         -------
         FRF
+            ``(n, n_out, n_in)``, same DOFs and quantity.
 
         Raises
         ------
@@ -590,6 +382,7 @@ class FRF:
         Returns
         -------
         FRF
+            ``(n_freq, len(outputs), len(inputs))`` on the target DOFs.
 
         Raises
         ------
@@ -631,54 +424,32 @@ class FRF:
         Parameters
         ----------
         parts
-            The FRFs, in order.
+            The FRFs, in order, each ``(n_freq, n_out_k, n_in)``.
 
         Returns
         -------
         FRF
+            ``(n_freq, sum of n_out_k, n_in)``, outputs in the order given.
         """
         return _concat(parts, along="outputs")
 
     @staticmethod
     def concat_inputs(parts: Sequence["FRF"]) -> "FRF":
-        """Stack FRFs with the same grid, outputs and quantity along inputs.
+        """Stack FRFs along inputs (the columns); :meth:`concat_outputs` stacks rows.
 
         Parameters
         ----------
         parts
-            The FRFs, in order.
+            The FRFs, in order: each ``(n_freq, n_out, n_in_k)`` with the same
+            frequencies, outputs and quantity.
 
         Returns
         -------
         FRF
+            ``(n_freq, n_out, sum of n_in_k)``: the columns of
+            ``parts[0]``, then those of ``parts[1]``, and so on.
         """
         return _concat(parts, along="inputs")
-
-
-def reciprocal_index(frf: FRF, outs: Sequence[Dof], ins: Sequence[Dof]):
-    """Where each entry of the block ``outs × ins`` sits in ``frf.values``, directly or by reciprocity.
-
-    Returns
-    -------
-    (rows, cols), None
-        Integer arrays ``(len(outs), len(ins))`` with
-        ``frf.values[:, rows, cols]`` the requested block: ``H[o, i]`` where
-        measured, else ``H[i, o]`` (reciprocity ``H_oi = H_io``).
-    None, (o, i)
-        The first requested pair known neither way.
-    """
-    oidx, iidx = frf._index["out"], frf._index["in"]
-    rows = np.empty((len(outs), len(ins)), dtype=np.intp)
-    cols = np.empty_like(rows)
-    for r, o in enumerate(outs):  # loops over DOF pairs, not frequency lines
-        for c, i in enumerate(ins):
-            if o in oidx and i in iidx:
-                rows[r, c], cols[r, c] = oidx[o], iidx[i]
-            elif i in oidx and o in iidx:
-                rows[r, c], cols[r, c] = oidx[i], iidx[o]
-            else:
-                return None, (o, i)
-    return (rows, cols), None
 
 
 def _concat(parts: Sequence[FRF], along: str) -> FRF:
