@@ -84,7 +84,6 @@ def optimize(
         raise InputError(f"--workers must be between 1 and 256, got {workers}")
     if not 1 <= top <= 100_000:
         raise InputError(f"--top must be between 1 and 100000, got {top}")
-    problem = load_problem(spec_file)
     check_db_target(db)
     import time
 
@@ -95,6 +94,9 @@ def optimize(
 
     repo = Repository(db)
     try:
+        problem = load_problem(spec_file, repo)
+        for line in problem.notes:
+            message(line)
         outcome = optimize_stack(problem, repo, progress=report, simulate=not no_simulate, scheduler=scheduler,
                                  n_workers=workers)
     finally:
