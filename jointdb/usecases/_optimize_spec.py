@@ -148,6 +148,9 @@ def problem_from_document(doc: Any, repo=None, *, base: Path | str | None = None
         template = _template(spec, handle, base, allow_files)
         spindle_part = next((p for p in template.parts if p.get("slot") == "spindle"), None)
         holders, notes = _holders(spec, template, handle, spindle_part)
+    except (InputError, NotFoundError) as exc:  # named after the document, as the schema's errors are
+        text = str(exc)
+        raise type(exc)(text if text.startswith(f"{where}: ") else f"{where}: {text}") from None
     finally:
         if owned:
             handle.close()
@@ -155,6 +158,10 @@ def problem_from_document(doc: Any, repo=None, *, base: Path | str | None = None
     cut = MillingCut(spec.tool.flutes, kt, kr, spec.cut.radial_immersion, spec.cut.down_milling)
     pinned = spec.model_dump(mode="json", exclude_none=True)
     pinned["holders"] = [_pinned_holder(h) for h in holders] if spec.holders else []
+    if isinstance(pinned["stack"], dict):  # the stack's own part references, pinned to the versions read
+        for used in template.parts:
+            if isinstance(pinned["stack"].get(used["slot"]), dict) and "part" in pinned["stack"][used["slot"]]:
+                pinned["stack"][used["slot"]] = {"part": used["part"]}
     if spindle_part is not None and (spec.machine.spindle or spec.machine.name):
         pinned["machine"].pop("name", None)
         pinned["machine"]["spindle"] = spindle_part["part"]

@@ -11,23 +11,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from jointdb.usecases._demo import run_main_job
-from jointdb.store import Repository
 from jointdb.usecases._optimize import best_cut, enumerate_candidates, evaluate_brute_force, load_problem, rank
 from jointdb.usecases._optimize_eval import evaluate_candidates
 
 ROOT = Path(__file__).resolve().parents[2]
 SPEC = ROOT / "fixtures" / "optimize" / "optimize-spec.json"
-
-
-@pytest.fixture(scope="module")
-def catalogue(tmp_path_factory):
-    """The bundled catalogue, identified and catalogued by the main job (as `jointdb demo` does)."""
-    tmp = tmp_path_factory.mktemp("cat")
-    run_main_job(tmp / "out", f"sqlite:///{tmp / 'joints.sqlite'}", say=lambda _: None, n_speeds=40)
-    repo = Repository(f"sqlite:///{tmp / 'joints.sqlite'}")
-    yield repo, tmp / "joints.sqlite"
-    repo.close()
 
 
 def test_candidates_are_the_catalogued_conditions_in_range(catalogue):
