@@ -22,9 +22,11 @@ def _write_outputs(out: Path, problem, outcome) -> list[Path]:
     from jointdb.cli._output import write_rows
     from jointdb.io._jsonable import to_jsonable
     from jointdb.io._atomic import atomic_path
+    from jointdb.usecases._optimize_run import outcome_json
     from jointdb.plots._optimize import plot_pareto, plot_rate_vs_overhang
     from jointdb.plots._lobes import plot_lobes
     from jointdb.usecases._optimize import pareto_front
+    from jointdb.usecases._optimize_run import rate_by_overhang
 
     out.mkdir(parents=True, exist_ok=True)
     rows = [r.row() for r in outcome.ranked]
@@ -33,7 +35,7 @@ def _write_outputs(out: Path, problem, outcome) -> list[Path]:
     best = outcome.ranked[0]
     files.append(plot_lobes(best.lobes, out / "best-lobes.png",
                             title=f"Best stack: {best.candidate.holder}, overhang {best.candidate.overhang_m * 1e3:g} mm"))
-    files.append(plot_rate_vs_overhang(outcome.ranked, out / "rate-vs-overhang.png"))
+    files.append(plot_rate_vs_overhang(rate_by_overhang(outcome.ranked), out / "rate-vs-overhang.png"))
     files.append(plot_pareto(*pareto_front(problem, outcome.ranked), out / "pareto-rate-vs-margin.png"))
     if outcome.checks:
         from jointdb.plots._simulate import plot_simulation
@@ -43,14 +45,9 @@ def _write_outputs(out: Path, problem, outcome) -> list[Path]:
     import json
 
     with atomic_path(out / "result.json") as tmp:
-        Path(tmp).write_text(json.dumps(to_jsonable(_json(outcome)), indent=1))
+        Path(tmp).write_text(json.dumps(to_jsonable(outcome_json(problem, outcome)), indent=1))
     files.append(out / "result.json")
     return files
-
-
-def _json(outcome) -> dict:
-    return {"ranked": [r.row() for r in outcome.ranked],
-            "checks": [s.summary() for s in outcome.checks], "notes": list(outcome.notes)}
 
 
 def optimize(
@@ -79,6 +76,7 @@ def optimize(
     from jointdb.errors import InputError
     from jointdb.store import Repository
     from jointdb.usecases import load_problem, optimize_stack
+    from jointdb.usecases._optimize_run import outcome_json
 
     if not 1 <= workers <= 256:
         raise InputError(f"--workers must be between 1 and 256, got {workers}")
@@ -107,7 +105,7 @@ def optimize(
         for f in _write_outputs(out, problem, outcome):
             message(f"wrote {f}")
     if as_json:
-        emit(_json(outcome), as_json=True)
+        emit(outcome_json(problem, outcome), as_json=True)
         return
     b = outcome.ranked[0]
     message(f"recommended: holder {b.candidate.holder}, overhang {b.candidate.overhang_m * 1e3:g} mm, clamping torque "

@@ -145,3 +145,62 @@ def optimize_stack(problem: OptimizeProblem, repo, *, progress: Progress | None 
         notes.append(f"time domain at {n:.0f} rpm: recommended {a * 1e3:.3g} mm {verdicts[0]}; "
                      f"1.1× the limit ({1.1 * limit * 1e3:.3g} mm) {verdicts[1]}")
     return OptimizeOutcome(ranked, checks, tuple(notes))
+
+
+def rate_by_overhang(results: Sequence[CandidateResult]) -> dict[str, tuple[list[float], list[float]]]:
+    """Per holder, the best removal rate [m³/s] at each overhang [m] (best over torques and drawbar forces).
+
+    Parameters
+    ----------
+    results
+        Candidate results (any order).
+
+    Returns
+    -------
+    dict
+        ``holder -> (overhangs, rates)``, overhangs ascending.
+    """
+    best: dict[str, dict[float, float]] = {}
+    for r in results:
+        row = best.setdefault(r.candidate.holder, {})
+        g = r.candidate.overhang_m
+        row[g] = max(row.get(g, 0.0), r.best["removal_rate_m3_s"])
+    return {h: (sorted(row), [row[g] for g in sorted(row)]) for h, row in sorted(best.items())}
+
+
+def outcome_json(problem: OptimizeProblem, outcome: OptimizeOutcome, top: int | None = None) -> dict:
+    """The result of an optimize run as JSON-ready values (SI units): what ``jointdb optimize --json``
+    prints and an optimize job returns.
+
+    Parameters
+    ----------
+    problem
+        The problem that was solved (its notes: which holders a family selected).
+    outcome
+        From :func:`optimize_stack`.
+    top
+        Rows of the ranking to include (None: all).
+
+    Returns
+    -------
+    dict
+        ``candidates`` (how many), ``ranked`` (rows, best first: candidate, best cut, binding constraint,
+        joints), ``checks`` (time-domain summaries), ``notes``, ``best_lobes`` (speeds [rpm], limiting
+        depth [m] of the best candidate's zero-order lobes), ``rate_vs_overhang`` (per holder) and
+        ``pareto`` (the best rate against the margin held back) — the data of the three figures; non-finite
+        numbers as null.
+    """
+    from jointdb.io._jsonable import to_jsonable
+    from jointdb.usecases._optimize import pareto_front
+
+    rows = outcome.ranked if top is None else outcome.ranked[:top]
+    best = outcome.ranked[0]
+    margins, rates = pareto_front(problem, outcome.ranked)
+    return to_jsonable({"candidates": len(outcome.ranked), "ranked": [r.row() for r in rows],
+            "checks": [s.summary() for s in outcome.checks], "notes": [*problem.notes, *outcome.notes],
+            "parts": list(problem.template.parts),
+            "best_lobes": {"spindle_speed_rpm": np.asarray(best.lobes.spindle_speed_rpm).tolist(),
+                           "depth_m": np.asarray(best.lobes.depth_m, float)},
+            "rate_vs_overhang": {h: {"overhang_m": g, "removal_rate_m3_s": q}
+                                 for h, (g, q) in rate_by_overhang(outcome.ranked).items()},
+            "pareto": {"margin": margins, "removal_rate_m3_s": rates}})
