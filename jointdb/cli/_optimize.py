@@ -13,7 +13,7 @@ def _people_row(rank: int, r) -> dict:
     return {"rank": rank, "holder": c.holder, "overhang_mm": c.overhang_m * 1e3, "torque_nm": c.torque_nm,
             "drawbar_kn": c.drawbar_n / 1e3, "speed_rpm": round(b["spindle_speed_rpm"]), "depth_mm": b["depth_m"] * 1e3,
             "rate_cm3_min": b["removal_rate_m3_s"] * 6e7, "binding": b["binding"],
-            "limit_by": "ZOA+SD" if "sd_limit_m" in b else "ZOA",
+            "limit_by": ("ZOA+band+SD" if b.get("band_limit_m") is not None else "ZOA+SD") if "sd_limit_m" in b else "ZOA",
             "joints": f"{r.joints.get('tool-holder')}, {r.joints.get('holder-spindle')}"}
 
 

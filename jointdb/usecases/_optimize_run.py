@@ -42,13 +42,59 @@ class OptimizeOutcome:
     notes: tuple = ()
 
 
+def band_lower_edge(problem: OptimizeProblem, result: CandidateResult, repo) -> np.ndarray | None:
+    """The lower (5 %) edge of a candidate's zero-order lobe band [m] on its lobes' speeds, from the
+    uncertainty of its joints (measurement noise, joint choice, prediction path, as ``jointdb predict``
+    samples it); None when its joints carry no uncertainty.
+
+    Parameters
+    ----------
+    problem
+        The optimize problem.
+    result
+        The candidate's result (its candidate and lobes).
+    repo
+        The joint store.
+
+    Returns
+    -------
+    numpy.ndarray or None
+        Shape ``(n_speeds,)``; NaN where no sample has a finite limit.
+    """
+    from jointdb.stack import prediction_grid
+    from jointdb.usecases._demo_band import journey_bands
+    from jointdb.usecases._optimize import candidate_stack
+    from jointdb.usecases._stack import resolve_joints
+
+    spec = candidate_stack(problem, result.candidate)
+    _, make, _ = journey_bands(spec, resolve_joints(spec, repo), prediction_grid(spec), lambda _: None)
+    if make is None:
+        return None
+    return np.asarray(make(problem.cut, result.lobes.spindle_speed_rpm).depth_m[0], dtype=float)
+
+
+def _band_limited(problem: OptimizeProblem, r: CandidateResult, repo) -> CandidateResult:
+    """``r`` with its best cut under the smaller of its nominal limit and the band's lower edge."""
+    from dataclasses import replace
+
+    p05 = band_lower_edge(problem, r, repo)
+    if p05 is None:
+        return replace(r, best={**r.best, "band_limit_m": None})
+    nominal = np.asarray(r.lobes.depth_m, dtype=float)
+    stab = np.where(np.isnan(p05), nominal, np.minimum(nominal, p05))
+    best = best_cut(problem, r.lobes, stability_m=stab)
+    i = int(np.argmin(np.abs(r.lobes.spindle_speed_rpm - best["spindle_speed_rpm"])))
+    return replace(r, best={**best, "stability_limit_m": float(stab[i]), "band_limit_m": float(p05[i])})
+
+
 def confirm_with_sd(problem: OptimizeProblem, results: Sequence[CandidateResult], n_intervals: int = 40
                     ) -> list[CandidateResult]:
-    """Semi-discretization at each result's best speed: the depth becomes the smaller of the zero-order and
-    SD limits (less the margin) under the same other limits; ``best`` gains ``sd_limit_m``.
+    """Semi-discretization at each result's best speed: the depth becomes the smaller of the limit used so
+    far (zero-order, or the band's lower edge when ``best`` holds ``band_limit_m``) and the SD limit (less the
+    margin) under the same other limits; ``best`` gains ``zoa_limit_m`` and ``sd_limit_m``.
 
     The zero-order approximation can overrate the pockets of few-tooth, partial-immersion cuts; SD on the
-    tip's fitted modes is the check (docs/theory.md §5).
+    tip's fitted modes is the check (docs/theory.md §5). It is of the nominal tip, not of the band.
     """
     from dataclasses import replace
 
@@ -62,11 +108,13 @@ def confirm_with_sd(problem: OptimizeProblem, results: Sequence[CandidateResult]
         sd = float(milling_lobes_sd(model, problem.cut, [n], n_intervals=n_intervals).depth_m[0])
         lobes = r.lobes
         i = int(np.argmin(np.abs(lobes.spindle_speed_rpm - n)))
-        depth = np.array(lobes.depth_m, dtype=float)
-        depth[i] = min(depth[i], sd) if np.isfinite(depth[i]) else sd
-        one = replace(lobes, spindle_speed_rpm=lobes.spindle_speed_rpm[i:i + 1], depth_m=depth[i:i + 1],
+        used = r.best["stability_limit_m"] if "band_limit_m" in r.best else float(lobes.depth_m[i])
+        limit = min(used, sd) if np.isfinite(used) else sd
+        one = replace(lobes, spindle_speed_rpm=lobes.spindle_speed_rpm[i:i + 1], depth_m=np.array([limit]),
                       chatter_freq_hz=lobes.chatter_freq_hz[i:i + 1], lobe=lobes.lobe[i:i + 1], kind=lobes.kind[i:i + 1])
         best = {**best_cut(problem, one), "zoa_limit_m": float(lobes.depth_m[i]), "sd_limit_m": sd}
+        if "band_limit_m" in r.best:
+            best["band_limit_m"] = r.best["band_limit_m"]
         out.append(replace(r, best=best))
     return out
 
@@ -74,8 +122,9 @@ def confirm_with_sd(problem: OptimizeProblem, results: Sequence[CandidateResult]
 def _confirm_top(problem: OptimizeProblem, ranked: list, repo, confirm: int, max_confirm: int):
     """Confirm by SD until the best ``confirm`` of the ranking are all confirmed (or ``max_confirm`` are spent).
 
-    SD only lowers a candidate's rate, so once the best ``confirm`` are confirmed no unconfirmed one below
-    them can overtake them. Returns the re-ranked list and notes.
+    SD (and, with ``margin_from: band``, the band's lower edge, taken no higher than the nominal limit) only
+    lowers a candidate's rate, so once the best ``confirm`` are confirmed no unconfirmed one below them can
+    overtake them. Returns the re-ranked list and notes.
     """
     done, notes = 0, []
     while confirm > 0 and done < max_confirm:
@@ -84,13 +133,18 @@ def _confirm_top(problem: OptimizeProblem, ranked: list, repo, confirm: int, max
             break
         # their tip FRFs again (the search keeps none: 10 000 tips would not fit in memory)
         fresh = evaluate_candidates(problem, [ranked[i].candidate for i in todo], repo, keep_tips=True)
+        if problem.spec.objective.margin_from == "band":
+            fresh = [_band_limited(problem, r, repo) for r in fresh]
         for i, r in zip(todo, confirm_with_sd(problem, fresh)):
             ranked[i] = r
         done += len(todo)
         ranked = rank(ranked)
     if confirm > 0:
+        band = problem.spec.objective.margin_from == "band"
         note = (f"the best {confirm} confirmed by semi-discretization at their best speed (depth = the smaller of "
-                f"the ZOA and SD limits; {done} candidates checked)")
+                f"the ZOA{', the lobe band’s 5 % edge' if band else ''} and SD limits; {done} candidates checked)")
+        if band and any(r.best.get("band_limit_m", 0.0) is None for r in ranked[:confirm]):
+            note += "; some joints carry no uncertainty: no band for those, their nominal limit is used"
         if not all("sd_limit_m" in r.best for r in ranked[:confirm]):
             note += f"; not settled after {max_confirm} checks: unconfirmed candidates (ZOA only) remain among them"
         notes.append(note)
@@ -131,6 +185,8 @@ def optimize_stack(problem: OptimizeProblem, repo, *, progress: Progress | None 
     candidates = enumerate_candidates(problem, repo)
     ranked = rank(evaluate_candidates(problem, candidates, repo, progress, scheduler=scheduler, n_workers=n_workers))
     ranked, notes = _confirm_top(problem, ranked, repo, confirm, max_confirm)
+    if confirm == 0 and problem.spec.objective.margin_from == "band":
+        notes.append("margin_from band: no candidate was confirmed (confirm=0), so no band was applied")
     checks: tuple = ()
     best = ranked[0]
     limit = best.best.get("sd_limit_m", best.best["stability_limit_m"])

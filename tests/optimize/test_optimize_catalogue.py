@@ -124,3 +124,34 @@ def test_the_service_form_refuses_a_spindle_model_file(parts):
     machine = {k: v for k, v in SPEC["machine"].items() if k != "name"}
     with pytest.raises(InputError, match="stack.spindle: refers to a file"):
         problem_from_document(_spec(stack=stack, machine=machine), parts, allow_files=False)
+
+
+def test_margin_from_the_band_lowers_the_confirmed_best_to_the_bands_lower_edge(parts):
+    from jointdb.stack import prediction_grid
+    from jointdb.usecases import optimize_stack
+    from jointdb.usecases._demo_band import journey_bands
+    from jointdb.usecases._optimize import candidate_stack
+    from jointdb.usecases._stack import predict_stack
+
+    objective = {"kind": "removal-rate", "margin": 0.0}
+    holders = [{"part": "er32-collet-chuck-hsk63@1"}]
+    nominal = optimize_stack(problem_from_document(_spec(objective=objective, holders=holders), parts), parts,
+                             simulate=False, scheduler="in-process")
+    problem = problem_from_document(_spec(objective={**objective, "margin_from": "band"}, holders=holders), parts)
+    banded = optimize_stack(problem, parts, simulate=False, scheduler="in-process")
+    top = banded.ranked[:5]
+    assert all(r.best["band_limit_m"] is not None and "sd_limit_m" in r.best for r in top)
+    for r in top:  # the depth is the smallest of the nominal ZOA, the band's 5 % edge and SD (no margin fraction)
+        b = r.best
+        assert b["depth_m"] <= min(b["zoa_limit_m"], b["band_limit_m"], b["sd_limit_m"]) * (1 + 1e-12)
+    floor = top[-1].best["removal_rate_m3_s"]
+    assert all(r.best["removal_rate_m3_s"] <= floor for r in banded.ranked[5:])
+    assert banded.ranked[0].best["removal_rate_m3_s"] < nominal.ranked[0].best["removal_rate_m3_s"]
+    # the band's edge of the best, sampled again from predict_stack's own joint resolutions
+    best = banded.ranked[0]
+    pred = predict_stack(candidate_stack(problem, best.candidate), parts)
+    _, make, _ = journey_bands(pred.spec, pred.joints, prediction_grid(pred.spec), lambda _: None)
+    lobe_band = make(problem.cut, best.lobes.spindle_speed_rpm)
+    i = int(np.argmin(np.abs(best.lobes.spindle_speed_rpm - best.best["spindle_speed_rpm"])))
+    assert best.best["band_limit_m"] == float(lobe_band.depth_m[0, i])
+    assert lobe_band.depth_m[0, i] < lobe_band.depth_m[1, i] < lobe_band.depth_m[2, i]
