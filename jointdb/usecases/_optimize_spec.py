@@ -59,18 +59,11 @@ class OptimizeProblem:
 
 
 def _validate(doc: Any, where: str):
-    from pydantic import ValidationError
-
-    from jointdb.schemas.optimize import OptimizeSpecFile
+    from jointdb.schemas import parse
 
     if not isinstance(doc, dict):
         raise InputError(f"{where}: an optimize spec is a JSON object (format jointdb-optimize/1)")
-    try:
-        return OptimizeSpecFile.model_validate(doc)
-    except ValidationError as exc:
-        err = exc.errors()[0]
-        loc = ".".join(str(x) for x in err["loc"]) or "(top level)"
-        raise InputError(f"{where}: {loc}: {str(err['msg'])[:200]}") from None
+    return parse("optimize", doc, where)
 
 
 def load_problem(path: Path | str, repo=None) -> OptimizeProblem:

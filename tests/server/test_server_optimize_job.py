@@ -74,7 +74,7 @@ def _with(**changes) -> dict:
     ({"spec": _with(stack={**SPEC["stack"], "spindle": {"model": "/etc/m.json", "point": "nose"}},
                     machine={k: v for k, v in SPEC["machine"].items() if k != "name"})}, 422,
      "stack.spindle: refers to a file"),
-    ({"spec": _with(colour="red")}, 422, "spec: colour: Extra inputs are not permitted"),
+    ({"spec": _with(colour="red")}, 422, "spec: colour: unknown field"),
     ({"spec": _with(tool={**SPEC["tool"], "overhang_step_m": 1e-12})}, 422, "overhang grid: more than 1000"),
     ({"spec": SPEC, "top": 0}, 422, "top"),
     ({"spec": _with(holders=[{"family": "no-such-family"}])}, 404, "no catalogued holder of family"),
