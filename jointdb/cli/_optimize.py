@@ -33,10 +33,15 @@ def _write_outputs(out: Path, problem, outcome) -> list[Path]:
     files = [out / "ranking.csv"]
     write_rows(files[0], rows, kind="optimize")
     best = outcome.ranked[0]
-    files.append(plot_lobes(best.lobes, out / "best-lobes.png",
+    files.append(plot_lobes(best.lobes, out / "best-lobes.png", band=outcome.best_band,
                             title=f"Best stack: {best.candidate.holder}, overhang {best.candidate.overhang_m * 1e3:g} mm"))
     files.append(plot_rate_vs_overhang(rate_by_overhang(outcome.ranked), out / "rate-vs-overhang.png"))
-    files.append(plot_pareto(*pareto_front(problem, outcome.ranked), out / "pareto-rate-vs-margin.png"))
+    b = best.best
+    zoa = b.get("zoa_limit_m") or float("nan")
+    point = (1 - b["depth_m"] / zoa, b["removal_rate_m3_s"]) if 0 < zoa < float("inf") else None
+    by = "band's 5 % edge, SD" if b.get("band_limit_m") is not None else "SD"
+    files.append(plot_pareto(*pareto_front(problem, outcome.ranked), out / "pareto-rate-vs-margin.png", point=point,
+                             point_label=f"recommended (margin {b['margin']:.0%}, {by}; binding: {b['binding']})"))
     if outcome.checks:
         from jointdb.plots._simulate import plot_simulation
 

@@ -6,6 +6,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -35,17 +36,21 @@ class OptimizeOutcome:
         (``simulate=False``, no stable cut, or no finite limit).
     notes
         Messages for the user (how many were confirmed, the time-domain verdicts).
+    best_band
+        With ``margin_from: band``: the best candidate's :class:`jointdb.stability.LobeBand` (5/50/95 % of
+        its zero-order limit per speed), else None.
     """
 
     ranked: list
     checks: tuple = ()
     notes: tuple = ()
+    best_band: Any = None
 
 
-def band_lower_edge(problem: OptimizeProblem, result: CandidateResult, repo) -> np.ndarray | None:
-    """The lower (5 %) edge of a candidate's zero-order lobe band [m] on its lobes' speeds, from the
-    uncertainty of its joints (measurement noise, joint choice, prediction path, as ``jointdb predict``
-    samples it); None when its joints carry no uncertainty.
+def lobe_band_of(problem: OptimizeProblem, result: CandidateResult, repo):
+    """A candidate's zero-order lobe band on its lobes' speeds, from the uncertainty of its joints
+    (measurement noise, joint choice, prediction path, as ``jointdb predict`` samples it); None when its
+    joints carry no uncertainty.
 
     Parameters
     ----------
@@ -58,8 +63,8 @@ def band_lower_edge(problem: OptimizeProblem, result: CandidateResult, repo) -> 
 
     Returns
     -------
-    numpy.ndarray or None
-        Shape ``(n_speeds,)``; NaN where no sample has a finite limit.
+    jointdb.stability.LobeBand or None
+        ``depth_m`` of shape ``(3, n_speeds)``: 5/50/95 % [m], NaN where no sample has a finite limit.
     """
     from jointdb.stack import prediction_grid
     from jointdb.usecases._demo_band import journey_bands
@@ -68,18 +73,17 @@ def band_lower_edge(problem: OptimizeProblem, result: CandidateResult, repo) -> 
 
     spec = candidate_stack(problem, result.candidate)
     _, make, _ = journey_bands(spec, resolve_joints(spec, repo), prediction_grid(spec), lambda _: None)
-    if make is None:
-        return None
-    return np.asarray(make(problem.cut, result.lobes.spindle_speed_rpm).depth_m[0], dtype=float)
+    return None if make is None else make(problem.cut, result.lobes.spindle_speed_rpm)
 
 
 def _band_limited(problem: OptimizeProblem, r: CandidateResult, repo) -> CandidateResult:
     """``r`` with its best cut under the smaller of its nominal limit and the band's lower edge."""
     from dataclasses import replace
 
-    p05 = band_lower_edge(problem, r, repo)
-    if p05 is None:
+    band = lobe_band_of(problem, r, repo)
+    if band is None:
         return replace(r, best={**r.best, "band_limit_m": None})
+    p05 = np.asarray(band.depth_m[0], dtype=float)
     nominal = np.asarray(r.lobes.depth_m, dtype=float)
     stab = np.where(np.isnan(p05), nominal, np.minimum(nominal, p05))
     best = best_cut(problem, r.lobes, stability_m=stab)
@@ -189,6 +193,9 @@ def optimize_stack(problem: OptimizeProblem, repo, *, progress: Progress | None 
         notes.append("margin_from band: no candidate was confirmed (confirm=0), so no band was applied")
     checks: tuple = ()
     best = ranked[0]
+    best_band = None
+    if problem.spec.objective.margin_from == "band" and best.best.get("band_limit_m") is not None:
+        best_band = lobe_band_of(problem, best, repo)
     limit = best.best.get("sd_limit_m", best.best["stability_limit_m"])
     if simulate and best.best["removal_rate_m3_s"] > 0 and math.isfinite(limit):
         from jointdb.usecases._simulate import simulate_tip
@@ -200,7 +207,7 @@ def optimize_stack(problem: OptimizeProblem, repo, *, progress: Progress | None 
         verdicts = ["chatter" if r.chatter else "stable" for r in checks]
         notes.append(f"time domain at {n:.0f} rpm: recommended {a * 1e3:.3g} mm {verdicts[0]}; "
                      f"1.1× the limit ({1.1 * limit * 1e3:.3g} mm) {verdicts[1]}")
-    return OptimizeOutcome(ranked, checks, tuple(notes))
+    return OptimizeOutcome(ranked, checks, tuple(notes), best_band)
 
 
 def rate_by_overhang(results: Sequence[CandidateResult]) -> dict[str, tuple[list[float], list[float]]]:
@@ -256,7 +263,8 @@ def outcome_json(problem: OptimizeProblem, outcome: OptimizeOutcome, top: int | 
             "checks": [s.summary() for s in outcome.checks], "notes": [*problem.notes, *outcome.notes],
             "parts": list(problem.template.parts),
             "best_lobes": {"spindle_speed_rpm": np.asarray(best.lobes.spindle_speed_rpm).tolist(),
-                           "depth_m": np.asarray(best.lobes.depth_m, float)},
+                           "depth_m": np.asarray(best.lobes.depth_m, float),
+                           "band": None if outcome.best_band is None else outcome.best_band.to_json()},
             "rate_vs_overhang": {h: {"overhang_m": g, "removal_rate_m3_s": q}
                                  for h, (g, q) in rate_by_overhang(outcome.ranked).items()},
             "pareto": {"margin": margins, "removal_rate_m3_s": rates}})
