@@ -123,7 +123,8 @@ def confirm_with_sd(problem: OptimizeProblem, results: Sequence[CandidateResult]
     return out
 
 
-def _confirm_top(problem: OptimizeProblem, ranked: list, repo, confirm: int, max_confirm: int):
+def _confirm_top(problem: OptimizeProblem, ranked: list, repo, confirm: int, max_confirm: int,
+                 progress: Progress | None = None):
     """Confirm by SD until the best ``confirm`` of the ranking are all confirmed (or ``max_confirm`` are spent).
 
     SD (and, with ``margin_from: band``, the band's lower edge, taken no higher than the nominal limit) only
@@ -143,6 +144,8 @@ def _confirm_top(problem: OptimizeProblem, ranked: list, repo, confirm: int, max
             ranked[i] = r
         done += len(todo)
         ranked = rank(ranked)
+        if progress:  # the search is done; a job may still be cancelled between these checks
+            progress(len(ranked), len(ranked), f"{done} of the best confirmed by semi-discretization")
     if confirm > 0:
         band = problem.spec.objective.margin_from == "band"
         note = (f"the best {confirm} confirmed by semi-discretization at their best speed (depth = the smaller of "
@@ -188,7 +191,7 @@ def optimize_stack(problem: OptimizeProblem, repo, *, progress: Progress | None 
     """
     candidates = enumerate_candidates(problem, repo)
     ranked = rank(evaluate_candidates(problem, candidates, repo, progress, scheduler=scheduler, n_workers=n_workers))
-    ranked, notes = _confirm_top(problem, ranked, repo, confirm, max_confirm)
+    ranked, notes = _confirm_top(problem, ranked, repo, confirm, max_confirm, progress)
     if confirm == 0 and problem.spec.objective.margin_from == "band":
         notes.append("margin_from band: no candidate was confirmed (confirm=0), so no band was applied")
     checks: tuple = ()
@@ -200,6 +203,8 @@ def optimize_stack(problem: OptimizeProblem, repo, *, progress: Progress | None 
     if simulate and best.best["removal_rate_m3_s"] > 0 and math.isfinite(limit):
         from jointdb.usecases._simulate import simulate_tip
 
+        if progress:
+            progress(len(ranked), len(ranked), "time-domain check of the best")
         n, a = best.best["spindle_speed_rpm"], best.best["depth_m"]
         sim = simulate_tip(best.tip, problem.cut, [n, n], [a, 1.1 * limit], revolutions=revolutions,
                            feed_per_tooth_m=problem.spec.cut.feed_per_tooth_m)
