@@ -150,23 +150,33 @@ def evaluate_chunk(problem: OptimizeProblem, candidates: Sequence[Candidate], ca
     return results
 
 
+def _blobs_of(repo) -> str | None:
+    """Where ``repo`` keeps its blobs, for a worker to open the same store: a directory, ``"database"``, or
+    None (the worker's default)."""
+    store = getattr(repo, "blobs", None)
+    if type(store).__name__ == "DatabaseBlobStore":  # the frf_blobs table (JOINTDB_BLOBS=database)
+        return "database"
+    root = getattr(store, "root", None)
+    return None if root is None else str(root)
+
+
 @functools.lru_cache(maxsize=4)
-def _worker_state(pinned: str, base: str | None, db_url: str):
+def _worker_state(pinned: str, base: str | None, db_url: str, blobs: str | None = None):
     """The problem, an open store and the substructure cache of one worker process (kept between tasks)."""
     import json
 
     from jointdb.store import Repository
 
-    repo = Repository(db_url)
+    repo = Repository(db_url, blobs=blobs)
     problem = problem_from_document(json.loads(pinned), repo, base=base)
     return problem, SubstructureCache(problem, repo)
 
 
-def evaluate_chunk_by_reference(pinned: str, base: str | None, db_url: str,
-                                candidates: Sequence[Candidate]) -> list[CandidateResult]:
-    """:func:`evaluate_chunk` on a Dask worker: the pinned spec document and the database named, the
-    substructures computed there."""
-    problem, cache = _worker_state(pinned, base, db_url)
+def evaluate_chunk_by_reference(pinned: str, base: str | None, db_url: str, candidates: Sequence[Candidate],
+                                blobs: str | None = None) -> list[CandidateResult]:
+    """:func:`evaluate_chunk` on a Dask worker: the pinned spec document, the database and its blob store
+    named, the substructures computed there."""
+    problem, cache = _worker_state(pinned, base, db_url, blobs)
     return evaluate_chunk(problem, candidates, cache)
 
 
@@ -253,7 +263,7 @@ def evaluate_candidates(problem: OptimizeProblem, candidates: Sequence[Candidate
     client, cluster = _client(scheduler, n_workers)
     try:
         futures = {client.submit(evaluate_chunk_by_reference, problem.pinned, problem.base, str(repo.url),
-                                 [candidates[i] for i in idx], pure=False): idx for idx in parts}
+                                 [candidates[i] for i in idx], _blobs_of(repo), pure=False): idx for idx in parts}
         done = 0
         for fut in as_completed(futures):
             idx = futures[fut]
