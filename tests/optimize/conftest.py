@@ -14,3 +14,4 @@ def catalogue(tmp_path_factory):
     repo = Repository(f"sqlite:///{tmp / 'joints.sqlite'}")
     yield repo, tmp / "joints.sqlite"
     repo.close()
+
