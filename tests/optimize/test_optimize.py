@@ -9,6 +9,7 @@ from dataclasses import replace
 from pathlib import Path
 
 import pytest
+
 from optimize_helpers import fast_equals_brute_force
 
 from jointdb.usecases._optimize import best_cut, enumerate_candidates, load_problem

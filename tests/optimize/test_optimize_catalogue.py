@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+
 from optimize_helpers import fast_equals_brute_force
 
 from jointdb.errors import InputError, NotFoundError
