@@ -253,7 +253,9 @@ def outcome_json(problem: OptimizeProblem, outcome: OptimizeOutcome, top: int | 
     -------
     dict
         ``candidates`` (how many), ``ranked`` (rows, best first: candidate, best cut, binding constraint,
-        joints), ``checks`` (time-domain summaries), ``notes``, ``best_lobes`` (speeds [rpm], limiting
+        joints), ``checks`` (time-domain summaries), ``notes``, ``parts`` (the catalogued parts of the
+        template the candidates share: spindle, tool, and the holder when the spec allows no others),
+        ``holder_parts`` (the catalogued holders allowed, ``name@version``), ``best_lobes`` (speeds [rpm], limiting
         depth [m] of the best candidate's zero-order lobes), ``rate_vs_overhang`` (per holder) and
         ``pareto`` (the best rate against the margin held back) — the data of the three figures; non-finite
         numbers as null.
@@ -266,7 +268,8 @@ def outcome_json(problem: OptimizeProblem, outcome: OptimizeOutcome, top: int | 
     margins, rates = pareto_front(problem, outcome.ranked)
     return to_jsonable({"candidates": len(outcome.ranked), "ranked": [r.row() for r in rows],
             "checks": [s.summary() for s in outcome.checks], "notes": [*problem.notes, *outcome.notes],
-            "parts": list(problem.template.parts),
+            "parts": [p for p in problem.template.parts if not (problem.spec.holders and p.get("slot") == "holder")],
+            "holder_parts": [h.part for h in problem.holders if h.part],
             "best_lobes": {"spindle_speed_rpm": np.asarray(best.lobes.spindle_speed_rpm).tolist(),
                            "depth_m": np.asarray(best.lobes.depth_m, float),
                            "band": None if outcome.best_band is None else outcome.best_band.to_json()},

@@ -56,11 +56,13 @@ def test_optimize_job_equals_the_cli(served, tmp_path):
     cli = json.loads(out.stdout)
     assert got["candidates"] == cli["candidates"] == 36
     assert got["ranked"] == cli["ranked"][:5]
-    for key in ("notes", "parts", "best_lobes", "rate_vs_overhang", "pareto"):
+    for key in ("notes", "parts", "holder_parts", "best_lobes", "rate_vs_overhang", "pareto"):
         assert got[key] == cli[key], key
     best = got["ranked"][0]
     assert best["holder"] == "er32-collet-chuck-hsk63@1" and best["removal_rate_m3_s"] > 0
-    assert {p["slot"]: p["part"] for p in got["parts"]}["spindle"] == "demo-mill-spindle@1"
+    assert {p["slot"]: p["part"] for p in got["parts"]} == {"spindle": "demo-mill-spindle@1",
+                                                            "tool": "carbide-end-mill-12mm-4fl@1"}
+    assert got["holder_parts"] == ["er32-collet-chuck-hsk63@1"]
 
 
 def _with(**changes) -> dict:
