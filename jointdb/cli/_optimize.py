@@ -69,12 +69,15 @@ def optimize(
 ) -> None:
     """Find the holder, overhang, torque, drawbar force, speed and depth of highest stable removal rate.
 
-    Candidates are every allowed holder × overhang × catalogued clamping torque × catalogued drawbar
-    force in the spec's ranges; each tip is predicted (both planes), its zero-order lobes computed, and
-    the best cut obeys stability (less the margin), flute length, spindle power and torque. The best
-    stack is then simulated in the time domain at the recommended cut and at 1.1× its limit.
+    Candidates are every allowed holder (inline, a catalogued part, or a family's catalogued holders) ×
+    overhang × catalogued clamping torque × catalogued drawbar force in the spec's ranges; the spindle is
+    the template's or the machine's catalogued part. Each tip is predicted (both planes), its zero-order
+    lobes computed, and the best cut obeys stability (less the margin, or at the lobe band's lower edge),
+    flute length, spindle power (flat or a curve over speed) and torque. The best five are confirmed by
+    semi-discretization; the best stack is simulated in the time domain at the recommended cut and at
+    1.1× its limit.
 
-    Example: jointdb optimize fixtures/optimize/optimize-spec.json --db demo-out/joints.sqlite --out opt
+    Example: jointdb optimize fixtures/optimize/optimize-catalogue.json --db demo-out/joints.sqlite --out opt
     """
     from jointdb.cli._output import emit, message, progress_line
     from jointdb.cli._store import check_db_target
