@@ -79,8 +79,25 @@ def _query_geometry(choice) -> dict:
     return dict((choice.conditions or {}).get("geometry") or {})
 
 
+def _pinned_condition(tpl, interface: str, attr: str, allowed, repo) -> float | None:
+    """The ``attr`` condition (torque_nm / preload_n) of the joint an interface pins (``name@version``), checked
+    against the spec's range; None when the interface is a query."""
+    choice = tpl.interfaces[interface]
+    if choice.kind != "catalogued":
+        return None
+    v = choice.version
+    jv = repo.get(choice.name, version=v) if isinstance(v, int) else repo.get(choice.name, label=str(v))
+    value = getattr(jv.conditions, attr)
+    what = "torque_nm" if attr == "torque_nm" else "drawbar_n"
+    if value is None or not allowed[0] <= float(value) <= allowed[1]:
+        raise InputError(f"interfaces.{interface}: the pinned joint {jv.name}@{jv.version} was measured at "
+                         f"{attr} {value}, outside the spec's {what} {list(allowed)}")
+    return float(value)
+
+
 def enumerate_candidates(problem: OptimizeProblem, repo) -> list[Candidate]:
-    """Every allowed holder × overhang on the grid × catalogued torque × catalogued drawbar force in range.
+    """Every allowed holder × overhang on the grid × catalogued torque × catalogued drawbar force in range
+    (an interface pinned to a catalogued joint, ``name@version``, contributes its one measured condition).
 
     Raises
     ------
@@ -96,16 +113,22 @@ def enumerate_candidates(problem: OptimizeProblem, repo) -> list[Candidate]:
     lo, hi = spec.tool.overhang_m
     n = int(math.floor((hi - lo) / spec.tool.overhang_step_m + 1e-9)) + 1
     overhangs = [round(lo + k * spec.tool.overhang_step_m, 9) for k in range(max(n, 1))]
-    th_geom = _query_geometry(tpl.interfaces["tool-holder"])
-    torques = _catalogued(repo, "tool-holder", "torque_nm", *spec.torque_nm, th_geom)
+    pinned_torque = _pinned_condition(tpl, "tool-holder", "torque_nm", spec.torque_nm, repo)
+    if pinned_torque is not None:
+        torques = [pinned_torque]
+    else:
+        th_geom = _query_geometry(tpl.interfaces["tool-holder"])
+        torques = _catalogued(repo, "tool-holder", "torque_nm", *spec.torque_nm, th_geom)
     if not torques:
         raise NotFoundError(f"no catalogued tool-holder joint with a torque in {list(spec.torque_nm)} N·m")
+    pinned_force = _pinned_condition(tpl, "holder-spindle", "preload_n", spec.drawbar_n, repo)
     out = []
     for h in problem.holders:
         geom = _query_geometry(tpl.interfaces["holder-spindle"])
         if h.taper_diameter_m is not None:
             geom["taper_diameter_m"] = h.taper_diameter_m
-        forces = _catalogued(repo, "holder-spindle", "preload_n", *spec.drawbar_n, geom)
+        forces = ([pinned_force] if pinned_force is not None else
+                  _catalogued(repo, "holder-spindle", "preload_n", *spec.drawbar_n, geom))
         if not forces:
             raise NotFoundError(f"holder {h.name}: no catalogued holder-spindle joint with a drawbar force in "
                                 f"{list(spec.drawbar_n)} N (taper {geom.get('taper_diameter_m')})")
@@ -135,14 +158,18 @@ def candidate_stack(problem: OptimizeProblem, cand: Candidate):
     if not 0 < cand.overhang_m < spec.tool.length:
         raise InputError(f"overhang {cand.overhang_m} m: must be inside the tool's length {spec.tool.length} m")
     th, hs = spec.interfaces["tool-holder"], spec.interfaces["holder-spindle"]
-    if th.kind != "query" or hs.kind != "query":
-        raise InputError("the template stack's interfaces must both be catalogue queries ({\"query\": {...}})")
-    th_c = {**dict(th.conditions), "torque_nm": cand.torque_nm}
-    hs_c = {**dict(hs.conditions), "preload_n": cand.drawbar_n}
-    if holder.taper_diameter_m is not None:
-        hs_c["geometry"] = {**dict(hs_c.get("geometry") or {}), "taper_diameter_m": holder.taper_diameter_m}
-    interfaces = {"tool-holder": JointChoice(**{**th.__dict__, "conditions": th_c}),
-                  "holder-spindle": JointChoice(**{**hs.__dict__, "conditions": hs_c})}
+    if th.kind not in ("query", "catalogued") or hs.kind not in ("query", "catalogued"):
+        raise InputError("the template stack's interfaces must be catalogue queries ({\"query\": {...}}) or "
+                         "catalogued joints (name@version)")
+    interfaces = dict(spec.interfaces)
+    if th.kind == "query":
+        th_c = {**dict(th.conditions), "torque_nm": cand.torque_nm}
+        interfaces["tool-holder"] = JointChoice(**{**th.__dict__, "conditions": th_c})
+    if hs.kind == "query":
+        hs_c = {**dict(hs.conditions), "preload_n": cand.drawbar_n}
+        if holder.taper_diameter_m is not None:
+            hs_c["geometry"] = {**dict(hs_c.get("geometry") or {}), "taper_diameter_m": holder.taper_diameter_m}
+        interfaces["holder-spindle"] = JointChoice(**{**hs.__dict__, "conditions": hs_c})
     return spec.replace(gauge_length=cand.overhang_m, interfaces=interfaces)
 
 

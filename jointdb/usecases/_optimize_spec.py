@@ -135,12 +135,14 @@ def problem_from_document(doc: Any, repo=None, *, base: Path | str | None = None
 
     spec = _validate(doc, where)
     needs_store = (spec.machine.spindle or spec.machine.name or any(h.part or h.family for h in spec.holders)
-                   or (isinstance(spec.stack, dict) and "part" in json.dumps(spec.stack)))
+                   or (isinstance(spec.stack, dict) and ('"part"' in json.dumps(spec.stack) or "@" in json.dumps(
+                       spec.stack.get("interfaces")))))
     handle, owned = _open(repo) if needs_store else (repo, False)
     try:
         template = _template(spec, handle, base, allow_files)
         spindle_part = next((p for p in template.parts if p.get("slot") == "spindle"), None)
         holders, notes = _holders(spec, template, handle, spindle_part)
+        pinned_joints = _pinned_joints(template, handle)
     except (InputError, NotFoundError) as exc:  # named after the document, as the schema's errors are
         text = str(exc)
         raise type(exc)(text if text.startswith(f"{where}: ") else f"{where}: {text}") from None
@@ -151,6 +153,8 @@ def problem_from_document(doc: Any, repo=None, *, base: Path | str | None = None
     cut = MillingCut(spec.tool.flutes, kt, kr, spec.cut.radial_immersion, spec.cut.down_milling)
     pinned = spec.model_dump(mode="json", exclude_none=True)
     pinned["holders"] = [_pinned_holder(h) for h in holders] if spec.holders else []
+    if isinstance(pinned["stack"], dict):  # joints pinned by label: to the version the label named now
+        pinned["stack"]["interfaces"] = {**pinned["stack"].get("interfaces", {}), **pinned_joints}
     if isinstance(pinned["stack"], dict):  # the stack's own part references, pinned to the versions read
         for used in template.parts:
             if isinstance(pinned["stack"].get(used["slot"]), dict) and "part" in pinned["stack"][used["slot"]]:
@@ -160,6 +164,16 @@ def problem_from_document(doc: Any, repo=None, *, base: Path | str | None = None
         pinned["machine"]["spindle"] = spindle_part["part"]
     return OptimizeProblem(spec, template, cut, None, tuple(holders), json.dumps(pinned, sort_keys=True),
                            None if base is None else str(Path(base).resolve()), tuple(notes))
+
+
+def _pinned_joints(template, handle) -> dict:
+    """``interface -> {"joint": "name@version"}`` for the interfaces that pin a catalogued joint by label."""
+    out = {}
+    for name, choice in template.interfaces.items():
+        if choice.kind == "catalogued" and not isinstance(choice.version, int):
+            jv = handle.get(choice.name, label=str(choice.version))
+            out[name] = {"joint": f"{jv.name}@{jv.version}"}
+    return out
 
 
 def _pinned_holder(h: HolderOption) -> dict:

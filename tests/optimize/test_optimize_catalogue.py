@@ -149,3 +149,19 @@ def test_margin_from_the_band_lowers_the_confirmed_best_to_the_bands_lower_edge(
     i = int(np.argmin(np.abs(best.lobes.spindle_speed_rpm - best.best["spindle_speed_rpm"])))
     assert best.best["band_limit_m"] == float(lobe_band.depth_m[0, i])
     assert lobe_band.depth_m[0, i] < lobe_band.depth_m[1, i] < lobe_band.depth_m[2, i]
+
+
+def test_an_interface_pinned_to_a_catalogued_joint_by_label(parts):
+    parts.label("hs-hsk-a63-18kn", 1, "machine-b", author="test")
+    stack = copy.deepcopy(SPEC["stack"])
+    stack["interfaces"]["holder-spindle"] = "hs-hsk-a63-18kn@machine-b"
+    holders = [{"part": "er32-collet-chuck-hsk63@1"}]
+    problem = problem_from_document(_spec(stack=stack, holders=holders), parts, allow_files=False)
+    assert json.loads(problem.pinned)["stack"]["interfaces"]["holder-spindle"] == {"joint": "hs-hsk-a63-18kn@1"}
+    cands = enumerate_candidates(problem, parts)
+    assert len(cands) == 4 * 3 and {c.drawbar_n for c in cands} == {18000.0}  # its one measured condition
+    fast = fast_equals_brute_force(problem, cands[::2], parts)
+    assert {r.joints["holder-spindle"] for r in fast} == {"hs-hsk-a63-18kn@1"}
+    with pytest.raises(InputError, match="pinned joint hs-hsk-a63-18kn@1 was measured at preload_n 18000"):
+        enumerate_candidates(problem_from_document(_spec(stack=stack, holders=holders, drawbar_n=[20000, 30000]),
+                                                   parts), parts)
