@@ -31,6 +31,7 @@ def _examples() -> list[tuple[str, Path]]:
         out += [("model", p) for p in sorted((fx / "campaigns").glob("*/tool*.json"))]
         out += [("stack", p) for p in sorted((fx / "stacks").glob("*.json"))]
         out += [("campaign", p) for p in sorted((fx / "campaigns").glob("*/campaign.json"))]
+        out += [("optimize", p) for p in sorted((fx / "optimize").glob("*.json"))]
     return out
 
 

@@ -17,7 +17,9 @@ import numpy as np
 
 from jointdb.errors import InputError
 
-KINDS = ("predict", "lobes", "diagnose", "identify")
+KINDS = ("predict", "lobes", "diagnose", "identify", "optimize")
+#: Most ranking rows an optimize job returns.
+MAX_OPTIMIZE_ROWS = 1000
 
 
 class Cancelled(Exception):
@@ -129,6 +131,42 @@ def run_diagnose(payload: dict, repo, progress: Progress) -> tuple[dict, None]:
     return to_jsonable(result.to_dict() | {"input_notes": list(result.observation.notes)}), None
 
 
+def optimize_options(payload: dict) -> tuple[int, bool]:
+    """``(top, simulate)`` of an optimize job's payload, checked (InputError naming the field)."""
+    top, simulate = payload.get("top", 20), payload.get("simulate", True)
+    if isinstance(top, bool) or not isinstance(top, int) or not 1 <= top <= MAX_OPTIMIZE_ROWS:
+        raise InputError(f"top: a whole number of ranking rows in 1-{MAX_OPTIMIZE_ROWS}, got {str(top)[:40]}")
+    if not isinstance(simulate, bool):
+        raise InputError(f"simulate: true or false, got {str(simulate)[:40]}")
+    return top, simulate
+
+
+def run_optimize(payload: dict, repo, progress: Progress) -> tuple[dict, None]:
+    """``jointdb optimize`` on a spec sent inline (parts and joints from the catalogue, no server files).
+
+    The candidates are evaluated in the worker's process, or on the Dask scheduler the deployment names
+    in ``JOINTDB_DASK_SCHEDULER`` (never one the request names); the result is
+    :func:`jointdb.usecases._optimize_run.outcome_json`, as ``jointdb optimize --json`` prints it.
+    """
+    import os
+
+    from jointdb.usecases import optimize_stack
+    from jointdb.usecases._optimize import problem_from_document
+    from jointdb.usecases._optimize_run import outcome_json
+
+    top, simulate = optimize_options(payload)
+    progress(0.02, "reading the spec and the parts")
+    problem = problem_from_document(payload.get("spec"), repo, where="spec", allow_files=False)
+
+    def report(done: int, total: int, message: str) -> None:
+        progress(0.05 + 0.8 * done / max(total, 1), f"{done}/{total} candidates ({message})")
+
+    scheduler = os.environ.get("JOINTDB_DASK_SCHEDULER") or "in-process"
+    outcome = optimize_stack(problem, repo, progress=report, simulate=simulate, scheduler=scheduler)
+    progress(0.95, "writing the result")
+    return outcome_json(problem, outcome, top), None
+
+
 def run_identify(payload: dict, upload: bytes | None, progress: Progress) -> tuple[dict, bytes]:
     """Unpack the uploaded campaign (hardened: :func:`jointdb.jobs._review.unpack_upload`), identify it
     and return the review data with the joint file (HDF5 bytes) to catalogue."""
@@ -150,4 +188,6 @@ def run(kind: str, payload: dict, upload: bytes | None, repo, progress: Progress
         return run_diagnose(payload, repo, progress)
     if kind == "identify":
         return run_identify(payload, upload, progress)
+    if kind == "optimize":
+        return run_optimize(payload, repo, progress)
     raise InputError(f"kind must be one of {', '.join(KINDS)}, got {kind!r}")

@@ -11,19 +11,26 @@ from jointdb.plots._frf import _pyplot, save_figure
 __all__ = ["plot_rate_vs_overhang", "plot_pareto"]
 
 
-def plot_rate_vs_overhang(results, path) -> Path:
-    """Best removal rate [cm³/min] against overhang [mm], one line per holder (best over torques and forces)."""
+def plot_rate_vs_overhang(by_holder, path) -> Path:
+    """Best removal rate [cm³/min] against overhang [mm], one line per holder.
+
+    Parameters
+    ----------
+    by_holder
+        ``holder -> (overhangs [m], rates [m³/s])``
+        (:func:`jointdb.usecases._optimize_run.rate_by_overhang`).
+    path
+        The PNG to write.
+
+    Returns
+    -------
+    Path
+        ``path``.
+    """
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(7, 4.5))
-    holders = sorted({r.candidate.holder for r in results})
-    for h in holders:
-        best: dict = {}
-        for r in results:
-            if r.candidate.holder == h:
-                g = r.candidate.overhang_m
-                best[g] = max(best.get(g, 0.0), r.best["removal_rate_m3_s"])
-        g = np.array(sorted(best))
-        ax.plot(g * 1e3, [best[x] * 6e7 for x in g], "o-", label=h)
+    for h, (g, q) in by_holder.items():
+        ax.plot(np.asarray(g) * 1e3, np.asarray(q) * 6e7, "o-", label=h)
     ax.set_xlabel("overhang (gauge length) [mm]")
     ax.set_ylabel("best stable removal rate [cm³/min]")
     ax.grid(True, alpha=0.3)
@@ -32,14 +39,36 @@ def plot_rate_vs_overhang(results, path) -> Path:
     return save_figure(fig, path)
 
 
-def plot_pareto(margins, rates, path) -> Path:
-    """Pareto front: the highest removal rate [m³/s] any candidate reaches against the fraction of the
-    limiting depth held back (``margins``), from :func:`jointdb.usecases._optimize.pareto_front`."""
+def plot_pareto(margins, rates, path, point=None, point_label: str = "recommendation") -> Path:
+    """Pareto front: the highest removal rate any candidate reaches against the fraction of the limiting
+    depth held back.
+
+    Parameters
+    ----------
+    margins, rates
+        Fractions held back and the best removal rate [m³/s] at each
+        (:func:`jointdb.usecases._optimize.pareto_front`).
+    path
+        The PNG to write.
+    point
+        ``(margin, rate)`` of the confirmed recommendation, its margin as the fraction of its zero-order
+        limit held back (by the margin, the band's lower edge and semi-discretization); drawn as a marker
+        labelled ``point_label``.
+
+    Returns
+    -------
+    Path
+        ``path``.
+    """
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(7, 4.5))
-    ax.plot(np.asarray(margins) * 100, np.asarray(rates) * 6e7, "o-")
+    ax.plot(np.asarray(margins) * 100, np.asarray(rates) * 6e7, "o-",
+            label="best of all candidates, zero-order lobes less the margin")
+    if point is not None:
+        ax.plot([point[0] * 100], [point[1] * 6e7], "r*", markersize=12, label=point_label)
     ax.set_xlabel("stability margin held back [% of the limiting depth]")
     ax.set_ylabel("best removal rate [cm³/min]")
     ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8)
     fig.tight_layout()
     return save_figure(fig, path)

@@ -8,6 +8,7 @@ kind               model                           file
 ``campaign``       :class:`CampaignFile`           campaign JSON (``jointdb-campaign/1``)
 ``bundle-record``  :class:`VersionRecord`          a version record inside a joint bundle
 ``bundle-states``  :class:`JointStates`            a bundled joint's labels and states
+``optimize``       :class:`OptimizeSpecFile`       optimize spec JSON (``jointdb-optimize/1``)
 =================  ==============================  ==========================================
 
 The schemas are the readers' first step: :func:`jointdb.fe.model_from_dict`,
@@ -57,6 +58,7 @@ SCHEMAS: dict[str, str] = {
     "campaign": "jointdb.schemas.campaign:CampaignFile",
     "bundle-record": "jointdb.schemas.bundle:VersionRecord",
     "bundle-states": "jointdb.schemas.bundle:JointStates",
+    "optimize": "jointdb.schemas.optimize:OptimizeSpecFile",
 }
 #: kind -> published file name under docs/schemas/
 SCHEMA_FILES: dict[str, str] = {
@@ -65,6 +67,7 @@ SCHEMA_FILES: dict[str, str] = {
     "campaign": "campaign.schema.json",
     "bundle-record": "bundle-record.schema.json",
     "bundle-states": "bundle-states.schema.json",
+    "optimize": "optimize.schema.json",
 }
 _IDS = {
     "model": "jointdb-beam-model/1",
@@ -72,6 +75,7 @@ _IDS = {
     "campaign": "jointdb-campaign/1",
     "bundle-record": "jointdb-bundle/2 version record",
     "bundle-states": "jointdb-bundle/2 labels and states",
+    "optimize": "jointdb-optimize/1",
 }
 
 

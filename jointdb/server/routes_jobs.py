@@ -1,6 +1,7 @@
 """Job routes: long work answered at once with 202 and a job URL (issue 21; docs/service.md, Jobs).
 
-``POST /api/v1/jobs/{kind}`` (predict, lobes, diagnose: JSON as the synchronous routes;
+``POST /api/v1/jobs/{kind}`` (predict, lobes, diagnose: JSON as the synchronous routes; optimize: an
+optimize spec with its stack inline and parts and joints from the catalogue;
 identify: a multipart upload of a campaign archive, or JSON with it in base64) checks the
 input, queues the job and answers **202** with ``{"id", "url", "state"}`` and a ``Location``
 header. ``GET /api/v1/jobs/{id}`` shows state, progress, message, one-line error and the
@@ -24,6 +25,7 @@ from pathlib import Path
 from typing import Any, Optional
 
 from fastapi import APIRouter, HTTPException, Query, Request, Response, Security
+from pydantic import BaseModel, ConfigDict, Field
 
 from jointdb.errors import InputError, NotFoundError
 from jointdb.server._deps import need, version_json
@@ -91,6 +93,29 @@ def submit_diagnose(body: DiagnoseIn, request: Request, response: Response, who=
 
     model_from_dict(body.model)
     return _accepted(response, queue(request).submit("diagnose", who.name, body.model_dump(mode="json")))
+
+
+class OptimizeJobIn(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+    spec: dict[str, Any] = Field(..., description="An optimize spec (format jointdb-optimize/1) with its stack "
+                                 "inline: spindle, holders and tool as catalogued parts or inline, joints as "
+                                 "catalogue queries; no file paths.")
+    top: int = Field(20, ge=1, le=1000, description="Rows of the ranking in the result.")
+    simulate: bool = Field(True, description="Check the best stack in the time domain.")
+
+
+@router.post("/jobs/optimize", status_code=202, responses=_ACCEPTED,
+             summary="The stack and cut of highest stable removal rate (job)")
+def submit_optimize(body: OptimizeJobIn, request: Request, response: Response, who=reader) -> dict[str, Any]:
+    """``jointdb optimize`` on a spec sent inline; the result as ``jointdb optimize --json`` prints it
+    (ranking, best cut and binding constraint per candidate, joints, time-domain checks, figure data)."""
+    from jointdb.usecases._optimize import enumerate_candidates, problem_from_document
+
+    # a bad spec, an unknown part or family, or too many candidates is a 422 now, not a failed job later
+    repo = request.app.state.repo
+    enumerate_candidates(problem_from_document(body.spec, repo, where="spec", allow_files=False), repo)
+    return _accepted(response, queue(request).submit("optimize", who.name, body.model_dump(mode="json")))
 
 
 async def _identify_input(request: Request) -> tuple[dict[str, Any], bytes]:

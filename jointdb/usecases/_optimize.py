@@ -19,13 +19,17 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from jointdb.errors import InputError, NotFoundError
-from jointdb.frf import FRF, Dof, Quantity
+from jointdb.frf import FRF
+from jointdb.usecases._optimize_spec import HolderOption, OptimizeProblem, load_problem, problem_from_document
+
+__all__ = ["Candidate", "CandidateResult", "HolderOption", "OptimizeProblem", "load_problem", "problem_from_document",
+           "enumerate_candidates", "candidate_stack", "best_cut", "available_power", "evaluate_brute_force",
+           "pareto_front", "rank"]
 
 Progress = Callable[[int, int, str], None]
 
@@ -56,60 +60,6 @@ class CandidateResult:
                 **self.best, **{f"joint_{k}": v for k, v in self.joints.items()}}
 
 
-@dataclass(frozen=True, eq=False)
-class OptimizeProblem:
-    """The parsed spec: the file model, the template stack, and the cut."""
-
-    spec: Any  # jointdb.schemas.optimize.OptimizeSpecFile
-    template: Any  # jointdb.stack.StackSpec
-    cut: Any  # jointdb.stability.MillingCut
-    source: Path | None = None  # the spec file (a Dask worker loads the problem from it)
-
-
-def load_problem(path: Path | str) -> OptimizeProblem:
-    """Read an optimize spec file and its template stack (InputError naming the field).
-
-    Parameters
-    ----------
-    path
-        The optimize spec JSON file (:class:`jointdb.schemas.optimize.OptimizeSpecFile`); the stack
-        file it names is relative to it.
-
-    Returns
-    -------
-    OptimizeProblem
-        The validated spec, the template :class:`jointdb.stack.StackSpec`, the
-        :class:`jointdb.stability.MillingCut` (flutes, cutting coefficients in N/m², radial
-        immersion, down or up milling) and the spec file's resolved path.
-
-    Raises
-    ------
-    InputError
-        Naming the file and the field.
-    NotFoundError
-        A missing spec or stack file (or a file the stack names).
-    """
-    from pydantic import ValidationError
-
-    from jointdb.schemas._jsonfile import read_json_file
-    from jointdb.schemas.optimize import OptimizeSpecFile
-    from jointdb.stability import MillingCut
-    from jointdb.usecases._files import load_stack
-
-    p = Path(path)
-    doc = read_json_file(p, "optimize spec")
-    try:
-        spec = OptimizeSpecFile.model_validate(doc)
-    except ValidationError as exc:
-        err = exc.errors()[0]
-        where = ".".join(str(x) for x in err["loc"]) or "(top level)"
-        raise InputError(f"{p.name}: {where}: {err['msg']}") from None
-    template = load_stack(p.parent / spec.stack)
-    kt, kr = spec.cut.coefficients
-    cut = MillingCut(spec.tool.flutes, kt, kr, spec.cut.radial_immersion, spec.cut.down_milling)
-    return OptimizeProblem(spec, template, cut, p.resolve())
-
-
 def _catalogued(repo, joint_type: str, attr: str, lo: float, hi: float, geometry: dict) -> list[float]:
     """Distinct catalogued values of ``attr`` (torque_nm / preload_n) of a joint type within [lo, hi]."""
     values = set()
@@ -125,42 +75,69 @@ def _catalogued(repo, joint_type: str, attr: str, lo: float, hi: float, geometry
     return sorted(values)
 
 
-def _holders(problem: OptimizeProblem) -> list:
-    from jointdb.schemas.optimize import HolderChoice
-
-    return problem.spec.holders or [HolderChoice(name="template", holder=None, taper_diameter_m=None)]
-
-
 def _query_geometry(choice) -> dict:
     return dict((choice.conditions or {}).get("geometry") or {})
 
 
+def _pinned_condition(tpl, interface: str, attr: str, allowed, repo) -> float | None:
+    """The ``attr`` condition (torque_nm / preload_n) of the joint an interface pins (``name@version``), checked
+    against the spec's range; None when the interface is a query."""
+    choice = tpl.interfaces[interface]
+    if choice.kind != "catalogued":
+        return None
+    v = choice.version
+    jv = repo.get(choice.name, version=v) if isinstance(v, int) else repo.get(choice.name, label=str(v))
+    value = getattr(jv.conditions, attr)
+    what = "torque_nm" if attr == "torque_nm" else "drawbar_n"
+    if value is None or not allowed[0] <= float(value) <= allowed[1]:
+        raise InputError(f"interfaces.{interface}: the pinned joint {jv.name}@{jv.version} was measured at "
+                         f"{attr} {value}, outside the spec's {what} {list(allowed)}")
+    return float(value)
+
+
 def enumerate_candidates(problem: OptimizeProblem, repo) -> list[Candidate]:
-    """Every allowed holder × overhang on the grid × catalogued torque × catalogued drawbar force in range.
+    """Every allowed holder × overhang on the grid × catalogued torque × catalogued drawbar force in range
+    (an interface pinned to a catalogued joint, ``name@version``, contributes its one measured condition).
 
     Raises
     ------
     NotFoundError
         No catalogued torque or drawbar force inside the spec's ranges.
+    InputError
+        More than :data:`jointdb.schemas.optimize.MAX_CANDIDATES` candidates, or candidates × speeds
+        above :data:`jointdb.schemas.optimize.MAX_WORK`.
     """
+    from jointdb.schemas.optimize import MAX_CANDIDATES, MAX_WORK
+
     spec, tpl = problem.spec, problem.template
     lo, hi = spec.tool.overhang_m
     n = int(math.floor((hi - lo) / spec.tool.overhang_step_m + 1e-9)) + 1
     overhangs = [round(lo + k * spec.tool.overhang_step_m, 9) for k in range(max(n, 1))]
-    th_geom = _query_geometry(tpl.interfaces["tool-holder"])
-    torques = _catalogued(repo, "tool-holder", "torque_nm", *spec.torque_nm, th_geom)
+    pinned_torque = _pinned_condition(tpl, "tool-holder", "torque_nm", spec.torque_nm, repo)
+    if pinned_torque is not None:
+        torques = [pinned_torque]
+    else:
+        th_geom = _query_geometry(tpl.interfaces["tool-holder"])
+        torques = _catalogued(repo, "tool-holder", "torque_nm", *spec.torque_nm, th_geom)
     if not torques:
         raise NotFoundError(f"no catalogued tool-holder joint with a torque in {list(spec.torque_nm)} N·m")
+    pinned_force = _pinned_condition(tpl, "holder-spindle", "preload_n", spec.drawbar_n, repo)
     out = []
-    for h in _holders(problem):
+    for h in problem.holders:
         geom = _query_geometry(tpl.interfaces["holder-spindle"])
         if h.taper_diameter_m is not None:
             geom["taper_diameter_m"] = h.taper_diameter_m
-        forces = _catalogued(repo, "holder-spindle", "preload_n", *spec.drawbar_n, geom)
+        forces = ([pinned_force] if pinned_force is not None else
+                  _catalogued(repo, "holder-spindle", "preload_n", *spec.drawbar_n, geom))
         if not forces:
             raise NotFoundError(f"holder {h.name}: no catalogued holder-spindle joint with a drawbar force in "
                                 f"{list(spec.drawbar_n)} N (taper {geom.get('taper_diameter_m')})")
         out += [Candidate(h.name, g, t, f) for g in overhangs for t in torques for f in forces]
+        if len(out) > MAX_CANDIDATES or len(out) * spec.machine.n_speeds > MAX_WORK:
+            raise InputError(f"too many candidates: {len(overhangs)} overhangs × {len(torques)} torques × "
+                             f"{len(forces)} drawbar forces per holder, {len(problem.holders)} holders × "
+                             f"{spec.machine.n_speeds} speeds exceeds {MAX_CANDIDATES} candidates or {MAX_WORK:.0e} "
+                             "candidate-speeds (narrow the ranges or coarsen the grids)")
     return out
 
 
@@ -169,7 +146,10 @@ def candidate_stack(problem: OptimizeProblem, cand: Candidate):
     from jointdb.stack import JointChoice, stack_from_dict, stack_to_dict
 
     tpl = problem.template
-    holder = next(h for h in _holders(problem) if h.name == cand.holder)
+    try:
+        holder = problem.holder(cand.holder)
+    except KeyError:
+        raise InputError(f"candidate holder {cand.holder!r} is not among the spec's holders") from None
     spec = tpl
     if holder.holder is not None:
         doc = stack_to_dict(tpl)
@@ -178,33 +158,80 @@ def candidate_stack(problem: OptimizeProblem, cand: Candidate):
     if not 0 < cand.overhang_m < spec.tool.length:
         raise InputError(f"overhang {cand.overhang_m} m: must be inside the tool's length {spec.tool.length} m")
     th, hs = spec.interfaces["tool-holder"], spec.interfaces["holder-spindle"]
-    if th.kind != "query" or hs.kind != "query":
-        raise InputError("the template stack's interfaces must both be catalogue queries ({\"query\": {...}})")
-    th_c = {**dict(th.conditions), "torque_nm": cand.torque_nm}
-    hs_c = {**dict(hs.conditions), "preload_n": cand.drawbar_n}
-    if holder.taper_diameter_m is not None:
-        hs_c["geometry"] = {**dict(hs_c.get("geometry") or {}), "taper_diameter_m": holder.taper_diameter_m}
-    interfaces = {"tool-holder": JointChoice(**{**th.__dict__, "conditions": th_c}),
-                  "holder-spindle": JointChoice(**{**hs.__dict__, "conditions": hs_c})}
+    if th.kind not in ("query", "catalogued") or hs.kind not in ("query", "catalogued"):
+        raise InputError("the template stack's interfaces must be catalogue queries ({\"query\": {...}}) or "
+                         "catalogued joints (name@version)")
+    interfaces = dict(spec.interfaces)
+    if th.kind == "query":
+        th_c = {**dict(th.conditions), "torque_nm": cand.torque_nm}
+        interfaces["tool-holder"] = JointChoice(**{**th.__dict__, "conditions": th_c})
+    if hs.kind == "query":
+        hs_c = {**dict(hs.conditions), "preload_n": cand.drawbar_n}
+        if holder.taper_diameter_m is not None:
+            hs_c["geometry"] = {**dict(hs_c.get("geometry") or {}), "taper_diameter_m": holder.taper_diameter_m}
+        interfaces["holder-spindle"] = JointChoice(**{**hs.__dict__, "conditions": hs_c})
     return spec.replace(gauge_length=cand.overhang_m, interfaces=interfaces)
 
 
-def best_cut(problem: OptimizeProblem, lobes) -> dict:
+def available_power(machine, speed_rpm) -> np.ndarray | None:
+    """The spindle power available at each speed [W]: the smaller of the flat ``power_w`` and the
+    ``power_curve`` (linear between its points); None when the spec gives neither.
+
+    Parameters
+    ----------
+    machine
+        The spec's :class:`jointdb.schemas.optimize.Machine`.
+    speed_rpm
+        Spindle speeds [rpm], shape ``(n_speeds,)``.
+
+    Returns
+    -------
+    numpy.ndarray or None
+        Shape ``(n_speeds,)`` [W].
+    """
+    n = np.asarray(speed_rpm, dtype=float)
+    out = None if machine.power_w is None else np.full(n.shape, float(machine.power_w))
+    if machine.power_curve is not None:
+        curve = np.interp(n, [p.speed_rpm for p in machine.power_curve], [p.power_w for p in machine.power_curve])
+        out = curve if out is None else np.minimum(out, curve)
+    return out
+
+
+def best_cut(problem: OptimizeProblem, lobes, stability_m=None) -> dict:
     """The speed and depth of highest removal rate under stability (less the margin), flute length,
-    spindle power and torque; ``binding`` names the constraint that sets the depth there.
+    spindle power (flat or a curve over speed) and torque; ``binding`` names the constraint that sets the
+    depth there.
 
     Removal rate ``Q = a · a_e · f_z · N · n/60`` [m³/s]; cutting power ``P = K_t Q`` (linear force law,
     no edge forces); spindle torque ``P / ω``.
+
+    Parameters
+    ----------
+    problem
+        The optimize problem (spec, template, cut).
+    lobes
+        The candidate's :class:`jointdb.stability.LobeResult` (speeds [rpm], limiting depth [m]).
+    stability_m
+        The stability limit per speed [m] to use instead of ``lobes.depth_m`` (e.g. the band's lower
+        edge); the same shape.
+
+    Returns
+    -------
+    dict
+        ``spindle_speed_rpm``, ``depth_m`` [m], ``removal_rate_m3_s``, ``binding``, ``stability_limit_m``
+        (of ``lobes`` at that speed), ``power_w`` (cutting power) and ``margin``.
     """
     spec, cut = problem.spec, problem.cut
     n = np.asarray(lobes.spindle_speed_rpm, float)
     diameter = max(s.diameter for s in problem.template.tool.segments)
     rate_per_depth = spec.cut.radial_immersion * diameter * spec.cut.feed_per_tooth_m * cut.n_teeth * n / 60.0
-    limits = {"stability": np.where(np.isfinite(lobes.depth_m), lobes.depth_m * (1 - spec.objective.margin),
-                                    np.where(np.isnan(lobes.depth_m), 0.0, np.inf)),
+    stab = np.asarray(lobes.depth_m if stability_m is None else stability_m, dtype=float)
+    limits = {"stability": np.where(np.isfinite(stab), stab * (1 - spec.objective.margin),
+                                    np.where(np.isnan(stab), 0.0, np.inf)),
               "flute length": np.full(n.size, spec.tool.flute_length_m)}
-    if spec.machine.power_w is not None:
-        limits["power"] = spec.machine.power_w / (cut.kt * rate_per_depth)
+    power = available_power(spec.machine, n)
+    if power is not None:
+        limits["power"] = power / (cut.kt * rate_per_depth)
     if spec.machine.torque_nm is not None:
         limits["torque"] = spec.machine.torque_nm * 2 * np.pi * n / 60.0 / (cut.kt * rate_per_depth)
     names = list(limits)

@@ -8,7 +8,8 @@ equals :func:`jointdb.usecases._optimize.evaluate_brute_force` to the last digit
 
 Scale-out: the candidates are split into chunks (whole (holder, overhang) groups) and each chunk is one
 Dask task running :func:`evaluate_chunk` — the very function the in-process path calls — on a worker
-that loads the spec and opens the database itself (cached per worker process). ``scheduler``:
+that loads the spec (its pinned document: every catalogue choice as ``name@version``) and opens the
+database itself (cached per worker process). ``scheduler``:
 ``None``/``"in-process"``, ``"local"`` (a ``distributed.LocalCluster`` of ``n_workers`` processes, one
 thread each) or a scheduler address (``tcp://host:8786``, workers started with ``dask worker`` on hosts
 with jointdb installed and the database reachable).
@@ -18,7 +19,6 @@ from __future__ import annotations
 
 import functools
 from collections.abc import Sequence
-from pathlib import Path
 
 import numpy as np
 
@@ -33,7 +33,7 @@ from jointdb.usecases._optimize import (
     best_cut,
     candidate_stack,
     evaluate_brute_force,
-    load_problem,
+    problem_from_document,
 )
 
 INTERFACES = ("tool-holder", "holder-spindle")
@@ -150,19 +150,33 @@ def evaluate_chunk(problem: OptimizeProblem, candidates: Sequence[Candidate], ca
     return results
 
 
+def _blobs_of(repo) -> str | None:
+    """Where ``repo`` keeps its blobs, for a worker to open the same store: a directory, ``"database"``, or
+    None (the worker's default)."""
+    store = getattr(repo, "blobs", None)
+    if type(store).__name__ == "DatabaseBlobStore":  # the frf_blobs table (JOINTDB_BLOBS=database)
+        return "database"
+    root = getattr(store, "root", None)
+    return None if root is None else str(root)
+
+
 @functools.lru_cache(maxsize=4)
-def _worker_state(spec_path: str, db_url: str):
+def _worker_state(pinned: str, base: str | None, db_url: str, blobs: str | None = None):
     """The problem, an open store and the substructure cache of one worker process (kept between tasks)."""
+    import json
+
     from jointdb.store import Repository
 
-    problem = load_problem(spec_path)
-    repo = Repository(db_url)
+    repo = Repository(db_url, blobs=blobs)
+    problem = problem_from_document(json.loads(pinned), repo, base=base)
     return problem, SubstructureCache(problem, repo)
 
 
-def evaluate_chunk_by_reference(spec_path: str, db_url: str, candidates: Sequence[Candidate]) -> list[CandidateResult]:
-    """:func:`evaluate_chunk` on a Dask worker: the spec and the database named, not shipped."""
-    problem, cache = _worker_state(spec_path, db_url)
+def evaluate_chunk_by_reference(pinned: str, base: str | None, db_url: str, candidates: Sequence[Candidate],
+                                blobs: str | None = None) -> list[CandidateResult]:
+    """:func:`evaluate_chunk` on a Dask worker: the pinned spec document, the database and its blob store
+    named, the substructures computed there."""
+    problem, cache = _worker_state(pinned, base, db_url, blobs)
     return evaluate_chunk(problem, candidates, cache)
 
 
@@ -241,14 +255,15 @@ def evaluate_candidates(problem: OptimizeProblem, candidates: Sequence[Candidate
             if progress:
                 progress(done, total, "in-process")
         return results
-    if problem.source is None:
-        raise InputError("a Dask cluster loads the spec from its file: load the problem with load_problem(path)")
+    if not problem.pinned:
+        raise InputError("a Dask cluster loads the spec from its document: build the problem with load_problem "
+                         "or problem_from_document")
     from distributed import as_completed
 
     client, cluster = _client(scheduler, n_workers)
     try:
-        futures = {client.submit(evaluate_chunk_by_reference, str(problem.source), str(repo.url),
-                                 [candidates[i] for i in idx], pure=False): idx for idx in parts}
+        futures = {client.submit(evaluate_chunk_by_reference, problem.pinned, problem.base, str(repo.url),
+                                 [candidates[i] for i in idx], _blobs_of(repo), pure=False): idx for idx in parts}
         done = 0
         for fut in as_completed(futures):
             idx = futures[fut]
