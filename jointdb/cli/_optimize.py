@@ -33,8 +33,10 @@ def _write_outputs(out: Path, problem, outcome) -> list[Path]:
     files = [out / "ranking.csv"]
     write_rows(files[0], rows, kind="optimize")
     best = outcome.ranked[0]
+    joints = "; ".join(f"{k}: {v}" for k, v in best.joints.items())
     files.append(plot_lobes(best.lobes, out / "best-lobes.png", band=outcome.best_band,
-                            title=f"Best stack: {best.candidate.holder}, overhang {best.candidate.overhang_m * 1e3:g} mm"))
+                            title=f"Best stack: {best.candidate.holder}, overhang {best.candidate.overhang_m * 1e3:g} mm",
+                            flute_length_m=problem.spec.tool.flute_length_m, joints=joints or None))
     files.append(plot_rate_vs_overhang(rate_by_overhang(outcome.ranked), out / "rate-vs-overhang.png"))
     b = best.best
     zoa = b.get("zoa_limit_m") or float("nan")
