@@ -89,7 +89,9 @@ def check_jointdb_sqlite(path: Path) -> None:
     if "alembic_version" not in tables:
         what = f"tables: {', '.join(sorted(tables)[:5])}" if tables else "no tables"
         raise InputError(f"{path} is a SQLite database but not a jointdb database ({what}); refusing to touch it")
-    foreign = tables - SCHEMA_TABLES - {"alembic_version"} - OUTSIDE_ALEMBIC
+    # sqlite_stat1..4: SQLite's own planner statistics, written by ANALYZE (or PRAGMA optimize)
+    foreign = {t for t in tables - SCHEMA_TABLES - {"alembic_version"} - OUTSIDE_ALEMBIC
+               if not t.startswith("sqlite_stat")}
     if foreign:
         raise InputError(f"{path} has tables jointdb does not know ({', '.join(sorted(foreign)[:5])}); "
                          "refusing to touch it")

@@ -148,3 +148,20 @@ def test_a_page_is_one_range_of_the_head_index(repo, joint_type):
             conn.exec_driver_sql("SET enable_seqscan = off")  # 30 rows: force what 100k rows choose
             plan = " | ".join(r[0] for r in conn.exec_driver_sql("EXPLAIN " + sql))
             assert "listed_name" in plan and "Sort" not in plan, plan
+
+
+def test_an_analyzed_sqlite_database_still_opens(tmp_path):
+    """ANALYZE (planner statistics, which the listing's plans rely on at scale) adds SQLite's own
+    sqlite_stat1 table; jointdb must not take it for a foreign table."""
+    from jointdb.store import Repository
+
+    repo = Repository(tmp_path / "a.sqlite")
+    repo.catalogue("A1", "tool-holder", spring_joint(), planar_conditions(), KIND)
+    with repo.write_engine.connect() as conn:
+        conn.exec_driver_sql("ANALYZE")
+        conn.commit()
+        assert conn.exec_driver_sql("SELECT count(*) FROM sqlite_master WHERE name = 'sqlite_stat1'").scalar() == 1
+    repo.close()
+    again = Repository(tmp_path / "a.sqlite")
+    assert [v.name for v in again.list_page().items] == ["A1"]
+    again.close()
