@@ -38,17 +38,19 @@ from __future__ import annotations
 
 import base64
 import binascii
+import json
 import math
+import threading
 from collections.abc import Iterable
 from dataclasses import dataclass
 from types import SimpleNamespace
 
-from sqlalchemy import exists, false, func, literal, select, true
+from sqlalchemy import Text, exists, false, func, literal, select, true, type_coerce
 from sqlalchemy.orm import aliased
 
 from jointdb.schemas._limits import control_character
 from jointdb.errors import InputError, IntegrityError
-from jointdb.store._models import LabelRow, QueryCountRow, QueryVersionRow, VersionRow
+from jointdb.store._models import LabelRow, QueryCountRow, QueryStampRow, QueryVersionRow, VersionRow
 from jointdb.store._records import DamagedVersion, to_version
 from jointdb.store._types import JointVersion, check_joint_type, check_label, normalise_material
 
@@ -249,3 +251,61 @@ def list_page(conn, *, joint_type=None, materials=(), label=None, include_deprec
         total = conn.execute(count_statement(**filters)).scalar_one()
     items, damaged = read_rows(rows)
     return JointPage(tuple(items), tuple(damaged), total, encode_cursor(rows[-1].name, total) if more else None)
+
+
+_FACETS: dict[tuple, dict[str, list[str]]] = {}
+_FACETS_LOCK = threading.Lock()
+
+
+def listing_facets(conn, key: str = "") -> dict[str, list[str]]:
+    """The values a catalogue page offers to filter on, over the listed versions: ``types``,
+    ``materials``, ``combos`` (material sets as ``"a + b"``), ``labels`` and ``tapers``
+    (``conditions.extra.taper``).
+
+    Read in SQL from the query index (no record is decoded or verified) and kept per process
+    for the query stamp ``(token, generation)`` they were read at: a page after no write costs
+    one single-row SELECT; the first after a write reads the listed rows once.
+
+    Parameters
+    ----------
+    conn
+        A connection of the repository's read engine.
+    key
+        What tells databases apart in the per-process cache (e.g. the URL).
+
+    Returns
+    -------
+    dict of str to list of str
+        Each facet's values, sorted.
+    """
+    qv, v, lab = QueryVersionRow, VersionRow, LabelRow
+    stamp = tuple(conn.execute(select(QueryStampRow.token, QueryStampRow.generation)
+                               .where(QueryStampRow.id == 1)).one())
+    with _FACETS_LOCK:
+        found = _FACETS.get((key, *stamp))
+    if found is not None:
+        return found
+    types = conn.execute(select(QueryCountRow.joint_type).where(QueryCountRow.joints > 0).distinct()).scalars()
+    labels = conn.execute(select(lab.label).join(qv, (qv.joint_id == lab.joint_id) & (qv.version == lab.version))
+                          .where(qv.listed == true()).distinct()).scalars()
+    mats, combos, tapers = set(), set(), set()
+    rows = select(type_coerce(v.materials, Text), type_coerce(v.extra, Text)).join(qv, qv.version_id == v.id)
+    for materials, extra in conn.execute(rows.where(qv.listed == true())):
+        try:  # raw JSON text (SQLite) or values (psycopg decodes json); a damaged row offers nothing
+            materials, extra = (json.loads(x) if isinstance(x, str) else x for x in (materials, extra))
+        except ValueError:
+            continue
+        if not isinstance(materials, list) or not all(isinstance(m, str) for m in materials):
+            continue
+        mats.update(materials)
+        combos.add(" + ".join(materials))
+        taper = extra.get("taper") if isinstance(extra, dict) else None
+        if isinstance(taper, str):
+            tapers.add(taper)
+    facets = {"types": sorted(set(types)), "materials": sorted(mats), "tapers": sorted(tapers),
+              "labels": sorted(set(labels)), "combos": sorted(c for c in combos if c)}
+    with _FACETS_LOCK:
+        if len(_FACETS) > 64:
+            _FACETS.clear()
+        _FACETS[(key, *stamp)] = facets
+    return facets
