@@ -452,7 +452,7 @@ class RemoteRepository:
         -------
         PartVersion
         """
-        from jointdb.store._parts import parse_part_ref
+        from jointdb.store._part_records import parse_part_ref
 
         name, tail = parse_part_ref(ref)
         return self.get_part(name, version=tail) if isinstance(tail, int) else self.get_part(name, label=tail)
@@ -523,7 +523,7 @@ class RemoteRepository:
 
 def part_from_json(d: dict):
     """A :class:`jointdb.store.PartVersion` from the API's JSON form of a part version."""
-    from jointdb.store._parts import PartVersion
+    from jointdb.store._part_records import PartVersion
 
     return PartVersion(d["name"], d["kind"], int(d["version"]), d["uuid"], datetime.fromisoformat(d["created_at"]),
                        d["author"], dict(d["attributes"]), dict(d["payload"]), d["blob_sha256"],
