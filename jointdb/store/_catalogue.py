@@ -48,7 +48,7 @@ from jointdb.store._models import (
     utcnow,
 )
 from jointdb.store._records import record_dict, record_sha256, software_version, to_version
-from jointdb.store._types import JointVersion, dof_strings
+from jointdb.store._vocabulary import dof_strings
 
 
 @functools.cache
