@@ -165,3 +165,33 @@ def test_an_analyzed_sqlite_database_still_opens(tmp_path):
     again = Repository(tmp_path / "a.sqlite")
     assert [v.name for v in again.list_page().items] == ["A1"]
     again.close()
+
+
+def test_the_fast_check_of_a_stored_field_accepts_only_what_the_full_check_accepts():
+    """Reading a row skips walking a flat JSON field only when the full check would pass it; anything
+    it is unsure of (nesting, NaN, infinity, huge integers, non-text keys, long texts) is checked in full."""
+    from jointdb.errors import InputError
+    from jointdb.schemas._limits import check_stored_json
+    from jointdb.store._records import MAX_RECORD_BYTES, _flat_within_limits
+
+    def full_ok(value) -> bool:
+        try:
+            check_stored_json(value, "f", max_bytes=MAX_RECORD_BYTES, texts=False)
+        except InputError:
+            return False
+        return True
+
+    rng = np.random.default_rng(5)
+    pool = [0, -1, 2.5, 1e300, -1e300, 1e301, float("nan"), float("inf"), 10**400, True, None, "", "x\u00e9\n",
+            "y" * 10, {"a": 1}, [1], "z" * (MAX_RECORD_BYTES // 5)]
+    fast_hits = 0
+    for _ in range(400):
+        items = [pool[int(i)] for i in rng.integers(len(pool), size=int(rng.integers(0, 5)))]
+        value = {f"k{i}": x for i, x in enumerate(items)} if rng.random() < 0.5 else items
+        if _flat_within_limits(value):
+            fast_hits += 1
+            assert full_ok(value), value
+    assert fast_hits > 50
+    for bad in ([float("nan")], {"a": float("inf")}, [10**400], {"a": {"b": 1}}, [[1]], {1: "a"}):
+        assert not _flat_within_limits(bad)
+    assert _flat_within_limits({"diameter_m": 0.02, "taper": "HSK-A63", "ok": True, "none": None})
