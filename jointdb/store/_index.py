@@ -132,13 +132,19 @@ def index_values(version_id: int, joint: tuple[int, str, str], number: int, mate
 
 def add_counts(session: Session | Connection, deltas: dict[tuple[str, bool], int]) -> None:
     """Add ``{(joint_type, deprecated): change}`` to ``query_counts`` (in the caller's write
-    transaction; a missing row is inserted)."""
+    transaction). One upsert per changed row: two writers adding the first joints of a new type
+    at once do not collide on the missing row (PostgreSQL and SQLite ``ON CONFLICT DO UPDATE``)."""
     t = QueryCountRow.__table__
+    conn = session.connection() if isinstance(session, Session) else session
+    if conn.dialect.name == "postgresql":
+        from sqlalchemy.dialects.postgresql import insert as upsert
+    else:
+        from sqlalchemy.dialects.sqlite import insert as upsert
     for (joint_type, deprecated), change in sorted(deltas.items()):
         if change:
-            key = (t.c.joint_type == joint_type) & (t.c.deprecated == bool(deprecated))
-            if session.execute(update(t).where(key).values(joints=t.c.joints + change)).rowcount == 0:
-                session.execute(insert(t).values(joint_type=joint_type, deprecated=bool(deprecated), joints=change))
+            stmt = upsert(t).values(joint_type=joint_type, deprecated=bool(deprecated), joints=change)
+            conn.execute(stmt.on_conflict_do_update(index_elements=[t.c.joint_type, t.c.deprecated],
+                                                    set_={"joints": t.c.joints + stmt.excluded.joints}))
 
 
 def _count_changes(joint_type: str, before: Iterable[tuple], after: Iterable[tuple]) -> dict[tuple[str, bool], int]:
