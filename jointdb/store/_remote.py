@@ -96,10 +96,15 @@ class RemoteRepository(RemoteParts):
     def _name(name: str) -> str:
         return quote(str(name), safe="")
 
+    #: rows asked for per page when a whole list is read
+    PAGE = 500
+
     def _all(self, path: str, damaged: list | None = None, **params) -> list[dict]:
-        items, offset = [], 0
+        """Every item of a paginated list: continued by the keyset cursor ``next`` where the list
+        gives one (the joints list: each page costs the same), else by ``next_offset``."""
+        items, position = [], {"offset": 0}
         while True:
-            page = self._call("GET", path, params={**params, "offset": offset, "limit": 500})
+            page = self._call("GET", path, params={**params, **position, "limit": self.PAGE})
             items.extend(page["items"])
             if damaged is not None and page.get("damaged"):
                 from jointdb.store._records import DamagedVersion
@@ -108,7 +113,7 @@ class RemoteRepository(RemoteParts):
                                for d in page["damaged"])
             if page.get("next_offset") is None:
                 return items
-            offset = page["next_offset"]
+            position = {"after": page["next"]} if page.get("next") else {"offset": page["next_offset"]}
 
     # ----------------------------------------------------------------- reads
     def get(self, name: str, version: int | None = None, at=None, label: str | None = None):
