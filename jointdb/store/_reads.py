@@ -173,7 +173,8 @@ class VersionReads:
                   preload_max: float | None = None, name_contains: str | None = None, after: str | None = None,
                   offset: int = 0, limit: int | None = 50) -> JointPage:
         """One page of the catalogue: the current version of each joint that passes the filters,
-        by name, in one SQL statement (see :mod:`jointdb.store._listing`).
+        by name, in one SQL statement that reads one range of the listing's head index (O(page)
+        rows whatever the catalogue's size; see :mod:`jointdb.store._listing`).
 
         Damaged rows do not stop the list: they are in ``JointPage.damaged``.
 
@@ -205,7 +206,9 @@ class VersionReads:
         Returns
         -------
         JointPage
-            ``items``, ``next`` cursor, ``damaged``.
+            ``items``, ``next`` cursor, ``damaged`` and ``total`` (the matches when the listing
+            started: read from maintained counts, or counted on the first page and carried in
+            the cursor).
 
         Raises
         ------
