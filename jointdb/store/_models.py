@@ -160,7 +160,18 @@ class StateRow(Base):
     at: Mapped[datetime] = mapped_column(UTCDateTime())
 
 
-class LabelRow(Base):
+class LabelColumns:
+    """The columns every label table has besides its owner (a joint's, a part's): a mutable
+    named pointer at one version of the owner, and who moved it when."""
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    label: Mapped[str] = mapped_column(String(100))
+    version: Mapped[int] = mapped_column(Integer)
+    updated_at: Mapped[datetime] = mapped_column(UTCDateTime())
+    updated_by: Mapped[str] = mapped_column(String(200))
+
+
+class LabelRow(LabelColumns, Base):
     __tablename__ = "labels"
     __table_args__ = (
         UniqueConstraint("joint_id", "label"),
@@ -170,12 +181,7 @@ class LabelRow(Base):
         ),
     )
 
-    id: Mapped[int] = mapped_column(Integer, primary_key=True)
     joint_id: Mapped[int] = mapped_column(ForeignKey("joints.id", ondelete="RESTRICT"))
-    label: Mapped[str] = mapped_column(String(100))
-    version: Mapped[int] = mapped_column(Integer)
-    updated_at: Mapped[datetime] = mapped_column(UTCDateTime())
-    updated_by: Mapped[str] = mapped_column(String(200))
 
 
 class AuditRow(Base):
@@ -310,7 +316,7 @@ class PartVersionRow(Base):
     record_sha256: Mapped[str] = mapped_column(String(64))
 
 
-class PartLabelRow(Base):
+class PartLabelRow(LabelColumns, Base):
     """A mutable named pointer (``released``, ``default``) at a part version (migration 0009)."""
 
     __tablename__ = "part_labels"
@@ -321,12 +327,7 @@ class PartLabelRow(Base):
         ),
     )
 
-    id: Mapped[int] = mapped_column(Integer, primary_key=True)
     part_id: Mapped[int] = mapped_column(ForeignKey("parts.id", ondelete="RESTRICT"))
-    label: Mapped[str] = mapped_column(String(100))
-    version: Mapped[int] = mapped_column(Integer)
-    updated_at: Mapped[datetime] = mapped_column(UTCDateTime())
-    updated_by: Mapped[str] = mapped_column(String(200))
 
 
 IMMUTABLE = (JointRow, VersionRow, StateRow, AuditRow, PartRow, PartVersionRow)
