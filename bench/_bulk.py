@@ -3,7 +3,8 @@
 Rows go into ``joints`` and ``joint_versions`` (with true record hashes, so every
 read verifies them as usual) and a few ``joint_states`` / ``labels`` rows, with
 executemany in one transaction each; the query index is then built from them by
-the same function migration 0004 uses (:func:`jointdb.store._index.rebuild`).
+the same function migration 0004 uses (:func:`jointdb.store._index.rebuild`, which also
+fills the listing's head and counts of migration 0010), and the tables are ANALYZEd.
 No blob files exist: a query that touched a blob would fail.
 """
 
@@ -71,3 +72,6 @@ def bulk_fill(repo, n_versions: int, per_joint: int, seed: int = 7) -> None:
         if labels:
             conn.execute(LabelRow.__table__.insert(), labels)
         rebuild(conn)
+    with repo.write_engine.connect() as conn:  # planner statistics, as autovacuum / a routine ANALYZE keep them
+        conn.exec_driver_sql("ANALYZE")
+        conn.commit()

@@ -7,8 +7,9 @@ catalogue is filled in bulk through the real tables (:mod:`_bulk`; 100,000 versi
 ``--per-joint`` of them per joint) and the same random pages are asked for, interleaved,
 three ways in one process:
 
-- **bare SQL** (the reference): the page's one SELECT (:func:`jointdb.store._listing.page_statement`)
-  executed and its rows fetched, nothing else;
+- **bare SQL** (the reference): the page's one SELECT (:func:`jointdb.store._listing.page_statement`:
+  one range of the head index, the total read from ``query_counts`` on a first page and carried
+  in the cursor after it) executed and its rows fetched, nothing else;
 - ``Repository.list_page``: the same statement plus argument checks, record-hash verification
   and the :class:`JointVersion` of each row;
 - ``GET /api/v1/joints?limit=50&after=…`` through the ASGI app (``httpx`` ASGI transport, so no
@@ -47,27 +48,31 @@ def _pct(values: list[float], q: float) -> float:
     return float(np.percentile(np.asarray(values) * 1e3, q))
 
 
-def _requests(n_joints: int, n: int, seed: int = 11) -> list[dict]:
-    """The pages asked for: ``after`` a random joint (None: the first page), sometimes one type."""
+def _requests(repo, n_joints: int, n: int, seed: int = 11) -> list[dict]:
+    """The pages asked for: ``after`` a random joint (None: the first page), sometimes one type.
+    A cursor carries the listing's total, as the ``next`` of a real first page does."""
     from jointdb.store._listing import encode_cursor
 
+    totals = {t: repo.list_page(t, limit=1).total for t in (None, *TYPES)}
     rng = np.random.default_rng(seed)
     out = []
     for i in range(n):
-        after = None if i % 4 == 0 else encode_cursor(f"bulk-{int(rng.integers(n_joints)):06d}")
-        out.append({"after": after, "joint_type": TYPES[i % 2] if i % 5 == 0 else None})
+        joint_type = TYPES[i % 2] if i % 5 == 0 else None
+        after = None if i % 4 == 0 else encode_cursor(f"bulk-{int(rng.integers(n_joints)):06d}", totals[joint_type])
+        out.append({"after": after, "joint_type": joint_type})
     return out
 
 
 def _bare_sql(repo, req: dict) -> int:
     """The page's one SELECT, rows fetched: what the database does for a page."""
-    from jointdb.store._listing import decode_cursor, page_statement
+    from jointdb.store._listing import page_statement, read_cursor
 
     filters = dict(joint_type=req["joint_type"], materials=(), label=None, include_deprecated=True, state=None,
                    torque=(None, None), preload=(None, None), name_contains=None)
-    after = decode_cursor(req["after"]) if req["after"] else None
+    after, total = read_cursor(req["after"]) if req["after"] else (None, None)
     with repo.read_engine.connect() as conn:
-        rows = conn.execute(page_statement(conn.dialect.name, after=after, offset=0, limit=PAGE, **filters)).all()
+        rows = conn.execute(page_statement(conn.dialect.name, after=after, offset=0, limit=PAGE,
+                                           with_total=total is None, **filters)).all()
     return len(rows)
 
 
@@ -113,7 +118,7 @@ def run_backend(label: str, url: str, per_joint: int, n_requests: int, blobs: Pa
         t0 = time.perf_counter()
         bulk_fill(repo, N_VERSIONS, per_joint)
         fill_s = time.perf_counter() - t0
-        times = asyncio.run(_measure(repo, _requests(N_VERSIONS // per_joint, n_requests)))
+        times = asyncio.run(_measure(repo, _requests(repo, N_VERSIONS // per_joint, n_requests)))
     finally:
         repo.close()
     ref = statistics.median(times["bare SQL"])

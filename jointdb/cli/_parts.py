@@ -53,7 +53,7 @@ def parts_add(
 
     Example: jointdb parts add holder er32-hsk63 --from-stack fixtures/bundled/catalogue/demo-stack.json --family ER32 --taper HSK-A63 --bore-mm 12
     """
-    from jointdb.store._parts import check_part_kind, check_part_name
+    from jointdb.store._part_records import check_part_kind, check_part_name
     from jointdb.usecases import part_from_files
 
     check_part_kind(kind)
@@ -122,7 +122,7 @@ def parts_label(
     Example: jointdb parts label er32-hsk63@1 released
     """
     from jointdb.errors import InputError
-    from jointdb.store._parts import parse_part_ref
+    from jointdb.store._part_records import parse_part_ref
 
     name, version = parse_part_ref(ref)
     if not isinstance(version, int):

@@ -7,6 +7,7 @@ import json
 from typing import Annotated, Any, Optional
 
 from fastapi import APIRouter, Depends, Path, Query
+from fastapi.responses import JSONResponse
 
 from jointdb.errors import InputError
 from jointdb.server._deps import Page, reader, repo, version_json
@@ -55,18 +56,22 @@ def list_joints(
     q: Optional[str] = Query(None, max_length=200, description="Part of the joint name."),
     after: Optional[str] = Query(None, max_length=400, description="The `next` cursor of the previous page."),
     r=Depends(repo), _who=reader,
-) -> dict[str, Any]:
-    """One page, by joint name, in one SQL statement. Continue with ``after=<next>`` (keyset) or
-    ``offset=<next_offset>``; ``damaged`` lists versions of this page whose stored rows are damaged
-    (left out of ``items``)."""
+) -> JSONResponse:
+    """One page, by joint name, in one SQL statement that reads O(page) index rows. Continue with
+    ``after=<next>`` (keyset) or ``offset=<next_offset>``; ``damaged`` lists versions of this page
+    whose stored rows are damaged (left out of ``items``). ``total``: the matches when the listing
+    started — read from maintained counts without a filter (or with only type / state), else
+    counted on the first page and carried in ``next`` (see docs/service.md)."""
     found = r.list_page(joint_type or None, materials=material or (), label=label or None,
                         include_deprecated=include_deprecated, state=state, torque_min=torque_min,
                         torque_max=torque_max, preload_min=preload_min, preload_max=preload_max,
                         name_contains=q or None, after=after, offset=page.offset, limit=page.limit)
     shown = len(found.items) + len(found.damaged)
-    return {"items": [version_json(v) for v in found.items], "total": found.total, "offset": page.offset,
-            "limit": page.limit, "next_offset": page.offset + shown if found.next else None, "next": found.next,
-            "damaged": damaged_json(found.damaged)}
+    # plain JSON already (version_json): encoded directly, without FastAPI's generic re-encoding pass
+    return JSONResponse({"items": [version_json(v) for v in found.items], "total": found.total,
+                         "offset": page.offset, "limit": page.limit,
+                         "next_offset": page.offset + shown if found.next else None, "next": found.next,
+                         "damaged": damaged_json(found.damaged)})
 
 
 @router.get("/joints/{name}", summary="One version: current (default), by label or at a time")

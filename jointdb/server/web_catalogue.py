@@ -17,6 +17,7 @@ from jointdb.errors import InputError, NotPermittedError
 from jointdb.server import web_format as wf
 from jointdb.server._deps import version_json
 from jointdb.server.web_core import _float, _form, _handle, _page, _reader, _writer_form, router
+from jointdb.store._listing import listing_facets
 from jointdb.store._tokens import check_may_change
 
 PAGE = 50
@@ -33,23 +34,11 @@ def _diameter(c: dict) -> float | None:
     return None
 
 
-def _facets(versions: list[dict]) -> dict[str, list[str]]:
-    """The values of the catalogue to choose from (types, materials, tapers, labels)."""
-    types, mats, tapers, labels, combos = set(), set(), set(), set(), set()
-    for v in versions:
-        types.add(v["joint_type"])
-        mats.update(v["conditions"]["materials"])
-        combos.add(" + ".join(v["conditions"]["materials"]))
-        taper = (v["conditions"].get("extra") or {}).get("taper")
-        if isinstance(taper, str):
-            tapers.add(taper)
-        labels.update(v["labels"])
-    return {"types": sorted(types), "materials": sorted(mats), "tapers": sorted(tapers), "labels": sorted(labels),
-            "combos": sorted(c for c in combos if c)}
-
-
 def _catalogue_facets(r) -> dict[str, list[str]]:
-    return _facets([version_json(v) for v in r.list_page(limit=None).items])
+    """The values of the catalogue to choose from (types, materials, combos, tapers, labels), read in
+    SQL and kept per query stamp (:func:`jointdb.store._listing.listing_facets`)."""
+    with r.read_engine.connect() as conn:
+        return listing_facets(conn, r.url)
 
 
 def _unknown_material(chosen: list[str], facets: dict) -> str | None:
@@ -83,22 +72,37 @@ def _in(x: float | None, lo: float | None, hi: float | None) -> bool:
     return x is not None and (lo is None or x >= lo) and (hi is None or x <= hi)
 
 
-def _filtered(r, p, facets: dict) -> tuple[list[dict], str | None]:
-    """The versions that pass the form's filters, and a message for a value not in the catalogue."""
-    chosen = [m for m in p.getlist("material") if m.strip()]
-    if _unknown_material(chosen, facets):
-        return [], _unknown_material(chosen, facets)
-    torque, force, diameter = _range(p, "torque"), _range(p, "force"), _range(p, "diameter")
+def _list_filters(p) -> dict[str, Any]:
+    """The form's filters that the listing's SQL applies (everything but diameter and taper)."""
+    torque, force = _range(p, "torque"), _range(p, "force")
     state = p.get("state") or ""
-    page = r.list_page(p.get("type") or None, materials=chosen, label=p.get("label") or None,
-                       include_deprecated=state != "active", state=state if state in ("active", "deprecated") else None,
-                       torque_min=torque[0], torque_max=torque[1], preload_min=force[0], preload_max=force[1],
-                       name_contains=p.get("q") or None, limit=None)
-    taper = p.get("taper") or ""
-    found = [version_json(v) for v in page.items]
+    return dict(joint_type=p.get("type") or None, materials=[m for m in p.getlist("material") if m.strip()],
+                label=p.get("label") or None, include_deprecated=state != "active",
+                state=state if state in ("active", "deprecated") else None, torque_min=torque[0],
+                torque_max=torque[1], preload_min=force[0], preload_max=force[1], name_contains=p.get("q") or None)
+
+
+def _scanned(r, p, offset: int) -> tuple[list[dict], int, bool]:
+    """A page filtered on diameter or taper too: those are not index columns, so the listing's
+    matches are read whole and filtered here; ``(page, total, more)``."""
+    diameter, taper = _range(p, "diameter"), p.get("taper") or ""
+    found = [version_json(v) for v in r.list_page(**_list_filters(p), limit=None).items]
     found = [v for v in found if _in(_diameter(v["conditions"]), *diameter)
              and (not taper or (v["conditions"].get("extra") or {}).get("taper") == taper)]
-    return found, None
+    return found[offset:offset + PAGE], len(found), offset + PAGE < len(found)
+
+
+def _listed(r, p, facets: dict, offset: int) -> tuple[list[dict], int, str | None, str | None]:
+    """One page of the list: ``(versions, total, next cursor, message)``. Without a diameter or taper
+    filter a page is one keyset page of the listing (O(page) rows); with one, see :func:`_scanned`."""
+    chosen = [m for m in p.getlist("material") if m.strip()]
+    if _unknown_material(chosen, facets):
+        return [], 0, None, _unknown_material(chosen, facets)
+    if any(p.get(k) for k in ("taper", "diameter_min", "diameter_max")):
+        found, total, more = _scanned(r, p, offset)
+        return found, total, ("" if more else None), None
+    page = r.list_page(**_list_filters(p), after=p.get("after") or None, limit=PAGE)
+    return [version_json(v) for v in page.items], page.total, page.next, None
 
 
 @router.get("/joints")
@@ -110,18 +114,19 @@ def joints(request: Request):
     f = {k: p.get(k, "") for k in ("type", "taper", "label", "state", "q", "torque_min", "torque_max", "force_min",
                                     "force_max", "diameter_min", "diameter_max")}
     f["material"] = p.getlist("material")
+    offset = int(p["offset"]) if (p.get("offset") or "").isdigit() else 0
     error = None
     try:
-        found, error = _filtered(r, p, facets)
-    except InputError as exc:  # a range that is not a number: the form stays, with the message
-        found, error = [], str(exc)
-    offset = int(p["offset"]) if (p.get("offset") or "").isdigit() else 0
-    items = [(v, _row(v)) for v in found[offset:offset + PAGE]]
-    query = [(k, v) for k, v in p.multi_items() if v and k != "offset"]
-    nxt = f"/ui/joints?{urlencode(query + [('offset', offset + PAGE)])}" if offset + PAGE < len(found) else None
-    prev = f"/ui/joints?{urlencode(query + [('offset', max(0, offset - PAGE))])}" if offset else None
-    return _page(request, "joints.html", 422 if error else 200, title="joints", items=items, total=len(found),
-                 offset=offset, f=f, facets=facets, next=nxt, prev=prev, error=error, ranges=RANGES)
+        found, total, cursor, error = _listed(r, p, facets, offset)
+    except InputError as exc:  # a range that is not a number, a stale cursor: the form stays, with the message
+        found, total, cursor, error = [], 0, None, str(exc)
+    items = [(v, _row(v)) for v in found]
+    query = [(k, v) for k, v in p.multi_items() if v and k not in ("offset", "after")]
+    after = [("after", cursor)] if cursor else []  # keyset (or, for a scanned page, the offset alone)
+    nxt = f"/ui/joints?{urlencode(query + after + [('offset', offset + PAGE)])}" if cursor is not None else None
+    first = f"/ui/joints?{urlencode(query)}" if offset else None
+    return _page(request, "joints.html", 422 if error else 200, title="joints", items=items, total=total,
+                 offset=offset, f=f, facets=facets, next=nxt, prev=first, error=error, ranges=RANGES)
 
 
 def _plots_json(plots: list[dict]) -> list[str]:

@@ -133,7 +133,7 @@ _LAZY = {
     "JointStore": "_protocol", "LocalJointStore": "_protocol", "BlobStoreProtocol": "_protocol",
     "open_store": "_open", "owned_store": "_open",
     "create_key_pair": "_signing", "load_private_key": "_signing", "load_public_key": "_signing",
-    "PartVersion": "_parts", "PART_KINDS": "_parts",
+    "PartVersion": "_part_records", "PART_KINDS": "_part_records",
 }
 
 

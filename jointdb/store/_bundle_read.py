@@ -39,8 +39,8 @@ from jointdb.store._types import (
     check_label,
     check_model_kind,
     check_name,
-    dof_strings,
 )
+from jointdb.store._vocabulary import dof_strings
 
 FORMAT = "jointdb-bundle"
 FORMAT_VERSION = 2

@@ -30,12 +30,12 @@ import functools
 import uuid as uuidlib
 from types import SimpleNamespace
 
-from sqlalchemy import bindparam, func, insert, or_, select, update
+from sqlalchemy import bindparam, false, func, insert, or_, select, update
 
 from jointdb.errors import ConflictError, InputError
 from jointdb.store._chain import append_chain
 from jointdb.store._identity import contradiction, identity_changes, same_content
-from jointdb.store._index import index_values
+from jointdb.store._index import add_counts, index_values
 from jointdb.store._models import (
     AuditRow,
     IdempotencyRow,
@@ -48,7 +48,7 @@ from jointdb.store._models import (
     utcnow,
 )
 from jointdb.store._records import record_dict, record_sha256, software_version, to_version
-from jointdb.store._types import JointVersion, dof_strings
+from jointdb.store._vocabulary import dof_strings
 
 
 @functools.cache
@@ -76,11 +76,14 @@ def _statements() -> SimpleNamespace:
         insert_joint=insert(j),
         insert_version=insert(v),
         insert_audit=insert(AuditRow.__table__),
-        # the joint's other versions are no longer the newest (nor the newest active one, unless
-        # the new version is deprecated: then the newest active version stays what it was)
+        # the joint's other versions are no longer the newest (nor the newest active or listed one,
+        # unless the new version is deprecated: then the newest active version stays what it was, and
+        # stays listed; a listed version that is deprecated itself hands the head to the new one)
         clear_newest=update(q).where(q.c.joint_id == bindparam("jid"), q.c.newest).values(newest=False),
-        clear_both=(update(q).where(q.c.joint_id == bindparam("jid"), or_(q.c.newest, q.c.newest_active))
-                    .values(newest=False, newest_active=False)),
+        clear_listed_deprecated=(update(q).where(q.c.joint_id == bindparam("jid"), q.c.listed,
+                                                 q.c.newest_active == false()).values(listed=False)),
+        clear_all=(update(q).where(q.c.joint_id == bindparam("jid"), or_(q.c.newest, q.c.newest_active, q.c.listed))
+                   .values(newest=False, newest_active=False, listed=False)),
         insert_index=insert(q),
         insert_geometry=insert(QueryGeometryRow.__table__),
         bump=update(stamp).where(stamp.c.id == 1).values(generation=stamp.c.generation + 1),
@@ -209,10 +212,17 @@ def write_version(session, *, name, joint_type, frf, cond, kind, prov, qual, par
     append_chain(session, [("joint", jid if found is None else None), ("version", row.id), ("audit", audit_id)])
     _remember(conn, idempotency, name, number, 201, now)
     deprecated = state == "deprecated"
+    # the joint's listed version was a deprecated one (it has no active version): the new one takes its place
+    moved = found is not None and conn.execute(st.clear_listed_deprecated, {"jid": jid}).rowcount > 0
     if found is not None:
-        conn.execute(st.clear_newest if deprecated else st.clear_both, {"jid": jid})
-    values, geometry = index_values(row.id, jid, joint_type, number, row.materials, row.torque_nm, row.preload_n,
-                                    row.geometry, (deprecated, True, not deprecated))
+        conn.execute(st.clear_newest if deprecated else st.clear_all, {"jid": jid})
+    listed = found is None or moved or not deprecated
+    if found is None:
+        add_counts(conn, {(joint_type, deprecated): 1})
+    elif moved and not deprecated:
+        add_counts(conn, {(joint_type, True): -1, (joint_type, False): 1})
+    values, geometry = index_values(row.id, (jid, name, joint_type), number, row.materials, row.torque_nm,
+                                    row.preload_n, row.geometry, (deprecated, True, not deprecated, listed))
     conn.execute(st.insert_index, values)
     if geometry:
         conn.execute(st.insert_geometry, geometry)

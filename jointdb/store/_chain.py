@@ -307,13 +307,10 @@ def read_checkpoint_file(path) -> Any:
     """The JSON of a checkpoint file (one line errors)."""
     from pathlib import Path
 
+    from jointdb.store._signing import read_small_file
+
     p = Path(path)
-    try:
-        raw = p.read_bytes()
-    except OSError as exc:
-        raise InputError(f"cannot read checkpoint {p.name}: {exc.strerror or exc}") from None
-    if len(raw) > 64 * 1024:
-        raise InputError(f"checkpoint {p.name} is too large ({len(raw)} bytes) to be a checkpoint")
+    raw = read_small_file(p, f"checkpoint {p.name}", "is too large ({n} bytes) to be a checkpoint")
     try:
         return json.loads(raw)
     except (UnicodeDecodeError, ValueError):

@@ -342,6 +342,7 @@ DOWNGRADE_DROPS = {
     "0008": "the web catalogue's sign-in sessions (everyone signs in again) and the teams of API tokens",
     "0009": "the parts tables (spindles, holders, tools; refused while any part is catalogued: its rows are in "
             "the history chain)",
+    "0010": "the listing's head columns of the query index (derived; upgrading rebuilds them)",
 }
 
 

@@ -2,12 +2,17 @@
 
 Tables (migration ``0004``; models in :mod:`jointdb.store._models`):
 
-``query_versions``  per version: joint, type, number, torque, preload, materials (JSON
-                    text of the sorted list) and three flags of its current standing:
-                    ``deprecated`` (the latest state row that applies to it says so),
-                    ``newest`` (highest number of its joint), ``newest_active`` (highest
-                    number among the joint's versions that are not deprecated).
+``query_versions``  per version: joint (id and name), type, number, torque, preload,
+                    materials (JSON text of the sorted list) and four flags of its current
+                    standing: ``deprecated`` (the latest state row that applies to it says
+                    so), ``newest`` (highest number of its joint), ``newest_active``
+                    (highest number among the joint's versions that are not deprecated),
+                    ``listed`` (the version :meth:`Repository.get` returns: the newest
+                    active one, else the newest; exactly one per joint — the listing's head).
 ``query_geometry``  per version and geometry key: the number.
+``query_counts``    per joint type and ``deprecated``: how many joints have their listed
+                    version in that standing (the total of an unfiltered listing, read
+                    instead of counted; migration ``0010``).
 ``query_stamp``     one row ``(token, generation)``; ``generation`` goes up in every
                     transaction that changes versions, states or labels, so a reader
                     can tell with one SELECT whether arrays it holds are still current.
@@ -28,11 +33,12 @@ import uuid
 from collections.abc import Iterable, Sequence
 from typing import Any
 
-from sqlalchemy import Connection, delete, insert, select, update
+from sqlalchemy import Connection, delete, insert, inspect, select, update
 from sqlalchemy.orm import Session
 
 from jointdb.store._models import (
     JointRow,
+    QueryCountRow,
     QueryGeometryRow,
     QueryStampRow,
     QueryVersionRow,
@@ -47,8 +53,8 @@ def materials_key(materials: Iterable[str]) -> str:
 
 
 def standing(versions: Sequence[tuple[int, int]], states: Iterable[tuple[Any, int, int | None, str]]
-             ) -> dict[int, tuple[bool, bool, bool]]:
-    """``{version_id: (deprecated, newest, newest_active)}`` of one joint's versions.
+             ) -> dict[int, tuple[bool, bool, bool, bool]]:
+    """``{version_id: (deprecated, newest, newest_active, listed)}`` of one joint's versions.
 
     ``versions``: ``(version_id, number)``; ``states``: ``(at, state_id, version or None,
     state)``. A version's state is that of the latest row, by ``(at, id)``, that names it
@@ -70,7 +76,8 @@ def standing(versions: Sequence[tuple[int, int]], states: Iterable[tuple[Any, in
     newest = max((n for _, n in versions), default=None)
     active = [n for vid, n in versions if not deprecated[vid]]
     newest_active = max(active, default=None)
-    return {vid: (deprecated[vid], n == newest, n == newest_active) for vid, n in versions}
+    listed = newest if newest_active is None else newest_active
+    return {vid: (deprecated[vid], n == newest, n == newest_active, n == listed) for vid, n in versions}
 
 
 #: ``query_versions.packed``: the numbers a ranking needs as little-endian bytes (NULL as -1.0;
@@ -87,15 +94,67 @@ def geometry_row(key: str, version_id: int, value: float) -> dict:
     return {"key": key, "version_id": version_id, "value": value, "bits": struct.pack("<d", value)}
 
 
-def index_values(version_id: int, joint_id: int, joint_type: str, number: int, materials, torque, preload,
-                 geometry: dict, flags: tuple[bool, bool, bool]) -> tuple[dict, list[dict]]:
-    """The ``query_versions`` row and ``query_geometry`` rows of one version."""
-    row = {"version_id": version_id, "joint_id": joint_id, "joint_type": joint_type, "version": number,
-           "deprecated": flags[0], "newest": flags[1], "newest_active": flags[2],
+FLAGS = ("deprecated", "newest", "newest_active", "listed")
+
+
+def index_values(version_id: int, joint: tuple[int, str, str], number: int, materials, torque, preload,
+                 geometry: dict, flags: tuple[bool, bool, bool, bool]) -> tuple[dict, list[dict]]:
+    """The ``query_versions`` row and ``query_geometry`` rows of one version.
+
+    Parameters
+    ----------
+    version_id
+        The version's row id.
+    joint
+        ``(id, name, joint_type)`` of its joint.
+    number
+        The version number.
+    materials, torque, preload, geometry
+        Its conditions (torque [N·m], preload [N], geometry numbers in SI units).
+    flags
+        ``(deprecated, newest, newest_active, listed)`` (:func:`standing`).
+
+    Returns
+    -------
+    row : dict
+        The ``query_versions`` row.
+    geometry_rows : list of dict
+        The ``query_geometry`` rows.
+    """
+    joint_id, name, joint_type = joint
+    row = {"version_id": version_id, "joint_id": joint_id, "name": name, "joint_type": joint_type,
+           "version": number, **dict(zip(FLAGS, flags)),
            "torque_nm": torque, "preload_n": preload, "materials": materials_key(materials),
            "packed": pack_row(version_id, joint_id, number, torque, preload)}
     geo = [geometry_row(str(k), version_id, float(x)) for k, x in (geometry or {}).items()]
     return row, geo
+
+
+def add_counts(session: Session | Connection, deltas: dict[tuple[str, bool], int]) -> None:
+    """Add ``{(joint_type, deprecated): change}`` to ``query_counts`` (in the caller's write
+    transaction). One upsert per changed row: two writers adding the first joints of a new type
+    at once do not collide on the missing row (PostgreSQL and SQLite ``ON CONFLICT DO UPDATE``)."""
+    t = QueryCountRow.__table__
+    conn = session.connection() if isinstance(session, Session) else session
+    if conn.dialect.name == "postgresql":
+        from sqlalchemy.dialects.postgresql import insert as upsert
+    else:
+        from sqlalchemy.dialects.sqlite import insert as upsert
+    for (joint_type, deprecated), change in sorted(deltas.items()):
+        if change:
+            stmt = upsert(t).values(joint_type=joint_type, deprecated=bool(deprecated), joints=change)
+            conn.execute(stmt.on_conflict_do_update(index_elements=[t.c.joint_type, t.c.deprecated],
+                                                    set_={"joints": t.c.joints + stmt.excluded.joints}))
+
+
+def _count_changes(joint_type: str, before: Iterable[tuple], after: Iterable[tuple]) -> dict[tuple[str, bool], int]:
+    """The ``query_counts`` changes between two sets of flags ``(deprecated, ..., listed)``."""
+    deltas: dict[tuple[str, bool], int] = {}
+    for sign, flags in ((-1, before), (1, after)):
+        for f in flags:
+            if f[3]:
+                deltas[(joint_type, bool(f[0]))] = deltas.get((joint_type, bool(f[0])), 0) + sign
+    return deltas
 
 
 def bump(session: Session | Connection) -> None:
@@ -112,22 +171,24 @@ def refresh_joints(session: Session, joint_ids: Iterable[int]) -> None:
     history rows were added and flushed, in the same transaction.
     """
     for joint_id in sorted(set(joint_ids)):
-        joint_type = session.scalar(select(JointRow.joint_type).where(JointRow.id == joint_id))
+        name, joint_type = session.execute(select(JointRow.name, JointRow.joint_type)
+                                           .where(JointRow.id == joint_id)).one()
         versions = [tuple(r) for r in session.execute(select(VersionRow.id, VersionRow.version)
                                                       .where(VersionRow.joint_id == joint_id))]
         states = [tuple(r) for r in session.execute(select(StateRow.at, StateRow.id, StateRow.version, StateRow.state)
                                                     .where(StateRow.joint_id == joint_id))]
         flags = standing(versions, states)
-        have = {vid: (bool(d), bool(n), bool(a)) for vid, d, n, a in session.execute(
-            select(QueryVersionRow.version_id, QueryVersionRow.deprecated, QueryVersionRow.newest,
-                   QueryVersionRow.newest_active).where(QueryVersionRow.joint_id == joint_id))}
+        have = {row[0]: tuple(bool(x) for x in row[1:]) for row in session.execute(
+            select(QueryVersionRow.version_id, *[getattr(QueryVersionRow, f) for f in FLAGS])
+            .where(QueryVersionRow.joint_id == joint_id))}
         missing = [vid for vid, _ in versions if vid not in have]
         if missing:
             new_rows, new_geo = [], []
             for vid, number, mats, torque, preload, geometry in session.execute(
                     select(VersionRow.id, VersionRow.version, VersionRow.materials, VersionRow.torque_nm,
                            VersionRow.preload_n, VersionRow.geometry).where(VersionRow.id.in_(missing))):
-                row, geo = index_values(vid, joint_id, joint_type, number, mats, torque, preload, geometry, flags[vid])
+                row, geo = index_values(vid, (joint_id, name, joint_type), number, mats, torque, preload, geometry,
+                                        flags[vid])
                 new_rows.append(row)
                 new_geo.extend(geo)
             session.execute(insert(QueryVersionRow), new_rows)
@@ -136,13 +197,14 @@ def refresh_joints(session: Session, joint_ids: Iterable[int]) -> None:
         for vid, f in flags.items():
             if vid in have and have[vid] != f:
                 session.execute(update(QueryVersionRow).where(QueryVersionRow.version_id == vid)
-                                .values(deprecated=f[0], newest=f[1], newest_active=f[2]))
+                                .values(**dict(zip(FLAGS, f))))
+        add_counts(session, _count_changes(joint_type, have.values(), flags.values()))
     bump(session)
 
 
 def _expected(conn: Connection) -> tuple[dict[int, dict], set[tuple[str, int, float]]]:
     """Every index row as recomputed from the history tables."""
-    types = {r[0]: r[1] for r in conn.execute(select(JointRow.id, JointRow.joint_type))}
+    joints = {r[0]: (r[0], r[1], r[2]) for r in conn.execute(select(JointRow.id, JointRow.name, JointRow.joint_type))}
     per_joint: dict[int, list] = {}
     for vid, jid, number, mats, torque, preload, geometry in conn.execute(
             select(VersionRow.id, VersionRow.joint_id, VersionRow.version, VersionRow.materials,
@@ -157,28 +219,44 @@ def _expected(conn: Connection) -> tuple[dict[int, dict], set[tuple[str, int, fl
     for jid, vs in per_joint.items():
         flags = standing([(v[0], v[1]) for v in vs], states.get(jid, ()))
         for vid, number, mats, torque, preload, geometry in vs:
-            row, g = index_values(vid, jid, types[jid], number, mats, torque, preload, geometry, flags[vid])
+            row, g = index_values(vid, joints[jid], number, mats, torque, preload, geometry, flags[vid])
             rows[vid] = row
             geo.update((x["key"], x["version_id"], x["value"]) for x in g)
     return rows, geo
 
 
 def rebuild(conn: Connection) -> int:
-    """Rewrite the whole index from history (migration ``0004``); returns the number of versions."""
+    """Rewrite the whole index from history (migration ``0004``); returns the number of versions.
+
+    Only the columns the table has at the caller's schema revision are written (migration
+    ``0004`` runs before ``0010`` adds ``listed`` and ``name``, which ``0010`` then fills)."""
     rows, geo = _expected(conn)
     conn.execute(delete(QueryGeometryRow))
     conn.execute(delete(QueryVersionRow))
-    ordered = [rows[k] for k in sorted(rows)]
+    present = {c["name"] for c in inspect(conn).get_columns(QueryVersionRow.__tablename__)}
+    ordered = [{c: x for c, x in rows[vid].items() if c in present} for vid in sorted(rows)]
     for i in range(0, len(ordered), 5000):
         conn.execute(insert(QueryVersionRow), ordered[i:i + 5000])
     g = [geometry_row(k, v, x) for k, v, x in sorted(geo)]
     for i in range(0, len(g), 5000):
         conn.execute(insert(QueryGeometryRow), g[i:i + 5000])
+    if inspect(conn).has_table(QueryCountRow.__tablename__):
+        conn.execute(delete(QueryCountRow))
+        add_counts(conn, _expected_counts(rows))
     if conn.execute(select(QueryStampRow.id)).first() is None:
         conn.execute(insert(QueryStampRow), [{"id": 1, "token": str(uuid.uuid4()), "generation": 0}])
     else:
         bump(conn)
     return len(rows)
+
+
+def _expected_counts(rows: dict[int, dict]) -> dict[tuple[str, bool], int]:
+    counts: dict[tuple[str, bool], int] = {}
+    for row in rows.values():
+        if row["listed"]:
+            key = (row["joint_type"], bool(row["deprecated"]))
+            counts[key] = counts.get(key, 0) + 1
+    return counts
 
 
 def index_problems(conn: Connection) -> list[str]:
@@ -192,7 +270,7 @@ def index_problems(conn: Connection) -> list[str]:
     for vid in sorted(set(rows) | set(have)):
         want, got = rows.get(vid), have.get(vid)
         if got is not None:
-            got = {k: (bool(v) if k in ("deprecated", "newest", "newest_active") else v) for k, v in got.items()}
+            got = {k: (bool(v) if k in FLAGS else v) for k, v in got.items()}
         if want != got:
             problems.append(f"query index: row of version id {vid} differs from history "
                             f"(expected {want}, found {got})")
@@ -202,4 +280,9 @@ def index_problems(conn: Connection) -> list[str]:
                                                       QueryGeometryRow.value))}
     if have_geo != geo:
         problems.append(f"query index: {len(geo ^ have_geo)} geometry rows differ from history")
+    counts = {(t, bool(d)): n for t, d, n in conn.execute(select(QueryCountRow.joint_type, QueryCountRow.deprecated,
+                                                                 QueryCountRow.joints)) if n}
+    if counts != _expected_counts(rows):
+        problems.append(f"query index: the listing's counts {counts} differ from history "
+                        f"({_expected_counts(rows)})")
     return problems

@@ -57,7 +57,7 @@ def _referenced(store: "ReadAccess") -> dict[str, list[str]]:
 
 def _part_problems(s, problems: list[str]) -> int:
     """Check every part version's record hash (migration 0009); the number of rows read."""
-    from jointdb.store._parts import verified_part
+    from jointdb.store._part_records import verified_part
 
     parts = {p.id: p for p in s.scalars(select(PartRow))}
     n = 0

@@ -160,7 +160,18 @@ class StateRow(Base):
     at: Mapped[datetime] = mapped_column(UTCDateTime())
 
 
-class LabelRow(Base):
+class LabelColumns:
+    """The columns every label table has besides its owner (a joint's, a part's): a mutable
+    named pointer at one version of the owner, and who moved it when."""
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    label: Mapped[str] = mapped_column(String(100))
+    version: Mapped[int] = mapped_column(Integer)
+    updated_at: Mapped[datetime] = mapped_column(UTCDateTime())
+    updated_by: Mapped[str] = mapped_column(String(200))
+
+
+class LabelRow(LabelColumns, Base):
     __tablename__ = "labels"
     __table_args__ = (
         UniqueConstraint("joint_id", "label"),
@@ -170,12 +181,7 @@ class LabelRow(Base):
         ),
     )
 
-    id: Mapped[int] = mapped_column(Integer, primary_key=True)
     joint_id: Mapped[int] = mapped_column(ForeignKey("joints.id", ondelete="RESTRICT"))
-    label: Mapped[str] = mapped_column(String(100))
-    version: Mapped[int] = mapped_column(Integer)
-    updated_at: Mapped[datetime] = mapped_column(UTCDateTime())
-    updated_by: Mapped[str] = mapped_column(String(200))
 
 
 class AuditRow(Base):
@@ -310,7 +316,7 @@ class PartVersionRow(Base):
     record_sha256: Mapped[str] = mapped_column(String(64))
 
 
-class PartLabelRow(Base):
+class PartLabelRow(LabelColumns, Base):
     """A mutable named pointer (``released``, ``default``) at a part version (migration 0009)."""
 
     __tablename__ = "part_labels"
@@ -321,12 +327,7 @@ class PartLabelRow(Base):
         ),
     )
 
-    id: Mapped[int] = mapped_column(Integer, primary_key=True)
     part_id: Mapped[int] = mapped_column(ForeignKey("parts.id", ondelete="RESTRICT"))
-    label: Mapped[str] = mapped_column(String(100))
-    version: Mapped[int] = mapped_column(Integer)
-    updated_at: Mapped[datetime] = mapped_column(UTCDateTime())
-    updated_by: Mapped[str] = mapped_column(String(200))
 
 
 IMMUTABLE = (JointRow, VersionRow, StateRow, AuditRow, PartRow, PartVersionRow)
@@ -351,15 +352,19 @@ def _refuse_changes_to_immutable_rows(session: Session, flush_context, instances
 # --------------------------------------------------------------------------- derived: the query index
 class QueryVersionRow(Base):
     """One row per catalogued version: its ranking conditions as typed columns and its current
-    standing (deprecated; newest of its joint; newest not deprecated). Derived from the history
-    tables, rewritten in the same transaction as every change to them (migration ``0004``;
-    :mod:`jointdb.store._index`); not a history table, so UPDATE is allowed."""
+    standing (deprecated; newest of its joint; newest not deprecated; ``listed``: the version
+    :meth:`Repository.get` returns, one per joint). Derived from the history tables, rewritten
+    in the same transaction as every change to them (migrations ``0004``, ``0010``;
+    :mod:`jointdb.store._index`); not a history table, so UPDATE is allowed. ``name`` repeats
+    the joint's (immutable) name so that a listing page is one range of ``ix_query_versions_listed_name``."""
 
     __tablename__ = "query_versions"
     __table_args__ = (
         Index("ix_query_versions_type_newest_active", "joint_type", "newest_active", "version_id", "packed",
               "materials"),  # covering for the default query
         Index("ix_query_versions_joint_id", "joint_id"),
+        Index("ix_query_versions_listed_name", "listed", "name"),  # a listing page: one index range
+        Index("ix_query_versions_type_listed_name", "joint_type", "listed", "name"),
     )
 
     version_id: Mapped[int] = mapped_column(ForeignKey("joint_versions.id", ondelete="RESTRICT"), primary_key=True)
@@ -369,6 +374,8 @@ class QueryVersionRow(Base):
     deprecated: Mapped[bool] = mapped_column(Boolean)
     newest: Mapped[bool] = mapped_column(Boolean)
     newest_active: Mapped[bool] = mapped_column(Boolean)
+    listed: Mapped[bool] = mapped_column(Boolean)  # newest_active, or newest when every version is deprecated
+    name: Mapped[str] = mapped_column(String(200))  # the joint's name (joint names never change)
     torque_nm: Mapped[float | None] = mapped_column(Float)
     preload_n: Mapped[float | None] = mapped_column(Float)
     materials: Mapped[str] = mapped_column(Text)  # JSON text of the sorted material list
@@ -385,6 +392,18 @@ class QueryGeometryRow(Base):
     version_id: Mapped[int] = mapped_column(ForeignKey("joint_versions.id", ondelete="RESTRICT"), primary_key=True)
     value: Mapped[float] = mapped_column(Float)
     bits: Mapped[bytes] = mapped_column(LargeBinary)  # value as little-endian float64
+
+
+class QueryCountRow(Base):
+    """How many joints the listing shows, per joint type and standing of the listed version: the
+    ``total`` of an unfiltered (or type- or state-filtered) listing without counting rows. Derived
+    with :class:`QueryVersionRow` in the same transactions (migration ``0010``)."""
+
+    __tablename__ = "query_counts"
+
+    joint_type: Mapped[str] = mapped_column(String(100), primary_key=True)
+    deprecated: Mapped[bool] = mapped_column(Boolean, primary_key=True)
+    joints: Mapped[int] = mapped_column(BigInteger)
 
 
 class QueryStampRow(Base):

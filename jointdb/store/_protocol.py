@@ -31,7 +31,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from jointdb.frf import FRF
     from jointdb.store._blobs import BlobInfo, PendingPut
     from jointdb.store._listing import JointPage
-    from jointdb.store._parts import PartVersion
+    from jointdb.store._part_records import PartVersion
     from jointdb.store._reports import Catalogued, CheckReport, VersionDiff
     from jointdb.store._types import Conditions, InterpolatedJoint, JointVersion, Match, Provenance
 
@@ -158,7 +158,7 @@ class JointStore(Protocol):
     def audit(self, name: str | None = None, limit: int = 100) -> list[dict[str, Any]]:
         """The newest audit-log entries (optionally of one joint)."""
 
-    # parts of stacks (spindles, holders, tools; jointdb.store._parts)
+    # parts of stacks (spindles, holders, tools; jointdb.store._parts, _part_records)
     def add_part(self, name: str, kind: str, payload: Mapping[str, Any], *, frf: FRF | None = None,
                  attributes: Mapping[str, Any] | None = None, provenance: Mapping[str, Any] | None = None,
                  author: str | None = None, label: str | None = None) -> PartVersion:

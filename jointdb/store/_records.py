@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import getpass
 import hashlib
+import itertools
 import json
 import os
 from collections.abc import Iterable, Mapping
@@ -11,7 +12,13 @@ from dataclasses import dataclass
 from datetime import datetime, timezone
 from typing import TYPE_CHECKING, Any
 
-from jointdb.schemas._limits import MAX_FIELD_BYTES, check_stored_json, check_text
+from jointdb.schemas._limits import (
+    MAX_FIELD_BYTES,
+    MAX_FIELD_ENTRIES,
+    MAX_JSON_NUMBER,
+    check_stored_json,
+    check_text,
+)
 from jointdb.errors import InputError, IntegrityError
 from jointdb.store._types import Conditions, JointVersion, Provenance
 
@@ -155,6 +162,29 @@ def _item_ok(value: Any, kind: str | None) -> bool:
     return True
 
 
+def _flat_within_limits(value: dict | list) -> bool:
+    """Whether a stored JSON value is certainly within what :func:`check_stored_json` accepts on
+    reading back, without walking it there: one level of texts, finite numbers (magnitude
+    <= ``MAX_JSON_NUMBER``), booleans and nulls under text keys, few entries, and an encoded size
+    that is bounded above (at most 6 bytes per character: UTF-8 or a JSON escape; at most 310
+    per number) by ``MAX_RECORD_BYTES``. False means: check it in full (it may still be fine)."""
+    if len(value) > MAX_FIELD_ENTRIES:
+        return False
+    size = 2
+    for key, x in (value.items() if isinstance(value, dict) else zip(itertools.repeat(""), value)):
+        if not isinstance(key, str):
+            return False
+        if isinstance(x, str):
+            size += 6 * (len(key) + len(x)) + 6
+        elif x is None or isinstance(x, bool):
+            size += 6 * len(key) + 9
+        elif isinstance(x, (int, float)) and x == x and abs(x) <= MAX_JSON_NUMBER:  # x == x: not NaN
+            size += 6 * len(key) + 316
+        else:
+            return False
+    return size <= MAX_RECORD_BYTES
+
+
 def stored_problem(row: Any) -> str | None:
     """Why a stored version row cannot be used (None when its fields have the catalogue's shapes and
     limits): a JSON column that is not JSON, of the wrong shape, or beyond the record limits of
@@ -168,6 +198,8 @@ def stored_problem(row: Any) -> str | None:
         items = value.values() if isinstance(value, dict) else value
         if not all(_item_ok(x, kind) for x in items):
             return f"column {column} holds values of the wrong kind"
+        if _flat_within_limits(value):  # the usual row: nothing to walk
+            continue
         try:
             check_stored_json(value, column, max_bytes=MAX_RECORD_BYTES, texts=False)
         except InputError as exc:

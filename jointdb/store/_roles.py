@@ -35,6 +35,7 @@ APP_PRIVILEGES = {
     "query_versions": "SELECT, INSERT, UPDATE, DELETE",
     "query_geometry": "SELECT, INSERT, UPDATE, DELETE",
     "query_stamp": "SELECT, INSERT, UPDATE",
+    "query_counts": "SELECT, INSERT, UPDATE, DELETE",  # the listing's totals (migration 0010)
     "api_tokens": "SELECT, INSERT, UPDATE (revoked_at)",
     "frf_blobs": "SELECT, INSERT, UPDATE (touched_at), DELETE",
     "idempotency_keys": "SELECT, INSERT",  # the stored answers to retried catalogue requests

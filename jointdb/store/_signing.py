@@ -91,17 +91,43 @@ def create_key_pair(path: str | os.PathLike) -> tuple[Path, Path]:
     return private_path, public_path
 
 
+def read_small_file(path: str | os.PathLike, shown: str, too_large: str, limit: int = 64 * 1024) -> bytes:
+    """The bytes of a small file (a key, a checkpoint), with one-line errors.
+
+    Parameters
+    ----------
+    path
+        The file.
+    shown
+        How the messages name it, e.g. ``"checkpoint cp.json"``.
+    too_large
+        What a file over ``limit`` is told, with ``{n}`` for its size in bytes.
+    limit
+        Largest size accepted [bytes].
+
+    Returns
+    -------
+    bytes
+
+    Raises
+    ------
+    InputError
+        The file cannot be read or is larger than ``limit``.
+    """
+    try:
+        data = Path(path).read_bytes()
+    except OSError as exc:
+        raise InputError(f"cannot read {shown}: {exc.strerror or exc}") from None
+    if len(data) > limit:
+        raise InputError(f"{shown} {too_large.format(n=len(data))}")
+    return data
+
+
 def _read(path: str | os.PathLike, what: str) -> bytes:
     p = Path(path)
     if not p.is_file():
         raise NotFoundError(f"{what} {p} does not exist")
-    try:
-        data = p.read_bytes()
-    except OSError as exc:
-        raise InputError(f"cannot read {what} {p}: {exc.strerror or exc}") from None
-    if len(data) > 64 * 1024:
-        raise InputError(f"{what} {p} is not a key file ({len(data)} bytes)")
-    return data
+    return read_small_file(p, f"{what} {p}", "is not a key file ({n} bytes)")
 
 
 def load_private_key(path: str | os.PathLike):

@@ -85,3 +85,27 @@ def test_a_damaged_version_is_reported_and_the_rest_answers(listed):
         assert any("L-5 v1" in w for w in near.json()["warnings"])
         for other in ("L-4", "L-6"):
             assert c.get(f"/api/v1/joints/{other}").status_code == 200
+
+
+def test_the_client_reads_the_whole_list_by_cursor(listed, monkeypatch):
+    """RemoteRepository.list_joints continues by the keyset cursor (each page costs the same), not
+    by an offset that the database must skip."""
+    from jointdb.client import RemoteRepository
+
+    asked: list[dict] = []
+    with RemoteRepository(listed.url, listed.tokens["reader"]) as remote:
+        monkeypatch.setattr(remote, "PAGE", 3)
+        call = remote._call
+
+        def spy(method, path, **kw):
+            if path == "/joints":
+                asked.append(dict(kw.get("params") or {}))
+            return call(method, path, **kw)
+
+        monkeypatch.setattr(remote, "_call", spy)
+        names = [v.name for v in remote.list_joints("tool-holder")]
+    with listed.client("reader") as c:  # the same list in one page (a version damaged by another test is left out)
+        whole = c.get("/api/v1/joints", params={"type": "tool-holder", "limit": 500}).json()["items"]
+    assert names == [j["name"] for j in whole] and len(names) >= 6
+    assert len(asked) >= 3 and "after" not in asked[0]
+    assert all("after" in p and "offset" not in p for p in asked[1:]), asked
