@@ -22,12 +22,16 @@ BEARER = HTTPBearer(auto_error=False, scheme_name="bearer", bearerFormat="jdb_<i
                     description="An API token (`jointdb tokens create`), sent as `Authorization: Bearer <token>`.")
 
 
-def repo(request: Request):
-    """The app's :class:`jointdb.store.Repository` (one per worker process)."""
+async def repo(request: Request):
+    """The app's :class:`jointdb.store.Repository` (one per worker process).
+
+    ``async`` because it does no I/O: FastAPI runs a plain ``def`` dependency in its thread pool,
+    one thread hop per request for nothing."""
     return request.app.state.repo
 
 
-def settings(request: Request):
+async def settings(request: Request):
+    """The app's settings (no I/O, hence ``async``: no thread hop)."""
     return request.app.state.settings
 
 
@@ -137,6 +141,12 @@ class Page:
         end = self.offset + len(part)
         return {"items": part, "total": len(items), "offset": self.offset, "limit": self.limit,
                 "next_offset": end if end < len(items) else None}
+
+
+async def page(offset: int = Query(0, ge=0, le=10**9), limit: int = Query(50, ge=1, le=500)) -> Page:
+    """The :class:`Page` of a request, as a dependency (``Depends(page)``): ``async`` because it does
+    no I/O (a class dependency would cost a thread-pool hop per request)."""
+    return Page(offset, limit)
 
 
 def version_json(v) -> dict[str, Any]:

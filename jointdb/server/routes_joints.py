@@ -10,7 +10,7 @@ from fastapi import APIRouter, Depends, Path, Query
 from fastapi.responses import JSONResponse
 
 from jointdb.errors import InputError
-from jointdb.server._deps import Page, reader, repo, version_json
+from jointdb.server._deps import Page, page, reader, repo, version_json
 from jointdb.store._types import check_name
 
 router = APIRouter(tags=["joints"])
@@ -43,7 +43,7 @@ def damaged_json(damaged) -> list[dict[str, Any]]:
 
 @router.get("/joints", summary="List and filter joints (current version of each)")
 def list_joints(
-    page: Page = Depends(),
+    page: Page = Depends(page),
     joint_type: Optional[str] = Query(None, alias="type", max_length=100, description="Joint type, e.g. tool-holder."),
     material: Optional[list[str]] = Query(None, description="Interface material (repeat: all must be present)."),
     label: Optional[str] = Query(None, max_length=100, description="Only joints with this label (shows that version)."),
@@ -88,7 +88,7 @@ def show_version(name: Name, version: Annotated[int, Path(ge=1, le=2**31 - 1)], 
 
 
 @router.get("/joints/{name}/history", summary="All versions of a joint, oldest first")
-def history(name: Name, page: Page = Depends(), r=Depends(repo), _who=reader) -> dict[str, Any]:
+def history(name: Name, page: Page = Depends(page), r=Depends(repo), _who=reader) -> dict[str, Any]:
     damaged: list = []
     out = page.of([version_json(v) for v in r.history(joint_name(name), damaged=damaged)])
     out["damaged"] = damaged_json(damaged)
@@ -112,7 +112,7 @@ def diff(name: Name, a: int = Query(..., ge=1, le=2**31 - 1, description="First 
 
 
 @router.get("/audit", summary="The audit log, newest first (optionally of one joint)")
-def audit(page: Page = Depends(), joint: Optional[str] = Query(None, max_length=200), r=Depends(repo),
+def audit(page: Page = Depends(page), joint: Optional[str] = Query(None, max_length=200), r=Depends(repo),
           _who=reader) -> dict[str, Any]:
     rows = r.audit(joint_name(joint) if joint else None, limit=page.offset + page.limit + 1)
     part = rows[page.offset:page.offset + page.limit]

@@ -20,7 +20,7 @@ from fastapi import APIRouter, Depends, Path, Query, Request, Response
 from pydantic import Field
 
 from jointdb.errors import InputError, JointdbError, NotFoundError
-from jointdb.server._deps import Page, reader, repo, writer
+from jointdb.server._deps import Page, page, reader, repo, writer
 from jointdb.server._schemas import FrfIn, Strict
 
 router = APIRouter(tags=["parts"])
@@ -73,7 +73,7 @@ def _get(r, name: str, version: str):
 
 
 @router.get("/parts", summary="Catalogued parts: the latest version of each")
-def list_parts(page: Page = Depends(),
+def list_parts(page: Page = Depends(page),
                kind: Optional[Literal["spindle", "holder", "tool"]] = Query(None),
                family: Optional[str] = Query(None, max_length=100, description="Holder family, e.g. ER32."),
                machine: Optional[str] = Query(None, max_length=200, description="The spindle's machine."),
@@ -83,7 +83,7 @@ def list_parts(page: Page = Depends(),
 
 
 @router.get("/parts/{name}", summary="Every version of a part, oldest first")
-def part_versions(name: PartName, page: Page = Depends(), r=Depends(repo), _who=reader) -> dict[str, Any]:
+def part_versions(name: PartName, page: Page = Depends(page), r=Depends(repo), _who=reader) -> dict[str, Any]:
     hist = r.part_history(_name(name))
     return {"name": hist[0].name, "kind": hist[0].kind, **page.of([part_summary(p) for p in hist])}
 
