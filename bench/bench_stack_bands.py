@@ -72,26 +72,41 @@ def summary(rows: list[dict]) -> dict:
     return out
 
 
-def run(n: int, samples: int, seeds, say=print) -> dict:
+def run(n: int, samples: int, seeds, say=print, catalogue: Path | None = None) -> dict:
+    """Build (or reuse, ``catalogue``: a folder kept between runs) the family-B catalogue and check the bands of
+    ``n`` stacks per seed."""
     from jointdb.store import Repository
 
     t0 = time.time()
-    with tempfile.TemporaryDirectory() as tmp, Repository(f"sqlite:///{Path(tmp) / 'b.sqlite'}") as repo:
-        say("catalogue of family B:")
-        tb.build_catalogue(Path(tmp), repo, say=say)
-        out = {}
-        for seed in seeds:
-            rows = []
-            for case in tb.draw(n, seed):
-                rows.append(band_row(case, repo, samples))
-                r = rows[-1]
-                say(f"  {r['case']}: peak {r.get('peak_err', float('nan')):+.1%} band ±{r.get('peak_half', 0):.1%} "
-                    f"{'in' if r.get('peak_covered') else 'OUT'}; floor {r.get('floor_err', float('nan')):+.1%} band "
-                    f"±{r.get('floor_half', 0):.1%} {'in' if r.get('floor_covered') else 'OUT'}; "
-                    f"dominant term: {r['dominant_term']}")
-            out[seed] = {"rows": rows, "summary": summary(rows)}
-            say(f"seed {seed}: {out[seed]['summary']}")
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(catalogue) if catalogue is not None else Path(tmp)
+        folder.mkdir(parents=True, exist_ok=True)
+        db = folder / "b.sqlite"
+        fresh = not db.exists()
+        with Repository(f"sqlite:///{db}") as repo:
+            if fresh:
+                say("catalogue of family B:")
+                tb.build_catalogue(folder, repo, say=say)
+            else:
+                say(f"catalogue of family B reused from {folder}")
+            out = _seeds(repo, n, samples, seeds, say)
     out["seconds"] = time.time() - t0
+    return out
+
+
+def _seeds(repo, n: int, samples: int, seeds, say) -> dict:
+    out = {}
+    for seed in seeds:
+        rows = []
+        for case in tb.draw(n, seed):
+            rows.append(band_row(case, repo, samples))
+            r = rows[-1]
+            say(f"  {r['case']}: peak {r.get('peak_err', float('nan')):+.1%} band ±{r.get('peak_half', 0):.1%} "
+                f"{'in' if r.get('peak_covered') else 'OUT'}; floor {r.get('floor_err', float('nan')):+.1%} band "
+                f"±{r.get('floor_half', 0):.1%} {'in' if r.get('floor_covered') else 'OUT'}; "
+                f"dominant term: {r['dominant_term']}")
+        out[seed] = {"rows": rows, "summary": summary(rows)}
+        say(f"seed {seed}: {out[seed]['summary']}")
     return out
 
 
@@ -101,9 +116,13 @@ def main(argv=None) -> None:
     ap.add_argument("--samples", type=int, default=N_SAMPLES)
     ap.add_argument("--tuning", action="store_true", help="run the tuning seeds instead of the reported one")
     ap.add_argument("--report", type=Path, default=None)
+    ap.add_argument("--catalogue", type=Path, default=None,
+                    help="folder to keep the family-B catalogue in and reuse on the next run (built if empty)")
+    ap.add_argument("--seeds", type=int, nargs="*", default=None, help="these seeds instead (development)")
     args = ap.parse_args(argv)
     seeds = tb.TUNING_SEEDS if args.tuning else tb.REPORT_SEEDS
-    res = run(args.n, args.samples, seeds)
+    seeds = args.seeds or seeds
+    res = run(args.n, args.samples, seeds, catalogue=args.catalogue)
     if args.report is not None and not args.tuning:
         from _stack_bands_report import write_section
 
