@@ -63,10 +63,13 @@ def _rows_table(rows: list[dict]) -> list[str]:
 
 
 def _summary_rows(seed, s: dict) -> list[str]:
+    import _stack_truth_b as tb
+
+    status = "seen" if seed in tb.SEEN_SEEDS else "blind" if isinstance(seed, int) else ""
     out = []
     for key, label in (("peak", "dominant peak magnitude"), ("floor", "lobe floor")):
         q = s[key]
-        out.append(f"| {seed} | {label} | {q['banded']} of {q['stacks']} | {q['covered']} of {q['banded']} "
+        out.append(f"| {seed} {f'({status})' if status else ''} | {label} | {q['banded']} of {q['stacks']} | {q['covered']} of {q['banded']} "
                    f"({q['covered'] / max(q['banded'], 1):.0%}) | {q['median_half']:.1%} | "
                    f"{q['median_abs_err']:.1%} | {q['median_half'] / max(q['median_abs_err'], 1e-12):.1f}× |")
     return out
@@ -94,14 +97,25 @@ def section(results: dict, seconds: float) -> str:
              f"{CAP_OVER_MEDIAN:g}× their median per line, prediction-path σ {MODEL_FORM_SIGMA:.1%}) was set on the "
              f"tuning seeds {', '.join(map(str, tb.TUNING_SEEDS))} only.", "",
              "The band is the 5–95 % range of 200 samples: measurement noise (the fit covariance of joints kept "
-             "as constant k, c), joint choice (the catalogue's leave-one-out errors, scaled by the request's "
-             "distance over theirs, `jointdb/store/_loo.py`) and the prediction path's own model-form error. "
+             "as constant k, c), joint choice and the prediction path's own model-form error. The joint-choice "
+             "term leaves out whole condition lines of the catalogue (each interior diameter, torque, drawbar force "
+             "line; `jointdb/store/_loo.py`), interpolates them across the gap as a request between lines is "
+             "interpolated, and scales each such error by the request's gap product over the line's, "
+             "(r − v₋)(v₊ − r) / ((v − v₋)(v₊ − v)) in ln units: zero on a catalogued line, largest mid-way, one "
+             "independent draw per axis (an axis with two lines only: a quarter of the difference between them at "
+             "mid-way). A prediction whose dominant tip peak is not passive (Im H > 0 near it: a negatively damped "
+             "resonance from per-line joints) is redone with the joints' constant k, c fit "
+             "(`jointdb/usecases/_stack_guard.py`), marked *constant k, c fallback* below. "
              "*Dominant term*: the term whose band alone is widest. Goals: truth inside on ≥ 80 % of the stacks, "
              "median half-width ≤ 3× the median |error|.", "",
              "| seed | quantity | stacks with a band | truth inside the 90 % band | median half-width | "
              "median abs error | half-width / error |", "|---|---|---|---|---|---|---|"]
     for seed, res in results.items():
         lines += _summary_rows(seed, res["summary"])
+    if len(results) > 1:
+        from bench_stack_bands import summary
+
+        lines += _summary_rows(f"all {len(results)} seeds", summary([r for res in results.values() for r in res["rows"]]))
     lines += ["", "History: " + " ".join(HISTORY), "", *FINDINGS, ""]
     for seed, res in results.items():
         dom: dict[str, int] = {}

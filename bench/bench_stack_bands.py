@@ -42,7 +42,8 @@ def band_row(case, repo, n: int = N_SAMPLES) -> dict:
     lt = sv._floor(truth)
     row = {"case": case.name, "truth_peak": at, "truth_floor": lt, "pred_peak": sv._dominant(h)[1],
            "pred_floor": sv._floor(h), "dominant_term": terms.dominant, "half_widths": terms.half_width,
-           "methods": {k: r.method for k, r in result.joints.items()},
+           "methods": {k: r.method + (" (constant k, c fallback)" if any("constant k, c fit" in w for w in r.warnings)
+                                      else "") for k, r in result.joints.items()},
            "extrapolating": any(r.extrapolating for r in result.joints.values())}
     b = terms.band
     if b is None:

@@ -124,8 +124,10 @@ def choice_perturbed(planes: np.ndarray, relative: np.ndarray, scale: np.ndarray
 
     Each sample draws, per group (a condition axis whose lines were left out, :mod:`jointdb.store._loo`), one
     of the catalogue's leave-one-out errors ``R_j`` (the relative error per line, ``Z_j = (I + R_j) Ẑ_j``, of
-    catalogued joints predicted from the others) and a normal amplitude ``t_j = scale_j ξ``, and applies their
-    sum to its dynamic stiffness: ``Z' = (I + Σ_g t_g R_{j_g}) Z``.
+    catalogued joints predicted from the others) and a normal amplitude ``t_j = scale_j ξ``, and applies them
+    multiplicatively to its dynamic stiffness: ``Z' = exp(Σ_g t_g ln(I + R_{j_g})) Z`` (per line; ``t = 1``
+    reproduces the left-out error exactly, ``t = −1`` its inverse, so a stiffness or damping error is as likely
+    ×2 as ×½ and no draw drives the joint's damping through zero).
 
     Parameters
     ----------
@@ -149,13 +151,20 @@ def choice_perturbed(planes: np.ndarray, relative: np.ndarray, scale: np.ndarray
     n = z.shape[0]
     scale = np.asarray(scale, float)
     group = np.zeros(scale.size, dtype=int) if group is None else np.asarray(group, dtype=int)
-    dz = np.zeros_like(z)
+    log_r = _matrix_function(np.eye(relative.shape[-1]) + relative, np.log)
+    s = np.zeros((n,) + log_r.shape[1:], dtype=complex)
     for g in np.unique(group):
         idx = np.flatnonzero(group == g)
         j = idx[rng.integers(idx.size, size=n)]
         t = scale[j] * rng.standard_normal(n)
-        dz += t[:, None, None, None] * (relative[j] @ z)
-    return np.linalg.inv(z + dz)
+        s += t[:, None, None, None] * log_r[j]
+    return np.linalg.inv(_matrix_function(s, np.exp) @ z)
+
+
+def _matrix_function(a: np.ndarray, fun) -> np.ndarray:
+    """``fun`` of each square matrix of ``a`` (``(..., n, n)``) through its eigendecomposition (principal branch)."""
+    w, v = np.linalg.eig(a)
+    return (v * fun(w.astype(complex))[..., None, :]) @ np.linalg.inv(v)
 
 
 def _interface_samples(name, spec, resolved, f, n, seed, uncertainties, choice, rng):

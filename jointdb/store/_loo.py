@@ -21,6 +21,15 @@ it lies inside the others' catalogued range (an interpolation) or not (an edge),
   line ``σ(δ) = b·δ`` with ``b² = Σ e_j² / Σ d_j²`` through those is what ``--json`` reports
   (``choice_error``), a joint at a catalogued condition erring only by its noise.
 
+An interpolated request is served differently: it lies *between* catalogued lines (a shank diameter
+between Ø8 and Ø12, a torque between two torques), and its error is that of interpolating across that
+gap, which a single left-out joint (its neighbours on the same lines) does not measure.
+:func:`leave_line_out` therefore leaves out whole interior condition lines, interpolates every joint on
+them from the joints off the line, and keeps each error with its gap product ``(v − v₋)(v₊ − v)``;
+a request draws them scaled by its own gap product over theirs (:func:`request_gaps`; linear
+interpolation errs by ``½ f''·(r − v₋)(v₊ − r)``), zero on a catalogued line, one independent
+draw per axis (:func:`line_error_model`).
+
 Pure numerics on the pool the caller already has (``load_frf`` reads the blobs);
 no query is issued here.
 """

@@ -93,15 +93,27 @@ def test_a_request_on_a_catalogued_line_gets_no_joint_choice_error_from_that_axi
 
 
 def test_one_draw_per_group_and_the_draws_add():
-    """Two groups with unit patterns R = I and scales s₁, s₂: Z' = (1 + s₁ξ₁ + s₂ξ₂) Z, so the sampled log-spread of
-    the joint's stiffness has variance s₁² + s₂² (2000 samples: ±10 %)."""
+    """Two groups with patterns I + R = e·I and scales s₁, s₂: Z' = exp(s₁ξ₁ + s₂ξ₂) Z, so ln of the sampled stiffness
+    has standard deviation √(s₁² + s₂²) (2000 samples: ±10 %); t = 1 reproduces the left-out error exactly."""
     from jointdb.stack._band import choice_perturbed
 
     h = np.broadcast_to(np.linalg.inv(np.diag([1e7, 1e5]).astype(complex)), (2000, 1, 2, 2))
-    rel = np.broadcast_to(np.eye(2, dtype=complex), (4, 1, 2, 2))
-    s = choice_perturbed(h, rel, np.array([0.01, 0.01, 0.02, 0.02]), np.random.default_rng(1), np.array([0, 0, 1, 1]))
-    k = np.linalg.inv(s)[:, 0, 0, 0].real / 1e7 - 1
-    assert np.std(k) == pytest.approx(np.hypot(0.01, 0.02), rel=0.1)
+    rel = np.broadcast_to((np.e - 1) * np.eye(2, dtype=complex), (4, 1, 2, 2))
+    s = choice_perturbed(h, rel, np.array([0.1, 0.1, 0.2, 0.2]), np.random.default_rng(1), np.array([0, 0, 1, 1]))
+    k = np.log(np.linalg.inv(s)[:, 0, 0, 0].real / 1e7)
+    assert np.std(k) == pytest.approx(np.hypot(0.1, 0.2), rel=0.1)
+    r = np.array([[[[0.3 + 0.1j, 0.02], [0.05, -0.2 + 0.05j]]]])
+    z = np.array([[[[2e7 + 1e5j, 1e5], [1e5, 4e5 + 2e3j]]]])
+
+    class One:  # a generator whose draws are j = 0, ξ = 1
+        def integers(self, m, size):
+            return np.zeros(size, int)
+
+        def standard_normal(self, n):
+            return np.ones(n)
+
+    out = choice_perturbed(np.linalg.inv(z), r, np.ones(1), One())
+    assert np.allclose(np.linalg.inv(out), (np.eye(2) + r) @ z, rtol=1e-9)
 
 
 # ------------------------------------------------------------------ the passivity guard
