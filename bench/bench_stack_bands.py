@@ -5,6 +5,9 @@ tuning seeds and, separately, the reported seed, each with its 5–95 % band (me
 joint choice), and compares the band with the truth's dominant peak |H| and lobe floor.
 
     python bench/bench_stack_bands.py [--n 24] [--samples 200] [--report docs/validation/stack-prediction.md]
+    # on a shared machine, one process per seed, then merge:
+    python bench/bench_stack_bands.py --catalogue /tmp/b --seeds 7201 --rows-out /tmp/7201.json   # (build first)
+    python bench/bench_stack_bands.py --merge /tmp/72*.json --report docs/validation/stack-prediction.md
 
 The calibration factor (``jointdb.usecases._stack.CHOICE_CALIBRATION``) is set from the tuning seeds'
 coverage only; the reported seed's table is what it is. With ``--report`` the *Bands* section of the page
@@ -14,6 +17,7 @@ is rewritten.
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 import tempfile
 import time
@@ -119,17 +123,28 @@ def main(argv=None) -> None:
     ap.add_argument("--report", type=Path, default=None)
     ap.add_argument("--catalogue", type=Path, default=None,
                     help="folder to keep the family-B catalogue in and reuse on the next run (built if empty)")
-    ap.add_argument("--seeds", type=int, nargs="*", default=None, help="these seeds instead (development)")
+    ap.add_argument("--seeds", type=int, nargs="*", default=None, help="these seeds instead (e.g. one per process)")
+    ap.add_argument("--rows-out", type=Path, default=None, help="write this run's rows as JSON (to merge later)")
+    ap.add_argument("--merge", type=Path, nargs="*", default=None,
+                    help="write --report from these --rows-out files (seeds run in separate processes) instead")
     args = ap.parse_args(argv)
     seeds = tb.TUNING_SEEDS if args.tuning else tb.REPORT_SEEDS
     seeds = args.seeds or seeds
-    res = run(args.n, args.samples, seeds, catalogue=args.catalogue)
+    if args.merge:
+        res = {"seconds": 0.0}
+        for part in args.merge:
+            got = json.loads(part.read_text(encoding="utf-8"))
+            res["seconds"] = max(res["seconds"], got.pop("seconds"))
+            res.update({int(k): v for k, v in got.items()})
+        seeds = sorted(k for k in res if k != "seconds")
+    else:
+        res = run(args.n, args.samples, seeds, catalogue=args.catalogue)
+    if args.rows_out is not None:
+        args.rows_out.write_text(json.dumps({str(k): v for k, v in res.items()}, default=str) + "\n", encoding="utf-8")
     if args.report is not None and not args.tuning:
         from _stack_bands_report import write_section
 
         write_section(args.report, {seed: res[seed] for seed in seeds}, res["seconds"])
-        import json
-
         args.report.with_name("stack-bands.json").write_text(
             json.dumps({str(k): v for k, v in res.items()}, indent=1, default=str) + "\n", encoding="utf-8")
 
