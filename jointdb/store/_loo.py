@@ -369,9 +369,12 @@ def leave_line_out(load_frf: Callable[[JointVersion], FRF], pool: Sequence[Match
     Returns
     -------
     list[LooPoint]
-        Points with ``axis`` and ``gap`` set; empty when no axis has two lines or more.
+        Points with ``axis`` and ``gap`` set; empty when no axis has two lines or more, or fewer than 3 joints
+        have every condition the request names.
     """
     usable = [(m, c) for m in pool if (c := _restricted(m.version, request)) is not None]
+    if len(usable) < 3:  # as leave_one_out: two joints cannot tell their error from the law between them
+        return []
     coords = [_axis_values(c, request) for _, c in usable]
     load = _cached(load_frf)
     out = []

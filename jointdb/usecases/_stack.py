@@ -128,6 +128,7 @@ class JointResolution:
             "joints_used": [{"joint": f"{n}@{v}", "weight": w, "distance": d} for n, v, w, d in self.neighbours],
             "choice_error": None if self.choice_error is None else {
                 "request_distance": self.choice_error.distance,
+                "request_gap_by_axis": dict(getattr(self.choice_error, "gaps", {}) or {}),
                 "stiffness_error_by_dof": dict(zip(self.choice_error.dofs, self.choice_error.sigma[:, 0].tolist())),
                 "damping_error_by_dof": dict(zip(self.choice_error.dofs, self.choice_error.sigma[:, 1].tolist())),
                 "leave_one_out_joints": [f"{p.name}@{p.version}" for p in self.choice_error.points],
