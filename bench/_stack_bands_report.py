@@ -79,7 +79,7 @@ def section(results: dict, seconds: float) -> str:
     """Markdown of the reported seeds' rows and summaries (``results``: seed → {rows, summary})."""
     import _stack_truth_b as tb
     from jointdb.store._loo import CAP_OVER_MEDIAN
-    from jointdb.usecases._stack import CHOICE_CALIBRATION
+    from jointdb.usecases._stack import CHOICE_CALIBRATION, LINE_CALIBRATION
     from jointdb.usecases._stack_band import MODEL_FORM_SIGMA
 
     lines = [BEGIN, "", "## Bands: do they contain the truth? (issue 22)", "",
@@ -93,7 +93,8 @@ def section(results: dict, seconds: float) -> str:
              "campaigns (machines at 10 and 25 kN; Ø8 / Ø12 / Ø16 at 30 / 70 / 150 N·m), 0.2 % noise. Stacks are "
              "drawn inside that range (Ø8–16 mm, 30–150 N·m, 10–25 kN, insertion 32–38 mm, fluted or blank); "
              "the "
-             f"calibration (joint-choice factor {CHOICE_CALIBRATION:g}, leave-one-out errors capped at "
+             f"calibration (joint-choice factor {LINE_CALIBRATION:g} for lines left out, {CHOICE_CALIBRATION:g} "
+             f"for single joints, leave-one-out errors capped at "
              f"{CAP_OVER_MEDIAN:g}× their median per line, prediction-path σ {MODEL_FORM_SIGMA:.1%}) was set on the "
              f"tuning seeds {', '.join(map(str, tb.TUNING_SEEDS))} only.", "",
              "The band is the 5–95 % range of 200 samples: measurement noise (the fit covariance of joints kept "

@@ -8,6 +8,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from jointdb.errors import NotFoundError
 from jointdb.frf import FRF
 from jointdb.stack import INTERFACE_NAMES, Prediction, StackSpec, predict_tool_tip, prediction_grid
@@ -16,11 +18,15 @@ from jointdb.usecases._files import load_stack
 #: How many nearest catalogued joints a stack's interpolated query ranks before the interpolation picks the
 #: ones that bracket the request along the condition axes (jointdb.store._interp).
 INTERPOLATION_POOL = 64
-#: The joint-choice error of the band is the leave-one-out error model (jointdb.store._loo) times this factor.
-#: Calibrated for coverage on the tuning seeds of bench/_stack_truth_b.py (docs/validation/stack-prediction.md,
-#: *Bands*): the leave-one-out removes a catalogued point and so doubles the local grid spacing, while the
-#: straight-line model is fitted through the origin; the factor absorbs both and the prediction path's own error.
+#: The joint-choice error of the band is the leave-one-out error model (jointdb.store._loo) times a factor.
+#: Single joints left out, scaled by distance (a query without interpolation, an axis the catalogue never varied):
+#: this one. Calibrated for coverage on the tuning seeds of bench/_stack_truth_b.py (docs/validation/
+#: stack-prediction.md, *Bands*): leaving a joint out doubles the local grid spacing, while the straight-line model
+#: is fitted through the origin.
 CHOICE_CALIBRATION = 0.08
+#: Whole condition lines left out, scaled by the request's gap product over theirs (an interpolated request): this
+#: one. The model is second order, so 1 is the uncalibrated estimate; set on the tuning seeds only.
+LINE_CALIBRATION = 1.0
 
 #: How a queried joint was chosen (the wording of docs/stacks.md): the nearest catalogued joint, an
 #: interpolation between the joints whose conditions bracket the request (a simplex of the catalogued grid),
@@ -98,7 +104,7 @@ class JointResolution:
         tuple or None
             ``(relative, scale, group)``: ``relative`` ``(m, n_freq, 2, 2)`` complex: each left-out joint's
             relative error of the dynamic stiffness, DOFs in the order (x, θ); ``scale`` ``(m,)``: the
-            request's gap (or distance) over that joint's, times ``CHOICE_CALIBRATION``; ``group`` ``(m,)``: the
+            request's gap (or distance) over that joint's, times ``LINE_CALIBRATION`` (``CHOICE_CALIBRATION``); ``group`` ``(m,)``: the
             condition axis of each error (independent draws per axis). None without an error model, for a joint of
             other than two DOFs, or a request on a catalogued condition (distance 0).
         """
@@ -107,7 +113,8 @@ class JointResolution:
             return None
         order = [0, 1] if m.dofs[0].endswith("x") else [1, 0]
         rel, scale, group = m.on_grid(freq, order)
-        return rel, CHOICE_CALIBRATION * scale, group
+        cal = np.array([LINE_CALIBRATION if p.axis else CHOICE_CALIBRATION for p in m.points])
+        return rel, cal * scale, group
 
     def row(self) -> dict[str, Any]:
         """A flat row for tables / JSON.
@@ -132,7 +139,7 @@ class JointResolution:
                 "stiffness_error_by_dof": dict(zip(self.choice_error.dofs, self.choice_error.sigma[:, 0].tolist())),
                 "damping_error_by_dof": dict(zip(self.choice_error.dofs, self.choice_error.sigma[:, 1].tolist())),
                 "leave_one_out_joints": [f"{p.name}@{p.version}" for p in self.choice_error.points],
-                "calibration": CHOICE_CALIBRATION},
+                "calibration": {"lines": LINE_CALIBRATION, "single_joints": CHOICE_CALIBRATION}},
             "warnings": "; ".join(self.warnings) or None,
         }
 
