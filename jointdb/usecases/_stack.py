@@ -26,7 +26,7 @@ INTERPOLATION_POOL = 64
 CHOICE_CALIBRATION = 0.08
 #: Whole condition lines left out, scaled by the request's gap product over theirs (an interpolated request): this
 #: one. The model is second order, so 1 is the uncalibrated estimate; set on the tuning seeds only.
-LINE_CALIBRATION = 1.0
+LINE_CALIBRATION = 0.5
 
 #: How a queried joint was chosen (the wording of docs/stacks.md): the nearest catalogued joint, an
 #: interpolation between the joints whose conditions bracket the request (a simplex of the catalogued grid),
