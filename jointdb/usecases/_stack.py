@@ -104,7 +104,8 @@ class JointResolution:
         tuple or None
             ``(relative, scale, group)``: ``relative`` ``(m, n_freq, 2, 2)`` complex: each left-out joint's
             relative error of the dynamic stiffness, DOFs in the order (x, θ); ``scale`` ``(m,)``: the
-            request's gap (or distance) over that joint's, times ``LINE_CALIBRATION`` (``CHOICE_CALIBRATION``); ``group`` ``(m,)``: the
+            request's gap (or distance) over that joint's, times ``LINE_CALIBRATION`` (``CHOICE_CALIBRATION``);
+            ``group`` ``(m,)``: the
             condition axis of each error (independent draws per axis). None without an error model, for a joint of
             other than two DOFs, or a request on a catalogued condition (distance 0).
         """

@@ -63,7 +63,8 @@ def non_passive_peaks(freq: np.ndarray, tip: np.ndarray) -> list[str]:
         near = slice(max(k - NEAR_PEAK_LINES, 0), k + NEAR_PEAK_LINES + 1)
         j = near.start + int(np.argmax(h[near].imag))
         if h[j].imag > 0:
-            out.append(f"term {d + 1}: peak {abs(h[k]):.3g} m/N at {f[k]:.0f} Hz, phase {np.degrees(np.angle(h[j])):+.0f}° "
+            out.append(f"term {d + 1}: peak {abs(h[k]):.3g} m/N at {f[k]:.0f} Hz, phase "
+                       f"{np.degrees(np.angle(h[j])):+.0f}° "
                        f"at {f[j]:.0f} Hz (a passive driving point lies between −180° and 0°)")
     return out
 
