@@ -11,8 +11,9 @@ between −180° and 0°). Such a prediction is wrong by an arbitrary amount (fa
 
 :func:`guarded` checks the nominal prediction's dominant peak in each plane. When it is not
 passive, the catalogue's joints are replaced by their constant k, c fit over the fit band
-(:func:`constant_joint`), one interface at a time (tool–holder first) and then both, and the
-first passive prediction is kept; the replaced joint's resolution says so in its warnings.
+(:func:`constant_joint`) — first only on the lines around the spurious peak (:func:`_local_repair`; the
+per-line joint is kept elsewhere), else everywhere, one interface at a time (tool–holder first) and then
+both — and the first passive prediction is kept; the replaced joint's resolution says so in its warnings.
 """
 
 from __future__ import annotations
@@ -100,6 +101,37 @@ def constant_joint(frf: FRF, band: tuple[float, float] = PEAK_BAND_HZ) -> FRF:
     return frf.replace(values=np.linalg.inv(k[None] + 1j * w[:, None, None] * c[None]))
 
 
+#: A spurious peak's lines are repaired locally first: the joints' constant k, c replaces the per-line joint on the
+#: lines within this fraction of the peak's frequency (the per-line joint is kept, and trusted, everywhere else; each
+#: line of a prediction is independent of the others). Up to :data:`REPAIR_ROUNDS` spurious peaks are repaired so.
+REPAIR_HALF_WIDTH = 0.05
+REPAIR_ROUNDS = 3
+
+
+def _local_repair(spec, joints, names, prediction, predict):
+    """``(prediction, frfs, window text)`` with the joints ``names`` replaced by their constant fit on the lines around
+    each non-passive dominant peak, or None when :data:`REPAIR_ROUNDS` windows do not make the tip passive."""
+    frfs = {n: r.frf for n, r in joints.items() if r.frf is not None}
+    const = {n: constant_joint(frfs[n]) for n in names}
+    f = prediction.tip.freq
+    mask = np.zeros(f.size, bool)
+    trial = prediction
+    for _ in range(REPAIR_ROUNDS):
+        tip = trial.tip.values
+        inside = (f >= PEAK_BAND_HZ[0]) & (f <= PEAK_BAND_HZ[1])
+        for d in range(min(tip.shape[1], tip.shape[2])):
+            k = int(np.argmax(np.where(inside, np.abs(tip[:, d, d]), -np.inf)))
+            mask |= np.abs(f - f[k]) <= REPAIR_HALF_WIDTH * f[k]
+        for n in names:
+            on = np.isin(frfs[n].freq, f[mask])
+            frfs[n] = frfs[n].replace(values=np.where(on[:, None, None], const[n].values, joints[n].frf.values))
+        trial = predict(spec, frfs)
+        if not non_passive_peaks(trial.tip.freq, trial.tip.values):
+            lo, hi = f[mask].min(), f[mask].max()
+            return trial, frfs, f"{int(mask.sum())} lines within {lo:.0f}–{hi:.0f} Hz"
+    return None
+
+
 def guarded(spec, joints: Mapping, prediction, predict) -> tuple[object, dict]:
     """``(prediction, joints)``: the nominal ones when passive, else the first passive fallback (module docstring).
 
@@ -125,6 +157,15 @@ def guarded(spec, joints: Mapping, prediction, predict) -> tuple[object, dict]:
                                                                                    "interpolated")]
     if not bad or not catalogued:
         return prediction, joints
+    repaired = _local_repair(spec, joints, catalogued, prediction, predict)
+    if repaired is not None:
+        trial, frfs, window = repaired
+        for n in catalogued:
+            note = (f"the catalogued joint's FRF gave a non-physical tool-tip resonance ({'; '.join(bad)}); on "
+                    f"{window} its constant k, c fit over {PEAK_BAND_HZ[0]:g}–{PEAK_BAND_HZ[1]:g} Hz is used instead")
+            joints[n] = replace(joints[n], frf=frfs[n], warnings=tuple(joints[n].warnings) + (note,),
+                                description=f"{joints[n].description} (constant k, c fallback near the spurious peak)")
+        return trial, joints
     trials = [[n] for n in catalogued] + ([catalogued] if len(catalogued) > 1 else [])
     for names in trials:
         frfs = {n: r.frf for n, r in joints.items() if r.frf is not None}
