@@ -27,12 +27,6 @@ TERMS = ("measurement noise", "joint choice", "prediction path")
 #: the catalogue (each per-line joint reproduces its own campaign): calibrated on the tuning seeds of
 #: bench/_stack_truth_b.py, with LINE_CALIBRATION (docs/validation/stack-prediction.md, *Bands*).
 MODEL_FORM_SIGMA = 0.02
-#: Relative standard error of a catalogued joint's dynamic stiffness when it is used in a stack other than its
-#: campaign's (part of the prediction path): a per-line joint also carries what its campaign's beam models missed
-#: for *that* tool (gauge, insertion, flutes), which does not transfer. Drawn as ``Z' = exp(σ ξ) Z`` for every
-#: database joint, so its effect on the tip grows with how joint-dominated the stack is (short tools). Set on the
-#: tuning seeds with LINE_CALIBRATION.
-JOINT_TRANSFER_SIGMA = 0.0
 
 
 def _inputs(result, terms=TERMS) -> tuple[dict, dict, list[str]]:
@@ -48,22 +42,7 @@ def _inputs(result, terms=TERMS) -> tuple[dict, dict, list[str]]:
             elif r.kind in ("query", "interpolated") and r.choice_error is None:
                 notes.append(f"{name}: no joint-choice error — fewer than 3 catalogued joints of its kind share the "
                              "conditions the query names, so leave-one-out cannot estimate one")
-    if "prediction path" in terms and JOINT_TRANSFER_SIGMA > 0:
-        for name, r in result.joints.items():
-            if r.frf is not None and r.kind in ("catalogued", "query", "interpolated"):
-                sigma[name] = _with_transfer(sigma.get(name), result.prediction.tip.freq.size)
     return unc, sigma, notes
-
-
-def _with_transfer(choice, n_freq: int) -> tuple:
-    """``choice`` (or nothing) plus one more independent group: ``Z' = exp(σ ξ) Z`` with σ = JOINT_TRANSFER_SIGMA."""
-    r = np.broadcast_to((np.e - 1.0) * np.eye(2, dtype=complex), (1, n_freq, 2, 2))
-    if choice is None:
-        return r, np.array([JOINT_TRANSFER_SIGMA]), np.zeros(1, dtype=int)
-    rel, scale, *group = choice
-    group = group[0] if group else np.zeros(len(scale), dtype=int)
-    return (np.concatenate([rel, r]), np.append(scale, JOINT_TRANSFER_SIGMA),
-            np.append(group, int(np.max(group, initial=-1)) + 1))
 
 
 def prediction_band(result, n: int = 200, seed: int = 0, terms=TERMS):

@@ -176,15 +176,3 @@ def test_guarded_falls_back_to_constant_joints_and_says_so():
     assert np.all(np.abs(pred.tip.values) > 0) and "constant k, c" in out["tool-holder"].warnings[-1]
     assert np.allclose(out["tool-holder"].frf.values, _const(wiggly)) and dofs == list(out["tool-holder"].frf.inputs)
 
-
-def test_the_joint_transfer_term_is_one_more_independent_group(monkeypatch):
-    """Z' = exp(σξ) Z for a catalogued joint used in another stack: a pattern ln(I + R) = I with scale σ, drawn
-    independently of the joint-choice groups."""
-    import jointdb.usecases._stack_band as sb
-
-    monkeypatch.setattr(sb, "JOINT_TRANSFER_SIGMA", 0.07)
-    rel, scale, group = sb._with_transfer((np.zeros((3, 5, 2, 2), complex), np.ones(3), np.array([0, 0, 1])), 5)
-    assert rel.shape == (4, 5, 2, 2) and list(group) == [0, 0, 1, 2] and scale[-1] == 0.07
-    assert np.allclose(rel[-1], (np.e - 1) * np.eye(2))
-    rel, scale, group = sb._with_transfer(None, 5)
-    assert rel.shape == (1, 5, 2, 2) and list(scale) == [0.07] and list(group) == [0]
