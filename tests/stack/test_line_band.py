@@ -176,3 +176,32 @@ def test_guarded_falls_back_to_constant_joints_and_says_so():
     assert np.all(np.abs(pred.tip.values) > 0) and "constant k, c" in out["tool-holder"].warnings[-1]
     assert np.allclose(out["tool-holder"].frf.values, _const(wiggly)) and dofs == list(out["tool-holder"].frf.inputs)
 
+
+def test_a_spurious_peak_is_repaired_on_its_own_lines_only():
+    """Fake prediction path: a negatively damped mode at 4003 Hz exists while the joint is per-line on the lines near
+    it, a passive one at 2003 Hz always. The repair replaces the joint by its constant fit within 5 % of 4003 Hz and
+    keeps the per-line joint on every other line."""
+    from types import SimpleNamespace
+
+    from jointdb.usecases import JointResolution
+    from jointdb.usecases._stack_guard import constant_joint, guarded
+
+    f = np.arange(10.0, 5001.0, 10.0)
+    k, m = 1e7, 1e7 / (2 * np.pi * 2003.0) ** 2
+    k2 = 1e7 * (4003.0 / 2003.0) ** 2
+    wiggly = spring_damper_joint(f, [3e7, 6e5], [300.0, 3.0], ["3x", "3ry"])
+    wiggly = wiggly.replace(values=wiggly.values * (1 + 0.05 * np.sin(f / 300.0))[:, None, None])
+    const = constant_joint(wiggly).values
+    near = np.abs(f - 4000.0) <= 0.05 * 4000.0  # around the peak line
+
+    def predict(spec, frfs):
+        v = frfs["tool-holder"].values
+        bad = not np.allclose(v[near], const[near])
+        h = _sdof(f, k, m, 0.02 * 2 * np.sqrt(k * m)) + 5 * _sdof(f, k2, m, (-1 if bad else 1) * 0.001 * np.sqrt(k2 * m))
+        return SimpleNamespace(tip=FRF(f, h[:, None, None], [Dof(1, "x")], [Dof(1, "x")], "receptance"))
+
+    joints = {"tool-holder": JointResolution("tool-holder", "interpolated", wiggly, "th", 1)}
+    pred, out = guarded(None, joints, predict(None, {"tool-holder": wiggly}), predict)
+    got = out["tool-holder"].frf.values
+    assert np.allclose(got[near], const[near]) and np.array_equal(got[~near], wiggly.values[~near])
+    assert "lines within" in out["tool-holder"].warnings[-1]
