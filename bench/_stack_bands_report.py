@@ -36,27 +36,33 @@ HISTORY = (
     "passivity guard. Its factor was chosen on the tuning seeds 7101 and 7102 only (48 stacks): factors 0.5 / "
     "0.75 / 1.0 / 1.5 put the truth inside on 44 / 46 / 46 / 48 peaks and 42 / 44 / 43 / 46 floors, at "
     "half-width / error 2.5 / 3.1 / 3.7 / 5.6× (peak) and 2.2 / 2.8 / 3.4 / 4.7× (floor); 0.5 is the largest "
-    "within the 3× goal. Seed 7203 was drawn for the first time after that (blind); 7201 and 7202 are seen.",
+    "within the 3× goal. Seeds 7203 and 7204 were drawn for the first time after that (blind; 7204 after 7203's result was read, "
+    "with the calibration unchanged); 7201 and 7202 are seen.",
 )
 
 
 #: What the reported run shows (written after reading it; review it when the bench is rerun).
 FINDINGS = (
-    "What this shows: coverage meets the 80 % goal on the seen seeds and over all 72 stacks (61 of 72 peaks and "
-    "floors, 85 %), not on the blind seed; the width stays within 3× the error except on seed 7201's peak (3.7×). "
-    "Seeds 7201 and 7202 (seen): "
-    "22 of 24 peaks and 23 / 22 of 24 floors inside (≥ 92 %), half-width / error 3.7× / 2.6× (7201, whose errors "
-    "are unusually small, median 1.1 %) and 1.9× / 1.7× (7202). The line leave-out covers the stacks between the "
-    "Ø8 and Ø12 lines that v2 missed (S02-10, S02-15, S02-16, S02-17, S02-19 now inside), and the passivity guard "
-    "turns S02-21 from +684 % into −7.1 % (both joints' constant k, c on the 27 lines within 4740–5000 Hz "
-    "around the spurious 4980 Hz peak, the per-line joints elsewhere; still just outside its ±4.9 % band). Seed 7203 "
-    "(blind): 17 (71 %) peaks and 16 (67 %) floors inside — below the 80 % goal — with the band *narrower* than "
-    "the error (0.9×). Its misses are short or joint-dominated tools close to catalogued lines (Ø8 × 30 mm, Ø13 × "
-    "40 mm, 35 N·m stacks), errors −5 to −8 % in peak, where the joint choice adds little and the prediction-path "
-    "term (±3.3 %) is all the band has: the error of carrying a per-line joint from its campaign's tool to "
-    "another tool is not a constant fraction of the tip, it grows with how much the tip depends on the joint. "
-    "The peak errors are also one-sided (the prediction under-estimates the peak on 21 of 24 stacks of 7203), "
-    "which a band centred on the prediction does not know.",
+    "What this shows: over all 96 stacks the truth is inside the 90 % band for 83 of 96 peaks and 83 of 96 floors "
+    "(86 %), with median half-width ≤ 3× the median error on every seed but 7201's peak (3.7×, its errors are "
+    "unusually small, median 1.1 %). Of the two blind seeds, 7204 meets both goals (22 and 22 of 24, 92 %, "
+    "1.9× / 1.7×); 7203 does not: 17 (71 %) peaks and 16 (67 %) floors, the band narrower than the error (0.9×). "
+    "Seeds 7201 and 7202 (seen): 22 of 24 peaks and 23 / 22 of 24 floors (≥ 92 %). The line leave-out covers the "
+    "stacks between the Ø8 and Ø12 lines that v2 missed (S02-10, S02-15, S02-16, S02-17, S02-19 now inside), and "
+    "the passivity guard turns S02-21 from +684 % into −7.1 % (both joints' constant k, c on the 27 lines within "
+    "4740–5000 Hz around the spurious 4980 Hz peak, the per-line joints elsewhere; still just outside its ±4.9 % "
+    "band); S04-24 (inside its band) and a stack of the reduced catalogue of tests/stack/test_band_truth_b.py are "
+    "repaired the same way.",
+    "Seed 7203's misses are short or joint-dominated tools close to catalogued lines (Ø8 × 30 mm, Ø13 × 40 mm, "
+    "35 N·m stacks), peak errors −5 to −8 %, where the joint choice adds little and the prediction-path term "
+    "(±3.3 %) is all the band has: the error of carrying a per-line joint from its campaign's tool to another "
+    "tool grows with how much the tip depends on the joint, which a constant σ does not know. The peak errors are "
+    "also one-sided (the prediction under-estimates the peak on 21 of 24 stacks of 7203, 17 of 24 of 7204), "
+    "which a band centred on the prediction cannot represent. A joint-transfer term (every catalogued joint's Z "
+    "scaled by exp(σξ), σ = 5 %) was tried on the tuning seeds and dropped: it widened every band (median "
+    "half-width 3.9 → 6.5 %) without covering more stacks there. Sensitivity, after the fact and not the "
+    "reported calibration: with the joint-choice factor 0.75 (the next one on the tuning grid, 3.1× wide there) "
+    "seed 7203 would have 20 and 20 of 24 inside (83 %), half-width 5.2 % / 6.7 % against errors 4.9 % / 5.5 %.",
 )
 
 
