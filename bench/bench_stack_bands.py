@@ -5,6 +5,9 @@ tuning seeds and, separately, the reported seed, each with its 5–95 % band (me
 joint choice), and compares the band with the truth's dominant peak |H| and lobe floor.
 
     python bench/bench_stack_bands.py [--n 24] [--samples 200] [--report docs/validation/stack-prediction.md]
+    # on a shared machine, one process per seed, then merge:
+    python bench/bench_stack_bands.py --catalogue /tmp/b --seeds 7201 --rows-out /tmp/7201.json   # (build first)
+    python bench/bench_stack_bands.py --merge /tmp/72*.json --report docs/validation/stack-prediction.md
 
 The calibration factor (``jointdb.usecases._stack.CHOICE_CALIBRATION``) is set from the tuning seeds'
 coverage only; the reported seed's table is what it is. With ``--report`` the *Bands* section of the page
@@ -14,6 +17,7 @@ is rewritten.
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 import tempfile
 import time
@@ -42,7 +46,8 @@ def band_row(case, repo, n: int = N_SAMPLES) -> dict:
     lt = sv._floor(truth)
     row = {"case": case.name, "truth_peak": at, "truth_floor": lt, "pred_peak": sv._dominant(h)[1],
            "pred_floor": sv._floor(h), "dominant_term": terms.dominant, "half_widths": terms.half_width,
-           "methods": {k: r.method for k, r in result.joints.items()},
+           "methods": {k: r.method + (" (constant k, c fallback)" if any("constant k, c fit" in w for w in r.warnings)
+                                      else "") for k, r in result.joints.items()},
            "extrapolating": any(r.extrapolating for r in result.joints.values())}
     b = terms.band
     if b is None:
@@ -72,26 +77,41 @@ def summary(rows: list[dict]) -> dict:
     return out
 
 
-def run(n: int, samples: int, seeds, say=print) -> dict:
+def run(n: int, samples: int, seeds, say=print, catalogue: Path | None = None) -> dict:
+    """Build (or reuse, ``catalogue``: a folder kept between runs) the family-B catalogue and check the bands of
+    ``n`` stacks per seed."""
     from jointdb.store import Repository
 
     t0 = time.time()
-    with tempfile.TemporaryDirectory() as tmp, Repository(f"sqlite:///{Path(tmp) / 'b.sqlite'}") as repo:
-        say("catalogue of family B:")
-        tb.build_catalogue(Path(tmp), repo, say=say)
-        out = {}
-        for seed in seeds:
-            rows = []
-            for case in tb.draw(n, seed):
-                rows.append(band_row(case, repo, samples))
-                r = rows[-1]
-                say(f"  {r['case']}: peak {r.get('peak_err', float('nan')):+.1%} band ±{r.get('peak_half', 0):.1%} "
-                    f"{'in' if r.get('peak_covered') else 'OUT'}; floor {r.get('floor_err', float('nan')):+.1%} band "
-                    f"±{r.get('floor_half', 0):.1%} {'in' if r.get('floor_covered') else 'OUT'}; "
-                    f"dominant term: {r['dominant_term']}")
-            out[seed] = {"rows": rows, "summary": summary(rows)}
-            say(f"seed {seed}: {out[seed]['summary']}")
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(catalogue) if catalogue is not None else Path(tmp)
+        folder.mkdir(parents=True, exist_ok=True)
+        db = folder / "b.sqlite"
+        fresh = not db.exists()
+        with Repository(f"sqlite:///{db}") as repo:
+            if fresh:
+                say("catalogue of family B:")
+                tb.build_catalogue(folder, repo, say=say)
+            else:
+                say(f"catalogue of family B reused from {folder}")
+            out = _seeds(repo, n, samples, seeds, say)
     out["seconds"] = time.time() - t0
+    return out
+
+
+def _seeds(repo, n: int, samples: int, seeds, say) -> dict:
+    out = {}
+    for seed in seeds:
+        rows = []
+        for case in tb.draw(n, seed):
+            rows.append(band_row(case, repo, samples))
+            r = rows[-1]
+            say(f"  {r['case']}: peak {r.get('peak_err', float('nan')):+.1%} band ±{r.get('peak_half', 0):.1%} "
+                f"{'in' if r.get('peak_covered') else 'OUT'}; floor {r.get('floor_err', float('nan')):+.1%} band "
+                f"±{r.get('floor_half', 0):.1%} {'in' if r.get('floor_covered') else 'OUT'}; "
+                f"dominant term: {r['dominant_term']}")
+        out[seed] = {"rows": rows, "summary": summary(rows)}
+        say(f"seed {seed}: {out[seed]['summary']}")
     return out
 
 
@@ -101,15 +121,30 @@ def main(argv=None) -> None:
     ap.add_argument("--samples", type=int, default=N_SAMPLES)
     ap.add_argument("--tuning", action="store_true", help="run the tuning seeds instead of the reported one")
     ap.add_argument("--report", type=Path, default=None)
+    ap.add_argument("--catalogue", type=Path, default=None,
+                    help="folder to keep the family-B catalogue in and reuse on the next run (built if empty)")
+    ap.add_argument("--seeds", type=int, nargs="*", default=None, help="these seeds instead (e.g. one per process)")
+    ap.add_argument("--rows-out", type=Path, default=None, help="write this run's rows as JSON (to merge later)")
+    ap.add_argument("--merge", type=Path, nargs="*", default=None,
+                    help="write --report from these --rows-out files (seeds run in separate processes) instead")
     args = ap.parse_args(argv)
     seeds = tb.TUNING_SEEDS if args.tuning else tb.REPORT_SEEDS
-    res = run(args.n, args.samples, seeds)
+    seeds = args.seeds or seeds
+    if args.merge:
+        res = {"seconds": 0.0}
+        for part in args.merge:
+            got = json.loads(part.read_text(encoding="utf-8"))
+            res["seconds"] = max(res["seconds"], got.pop("seconds"))
+            res.update({int(k): v for k, v in got.items()})
+        seeds = sorted(k for k in res if k != "seconds")
+    else:
+        res = run(args.n, args.samples, seeds, catalogue=args.catalogue)
+    if args.rows_out is not None:
+        args.rows_out.write_text(json.dumps({str(k): v for k, v in res.items()}, default=str) + "\n", encoding="utf-8")
     if args.report is not None and not args.tuning:
         from _stack_bands_report import write_section
 
         write_section(args.report, {seed: res[seed] for seed in seeds}, res["seconds"])
-        import json
-
         args.report.with_name("stack-bands.json").write_text(
             json.dumps({str(k): v for k, v in res.items()}, indent=1, default=str) + "\n", encoding="utf-8")
 

@@ -119,12 +119,15 @@ def _sampled_planes(record: Mapping, f: np.ndarray, n: int, seed: int, what: str
 
 
 def choice_perturbed(planes: np.ndarray, relative: np.ndarray, scale: np.ndarray,
-                     rng: np.random.Generator) -> np.ndarray:
+                     rng: np.random.Generator, group: np.ndarray | None = None) -> np.ndarray:
     """Joint receptance samples with the joint-choice error applied (docs/stacks.md, *Bands*).
 
-    Each sample draws one of the catalogue's leave-one-out errors ``R_j`` (the relative error per line,
-    ``Z_j = (I + R_j) Ẑ_j``, of a catalogued joint predicted from the others) and a normal amplitude
-    ``t = scale_j ξ``, and applies it to its dynamic stiffness: ``Z' = (I + t R_j) Z``.
+    Each sample draws, per group (a condition axis whose lines were left out, :mod:`jointdb.store._loo`), one
+    of the catalogue's leave-one-out errors ``R_j`` (the relative error per line, ``Z_j = (I + R_j) Ẑ_j``, of
+    catalogued joints predicted from the others) and a normal amplitude ``t_j = scale_j ξ``, and applies them
+    multiplicatively to its dynamic stiffness: ``Z' = exp(Σ_g t_g ln(I + R_{j_g})) Z`` (per line; ``t = 1``
+    reproduces the left-out error exactly, ``t = −1`` its inverse, so a stiffness or damping error is as likely
+    ×2 as ×½ and no draw drives the joint's damping through zero).
 
     Parameters
     ----------
@@ -133,10 +136,12 @@ def choice_perturbed(planes: np.ndarray, relative: np.ndarray, scale: np.ndarray
     relative
         ``(m, n_freq, 2, 2)`` leave-one-out relative errors over (x, θ), on the same lines.
     scale
-        ``(m,)`` standard deviation of the amplitude per error (request's distance over the point's, times
-        the calibration).
+        ``(m,)`` standard deviation of the amplitude per error (request's distance or gap over the point's,
+        times the calibration).
     rng
         Random generator.
+    group
+        ``(m,)`` integer group of each error (None: one group); the groups' draws are independent and add.
 
     Returns
     -------
@@ -144,9 +149,22 @@ def choice_perturbed(planes: np.ndarray, relative: np.ndarray, scale: np.ndarray
     """
     z = np.linalg.inv(planes)
     n = z.shape[0]
-    j = rng.integers(relative.shape[0], size=n)
-    t = np.asarray(scale, float)[j] * rng.standard_normal(n)
-    return np.linalg.inv(z + t[:, None, None, None] * (relative[j] @ z))
+    scale = np.asarray(scale, float)
+    group = np.zeros(scale.size, dtype=int) if group is None else np.asarray(group, dtype=int)
+    log_r = _matrix_function(np.eye(relative.shape[-1]) + relative, np.log)
+    s = np.zeros((n,) + log_r.shape[1:], dtype=complex)
+    for g in np.unique(group):
+        idx = np.flatnonzero(group == g)
+        j = idx[rng.integers(idx.size, size=n)]
+        t = scale[j] * rng.standard_normal(n)
+        s += t[:, None, None, None] * log_r[j]
+    return np.linalg.inv(_matrix_function(s, np.exp) @ z)
+
+
+def _matrix_function(a: np.ndarray, fun) -> np.ndarray:
+    """``fun`` of each square matrix of ``a`` (``(..., n, n)``) through its eigendecomposition (principal branch)."""
+    w, v = np.linalg.eig(a)
+    return (v * fun(w.astype(complex))[..., None, :]) @ np.linalg.inv(v)
 
 
 def _interface_samples(name, spec, resolved, f, n, seed, uncertainties, choice, rng):
@@ -165,12 +183,12 @@ def _interface_samples(name, spec, resolved, f, n, seed, uncertainties, choice, 
         return planes
     same = planes["x"] is planes["y"] or np.array_equal(planes["x"], planes["y"])
     state = rng.bit_generator.state
-    out = {"x": choice_perturbed(planes["x"], *choice, rng)}
+    out = {"x": choice_perturbed(planes["x"], *choice[:2], rng, *choice[2:])}
     if same:
         out["y"] = out["x"]
     else:
         rng.bit_generator.state = state  # the same draws in both planes: one joint
-        out["y"] = choice_perturbed(planes["y"], *choice, rng)
+        out["y"] = choice_perturbed(planes["y"], *choice[:2], rng, *choice[2:])
     return out
 
 
@@ -187,7 +205,7 @@ def tip_band(spec: StackSpec, resolved_joints: Mapping[str, FRF], uncertainties:
         Interface name → uncertainty record of its joint (measurement noise through the fit's
         covariance); interfaces not named keep their nominal joint.
     choice
-        Interface name → ``(relative, scale)`` of its joint-choice error (:func:`choice_perturbed`, arrays on
+        Interface name → ``(relative, scale[, group])`` of its joint-choice error (:func:`choice_perturbed`, arrays on
         the prediction's lines), applied on top of the covariance samples.
     tip_sigma
         Relative standard error of the prediction path itself (model form: beams joined at points where the

@@ -8,6 +8,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from jointdb.errors import NotFoundError
 from jointdb.frf import FRF
 from jointdb.stack import INTERFACE_NAMES, Prediction, StackSpec, predict_tool_tip, prediction_grid
@@ -16,11 +18,15 @@ from jointdb.usecases._files import load_stack
 #: How many nearest catalogued joints a stack's interpolated query ranks before the interpolation picks the
 #: ones that bracket the request along the condition axes (jointdb.store._interp).
 INTERPOLATION_POOL = 64
-#: The joint-choice error of the band is the leave-one-out error model (jointdb.store._loo) times this factor.
-#: Calibrated for coverage on the tuning seeds of bench/_stack_truth_b.py (docs/validation/stack-prediction.md,
-#: *Bands*): the leave-one-out removes a catalogued point and so doubles the local grid spacing, while the
-#: straight-line model is fitted through the origin; the factor absorbs both and the prediction path's own error.
+#: The joint-choice error of the band is the leave-one-out error model (jointdb.store._loo) times a factor.
+#: Single joints left out, scaled by distance (a query without interpolation, an axis the catalogue never varied):
+#: this one. Calibrated for coverage on the tuning seeds of bench/_stack_truth_b.py (docs/validation/
+#: stack-prediction.md, *Bands*): leaving a joint out doubles the local grid spacing, while the straight-line model
+#: is fitted through the origin.
 CHOICE_CALIBRATION = 0.08
+#: Whole condition lines left out, scaled by the request's gap product over theirs (an interpolated request): this
+#: one. The model is second order, so 1 is the uncalibrated estimate; set on the tuning seeds only.
+LINE_CALIBRATION = 0.5
 
 #: How a queried joint was chosen (the wording of docs/stacks.md): the nearest catalogued joint, an
 #: interpolation between the joints whose conditions bracket the request (a simplex of the catalogued grid),
@@ -96,17 +102,20 @@ class JointResolution:
         Returns
         -------
         tuple or None
-            ``relative`` ``(m, n_freq, 2, 2)`` complex: each left-out joint's relative error of the
-            dynamic stiffness, DOFs in the order (x, θ); ``scale`` ``(m,)``: the request's distance over
-            that joint's, times ``CHOICE_CALIBRATION``. None without an error model, for a joint of
+            ``(relative, scale, group)``: ``relative`` ``(m, n_freq, 2, 2)`` complex: each left-out joint's
+            relative error of the dynamic stiffness, DOFs in the order (x, θ); ``scale`` ``(m,)``: the
+            request's gap (or distance) over that joint's, times ``LINE_CALIBRATION`` (``CHOICE_CALIBRATION``);
+            ``group`` ``(m,)``: the
+            condition axis of each error (independent draws per axis). None without an error model, for a joint of
             other than two DOFs, or a request on a catalogued condition (distance 0).
         """
         m = self.choice_error
         if m is None or len(m.dofs) != 2 or m.distance <= 0:
             return None
         order = [0, 1] if m.dofs[0].endswith("x") else [1, 0]
-        rel, scale = m.on_grid(freq, order)
-        return rel, CHOICE_CALIBRATION * scale
+        rel, scale, group = m.on_grid(freq, order)
+        cal = np.array([LINE_CALIBRATION if p.axis else CHOICE_CALIBRATION for p in m.points])
+        return rel, cal * scale, group
 
     def row(self) -> dict[str, Any]:
         """A flat row for tables / JSON.
@@ -127,10 +136,11 @@ class JointResolution:
             "joints_used": [{"joint": f"{n}@{v}", "weight": w, "distance": d} for n, v, w, d in self.neighbours],
             "choice_error": None if self.choice_error is None else {
                 "request_distance": self.choice_error.distance,
+                "request_gap_by_axis": dict(getattr(self.choice_error, "gaps", {}) or {}),
                 "stiffness_error_by_dof": dict(zip(self.choice_error.dofs, self.choice_error.sigma[:, 0].tolist())),
                 "damping_error_by_dof": dict(zip(self.choice_error.dofs, self.choice_error.sigma[:, 1].tolist())),
                 "leave_one_out_joints": [f"{p.name}@{p.version}" for p in self.choice_error.points],
-                "calibration": CHOICE_CALIBRATION},
+                "calibration": {"lines": LINE_CALIBRATION, "single_joints": CHOICE_CALIBRATION}},
             "warnings": "; ".join(self.warnings) or None,
         }
 
@@ -259,13 +269,16 @@ def _pool(handle, choice, conditions):
 
 def _choice_error(handle, pool, conditions, interpolate: bool):
     """The leave-one-out joint-choice error model of a query (None when the pool has too few joints)."""
-    from jointdb.store._loo import choice_error_model, leave_one_out, pool_distances
+    from jointdb.store._loo import choice_error_model, leave_one_out, line_error_model, pool_distances
 
     first = pool[0].version
     pool = [m for m in pool if m.version.model_kind == first.model_kind and tuple(m.version.dofs) == tuple(first.dofs)]
-    points = leave_one_out(handle.load_frf, pool, conditions, "axes" if interpolate else "nearest")
     here = pool_distances(pool, conditions)
     nearest = min(here, key=lambda m: m.distance)
+    if interpolate:  # whole condition lines left out and interpolated across the gap, as the request is
+        return line_error_model(handle.load_frf, pool, conditions, nearest.distance, first.dofs,
+                                inside=not nearest.extrapolating)
+    points = leave_one_out(handle.load_frf, pool, conditions, "nearest")
     return choice_error_model(points, nearest.distance, first.dofs, inside=not nearest.extrapolating)
 
 
@@ -316,6 +329,10 @@ class StackPrediction:
 def predict_with_joints(spec: StackSpec, joints: Mapping[str, JointResolution], freq=None) -> StackPrediction:
     """Predict a stack's tool-tip FRF with joints already resolved (:func:`resolve_joints`).
 
+    A prediction whose dominant tip peak is not passive (a negatively damped resonance from a per-line joint)
+    is predicted again with constant k, c joints (:func:`jointdb.usecases._stack_guard.guarded`); the replaced
+    joints' resolutions say so.
+
     Parameters
     ----------
     spec
@@ -330,8 +347,14 @@ def predict_with_joints(spec: StackSpec, joints: Mapping[str, JointResolution], 
     -------
     StackPrediction
     """
+    from jointdb.usecases._stack_guard import guarded
+
+    f = prediction_grid(spec, freq)
     resolved = {n: r.frf for n, r in joints.items() if r.frf is not None}
-    return StackPrediction(spec, predict_tool_tip(spec, resolved, prediction_grid(spec, freq)), joints)
+    # a per-line joint can create a negatively damped tip resonance: fall back to its constant k, c (and say so)
+    prediction, joints = guarded(spec, joints, predict_tool_tip(spec, resolved, f),
+                                 lambda s, frfs: predict_tool_tip(s, frfs, f))
+    return StackPrediction(spec, prediction, joints)
 
 
 def predict_stack(spec: StackSpec | Path | str, repo=None, freq=None) -> StackPrediction:

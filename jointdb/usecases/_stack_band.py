@@ -2,7 +2,8 @@
 
 :func:`prediction_band` samples every interface whose joint carries an error estimate — its fit's
 covariance (measurement noise) and, for a queried joint, the leave-one-out joint-choice error
-(:mod:`jointdb.store._loo`, calibrated by :data:`jointdb.usecases._stack.CHOICE_CALIBRATION`) — plus the
+(:mod:`jointdb.store._loo`: whole condition lines left out for an interpolated joint, calibrated by
+:data:`jointdb.usecases._stack.LINE_CALIBRATION`; single joints for a nearest one, by ``CHOICE_CALIBRATION``) — plus the
 prediction path's own model-form error (:data:`MODEL_FORM_SIGMA`), and couples them all
 (:func:`jointdb.stack._band.tip_band`). :func:`band_terms` also samples each term alone,
 to say which one dominates.
@@ -24,7 +25,7 @@ TERMS = ("measurement noise", "joint choice", "prediction path")
 #: Relative standard error of the prediction path's own tip receptance (model form: three beams joined at two
 #: points where a real stack has distributed contact, a holder model, a spindle receptance). Not estimable from
 #: the catalogue (each per-line joint reproduces its own campaign): calibrated on the tuning seeds of
-#: bench/_stack_truth_b.py, like CHOICE_CALIBRATION (docs/validation/stack-prediction.md, *Bands*).
+#: bench/_stack_truth_b.py, with LINE_CALIBRATION (docs/validation/stack-prediction.md, *Bands*).
 MODEL_FORM_SIGMA = 0.02
 
 

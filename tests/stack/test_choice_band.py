@@ -82,6 +82,7 @@ def test_raw_leave_one_out_band_contains_the_true_tip(catalogue, torque, monkeyp
     from jointdb import usecases
 
     monkeypatch.setattr(us, "CHOICE_CALIBRATION", 1.0)
+    monkeypatch.setattr(us, "LINE_CALIBRATION", 1.0)  # an interpolated request: whole torque lines left out
     monkeypatch.setattr(sb, "MODEL_FORM_SIGMA", 0.0)
     d, db = catalogue
     q = {"query": {"joint_type": "tool-holder", "materials": ["tungsten-carbide", "steel"], "torque_nm": torque,
