@@ -85,6 +85,7 @@ def read_frf_csv(path: str | os.PathLike) -> FRF:
     Returns
     -------
     FRF
+        The FRF with the file's lines, DOF labels and quantity.
 
     Raises
     ------

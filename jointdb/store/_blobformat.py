@@ -267,6 +267,7 @@ def read_frf_file(path: str | os.PathLike, verify: bool = True) -> FRF:
     Returns
     -------
     FRF
+        The FRF the file holds (with ``verify``, bit for bit the one written).
 
     Raises
     ------

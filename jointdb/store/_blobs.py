@@ -112,6 +112,7 @@ class BlobStore(VerifyingBlobs):
         Returns
         -------
         Path
+            ``root/<first two hex digits>/<digest>.h5``; the file may not exist.
 
         Raises
         ------
@@ -257,6 +258,7 @@ class BlobStore(VerifyingBlobs):
         Returns
         -------
         FRF
+            The stored FRF, its content hash checked against ``digest``.
 
         Raises
         ------

@@ -261,6 +261,7 @@ class VersionReads:
         Returns
         -------
         FRF
+            The joint's identified FRF, verified against its content hash.
 
         Raises
         ------
@@ -298,6 +299,7 @@ class VersionReads:
         Returns
         -------
         FRF
+            The measurement as it was uploaded, verified against its content hash.
 
         Raises
         ------

@@ -316,11 +316,12 @@ class Repository(VersionReads, WholeRepository, LabelsAndStates, PartsStore):
         Returns
         -------
         Catalogued or None
+            The version the first request with this key catalogued, and whether it was new.
 
         Raises
         ------
         InputError
-            The key was used by the same owner for another request.
+            This owner already sent this key with a different request body.
         """
         if idempotency is None:
             return None

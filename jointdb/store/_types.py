@@ -130,6 +130,7 @@ class Conditions:
         Returns
         -------
         Conditions
+            The conditions in SI units, checked.
 
         Raises
         ------

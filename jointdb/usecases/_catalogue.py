@@ -202,6 +202,7 @@ def merge_conditions(path: Path, recorded: Any, given, force: bool):
     Returns
     -------
     Conditions
+        The file's conditions merged with the caller's, in SI units.
 
     Raises
     ------

@@ -138,7 +138,7 @@ def add_part_from_files(store, name: str, kind: str, *, attributes: Mapping[str,
     Returns
     -------
     PartVersion
-        The new version, or the latest one when its content is identical.
+        The part as catalogued: a new version, or the latest one when the files give identical content.
 
     Raises
     ------
