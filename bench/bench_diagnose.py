@@ -3,6 +3,11 @@
 Usage::
 
     .venv/bin/python bench/bench_diagnose.py [--cases 20] [--seed 1000] [--effects a,b] [--markdown out.md]
+        [--jsonl cases.jsonl]          # log every case as it finishes
+    .venv/bin/python bench/bench_diagnose.py --from-jsonl cases.jsonl   # report on a (partial) log
+
+Cases run seed by seed (every effect once per seed), so a run stopped part-way
+has about the same number of cases per effect.
 
 Seeds: below 1000 for development (tuning the diagnosis or the generator);
 from 1000 up for the reported benchmark, never used for tuning. The default
@@ -28,7 +33,7 @@ import time
 import numpy as np
 
 from jointdb.diagnose_bench import EFFECTS, BenchResult, generate_case, run_case, single_blas_thread
-from jointdb.diagnose_bench._run import REPORTED_SEEDS_START
+from jointdb.diagnose_bench._run import REPORTED_SEEDS_START, load_average
 from jointdb.fe import model_from_dict
 
 
@@ -87,46 +92,40 @@ def _md_table(rows, cols=None):
     return "\n".join(out)
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--cases", type=int, default=20)
-    ap.add_argument("--seed", type=int, default=1000)
-    ap.add_argument("--effects", default=",".join(EFFECTS))
-    ap.add_argument("--markdown", default=None)
-    args = ap.parse_args()
-    effects = [e for e in args.effects.split(",") if e]
-    unknown = [e for e in effects if e not in EFFECTS]
-    if unknown:
-        ap.error(f"--effects: unknown {', '.join(unknown)}; known: {', '.join(EFFECTS)}")
-    if args.seed < REPORTED_SEEDS_START:
-        print(f"note: seeds {args.seed}..{args.seed + args.cases - 1} include development seeds "
-              f"(< {REPORTED_SEEDS_START}); report only runs from --seed {REPORTED_SEEDS_START} up", flush=True)
-    gen_secs = []
-    with single_blas_thread():
-        # reference: one direct FRF synthesis of a nominal model on all recorded lines
-        case = generate_case("none", args.seed)
-        model = model_from_dict(case.model)
-        frf = case.recordings[0].frf
-        model.frf(frf.freq, points=["tip", "flute", "shank"], directions=["x"])     # warm-up
-        t = time.perf_counter()
-        model.frf(frf.freq, points=["tip", "flute", "shank"], directions=["x"])
-        t_ref = time.perf_counter() - t
-        t0 = time.perf_counter()
-        results = []
-        n_all = len(effects) * args.cases
+def _reference_seconds(seed: int) -> float:
+    """One direct FRF synthesis of a nominal model on all recorded lines (warm) [s]."""
+    case = generate_case("none", seed)
+    model = model_from_dict(case.model)
+    frf = case.recordings[0].frf
+    model.frf(frf.freq, points=["tip", "flute", "shank"], directions=["x"])     # warm-up
+    t = time.perf_counter()
+    model.frf(frf.freq, points=["tip", "flute", "shank"], directions=["x"])
+    return time.perf_counter() - t
+
+
+def _run(effects, args, log):
+    """Diagnose the cases seed by seed (every effect once per seed, so a stopped run stays balanced)."""
+    results, gen_secs = [], []
+    n_all = len(effects) * args.cases
+    for k in range(args.cases):
         for e in effects:
-            for k in range(args.cases):
-                tg = time.perf_counter()
-                case = generate_case(e, args.seed + k)
-                gen_secs.append(time.perf_counter() - tg)
-                r = run_case(case)
-                results.append(r)
-                place = "" if r.placed is None else (" placed" if r.placed else " not placed") + (
-                    f" at {r.position * 1e3:.1f} mm" if r.position is not None else "")
-                held = f" (not named, not identified: {r.unresolved})" if r.unresolved and r.named == "none" else ""
-                print(f"[{len(results)}/{n_all}] {r.case:28s} named {r.named:20s} {'+' if r.first else '-'} "
-                      f"improvement {r.improvement:7.2f} {r.seconds:5.1f} s{place}{held}", flush=True)
-        bench = BenchResult(results, time.perf_counter() - t0)
+            tg = time.perf_counter()
+            case = generate_case(e, args.seed + k)
+            gen_secs.append(time.perf_counter() - tg)
+            r = run_case(case)
+            results.append(r)
+            if log is not None:
+                log.write(r.to_json() + "\n")
+                log.flush()
+            place = "" if r.placed is None else (" placed" if r.placed else " not placed") + (
+                f" at {r.position * 1e3:.1f} mm" if r.position is not None else "")
+            held = f" (not named, not identified: {r.unresolved})" if r.unresolved and r.named == "none" else ""
+            print(f"[{len(results)}/{n_all}] {r.case:28s} named {r.named:20s} {'+' if r.first else '-'} "
+                  f"improvement {r.improvement:7.2f} {r.seconds:5.1f} s load {r.load:.1f}{place}{held}", flush=True)
+    return results, gen_secs
+
+
+def _report(bench: BenchResult, t_ref: float | None, gen_secs) -> list[str]:
     per = bench.per_effect()
     rows, cols, m = bench.confusion()
     conf = [{"hidden \\ named": r, **{c: int(v) for c, v in zip(cols, row)}} for r, row in zip(rows, m)]
@@ -135,19 +134,54 @@ def main() -> None:
     loose = [c.case for c in bench.cases if c.named != "none" and c.key_unidentified]
     held = [f"{c.case} ({c.unresolved})" for c in bench.cases if c.named == "none" and c.unresolved]
     secs = [c.seconds for c in bench.cases]
-    timing = {"cases": len(results), "total_s": round(bench.seconds, 1),
-              "median_case_s": round(float(np.median(secs)), 2), "max_case_s": round(float(np.max(secs)), 2),
-              "median_generation_s": round(float(np.median(gen_secs)), 2),
-              "reference_direct_frf_s": round(t_ref, 4),
-              "median_case_over_reference": round(float(np.median(secs)) / t_ref, 1)}
-    text = ["## Per hidden effect", _md_table(per), "", "## Confusion matrix (rows: hidden; columns: named first)",
+    timing = {"cases": len(bench.cases), "total_s": round(bench.seconds, 1),
+              "median_case_s": round(float(np.median(secs)), 2), "max_case_s": round(float(np.max(secs)), 2)}
+    if gen_secs:
+        timing["median_generation_s"] = round(float(np.median(gen_secs)), 2)
+    if t_ref:
+        timing["reference_direct_frf_s"] = round(t_ref, 4)
+        timing["median_case_over_reference"] = round(float(np.median(secs)) / t_ref, 1)
+    return ["## Per hidden effect", _md_table(per), "", "## Confusion matrix (rows: hidden; columns: named first)",
             _md_table(conf), "", "## Parameter recovery (cases named first)", _md_table(rec) if rec else "(none)",
             "", f"Named with a key parameter not identified (σ > 0.5× value): {len(loose)} "
             f"{loose if loose else ''}; best fit left unnamed as not identified: {len(held)} {held if held else ''}",
-            "", "## Timing", _md_table([timing])]
+            "", "## Timing (one BLAS thread)", _md_table([timing]), "", _md_table(bench.timing())]
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--cases", type=int, default=20)
+    ap.add_argument("--seed", type=int, default=1000)
+    ap.add_argument("--effects", default=",".join(EFFECTS))
+    ap.add_argument("--markdown", default=None)
+    ap.add_argument("--jsonl", default=None, help="append one JSON line per diagnosed case to this file")
+    ap.add_argument("--from-jsonl", default=None, help="only report on the cases logged in this file")
+    args = ap.parse_args()
+    effects = [e for e in args.effects.split(",") if e]
+    unknown = [e for e in effects if e not in EFFECTS]
+    if unknown:
+        ap.error(f"--effects: unknown {', '.join(unknown)}; known: {', '.join(EFFECTS)}")
+    if args.seed < REPORTED_SEEDS_START:
+        print(f"note: seeds {args.seed}..{args.seed + args.cases - 1} include development seeds "
+              f"(< {REPORTED_SEEDS_START}); report only runs from --seed {REPORTED_SEEDS_START} up", flush=True)
+    print("load average at start: %.2f %.2f %.2f (1, 5, 15 min)" % load_average(), flush=True)
+    if args.from_jsonl:
+        with open(args.from_jsonl, encoding="utf-8") as fh:
+            bench, t_ref, gen_secs = BenchResult.from_lines(fh), None, []
+    else:
+        with single_blas_thread():
+            t_ref = _reference_seconds(args.seed)
+            t0 = time.perf_counter()
+            log = open(args.jsonl, "a", encoding="utf-8") if args.jsonl else None
+            try:
+                results, gen_secs = _run(effects, args, log)
+            finally:
+                if log is not None:
+                    log.close()
+            bench = BenchResult(results, time.perf_counter() - t0)
+    text = _report(bench, t_ref, gen_secs)
     print("\n".join(text))
-    print(f"median run time per case: {timing['median_case_s']} s (diagnosis, one BLAS thread); "
-          f"median generation {timing['median_generation_s']} s")
+    print("load average at end: %.2f %.2f %.2f (1, 5, 15 min)" % load_average())
     if args.markdown:
         with open(args.markdown, "w", encoding="utf-8") as fh:
             fh.write("\n".join(text) + "\n")
