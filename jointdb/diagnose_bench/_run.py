@@ -33,7 +33,7 @@ import numpy as np
 from jointdb.diagnose_bench._cases import EFFECTS, BenchCase, generate_case
 
 __all__ = ["CaseResult", "BenchResult", "run_case", "run_benchmark", "expected_families",
-           "truth_position", "placement_tolerance", "REPORTED_SEEDS_START", "TIME_GOAL_S", "time_goal",
+           "truth_position", "placement_tolerance", "diagnose_case", "REPORTED_SEEDS_START", "TIME_GOAL_S", "time_goal",
            "load_average"]
 
 #: first seed of the reported benchmark; seeds below it are for development
@@ -203,16 +203,35 @@ class BenchResult:
         return rows, cols, m
 
 
-def run_case(case: BenchCase) -> CaseResult:
-    """Diagnose one generated case and score it."""
+def diagnose_case(case: BenchCase):
+    """Diagnose a generated case as a user would: its nominal model against its recordings.
+
+    Parameters
+    ----------
+    case
+        A :class:`BenchCase` from :func:`generate_case`.
+
+    Returns
+    -------
+    model : jointdb.fe.BeamModel
+        The nominal model the case hands to the diagnosis.
+    diagnosis : jointdb.diagnose.Diagnosis
+        Its ``seconds`` is the diagnosis's wall time [s].
+    """
     from jointdb.diagnose import Measurement, diagnose
-    from jointdb.diagnose._identify import unidentified
     from jointdb.fe import model_from_dict
 
     model = model_from_dict(case.model)
     ms = [Measurement(r.frf, r.coherence, r.level_n, label=f"{case.name}/{i}") for i, r in enumerate(case.recordings)]
+    return model, diagnose(model, ms)
+
+
+def run_case(case: BenchCase) -> CaseResult:
+    """Diagnose one generated case and score it."""
+    from jointdb.diagnose._identify import unidentified
+
     t0 = time.perf_counter()
-    d = diagnose(model, ms)
+    _, d = diagnose_case(case)
     dt = time.perf_counter() - t0
     best = d.best
 

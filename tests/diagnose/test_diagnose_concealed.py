@@ -6,28 +6,23 @@ hidden effect is named first and the refit mismatch falls >= 3x (tolerance:
 every case of this small sample; the benchmark reports the rates).
 """
 
+import functools
+
 import numpy as np
 import pytest
 
-from jointdb.diagnose import Measurement, diagnose
-from jointdb.diagnose_bench import generate_case, run_case
-from jointdb.fe import PointMass, Support, model_from_dict
+from jointdb.diagnose_bench import diagnose_case, generate_case, run_case
+from jointdb.fe import PointMass, Support
 
 CLAIMED = ["joint_compliance", "joint_damping", "sensor_mass", "shear_rotary", "fluted_diameter",
            "hysteretic_damping", "gain", "delay"]
 
 
-_CACHE: dict = {}
-
-
+@functools.cache
 def _diagnosed(effect, seed):
     """(case, model, Diagnosis), computed once per session."""
-    if (effect, seed) not in _CACHE:
-        case = generate_case(effect, seed)
-        model = model_from_dict(case.model)
-        d = diagnose(model, [Measurement(r.frf, r.coherence, r.level_n) for r in case.recordings])
-        _CACHE[(effect, seed)] = (case, model, d)
-    return _CACHE[(effect, seed)]
+    case = generate_case(effect, seed)
+    return (case, *diagnose_case(case))
 
 
 def _primary(d):
