@@ -4,15 +4,10 @@
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import numpy as np
 
 from jointdb.errors import InputError
 from jointdb.frf import FRF, Dof
-
-if TYPE_CHECKING:
-    from jointdb.diagnose._data import Measurement
 
 __all__ = ["finite_recording", "lines_text"]
 
@@ -33,8 +28,8 @@ def lines_text(freq: np.ndarray, idx: np.ndarray, limit: int = 3) -> str:
     return ", ".join(parts) + (f" and {more} more line{'s' if more > 1 else ''}" if more else "")
 
 
-def finite_recording(m: Measurement, k: int, mask: bool, notes: list[str]):
-    """The recording as an :class:`FRF` plus its coherence and the mask of non-finite entries (or None).
+def finite_recording(m, k: int, mask: bool, notes: list[str]):
+    """A :class:`Measurement` (the ``k``-th) as an :class:`FRF`, its coherence and the mask of non-finite entries (or None).
 
     Non-finite frequencies, values or coherence are refused (naming the
     recording, the FRF entry and the lines) unless ``mask``; masked lines get

@@ -10,15 +10,10 @@ Model form: a delete-one-block jackknife over frequency (:func:`jackknife_spread
 from __future__ import annotations
 
 import copy
-from typing import TYPE_CHECKING
-
 import numpy as np
 import scipy.optimize
 
 from jointdb.errors import NumericalError
-
-if TYPE_CHECKING:
-    from jointdb.diagnose._fit import Fit, ModelEvaluator
 
 __all__ = ["FLAT_SIGMA", "JACKKNIFE_BLOCKS", "correlation_inflation", "linearised_sigmas", "jackknife_spread"]
 
@@ -30,7 +25,7 @@ FLAT_SIGMA = 1e3
 JACKKNIFE_BLOCKS = 5
 
 
-def correlation_inflation(r: np.ndarray, ev: ModelEvaluator) -> float:
+def correlation_inflation(r: np.ndarray, ev) -> float:
     """Variance inflation τ = n / n_eff for residuals correlated along frequency.
 
     τ = 1 + 2 Σ_k ρ_k is the integrated autocorrelation time of the residual
@@ -54,7 +49,7 @@ def correlation_inflation(r: np.ndarray, ev: ModelEvaluator) -> float:
     return float(min(tau, max(ev.n / 4.0, 1.0)))
 
 
-def linearised_sigmas(params, res, rss: float, ev: ModelEvaluator):
+def linearised_sigmas(params, res, rss: float, ev):
     """Statistical σ of a least-squares fit: ``χ²_red τ (JᵀJ)⁻¹`` at the optimum.
 
     Parameters
@@ -97,7 +92,7 @@ def linearised_sigmas(params, res, rss: float, ev: ModelEvaluator):
     return sigmas, cov, inflate
 
 
-def jackknife_spread(ev: ModelEvaluator, nominal, fit: Fit, blocks: int = JACKKNIFE_BLOCKS) -> dict:
+def jackknife_spread(ev, nominal, fit, blocks: int = JACKKNIFE_BLOCKS) -> dict:
     """Model-form spread of a fit's parameters: delete-one-block jackknife over frequency.
 
     The fit lines are cut into ``blocks`` contiguous groups (in practice: the
