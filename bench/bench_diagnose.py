@@ -121,7 +121,8 @@ def _run(effects, args, log):
                 f" at {r.position * 1e3:.1f} mm" if r.position is not None else "")
             held = f" (not named, not identified: {r.unresolved})" if r.unresolved and r.named == "none" else ""
             print(f"[{len(results)}/{n_all}] {r.case:28s} named {r.named:20s} {'+' if r.first else '-'} "
-                  f"improvement {r.improvement:7.2f} {r.seconds:5.1f} s load {r.load:.1f}{place}{held}", flush=True)
+                  f"improvement {r.improvement:7.2f} {r.seconds:5.1f} s (cpu {r.cpu_seconds:5.1f} s) load {r.load:.1f}"
+                  f"{place}{held}", flush=True)
     return results, gen_secs
 
 

@@ -108,6 +108,7 @@ class CaseResult:
     equivalent: tuple = ()         # parameters of the named fit that are an equivalent model's (labelled so)
 
     load: float | None = None      # 1-minute load average when the case finished (timing context)
+    cpu_seconds: float | None = None  # CPU time of the diagnosis [s] (≈ wall time on an idle core)
 
     def to_json(self) -> str:
         """One JSON line (non-finite numbers as JSON's Infinity/NaN, numpy scalars as floats)."""
@@ -171,16 +172,26 @@ class BenchResult:
         return rows
 
     def timing(self) -> list[dict]:
-        """Per hidden effect: median / max diagnosis time against its goal, and the load it ran under."""
+        """Per hidden effect: median / max diagnosis time (wall and CPU) against its goal, and the load.
+
+        On a shared machine the wall time grows with the load; the CPU time of the (single-threaded)
+        diagnosis is what it takes on an idle core, so the goal is judged on it as well.
+        """
         rows = []
         for eff in dict.fromkeys(c.effect for c in self.cases):
-            secs = [c.seconds for c in self.cases if c.effect == eff]
-            loads = [c.load for c in self.cases if c.effect == eff and c.load is not None]
-            med = float(np.median(secs))
-            rows.append({"effect": eff, "cases": len(secs), "median_s": round(med, 1),
-                         "max_s": round(float(np.max(secs)), 1), "goal_s": time_goal(eff),
-                         "met": "yes" if med <= time_goal(eff) else "NO",
-                         "load_1min": f"{min(loads):.1f}–{max(loads):.1f}" if loads else ""})
+            cs = [c for c in self.cases if c.effect == eff]
+            secs = [c.seconds for c in cs]
+            cpu = [c.cpu_seconds for c in cs if c.cpu_seconds is not None]
+            loads = [c.load for c in cs if c.load is not None]
+            goal = time_goal(eff)
+            row = {"effect": eff, "cases": len(cs), "median_wall_s": round(float(np.median(secs)), 1),
+                   "max_wall_s": round(float(np.max(secs)), 1)}
+            if cpu:
+                row |= {"median_cpu_s": round(float(np.median(cpu)), 1), "max_cpu_s": round(float(np.max(cpu)), 1)}
+            row |= {"goal_s": goal, "wall_met": "yes" if np.median(secs) <= goal else "NO",
+                    "cpu_met": ("yes" if np.median(cpu) <= goal else "NO") if cpu else "",
+                    "load_1min": f"{min(loads):.1f}–{max(loads):.1f}" if loads else ""}
+            rows.append(row)
         return rows
 
     @classmethod
@@ -230,9 +241,9 @@ def run_case(case: BenchCase) -> CaseResult:
     """Diagnose one generated case and score it."""
     from jointdb.diagnose._identify import unidentified
 
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     _, d = diagnose_case(case)
-    dt = time.perf_counter() - t0
+    dt, cpu = time.perf_counter() - t0, time.process_time() - c0
     best = d.best
 
     def first_family(f):
@@ -266,7 +277,7 @@ def run_case(case: BenchCase) -> CaseResult:
         key_unidentified=() if best is None else tuple(unidentified(best)),
         equivalent=() if best is None else tuple(q.name.removeprefix("a.") for q in best.candidate.params
                                                  if q.equivalent),
-        load=round(load_average()[0], 2),
+        load=round(load_average()[0], 2), cpu_seconds=cpu,
     )
 
 
