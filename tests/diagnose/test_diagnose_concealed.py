@@ -11,6 +11,7 @@ import functools
 import numpy as np
 import pytest
 
+from jointdb.diagnose._identify import unidentified
 from jointdb.diagnose_bench import diagnose_case, generate_case, run_case
 from jointdb.fe import PointMass, Support
 
@@ -37,6 +38,8 @@ def test_hidden_effect_is_named_first_and_fit_improves(effect, seed):
     assert d.explained
     assert _primary(d).family == effect, [f.name for f in d.ranking[:3]]
     assert d.mismatch_before / d.mismatch_after >= 3.0
+    # nothing is named whose key parameter has σ > 0.5× its value (issue 25)
+    assert unidentified(d.best) == {}, d.best.sigmas
 
 
 @pytest.mark.parametrize("seed", [0, 1])
