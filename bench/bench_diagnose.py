@@ -33,7 +33,7 @@ import time
 import numpy as np
 
 from jointdb.diagnose_bench import EFFECTS, BenchResult, generate_case, run_case, single_blas_thread
-from jointdb.diagnose_bench._run import REPORTED_SEEDS_START, load_average
+from jointdb.diagnose_bench._run import REPORTED_SEEDS_START, effects_from, load_average
 from jointdb.fe import model_from_dict
 
 
@@ -195,10 +195,10 @@ def main() -> None:
     ap.add_argument("--jsonl", default=None, help="append one JSON line per diagnosed case to this file")
     ap.add_argument("--from-jsonl", default=None, help="only report on the cases logged in this file")
     args = ap.parse_args()
-    effects = [e for e in args.effects.split(",") if e]
-    unknown = [e for e in effects if e not in EFFECTS]
-    if unknown:
-        ap.error(f"--effects: unknown {', '.join(unknown)}; known: {', '.join(EFFECTS)}")
+    try:
+        effects = effects_from(args.effects)
+    except ValueError as exc:
+        ap.error(f"--effects: {exc}")
     if args.seed < REPORTED_SEEDS_START:
         print(f"note: seeds {args.seed}..{args.seed + args.cases - 1} include development seeds "
               f"(< {REPORTED_SEEDS_START}); report only runs from --seed {REPORTED_SEEDS_START} up", flush=True)

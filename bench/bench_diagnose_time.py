@@ -26,7 +26,7 @@ import time
 import numpy as np
 
 from jointdb.diagnose_bench import EFFECTS, BenchResult, generate_case, run_case, single_blas_thread
-from jointdb.diagnose_bench._run import load_average
+from jointdb.diagnose_bench._run import effects_from, load_average
 from jointdb.fe import model_from_dict
 
 
@@ -57,10 +57,10 @@ def main() -> None:
     ap.add_argument("--effects", default=",".join(EFFECTS))
     ap.add_argument("--from-jsonl", default=None, help="summarise the cases logged by bench_diagnose.py --jsonl")
     args = ap.parse_args()
-    effects = [e for e in args.effects.split(",") if e]
-    unknown = [e for e in effects if e not in EFFECTS]
-    if unknown:
-        ap.error(f"--effects: unknown {', '.join(unknown)}; known: {', '.join(EFFECTS)}")
+    try:
+        effects = effects_from(args.effects)
+    except ValueError as exc:
+        ap.error(f"--effects: {exc}")
     print("load average at start: %.2f %.2f %.2f (1, 5, 15 min)" % load_average(), flush=True)
     if args.from_jsonl:
         with open(args.from_jsonl, encoding="utf-8") as fh:

@@ -34,7 +34,7 @@ from jointdb.diagnose_bench._cases import EFFECTS, BenchCase, generate_case
 
 __all__ = ["CaseResult", "BenchResult", "run_case", "run_benchmark", "expected_families",
            "truth_position", "placement_tolerance", "diagnose_case", "REPORTED_SEEDS_START", "TIME_GOAL_S", "time_goal",
-           "load_average"]
+           "load_average", "effects_from"]
 
 #: first seed of the reported benchmark; seeds below it are for development
 REPORTED_SEEDS_START = 1000
@@ -56,6 +56,15 @@ _TUPLE_FIELDS = ("names", "top3", "level_improvements", "key_unidentified", "equ
 def time_goal(effect: str) -> float:
     """Median diagnosis time goal [s] for a hidden effect (45 s micro-slip, 30 s otherwise)."""
     return TIME_GOAL_S["micro-slip" if effect in LEVEL_EFFECTS else "other"]
+
+
+def effects_from(text: str) -> list[str]:
+    """The hidden effects named in a comma-separated list (ValueError naming any unknown one)."""
+    effects = [e for e in text.split(",") if e]
+    unknown = [e for e in effects if e not in EFFECTS]
+    if unknown:
+        raise ValueError(f"unknown {', '.join(unknown)}; known: {', '.join(EFFECTS)}")
+    return effects
 
 
 def load_average() -> tuple[float, float, float]:
