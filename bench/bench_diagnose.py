@@ -204,8 +204,7 @@ def main() -> None:
               f"(< {REPORTED_SEEDS_START}); report only runs from --seed {REPORTED_SEEDS_START} up", flush=True)
     print("load average at start: %.2f %.2f %.2f (1, 5, 15 min)" % load_average(), flush=True)
     if args.from_jsonl:
-        with open(args.from_jsonl, encoding="utf-8") as fh:
-            bench, t_ref, gen_secs = BenchResult.from_lines(fh), None, []
+        bench, t_ref, gen_secs = BenchResult.from_file(args.from_jsonl), None, []
     else:
         with single_blas_thread():
             t_ref = _reference_seconds(args.seed)

@@ -63,9 +63,7 @@ def main() -> None:
         ap.error(f"--effects: {exc}")
     print("load average at start: %.2f %.2f %.2f (1, 5, 15 min)" % load_average(), flush=True)
     if args.from_jsonl:
-        with open(args.from_jsonl, encoding="utf-8") as fh:
-            bench = BenchResult.from_lines(fh)
-        refs = []
+        bench, refs = BenchResult.from_file(args.from_jsonl), []
     else:
         results = []
         with single_blas_thread():

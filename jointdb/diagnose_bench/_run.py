@@ -212,6 +212,15 @@ class BenchResult:
         cases = [CaseResult.from_json(s) for s in lines if s.strip()]
         return cls(cases, float(sum(c.seconds for c in cases)))
 
+    @classmethod
+    def from_file(cls, path: str) -> BenchResult:
+        """Rebuild from a ``--jsonl`` log of ``bench/bench_diagnose.py`` (gzip-compressed if ``*.gz``)."""
+        import gzip
+
+        opener = gzip.open if str(path).endswith(".gz") else open
+        with opener(path, "rt", encoding="utf-8") as fh:
+            return cls.from_lines(fh)
+
     def confusion(self) -> tuple[list[str], list[str], np.ndarray]:
         """Rows: hidden effect; columns: family named first (counts)."""
         rows = list(dict.fromkeys(c.effect for c in self.cases))
