@@ -72,7 +72,8 @@ Excitation levels
 from jointdb.diagnose._compare import ModePair, Peak, Signature, find_peaks, pair_modes, signature
 from jointdb.diagnose._data import Measurement, Observation, prepare
 from jointdb.diagnose._diagnose import BIC_MARGIN, MIN_IMPROVEMENT, MIN_PAIR_IMPROVEMENT, Diagnosis, diagnose
-from jointdb.diagnose._fit import Fit, ModelEvaluator, fit_candidate, jackknife_spread
+from jointdb.diagnose._fit import Fit, ModelEvaluator, fit_candidate
+from jointdb.diagnose._uncertainty import jackknife_spread
 from jointdb.diagnose._levels import LevelAnalysis, ModeTrack, track_modes
 from jointdb.diagnose._modalfit import ModalFit, local_modal_fit
 from jointdb.diagnose.physics import Candidate, Context, Param, candidates_for, register

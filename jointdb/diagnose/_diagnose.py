@@ -9,17 +9,22 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from jointdb.diagnose._compare import Signature, find_peaks, signature
+from jointdb.diagnose._compare import Signature, signature
 from jointdb.diagnose._data import Measurement, Observation, prepare
-from jointdb.diagnose._fit import Fit, ModelEvaluator, fit_candidate, nominal_fit
-from jointdb.diagnose._identify import (
-    combination_note,
-    damping_grows,
-    identified,
-    identify_advice,
-    model_form_sigmas,
-    next_ranked,
-    unidentified,
+from jointdb.diagnose._fit import Fit, ModelEvaluator, nominal_fit
+from jointdb.diagnose._identify import combination_note, identified, identify_advice, next_ranked, unidentified
+from jointdb.diagnose._select import (
+    BIC_MARGIN,
+    CLOSE_CALL,
+    MIN_IMPROVEMENT,
+    MIN_PAIR_IMPROVEMENT,
+    OCCAM_TOLERANCE,
+    Rules,
+    fit_pairs,
+    fit_singles,
+    prefit_targets,
+    select_candidates,
+    settle_best,
 )
 from jointdb.diagnose._validity import check_beam_range
 from jointdb.diagnose._verdict import (
@@ -31,37 +36,10 @@ from jointdb.diagnose._verdict import (
     unexplained_verdict,
     unidentified_verdict,
 )
-from jointdb.diagnose.physics import Combination, Context, candidates_for
-from jointdb.diagnose.physics.interface import screen_sites
+from jointdb.diagnose.physics import Combination
 from jointdb.errors import InputError
 
 __all__ = ["Diagnosis", "diagnose", "BIC_MARGIN", "MIN_IMPROVEMENT", "MIN_PAIR_IMPROVEMENT"]
-
-#: An explanation must lower the BIC by at least this much ...
-BIC_MARGIN = 10.0
-#: ... and reduce the mismatch by at least this factor (false-alarm threshold,
-#: chosen on null cases of the benchmark generator: see docs/validation/diagnose-bench.md).
-MIN_IMPROVEMENT = 1.5
-#: A combination (a second effect) must beat the best single explanation by this
-#: factor in mismatch, and by BIC_MARGIN in BIC *per independent line group*
-#: (ΔBIC divided by the residual's correlation time τ), so that a second effect
-#: is not added merely to soak up the model-form error of the first.
-MIN_PAIR_IMPROVEMENT = 2.0
-#: Parsimony: an explanation with fewer parameters whose mismatch is within
-#: this factor of the BIC-best one is preferred (BIC alone under-penalises,
-#: because residuals on neighbouring lines are correlated).
-OCCAM_TOLERANCE = 1.15
-#: A fit whose parameters lie outside their plausible range keeps only 1/(1 + w Σd²) of its BIC gain
-#: (d: distance outside the range in units of its width; see Param.implausibility).
-PLAUSIBILITY_WEIGHT = 4.0
-#: Another explanation within this factor of the best's mismatch is named as a close alternative.
-CLOSE_CALL = 1.25
-#: Evaluations per parameter (+1) of the harmonic-balance refinement of a selected micro-slip joint.
-REFINE_EVALUATIONS = 3
-#: Interface sites at which level-dependent joints are fitted (those of the best linear joint fits).
-LEVEL_SITES = 2
-#: Families of linear joints (a level-dependent joint starts from their fit at the same place).
-JOINT_FAMILIES = ("joint_compliance", "joint_damping")
 
 
 @dataclass
@@ -232,21 +210,6 @@ class Diagnosis:
         }
 
 
-def _plausibility(fit: Fit, nominal: Fit) -> None:
-    """Mark parameters outside their plausible range and shrink the fit's BIC gain accordingly.
-
-    ``score = BIC_nominal + ΔBIC / (1 + PLAUSIBILITY_WEIGHT Σ d²)`` for a gain
-    (ΔBIC < 0), ``d`` being each parameter's distance outside its plausible
-    range in units of the range width (:meth:`Param.implausibility`).
-    """
-    params = fit.candidate.params if fit.candidate is not None else ()
-    bad = {q.name: q.implausibility(fit.values[q.name]) for q in params}
-    fit.implausible = {k: v for k, v in bad.items() if v > 0}
-    d2 = sum(v * v for v in fit.implausible.values())
-    gain = fit.bic - nominal.bic
-    fit.score = nominal.bic + (gain / (1.0 + PLAUSIBILITY_WEIGHT * d2) if gain < 0 else gain)
-
-
 def _level_analysis(obs: Observation, centres=None):
     """Local modal fits per level (None with a single level or when no mode can be fitted)."""
     if len(obs.levels) < 2:
@@ -272,22 +235,6 @@ def _model_level_analysis(full: ModelEvaluator, H: np.ndarray, obs: Observation,
         return track_modes(full.freq, H, np.where(full.w > 0, full.w, 0.0), obs.levels, centres=centres)
     except (InputError, NumericalError, np.linalg.LinAlgError):
         return None
-
-
-def _per_level_start(cand, fits: list[Fit]) -> dict | None:
-    """Start a level-dependent candidate from the best fitted linear joint at the same place."""
-    names = {q.name for q in cand.params}
-    same = [f for f in fits if f.candidate.slot == cand.slot and f.family in JOINT_FAMILIES
-            and names >= {q.name for q in f.candidate.params} - {"eta_joint"}]
-    if not same:
-        same = [f for f in fits if f.family in JOINT_FAMILIES and not hasattr(f.candidate, "site")]
-    if not same:
-        return None
-    seed = min(same, key=lambda f: f.bic).values
-    start = {k: v for k, v in seed.items() if k in names}
-    if "eta_joint" in seed and "eta_0" in names:
-        start["eta_0"] = seed["eta_joint"]
-    return start or None
 
 
 def diagnose(model, measurements: Sequence[Measurement], mapping: Mapping[int, str] | None = None,
@@ -344,6 +291,52 @@ def diagnose(model, measurements: Sequence[Measurement], mapping: Mapping[int, s
     (True, True)
     """
     t0 = time.perf_counter()
+    run = _compare(model, measurements, mapping, band, mask_nonfinite)
+    best, unresolved, ok, fits, found = _search(run, model, families, combinations)
+    # rank 1 is what the verdict talks about: the named fit, else the unidentified one, else the best
+    # fit that could explain these recordings (with level dependence: an amplitude-dependent one)
+    top = best or unresolved
+    fits = ([top] if top is not None else []) + sorted((f for f in fits if f is not top),
+                                                        key=lambda f: (not run.rules.eligible(f), f.score))
+    mis0 = run.full.mismatch(np.asarray(run.H0_full))
+    mis1 = run.full.mismatch(np.asarray(found.H_full)) if found.H_full is not None else mis0
+    if best is not None and mis1 * MIN_IMPROVEMENT > mis0:
+        # the fit lines improved but the whole band did not: not an explanation (never explained=True below 1.5x)
+        words = _Words(not_better_verdict(best, _where(run), mis0, mis1, MIN_IMPROVEMENT))
+        best, found, mis1 = None, _Found(), mis0
+    else:
+        words = _words(run, best, unresolved, ok, fits, found, mis0, mis1)
+    levels_model = _model_level_analysis(run.full, np.asarray(found.H_full), run.obs, run.levels_data) \
+        if found.H_full is not None and run.levels_data is not None else None
+    return Diagnosis(
+        explained=best is not None, verdict=words.verdict, best=best, ranking=fits, nominal=run.nominal,
+        before=run.before, after=found.after, mismatch_before=mis0, mismatch_after=mis1,
+        augmented=found.augmented, chain_correction=found.chain, observation=run.obs,
+        level_table=found.level_table, seconds=time.perf_counter() - t0, H_before=np.asarray(run.H0_full),
+        H_after=None if found.H_full is None else np.asarray(found.H_full),
+        levels_data=run.levels_data, levels_model=levels_model, alternative=words.alternative,
+        advice=words.advice, unresolved=unresolved,
+    )
+
+
+@dataclass(frozen=True)
+class _Run:
+    """A diagnosis's first step: the recordings on the model's lines, the nominal model compared with
+    them, and the selection rules that follow from the levels."""
+
+    obs: Observation
+    ev: ModelEvaluator            # the fit lines
+    full: ModelEvaluator          # all recorded lines (direct synthesis)
+    modes: np.ndarray             # the nominal model's first natural frequencies [Hz]
+    H0_full: object               # the nominal receptance on all lines
+    before: Signature
+    nominal: Fit
+    levels_data: object           # LevelAnalysis of the recordings, or None
+    rules: Rules
+
+
+def _compare(model, measurements, mapping, band, mask_nonfinite: bool) -> _Run:
+    """Read the recordings onto the model's lines and compare the nominal model with them."""
     modes = model.modes(8).freq_hz
     kw = {"mask_nonfinite": True} if mask_nonfinite else {}
     obs = prepare(model, measurements, mapping, band, model_freqs=modes, **kw)
@@ -356,59 +349,63 @@ def diagnose(model, measurements: Sequence[Measurement], mapping: Mapping[int, s
     nominal = nominal_fit(ev, model)
     nominal.score = nominal.bic
     levels_data = _level_analysis(obs)
-    rules = _Rules(nominal, levels_data is not None and levels_data.differs,
-                   levels_data is not None and levels_data.damping_grows)
-    cands = _candidates(model, obs, modes, before, families, rules.level_dependent)
-    fits = _fit_singles(ev, model, cands, _prefit_targets(full), rules)
+    rules = Rules(nominal, levels_data is not None and levels_data.differs,
+                  levels_data is not None and levels_data.damping_grows)
+    return _Run(obs, ev, full, modes, H0_full, before, nominal, levels_data, rules)
+
+
+def _search(run: _Run, model, families, combinations: bool):
+    """Fit the candidates (and pairs), select, and keep the selection only if it is identified.
+
+    Returns ``(best, unresolved, ok, fits, found)``: the named fit (or None), the best fit left unnamed
+    as not identified (or None), the accepted fits, all fits, and what the named fit gives (:class:`_Found`).
+    """
+    cands = select_candidates(model, run.obs, run.modes, run.before, families, run.rules.level_dependent)
+    fits = fit_singles(run.ev, model, cands, prefit_targets(run.full), run.rules)
     if combinations and fits:
-        fits = _fit_pairs(ev, model, fits, rules)
-    ok = [f for f in fits if rules.eligible(f) and rules.passes(f, nominal)]
+        fits = fit_pairs(run.ev, model, fits, run.rules)
+    ok = [f for f in fits if run.rules.eligible(f) and run.rules.passes(f, run.nominal)]
     best, found, unresolved = None, _Found(), None
     if ok:
-        best, fits = _settle_best(ev, model, ok, fits, rules)
-        best, unresolved = identified(ev, model, best, ok, fits, rules, CLOSE_CALL)
+        best, fits = settle_best(run.ev, model, ok, fits, run.rules)
+        best, unresolved = identified(run.ev, model, best, ok, fits, run.rules, CLOSE_CALL)
         if best is not None:
-            found = _apply_best(model, best, obs, full, levels_data)
-    # rank 1 is what the verdict talks about: the named fit, else the unidentified one, else the best
-    # fit that could explain these recordings (with level dependence: an amplitude-dependent one)
-    top = best or unresolved
-    fits = ([top] if top is not None else []) + sorted((f for f in fits if f is not top),
-                                                        key=lambda f: (not rules.eligible(f), f.score))
-    mis0 = full.mismatch(np.asarray(H0_full))
-    mis1 = full.mismatch(np.asarray(found.H_full)) if found.H_full is not None else mis0
-    levels_model = _model_level_analysis(full, np.asarray(found.H_full), obs, levels_data) \
-        if found.H_full is not None and levels_data is not None else None
-    where = shift_text(before) + levels_text(levels_data)
-    alternative, advice = None, ""
-    if best is not None and mis1 * MIN_IMPROVEMENT > mis0:
-        # the fit lines improved but the whole band did not: not an explanation (never explained=True below 1.5x)
-        verdict = not_better_verdict(best, where, mis0, mis1, MIN_IMPROVEMENT)
-        best, found, levels_model = None, _Found(), None
-        mis1 = mis0
-    elif unresolved is not None and best is None:
-        verdict = unidentified_verdict(unresolved, unidentified(unresolved), where, mis0,
-                                       identify_advice(unresolved, len(set(obs.out_points)), len(obs.levels)))
-    elif best is None:
+            found = _apply_best(model, best, run.obs, run.full, run.levels_data)
+    return best, unresolved, ok, fits, found
+
+
+@dataclass(frozen=True)
+class _Words:
+    verdict: str
+    alternative: Fit | None = None
+    advice: str = ""
+
+
+def _where(run: _Run) -> str:
+    """Where the recording departs from the model (mode shifts, level trends), in words."""
+    return shift_text(run.before) + levels_text(run.levels_data)
+
+
+def _words(run: _Run, best, unresolved, ok, fits, found, mis0: float, mis1: float) -> _Words:
+    """The verdict: what was named (rank 1) and why it beats the next, or why nothing is named."""
+    where, rules = _where(run), run.rules
+    if unresolved is not None and best is None:
+        return _Words(unidentified_verdict(unresolved, unidentified(unresolved), where, mis0,
+                                           identify_advice(unresolved, len(set(run.obs.out_points)),
+                                                           len(run.obs.levels))))
+    if best is None:
         runner = fits[0] if fits else None
         verdict = unexplained_verdict(fits, runner, rules.nominal.mismatch, rules.level_dependent, where, mis0)
         if runner is not None and rules.level_dependent and not rules.eligible(runner):
             verdict += f" ({runner.candidate.explanation} cannot change with the excitation level.)"
-    else:
-        verdict, alternative, advice = explained_verdict(best, ok, found.level_table, obs, where, mis0, mis1,
-                                                         CLOSE_CALL)
-        nxt = next_ranked(best, fits)
-        # a close alternative is already named with the measurement that separates it
-        verdict += combination_note(best) + rank_text(best, None if nxt is alternative else nxt, rules.eligible,
-                                                      unresolved)
-    return Diagnosis(
-        explained=best is not None, verdict=verdict, best=best, ranking=fits, nominal=nominal, before=before,
-        after=found.after, mismatch_before=mis0, mismatch_after=mis1, augmented=found.augmented,
-        chain_correction=found.chain, observation=obs, level_table=found.level_table,
-        seconds=time.perf_counter() - t0, H_before=np.asarray(H0_full),
-        H_after=None if found.H_full is None else np.asarray(found.H_full),
-        levels_data=levels_data, levels_model=levels_model, alternative=alternative, advice=advice,
-        unresolved=unresolved,
-    )
+        return _Words(verdict)
+    verdict, alternative, advice = explained_verdict(best, ok, found.level_table, run.obs, where, mis0, mis1,
+                                                     CLOSE_CALL)
+    nxt = next_ranked(best, fits)
+    # a close alternative is already named with the measurement that separates it
+    verdict += combination_note(best) + rank_text(best, None if nxt is alternative else nxt, rules.eligible,
+                                                  unresolved)
+    return _Words(verdict, alternative, advice)
 
 
 def _check_shared_resonance(obs: Observation, modes: np.ndarray, before: Signature) -> None:
@@ -420,130 +417,6 @@ def _check_shared_resonance(obs: Observation, modes: np.ndarray, before: Signatu
             f"the model's modes are at {', '.join(f'{f:.0f}' for f in modes[:4])} Hz; "
             "record (or choose with --band) a range that contains them"
         )
-
-
-@dataclass(frozen=True)
-class _Rules:
-    """The selection rules of a diagnosis, against its nominal fit."""
-
-    nominal: Fit
-    #: the recordings differ across levels beyond noise
-    level_dependent: bool
-    #: ... and their damping grows with the level
-    damping_grows: bool = False
-
-    def eligible(self, f: Fit) -> bool:
-        # when the levels disagree beyond noise, only an explanation that accounts for all of them may win;
-        # when the recorded damping grows with the level, only one whose damping grows with it
-        if not self.level_dependent:
-            return True
-        return f.candidate.per_level and (not self.damping_grows or damping_grows(f))
-
-    @staticmethod
-    def passes(f: Fit, ref: Fit) -> bool:
-        return f.score <= ref.score - BIC_MARGIN and f.mismatch * MIN_IMPROVEMENT <= ref.mismatch
-
-    def simplest(self, f: Fit, fits: list[Fit]) -> Fit:
-        """The member of f's slot with fewest parameters that is practically as good."""
-        near = [g for g in fits if g.candidate.slot == f.candidate.slot and self.passes(g, self.nominal)
-                and self.eligible(g) and g.mismatch <= OCCAM_TOLERANCE * f.mismatch]
-        return min(near, key=lambda g: (g.p, g.score)) if near else f
-
-
-def _candidates(model, obs: Observation, modes: np.ndarray, before: Signature, families, level_dependent: bool):
-    """The candidates worth fitting: the families asked for, the best-screened interface sites, and
-    level-dependent physics only when the levels differ."""
-    ctx = Context(model=model, points=tuple(dict.fromkeys(obs.out_points)), n_levels=len(obs.levels),
-                  levels=obs.levels, modes_hz=modes)
-    cands = candidates_for(ctx)
-    if families is not None:
-        cands = [c for c in cands if c.family in set(families)]
-    # joints inside the stack: screen the sites on the recorded frequency shifts, fit only the best few
-    sites = sorted({c.site for c in cands if hasattr(c, "site")}, key=lambda st: st.position)
-    kept = set(screen_sites(model, sites, before.pairs)) if sites else set()
-    cands = [c for c in cands if not hasattr(c, "site") or c.site in kept]
-    if not level_dependent:
-        # a level-dependent explanation of recordings that agree across levels is invented physics
-        cands = [c for c in cands if not c.per_level]
-    return cands
-
-
-def _prefit_targets(full: ModelEvaluator) -> np.ndarray | None:
-    """Recorded resonances for the stage-1 frequency pre-fit: the strong recorded peaks
-    (10 % of the strongest), each pulling its nearest model mode."""
-    rpk = find_peaks(full.freq, full.rec[0], full.w[0])
-    top = max((p.height for p in rpk), default=0.0)
-    strong = sorted(p.freq_hz for p in rpk if p.height >= 0.1 * top)
-    return np.asarray(strong) if strong else None
-
-
-def _fit_singles(ev: ModelEvaluator, model, cands, target, rules: _Rules) -> list[Fit]:
-    """Fit every single candidate, best score first (level-dependent joints only at the best sites)."""
-    fits = [fit_candidate(ev, model, c, target_freqs=target) for c in cands if not c.per_level]
-    # level-dependent joints (each fit costs one model per level) only where a linear joint fits best
-    linear = sorted((f for f in fits if hasattr(f.candidate, "site") and f.family in JOINT_FAMILIES),
-                    key=lambda f: f.bic)
-    best_sites = list(dict.fromkeys(f.candidate.site for f in linear))[:LEVEL_SITES]
-    for c in cands:
-        if c.per_level and (not hasattr(c, "site") or c.site in best_sites):
-            fits.append(fit_candidate(ev, model, c, start=_per_level_start(c, fits)))
-    for f in fits:
-        _plausibility(f, rules.nominal)
-    fits.sort(key=lambda f: f.score)
-    return fits
-
-
-def _fit_pairs(ev: ModelEvaluator, model, fits: list[Fit], rules: _Rules) -> list[Fit]:
-    """Add the pairs of the (up to three) best single explanations of different slots and families
-    that beat the best single one clearly enough; all fits, best score first."""
-    tops = []
-    for f in (rules.simplest(f, fits) for f in fits):
-        if rules.passes(f, rules.nominal) and all(f.candidate.slot != t.candidate.slot and
-                                                  f.family != t.family for t in tops):
-            tops.append(f)
-        if len(tops) == 3:
-            break
-    best_single = next((f for f in fits if rules.eligible(f)), fits[0])
-    pair_fits = []
-    for i in range(len(tops)):
-        for j in range(i + 1, len(tops)):
-            a, b = tops[i], tops[j]
-            if a.candidate.per_level and b.candidate.per_level:
-                continue
-            if rules.level_dependent and not (a.candidate.per_level or b.candidate.per_level):
-                continue
-            combo = Combination(a.candidate, b.candidate)
-            start = {f"a.{k}": v for k, v in a.values.items()} | {f"b.{k}": v for k, v in b.values.items()}
-            pf = fit_candidate(ev, model, combo, start=start, max_nfev=12 * (len(combo.params) + 1))
-            _plausibility(pf, rules.nominal)
-            tau = max(best_single.tau, 1.0)
-            if (best_single.score - pf.score) / tau >= BIC_MARGIN and pf.mismatch * MIN_PAIR_IMPROVEMENT <= \
-                    best_single.mismatch:
-                pair_fits.append(pf)
-    return sorted(fits + pair_fits, key=lambda f: f.score)
-
-
-def _settle_best(ev: ModelEvaluator, model, ok: list[Fit], fits: list[Fit], rules: _Rules):
-    """The selected explanation among the accepted ``ok`` (the simplest practically as good as the best),
-    with its uncertainties, refined by harmonic balance when it can be; and the ranking, it first."""
-    best = ok[0]
-    near = [f for f in ok if f.mismatch <= OCCAM_TOLERANCE * best.mismatch]
-    best = min(near, key=lambda f: (bool(f.implausible), f.p, f.score))
-    fits = [best] + [f for f in fits if f is not best]
-    model_form_sigmas(ev, model, best, fits, rules)
-    # an amplitude-dependent joint with known forces: refine by harmonic balance line by line (the
-    # selection used the per-level describing function at the linear peak, which is ~20x cheaper)
-    refine = getattr(best.candidate, "refined", None)
-    fine = refine() if refine is not None else None
-    if fine is not None:
-        rf = fit_candidate(ev, model, fine, start=best.values, max_nfev=REFINE_EVALUATIONS * (best.p + 1))
-        _plausibility(rf, rules.nominal)
-        if rf.mismatch < best.mismatch:
-            rf.sigmas_model = best.sigmas_model
-            rf.sigmas = {k: float(np.hypot(v, rf.sigmas_model.get(k, 0.0))) for k, v in rf.sigmas_stat.items()}
-            fits = [rf] + fits
-            best = rf
-    return best, fits
 
 
 @dataclass

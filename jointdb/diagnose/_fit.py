@@ -16,7 +16,7 @@ candidate's start and its extra starts. Uncertainty: the linearised
 larger than the noise) and τ the integrated autocorrelation time of the
 residual along frequency (n/τ independent lines); for the selected
 explanation, a delete-one-block jackknife over frequency adds the model-form
-spread (:func:`jackknife_spread`), and the reported σ is the root sum of
+spread (:func:`jointdb.diagnose._uncertainty.jackknife_spread`), and the reported σ is the root sum of
 squares of the two.
 """
 
@@ -27,6 +27,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.optimize
 
+from jointdb.diagnose._uncertainty import linearised_sigmas
 from jointdb.errors import InputError, NumericalError
 
 __all__ = ["Fit", "ModelEvaluator", "fit_candidate"]
@@ -285,107 +286,16 @@ def _bic(rss: float, n: int, p: int) -> float:
     return float(n * np.log(max(rss, 1e-300) / n) + p * np.log(n))
 
 
-def nominal_fit(ev: ModelEvaluator, nominal) -> Fit:
-    H = ev.predict(nominal)
+def _unfitted(ev: ModelEvaluator, H: np.ndarray, cand=None, nfev: int = 0) -> Fit:
+    """The fit of a model without free parameters (the nominal one when ``cand`` is None)."""
     r = ev.residual(H)
     rss = float(r @ r)
-    return Fit(None, {}, {}, rss, ev.n, 0, _bic(rss, ev.n, 0), ev.mismatch(H), ev.mismatch(H, True))
+    return Fit(cand, {}, {}, rss, ev.n, 0, _bic(rss, ev.n, 0), ev.mismatch(H), ev.mismatch(H, True), nfev)
 
 
-def _correlation_inflation(r: np.ndarray, ev: ModelEvaluator) -> float:
-    """Variance inflation τ = n / n_eff for residuals correlated along frequency.
-
-    τ = 1 + 2 Σ_k ρ_k is the integrated autocorrelation time of the residual
-    along the fit lines (per FRF, real and imaginary parts), summed until ρ_k
-    falls below 0.05 (at most 50 lags). Model-form error makes neighbouring
-    residuals alike, so only about n/τ of the n residuals are independent; the
-    textbook covariance (independent residuals) is too optimistic by τ.
-    """
-    shape = (2,) + ev.rec.shape
-    x = r.reshape(shape)
-    x = np.moveaxis(x, 2, -1).reshape(-1, shape[2])        # series along frequency
-    den = float((x * x).sum())
-    if den <= 0 or x.shape[1] < 3:
-        return 1.0
-    tau = 1.0
-    for k in range(1, min(50, x.shape[1] - 1)):
-        rho = float((x[:, :-k] * x[:, k:]).sum()) / den
-        if rho < 0.05:
-            break
-        tau += 2 * rho
-    return float(min(tau, max(ev.n / 4.0, 1.0)))
-
-
-#: σ (in the fit's coordinates: log space for logarithmic parameters) given to a parameter with a flat
-#: profile (the residual does not change with it): far beyond any identification threshold.
-FLAT_SIGMA = 1e3
-
-#: Contiguous frequency blocks for the delete-one-block jackknife (model-form spread).
-JACKKNIFE_BLOCKS = 5
-
-
-def jackknife_spread(ev: ModelEvaluator, nominal, fit: "Fit", blocks: int = JACKKNIFE_BLOCKS) -> dict:
-    """Model-form spread of a fit's parameters: delete-one-block jackknife over frequency.
-
-    The fit lines are cut into ``blocks`` contiguous groups (in practice: the
-    background and each resonance); the candidate is refitted with each group
-    left out, starting from the full fit. If the candidate's physics is only an
-    approximation, different parts of the spectrum ask for different values and
-    the refits scatter. Returns ``{name: σ_jk}`` (SI) with
-    ``σ_jk² = (B−1)/B Σ_b (θ_b − θ̄)²`` (in the fit's log space where the
-    parameter is logarithmic). Costs ``blocks`` short refits.
-
-    Parameters
-    ----------
-    ev
-        The :class:`ModelEvaluator` of the fit.
-    nominal
-        The nominal :class:`jointdb.fe.BeamModel`.
-    fit
-        The :class:`Fit` to assess.
-    blocks
-        Number of contiguous frequency blocks B.
-
-    Returns
-    -------
-    dict
-        Parameter name → σ_jk, SI (empty when there are too few lines or no parameters).
-    """
-    import copy
-
-    cand = fit.candidate
-    params = cand.params
-    if not params or ev.freq.size < 2 * blocks:
-        return {}
-    lo = np.array([q.u_bounds[0] for q in params])
-    hi = np.array([q.u_bounds[1] for q in params])
-    u_hat = np.clip([q.to_u(fit.values[q.name]) for q in params], lo + 1e-9, hi - 1e-9)
-    edges = np.linspace(0, ev.freq.size, blocks + 1).astype(int)
-    us = []
-    for a, b in zip(edges[:-1], edges[1:]):
-        sub = copy.copy(ev)
-        w = np.array(ev.w, copy=True)
-        w[:, a:b] = 0.0
-        sub.w = w
-        sub.n = int(2 * np.count_nonzero(w))
-
-        def fun(u, sub=sub):
-            vals = {q.name: q.from_u(x) for q, x in zip(params, u)}
-            try:
-                return sub.residual(sub.predict(nominal, cand, vals))
-            except (NumericalError, np.linalg.LinAlgError):
-                return np.full(sub.n if sub.n else 1, 1e3)
-
-        res = scipy.optimize.least_squares(fun, u_hat, bounds=(lo, hi), method="trf", diff_step=1e-4,
-                                           max_nfev=min(8 * (len(params) + 1), 24), xtol=1e-6, ftol=1e-6)
-        us.append(res.x)
-    us = np.asarray(us)
-    var = (blocks - 1) / blocks * ((us - us.mean(axis=0)) ** 2).sum(axis=0)
-    out = {}
-    for q, x, v in zip(params, u_hat, var):
-        s = float(np.sqrt(v))
-        out[q.name] = float(abs(q.from_u(x)) * s) if q.log else float(q.scale * s)
-    return out
+def nominal_fit(ev: ModelEvaluator, nominal) -> Fit:
+    """The nominal model scored like a fit (no parameters)."""
+    return _unfitted(ev, ev.predict(nominal))
 
 
 def _changes_model(cand) -> bool:
@@ -444,24 +354,42 @@ def fit_candidate(ev: ModelEvaluator, nominal, cand, start: dict | None = None, 
     """
     params = cand.params
     p = len(params)
+    if p == 0:
+        return _unfitted(ev, ev.predict(nominal, cand, {}), cand, nfev=1)
+    lo = np.array([q.u_bounds[0] for q in params])
+    hi = np.array([q.u_bounds[1] for q in params])
+    fun = _residual_function(ev, nominal, cand)
+    starts = _starts(nominal, cand, start, target_freqs, lo, hi)
+    res, rss, nfev = _refine_best(fun, starts, lo, hi, max_nfev or 30 * (p + 1), cand.name)
+    values = _values_of(params, res.x)
+    sigmas, cov, inflate = linearised_sigmas(params, res, rss, ev)
+    at_bound = [q.name for q, x, a, b in zip(params, res.x, lo, hi) if min(x - a, b - x) < 1e-3]
+    H = ev.predict(nominal, cand, values)
+    return Fit(cand, values, sigmas, rss, ev.n, p, _bic(rss, ev.n, p), ev.mismatch(H), ev.mismatch(H, True),
+               nfev, at_bound, chi2_red=rss / max(ev.n - p, 1), tau=inflate, sigmas_stat=dict(sigmas), cov_u=cov)
 
-    def values_of(u):
-        return {q.name: q.from_u(x) for q, x in zip(params, u)}
 
+def _values_of(params, u) -> dict:
+    """Parameter values (SI) from the fit's coordinates ``u``."""
+    return {q.name: q.from_u(x) for q, x in zip(params, u)}
+
+
+def _residual_function(ev: ModelEvaluator, nominal, cand):
+    """The weighted residual as a function of the fit's coordinates (1e3 everywhere where the model fails)."""
     def fun(u):
         try:
-            return ev.residual(ev.predict(nominal, cand, values_of(u)))
+            return ev.residual(ev.predict(nominal, cand, _values_of(cand.params, u)))
         except (NumericalError, np.linalg.LinAlgError):
             return np.full(ev.n if ev.n else 1, 1e3)
 
-    if p == 0:
-        H = ev.predict(nominal, cand, {})
-        r = ev.residual(H)
-        rss = float(r @ r)
-        return Fit(cand, {}, {}, rss, ev.n, 0, _bic(rss, ev.n, 0), ev.mismatch(H), ev.mismatch(H, True), 1)
+    return fun
 
-    lo = np.array([q.u_bounds[0] for q in params])
-    hi = np.array([q.u_bounds[1] for q in params])
+
+def _starts(nominal, cand, start: dict | None, target_freqs, lo: np.ndarray, hi: np.ndarray) -> list:
+    """Starting points in the fit's coordinates: the given start (or the candidate's and its extra
+    starts), each first moved to match the recorded resonances when they are given (stage 1; the best
+    two are kept)."""
+    params = cand.params
     starts = []
     u0 = np.array([q.to_u(start[q.name]) if start and q.name in start else 0.0 for q in params])
     starts.append(np.clip(u0, lo + 1e-9, hi - 1e-9))
@@ -477,6 +405,12 @@ def fit_candidate(ev: ModelEvaluator, nominal, cand, start: dict | None = None, 
             moved.append((c1, np.clip(u1, lo + 1e-9, hi - 1e-9)))
         moved.sort(key=lambda t: t[0])
         starts = [u for _, u in moved[:2]]
+    return starts
+
+
+def _refine_best(fun, starts: list, lo: np.ndarray, hi: np.ndarray, max_nfev: int, name: str):
+    """Stage 2: minimise the FRF residual from the starts (a start already 4× worse than the best so
+    far is not refined). Returns ``(least-squares result, RSS, model evaluations)``."""
     best = None
     nfev = 0
     for u_start in starts:
@@ -488,33 +422,12 @@ def fit_candidate(ev: ModelEvaluator, nominal, cand, start: dict | None = None, 
             continue
         try:
             res = scipy.optimize.least_squares(fun, u_start, bounds=(lo, hi), method="trf", diff_step=1e-4,
-                                               x_scale=1.0, max_nfev=max_nfev or 30 * (p + 1), xtol=1e-5,
-                                               ftol=1e-5)
+                                               x_scale=1.0, max_nfev=max_nfev, xtol=1e-5, ftol=1e-5)
         except ValueError as exc:  # pragma: no cover - defensive
-            raise InputError(f"cannot fit candidate {cand.name}: {exc}") from None
+            raise InputError(f"cannot fit candidate {name}: {exc}") from None
         nfev += res.nfev
         rss = float(2 * res.cost)
         if best is None or rss < best[1]:
             best = (res, rss)
     res, rss = best
-    values = values_of(res.x)
-    sigmas = {}
-    J = res.jac
-    dof = max(ev.n - p, 1)
-    inflate = _correlation_inflation(res.fun, ev)
-    try:
-        cov = np.linalg.pinv(J.T @ J) * (rss / dof) * inflate
-        su = np.sqrt(np.clip(np.diag(cov), 0, None))
-    except np.linalg.LinAlgError:  # pragma: no cover
-        cov, su = None, np.full(p, np.nan)
-    # a parameter the residual does not feel at all (a flat profile: e.g. a stiffness far beyond what the
-    # recordings resolve) gets no σ from the pseudo-inverse; give it one that says "not resolved"
-    col = np.linalg.norm(J, axis=0)
-    su = np.where(col > 1e-9 * max(float(col.max(initial=0.0)), 1e-300), su, FLAT_SIGMA)
-    for q, x, s in zip(params, res.x, su):
-        v = q.from_u(x)
-        sigmas[q.name] = float(abs(v) * s) if q.log else float(q.scale * s)
-    at_bound = [q.name for q, x, a, b in zip(params, res.x, lo, hi) if min(x - a, b - x) < 1e-3]
-    H = ev.predict(nominal, cand, values)
-    return Fit(cand, values, sigmas, rss, ev.n, p, _bic(rss, ev.n, p), ev.mismatch(H), ev.mismatch(H, True),
-               nfev, at_bound, chi2_red=rss / dof, tau=inflate, sigmas_stat=dict(sigmas), cov_u=cov)
+    return res, rss, nfev

@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from jointdb.diagnose._fit import jackknife_spread
+from jointdb.diagnose._uncertainty import jackknife_spread
 from jointdb.diagnose.physics._candidate import IDENTIFIED
 
 __all__ = ["IDENTIFIED", "unidentified", "identify_advice", "damping_grows", "DAMPING_GROWTH", "combination_note",

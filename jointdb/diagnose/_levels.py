@@ -320,6 +320,35 @@ def track_modes(freq: np.ndarray, values: np.ndarray, weight: np.ndarray | None,
     InputError
         Shapes that do not match, or ``len(levels) != n_level``.
     """
+    freq, vals, weight, known, order = _checked(freq, values, weight, levels)
+    n_lv = vals.shape[0]
+    inds = [indicator(vals[lv], weight[lv]) for lv in range(n_lv)]
+    first = order[0]
+    if centres is None:
+        idx = peak_indices(freq, vals[first], weight[first])
+        top = max((inds[first][k] for k in idx), default=0.0)
+        centres = [float(freq[k]) for k in idx if inds[first][k] >= STRONG_PEAK * top]
+    centres = sorted(float(c) for c in centres if freq[0] <= c <= freq[-1])
+    tracks, skipped = [], []
+    for m, fc in enumerate(centres):
+        lo = np.sqrt(centres[m - 1] * fc) if m > 0 else freq[0]
+        hi = np.sqrt(centres[m + 1] * fc) if m + 1 < len(centres) else freq[-1]
+        try:
+            fits = _follow(freq, vals, weight, inds, order, fc, (lo, hi), band_halfwidths, min_band)
+        except InputError:
+            skipped.append(fc)  # too few lines around this peak at some level: not tracked, and said so
+            continue
+        track = _track(m + 1, fits, levels if known else None, order)
+        if track is None:
+            skipped.append(fc)  # no resonance to follow here (a weak local maximum, a tail): not a mode
+            continue
+        tracks.append(track)
+    return LevelAnalysis(tracks=tuple(tracks), levels=tuple(levels), order=order, skipped=tuple(skipped))
+
+
+def _checked(freq, values, weight, levels):
+    """The inputs of :func:`track_modes` as arrays (unusable lines at zero weight), and the level order
+    (increasing force when every level is known, else as given)."""
     freq = np.asarray(freq, dtype=float)
     values = np.asarray(values)
     if values.ndim != 4 or values.shape[1] != freq.size:
@@ -336,54 +365,51 @@ def track_modes(freq: np.ndarray, values: np.ndarray, weight: np.ndarray | None,
     known = all(v is not None for v in levels)
     order = tuple(int(k) for k in (np.argsort(np.asarray(levels, dtype=float), kind="stable") if known
                                    else range(n_lv)))
-    inds = [indicator(vals[lv], weight[lv]) for lv in range(n_lv)]
-    first = order[0]
-    if centres is None:
-        idx = peak_indices(freq, vals[first], weight[first])
-        top = max((inds[first][k] for k in idx), default=0.0)
-        centres = [float(freq[k]) for k in idx if inds[first][k] >= STRONG_PEAK * top]
-    centres = sorted(float(c) for c in centres if freq[0] <= c <= freq[-1])
-    tracks, skipped = [], []
-    for m, fc in enumerate(centres):
-        lo = np.sqrt(centres[m - 1] * fc) if m > 0 else freq[0]
-        hi = np.sqrt(centres[m + 1] * fc) if m + 1 < len(centres) else freq[-1]
-        fits: list = [None] * n_lv
-        prev = fc
-        try:
-            for lv in order:
-                # this level's own peak, near the previous level's, inside this mode's share of the axis
-                reach = max(0.06 * prev, 4 * (fits[order[0]].zeta * prev if fits[order[0]] else 0.0))
-                win = np.where((np.abs(freq - prev) <= reach) & (freq > lo) & (freq < hi))[0]
-                f_pk = float(freq[win[np.argmax(inds[lv][win])]]) if win.size else prev
-                fits[lv] = local_modal_fit(freq, vals[lv], weight[lv], f_pk, search=0.0,
-                                           band_halfwidths=band_halfwidths, min_band=min_band)
-                prev = fits[lv].freq_hz
-        except InputError:
-            skipped.append(fc)  # too few lines around this peak at some level: not tracked, and said so
-            continue
-        f = np.array([fi.freq_hz for fi in fits])
-        sf = np.array([fi.sigma_freq_hz for fi in fits])
-        z = np.array([fi.zeta for fi in fits])
-        sz = np.array([fi.sigma_zeta for fi in fits])
-        if not _credible(f, sf, z, fits, order[0]):
-            skipped.append(fc)  # no resonance to follow here (a weak local maximum, a tail): not a mode
-            continue
-        e = np.unravel_index(int(np.argmax(fits[first].peak_entries)), fits[first].peak_entries.shape)
-        peak = np.array([fi.peak_entries[e] for fi in fits])
-        amp = peak * np.array([float(v) for v in levels]) if known else peak
-        bad = level_outliers(f, sf, order)
-        keep = np.array([k not in bad for k in range(n_lv)])
-        c_f, p_f = _chi2(f[keep], sf[keep])
-        c_z, p_z = _chi2(np.log(z[keep]), (sz / z)[keep])
-        spread_f = float(f[keep].max() / f[keep].min() - 1)
-        spread_z = float(z[keep].max() / z[keep].min())
-        tracks.append(ModeTrack(
-            mode=m + 1, freq_hz=f, sigma_freq_hz=sf, zeta=z, sigma_zeta=sz, peak=peak, amplitude=amp,
-            amplitude_unit="m" if known else "m/N", entry=(int(e[0]), int(e[1])),
-            chi2_freq=c_f, p_freq=p_f, chi2_zeta=c_z, p_zeta=p_z,
-            freq_change=float(f[order[-1]] / f[order[0]] - 1), zeta_ratio=float(z[order[-1]] / z[order[0]]),
-            spread_freq=spread_f, spread_zeta=spread_z,
-            differs_freq=bool(n_lv > 1 and p_f < P_LEVELS and spread_f > FREQ_FLOOR),
-            differs_zeta=bool(n_lv > 1 and p_z < P_LEVELS and spread_z > ZETA_FLOOR),
-            fits=tuple(fits), outliers=bad))
-    return LevelAnalysis(tracks=tuple(tracks), levels=tuple(levels), order=order, skipped=tuple(skipped))
+    return freq, vals, weight, known, order
+
+
+def _follow(freq, vals, weight, inds, order, fc: float, share: tuple, band_halfwidths: float, min_band: float):
+    """Local modal fits of one mode at every level, lowest level first, each band re-centred on the
+    level's own peak near the previous level's frequency inside the mode's ``share`` of the axis."""
+    lo, hi = share
+    fits: list = [None] * vals.shape[0]
+    prev = fc
+    for lv in order:
+        # this level's own peak, near the previous level's, inside this mode's share of the axis
+        reach = max(0.06 * prev, 4 * (fits[order[0]].zeta * prev if fits[order[0]] else 0.0))
+        win = np.where((np.abs(freq - prev) <= reach) & (freq > lo) & (freq < hi))[0]
+        f_pk = float(freq[win[np.argmax(inds[lv][win])]]) if win.size else prev
+        fits[lv] = local_modal_fit(freq, vals[lv], weight[lv], f_pk, search=0.0,
+                                   band_halfwidths=band_halfwidths, min_band=min_band)
+        prev = fits[lv].freq_hz
+    return fits
+
+
+def _track(mode: int, fits: list, levels, order) -> ModeTrack | None:
+    """One mode's trend across levels from its local fits (None if there is no resonance to follow);
+    ``levels`` None when the forces are not all known (amplitudes then per unit force)."""
+    n_lv = len(fits)
+    f = np.array([fi.freq_hz for fi in fits])
+    sf = np.array([fi.sigma_freq_hz for fi in fits])
+    z = np.array([fi.zeta for fi in fits])
+    sz = np.array([fi.sigma_zeta for fi in fits])
+    if not _credible(f, sf, z, fits, order[0]):
+        return None
+    e = np.unravel_index(int(np.argmax(fits[order[0]].peak_entries)), fits[order[0]].peak_entries.shape)
+    peak = np.array([fi.peak_entries[e] for fi in fits])
+    amp = peak * np.array([float(v) for v in levels]) if levels is not None else peak
+    bad = level_outliers(f, sf, order)
+    keep = np.array([k not in bad for k in range(n_lv)])
+    c_f, p_f = _chi2(f[keep], sf[keep])
+    c_z, p_z = _chi2(np.log(z[keep]), (sz / z)[keep])
+    spread_f = float(f[keep].max() / f[keep].min() - 1)
+    spread_z = float(z[keep].max() / z[keep].min())
+    return ModeTrack(
+        mode=mode, freq_hz=f, sigma_freq_hz=sf, zeta=z, sigma_zeta=sz, peak=peak, amplitude=amp,
+        amplitude_unit="m" if levels is not None else "m/N", entry=(int(e[0]), int(e[1])),
+        chi2_freq=c_f, p_freq=p_f, chi2_zeta=c_z, p_zeta=p_z,
+        freq_change=float(f[order[-1]] / f[order[0]] - 1), zeta_ratio=float(z[order[-1]] / z[order[0]]),
+        spread_freq=spread_f, spread_zeta=spread_z,
+        differs_freq=bool(n_lv > 1 and p_f < P_LEVELS and spread_f > FREQ_FLOOR),
+        differs_zeta=bool(n_lv > 1 and p_z < P_LEVELS and spread_z > ZETA_FLOOR),
+        fits=tuple(fits), outliers=bad)

@@ -27,6 +27,7 @@ from jointdb.diagnose_bench._run import (
     REPORTED_SEEDS_START,
     BenchResult,
     CaseResult,
+    diagnose_case,
     expected_families,
     run_benchmark,
     run_case,
@@ -34,5 +35,5 @@ from jointdb.diagnose_bench._run import (
 from jointdb.diagnose_bench._stack_cases import STACK_EFFECTS
 
 __all__ = ["EFFECTS", "STACK_EFFECTS", "BenchCase", "Recording", "generate_case", "generate_suite",
-           "BenchResult", "CaseResult", "run_benchmark", "run_case", "expected_families",
+           "BenchResult", "CaseResult", "run_benchmark", "run_case", "diagnose_case", "expected_families",
            "REPORTED_SEEDS_START", "single_blas_thread"]

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from jointdb.diagnose._diagnose import _plausibility
+from jointdb.diagnose._select import plausibility as _plausibility
 from jointdb.diagnose import Fit
 from jointdb.diagnose._verdict import separating_measurement
 from jointdb.diagnose.physics import Param

@@ -8,25 +8,21 @@ face, the inserted shank left out or bonded). Development seeds (< 1000) only:
 the reported rates come from `jointdb diagnose-bench` on seeds >= 1000.
 """
 
+import functools
+
 import numpy as np
 import pytest
 
-from jointdb.diagnose import Measurement, diagnose
 from jointdb.diagnose import MIN_IMPROVEMENT
-from jointdb.diagnose_bench import generate_case
-from jointdb.fe import model_from_dict, model_to_dict
+from jointdb.diagnose_bench import diagnose_case, generate_case
+from jointdb.fe import model_to_dict
 
 JOINTS = ("joint_compliance", "joint_damping")
-_CACHE: dict = {}
-
-
+@functools.cache
 def _diagnosed(effect, seed):
-    if (effect, seed) not in _CACHE:
-        case = generate_case(effect, seed)
-        model = model_from_dict(case.model)
-        d = diagnose(model, [Measurement(r.frf, r.coherence, r.level_n) for r in case.recordings])
-        _CACHE[(effect, seed)] = (case, d)
-    return _CACHE[(effect, seed)]
+    """(case, Diagnosis), computed once per session."""
+    case = generate_case(effect, seed)
+    return case, diagnose_case(case)[1]
 
 
 def _primary(d):

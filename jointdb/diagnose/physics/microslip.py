@@ -79,7 +79,12 @@ class _Microslip:
     family = "softening_joint"
     per_level = True
 
-    def _use_levels(self, levels) -> None:
+    def _start(self, model, site: Site, levels, kind: str, what: str) -> None:
+        """The undamped linear candidate at ``site`` with the law over ``levels``; named ``kind@position``."""
+        super().__init__(model, site, damped=False)
+        self.name = f"{kind}@{site.position * 1e3:.4g}mm"
+        self.explanation = (f"an amplitude-dependent (micro-slip) {what} at {site.location} whose stiffness "
+                            "falls and damping rises with the excitation")
         self.family = "softening_joint"
         self.levels = tuple(levels)
         self.law, extra = _law_params(self.levels)
@@ -146,11 +151,7 @@ class MicroslipContact(_Microslip, InterfaceContact):
     """A contact layer over an insertion whose stiffness falls and loss rises with the excitation level."""
 
     def __init__(self, model, site: Site, levels):
-        super().__init__(model, site, damped=False)
-        self.name = f"interface_contact_microslip@{site.position * 1e3:.4g}mm"
-        self.explanation = (f"an amplitude-dependent (micro-slip) contact over the insertion at {site.location} "
-                            "whose stiffness falls and damping rises with the excitation")
-        self._use_levels(levels)
+        self._start(model, site, levels, "interface_contact_microslip", "contact over the insertion")
 
     def apply(self, model, values, level=0):
         s, eta = self.state(values, level)
@@ -196,11 +197,7 @@ class MicroslipJoint(_Microslip, InterfaceJoint):
     """A point joint at a site whose stiffness falls and loss rises with the excitation level."""
 
     def __init__(self, model, site: Site, levels):
-        super().__init__(model, site, damped=False)
-        self.name = f"interface_microslip@{site.position * 1e3:.4g}mm"
-        self.explanation = (f"an amplitude-dependent (micro-slip) joint at {site.location} whose stiffness falls "
-                            "and damping rises with the excitation")
-        self._use_levels(levels)
+        self._start(model, site, levels, "interface_microslip", "joint")
 
     def apply(self, model, values, level=0):
         s, eta = self.state(values, level)
