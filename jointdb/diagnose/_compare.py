@@ -128,12 +128,10 @@ def find_peaks(freq, values, weight) -> list[Peak]:
 
     Parameters
     ----------
-    freq
-        Frequency lines [Hz], ``(n_freq,)``.
-    values
-        Complex FRF values, ``(n_freq, n_out, n_in)``.
+    freq, values
+        Frequency lines [Hz] ``(n_freq,)`` and the complex FRF ``(n_freq, n_out, n_in)``.
     weight
-        Weight of each value (0: ignored), same shape.
+        Weight of each value (0: ignored), same shape as ``values``.
 
     Returns
     -------

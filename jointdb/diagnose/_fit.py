@@ -156,6 +156,7 @@ class ModelEvaluator:
         Returns
         -------
         ndarray, complex, same shape
+            Real part: the log amplitude ratio; imaginary part: the phase difference [rad].
         """
         with np.errstate(divide="ignore", invalid="ignore"):
             lr = np.log(H / self.rec)

@@ -89,10 +89,8 @@ def read_frf_csv(path: str | os.PathLike) -> FRF:
 
     Raises
     ------
-    NotFoundError
-        If the file does not exist.
-    InputError
-        Bad header (column named), unequal row lengths, non-numbers (line named), mixed
+    NotFoundError, InputError
+        No such file; or a bad header (column named), unequal row lengths, non-numbers (line named), mixed
         quantities, an incomplete outputs × inputs set, or anything :class:`~jointdb.frf.FRF` refuses.
     """
     p = Path(path)

@@ -25,7 +25,7 @@ def plot_rate_vs_overhang(by_holder, path) -> Path:
     Returns
     -------
     Path
-        ``path``.
+        ``path``, one line per holder.
     """
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(7, 4.5))

@@ -133,6 +133,7 @@ class BlobStore(VerifyingBlobs):
         Returns
         -------
         bool
+            True when the file is there (its content is checked on read, not here).
         """
         return self.path(digest).is_file()
 

@@ -113,6 +113,7 @@ class Param:
         Returns
         -------
         str
+            One line of the verdict.
         """
         if sigma is not None and self.relative_sigma(value, sigma) > IDENTIFIED:
             return f"{self.label} ≈ {self.fmt(value)} (not resolved by these measurements)"
