@@ -168,7 +168,7 @@ class ModelEvaluator:
         Parameters
         ----------
         H
-            Model receptance, ``(n_level, n_freq, n_out, n_in)``.
+            As :meth:`log_ratio`.
 
         Returns
         -------

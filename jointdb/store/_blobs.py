@@ -128,7 +128,7 @@ class BlobStore(VerifyingBlobs):
         Parameters
         ----------
         digest
-            The blob's SHA-256 (hex).
+            As :meth:`path`.
 
         Returns
         -------

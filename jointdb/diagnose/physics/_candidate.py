@@ -124,14 +124,13 @@ class Param:
 
         Parameters
         ----------
-        value
-            The fitted value, SI.
-        sigma
-            Its standard deviation, SI, or None.
+        value, sigma
+            As :meth:`shown`.
 
         Returns
         -------
         float
+            Compared with ``IDENTIFIED`` to decide whether the value is resolved.
         """
         if sigma is None or not np.isfinite(sigma) or value == 0:
             return float("inf")
