@@ -9,6 +9,7 @@ was computed (atomically).
 from __future__ import annotations
 
 import json
+import os
 import sys
 from pathlib import Path
 from typing import Annotated, Any, Optional
@@ -110,17 +111,50 @@ def init_cmd(
         preload = _ask(None, "--preload", "preload / drawbar force [N] (empty: none)", float, required=False)
     conditions = {"materials": list(mats or []), "torque_nm": torque, "preload_n": preload,
                   "geometry": _pairs(geometry, "--geometry"), "extra": _pairs(extra, "--extra")}
-    built = _substructure_a(folder, force, db, spindle=spindle, holder=holder, through_joint=through_joint,
-                            insertion=insertion, shank_diameter=shank_diameter, shank_material=shank_material)
+    options = _init_options(smoothing, fit_band)
+    if target.resolve().parent != folder.resolve():
+        raise InputError(f"--out {target}: write the campaign file into {folder} (its paths are relative to it)")
+    from jointdb.usecases._substructure_a import A_FILE
+
+    from_parts = any(v is not None for v in (spindle, holder, through_joint, insertion, shank_diameter,
+                                             shank_material))
+    a_path = folder / A_FILE
+    kept = a_path.with_name(a_path.name + ".before-init") if from_parts and a_path.exists() else None
+    if kept is not None and force:
+        os.replace(a_path, kept)  # an earlier A is kept aside until this run has written its campaign file
+    built = None
     try:
+        built = _substructure_a(folder, force, db, spindle=spindle, holder=holder, through_joint=through_joint,
+                                insertion=insertion, shank_diameter=shank_diameter, shank_material=shank_material)
         doc, notes = scaffold_campaign(folder, joint_type=jt, conditions=conditions, name=name)
-    except InputError:
-        if built is not None:  # ours, written moments ago: a failed init leaves nothing behind
+        if built is not None:
+            doc["substructures"][doc["interface"]["a"]]["provenance"] = dict(built[1].provenance)
+            notes = (*notes, _through_note(built[1].provenance))
+        if options:
+            doc["options"] = options
+        _write_json_atomic(target, doc)
+    except BaseException:  # a failed init leaves the folder as it was: no new A, the earlier one back
+        if built is not None:
             built[0].unlink(missing_ok=True)
+        if kept is not None and kept.exists():
+            os.replace(kept, a_path)
         raise
-    if built is not None:
-        doc["substructures"][doc["interface"]["a"]]["provenance"] = dict(built[1].provenance)
-        notes = (*notes, _through_note(built[1].provenance))
+    if kept is not None and kept.exists():
+        kept.unlink()
+    sub = doc["substructures"]
+    message(f"measurements: {', '.join(doc['measurements'])}; A = {doc['interface']['a']} "
+            f"({next(iter(sub[doc['interface']['a']].values()))}) at {' '.join(doc['interface']['a_dofs'])}; "
+            f"B = {doc['interface']['b']} ({sub[doc['interface']['b']]['model']}) at "
+            f"{' '.join(doc['interface']['b_dofs'])}, tip node {doc['planar']['b_tip']}")
+    for note in notes:
+        message(f"note: {note}")
+    if not doc["conditions"]:
+        message("note: no conditions given; the joint can be pinned but not found by a query")
+    typer.echo(str(target))
+
+
+def _init_options(smoothing: int | None, fit_band: str | None) -> dict[str, Any]:
+    """The campaign's ``options`` from ``--smoothing`` and ``--fit-band``, checked before anything is written."""
     options: dict[str, Any] = {}
     if smoothing is not None:
         if smoothing < 3 or smoothing % 2 == 0:
@@ -134,21 +168,7 @@ def init_cmd(
         if not 0 <= lo < hi:
             raise InputError(f"--fit-band {fit_band!r}: need 0 <= FMIN < FMAX")
         options["fit_band"] = [lo, hi]
-    if options:
-        doc["options"] = options
-    if target.resolve().parent != folder.resolve():
-        raise InputError(f"--out {target}: write the campaign file into {folder} (its paths are relative to it)")
-    _write_json_atomic(target, doc)
-    sub = doc["substructures"]
-    message(f"measurements: {', '.join(doc['measurements'])}; A = {doc['interface']['a']} "
-            f"({next(iter(sub[doc['interface']['a']].values()))}) at {' '.join(doc['interface']['a_dofs'])}; "
-            f"B = {doc['interface']['b']} ({sub[doc['interface']['b']]['model']}) at "
-            f"{' '.join(doc['interface']['b_dofs'])}, tip node {doc['planar']['b_tip']}")
-    for note in notes:
-        message(f"note: {note}")
-    if not doc["conditions"]:
-        message("note: no conditions given; the joint can be pinned but not found by a query")
-    typer.echo(str(target))
+    return options
 
 
 def _substructure_a(folder: Path, force: bool, db, **given):

@@ -115,7 +115,9 @@ def submit_optimize(body: OptimizeJobIn, request: Request, response: Response, w
     # a bad spec, an unknown part or family, or too many candidates is a 422 now, not a failed job later
     repo = request.app.state.repo
     enumerate_candidates(problem_from_document(body.spec, repo, where="spec", allow_files=False), repo)
-    return _accepted(response, queue(request).submit("optimize", who.name, body.model_dump(mode="json")))
+    # the spec as sent (not model_dump: pydantic refuses to serialise a deeply nested body with a 500)
+    payload = {"spec": body.spec, "top": body.top, "simulate": body.simulate}
+    return _accepted(response, queue(request).submit("optimize", who.name, payload))
 
 
 async def _identify_input(request: Request) -> tuple[dict[str, Any], bytes]:
@@ -197,14 +199,24 @@ def list_jobs(request: Request, who=reader, kind: Optional[str] = Query(None, ma
               state: Optional[str] = Query(None, max_length=20)) -> dict[str, Any]:
     from jointdb.jobs import job_json
 
-    return {"items": [job_json(r) for r in queue(request).list(who.name, kind, state)]}
+    return {"items": [_scrubbed(request, job_json(r)) for r in queue(request).list(who.name, kind, state)]}
 
 
 @router.get("/jobs/{job_id}", summary="A job: state, progress, message, error, result")
 def get_job(job_id: JobId, request: Request, who=reader) -> dict[str, Any]:
     from jointdb.jobs import job_json
 
-    return job_json(_own(request, job_id, who))
+    return _scrubbed(request, job_json(_own(request, job_id, who)))
+
+
+def _scrubbed(request: Request, job: dict[str, Any]) -> dict[str, Any]:
+    """A job's JSON with no server folder or URL in its error (as every HTTP error, :mod:`._safety`)."""
+    if job.get("error"):
+        from jointdb.server._app import _hidden_dirs
+        from jointdb.server._safety import scrub_message
+
+        job["error"] = scrub_message(job["error"], _hidden_dirs(request.app))
+    return job
 
 
 @router.post("/jobs/{job_id}/cancel", status_code=202, summary="Cancel a job")

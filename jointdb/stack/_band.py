@@ -151,20 +151,41 @@ def choice_perturbed(planes: np.ndarray, relative: np.ndarray, scale: np.ndarray
     n = z.shape[0]
     scale = np.asarray(scale, float)
     group = np.zeros(scale.size, dtype=int) if group is None else np.asarray(group, dtype=int)
-    log_r = _matrix_function(np.eye(relative.shape[-1]) + relative, np.log)
+    log_r = _matrix_log(np.eye(relative.shape[-1]) + relative)
     s = np.zeros((n,) + log_r.shape[1:], dtype=complex)
     for g in np.unique(group):
         idx = np.flatnonzero(group == g)
         j = idx[rng.integers(idx.size, size=n)]
         t = scale[j] * rng.standard_normal(n)
         s += t[:, None, None, None] * log_r[j]
-    return np.linalg.inv(_matrix_function(s, np.exp) @ z)
+    from scipy.linalg import expm
+
+    return np.linalg.inv(expm(s) @ z)
 
 
-def _matrix_function(a: np.ndarray, fun) -> np.ndarray:
-    """``fun`` of each square matrix of ``a`` (``(..., n, n)``) through its eigendecomposition (principal branch)."""
+#: Smallest real part kept for an eigenvalue of ``I + R`` in :func:`_matrix_log`: a relative error
+#: is never taken below -95 % (an eigenvalue at or past zero would be a joint with no stiffness or
+#: a sign flip, whose logarithm is -inf or the non-physical ``iπ`` branch).
+_LOG_FLOOR = 0.05
+
+
+def _matrix_log(a: np.ndarray) -> np.ndarray:
+    """Principal logarithm of each ``(n, n)`` matrix of ``a`` (``(..., n, n)``) through its eigendecomposition,
+    eigenvalues' real parts floored at :data:`_LOG_FLOOR`; where the eigenvectors are ill-conditioned
+    (a defective matrix) the series ``R - R²/2 + R³/3`` of ``a = I + R`` is used instead."""
     w, v = np.linalg.eig(a)
-    return (v * fun(w.astype(complex))[..., None, :]) @ np.linalg.inv(v)
+    w = np.maximum(w.real, _LOG_FLOOR) + 1j * w.imag
+    cond = np.linalg.cond(v)
+    good = np.isfinite(cond) & (cond < 1e6)
+    out = np.empty(a.shape, dtype=complex)
+    if good.any():
+        vg = v[good]
+        out[good] = (vg * np.log(w[good])[..., None, :]) @ np.linalg.inv(vg)
+    if (~good).any():
+        r = a[~good] - np.eye(a.shape[-1])
+        r2 = r @ r
+        out[~good] = r - r2 / 2 + (r2 @ r) / 3
+    return out
 
 
 def _interface_samples(name, spec, resolved, f, n, seed, uncertainties, choice, rng):

@@ -248,7 +248,7 @@ def list_page(conn, *, joint_type=None, materials=(), label=None, include_deprec
     rows = rows[:int(limit)] if limit is not None else rows
     total = carried if carried is not None else int(rows[0].total) if rows else 0
     if not rows and carried is None and (start is not None or offset):  # past the end: the total is still asked for
-        total = conn.execute(count_statement(**filters)).scalar_one()
+        total = int(conn.execute(count_statement(**filters)).scalar_one())  # PostgreSQL's SUM(bigint) is numeric
     items, damaged = read_rows(rows)
     return JointPage(tuple(items), tuple(damaged), total, encode_cursor(rows[-1].name, total) if more else None)
 

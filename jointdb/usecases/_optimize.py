@@ -60,12 +60,13 @@ class CandidateResult:
                 **self.best, **{f"joint_{k}": v for k, v in self.joints.items()}}
 
 
-def _catalogued(repo, joint_type: str, attr: str, lo: float, hi: float, geometry: dict) -> list[float]:
-    """Distinct catalogued values of ``attr`` (torque_nm / preload_n) of a joint type within [lo, hi]."""
+def _catalogued(joints, attr: str, lo: float, hi: float, geometry: dict) -> list[float]:
+    """Distinct catalogued values of ``attr`` (torque_nm / preload_n) within [lo, hi] among ``joints``
+    (the current versions of one joint type, read once per enumeration)."""
     values = set()
-    for jv in repo.list_joints():
+    for jv in joints:
         cond = jv.conditions
-        if jv.joint_type != joint_type or getattr(cond, attr) is None or jv.state != "active":
+        if getattr(cond, attr) is None or jv.state != "active":
             continue
         if any(k in cond.geometry and not math.isclose(cond.geometry[k], v, rel_tol=1e-6) for k, v in geometry.items()):
             continue
@@ -118,17 +119,19 @@ def enumerate_candidates(problem: OptimizeProblem, repo) -> list[Candidate]:
         torques = [pinned_torque]
     else:
         th_geom = _query_geometry(tpl.interfaces["tool-holder"])
-        torques = _catalogued(repo, "tool-holder", "torque_nm", *spec.torque_nm, th_geom)
+        torques = _catalogued(repo.list_joints("tool-holder", include_deprecated=False), "torque_nm",
+                              *spec.torque_nm, th_geom)
     if not torques:
         raise NotFoundError(f"no catalogued tool-holder joint with a torque in {list(spec.torque_nm)} N·m")
     pinned_force = _pinned_condition(tpl, "holder-spindle", "preload_n", spec.drawbar_n, repo)
     out = []
+    tapers = repo.list_joints("holder-spindle", include_deprecated=False) if pinned_force is None else []
     for h in problem.holders:
         geom = _query_geometry(tpl.interfaces["holder-spindle"])
         if h.taper_diameter_m is not None:
             geom["taper_diameter_m"] = h.taper_diameter_m
         forces = ([pinned_force] if pinned_force is not None else
-                  _catalogued(repo, "holder-spindle", "preload_n", *spec.drawbar_n, geom))
+                  _catalogued(tapers, "preload_n", *spec.drawbar_n, geom))
         if not forces:
             raise NotFoundError(f"holder {h.name}: no catalogued holder-spindle joint with a drawbar force in "
                                 f"{list(spec.drawbar_n)} N (taper {geom.get('taper_diameter_m')})")

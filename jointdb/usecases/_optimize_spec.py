@@ -268,6 +268,10 @@ def _holders(spec, template, handle, spindle_part) -> tuple[list[HolderOption], 
     out, notes = [], []
     for i, choice in enumerate(spec.holders):
         if choice.name is not None:
+            if choice.holder is not None:  # checked now (a hostile or wrong holder is the spec's error, not a job's)
+                from jointdb.stack._stackfile import substructure_from_dict
+
+                substructure_from_dict("holder", choice.holder, f"holders[{i}].holder")
             out.append(HolderOption(choice.name, choice.holder, choice.taper_diameter_m))
             continue
         if choice.part is not None:

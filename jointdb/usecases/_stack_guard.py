@@ -54,6 +54,17 @@ def non_passive_peaks(freq: np.ndarray, tip: np.ndarray) -> list[str]:
         inside :data:`PEAK_BAND_HZ`.
     """
     f = np.asarray(freq, float)
+    out = []
+    for d, k, j in _bad_peaks(f, tip):
+        h = tip[:, d, d]
+        out.append(f"term {d + 1}: peak {abs(h[k]):.3g} m/N at {f[k]:.0f} Hz, phase "
+                   f"{np.degrees(np.angle(h[j])):+.0f}° "
+                   f"at {f[j]:.0f} Hz (a passive driving point lies between −180° and 0°)")
+    return out
+
+
+def _bad_peaks(f: np.ndarray, tip: np.ndarray) -> list[tuple[int, int, int]]:
+    """``(term, peak line, line with Im H > 0)`` of each diagonal term whose dominant peak is not passive."""
     inside = (f >= PEAK_BAND_HZ[0]) & (f <= PEAK_BAND_HZ[1])
     out = []
     if not inside.any():
@@ -64,9 +75,7 @@ def non_passive_peaks(freq: np.ndarray, tip: np.ndarray) -> list[str]:
         near = slice(max(k - NEAR_PEAK_LINES, 0), k + NEAR_PEAK_LINES + 1)
         j = near.start + int(np.argmax(h[near].imag))
         if h[j].imag > 0:
-            out.append(f"term {d + 1}: peak {abs(h[k]):.3g} m/N at {f[k]:.0f} Hz, phase "
-                       f"{np.degrees(np.angle(h[j])):+.0f}° "
-                       f"at {f[j]:.0f} Hz (a passive driving point lies between −180° and 0°)")
+            out.append((d, k, j))
     return out
 
 
@@ -114,21 +123,24 @@ def _local_repair(spec, joints, names, prediction, predict):
     frfs = {n: r.frf for n, r in joints.items() if r.frf is not None}
     const = {n: constant_joint(frfs[n]) for n in names}
     f = prediction.tip.freq
-    mask = np.zeros(f.size, bool)
+    windows: list[tuple[float, float]] = []
     trial = prediction
     for _ in range(REPAIR_ROUNDS):
-        tip = trial.tip.values
-        inside = (f >= PEAK_BAND_HZ[0]) & (f <= PEAK_BAND_HZ[1])
-        for d in range(min(tip.shape[1], tip.shape[2])):
-            k = int(np.argmax(np.where(inside, np.abs(tip[:, d, d]), -np.inf)))
-            mask |= np.abs(f - f[k]) <= REPAIR_HALF_WIDTH * f[k]
+        # only the planes whose peak is not passive; each joint's own lines inside a window, by frequency
+        # (a joint's lines need not be the prediction's)
+        windows += [(f[k] * (1 - REPAIR_HALF_WIDTH), f[k] * (1 + REPAIR_HALF_WIDTH))
+                    for _, k, _ in _bad_peaks(f, trial.tip.values)]
+        if not windows:
+            return None
         for n in names:
-            on = np.isin(frfs[n].freq, f[mask])
+            fj = frfs[n].freq
+            on = np.any([(fj >= lo) & (fj <= hi) for lo, hi in windows], axis=0)
             frfs[n] = frfs[n].replace(values=np.where(on[:, None, None], const[n].values, joints[n].frf.values))
         trial = predict(spec, frfs)
         if not non_passive_peaks(trial.tip.freq, trial.tip.values):
-            lo, hi = f[mask].min(), f[mask].max()
-            return trial, frfs, f"{int(mask.sum())} lines within {lo:.0f}–{hi:.0f} Hz"
+            covered = np.any([(f >= lo) & (f <= hi) for lo, hi in windows], axis=0)
+            lo, hi = min(w[0] for w in windows), max(w[1] for w in windows)
+            return trial, frfs, f"{int(covered.sum())} lines within {lo:.0f}–{hi:.0f} Hz"
     return None
 
 

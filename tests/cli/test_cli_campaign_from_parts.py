@@ -81,6 +81,8 @@ def test_rigid_taper_gives_the_monolithic_holder_on_spindle(setup, load_script):
     (["--through-joint", "rigid", *PARTS[:-6], "--insertion", "0.035", "--shank-diameter", "0.02",
       "--shank-material", "carbide"], "bore"),
     (["--through-joint", "rigid", "--spindle", "er32@1", *PARTS[2:]], "spindle"),
+    (["--through-joint", "rigid", *PARTS, "--fit-band", "4000,100"], "--fit-band"),
+    (["--through-joint", "rigid", *PARTS, "--smoothing", "4"], "--smoothing"),
 ])
 def test_refusals_name_the_option_and_write_nothing(setup, args, message):
     db, folder = setup
@@ -137,3 +139,22 @@ def test_a_queried_taper_joint_is_the_nearest_catalogued_one(setup):
     np.testing.assert_allclose(queried, pinned, rtol=1e-12, atol=0)
     other, _ = _a_file(folder, db, "--through-joint", "hs-hsk-a63-24kn@1", *PARTS)
     assert np.max(np.abs(other - pinned)) > 1e-3 * np.max(np.abs(pinned))  # the joint matters
+
+
+def test_a_failed_forced_init_leaves_the_earlier_substructure_a_as_it_was(setup):
+    db, folder = setup
+    r = run("campaign", "init", folder, "--type", "tool-holder", "--torque", "60", "--through-joint", "rigid",
+            *PARTS, "--db", db)
+    assert r.returncode == 0, r.stderr
+    a_before = (folder / "holder-on-spindle.uff").read_bytes()
+    doc_before = (folder / "campaign.json").read_bytes()
+    names = sorted(p.name for p in folder.iterdir())
+    # a second, forced run that fails after A would have been rebuilt (the tool-holder type is refused late:
+    # an unknown shank material), then one whose option check fails first
+    for extra in (["--shank-material", "unobtainium"], ["--fit-band", "x"]):
+        r = run("campaign", "init", folder, "--type", "tool-holder", "--torque", "60", "--through-joint", "rigid",
+                *PARTS, *extra, "--db", db, "--force")
+        assert r.returncode != 0 and "Traceback" not in r.stderr, r.stderr
+        assert sorted(p.name for p in folder.iterdir()) == names
+        assert (folder / "holder-on-spindle.uff").read_bytes() == a_before
+        assert (folder / "campaign.json").read_bytes() == doc_before

@@ -65,6 +65,13 @@ def test_optimize_job_equals_the_cli(served, tmp_path):
     assert got["holder_parts"] == ["er32-collet-chuck-hsk63@1"]
 
 
+def _deep(n: int) -> dict:
+    doc: dict = {}
+    for _ in range(n):
+        doc = {"a": doc}
+    return doc
+
+
 def _with(**changes) -> dict:
     doc = copy.deepcopy(SPEC)
     doc.update(changes)
@@ -80,6 +87,8 @@ def _with(**changes) -> dict:
     ({"spec": _with(tool={**SPEC["tool"], "overhang_step_m": 1e-12})}, 422, "overhang grid: more than 1000"),
     ({"spec": SPEC, "top": 0}, 422, "top"),
     ({"spec": _with(holders=[{"family": "no-such-family"}])}, 404, "no catalogued holder of family"),
+    ({"spec": _with(holders=[{"name": "mine", "holder": {"segments": "x"}}])}, 422, "holders[0].holder"),
+    ({"spec": _with(holders=[{"name": "deep", "holder": _deep(400)}])}, 422, "holders[0].holder"),
 ])
 def test_a_bad_optimize_spec_is_refused_at_submit(served, body, status, needle):
     with served.client() as c:
