@@ -26,6 +26,7 @@ from starlette.exceptions import HTTPException as StarletteHTTPException
 from jointdb.errors import IntegrityError, JointdbError
 from jointdb.server._middleware import ServiceMiddleware
 from jointdb.server._safety import ControlCharacterGuard, client_error, scrub_message
+from jointdb.server._safety import hidden_dirs as _hidden_dirs
 from jointdb.server._security import install as install_security_headers
 from jointdb.server._settings import Settings
 
@@ -35,30 +36,6 @@ log = logging.getLogger("jointdb.server")
 def _one_line(text: object, limit: int = 300) -> str:
     line = " ".join(str(text).split())
     return line if len(line) <= limit else line[: limit - 3] + "..."
-
-
-def _hidden_dirs(app) -> tuple[str, ...]:
-    """Server folders no message may show: the blob folder and the SQLite file's folder."""
-    dirs = getattr(app.state, "hidden_dirs", None)
-    if dirs is None:
-        found = []
-        blobs = getattr(app.state.settings, "blobs", None)
-        if blobs and blobs != "database":
-            found += [str(blobs), os.path.realpath(blobs)]
-        repo = getattr(app.state, "repo", None)
-        root = getattr(getattr(repo, "blobs", None), "root", None)
-        if isinstance(root, (str, os.PathLike)) and os.path.isdir(root):
-            found += [str(root), os.path.realpath(root)]
-        try:
-            from sqlalchemy.engine import make_url
-
-            database = make_url(repo.url).database if repo is not None else None
-            if database and "/" in database:
-                found += [os.path.dirname(database), os.path.dirname(os.path.realpath(database))]
-        except Exception:  # noqa: BLE001 - no URL to parse: nothing more to hide
-            pass
-        dirs = app.state.hidden_dirs = tuple(d for d in found if len(d) > 1)
-    return dirs
 
 
 def _error(request: Request, status: int, message: str, headers=None) -> JSONResponse:

@@ -132,3 +132,27 @@ class ControlCharacterGuard:
                 await send({"type": "http.response.body", "body": body})
                 return
         await self.app(scope, receive, send)
+
+
+def hidden_dirs(app) -> tuple[str, ...]:
+    """Server folders no message may show: the blob folder and the SQLite file's folder."""
+    dirs = getattr(app.state, "hidden_dirs", None)
+    if dirs is None:
+        found = []
+        blobs = getattr(app.state.settings, "blobs", None)
+        if blobs and blobs != "database":
+            found += [str(blobs), os.path.realpath(blobs)]
+        repo = getattr(app.state, "repo", None)
+        root = getattr(getattr(repo, "blobs", None), "root", None)
+        if isinstance(root, (str, os.PathLike)) and os.path.isdir(root):
+            found += [str(root), os.path.realpath(root)]
+        try:
+            from sqlalchemy.engine import make_url
+
+            database = make_url(repo.url).database if repo is not None else None
+            if database and "/" in database:
+                found += [os.path.dirname(database), os.path.dirname(os.path.realpath(database))]
+        except Exception:  # noqa: BLE001 - no URL to parse: nothing more to hide
+            pass
+        dirs = app.state.hidden_dirs = tuple(d for d in found if len(d) > 1)
+    return dirs

@@ -212,10 +212,9 @@ def get_job(job_id: JobId, request: Request, who=reader) -> dict[str, Any]:
 def _scrubbed(request: Request, job: dict[str, Any]) -> dict[str, Any]:
     """A job's JSON with no server folder or URL in its error (as every HTTP error, :mod:`._safety`)."""
     if job.get("error"):
-        from jointdb.server._app import _hidden_dirs
-        from jointdb.server._safety import scrub_message
+        from jointdb.server._safety import hidden_dirs, scrub_message
 
-        job["error"] = scrub_message(job["error"], _hidden_dirs(request.app))
+        job["error"] = scrub_message(job["error"], hidden_dirs(request.app))
     return job
 
 
