@@ -160,14 +160,21 @@ def _blobs_of(repo) -> str | None:
     return None if root is None else str(root)
 
 
-@functools.lru_cache(maxsize=4)
-def _worker_state(pinned: str, base: str | None, db_url: str, blobs: str | None = None):
-    """The problem, an open store and the substructure cache of one worker process (kept between tasks)."""
-    import json
-
+@functools.lru_cache(maxsize=None)
+def _worker_repo(db_url: str, blobs: str | None):
+    """One open store per database of a worker process, for its life (a spec's state below may be
+    evicted; the store it used is not dropped with it, so no connection pool is left open behind)."""
     from jointdb.store import Repository
 
-    repo = Repository(db_url, blobs=blobs)
+    return Repository(db_url, blobs=blobs)
+
+
+@functools.lru_cache(maxsize=4)
+def _worker_state(pinned: str, base: str | None, db_url: str, blobs: str | None = None):
+    """The problem and the substructure cache of one spec on a worker process (kept between tasks)."""
+    import json
+
+    repo = _worker_repo(db_url, blobs)
     problem = problem_from_document(json.loads(pinned), repo, base=base)
     return problem, SubstructureCache(problem, repo)
 
