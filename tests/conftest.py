@@ -65,3 +65,22 @@ def _load_script(relative: str):
 def load_script():
     """``load_script("fixtures/make_catalogue.py")``: a repository script as a module (not an installed package)."""
     return _load_script
+
+
+@pytest.fixture
+def run_cli(monkeypatch, capsys):
+    """``run_cli("identify", path, "--out", out)``: ``jointdb ARGS`` run in this process (``main()`` with
+    ``sys.argv`` set); ``(exit code, stdout, stderr)``."""
+    from jointdb.cli import main
+
+    def run(*args):
+        monkeypatch.setattr(sys, "argv", ["jointdb", *map(str, args)])
+        code = 0
+        try:
+            main()
+        except SystemExit as exc:
+            code = exc.code or 0
+        out = capsys.readouterr()
+        return code, out.out, out.err
+
+    return run

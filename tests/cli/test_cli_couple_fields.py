@@ -6,13 +6,11 @@ from __future__ import annotations
 
 import json
 import shutil
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from jointdb.cli import main
 
 ROOT = Path(__file__).resolve().parents[2]
 FIXTURE = ROOT / "fixtures" / "campaigns" / "th-steel-30nm"  # A = holder.uff (3x 3ry, 20-5000 Hz by 10), B = tool
@@ -20,17 +18,6 @@ GRID = {"min": 20.0, "max": 5000.0, "step": 10.0}
 GOOD = {"joint": {"k": [2e7, 3e5], "c": [250.0, 2.0]},
         "outputs": [["tool", "1x"], ["holder", "3ry"]], "inputs": [["tool", "1x"], ["holder", "3ry"]],
         "frequency": GRID}
-
-
-def run(monkeypatch, capsys, *args):
-    monkeypatch.setattr(sys, "argv", ["jointdb", *map(str, args)])
-    code = 0
-    try:
-        main()
-    except SystemExit as exc:
-        code = exc.code or 0
-    out = capsys.readouterr()
-    return code, out.out, out.err
 
 
 def couple_only(tmp_path: Path, couple: dict) -> Path:
@@ -44,10 +31,10 @@ def couple_only(tmp_path: Path, couple: dict) -> Path:
     return d / "campaign.json"
 
 
-def test_couple_only_campaign_gives_the_named_outputs_reciprocal(monkeypatch, capsys, tmp_path):
+def test_couple_only_campaign_gives_the_named_outputs_reciprocal(run_cli, tmp_path):
     path = couple_only(tmp_path, GOOD)
     out_file = tmp_path / "g.h5"
-    code, out, err = run(monkeypatch, capsys, "couple", path, "--out", out_file, "--json")
+    code, out, err = run_cli("couple", path, "--out", out_file, "--json")
     assert code == 0, err
     summary = json.loads(out)
     assert summary["outputs"] == "1x 3ry" and summary["inputs"] == "1x 3ry" and summary["lines"] == 499
@@ -77,15 +64,15 @@ BAD = [
 
 
 @pytest.mark.parametrize("couple, field", BAD, ids=[f"bad{i}" for i in range(len(BAD))])
-def test_bad_couple_fields_are_named(monkeypatch, capsys, tmp_path, couple, field):
+def test_bad_couple_fields_are_named(run_cli, tmp_path, couple, field):
     path = couple_only(tmp_path, couple)
-    code, out, err = run(monkeypatch, capsys, "couple", path, "--out", tmp_path / "g.h5")
+    code, out, err = run_cli("couple", path, "--out", tmp_path / "g.h5")
     assert code != 0 and field in err, err
     assert "Traceback" not in err and not (tmp_path / "g.h5").exists()
 
 
-def test_couple_help_points_to_the_field_reference(monkeypatch, capsys):
-    code, out, _ = run(monkeypatch, capsys, "couple", "--help")
+def test_couple_help_points_to_the_field_reference(run_cli):
+    code, out, _ = run_cli("couple", "--help")
     assert code == 0 and "docs/file-formats.md" in out and "frequency" in out and "outputs" in out
     text = (ROOT / "docs" / "file-formats.md").read_text(encoding="utf-8")
     for field in ("couple.joint", "couple.outputs", "couple.inputs", "couple.frequency"):

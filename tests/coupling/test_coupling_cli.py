@@ -3,28 +3,15 @@
 import filecmp
 import json
 import shutil
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from jointdb.cli import main
 from jointdb.io import read_frf_hdf5, read_frf_uff58, write_uff58
 
 ROOT = Path(__file__).resolve().parents[2]
 FIXTURE = ROOT / "fixtures" / "campaigns" / "th-steel-30nm"
-
-
-def run(monkeypatch, capsys, *args):
-    monkeypatch.setattr(sys, "argv", ["jointdb", *map(str, args)])
-    code = 0
-    try:
-        main()
-    except SystemExit as exc:
-        code = exc.code or 0
-    out = capsys.readouterr()
-    return code, out.out, out.err
 
 
 @pytest.fixture
@@ -42,10 +29,10 @@ def edit(campaign_dir, change):
     return p
 
 
-def test_identify_store_couple_back(monkeypatch, capsys, campaign, tmp_path):
+def test_identify_store_couple_back(run_cli, campaign, tmp_path):
     truth = json.loads((campaign / "truth.json").read_text())["joint"]
     out = tmp_path / "joint.h5"
-    code, stdout, err = run(monkeypatch, capsys, "identify", campaign / "campaign.json", "--out", out,
+    code, stdout, err = run_cli("identify", campaign / "campaign.json", "--out", out,
                             "--report", tmp_path / "rep.json", "--plots", tmp_path / "figs", "--json")
     assert code == 0, err
     rep = json.loads(stdout)
@@ -59,11 +46,11 @@ def test_identify_store_couple_back(monkeypatch, capsys, campaign, tmp_path):
     joint = read_frf_hdf5(out)
     assert [str(d) for d in joint.inputs] == ["3x", "3ry"]
     # couple back through the stored joint: reproduces the (noisy) measurement, unlike a rigid joint
-    code, stdout, err = run(monkeypatch, capsys, "couple", campaign / "campaign.json", "--joint", out,
+    code, stdout, err = run_cli("couple", campaign / "campaign.json", "--joint", out,
                             "--out", tmp_path / "g.uff", "--json")
     assert code == 0, err
     dev = json.loads(stdout)["mean_relative_deviation_from_measurement"]
-    code, stdout, _ = run(monkeypatch, capsys, "couple", campaign / "campaign.json", "--json")
+    code, stdout, _ = run_cli("couple", campaign / "campaign.json", "--json")
     dev_rigid = json.loads(stdout)["mean_relative_deviation_from_measurement"]
     assert dev < 0.06 < 0.5 < dev_rigid
     g = read_frf_uff58(tmp_path / "g.uff")
@@ -87,32 +74,32 @@ BAD = [
 
 
 @pytest.mark.parametrize("label,change,message", BAD, ids=[b[0] for b in BAD])
-def test_bad_campaign_fails_clearly_and_writes_nothing(monkeypatch, capsys, campaign, tmp_path, label, change, message):
+def test_bad_campaign_fails_clearly_and_writes_nothing(run_cli, campaign, tmp_path, label, change, message):
     path = edit(campaign, change)
     out, figs = tmp_path / "joint.h5", tmp_path / "figs"
-    code, stdout, err = run(monkeypatch, capsys, "identify", path, "--out", out, "--plots", figs)
+    code, stdout, err = run_cli("identify", path, "--out", out, "--plots", figs)
     assert code == 2
     assert message in err
     assert err.count("\n") == 1 and "Traceback" not in err
     assert not out.exists() and not figs.exists()
 
 
-def test_mismatched_grid_fails_clearly(monkeypatch, capsys, campaign, tmp_path):
+def test_mismatched_grid_fails_clearly(run_cli, campaign, tmp_path):
     v = read_frf_uff58(campaign / "validation.uff")
     write_uff58(campaign / "validation.uff", v.band(fmax=2000.0))
-    code, _, err = run(monkeypatch, capsys, "identify", campaign / "campaign.json", "--out", tmp_path / "j.h5")
+    code, _, err = run_cli("identify", campaign / "campaign.json", "--out", tmp_path / "j.h5")
     assert code == 2 and "validation.measurements" in err and "same" in err or "grid" in err
     assert not (tmp_path / "j.h5").exists()
     h = read_frf_uff58(campaign / "holder.uff")
     write_uff58(campaign / "holder.uff", h.band(fmax=3000.0))
-    code, _, err = run(monkeypatch, capsys, "identify", campaign / "campaign.json", "--out", tmp_path / "j.h5")
+    code, _, err = run_cli("identify", campaign / "campaign.json", "--out", tmp_path / "j.h5")
     assert code == 2 and "substructures.holder.uff58: holder.uff has 299 lines" in err
 
 
-def test_dead_channel_fails_clearly(monkeypatch, capsys, campaign, tmp_path):
+def test_dead_channel_fails_clearly(run_cli, campaign, tmp_path):
     m = read_frf_uff58(campaign / "assembly.uff")
     write_uff58(campaign / "assembly.uff", m.replace(values=np.zeros_like(m.values)))
-    code, _, err = run(monkeypatch, capsys, "identify", campaign / "campaign.json", "--out", tmp_path / "j.h5")
+    code, _, err = run_cli("identify", campaign / "campaign.json", "--out", tmp_path / "j.h5")
     assert code == 2, err
     assert "measured H(1x, 1x) is zero at every line" in err and "Traceback" not in err
     assert not (tmp_path / "j.h5").exists()
@@ -143,7 +130,7 @@ def _write_campaign(d, data):
     return d / "campaign.json"
 
 
-def test_n_point_campaign_through_the_cli(monkeypatch, capsys, tmp_path):
+def test_n_point_campaign_through_the_cli(run_cli, tmp_path):
     from coupling_cases import TABLE_5_1_K, plate_frfs, plates
 
     freq = np.arange(20.0, 2000.0, 20.0)
@@ -159,16 +146,16 @@ def test_n_point_campaign_through_the_cli(monkeypatch, capsys, tmp_path):
                       "b": "B", "b_dofs": [f"{n}z" for n in case["b_bolts"]]},
         "measurements": ["g.uff"], "n_point": {"internal": [f"{n}z" for n in case["internal"]]},
     })
-    code, stdout, err = run(monkeypatch, capsys, "identify", path, "--out", tmp_path / "j.h5", "--json")
+    code, stdout, err = run_cli("identify", path, "--out", tmp_path / "j.h5", "--json")
     assert code == 0, err
     rep = json.loads(stdout)
     assert np.allclose([row["k"] for row in rep["constant_fit"]], TABLE_5_1_K, rtol=1e-6)
-    code, stdout, err = run(monkeypatch, capsys, "couple", path, "--joint", tmp_path / "j.h5", "--json")
+    code, stdout, err = run_cli("couple", path, "--joint", tmp_path / "j.h5", "--json")
     assert code == 0, err
     assert json.loads(stdout)["mean_relative_deviation_from_measurement"] < 1e-6
 
 
-def test_matrix_campaign_through_the_cli(monkeypatch, capsys, tmp_path):
+def test_matrix_campaign_through_the_cli(run_cli, tmp_path):
     from coupling_cases import blocks
 
     freq = np.arange(150.0, 3000.0, 30.0)
@@ -184,7 +171,7 @@ def test_matrix_campaign_through_the_cli(monkeypatch, capsys, tmp_path):
                       "b_dofs": [str(d) for d in b["b_dofs"]]},
         "measurements": ["g.uff"], "matrix": {"measured": [[n, str(d)] for n, d in b["m15"]]},
     })
-    code, stdout, err = run(monkeypatch, capsys, "identify", path, "--out", tmp_path / "j.h5", "--json",
+    code, stdout, err = run_cli("identify", path, "--out", tmp_path / "j.h5", "--json",
                             "--plots", tmp_path / "figs")
     assert code == 0, err
     rep = json.loads(stdout)
@@ -193,6 +180,6 @@ def test_matrix_campaign_through_the_cli(monkeypatch, capsys, tmp_path):
     zt = np.linalg.inv(b["joint_true"].values)
     zi = np.linalg.inv(joint.values)
     assert np.median(np.linalg.norm(zi - zt, axis=(1, 2)) / np.linalg.norm(zt, axis=(1, 2))) < 1e-8
-    code, stdout, err = run(monkeypatch, capsys, "couple", path, "--joint", tmp_path / "j.h5", "--json")
+    code, stdout, err = run_cli("couple", path, "--joint", tmp_path / "j.h5", "--json")
     assert code == 0, err
     assert json.loads(stdout)["mean_relative_deviation_from_measurement"] < 1e-6
