@@ -14,30 +14,18 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from jointdb.coupling import spring_damper_joint
-from jointdb.store import Conditions, Provenance, Repository
+from jointdb.store import Conditions, Repository
+from power_law_catalogue import TORQUES, catalogue_power_law, law
 
 ROOT = Path(__file__).resolve().parents[2]
 STACK = ROOT / "fixtures" / "stacks" / "endmill-modelled-spindle.json"
-TORQUES = (30.0, 50.0, 80.0, 130.0, 200.0)
-F = np.linspace(20.0, 6000.0, 300)
-
-
-def law(t):
-    s = (t / 80.0) ** 0.5
-    return [3e7 * s, 6e5 * s], [300.0 * s, 3.0 * s]
 
 
 @pytest.fixture(scope="module")
 def catalogue(tmp_path_factory):
     d = tmp_path_factory.mktemp("choice")
     db = d / "j.sqlite"
-    with Repository(db) as repo:
-        for t in TORQUES:
-            k, c = law(t)
-            repo.catalogue(f"th-{t:03.0f}", "tool-holder", spring_damper_joint(F, k, c, ["3x", "3ry"]),
-                           Conditions(("tungsten-carbide", "steel"), torque_nm=t), "spring-damper-planar",
-                           Provenance(method="output-error-planar"))
+    catalogue_power_law(db)
     return d, db
 
 

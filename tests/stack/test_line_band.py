@@ -14,26 +14,15 @@ import pytest
 
 from jointdb.coupling import spring_damper_joint
 from jointdb.frf import FRF, Dof
-from jointdb.store import Conditions, Provenance, Repository
+from jointdb.store import Conditions, Repository
+from power_law_catalogue import F, TORQUES, catalogue_power_law
 
-TORQUES = (30.0, 50.0, 80.0, 130.0, 200.0)
-F = np.linspace(20.0, 6000.0, 300)
-
-
-def law(t):
-    s = (t / 80.0) ** 0.5
-    return [3e7 * s, 6e5 * s], [300.0 * s, 3.0 * s]
 
 
 @pytest.fixture(scope="module")
 def db(tmp_path_factory):
     path = tmp_path_factory.mktemp("lines") / "j.sqlite"
-    with Repository(path) as repo:
-        for t in TORQUES:
-            k, c = law(t)
-            repo.catalogue(f"th-{t:03.0f}", "tool-holder", spring_damper_joint(F, k, c, ["3x", "3ry"]),
-                           Conditions(("tungsten-carbide", "steel"), torque_nm=t), "spring-damper-planar",
-                           Provenance(method="output-error-planar"))
+    catalogue_power_law(path)
     return path
 
 

@@ -1,0 +1,29 @@
+"""The known-answer catalogue of the band tests (issue 22): planar tool–holder joints whose stiffness and
+damping follow k, c ∝ T^0.5 exactly (3e7 N/m, 6e5 N·m/rad, 300 N·s/m, 3 N·m·s/rad at 80 N·m), catalogued at
+five torques on one frequency grid."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from jointdb.coupling import spring_damper_joint
+from jointdb.store import Conditions, Provenance, Repository
+
+TORQUES = (30.0, 50.0, 80.0, 130.0, 200.0)
+F = np.linspace(20.0, 6000.0, 300)
+
+
+def law(t):
+    """``([k_x, k_θ], [c_x, c_θ])`` of the joint at torque ``t`` [N·m]."""
+    s = (t / 80.0) ** 0.5
+    return [3e7 * s, 6e5 * s], [300.0 * s, 3.0 * s]
+
+
+def catalogue_power_law(db) -> None:
+    """Catalogue the joint at each of :data:`TORQUES` as ``th-030`` … ``th-200`` into the SQLite file ``db``."""
+    with Repository(db) as repo:
+        for t in TORQUES:
+            k, c = law(t)
+            repo.catalogue(f"th-{t:03.0f}", "tool-holder", spring_damper_joint(F, k, c, ["3x", "3ry"]),
+                           Conditions(("tungsten-carbide", "steel"), torque_nm=t), "spring-damper-planar",
+                           Provenance(method="output-error-planar"))
