@@ -172,11 +172,7 @@ def guarded(spec, joints: Mapping, prediction, predict) -> tuple[object, dict]:
     repaired = _local_repair(spec, joints, catalogued, prediction, predict)
     if repaired is not None:
         trial, frfs, window = repaired
-        for n in catalogued:
-            note = (f"the catalogued joint's FRF gave a non-physical tool-tip resonance ({'; '.join(bad)}); on "
-                    f"{window} its constant k, c fit over {PEAK_BAND_HZ[0]:g}–{PEAK_BAND_HZ[1]:g} Hz is used instead")
-            joints[n] = replace(joints[n], frf=frfs[n], warnings=tuple(joints[n].warnings) + (note,),
-                                description=f"{joints[n].description} (constant k, c fallback near the spurious peak)")
+        _fall_back(joints, catalogued, frfs, bad, window)
         return trial, joints
     trials = [[n] for n in catalogued] + ([catalogued] if len(catalogued) > 1 else [])
     for names in trials:
@@ -184,14 +180,22 @@ def guarded(spec, joints: Mapping, prediction, predict) -> tuple[object, dict]:
         frfs.update({n: constant_joint(frfs[n]) for n in names})
         trial = predict(spec, frfs)
         if not non_passive_peaks(trial.tip.freq, trial.tip.values):
-            for n in names:
-                note = (f"the catalogued joint's FRF gave a non-physical tool-tip resonance ({'; '.join(bad)}); "
-                        f"its constant k, c fit over {PEAK_BAND_HZ[0]:g}–{PEAK_BAND_HZ[1]:g} Hz is used instead")
-                joints[n] = replace(joints[n], frf=frfs[n], warnings=tuple(joints[n].warnings) + (note,),
-                                    description=f"{joints[n].description} (constant k, c fallback)")
+            _fall_back(joints, names, frfs, bad)
             return trial, joints
     for n in catalogued:
         note = (f"the tool-tip prediction is not passive ({'; '.join(bad)}) and constant k, c joints do not "
                 "repair it: do not trust its peak")
         joints[n] = replace(joints[n], warnings=tuple(joints[n].warnings) + (note,))
     return prediction, joints
+
+
+def _fall_back(joints: dict, names, frfs: Mapping, bad: list[str], window: str | None = None) -> None:
+    """Put the fallback FRFs ``frfs`` of the joints ``names`` into ``joints``, each with its warning and
+    description: on the lines of ``window`` (text) only, or (None) everywhere."""
+    where = f"on {window} " if window else ""
+    for n in names:
+        note = (f"the catalogued joint's FRF gave a non-physical tool-tip resonance ({'; '.join(bad)}); "
+                f"{where}its constant k, c fit over {PEAK_BAND_HZ[0]:g}–{PEAK_BAND_HZ[1]:g} Hz is used instead")
+        joints[n] = replace(joints[n], frf=frfs[n], warnings=tuple(joints[n].warnings) + (note,),
+                            description=f"{joints[n].description} (constant k, c fallback"
+                                        f"{' near the spurious peak' if window else ''})")
