@@ -21,3 +21,14 @@ def test_a_server_side_failure_is_internal_and_logged(caplog):
         shown = _shown_error("j1", exc)
     assert "/srv" not in shown and shown.startswith("internal error (JointdbError)")
     assert "/srv/jointdb/blobs" in caplog.text
+
+
+def test_a_bug_is_internal_and_logged_with_its_traceback(caplog):
+    try:
+        {}["/srv/secret"]
+    except KeyError as exc:  # raised, so that it carries a traceback
+        bug = exc
+    with caplog.at_level(logging.ERROR, logger="jointdb.jobs"):
+        shown = _shown_error("j1", bug)
+    assert shown == "internal error (KeyError); the worker's log has the details"
+    assert "/srv/secret" in caplog.text and "Traceback" in caplog.text

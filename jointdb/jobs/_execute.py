@@ -12,15 +12,16 @@ from jointdb.jobs._table import JobRows, one_line
 log = logging.getLogger("jointdb.jobs")
 
 
-def _shown_error(job_id: str, exc: JointdbError) -> str:
-    """The job's error as its owner sees it: a user's error (4xx) or damaged data keeps its message;
-    a server-side failure (database, blob store: 5xx) is "internal error" here, its text (which may
-    name server folders) only in the worker's log."""
+def _shown_error(job_id: str, exc: Exception) -> str:
+    """The job's error as its owner sees it: a user's error (a jointdb error with a 4xx status) or damaged
+    data keeps its message; any other failure (database, blob store, a bug) is "internal error" here, its
+    text (which may name server folders) and traceback only in the worker's log."""
     from jointdb.errors import IntegrityError
 
-    if isinstance(exc, IntegrityError) or int(getattr(exc, "http_status", 500)) < 500:
+    if isinstance(exc, IntegrityError) or (isinstance(exc, JointdbError) and exc.http_status < 500):
         return str(exc)
-    log.error(json.dumps({"event": "job_error", "job": job_id, "error": one_line(f"{type(exc).__name__}: {exc}")}))
+    log.error(json.dumps({"event": "job_error", "job": job_id, "error": one_line(f"{type(exc).__name__}: {exc}")}),
+              exc_info=exc)
     return f"internal error ({type(exc).__name__}); the worker's log has the details"
 
 
@@ -37,14 +38,8 @@ def execute(rows: JobRows, job_id: str, repo) -> str | None:
     except Cancelled:
         rows.finish(job_id, "cancelled", message="cancelled while running")
         state = "cancelled"
-    except JointdbError as exc:
-        rows.finish(job_id, "failed", error=_shown_error(job_id, exc), message="failed")
-        state = "failed"
     except Exception as exc:  # noqa: BLE001 - any failure of a job is its one-line error, logged in full
-        log.error(json.dumps({"event": "job_error", "job": job_id, "error": one_line(f"{type(exc).__name__}: {exc}")}),
-                  exc_info=exc)
-        rows.finish(job_id, "failed", error=f"internal error ({type(exc).__name__}); the worker's log has the "
-                    "details", message="failed")
+        rows.finish(job_id, "failed", error=_shown_error(job_id, exc), message="failed")
         state = "failed"
     else:
         rows.finish(job_id, "succeeded", result=result, artifact=artifact, message="done")
