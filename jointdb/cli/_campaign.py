@@ -116,16 +116,16 @@ def init_cmd(
         raise InputError(f"--out {target}: write the campaign file into {folder} (its paths are relative to it)")
     from jointdb.usecases._substructure_a import A_FILE
 
-    from_parts = any(v is not None for v in (spindle, holder, through_joint, insertion, shank_diameter,
-                                             shank_material))
+    parts = dict(spindle=spindle, holder=holder, through_joint=through_joint, insertion=insertion,
+                 shank_diameter=shank_diameter, shank_material=shank_material)
     a_path = folder / A_FILE
+    from_parts = any(v is not None for v in parts.values())
     kept = a_path.with_name(a_path.name + ".before-init") if from_parts and a_path.exists() else None
     if kept is not None and force:
         os.replace(a_path, kept)  # an earlier A is kept aside until this run has written its campaign file
     built = None
     try:
-        built = _substructure_a(folder, force, db, spindle=spindle, holder=holder, through_joint=through_joint,
-                                insertion=insertion, shank_diameter=shank_diameter, shank_material=shank_material)
+        built = _substructure_a(folder, force, db, **parts) if from_parts else None
         doc, notes = scaffold_campaign(folder, joint_type=jt, conditions=conditions, name=name)
         if built is not None:
             doc["substructures"][doc["interface"]["a"]]["provenance"] = dict(built[1].provenance)
@@ -172,9 +172,7 @@ def _init_options(smoothing: int | None, fit_band: str | None) -> dict[str, Any]
 
 
 def _substructure_a(folder: Path, force: bool, db, **given):
-    """``(path, SubstructureA)`` written into FOLDER when the parts options are given; else None."""
-    if all(v is None for v in given.values()):
-        return None
+    """``(path, SubstructureA)`` written into FOLDER from the parts options (all of them needed)."""
     flags = {"spindle": "--spindle", "holder": "--holder", "through_joint": "--through-joint",
              "insertion": "--insertion", "shank_diameter": "--shank-diameter", "shank_material": "--shank-material"}
     missing = [flags[k] for k, v in given.items() if v is None]
