@@ -26,7 +26,7 @@ from starlette.exceptions import HTTPException as StarletteHTTPException
 from jointdb.errors import IntegrityError, JointdbError
 from jointdb.server._middleware import ServiceMiddleware
 from jointdb.server._safety import ControlCharacterGuard, client_error, scrub_message
-from jointdb.server._safety import hidden_dirs as _hidden_dirs
+from jointdb.server._safety import hidden_dirs
 from jointdb.server._security import install as install_security_headers
 from jointdb.server._settings import Settings
 
@@ -40,7 +40,7 @@ def _one_line(text: object, limit: int = 300) -> str:
 
 def _error(request: Request, status: int, message: str, headers=None) -> JSONResponse:
     rid = request.scope.get("state", {}).get("request_id")
-    text = _one_line(scrub_message(str(message), _hidden_dirs(request.app)))
+    text = _one_line(scrub_message(str(message), hidden_dirs(request.app)))
     return JSONResponse({"error": text, "request_id": rid}, status_code=status, headers=headers)
 
 
@@ -130,7 +130,7 @@ async def _jointdb_error(request: Request, exc: JointdbError):
     rid = request.scope.get("state", {}).get("request_id")
     if exc.http_status >= 500 and _value_fault(exc):  # the database refused a value of the request
         return _error(request, 422, _value_fault(exc))
-    status, text = client_error(exc, rid, _hidden_dirs(request.app))  # 5xx: no URL, SQL or path
+    status, text = client_error(exc, rid, hidden_dirs(request.app))  # 5xx: no URL, SQL or path
     if status >= 500 or isinstance(exc, IntegrityError):
         _note_failure(request, exc)  # the full text goes to the request's log line
     return _error(request, status, text)
