@@ -10,7 +10,7 @@ import concurrent.futures as cf
 import uuid
 
 import pytest
-from server_helpers import _pg_schema, drop_pg_schema, joint_upload, make_tokens, pg_base_url
+from server_helpers import joint_upload, make_tokens, migrated_database
 
 API = "/api/v1"
 
@@ -81,24 +81,11 @@ def test_idempotency_key_retry_returns_the_same_answer_and_a_reused_key_is_refus
 # ----------------------------------------------------------------- retries across a killed server
 @pytest.mark.parametrize("backend", ["sqlite", "postgresql"])
 def test_retries_across_a_sigkill_lose_nothing_and_duplicate_nothing(backend, tmp_path, load_script):
-    from jointdb.store import upgrade
-
     run_killed_server = load_script("bench/bench_reliability.py").run_killed_server
 
-    cleanup = None
-    if backend == "sqlite":
-        db = f"sqlite:///{tmp_path / 'j.sqlite'}"
-    else:
-        engine, schema, db = _pg_schema(pg_base_url())
-        cleanup = (engine, schema)
-    try:
-        upgrade(db)
+    with migrated_database(backend, tmp_path) as db:
         token = make_tokens(db, tmp_path / "blobs")["writer"]
         out = run_killed_server(db, tmp_path / "blobs", tmp_path / "server.log", token, clients=4, requests=10,
                                 kill_after=12)
-    finally:
-        if cleanup:
-            drop_pg_schema(*cleanup)
-            cleanup[0].dispose()
     assert out["killed"] and out["lost"] == 0 and out["duplicated"] == 0 and out["db_check_ok"], out
     assert out["succeeded"] == 40 and out["versions"] == 40, out
