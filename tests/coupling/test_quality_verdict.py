@@ -5,7 +5,7 @@ import json
 import numpy as np
 
 from jointdb.coupling._quality import dominant_peaks, parameter_verdicts, peak_errors
-from test_coupling_cli import campaign, run  # noqa: F401 - the CLI runner and the campaign fixture
+from test_coupling_cli import campaign  # noqa: F401 - the campaign fixture
 
 
 def sdof(freq, fn, zeta, k):
@@ -43,7 +43,7 @@ def test_parameter_verdicts_name_the_weak_parameter_and_correlations():
     assert parameter_verdicts(["k"], np.array([0.01]), np.eye(1)) == []
 
 
-def test_bundled_campaign_verdicts(monkeypatch, capsys, campaign, tmp_path):
+def test_bundled_campaign_verdicts(run_cli, campaign, tmp_path):
     truth = json.loads((campaign / "truth.json").read_text())["joint"]
     # per-line IRC joint (the old route): couple's verdict says the dominant peak is missed
     p = campaign / "campaign.json"
@@ -51,15 +51,15 @@ def test_bundled_campaign_verdicts(monkeypatch, capsys, campaign, tmp_path):
     data["options"]["method"] = "irc"
     irc_campaign = campaign / "irc.json"
     irc_campaign.write_text(json.dumps(data))
-    code, out, err = run(monkeypatch, capsys, "identify", irc_campaign, "--out", tmp_path / "irc.h5")
+    code, out, err = run_cli("identify", irc_campaign, "--out", tmp_path / "irc.h5")
     assert code == 0, err
     assert "peak at 800 Hz is missed" in out and "hides this" in out
-    code, out, err = run(monkeypatch, capsys, "couple", p, "--joint", tmp_path / "irc.h5")
+    code, out, err = run_cli("couple", p, "--joint", tmp_path / "irc.h5")
     assert code == 0, err
     line = [s for s in out.splitlines() if s.startswith("verdict:")]
     assert len(line) == 1 and "peak at 800 Hz is missed" in line[0] and "0.31×" in line[0], out
     # output-error joint (default): parameters with standard errors, peaks reproduced, validation checked
-    code, out, err = run(monkeypatch, capsys, "identify", p, "--out", tmp_path / "oe.h5", "--json")
+    code, out, err = run_cli("identify", p, "--out", tmp_path / "oe.h5", "--json")
     assert code == 0, err
     rep = json.loads(out)
     assert rep["method"] == "output-error"
@@ -71,7 +71,7 @@ def test_bundled_campaign_verdicts(monkeypatch, capsys, campaign, tmp_path):
     assert rep["peaks_irc_joint"][0]["missed"]
     assert all(not q["missed"] for q in rep["validation"]["peaks"])
     assert rep["verdict"][0].startswith("OK:")
-    code, out, err = run(monkeypatch, capsys, "couple", p, "--joint", tmp_path / "oe.h5", "--json")
+    code, out, err = run_cli("couple", p, "--joint", tmp_path / "oe.h5", "--json")
     assert code == 0, err
     summary = json.loads(out)
     assert summary["verdict"][0].startswith("OK:") and not summary["peaks"][0]["missed"]
