@@ -7,6 +7,31 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+def canonical_materials(texts: list[str], index: np.ndarray) -> tuple[list[str], np.ndarray]:
+    """The materials texts that ``index`` uses, sorted, and the index into them: one form whatever
+    order the rows came in, so that a full fetch and an incremental update give equal arrays.
+
+    Parameters
+    ----------
+    texts
+        Distinct materials texts.
+    index
+        Per candidate, an index into ``texts``.
+
+    Returns
+    -------
+    texts : list of str
+        The used texts, sorted.
+    index : ndarray of intp
+        Per candidate, an index into them.
+    """
+    used = np.unique(index) if index.size else np.zeros(0, dtype=np.intp)
+    order = sorted(used.tolist(), key=lambda i: texts[i])
+    remap = np.zeros(len(texts), dtype=np.intp)
+    remap[order] = np.arange(len(order), dtype=np.intp)
+    return [texts[i] for i in order], remap[np.asarray(index, dtype=np.intp)]
+
+
 #: stands for SQL NULL in fetched numeric columns (every stored condition number is >= 0)
 _NULL = -1.0
 
@@ -55,3 +80,33 @@ class Candidates:
             hit = self.version_id[pos] == ids
             out[pos[hit]] = np.array(vals, dtype=float)[hit]
         return out
+
+    def replace_joints(self, joint_ids, new: "Candidates | None") -> "Candidates":
+        """These candidates with every row of ``joint_ids`` replaced by the rows of ``new``.
+
+        Parameters
+        ----------
+        joint_ids
+            The joints whose rows are dropped.
+        new
+            Their current rows (None: none), with at least this set's geometry keys.
+
+        Returns
+        -------
+        Candidates
+            Ordered by version id, materials in canonical form (:func:`canonical_materials`).
+        """
+        keep = ~np.isin(self.joint_id, np.asarray(list(joint_ids), dtype=np.int64))
+        parts = [(self, keep)] + ([(new, slice(None))] if new is not None else [])
+        vid = np.concatenate([c.version_id[m] for c, m in parts])
+        order = np.argsort(vid, kind="stable")
+
+        def col(name):
+            return np.concatenate([getattr(c, name)[m] for c, m in parts])[order]
+        texts = self.materials + (new.materials if new is not None else [])
+        index = np.concatenate([self.materials_index[keep]]
+                               + ([new.materials_index + len(self.materials)] if new is not None else []))
+        texts, index = canonical_materials(texts, index[order])
+        geometry = {g: np.concatenate([c.geometry[g][m] for c, m in parts])[order] for g in self.geometry}
+        return Candidates(vid[order], col("joint_id"), col("number"), col("torque"), col("preload"), texts, index,
+                          geometry)

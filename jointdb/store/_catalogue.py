@@ -35,13 +35,12 @@ from sqlalchemy import bindparam, false, func, insert, or_, select, update
 from jointdb.errors import ConflictError, InputError
 from jointdb.store._chain import append_chain
 from jointdb.store._identity import contradiction, identity_changes, same_content
-from jointdb.store._index import add_counts, index_values
+from jointdb.store._index import add_counts, bump, index_values
 from jointdb.store._models import (
     AuditRow,
     IdempotencyRow,
     JointRow,
     QueryGeometryRow,
-    QueryStampRow,
     QueryVersionRow,
     StateRow,
     VersionRow,
@@ -54,7 +53,7 @@ from jointdb.store._vocabulary import dof_strings
 @functools.cache
 def _statements() -> SimpleNamespace:
     j, v, s = JointRow.__table__, VersionRow.__table__, StateRow.__table__
-    q, stamp = QueryVersionRow.__table__, QueryStampRow.__table__
+    q = QueryVersionRow.__table__
     latest = select(func.max(v.c.version)).where(v.c.joint_id == bindparam("jid")).scalar_subquery()
     state = (select(s.c.state)
              .where(s.c.joint_id == bindparam("jid"),
@@ -86,7 +85,6 @@ def _statements() -> SimpleNamespace:
                    .values(newest=False, newest_active=False, listed=False)),
         insert_index=insert(q),
         insert_geometry=insert(QueryGeometryRow.__table__),
-        bump=update(stamp).where(stamp.c.id == 1).values(generation=stamp.c.generation + 1),
     )
 
 
@@ -226,7 +224,7 @@ def write_version(session, *, name, joint_type, frf, cond, kind, prov, qual, par
     conn.execute(st.insert_index, values)
     if geometry:
         conn.execute(st.insert_geometry, geometry)
-    conn.execute(st.bump)
+    bump(conn, [jid])  # the stamp and the query index's change log
     joint = SimpleNamespace(id=jid, name=name, joint_type=joint_type)
     labels: tuple[str, ...] = ()
     if label is not None:

@@ -343,6 +343,7 @@ DOWNGRADE_DROPS = {
     "0009": "the parts tables (spindles, holders, tools; refused while any part is catalogued: its rows are in "
             "the history chain)",
     "0010": "the listing's head columns of the query index (derived; upgrading rebuilds them)",
+    "0011": "the query index's change log (derived; the next query after the downgrade refetches everything)",
 }
 
 

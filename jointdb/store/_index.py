@@ -16,6 +16,10 @@ Tables (migration ``0004``; models in :mod:`jointdb.store._models`):
 ``query_stamp``     one row ``(token, generation)``; ``generation`` goes up in every
                     transaction that changes versions, states or labels, so a reader
                     can tell with one SELECT whether arrays it holds are still current.
+``query_changes``   per such transaction its new generation and each joint it touched
+                    (migration ``0011``; :func:`bump`), so that a reader holding the arrays
+                    of an older generation refetches only those joints' rows. Pruned to the
+                    last :data:`KEEP_GENERATIONS` generations; a gap means "refetch all".
 
 The rows are written inside the same write transaction as the history rows they
 derive from (:func:`refresh_joints`, :func:`bump`; a new version:
@@ -38,6 +42,7 @@ from sqlalchemy.orm import Session
 
 from jointdb.store._models import (
     JointRow,
+    QueryChangeRow,
     QueryCountRow,
     QueryGeometryRow,
     QueryStampRow,
@@ -157,10 +162,38 @@ def _count_changes(joint_type: str, before: Iterable[tuple], after: Iterable[tup
     return deltas
 
 
-def bump(session: Session | Connection) -> None:
-    """Increase the query stamp's generation (in the caller's write transaction)."""
-    t = QueryStampRow.__table__
-    session.execute(update(t).where(t.c.id == 1).values(generation=t.c.generation + 1))
+#: generations the change log keeps (older ones are pruned every :data:`PRUNE_EVERY` generations)
+KEEP_GENERATIONS = 4096
+PRUNE_EVERY = 256
+
+
+def bump(session: Session | Connection, joint_ids: Iterable[int] | None = None) -> int:
+    """Increase the query stamp's generation and log the joints changed (in the caller's write transaction).
+
+    Every write that changes what a nearest query can return calls this once, where it bumps
+    the stamp: a new version, a state, a label, an import.
+
+    Parameters
+    ----------
+    session
+        The write transaction.
+    joint_ids
+        The joints whose index rows or labels it changed; None (or none given): any joint may
+        have changed, and readers refetch everything.
+
+    Returns
+    -------
+    int
+        The new generation.
+    """
+    t, c = QueryStampRow.__table__, QueryChangeRow.__table__
+    generation = int(session.execute(update(t).where(t.c.id == 1).values(generation=t.c.generation + 1)
+                                     .returning(t.c.generation)).scalar_one())
+    ids = sorted({int(j) for j in joint_ids}) if joint_ids is not None else []
+    session.execute(insert(c), [{"generation": generation, "joint_id": j} for j in ids or [None]])
+    if generation % PRUNE_EVERY == 0:
+        session.execute(delete(c).where(c.c.generation <= generation - KEEP_GENERATIONS))
+    return generation
 
 
 def refresh_joints(session: Session, joint_ids: Iterable[int]) -> None:
@@ -170,7 +203,8 @@ def refresh_joints(session: Session, joint_ids: Iterable[int]) -> None:
     joints' versions are recomputed and the changed ones updated. Call after the
     history rows were added and flushed, in the same transaction.
     """
-    for joint_id in sorted(set(joint_ids)):
+    joint_ids = sorted(set(joint_ids))
+    for joint_id in joint_ids:
         name, joint_type = session.execute(select(JointRow.name, JointRow.joint_type)
                                            .where(JointRow.id == joint_id)).one()
         versions = [tuple(r) for r in session.execute(select(VersionRow.id, VersionRow.version)
@@ -199,7 +233,7 @@ def refresh_joints(session: Session, joint_ids: Iterable[int]) -> None:
                 session.execute(update(QueryVersionRow).where(QueryVersionRow.version_id == vid)
                                 .values(**dict(zip(FLAGS, f))))
         add_counts(session, _count_changes(joint_type, have.values(), flags.values()))
-    bump(session)
+    bump(session, joint_ids)
 
 
 def _expected(conn: Connection) -> tuple[dict[int, dict], set[tuple[str, int, float]]]:
@@ -245,8 +279,9 @@ def rebuild(conn: Connection) -> int:
         add_counts(conn, _expected_counts(rows))
     if conn.execute(select(QueryStampRow.id)).first() is None:
         conn.execute(insert(QueryStampRow), [{"id": 1, "token": str(uuid.uuid4()), "generation": 0}])
-    else:
-        bump(conn)
+    else:  # no change-log entry: a gap, so that readers refetch everything
+        t = QueryStampRow.__table__
+        conn.execute(update(t).where(t.c.id == 1).values(generation=t.c.generation + 1))
     return len(rows)
 
 

@@ -53,8 +53,9 @@ class LabelsAndStates:
         self.get(name, version)  # NotFoundError for an unknown joint or version
 
         def write(s: Session) -> None:
-            self._move_label(s, joint_row(s, name), name, int(version), label, actor, utcnow())
-            bump(s)  # labels are read live by the query; only its stamp changes
+            joint = joint_row(s, name)
+            self._move_label(s, joint, name, int(version), label, actor, utcnow())
+            bump(s, [joint.id])  # labels are read live by the query; only its stamp changes
 
         self.storage.retrying(write)
         return self.get(name, version)
@@ -113,7 +114,7 @@ class LabelsAndStates:
             s.delete(row)
             s.add(AuditRow(at=utcnow(), actor=actor, action="unlabel", joint_name=name, version=row.version,
                            details={"label": label, "previous_version": row.version}))
-            bump(s)
+            bump(s, [joint.id])
 
         self.storage.retrying(write)
         return removed[0]

@@ -406,6 +406,20 @@ class QueryCountRow(Base):
     joints: Mapped[int] = mapped_column(BigInteger)
 
 
+class QueryChangeRow(Base):
+    """The query index's change log (migration ``0011``): per transaction that changes what a
+    nearest query can return, its stamp generation and each joint it touched (``joint_id`` NULL:
+    any joint may have changed). Lets a reader holding older candidate arrays refetch only the
+    rows of those joints (:func:`jointdb.store._index.note_change`). Derived, pruned state."""
+
+    __tablename__ = "query_changes"
+    __table_args__ = (Index("ix_query_changes_generation", "generation"),)
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    generation: Mapped[int] = mapped_column(BigInteger)
+    joint_id: Mapped[int | None] = mapped_column(Integer, nullable=True)
+
+
 class QueryStampRow(Base):
     """One row: a token fixed when the index is built and a generation counter increased by
     every transaction that changes what a query can return (versions, states, labels)."""

@@ -38,7 +38,7 @@ from typing import Any
 import numpy as np
 
 from jointdb.errors import InputError, IntegrityError, NotFoundError
-from jointdb.store._candidates import _NULL, Candidates
+from jointdb.store._candidates import _NULL, Candidates, canonical_materials
 from jointdb.store._records import DamagedRecordWarning, load_stored_json, to_version
 from jointdb.store._types import Conditions, Match, as_conditions, check_joint_type, check_label
 
@@ -122,6 +122,7 @@ class Reader:
         else:
             self.conn.rollback()  # a fresh transaction: SET TRANSACTION must come first in it
             self.rows("SET TRANSACTION ISOLATION LEVEL REPEATABLE READ READ ONLY")
+            self.rows(f"SET LOCAL work_mem = '{WORK_MEM}'")  # this read transaction only
         try:
             yield self
         finally:
@@ -133,6 +134,13 @@ class Reader:
 
 _cache: dict[tuple, tuple[tuple, Candidates]] = {}
 
+#: PostgreSQL ``work_mem`` of the query's read transaction (``SET LOCAL``): the join of a million-version
+#: index with a geometry key hashes ~500k rows, which spills to disk at the default 4 MB
+WORK_MEM = "64MB"
+#: the incremental update reads at most this many generations / changed joints; beyond, it refetches all
+MAX_STEPS = 2000
+MAX_CHANGED_JOINTS = 5000
+
 
 #: ``query_versions.packed`` (see :data:`jointdb.store._index.PACKED`) and -1.0 as float64 bytes
 _PACKED = np.dtype([("version_id", "<i8"), ("joint_id", "<i8"), ("number", "<i8"), ("torque", "<f8"),
@@ -140,37 +148,61 @@ _PACKED = np.dtype([("version_id", "<i8"), ("joint_id", "<i8"), ("number", "<i8"
 _NULL_BITS = "000000000000F0BF"
 
 
-def _packed_row(reader: Reader, sel: Selection, geometry_keys: list[str], raw: bool) -> tuple[int, list[bytes], str]:
+def _restrict(sel: Selection, joint_ids, dialect: str) -> tuple[str, str, list, list]:
+    """``(join, where, join_params, where_params)`` of ``sel``, limited to ``joint_ids`` unless None."""
+    join, where, params = sel.where()
+    head, tail = params[:-1], params[-1:]
+    if joint_ids is not None:
+        if dialect == "sqlite":
+            where += f" AND q.joint_id IN ({', '.join('?' for _ in joint_ids)})"
+            tail += [int(j) for j in joint_ids]
+        else:
+            where += " AND q.joint_id = ANY(?)"
+            tail.append([int(j) for j in joint_ids])
+    return join, where, head, tail
+
+
+def _packed_row(reader: Reader, sel: Selection, geometry_keys: list[str], raw: bool,
+                joint_ids=None) -> tuple[int, list[bytes], str]:
     """``(count, [packed bytes, geometry bytes per key], materials text)`` of ``sel`` in one SELECT.
 
-    ``raw``: the binary columns concatenated as they are (``group_concat`` treats a BLOB as
-    text of the same bytes in a UTF-8 database, embedded NULs included; the CAST hands the
-    result over as bytes); otherwise as hex text (any database encoding). All aggregates of
-    one SELECT visit the rows in the same order.
+    ``raw``: the binary columns concatenated as they are (SQLite: ``group_concat`` treats a
+    BLOB as text of the same bytes in a UTF-8 database, embedded NULs included, and the CAST
+    hands the result over as bytes; PostgreSQL: ``string_agg`` of ``bytea``); otherwise as hex
+    text (SQLite, any database encoding). All aggregates of one SELECT visit the rows in the
+    same order.
     """
-    join, where, params = sel.where()
-    if raw:
+    join, where, head, tail = _restrict(sel, joint_ids, reader.dialect)
+    n_geo = range(len(geometry_keys))
+    if reader.dialect != "sqlite":
+        packed = "string_agg(q.packed, ''::bytea)"
+        geo = [f"string_agg(coalesce(g{i}.bits, '\\x{_NULL_BITS}'::bytea), ''::bytea)" for i in n_geo]
+        mats = "string_agg(q.materials, chr(30))"
+    elif raw:
         col = "CAST(group_concat({}, '') AS BLOB)"
-        packed, geo = col.format("q.packed"), [col.format(f"coalesce(g{i}.bits, x'{_NULL_BITS}')")
-                                               for i in range(len(geometry_keys))]
+        packed, geo = col.format("q.packed"), [col.format(f"coalesce(g{i}.bits, x'{_NULL_BITS}')") for i in n_geo]
+        mats = "group_concat(q.materials, char(30))"
     else:
         packed = "group_concat(hex(q.packed), '')"
         geo = [f"group_concat(CASE WHEN g{i}.bits IS NULL THEN '{_NULL_BITS}' ELSE hex(g{i}.bits) END, '')"
-               for i in range(len(geometry_keys))]
+               for i in n_geo]
+        mats = "group_concat(q.materials, char(30))"
     geo_join = "".join(f" LEFT JOIN query_geometry g{i} ON g{i}.key = ? AND g{i}.version_id = q.version_id"
-                       for i in range(len(geometry_keys)))
-    row = reader.rows(
-        f"SELECT count(*), {packed}, group_concat(q.materials, char(30)){''.join(', ' + g for g in geo)} "
-        f"FROM query_versions q{join}{geo_join} WHERE {where}", [*params[:-1], *geometry_keys, params[-1]])[0]
-    binary = [b if raw else bytes.fromhex(b) for b in (row[1], *row[3:])] if row[0] else []
+                       for i in n_geo)
+    row = reader.rows(f"SELECT count(*), {packed}, {mats}{''.join(', ' + g for g in geo)} "
+                      f"FROM query_versions q{join}{geo_join} WHERE {where}", [*head, *geometry_keys, *tail])[0]
+    binary = [bytes(b) if raw else bytes.fromhex(b) for b in (row[1], *row[3:])] if row[0] else []
     return int(row[0]), binary, row[2]
 
 
-def _fetch_packed(reader: Reader, sel: Selection, geometry_keys: list[str]) -> Candidates:
-    """SQLite: the candidates as one row of concatenated binary columns (no Python object per row)."""
-    n, binary, materials = _packed_row(reader, sel, geometry_keys, raw=True)
+def _fetch(reader: Reader, sel: Selection, geometry_keys: list[str], joint_ids=None) -> Candidates:
+    """The candidates of ``sel`` (only of ``joint_ids`` unless None) with the given geometry keys,
+    as one row of concatenated binary columns (no Python object per candidate)."""
+    raw = True
+    n, binary, materials = _packed_row(reader, sel, geometry_keys, raw, joint_ids)
     if n and any(len(b) != size * n for b, size in zip(binary, [_PACKED.itemsize] + [8] * len(geometry_keys))):
-        n, binary, materials = _packed_row(reader, sel, geometry_keys, raw=False)  # e.g. a UTF-16 database
+        if reader.dialect == "sqlite":  # e.g. a UTF-16 database
+            n, binary, materials = _packed_row(reader, sel, geometry_keys, False, joint_ids)
     if n == 0:
         return Candidates.from_rows([], geometry_keys)
     rec = np.frombuffer(binary[0], dtype=_PACKED) if len(binary[0]) == _PACKED.itemsize * n else None
@@ -180,6 +212,7 @@ def _fetch_packed(reader: Reader, sel: Selection, geometry_keys: list[str]) -> C
     order = np.argsort(rec["version_id"], kind="stable")
     keys: dict[str, int] = {}
     idx = np.array([keys.setdefault(m, len(keys)) for m in mats], dtype=np.intp)
+    texts, idx = canonical_materials(list(keys), idx[order])
 
     def nums(a):
         a = np.array(a[order], dtype=float)
@@ -187,22 +220,7 @@ def _fetch_packed(reader: Reader, sel: Selection, geometry_keys: list[str]) -> C
         return a
     geometry = {g: nums(np.frombuffer(b, dtype="<f8")) for g, b in zip(geometry_keys, binary[1:])}
     return Candidates(rec["version_id"][order].copy(), rec["joint_id"][order].copy(), rec["number"][order].copy(),
-                      nums(rec["torque"]), nums(rec["preload"]), list(keys), idx[order], geometry)
-
-
-def _fetch(reader: Reader, sel: Selection, geometry_keys: list[str]) -> Candidates:
-    """The candidates of ``sel`` with the given geometry keys, in one SELECT."""
-    if reader.dialect == "sqlite":
-        return _fetch_packed(reader, sel, geometry_keys)
-    join, where, params = sel.where()
-    geo_cols = "".join(f", COALESCE(g{i}.value, {_NULL})" for i in range(len(geometry_keys)))
-    geo_join = "".join(f" LEFT JOIN query_geometry g{i} ON g{i}.key = ? AND g{i}.version_id = q.version_id"
-                       for i in range(len(geometry_keys)))
-    rows = reader.rows(
-        f"SELECT q.version_id, q.joint_id, q.version, COALESCE(q.torque_nm, {_NULL}), "
-        f"COALESCE(q.preload_n, {_NULL}), q.materials{geo_cols} FROM query_versions q{join}{geo_join} WHERE {where}",
-        [*params[:-1], *geometry_keys, params[-1]])
-    return Candidates.from_rows(rows, geometry_keys)
+                      nums(rec["torque"]), nums(rec["preload"]), texts, idx, geometry)
 
 
 def _fetch_geometry(reader: Reader, sel: Selection, key: str, cand: Candidates) -> np.ndarray:
@@ -213,10 +231,42 @@ def _fetch_geometry(reader: Reader, sel: Selection, key: str, cand: Candidates) 
     return cand.align(pairs)
 
 
+def _changed_joints(reader: Reader, since: int, now: int) -> list[int] | None:
+    """The joints changed after generation ``since`` up to ``now`` (the change log, migration
+    ``0011``), or None when the log cannot say: too many steps or joints, a generation missing
+    (pruned, or written without a log entry such as a rebuild) or one that changed any joint."""
+    if not 0 <= since < now or now - since > MAX_STEPS:
+        return None
+    rows = reader.rows("SELECT generation, joint_id FROM query_changes WHERE generation > ? AND generation <= ?",
+                       [since, now])
+    if {int(g) for g, _ in rows} != set(range(since + 1, now + 1)) or any(j is None for _, j in rows):
+        return None
+    joints = sorted({int(j) for _, j in rows})
+    return joints if len(joints) <= MAX_CHANGED_JOINTS else None
+
+
+def _updated(reader: Reader, sel: Selection, base: tuple[tuple, Candidates] | None, stamp: tuple
+             ) -> Candidates | None:
+    """``base`` (arrays of an older generation of the same token) brought up to ``stamp`` by
+    refetching only the rows of the joints changed since, or None (then fetch everything)."""
+    if base is None or base[0][0] != stamp[0]:
+        return None
+    joints = _changed_joints(reader, int(base[0][1]), int(stamp[1]))
+    if joints is None:
+        return None
+    keys = list(base[1].geometry)
+    return base[1].replace_joints(joints, _fetch(reader, sel, keys, joints) if joints else None)
+
+
 def current_candidates(reader: Reader, db_key: str, sel: Selection, geometry_keys) -> Candidates:
-    """The candidates of ``sel`` now (call in a snapshot): from this process's cache, else from
-    the on-disk cache (:mod:`jointdb.store._qcache`), else from the index, while the stamp is
-    unchanged."""
+    """The candidates of ``sel`` now (call in a snapshot).
+
+    In order: this process's cache, or the on-disk cache (:mod:`jointdb.store._qcache`), when
+    its stamp is the current one; else the newest older arrays of either, updated with the rows
+    of the joints changed since (the change log); else everything from the index. A
+    selection's rows of a joint depend only on that joint's versions, states and labels, so
+    replacing the changed joints' rows gives exactly the arrays a full fetch gives.
+    """
     from jointdb.store import _qcache
 
     stamp = tuple(reader.rows("SELECT token, generation FROM query_stamp WHERE id = 1")[0])
@@ -228,7 +278,10 @@ def current_candidates(reader: Reader, db_key: str, sel: Selection, geometry_key
             _cache.clear()
         cand = _qcache.load(db_key, stamp, sel)
         if cand is None:
-            cand = _fetch(reader, sel, keys)
+            older = hit if hit is not None and hit[0][0] == stamp[0] and hit[0][1] < stamp[1] else None
+            cand = _updated(reader, sel, older or _qcache.load_older(db_key, stamp, sel), stamp)
+            if cand is None:
+                cand = _fetch(reader, sel, keys)
             _qcache.save(db_key, stamp, sel, cand)
         hit = (stamp, cand)
         _cache[key] = hit

@@ -21,6 +21,7 @@ import contextlib
 import hashlib
 import os
 import uuid
+import zipfile
 from pathlib import Path
 
 import numpy as np
@@ -45,25 +46,53 @@ def _prefix(db_key: str, sel) -> str:
     return hashlib.sha256(text.encode()).hexdigest()[:32]
 
 
+def _token(stamp: tuple) -> str:
+    return "".join(c for c in str(stamp[0]) if c.isalnum())[:36]
+
+
 def _path(root: Path, db_key: str, stamp: tuple, sel) -> Path:
-    token = "".join(c for c in str(stamp[0]) if c.isalnum())[:36]
-    return root / f"{_prefix(db_key, sel)}-{token}-{int(stamp[1])}.npz"
+    return root / f"{_prefix(db_key, sel)}-{_token(stamp)}-{int(stamp[1])}.npz"
 
 
 def load(db_key: str, stamp: tuple, sel):
     """The cached candidates for exactly this stamp, or None."""
     root = cache_dir()
+    return None if root is None else _read(_path(root, db_key, stamp, sel))
+
+
+def load_older(db_key: str, stamp: tuple, sel) -> tuple[tuple, Candidates] | None:
+    """``(its stamp, candidates)`` of the newest file of this selection with the same token and
+    an older generation (to be updated with the changes since: :mod:`jointdb.store._nearest`), or None."""
+    root = cache_dir()
     if root is None:
         return None
+    head = f"{_prefix(db_key, sel)}-{_token(stamp)}-"
     try:
-        with np.load(_path(root, db_key, stamp, sel), allow_pickle=False) as z:
+        names = [p.name for p in root.glob(head + "*.npz")]
+    except OSError:
+        return None
+    older = [int(g) for g in (n[len(head):-4] for n in names) if g.isdigit() and int(g) < int(stamp[1])]
+    if not older:
+        return None
+    old_stamp = (stamp[0], max(older))
+    cand = _read(_path(root, db_key, old_stamp, sel))
+    return None if cand is None else (old_stamp, cand)
+
+
+def _read(path: Path) -> Candidates | None:
+    try:
+        with np.load(path, allow_pickle=False) as z:
             arrays = {k: z[k] for k in _ARRAYS}
             materials = [str(m) for m in z["materials"]]
             geometry = {k[4:]: z[k] for k in z.files if k.startswith("geo:")}
-    except (OSError, KeyError, ValueError):
+    except (OSError, KeyError, ValueError, EOFError, zipfile.BadZipFile):
         return None
     n = arrays["version_id"].size
     if any(a.shape != (n,) for a in (*arrays.values(), *geometry.values())):
+        return None
+    index = arrays["materials_index"]
+    if n and (index.dtype.kind not in "iu" or index.min() < 0 or index.max() >= len(materials)
+              or np.any(np.diff(arrays["version_id"]) <= 0)):
         return None
     return Candidates(arrays["version_id"], arrays["joint_id"], arrays["number"], arrays["torque"],
                       arrays["preload"], materials, arrays["materials_index"].astype(np.intp), geometry)

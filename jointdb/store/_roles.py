@@ -36,6 +36,7 @@ APP_PRIVILEGES = {
     "query_geometry": "SELECT, INSERT, UPDATE, DELETE",
     "query_stamp": "SELECT, INSERT, UPDATE",
     "query_counts": "SELECT, INSERT, UPDATE, DELETE",  # the listing's totals (migration 0010)
+    "query_changes": "SELECT, INSERT, DELETE",  # the query index's change log (migration 0011), pruned
     "api_tokens": "SELECT, INSERT, UPDATE (revoked_at)",
     "frf_blobs": "SELECT, INSERT, UPDATE (touched_at), DELETE",
     "idempotency_keys": "SELECT, INSERT",  # the stored answers to retried catalogue requests

@@ -12,7 +12,7 @@ from jointdb.errors import InputError
 
 #: The newest schema revision this jointdb knows: the schema check compares ``alembic_version``
 #: with it (one SELECT, no Alembic import); a test keeps it equal to the newest migration script.
-HEAD_REVISION = "0010"
+HEAD_REVISION = "0011"
 BUSY_TIMEOUT_S = 30.0
 SQLITE_MAGIC = b"SQLite format 3\x00"
 #: Tables of the jointdb schema (besides ``alembic_version``).
@@ -20,7 +20,7 @@ SQLITE_MAGIC = b"SQLite format 3\x00"
 #: (:mod:`jointdb.jobs._table`, created on first use by ``jointdb serve``).
 OUTSIDE_ALEMBIC = frozenset({"jointdb_jobs"})
 SCHEMA_TABLES = frozenset({"joints", "joint_versions", "joint_states", "labels", "audit_log",
-                           "query_versions", "query_geometry", "query_stamp", "query_counts", "api_tokens", "frf_blobs",
+                           "query_versions", "query_geometry", "query_stamp", "query_counts", "query_changes", "api_tokens", "frf_blobs",
                            "history_chain", "web_sessions", "idempotency_keys",
                            "parts", "part_versions", "part_labels"})
 

@@ -204,15 +204,15 @@ def test_raw_and_hex_fetches_give_the_same_candidates(catalogue, label, all_vers
             a = nearest._packed_row(reader, sel, keys, raw=True)
             b = nearest._packed_row(reader, sel, keys, raw=False)
             assert a[0] > 0 and a == b
-            want = nearest._fetch_packed(reader, sel, keys)
+            want = nearest._fetch(reader, sel, keys)
             real = nearest._packed_row
 
-            def short_raw(reader_, sel_, keys_, raw):  # raw bytes cut short: the hex form is used
-                n, binary, mats = real(reader_, sel_, keys_, raw=raw)
+            def short_raw(reader_, sel_, keys_, raw, joint_ids=None):  # raw bytes cut short: the hex form is used
+                n, binary, mats = real(reader_, sel_, keys_, raw, joint_ids)
                 return (n, [x[:-1] for x in binary], mats) if raw else (n, binary, mats)
 
             monkeypatch.setattr(nearest, "_packed_row", short_raw)
-            got = nearest._fetch_packed(reader, sel, keys)
+            got = nearest._fetch(reader, sel, keys)
     finally:
         raw.close()
     for field in ("version_id", "joint_id", "number", "torque", "preload", "materials_index"):
