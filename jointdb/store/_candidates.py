@@ -8,13 +8,13 @@ from dataclasses import dataclass, field
 import numpy as np
 
 def canonical_materials(texts: list[str], index: np.ndarray) -> tuple[list[str], np.ndarray]:
-    """The materials texts that ``index`` uses, sorted, and the index into them: one form whatever
-    order the rows came in, so that a full fetch and an incremental update give equal arrays.
+    """The distinct materials texts that ``index`` uses, sorted, and the index into them: one form
+    whatever order the rows came in, so that a full fetch and an incremental update give equal arrays.
 
     Parameters
     ----------
     texts
-        Distinct materials texts.
+        Materials texts (a text may occur more than once).
     index
         Per candidate, an index into ``texts``.
 
@@ -25,11 +25,13 @@ def canonical_materials(texts: list[str], index: np.ndarray) -> tuple[list[str],
     index : ndarray of intp
         Per candidate, an index into them.
     """
-    used = np.unique(index) if index.size else np.zeros(0, dtype=np.intp)
-    order = sorted(used.tolist(), key=lambda i: texts[i])
+    index = np.asarray(index, dtype=np.intp)
+    used = np.unique(index).tolist() if index.size else []
+    distinct = sorted({texts[i] for i in used})
+    position = {t: n for n, t in enumerate(distinct)}
     remap = np.zeros(len(texts), dtype=np.intp)
-    remap[order] = np.arange(len(order), dtype=np.intp)
-    return [texts[i] for i in order], remap[np.asarray(index, dtype=np.intp)]
+    remap[used] = [position[texts[i]] for i in used]
+    return distinct, remap[index]
 
 
 #: stands for SQL NULL in fetched numeric columns (every stored condition number is >= 0)
