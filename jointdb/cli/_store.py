@@ -267,15 +267,19 @@ def query(
     check_out(out, (".csv", ".json", ".h5", ".hdf5"))
     req = _conditions(material, preload, torque, geometry)
     selection = {"label": label, "all_versions": all_versions, "include_deprecated": include_deprecated}
-    from jointdb.store._light import nearest_in_file, sqlite_target
+    from jointdb.store._light import nearest_in_file, nearest_on_postgres, postgres_target, sqlite_target
 
     remote = db is None and bool(__import__("os").environ.get("JOINTDB_SERVER"))
-    light = sqlite_target(db) if interpolate is None and at is None and not remote else None
-    repo = None if light is not None else _repo(db, blobs)
+    fast = interpolate is None and at is None and not remote
+    light = sqlite_target(db) if fast else None
+    pg = postgres_target(db) if fast and light is None else None
+    repo = None if light is not None or pg is not None else _repo(db, blobs)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        if repo is None:  # a SQLite file: rank without loading SQLAlchemy (fast start)
+        if light is not None:  # a SQLite file: rank without loading SQLAlchemy (fast start)
             matches = nearest_in_file(light, joint_type, req, k=k, **selection)
+        elif pg is not None:  # PostgreSQL: psycopg directly, likewise
+            matches = nearest_on_postgres(pg, joint_type, req, k=k, **selection)
         else:
             matches = repo.nearest(joint_type, req, k=k, at=at, **selection)
     damaged = [w for w in caught if w.category.__name__ == "DamagedRecordWarning"]  # no store import here

@@ -1,11 +1,14 @@
-"""The nearest query on a SQLite file without SQLAlchemy or Alembic (``jointdb query``).
+"""The nearest query without SQLAlchemy or Alembic (``jointdb query``).
 
 A one-shot command pays for every import: SQLAlchemy and Alembic cost more than
 the query itself. For a SQLite target this module opens the file with the
 standard ``sqlite3`` module after the same checks :class:`Repository` makes
-(a jointdb SQLite file; schema at :data:`HEAD_REVISION`, read with one SELECT)
-and ranks with :func:`jointdb.store._nearest.nearest_now`, the code
-:meth:`Repository.nearest` runs too. PostgreSQL URLs go through the Repository.
+(a jointdb SQLite file; schema at :data:`HEAD_REVISION`, read with one SELECT);
+for a ``postgresql://`` or ``postgresql+psycopg://`` URL it connects with psycopg
+directly, with the connection options the Repository's engine uses (JIT off, a
+connect timeout) and the same schema check. Both rank with
+:func:`jointdb.store._nearest.nearest_now`, the code :meth:`Repository.nearest`
+runs too. SQLAlchemy is imported only to word an error.
 """
 
 from __future__ import annotations
@@ -43,6 +46,101 @@ def sqlite_target(db: str | os.PathLike | None) -> Path | None:
     if text.startswith("sqlite:///") and text[len("sqlite:///"):] not in ("", ":memory:"):
         return Path(text[len("sqlite:///"):])
     return None
+
+
+#: URL prefixes the PostgreSQL fast path takes (other drivers go through the Repository)
+PG_PREFIXES = ("postgresql://", "postgresql+psycopg://")
+#: as :data:`jointdb.store._db.PG_CONNECT_TIMEOUT_S` (a test keeps them equal)
+PG_CONNECT_TIMEOUT_S = 10
+
+
+def postgres_target(db: str | os.PathLike | None) -> str | None:
+    """The PostgreSQL URL ``--db`` / ``$JOINTDB_URL`` names (psycopg driver), else None."""
+    text = str(db) if db is not None else os.environ.get("JOINTDB_URL") or ""
+    return text if text.startswith(PG_PREFIXES) and "\0" not in text else None
+
+
+def _libpq(url: str) -> tuple[str, dict]:
+    """``(conninfo URI, connect keyword arguments)`` of a SQLAlchemy-style PostgreSQL URL, with the
+    engine's options (:func:`jointdb.store._db.make_engines`): ``-c jit=off`` added to ``options``,
+    a connect timeout unless given."""
+    from urllib.parse import parse_qsl, quote, urlencode, urlsplit, urlunsplit
+
+    parts = urlsplit(url)
+    query = parse_qsl(parts.query, keep_blank_values=True)
+    options = " ".join(v for k, v in query if k == "options")
+    rest = [(k, v) for k, v in query if k != "options"]
+    if not any(k == "connect_timeout" for k, _ in rest):
+        rest.append(("connect_timeout", str(PG_CONNECT_TIMEOUT_S)))
+    conninfo = urlunsplit(("postgresql", parts.netloc, parts.path, urlencode(rest, quote_via=quote), ""))
+    return conninfo, {"options": f"{options} -c jit=off".strip()}
+
+
+def open_postgres_reader(url: str) -> Reader:
+    """A read connection (psycopg) to a jointdb PostgreSQL database at the current schema.
+
+    Raises
+    ------
+    InputError
+        No server, no jointdb schema, or another schema revision (as the Repository says it).
+    """
+    import psycopg
+    from psycopg.types.json import set_json_loads
+
+    from jointdb.errors import InputError
+    from jointdb.store._records import load_stored_json
+
+    conninfo, kwargs = _libpq(url)
+    conn = psycopg.connect(conninfo, **kwargs)
+    try:
+        set_json_loads(load_stored_json, conn)  # a damaged JSON value reads as DamagedJSON, as in the Repository
+        try:
+            current = [r[0] for r in conn.execute("SELECT version_num FROM alembic_version")]
+        except psycopg.errors.UndefinedTable:
+            raise InputError("this database has no jointdb schema yet; run `jointdb db upgrade --db URL` first") \
+                from None
+        finally:
+            conn.rollback()
+        if current != [HEAD_REVISION]:
+            from jointdb.store._db import _script
+
+            raise schema_mismatch(current[0] if current else "none",
+                                  {r.revision for r in _script().walk_revisions()})
+    except BaseException:
+        conn.close()
+        raise
+    return Reader(conn, "postgresql")
+
+
+def nearest_on_postgres(url: str, joint_type: str, conditions, k: int = 3, **selection):
+    """:func:`nearest_now` on a PostgreSQL database through psycopg (see :meth:`Repository.nearest`
+    for the arguments); the query cache is shared with a Repository of the same URL.
+
+    Raises
+    ------
+    InputError, NotFoundError, IntegrityError
+        As :func:`open_postgres_reader` and :func:`nearest_now`; database errors become jointdb errors.
+    """
+    try:
+        import psycopg
+    except ImportError as exc:
+        from jointdb.store._dberrors import translate_error
+
+        raise translate_error(exc, url) from None
+    try:
+        reader = open_postgres_reader(url)
+    except psycopg.Error as exc:
+        from jointdb.store._dberrors import translate_error
+
+        raise translate_error(exc, url) from None
+    try:
+        return nearest_now(reader, url, joint_type, conditions, k, stacklevel=4, **selection)
+    except psycopg.Error as exc:
+        from jointdb.store._dberrors import translate_error
+
+        raise translate_error(exc, url) from None
+    finally:
+        reader.conn.close()
 
 
 def open_reader(path: Path) -> Reader:
