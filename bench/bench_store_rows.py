@@ -18,10 +18,23 @@
 3. ``jointdb query`` CPU time (getrusage of the children) on a 6-version database,
    against ``python -c pass``. Goal <= 0.35 s.
 
+4. ``--pg URL``: PostgreSQL at ``--versions`` (default 1,000,000; 100,000 for a shorter run), one
+   version per joint (half of them tool-holders: ~490k candidates), filled by COPY
+   (:func:`_bulk.bulk_fill_copy`) into the schema ``jointdb_bench_rows_N`` of that server, which is
+   kept for the next run (``--refill`` rebuilds it). Rows: ``jointdb query`` wall time of a fresh
+   process with the shared query cache current, and the first one after a write (one version
+   catalogued before each; the cache is updated from the previous generation), against
+   ``python -c pass``, a bare psycopg connect + ``SELECT 1``, and a bare psycopg fetch of the same
+   candidate rows; warm p50/p99 in one process; the candidate query's EXPLAIN (ANALYZE, BUFFERS)
+   checked for temp (spilled) blocks with the query's work_mem and with the server default.
+   Goals (issue 26): query <= 0.4 s with a current cache, <= 0.8 s after a write, warm p99 <= 40 ms.
+
 ``--check-old REV``: also run the query code of git revision REV (e.g. cd2eba3, before
 the query index) on the same 100k databases and require identical answers.
 
 Run: ``PYTHONPATH=. .venv/bin/python bench/bench_store_rows.py [--quick] [--check-old cd2eba3]``
+PostgreSQL: ``PYTHONPATH=. OPENBLAS_NUM_THREADS=1 .venv/bin/python bench/bench_store_rows.py --pg
+postgresql+psycopg://postgres@127.0.0.1:54330/postgres [--versions 100000]``
 """
 
 from __future__ import annotations
@@ -43,6 +56,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _bulk import bulk_fill  # noqa: E402
+from _bench_pg_rows import bench_pg  # noqa: E402
 
 from jointdb.store import Conditions, OutsideCatalogueWarning, Repository  # noqa: E402
 
@@ -254,11 +268,19 @@ def main(argv=None) -> None:
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--check-old", metavar="REV", help="compare with the query code of this git revision")
     ap.add_argument("--only", choices=("query", "catalogue", "cli"))
+    ap.add_argument("--pg", metavar="URL", help="run only the PostgreSQL rows, on this server")
+    ap.add_argument("--versions", type=int, default=1_000_000, help="versions in the PostgreSQL database")
+    ap.add_argument("--refill", action="store_true", help="rebuild the kept PostgreSQL bench schema")
+    ap.add_argument("--check-index", action="store_true", help="after filling, compare the index with history")
     args = ap.parse_args(argv)
     print(f"bench_store_rows  {time.strftime('%Y-%m-%dT%H:%MZ', time.gmtime())}  python {sys.version.split()[0]}  "
           f"numpy {np.__version__}  cpus {os.cpu_count()}  load {os.getloadavg()[0]:.1f}")
     with tempfile.TemporaryDirectory(prefix="jointdb-bench-", dir=os.environ.get("BENCH_TMP")) as tmp:
         root = Path(tmp)
+        if args.pg:
+            bench_pg(args.pg, args.versions, root, quick=args.quick, refill=args.refill,
+                     check_index=args.check_index, requests=requests, reference=numpy_reference)
+            return
         if args.only in (None, "catalogue"):
             bench_catalogue(root, 30 if args.quick else 100)
         if args.only in (None, "cli"):
