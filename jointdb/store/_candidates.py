@@ -26,7 +26,7 @@ def canonical_materials(texts: list[str], index: np.ndarray) -> tuple[list[str],
         Per candidate, an index into them.
     """
     index = np.asarray(index, dtype=np.intp)
-    used = np.unique(index).tolist() if index.size else []
+    used = np.flatnonzero(np.bincount(index, minlength=len(texts))).tolist() if index.size else []
     distinct = sorted({texts[i] for i in used})
     position = {t: n for n, t in enumerate(distinct)}
     remap = np.zeros(len(texts), dtype=np.intp)

@@ -54,6 +54,14 @@ PG_PREFIXES = ("postgresql://", "postgresql+psycopg://")
 PG_CONNECT_TIMEOUT_S = 10
 
 
+def _check_head(current: list[str]) -> None:
+    """Refuse a schema revision other than :data:`HEAD_REVISION` (Alembic is imported only then)."""
+    if current != [HEAD_REVISION]:
+        from jointdb.store._db import _script
+
+        raise schema_mismatch(current[0] if current else "none", {r.revision for r in _script().walk_revisions()})
+
+
 def postgres_target(db: str | os.PathLike | None) -> str | None:
     """The PostgreSQL URL ``--db`` / ``$JOINTDB_URL`` names (psycopg driver), else None."""
     text = str(db) if db is not None else os.environ.get("JOINTDB_URL") or ""
@@ -101,11 +109,7 @@ def open_postgres_reader(url: str) -> Reader:
                 from None
         finally:
             conn.rollback()
-        if current != [HEAD_REVISION]:
-            from jointdb.store._db import _script
-
-            raise schema_mismatch(current[0] if current else "none",
-                                  {r.revision for r in _script().walk_revisions()})
+        _check_head(current)
     except BaseException:
         conn.close()
         raise
@@ -162,11 +166,7 @@ def open_reader(path: Path) -> Reader:
         conn.execute(f"PRAGMA busy_timeout = {int(BUSY_TIMEOUT_S * 1000)}")
         conn.execute("PRAGMA query_only = ON")
         current = [r[0] for r in conn.execute("SELECT version_num FROM alembic_version")]
-        if current != [HEAD_REVISION]:
-            from jointdb.store._db import _script
-
-            raise schema_mismatch(current[0] if current else "none",
-                                  {r.revision for r in _script().walk_revisions()})
+        _check_head(current)
     except BaseException:
         conn.close()
         raise
