@@ -149,7 +149,9 @@ def bench_pg(base: str, n: int, root: Path, *, quick: bool, refill: bool, check_
 
     url, note = prepare(base, n, refill, check_index)
     runs = 3 if quick else 7
-    env = dict(os.environ, OPENBLAS_NUM_THREADS="1", PYTHONPATH=str(REPO), JOINTDB_QUERY_CACHE=str(root / "qcache"))
+    # as installed: byte code compiled once (a PYTHONDONTWRITEBYTECODE=1 shell would recompile jointdb every run)
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
+    env.update(OPENBLAS_NUM_THREADS="1", PYTHONPATH=str(REPO), JOINTDB_QUERY_CACHE=str(root / "qcache"))
     query = [sys.executable, "-m", "jointdb", "query", *REQUEST, "--db", url]
     from jointdb.store._light import _libpq
 

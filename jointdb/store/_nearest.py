@@ -122,7 +122,6 @@ class Reader:
         else:
             self.conn.rollback()  # a fresh transaction: SET TRANSACTION must come first in it
             self.rows("SET TRANSACTION ISOLATION LEVEL REPEATABLE READ READ ONLY")
-            self.rows(f"SET LOCAL work_mem = '{WORK_MEM}'")  # this read transaction only
         try:
             yield self
         finally:
@@ -198,6 +197,8 @@ def _packed_row(reader: Reader, sel: Selection, geometry_keys: list[str], raw: b
 def _fetch(reader: Reader, sel: Selection, geometry_keys: list[str], joint_ids=None) -> Candidates:
     """The candidates of ``sel`` (only of ``joint_ids`` unless None) with the given geometry keys,
     as one row of concatenated binary columns (no Python object per candidate)."""
+    if reader.dialect != "sqlite":
+        reader.rows(f"SET LOCAL work_mem = '{WORK_MEM}'")  # this read transaction only
     raw = True
     n, binary, materials = _packed_row(reader, sel, geometry_keys, raw, joint_ids)
     if n and any(len(b) != size * n for b, size in zip(binary, [_PACKED.itemsize] + [8] * len(geometry_keys))):
@@ -301,19 +302,32 @@ def _jaccard(a: tuple[str, ...], b: tuple[str, ...]) -> float:
     return 0.0 if union == 0 else 1.0 - sum((ca & cb).values()) / union
 
 
-def _log_term(values: np.ndarray, request: float, name: str, terms: dict, outside: list) -> None:
-    have = np.isfinite(values)
-    if not have.any():
+def _log_stats(values: np.ndarray, memo: dict, name: str) -> tuple:
+    """``(have, delta, logs, spread, lo, hi)`` of a candidate column (``delta`` None: no value at all),
+    kept in the candidates' ``memo``: they depend on the candidates only, not on the request."""
+    hit = memo.get(name)
+    if hit is None:
+        have = np.isfinite(values)
+        if not have.any():
+            hit = (have, None, None, None, None, None)
+        else:
+            delta = 1e-9 * max(1.0, float(np.nanmax(values)))
+            logs = np.log(values[have] + delta)
+            spread = max(float(logs.max() - logs.min()), MIN_LOG_SPREAD)
+            hit = (have, delta, logs, spread, float(np.nanmin(values)), float(np.nanmax(values)))
+        memo[name] = hit
+    return hit
+
+
+def _log_term(values: np.ndarray, request: float, name: str, terms: dict, outside: list, memo: dict) -> None:
+    have, delta, logs, spread, lo, hi = _log_stats(values, memo, name)
+    if delta is None:
         terms[name] = np.full(values.shape, MISSING_PENALTY)
         outside.append(name)
         return
-    delta = 1e-9 * max(1.0, float(np.nanmax(values)))
-    logs = np.log(values[have] + delta)
-    spread = max(float(logs.max() - logs.min()), MIN_LOG_SPREAD)
     term = np.full(values.shape, MISSING_PENALTY)
     term[have] = np.abs(logs - math.log(request + delta)) / spread
     terms[name] = term
-    lo, hi = float(np.nanmin(values)), float(np.nanmax(values))
     if request < lo or request > hi:
         outside.append(name)
 
@@ -327,9 +341,9 @@ def rank(cand: Candidates, req: Conditions, k: int) -> tuple[np.ndarray, np.ndar
     terms: dict[str, np.ndarray] = {}
     outside: list[str] = []
     if req.torque_nm is not None:
-        _log_term(cand.torque, req.torque_nm, "torque_nm", terms, outside)
+        _log_term(cand.torque, req.torque_nm, "torque_nm", terms, outside, cand.memo)
     if req.preload_n is not None:
-        _log_term(cand.preload, req.preload_n, "preload_n", terms, outside)
+        _log_term(cand.preload, req.preload_n, "preload_n", terms, outside, cand.memo)
     if req.materials:
         want = tuple(sorted(req.materials))
         per_key = np.array([_jaccard(want, tuple(m)) if m else MISSING_PENALTY

@@ -101,15 +101,16 @@ def test_connection_settings_match_the_engines():
     assert _light.postgres_target("postgresql+psycopg2://h/db") is None  # another driver: the Repository
 
 
-def test_the_read_transaction_has_its_own_work_mem(pg):
+def test_the_candidate_fetch_has_its_own_work_mem(pg):
     from jointdb.store._light import open_postgres_reader
-    from jointdb.store._nearest import WORK_MEM
+    from jointdb.store._nearest import WORK_MEM, Selection, _fetch
 
     reader = open_postgres_reader(pg.url)
     try:
         default = reader.rows("SHOW work_mem")[0][0]
         with reader.snapshot():
+            assert _fetch(reader, Selection("tool-holder"), ["diameter_m"]).version_id.size == 2
             assert reader.rows("SHOW work_mem")[0][0] == WORK_MEM
-        assert reader.rows("SHOW work_mem")[0][0] == default != WORK_MEM
+        assert reader.rows("SHOW work_mem")[0][0] == default != WORK_MEM  # SET LOCAL: that transaction only
     finally:
         reader.conn.close()
