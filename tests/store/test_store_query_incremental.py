@@ -157,3 +157,21 @@ def test_gaps_damage_and_rebuilds_fall_back_to_a_full_fetch(repo, tmp_path, monk
             conn.exec_driver_sql("UPDATE query_stamp SET token = 'another-token'")
         _write_and_check(repo, spy, rnd, names, "full")
         _write_and_check(repo, spy, rnd, names, "incremental", fresh_process=True)
+
+
+def test_the_change_log_is_pruned_to_the_last_generations(repo):
+    from jointdb.store._index import KEEP_GENERATIONS, PRUNE_EVERY
+
+    repo.catalogue("P", "tool-holder", spring_joint(), Conditions(torque_nm=10.0), "spring-damper-planar")
+    with repo.write_engine.begin() as conn:
+        generation = 2 * KEEP_GENERATIONS - 1  # the next write's generation is a multiple of PRUNE_EVERY
+        conn.exec_driver_sql(f"UPDATE query_stamp SET generation = {generation}")
+        conn.exec_driver_sql(f"INSERT INTO query_changes (generation, joint_id) VALUES ({KEEP_GENERATIONS}, 1), "
+                             f"({KEEP_GENERATIONS + 1}, 1)")
+    assert (generation + 1) % PRUNE_EVERY == 0
+    repo.label("P", 1, "released")
+    with repo.read_engine.connect() as conn:
+        kept = [tuple(r) for r in conn.exec_driver_sql("SELECT generation, joint_id FROM query_changes "
+                                                       "ORDER BY generation")]
+    # P's own first entry (generation 1) and everything up to KEEP_GENERATIONS back are gone; P is joint 1
+    assert kept == [(KEEP_GENERATIONS + 1, 1), (generation + 1, 1)]
