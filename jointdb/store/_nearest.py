@@ -325,11 +325,35 @@ def _log_term(values: np.ndarray, request: float, name: str, terms: dict, outsid
         terms[name] = np.full(values.shape, MISSING_PENALTY)
         outside.append(name)
         return
-    term = np.full(values.shape, MISSING_PENALTY)
-    term[have] = np.abs(logs - math.log(request + delta)) / spread
-    terms[name] = term
+    d = logs - math.log(request + delta)  # in place from here: |logs - ln(r + delta)| / spread
+    np.abs(d, out=d)
+    d /= spread
+    if d.size == values.size:  # every candidate has the value
+        terms[name] = d
+    else:
+        terms[name] = np.full(values.shape, MISSING_PENALTY)
+        terms[name][have] = d
     if request < lo or request > hi:
         outside.append(name)
+
+
+def _geometry_term(vals: np.ndarray, r_val: float, memo: dict, name: str) -> tuple[np.ndarray, bool]:
+    """``(term, outside)`` of one geometry key: ``|c - r| / max(|c|, |r|)``, 1.0 where missing."""
+    stats = memo.get(name)
+    if stats is None:
+        have = np.isfinite(vals)
+        stats = memo[name] = (have, bool(have.all()), *((float(np.nanmin(vals)), float(np.nanmax(vals)))
+                                                         if have.any() else (None, None)))
+    have, everywhere, lo, hi = stats
+    outside = lo is None or r_val < lo or r_val > hi
+    denom = np.maximum(np.abs(vals), abs(r_val))
+    with np.errstate(invalid="ignore"):
+        if r_val != 0.0:  # denom > 0 wherever the value is there
+            rel = np.abs(vals - r_val)
+            rel /= denom
+        else:
+            rel = np.where(denom > 0, np.abs(vals - r_val) / np.where(denom > 0, denom, 1.0), 0.0)
+    return (rel if everywhere else np.where(have, rel, MISSING_PENALTY)), outside
 
 
 def rank(cand: Candidates, req: Conditions, k: int) -> tuple[np.ndarray, np.ndarray, dict, list[str]]:
@@ -352,20 +376,20 @@ def rank(cand: Candidates, req: Conditions, k: int) -> tuple[np.ndarray, np.ndar
         if not np.any(per_key == 0.0):
             outside.append("materials")
     for key, r_val in req.geometry.items():
-        vals = cand.geometry[key]
-        have = np.isfinite(vals)
-        denom = np.maximum(np.abs(vals), abs(r_val))
-        with np.errstate(invalid="ignore"):
-            rel = np.where(denom > 0, np.abs(vals - r_val) / np.where(denom > 0, denom, 1.0), 0.0)
-        terms[f"geometry.{key}"] = np.where(have, rel, MISSING_PENALTY)
-        if not have.any() or r_val < np.nanmin(vals) or r_val > np.nanmax(vals):
-            outside.append(f"geometry.{key}")
-    total = np.sqrt(sum((t**2 for t in terms.values()), np.zeros(n)))
+        name = f"geometry.{key}"
+        terms[name], out = _geometry_term(cand.geometry[key], r_val, cand.memo, name)
+        if out:
+            outside.append(name)
+    total = np.zeros(n)
+    for t in terms.values():  # the squares summed in the terms' order, then the root
+        total += np.square(t)
+    np.sqrt(total, out=total)
     rounded = np.round(total, 12)
-    pool = np.arange(n)
     if n > 4 * k:  # the k best by the same key, without sorting all of them
         kth = np.partition(rounded, k - 1)[k - 1]
         pool = np.flatnonzero(rounded <= kth)
+    else:
+        pool = np.arange(n)
     order = pool[np.lexsort((cand.number[pool], cand.joint_id[pool], rounded[pool]))][:k]
     return order, total, terms, outside
 
