@@ -415,16 +415,13 @@ def fetch_versions(reader: Reader, version_ids: list[int], states: Mapping[int, 
         return {}
     marks = ", ".join("?" for _ in version_ids)
     cols = ", ".join(f"v.{c}" for c in _VERSION_COLUMNS)
-    rows = reader.rows(f"SELECT j.name, j.joint_type, q.deprecated, {cols} FROM joint_versions v "
+    agg = "group_concat(l.label, ',')" if reader.dialect == "sqlite" else "string_agg(l.label, ',')"
+    rows = reader.rows(f"SELECT j.name, j.joint_type, q.deprecated, (SELECT {agg} FROM labels l WHERE l.joint_id = "
+                       f"v.joint_id AND l.version = v.version), {cols} FROM joint_versions v "
                        f"JOIN joints j ON j.id = v.joint_id LEFT JOIN query_versions q ON q.version_id = v.id "
                        f"WHERE v.id IN ({marks})", version_ids)
-    labels: dict[tuple[int, int], list[str]] = {}
-    joint_ids = sorted({r[4] for r in rows})  # v.joint_id
-    if joint_ids:
-        for jid, number, label in reader.rows(
-                f"SELECT joint_id, version, label FROM labels WHERE joint_id IN ({', '.join('?' for _ in joint_ids)})",
-                joint_ids):
-            labels.setdefault((jid, number), []).append(label)
+    labels = {(r[5], r[6]): r[3].split(",") for r in rows if r[3]}  # labels are [A-Za-z0-9._-]: no comma
+    rows = [(*r[:3], *r[4:]) for r in rows]
     out, damaged = {}, []
     for name, joint_type, deprecated, *values in rows:
         row = SimpleNamespace(**dict(zip(_VERSION_COLUMNS, values)))
