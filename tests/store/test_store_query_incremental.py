@@ -1,6 +1,6 @@
 """The query cache updated incrementally equals a full fetch, bit for bit (SQLite and PostgreSQL).
 
-After each random write (new versions of new and existing joints, labels moved and removed,
+After each random write (new versions of new and existing joints, labels moved and removed, an import,
 versions and whole joints deprecated and undone) every selection's candidate arrays are taken
 as the next query takes them — from the arrays of the previous generation (this process's
 cache, or the on-disk file of a "new process") updated with the rows of the changed joints —
@@ -17,7 +17,7 @@ import warnings
 import pytest
 from store_helpers import spring_joint
 
-from jointdb.store import Conditions
+from jointdb.store import Conditions, Repository
 from jointdb.store import _nearest
 from jointdb.store._nearest import Reader, Selection
 
@@ -121,6 +121,14 @@ def test_incremental_update_equals_a_full_fetch(repo, tmp_path, monkeypatch, see
             _check_all(repo, spy, fresh_process=step % 2 == 1, expect="incremental")
         repo.catalogue("other", "holder-spindle", spring_joint(), Conditions(torque_nm=20.0), "spring-damper-planar")
         _check_all(repo, spy, fresh_process=True, expect="incremental")  # another type: no row of ours changed
+        with Repository(tmp_path / "lab.sqlite") as lab:  # an import adds joints and versions in one transaction
+            for i, t in enumerate((15.0, 35.0)):
+                lab.catalogue(f"IMP{i}", "tool-holder", spring_joint(), Conditions(("steel",), torque_nm=t),
+                              "spring-damper-planar")
+            lab.label("IMP1", 1, "released")
+            lab.export(None, tmp_path / "lab.h5")
+        repo.import_(tmp_path / "lab.h5", force=True)
+        _check_all(repo, spy, fresh_process=False, expect="incremental")
 
 
 def _write_and_check(repo, spy, rnd, names, expect, fresh_process=False):
