@@ -37,7 +37,7 @@ import uuid
 from collections.abc import Iterable, Sequence
 from typing import Any
 
-from sqlalchemy import Connection, delete, insert, inspect, select, update
+from sqlalchemy import Connection, delete, insert, inspect, select, text, update
 from sqlalchemy.orm import Session
 
 from jointdb.store._models import (
@@ -187,12 +187,19 @@ def bump(session: Session | Connection, joint_ids: Iterable[int] | None = None) 
         The new generation.
     """
     t, c = QueryStampRow.__table__, QueryChangeRow.__table__
-    generation = int(session.execute(update(t).where(t.c.id == 1).values(generation=t.c.generation + 1)
-                                     .returning(t.c.generation)).scalar_one())
     ids = sorted({int(j) for j in joint_ids}) if joint_ids is not None else []
-    session.execute(insert(c), [{"generation": generation, "joint_id": j} for j in ids or [None]])
+    conn = session.connection() if isinstance(session, Session) else session
+    if conn.dialect.name == "postgresql":  # one round trip: the stamp and the log in one statement
+        generation = int(conn.execute(text(
+            "WITH s AS (UPDATE query_stamp SET generation = generation + 1 WHERE id = 1 RETURNING generation) "
+            "INSERT INTO query_changes (generation, joint_id) SELECT s.generation, j "
+            "FROM s, unnest(CAST(:ids AS integer[])) AS j RETURNING generation"), {"ids": ids or [None]}).first()[0])
+    else:
+        generation = int(conn.execute(update(t).where(t.c.id == 1).values(generation=t.c.generation + 1)
+                                      .returning(t.c.generation)).scalar_one())
+        conn.execute(insert(c), [{"generation": generation, "joint_id": j} for j in ids or [None]])
     if generation % PRUNE_EVERY == 0:
-        session.execute(delete(c).where(c.c.generation <= generation - KEEP_GENERATIONS))
+        conn.execute(delete(c).where(c.c.generation <= generation - KEEP_GENERATIONS))
     return generation
 
 
