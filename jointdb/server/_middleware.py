@@ -29,6 +29,8 @@ log = logging.getLogger("jointdb.server.access")
 #: Paths that bypass admission: a load balancer's probes must answer while the service is busy.
 UNQUEUED = frozenset({"/healthz", "/readyz"})
 RETRY_AFTER_S = 1
+#: The HTTP versions served (uvicorn's httptools parser also accepts HTTP/0.9, which has no headers).
+HTTP_VERSIONS = frozenset({"1.0", "1.1"})
 
 
 def _json_response(status: int, message: str, request_id: str) -> tuple[dict, dict]:
@@ -86,6 +88,11 @@ class ServiceMiddleware:
     async def __call__(self, scope, receive, send):
         if scope["type"] != "http":
             await self.app(scope, receive, send)
+            return
+        if scope.get("http_version", "1.1") not in HTTP_VERSIONS:  # HTTP/0.9 (httptools parses it): refused
+            start, body = _json_response(400, "HTTP/1.0 or HTTP/1.1 requests only", "")
+            await send(start)
+            await send(body)
             return
         request_id = uuid.uuid4().hex[:16]
         scope.setdefault("state", {})["request_id"] = request_id
