@@ -25,35 +25,12 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "server"))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _asgi import call  # noqa: E402
 from bench_server import fresh_db  # noqa: E402
 from bench_service_load import seed  # noqa: E402
 from server_helpers import drop_pg_schema, make_tokens  # noqa: E402
 
 DEV_PG = "postgresql+psycopg://postgres@127.0.0.1:54330/postgres"
-
-
-async def call(app, method: str, path: str, query: str = "", body: bytes = b"", token: str = "") -> tuple[int, bytes]:
-    """One request through the ASGI app; its status and whole body."""
-    headers = [(b"host", b"bench"), (b"authorization", f"Bearer {token}".encode())]
-    if body:
-        headers += [(b"content-type", b"application/json"), (b"content-length", str(len(body)).encode())]
-    scope = {"type": "http", "asgi": {"version": "3.0"}, "http_version": "1.1", "method": method,
-             "scheme": "http", "path": path, "raw_path": path.encode(), "query_string": query.encode(),
-             "root_path": "", "headers": headers, "client": ("127.0.0.1", 1), "server": ("bench", 80)}
-    sent = [{"type": "http.request", "body": body, "more_body": False}]
-    out = {"status": 0, "body": []}
-
-    async def receive():
-        return sent.pop(0) if sent else {"type": "http.disconnect"}
-
-    async def send(message):
-        if message["type"] == "http.response.start":
-            out["status"] = message["status"]
-        elif message["type"] == "http.response.body":
-            out["body"].append(message.get("body", b""))
-
-    await app(scope, receive, send)
-    return out["status"], b"".join(out["body"])
 
 
 def requests_of(kind: str, rng: random.Random, n_joints: int, downloads) -> tuple[str, str, str, bytes]:
@@ -90,7 +67,6 @@ async def drive(app, kinds, n: int, token: str, n_joints: int, downloads, profil
         cpu, wall = (time.process_time() - c0) / n * 1e3, (time.perf_counter() - w0) / n * 1e3
         if profile == kind:
             yappi.stop()
-            yappi.get_func_stats().sort("tsub").print_all(columns={0: ("name", 90), 1: ("ncall", 8), 2: ("tsub", 8), 3: ("ttot", 8)}, out=sys.stdout) if False else None
             stats = yappi.get_func_stats()
             for label, key in (("own time", "tsub"), ("total time", "ttot")):
                 print(f"--- {kind}: top by {label} (ms per request)")
