@@ -140,14 +140,16 @@ class ServiceMiddleware:
             elif declared > limit:
                 await refuse(413, f"request body of {declared} bytes exceeds the limit of {limit} bytes")
             else:
-                buffered = await asyncio.wait_for(read_body(), self.timeout)
+                async with asyncio.timeout(self.timeout):  # in this task (wait_for would start one per call)
+                    buffered = await read_body()
                 if buffered is None:
                     await refuse(413, f"request body exceeds the limit of {limit} bytes")
                 else:
                     async def replay():
                         return buffered.pop(0) if buffered else await receive()
 
-                    await asyncio.wait_for(self._admitted(scope, replay, send_wrapped), self.timeout)
+                    async with asyncio.timeout(self.timeout):
+                        await self._admitted(scope, replay, send_wrapped)
         except Busy:
             await refuse(429, f"the service is busy ({self.admission.concurrency} requests running, "
                               f"{self.admission.waiting} waiting); retry in {RETRY_AFTER_S} s")
