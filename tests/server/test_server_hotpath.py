@@ -128,3 +128,39 @@ def test_a_dropped_connection_is_replaced_after_idle(tmp_path, monkeypatch):
                 assert conn.exec_driver_sql("SELECT pg_backend_pid()").scalar() != pid
         finally:
             r.close()
+
+
+def test_the_control_character_check_is_unicode_category_cc():
+    """The guard's one regex against Unicode's own definition, over every code point."""
+    import sys
+    import unicodedata
+
+    from jointdb.server._safety import _has_control
+
+    assert [c for c in range(sys.maxunicode + 1) if _has_control(chr(c))] == [
+        c for c in range(sys.maxunicode + 1) if unicodedata.category(chr(c)) == "Cc"]
+    assert _has_control("name\x00") and not _has_control("Ärger-ß/versions/3")
+
+
+def test_http_0_9_is_refused_before_the_app():
+    """httptools (uvicorn's C parser) parses HTTP/0.9, which h11 refused: the middleware answers 400."""
+    import asyncio
+
+    from jointdb.server._middleware import ServiceMiddleware
+
+    reached, sent = [], []
+
+    async def app(scope, receive, send):
+        reached.append(scope["http_version"])
+
+    async def receive():
+        return {"type": "http.request", "body": b"", "more_body": False}
+
+    async def send(message):
+        sent.append(message)
+
+    mw = ServiceMiddleware(app, max_upload_bytes=100, request_timeout_s=5)
+    for version in ("0.9", "1.0", "1.1"):
+        asyncio.run(mw({"type": "http", "http_version": version, "method": "GET", "path": "/", "headers": []},
+                       receive, send))
+    assert reached == ["1.0", "1.1"] and sent[0]["status"] == 400
