@@ -12,8 +12,9 @@ three ways in one process:
   in the cursor after it) executed and its rows fetched, nothing else;
 - ``Repository.list_page``: the same statement plus argument checks, record-hash verification
   and the :class:`JointVersion` of each row;
-- ``GET /api/v1/joints?limit=50&after=…`` through the ASGI app (``httpx`` ASGI transport, so no
-  socket: routing, validation, the thread-pool hop and JSON encoding are in, the network is not).
+- ``GET /api/v1/joints?limit=50&after=…`` called straight into the ASGI app (:mod:`_asgi`: no socket
+  and no HTTP client; the middleware, routing, validation, the thread-pool hop and JSON encoding are
+  in; uvicorn's parsing, ~0.2 ms with httptools, and a client's work are not).
 
 Pages start after a random joint (keyset cursor), every 4th is the first page, every 5th is
 filtered on a joint type. Reported: p50 and p99 in ms and each path's p50 over the bare SQL's.
@@ -26,6 +27,7 @@ from __future__ import annotations
 
 import argparse
 import asyncio
+import json
 import os
 import statistics
 import sys
@@ -33,10 +35,12 @@ import tempfile
 import time
 import uuid
 from pathlib import Path
+from urllib.parse import urlencode
 
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _asgi import call  # noqa: E402
 from _bulk import TYPES, bulk_fill  # noqa: E402
 
 DEV_PG = "postgresql+psycopg://postgres@127.0.0.1:54330/postgres"
@@ -77,36 +81,33 @@ def _bare_sql(repo, req: dict) -> int:
 
 
 async def _measure(repo, requests: list[dict]) -> dict[str, list[float]]:
-    import httpx
-
     from jointdb.server import create_app
     from jointdb.server._settings import Settings
 
     app = create_app(Settings(bind_host="127.0.0.1", open_reads=True), repo=repo)
     times: dict[str, list[float]] = {"bare SQL": [], "Repository.list_page": [], "GET /api/v1/joints": []}
-    transport = httpx.ASGITransport(app=app)
-    async with httpx.AsyncClient(transport=transport, base_url="http://127.0.0.1") as client:
-        for warm in requests[:10]:  # connections, caches, first compilation of the statement
-            _bare_sql(repo, warm)
-            repo.list_page(warm["joint_type"], after=warm["after"], limit=PAGE)
-            await client.get("/api/v1/joints", params={"limit": PAGE})
-        for req in requests:
-            t0 = time.perf_counter()
-            n_sql = _bare_sql(repo, req)
-            t1 = time.perf_counter()
-            page = repo.list_page(req["joint_type"], after=req["after"], limit=PAGE)
-            t2 = time.perf_counter()
-            params = {"limit": PAGE, **({"after": req["after"]} if req["after"] else {}),
-                      **({"type": req["joint_type"]} if req["joint_type"] else {})}
-            r = await client.get("/api/v1/joints", params=params)
-            t3 = time.perf_counter()
-            if r.status_code != 200 or len(r.json()["items"]) != len(page.items) or n_sql != len(page.items) + (
-                    1 if page.next else 0):
-                raise RuntimeError(f"the three paths disagree on {req}: HTTP {r.status_code}, {n_sql} SQL rows, "
-                                   f"{len(page.items)} listed")
-            times["bare SQL"].append(t1 - t0)
-            times["Repository.list_page"].append(t2 - t1)
-            times["GET /api/v1/joints"].append(t3 - t2)
+    for warm in requests[:10]:  # connections, caches, first compilation of the statement
+        _bare_sql(repo, warm)
+        repo.list_page(warm["joint_type"], after=warm["after"], limit=PAGE)
+        await call(app, "GET", "/api/v1/joints", urlencode({"limit": PAGE}))
+    for req in requests:
+        query = urlencode({"limit": PAGE, **({"after": req["after"]} if req["after"] else {}),
+                           **({"type": req["joint_type"]} if req["joint_type"] else {})})
+        t0 = time.perf_counter()
+        n_sql = _bare_sql(repo, req)
+        t1 = time.perf_counter()
+        page = repo.list_page(req["joint_type"], after=req["after"], limit=PAGE)
+        t2 = time.perf_counter()
+        status, body = await call(app, "GET", "/api/v1/joints", query)
+        t3 = time.perf_counter()
+        got = json.loads(body)["items"] if status == 200 else []
+        if status != 200 or [x["name"] for x in got] != [v.name for v in page.items] or n_sql != len(
+                page.items) + (1 if page.next else 0):
+            raise RuntimeError(f"the three paths disagree on {req}: HTTP {status}, {n_sql} SQL rows, "
+                               f"{len(page.items)} listed")
+        times["bare SQL"].append(t1 - t0)
+        times["Repository.list_page"].append(t2 - t1)
+        times["GET /api/v1/joints"].append(t3 - t2)
     return times
 
 

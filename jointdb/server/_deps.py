@@ -10,6 +10,7 @@ from urllib.parse import urlsplit
 
 from fastapi import Depends, HTTPException, Query, Request, Security
 from fastapi.security import HTTPBearer
+from starlette.concurrency import run_in_threadpool
 
 from jointdb.store._tokens import TokenInfo, authenticate, check_may_change
 
@@ -104,9 +105,16 @@ def need(role: str, anonymous_reads: bool = True):
     dependency gives None); False for what belongs to somebody (jobs), which always needs one.
     """
 
-    def dependency(request: Request, _scheme=Security(BEARER)) -> TokenInfo | None:
+    async def dependency(request: Request, _scheme=Security(BEARER)) -> TokenInfo | None:
+        # async: a request without credentials is answered here on the event loop; only a token or a
+        # session (a database read) goes to the thread pool - a plain ``def`` would cost every request a hop
         token = bearer(request)
-        info = identify(request, token) if token is not None else session_identity(request)
+        if token is not None:
+            info = await run_in_threadpool(identify, request, token)
+        elif request.cookies.get(SESSION_COOKIE):
+            info = await run_in_threadpool(session_identity, request)
+        else:
+            info = None
         if info is None:
             if anonymous_reads and role == "reader" and request.app.state.settings.open_reads:
                 return None

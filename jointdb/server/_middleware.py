@@ -29,6 +29,8 @@ log = logging.getLogger("jointdb.server.access")
 #: Paths that bypass admission: a load balancer's probes must answer while the service is busy.
 UNQUEUED = frozenset({"/healthz", "/readyz"})
 RETRY_AFTER_S = 1
+#: The HTTP versions served (uvicorn's httptools parser also accepts HTTP/0.9, which has no headers).
+HTTP_VERSIONS = frozenset({"1.0", "1.1"})
 
 
 def _json_response(status: int, message: str, request_id: str) -> tuple[dict, dict]:
@@ -87,6 +89,11 @@ class ServiceMiddleware:
         if scope["type"] != "http":
             await self.app(scope, receive, send)
             return
+        if scope.get("http_version", "1.1") not in HTTP_VERSIONS:  # HTTP/0.9 (httptools parses it): refused
+            start, body = _json_response(400, "HTTP/1.0 or HTTP/1.1 requests only", "")
+            await send(start)
+            await send(body)
+            return
         request_id = uuid.uuid4().hex[:16]
         scope.setdefault("state", {})["request_id"] = request_id
         t0 = time.perf_counter()
@@ -133,14 +140,16 @@ class ServiceMiddleware:
             elif declared > limit:
                 await refuse(413, f"request body of {declared} bytes exceeds the limit of {limit} bytes")
             else:
-                buffered = await asyncio.wait_for(read_body(), self.timeout)
+                async with asyncio.timeout(self.timeout):  # in this task (wait_for would start one per call)
+                    buffered = await read_body()
                 if buffered is None:
                     await refuse(413, f"request body exceeds the limit of {limit} bytes")
                 else:
                     async def replay():
                         return buffered.pop(0) if buffered else await receive()
 
-                    await asyncio.wait_for(self._admitted(scope, replay, send_wrapped), self.timeout)
+                    async with asyncio.timeout(self.timeout):
+                        await self._admitted(scope, replay, send_wrapped)
         except Busy:
             await refuse(429, f"the service is busy ({self.admission.concurrency} requests running, "
                               f"{self.admission.waiting} waiting); retry in {RETRY_AFTER_S} s")

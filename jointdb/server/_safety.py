@@ -19,7 +19,6 @@ import json
 import os
 import re
 import tempfile
-import unicodedata
 from urllib.parse import parse_qsl
 
 _URL = re.compile(r"\b[A-Za-z][A-Za-z0-9+.\-]*://[^\s'\"<>]*[^\s'\"<>/.,;:)]")
@@ -77,8 +76,12 @@ def client_error(exc: BaseException, request_id: str | None, dirs: tuple[str, ..
     return status, " ".join(scrub_message(text, dirs).split())
 
 
+#: Unicode's category Cc (control) is exactly U+0000-U+001F and U+007F-U+009F.
+_CONTROL = re.compile("[\x00-\x1f\x7f-\x9f]")
+
+
 def _has_control(text: str) -> bool:
-    return any(unicodedata.category(ch) == "Cc" for ch in text)
+    return _CONTROL.search(text) is not None
 
 
 class ControlCharacterGuard:

@@ -44,12 +44,14 @@ class SecurityHeadersMiddleware:
     def __init__(self, app, secure: bool):
         self.app = app
         self.secure = bool(secure)
+        self._static = security_headers(STATIC_PREFIXES[0], self.secure)  # built once, not per request
+        self._other = security_headers("/", self.secure)
 
     async def __call__(self, scope, receive, send):
         if scope["type"] != "http":
             await self.app(scope, receive, send)
             return
-        extra = security_headers(scope.get("path", ""), self.secure)
+        extra = self._static if scope.get("path", "").startswith(STATIC_PREFIXES) else self._other
 
         async def send_with_headers(message):
             if message["type"] == "http.response.start":

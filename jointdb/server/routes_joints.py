@@ -77,14 +77,15 @@ def list_joints(
 @router.get("/joints/{name}", summary="One version: current (default), by label or at a time")
 def show(name: Name, label: Optional[str] = Query(None, max_length=100),
          at: Optional[str] = Query(None, max_length=40, description="ISO 8601 time."),
-         r=Depends(repo), _who=reader) -> dict[str, Any]:
-    return version_json(r.get(joint_name(name), at=at, label=label))
+         r=Depends(repo), _who=reader) -> JSONResponse:
+    return JSONResponse(version_json(r.get(joint_name(name), at=at, label=label)))
 
 
 @router.get("/joints/{name}/versions/{version}", summary="One pinned version")
 def show_version(name: Name, version: Annotated[int, Path(ge=1, le=2**31 - 1)], r=Depends(repo),
-                 _who=reader) -> dict[str, Any]:
-    return version_json(r.get(joint_name(name), version))
+                 _who=reader) -> JSONResponse:
+    # plain JSON already: encoded as it is (no response-model validation pass over a dict we built)
+    return JSONResponse(version_json(r.get(joint_name(name), version)))
 
 
 @router.get("/joints/{name}/history", summary="All versions of a joint, oldest first")

@@ -6,6 +6,7 @@ import warnings
 from typing import Any
 
 from fastapi import APIRouter, Depends
+from fastapi.responses import JSONResponse
 
 from jointdb.errors import InputError
 from jointdb.io import frf_json
@@ -31,11 +32,11 @@ def match_json(m) -> dict[str, Any]:
 
 
 @router.post("/query/nearest", summary="The k catalogued versions nearest to given conditions")
-def nearest(body: NearestIn, r=Depends(repo), _who=reader) -> dict[str, Any]:
+def nearest(body: NearestIn, r=Depends(repo), _who=reader) -> JSONResponse:
     """Ranked by distance = sqrt(sum of the per-condition terms squared); the first is the
     answer, the others are the runners-up."""
     matches, notes = run_nearest(r, body)
-    return {"matches": [match_json(m) for m in matches], "warnings": notes}
+    return JSONResponse({"matches": [match_json(m) for m in matches], "warnings": notes})
 
 
 @router.post("/query/interpolate", summary="A joint FRF interpolated between the nearest versions")

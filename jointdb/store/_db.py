@@ -261,13 +261,48 @@ def make_engines(url: str, pool_size: int | None = None) -> tuple[Engine, Engine
         connect_args: dict = {"options": _without_jit(query.get("options"))}
         if "connect_timeout" not in query:
             connect_args["connect_timeout"] = PG_CONNECT_TIMEOUT_S
-        kwargs: dict = {"pool_pre_ping": True, "connect_args": connect_args}
+        kwargs: dict = {"connect_args": connect_args}
         if pool_size is not None:
             if not 1 <= int(pool_size) <= 1000:
                 raise InputError(f"pool_size must be 1..1000, got {pool_size}")
             kwargs |= {"pool_size": int(pool_size), "max_overflow": max(2, int(pool_size) // 2)}
         engine = create_engine(url, **kwargs)
+        _ping_when_idle(engine)
     return engine, engine
+
+
+#: A pooled PostgreSQL connection unused for longer than this is pinged before it is handed out [s].
+PING_AFTER_S = 2.0
+
+
+def _ping_when_idle(engine: Engine) -> None:
+    """Ping a pooled connection only when it sat idle for :data:`PING_AFTER_S` (a dead one is
+    replaced before use, as with ``pool_pre_ping``), not on every checkout: under load a
+    connection is handed out again within milliseconds, and a ping is one more round trip per
+    statement. (A connection the database dropped within the last ``PING_AFTER_S`` of use still
+    fails once; SQLAlchemy then discards the pool's connections.)"""
+    import time
+
+    from sqlalchemy.exc import DisconnectionError
+
+    @event.listens_for(engine, "connect")
+    def _fresh(dbapi_connection, record) -> None:
+        record.info["jointdb_used"] = time.monotonic()
+
+    @event.listens_for(engine, "checkin")
+    def _used(dbapi_connection, record) -> None:
+        record.info["jointdb_used"] = time.monotonic()
+
+    @event.listens_for(engine, "checkout")
+    def _ping(dbapi_connection, record, proxy) -> None:
+        if time.monotonic() - record.info.get("jointdb_used", 0.0) < PING_AFTER_S:
+            return
+        try:
+            with dbapi_connection.cursor() as cur:
+                cur.execute("SELECT 1")
+            dbapi_connection.rollback()
+        except Exception as exc:  # noqa: BLE001 - any failure: this connection is gone, the pool makes a new one
+            raise DisconnectionError(f"pooled connection is dead ({type(exc).__name__})") from exc
 
 
 # --------------------------------------------------------------------------- alembic

@@ -56,7 +56,7 @@ from jointdb.store._types import JointVersion, check_joint_type, check_label, no
 
 #: Largest page of a listing.
 MAX_PAGE = 10_000
-_VERSION_COLUMNS = [c.name for c in VersionRow.__table__.columns]
+VERSION_COLUMNS = [c.name for c in VersionRow.__table__.columns]
 
 
 @dataclass(frozen=True)
@@ -189,7 +189,7 @@ def page_statement(dialect: str, *, after: str | None, offset: int, limit: int |
               .scalar_subquery())
     total = count_statement(**filters).scalar_subquery() if with_total else literal(None)
     stmt = (select(qv.name, qv.joint_type, qv.deprecated, labels.label("labels"), total.label("total"),
-                   *[getattr(v, c) for c in _VERSION_COLUMNS])
+                   *[getattr(v, c) for c in VERSION_COLUMNS])
             .select_from(qv).join(v, v.id == qv.version_id).where(*terms).order_by(qv.name))
     if after is not None:
         stmt = stmt.where(qv.name > after)
@@ -202,10 +202,11 @@ def page_statement(dialect: str, *, after: str | None, offset: int, limit: int |
 
 def version_of(row) -> JointVersion:
     """The JointVersion of one listed row (IntegrityError naming joint and version when damaged)."""
-    values = SimpleNamespace(**{c: getattr(row, c) for c in _VERSION_COLUMNS})
-    joint = SimpleNamespace(id=row.joint_id, name=row.name, joint_type=row.joint_type)
-    labels = [x for x in (row.labels or "").split(",") if x]
-    return to_version(joint, values, "deprecated" if row.deprecated else "active", labels)
+    fields = row._asdict()  # one dict of the row (getattr per column on a Row costs ~30x more)
+    values = SimpleNamespace(**fields)  # the version columns, plus the listing's own (ignored)
+    joint = SimpleNamespace(id=fields["joint_id"], name=fields["name"], joint_type=fields["joint_type"])
+    labels = [x for x in (fields["labels"] or "").split(",") if x]
+    return to_version(joint, values, "deprecated" if fields["deprecated"] else "active", labels)
 
 
 def read_rows(rows: Iterable) -> tuple[list[JointVersion], list[DamagedVersion]]:

@@ -12,8 +12,8 @@ import warnings
 from collections.abc import Iterable
 from datetime import datetime
 
-from sqlalchemy import func, select
-from sqlalchemy.orm import Session
+from sqlalchemy import bindparam, func, literal, or_, select
+from sqlalchemy.orm import Session, aliased
 
 from jointdb.errors import InputError, IntegrityError, NotFoundError
 from jointdb.frf import FRF
@@ -21,11 +21,39 @@ from jointdb.store import _db
 from jointdb.store._access import joint_row
 from jointdb.store._reports import VersionDiff
 from jointdb.store._models import JointRow, LabelRow, StateRow, VersionRow
-from jointdb.store._listing import JointPage, list_page
+from jointdb.schemas._limits import control_character
+from jointdb.store._listing import VERSION_COLUMNS, JointPage, list_page, version_of
 from jointdb.store._records import DamagedRecordWarning, DamagedVersion, as_utc, state_of, to_version
 from jointdb.store._types import JointVersion, check_label
 
 _HEX64 = re.compile(r"[0-9a-f]{64}")
+
+
+def pinned_statement(dialect: str):
+    """One version of a joint by name and number with its current state and labels, in one SELECT
+    (the columns :func:`jointdb.store._listing.version_of` reads): the state is the joint's newest
+    state row for the whole joint or this version (by time, then id, as :func:`state_of`), the
+    labels those pointing at this version."""
+    j, v, st, lab = JointRow, VersionRow, aliased(StateRow), aliased(LabelRow)
+    state = (select(st.state).where(st.joint_id == j.id, or_(st.version.is_(None), st.version == v.version))
+             .order_by(st.at.desc(), st.id.desc()).limit(1).scalar_subquery())
+    agg = func.string_agg if dialect == "postgresql" else func.group_concat
+    labels = select(agg(lab.label, literal(","))).where(lab.joint_id == j.id, lab.version == v.version).scalar_subquery()
+    return (select(j.name, j.joint_type, (func.coalesce(state, literal("active")) == literal("deprecated"))
+                   .label("deprecated"), labels.label("labels"), *[getattr(v, c) for c in VERSION_COLUMNS])
+            .select_from(j).join(v, v.joint_id == j.id)
+            .where(j.name == bindparam("name"), v.version == bindparam("version")))
+
+
+class _PinnedByDialect(dict):
+    """:func:`pinned_statement` per dialect name, built on first use (SQLAlchemy caches its compilation)."""
+
+    def __missing__(self, dialect: str):
+        self[dialect] = pinned_statement(dialect)
+        return self[dialect]
+
+
+_PINNED = _PinnedByDialect()
 
 
 def _report_damaged(found: list[DamagedVersion], into: list | None) -> None:
@@ -93,6 +121,10 @@ class VersionReads:
             ``label`` combined with ``version`` or ``at`` (labels are current pointers).
         """
         at = as_utc(at)
+        if version is not None and at is None and label is None:
+            found = self._pinned(name, version)
+            if found is not None:
+                return found
         if label is not None and (version is not None or at is not None):
             raise InputError("a label names one version now; do not combine it with --version or --at")
         with self._read() as s:
@@ -128,6 +160,18 @@ class VersionReads:
                     return to_version(joint, row, "active", labels.get(row.version, ()))
             row = rows[0]
             return to_version(joint, row, "deprecated", labels.get(row.version, ()))
+
+    def _pinned(self, name: str, version: int) -> JointVersion | None:
+        """A pinned version in one statement (:func:`pinned_statement`), or None when it is not
+        there (or the arguments are not plain): :meth:`get`'s general path then answers (its errors
+        name what is missing). Same value as the general path: the state and labels are read
+        fresh with the row, and the record hash is verified as on every read."""
+        if (not isinstance(name, str) or len(name) > 1000 or control_character(name)
+                or isinstance(version, bool) or not isinstance(version, int) or not 0 < version < 2**31):
+            return None
+        with self.read_engine.connect() as conn:
+            row = conn.execute(_PINNED[conn.dialect.name], {"name": name, "version": version}).first()
+        return None if row is None else version_of(row)
 
     @_db.with_db_errors
     def history(self, name: str, *, damaged: list | None = None) -> list[JointVersion]:

@@ -28,7 +28,7 @@ from dataclasses import dataclass
 from datetime import datetime, timedelta, timezone
 from typing import TYPE_CHECKING
 
-from sqlalchemy import delete, select, update
+from sqlalchemy import bindparam, delete, select, update
 from sqlalchemy.orm import Session
 
 from jointdb.errors import InputError, NotFoundError, NotPermittedError
@@ -192,6 +192,10 @@ def revoke_token(repo: "Repository", token_id: str, revoked_by: str | None = Non
     return repo.storage.retrying(write)
 
 
+#: The token row by its public id (one statement, compiled once; columns by their attribute names).
+_BY_TOKEN_ID = select(*TokenRow.__table__.columns).where(TokenRow.__table__.c.token_id == bindparam("token_id"))
+
+
 def authenticate(repo: "Repository", token: str) -> TokenInfo | None:
     """The active token's info, or None (unknown, malformed, revoked or expired token).
 
@@ -200,8 +204,8 @@ def authenticate(repo: "Repository", token: str) -> TokenInfo | None:
     if not isinstance(token, str) or not _TOKEN.fullmatch(token):
         return None
     digest = token_sha256(token)
-    with read_session(repo) as s:
-        row = s.scalar(select(TokenRow).where(TokenRow.token_id == token[4:16]))
+    with repo.read_engine.connect() as conn:  # Core, not an ORM session: this runs on every request
+        row = conn.execute(_BY_TOKEN_ID, {"token_id": token[4:16]}).first()
     if row is None or not hmac.compare_digest(row.sha256, digest):
         return None
     info = _info(row)
