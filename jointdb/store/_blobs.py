@@ -40,6 +40,7 @@ from jointdb.store._blobformat import (  # noqa: F401 - re-exported: the blob fo
     frf_sha256,
     read_frf_file,
     read_frf_group,
+    verify_blob_bytes,
     write_frf_file,
     write_frf_group,
 )
@@ -94,6 +95,9 @@ class BlobStore(VerifyingBlobs):
     root
         Directory holding the blobs (created on first write).
     """
+
+    #: a blob file is durable before the row that references it is committed (not in its transaction)
+    writes_in_version_transaction = False
 
     def __init__(self, root: str | os.PathLike):
         self.root = Path(root)
@@ -178,7 +182,7 @@ class BlobStore(VerifyingBlobs):
 
         The blob file's bytes are built in memory (:func:`blob_bytes`) and written to a
         temporary file, whose fsync runs on a worker thread while the bytes are decoded
-        again with every check of a read (:func:`decode_blob_bytes`); only when they
+        again and compared with the FRF (:func:`verify_blob_bytes`); only when they
         pass is the file renamed into place and the directory fsynced (on the worker),
         so that a caller can prepare its database transaction meanwhile; when they do
         not, the temporary file is removed and IntegrityError raised.
@@ -237,12 +241,10 @@ class BlobStore(VerifyingBlobs):
             os.close(fd)
             tmp.unlink(missing_ok=True)
             raise
-        try:  # decoded again with every check of a read: nothing can reference a blob that does not
-            decode_blob_bytes(data, f"blob {digest}", digest)
-        except BaseException as exc:
+        try:  # decoded again and compared with the FRF: nothing can reference a blob that does not read back
+            verify_blob_bytes(data, frf, digest)
+        except BaseException:
             pending.cancel()  # removes the temporary file
-            if isinstance(exc, IntegrityError):
-                raise IntegrityError(f"blob {digest} did not read back: {exc}") from None
             raise
         pending.release()
         return pending

@@ -6,8 +6,10 @@ Same guarantees as the file store (:class:`jointdb.store._blobs.BlobStore`), sam
 a row's ``data`` is exactly a blob file (user block with the whole-file SHA-256, then the
 HDF5 layout with fletcher32 chunks), so every read checks the whole-file hash, the chunk
 checksums and that the decoded FRF hashes to the row's key. ``put`` is idempotent
-(``INSERT ... ON CONFLICT DO UPDATE touched_at``), committed before it returns and read
-back. ``collect`` (gc) locks the row (``FOR UPDATE`` on PostgreSQL, the write lock on
+(``INSERT ... ON CONFLICT``: a new blob is inserted, an existing one touched), its bytes
+decoded once and compared with the FRF before they are written, and committed before it
+returns; :meth:`DatabaseBlobStore.put_pending` writes it in the transaction of the version
+that references it instead. ``collect`` (gc) locks the row (``FOR UPDATE`` on PostgreSQL, the write lock on
 SQLite), re-reads its age and asks the database whether a row references it, all in one
 transaction; a concurrent ``put`` of the same blob waits for that transaction and then
 writes it again, so a writer can never reference a collected blob.
@@ -23,7 +25,7 @@ from sqlalchemy.orm import Session
 
 from jointdb.errors import IntegrityError, NotFoundError
 from jointdb.frf import FRF
-from jointdb.store._blobformat import blob_bytes, check_digest, decode_blob_bytes
+from jointdb.store._blobformat import blob_bytes, check_digest, decode_blob_bytes, verify_blob_bytes
 from jointdb.store._blobs import BlobInfo, VerifyingBlobs
 from jointdb.store._models import BlobRow
 
@@ -61,6 +63,9 @@ class SessionPut:
 class DatabaseBlobStore(VerifyingBlobs):
     """Content-addressed FRF blobs in the ``frf_blobs`` table of the repository's database."""
 
+    #: a blob is written in the transaction of the version that references it (``put_pending``)
+    writes_in_version_transaction = True
+
     def __init__(self, engine: Engine, where: str = "database"):
         self.engine = engine
         self.root = f"{where} (table frf_blobs)"  # shown by `jointdb db info`; not a directory
@@ -70,41 +75,48 @@ class DatabaseBlobStore(VerifyingBlobs):
 
     _key = staticmethod(check_digest)
 
-    def _upsert(self, session: Session, digest: str, data: bytes, now: datetime) -> None:
-        dialect = self.engine.dialect.name
-        if dialect == "postgresql":
+    def _insert(self, digest: str, data: bytes, now: datetime, *, touch: bool):
+        """``INSERT`` of a blob row that, when the row exists, does nothing (``touch=False``) or
+        refreshes its ``touched_at`` (``ON CONFLICT``; PostgreSQL and SQLite)."""
+        if self.engine.dialect.name == "postgresql":
             from sqlalchemy.dialects.postgresql import insert
         else:
             from sqlalchemy.dialects.sqlite import insert
         stmt = insert(BlobRow).values(sha256=digest, data=data, size=len(data), created_at=now, touched_at=now)
-        session.execute(stmt.on_conflict_do_update(index_elements=["sha256"], set_={"touched_at": now}))
+        if touch:
+            return stmt.on_conflict_do_update(index_elements=["sha256"], set_={"touched_at": now})
+        return stmt.on_conflict_do_nothing(index_elements=["sha256"])
 
     # ------------------------------------------------------------------ write
     def put(self, frf: FRF) -> str:
-        """Store an FRF durably (committed); return its SHA-256. Idempotent; read back and verified."""
-        digest, data = blob_bytes(frf)
-        with Session(self.engine) as s, s.begin():
-            existing = s.get(BlobRow, digest)
-            if existing is not None and self._check(digest, existing.data) is not None:
-                existing.data, existing.size = data, len(data)  # corrupt copy: replace it
-            self._upsert(s, digest, data, _now())
-        self.get(digest)
-        return digest
+        """Store an FRF durably (committed in a transaction of its own); return its SHA-256.
+        Idempotent; the encoded bytes are verified before they are written."""
+        return self.put_pending(frf).wait()
 
     def put_pending(self, frf: FRF) -> "SessionPut":
         """The blob encoded and verified now, written by ``wait(session)`` in the transaction of
         the version that references it (one commit for blob and row; nothing written when the
         version is refused). ``wait()`` without a session writes it in its own transaction."""
         digest, data = blob_bytes(frf)
-        self._decode(digest, data)  # the one decode: the bytes about to be stored give back this FRF
+        verify_blob_bytes(data, frf, digest)  # the one decode: these bytes give back this FRF
         return SessionPut(self, digest, data)
 
     def _write(self, session: Session, digest: str, data: bytes) -> None:
-        """Insert (or touch) a verified blob in ``session``; a damaged stored copy is replaced."""
+        """Insert (or touch) a verified blob in ``session``; a damaged stored copy is replaced.
+
+        A new blob is one ``INSERT ... ON CONFLICT DO NOTHING RETURNING``; only when the row exists is it
+        read (and replaced when damaged) and its ``touched_at`` refreshed (in one upsert, which
+        waits for a ``gc`` holding the row's lock and writes it again if ``gc`` deleted it)."""
+        now = _now()
+        conn = session.connection()
+        if conn.dialect.insert_returning:  # a row back: inserted (SQLite >= 3.35 and PostgreSQL)
+            new = self._insert(digest, data, now, touch=False).returning(BlobRow.sha256)
+            if conn.execute(new).first() is not None:
+                return
         existing = session.get(BlobRow, digest)
         if existing is not None and bytes(existing.data) != data and self._check(digest, existing.data):
             existing.data, existing.size = data, len(data)
-        self._upsert(session, digest, data, _now())
+        session.execute(self._insert(digest, data, now, touch=True))
 
     # ------------------------------------------------------------------- read
     @staticmethod

@@ -282,8 +282,9 @@ class Repository(VersionReads, WholeRepository, LabelsAndStates, PartsStore):
         known = self.idempotent_answer(idempotency)
         if known is not None:
             return known
-        with self.read_engine.connect() as conn:  # refuse conflicts before writing any blob
-            precheck(conn, name, joint_type, parent, identity_of(frf, cond, kind, frf_sha256(frf)), force)
+        if not self.blobs.writes_in_version_transaction:  # refuse conflicts before writing a blob file
+            with self.read_engine.connect() as conn:  # (a database blob is written with the row, or not at all)
+                precheck(conn, name, joint_type, parent, identity_of(frf, cond, kind, frf_sha256(frf)), force)
         # encoded, verified and written now, made durable (fsync, rename, directory fsync) while the
         # row is prepared; the transaction commits only after pending.wait(): never a row without its blob
         pending = self.blobs.put_pending(frf)
