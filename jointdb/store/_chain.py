@@ -164,7 +164,8 @@ def _append(conn, rows: list[tuple[str, int, str | None]]) -> None:
         seq += 1
         head = next_head(head, seq, kind, row_id, content)
         entries.append({"seq": seq, "kind": kind, "row_id": row_id, "content_sha256": content, "head_sha256": head})
-    conn.execute(insert(ChainRow.__table__), entries)
+    for at in range(0, len(entries), 1000):  # multi-row INSERTs (one for a write; within the drivers' parameter limits)
+        conn.execute(insert(ChainRow.__table__).values(entries[at:at + 1000]))
 
 
 _HEAD = "SELECT seq, head_sha256 FROM history_chain ORDER BY seq DESC LIMIT 1"
@@ -186,9 +187,10 @@ def _locked_head(conn) -> tuple[int, str]:
 
     raw = conn.connection.driver_connection
     try:
-        with raw.pipeline():
+        with raw.pipeline():  # sent together; leaving the block syncs once and receives both results
             raw.execute(_LOCK)
-            last = raw.execute(_HEAD).fetchone()
+            head = raw.execute(_HEAD)
+        last = head.fetchone()
     except psycopg.Error as exc:
         raise DBAPIError.instance(_LOCK + "; " + _HEAD, None, exc, psycopg.Error,
                                   dialect=conn.dialect) from exc
