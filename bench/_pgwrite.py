@@ -169,7 +169,7 @@ def compare(rev: str, base: str | None, rounds: int, n_sqlite: int, n_pg: int) -
     """Alternate the measurements between git revision ``rev`` and this tree (module docstring)."""
     tree = BENCH.parent
     with tempfile.TemporaryDirectory(prefix="jointdb-before-") as before:
-        archive = subprocess.run(["git", "-C", str(tree), "archive", rev, "jointdb"], check=True,
+        archive = subprocess.run(["git", "-C", str(tree), "archive", rev, "jointdb", "migrations"], check=True,
                                  capture_output=True).stdout
         subprocess.run(["tar", "-x", "-C", before], input=archive, check=True)
         commit = subprocess.run(["git", "-C", str(tree), "rev-parse", "--short", rev], check=True,
@@ -180,8 +180,10 @@ def compare(rev: str, base: str | None, rounds: int, n_sqlite: int, n_pg: int) -
             for label, code in (("before", before), ("after", str(tree))):
                 env = {**os.environ, "PYTHONPATH": code, "OPENBLAS_NUM_THREADS": "1"}
                 cmd = [sys.executable, str(BENCH / "_pgwrite.py"), str(n_sqlite), str(n_pg), base or ""]
-                out = json.loads(subprocess.run(cmd, env=env, check=True, capture_output=True,
-                                                text=True).stdout.splitlines()[-1])
+                run = subprocess.run(cmd, env=env, capture_output=True, text=True)
+                if run.returncode:
+                    raise RuntimeError(f"the {label} run failed:\n{run.stderr[-3000:]}")
+                out = json.loads(run.stdout.splitlines()[-1])
                 if not Path(out["jointdb"]).resolve().is_relative_to(Path(code).resolve()):
                     raise RuntimeError(f"the {label} run imported jointdb from {out['jointdb']}, not {code}")
                 results[label].append(out)

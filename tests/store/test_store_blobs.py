@@ -234,14 +234,14 @@ def test_gc_racing_catalogues_of_an_old_stored_blob_never_loses_it(repo):
 def test_unwritable_blob_store_is_one_line_and_writes_no_row(repo, monkeypatch):
     import errno
 
-    import jointdb.store._blobs as blobs_mod
+    import jointdb.store._durable as durable_mod
     from jointdb.errors import InputError
 
     def refuse(path, data):  # the blob directory refuses the temporary file (as a read-only one would)
         open(path, "wb").close()  # even after creating it: nothing may be left behind
         raise PermissionError(errno.EACCES, "Permission denied")
 
-    monkeypatch.setattr(blobs_mod, "_write_tmp", refuse)
+    monkeypatch.setattr(durable_mod, "write_tmp", refuse)
     with pytest.raises(InputError, match="cannot write to the blob store .*Permission denied"):
         repo.catalogue("T1", "tool-holder", spring_joint(), planar_conditions(), "spring-damper-planar")
     monkeypatch.undo()
