@@ -18,6 +18,7 @@ writes it again, so a writer can never reference a collected blob.
 from __future__ import annotations
 
 from collections.abc import Iterator
+from concurrent import futures
 from datetime import datetime, timezone
 
 from sqlalchemy import Engine, delete, select
@@ -25,8 +26,9 @@ from sqlalchemy.orm import Session
 
 from jointdb.errors import IntegrityError, NotFoundError
 from jointdb.frf import FRF
-from jointdb.store._blobformat import blob_bytes, check_digest, decode_blob_bytes, verify_blob_bytes
+from jointdb.store._blobformat import blob_bytes, check_digest, decode_blob_bytes, frf_sha256, verify_blob_bytes
 from jointdb.store._blobs import BlobInfo, VerifyingBlobs
+from jointdb.store._durable import executor
 from jointdb.store._models import BlobRow
 
 #: the value of ``blobs=`` / ``JOINTDB_BLOBS`` that selects this store
@@ -37,27 +39,45 @@ def _now() -> datetime:
     return datetime.now(timezone.utc)
 
 
-class SessionPut:
-    """A database blob waiting to be written in the transaction of its version (see
-    :meth:`DatabaseBlobStore.put_pending`); the interface of :class:`~jointdb.store._blobs.PendingPut`."""
+def _encoded(frf: FRF, digest: str) -> bytes:
+    """The blob file's bytes of ``frf``, decoded once and compared with it (IntegrityError if not)."""
+    _, data = blob_bytes(frf, digest)
+    verify_blob_bytes(data, frf, digest)  # the one decode: these bytes give back this FRF
+    return data
 
-    def __init__(self, store: "DatabaseBlobStore", digest: str, data: bytes):
-        self.store, self.digest, self._data = store, digest, data
+
+class SessionPut:
+    """A database blob being encoded and verified on a worker thread, written in the transaction of
+    its version (see :meth:`DatabaseBlobStore.put_pending`); the interface of
+    :class:`~jointdb.store._durable.PendingPut`."""
+
+    def __init__(self, store: "DatabaseBlobStore", digest: str, frf: FRF):
+        self.store, self.digest = store, digest
+        self._encoding = executor().submit(_encoded, frf, digest)
 
     def wait(self, session: Session | None = None) -> str:
-        """Write the blob in ``session`` (committed with it), or in its own transaction; its digest."""
+        """Write the blob in ``session`` (committed with it), or in its own transaction; its digest.
+
+        Raises
+        ------
+        IntegrityError
+            The encoded bytes did not read back as the FRF (nothing is written).
+        """
+        data = self._encoding.result()  # the same bytes again when a retried transaction waits again
         if session is None:
             with Session(self.store.engine) as own, own.begin():
-                self.store._write(own, self.digest, self._data)
+                self.store._write(own, self.digest, data)
         else:
-            self.store._write(session, self.digest, self._data)
+            self.store._write(session, self.digest, data)
         return self.digest
 
     def join(self) -> None:
-        """Nothing runs in the background."""
+        """Wait for the worker's encoding, without raising what it met."""
+        futures.wait([self._encoding])
 
     def cancel(self) -> None:
-        """Nothing was written."""
+        """Nothing was written; wait for the worker."""
+        self.join()
 
 
 class DatabaseBlobStore(VerifyingBlobs):
@@ -94,12 +114,12 @@ class DatabaseBlobStore(VerifyingBlobs):
         return self.put_pending(frf).wait()
 
     def put_pending(self, frf: FRF) -> "SessionPut":
-        """The blob encoded and verified now, written by ``wait(session)`` in the transaction of
-        the version that references it (one commit for blob and row; nothing written when the
-        version is refused). ``wait()`` without a session writes it in its own transaction."""
-        digest, data = blob_bytes(frf)
-        verify_blob_bytes(data, frf, digest)  # the one decode: these bytes give back this FRF
-        return SessionPut(self, digest, data)
+        """The blob's content hash now; its bytes encoded and verified on a worker thread while the
+        caller runs the transaction of the version that references it, and written by
+        ``wait(session)`` in that transaction (one commit for blob and row; nothing written when
+        the version is refused or the bytes do not verify). ``wait()`` without a session writes it
+        in its own transaction."""
+        return SessionPut(self, frf_sha256(frf), frf)
 
     def _write(self, session: Session, digest: str, data: bytes) -> None:
         """Insert (or touch) a verified blob in ``session``; a damaged stored copy is replaced.

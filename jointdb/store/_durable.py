@@ -67,7 +67,14 @@ def make_durable(fd: int, tmp: Path, final: Path, root: Path, new_dir: bool, ver
 _workers = None  # (pid, ThreadPoolExecutor): the threads that make blobs durable, started once per process
 
 
-def _executor():
+def executor():
+    """The worker threads of this process that make blob files durable and encode database blobs
+    (started on first use; a forked child starts its own).
+
+    Returns
+    -------
+    concurrent.futures.ThreadPoolExecutor
+    """
     global _workers
     if _workers is None or _workers[0] != os.getpid():  # a forked child has none of its parent's threads
         from concurrent.futures import ThreadPoolExecutor
@@ -100,7 +107,7 @@ class PendingPut:
                 except BaseException as exc:  # noqa: BLE001 - handed to wait()
                     self._error = exc
 
-            self._thread = _executor().submit(run)
+            self._thread = executor().submit(run)
 
     def _verified(self) -> bool:
         self._decided.wait()
