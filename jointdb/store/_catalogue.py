@@ -228,16 +228,8 @@ def write_version(session, *, name, joint_type, frf, cond, kind, prov, qual, par
             _remember(conn, idempotency, name, same, 200, now)
             return SimpleNamespace(version=None, name=name, number=same, created=False)
     number = (latest or 0) + 1
-    row = SimpleNamespace(
-        joint_id=jid, version=number, uuid=str(uuidlib.uuid4()), created_at=now, author=actor,
-        materials=list(cond.materials), preload_n=cond.preload_n, torque_nm=cond.torque_nm,
-        geometry=dict(cond.geometry), extra=dict(cond.extra), model_kind=kind, dofs=list(dof_strings(frf.outputs)),
-        quantity=frf.quantity.value, n_freq=frf.n_freq, freq_min_hz=float(frf.freq[0]),
-        freq_max_hz=float(frf.freq[-1]), blob_sha256=blob, raw_blobs=raw_blobs, input_files=dict(prov.input_files),
-        method=prov.method, method_params=dict(prov.parameters),
-        software_version=prov.software_version or software_version(),
-        parent_version=parent if parent is not None else latest, quality=qual)
-    row.record_sha256 = record_sha256(record_dict(name, joint_type, row))
+    row = _version_row(name, joint_type, jid, number, now, actor, frf, cond, kind, prov, qual, blob, raw_blobs,
+                       parent if parent is not None else latest)
     history.append(_insert_history(conn, "version", dict(vars(row))))
     row.id = history[-1][1]
     history.append(_insert_history(conn, "audit", {"at": now, "actor": actor, "action": "catalogue",
@@ -269,6 +261,21 @@ def write_version(session, *, name, joint_type, frf, cond, kind, prov, qual, par
     # the record hash was just computed from this row: not computed again
     version = to_version(joint, row, labels=labels, verify=False)
     return SimpleNamespace(version=version, name=name, number=number, created=True)
+
+
+def _version_row(name, joint_type, jid, number, now, actor, frf, cond, kind, prov, qual, blob, raw_blobs,
+                 parent) -> SimpleNamespace:
+    """The ``joint_versions`` row of a new version, its record hash included."""
+    row = SimpleNamespace(
+        joint_id=jid, version=number, uuid=str(uuidlib.uuid4()), created_at=now, author=actor,
+        materials=list(cond.materials), preload_n=cond.preload_n, torque_nm=cond.torque_nm,
+        geometry=dict(cond.geometry), extra=dict(cond.extra), model_kind=kind, dofs=list(dof_strings(frf.outputs)),
+        quantity=frf.quantity.value, n_freq=frf.n_freq, freq_min_hz=float(frf.freq[0]),
+        freq_max_hz=float(frf.freq[-1]), blob_sha256=blob, raw_blobs=raw_blobs, input_files=dict(prov.input_files),
+        method=prov.method, method_params=dict(prov.parameters),
+        software_version=prov.software_version or software_version(), parent_version=parent, quality=qual)
+    row.record_sha256 = record_sha256(record_dict(name, joint_type, row))
+    return row
 
 
 def _locked_head(conn, name: str):
