@@ -9,9 +9,9 @@ One new version is, inside the caller's write transaction:
    writer holds (``SKIP LOCKED``): then the lock is waited for in a SELECT of its own and
    the latest version read after it (a read in the locking statement itself would see the
    snapshot from before the other writer committed);
-2. the version row with its record hash, and its audit row, each ``INSERT ... RETURNING``
-   the row as stored: its history-chain entry (:mod:`jointdb.store._chain`) is hashed from
-   that, not read again;
+2. the version row with its record hash, and its audit row: on PostgreSQL one statement
+   (an ``INSERT ... RETURNING`` in a CTE for each) that returns the rows as stored, whose
+   history-chain entries (:mod:`jointdb.store._chain`) are hashed from that, not read again;
 3. the query index (:mod:`jointdb.store._index`): the joint's other versions lose the
    ``newest`` (and, unless the new one is deprecated, ``newest_active``) flags, the new
    version's index and geometry rows, and the stamp's generation is increased.
@@ -35,7 +35,7 @@ import functools
 import uuid as uuidlib
 from types import SimpleNamespace
 
-from sqlalchemy import and_, bindparam, false, func, insert, or_, select, update
+from sqlalchemy import and_, bindparam, false, func, insert, or_, select, true, update
 
 from jointdb.errors import ConflictError, InputError
 from jointdb.store._chain import append_chain, content_hash, stored_columns
@@ -102,24 +102,45 @@ _TABLES = {"joint": JointRow, "version": VersionRow, "audit": AuditRow}
 
 
 @functools.cache
-def _inserts(dialect: str, returning: bool) -> dict:
-    """``kind -> INSERT`` of the history rows; with ``returning``, each returns its row as stored
-    (:func:`jointdb.store._chain.stored_columns`) for its chain entry."""
-    return {kind: (insert(cls.__table__).returning(*stored_columns(kind, dialect)) if returning
-                   else insert(cls.__table__)) for kind, cls in _TABLES.items()}
+def _insert(kind: str) -> object:
+    return insert(_TABLES[kind].__table__)
 
 
-def _insert_history(conn, kind: str, values: dict) -> tuple:
-    """Insert one history row; ``(kind, id, content hash)`` for :func:`append_chain` (on PostgreSQL
-    the hash is taken from the row the INSERT returned; on SQLite it is None: the chain reads the
-    row, because SQLite returns a REAL column's integral value as an integer, before its affinity
-    is applied, and the hash would differ from the stored row's)."""
-    returning = conn.dialect.name == "postgresql"
-    result = conn.execute(_inserts(conn.dialect.name, returning)[kind], values)
-    if not returning:
-        return kind, result.inserted_primary_key[0], None
-    stored = result.one()
-    return kind, stored.id, content_hash(kind, stored)
+@functools.cache
+def _insert_returning(shape: tuple[tuple[str, tuple[str, ...]], ...]) -> object:
+    """PostgreSQL: one statement inserting one row of each ``(kind, columns)`` of ``shape``, each in a
+    data-modifying CTE ``rN`` that returns the row as stored (:func:`jointdb.store._chain.stored_columns`);
+    the SELECT returns them side by side, as ``rN_<column>``. Parameters: ``rN_<column>``."""
+    ctes = []
+    for n, (kind, columns) in enumerate(shape):
+        table = _TABLES[kind].__table__
+        values = {c: bindparam(f"r{n}_{c}", type_=table.c[c].type) for c in columns}
+        ctes.append(insert(table).values(values).returning(*stored_columns(kind, "postgresql")).cte(f"r{n}"))
+    joined = ctes[0]
+    for cte in ctes[1:]:
+        joined = joined.join(cte, true())
+    return select(*[c.label(f"r{n}_{c.name}") for n, cte in enumerate(ctes) for c in cte.c]).select_from(joined)
+
+
+def _insert_history(conn, rows: list[tuple[str, dict]]) -> list[tuple]:
+    """Insert history rows ``(kind, values)``; ``(kind, id, content hash)`` of each, for :func:`append_chain`.
+
+    PostgreSQL: all in one statement (:func:`_insert_returning`), each row's hash taken from the row
+    as stored that it returned. SQLite: one INSERT each and no hash (the chain reads the rows: SQLite
+    returns a REAL column's integral value as an integer, before its affinity is applied, so a hash
+    of the returned row would differ from the stored row's).
+    """
+    if conn.dialect.name != "postgresql":
+        return [(kind, conn.execute(_insert(kind), values).inserted_primary_key[0], None) for kind, values in rows]
+    shape = tuple((kind, tuple(sorted(values))) for kind, values in rows)
+    params = {f"r{n}_{c}": v for n, (_, values) in enumerate(rows) for c, v in values.items()}
+    stored = conn.execute(_insert_returning(shape), params).one()._mapping
+    out = []
+    for n, (kind, _) in enumerate(rows):
+        prefix = f"r{n}_"
+        row = {k[len(prefix):]: v for k, v in stored.items() if k.startswith(prefix)}
+        out.append((kind, row["id"], content_hash(kind, row)))
+    return out
 
 
 def precheck(conn, name: str, joint_type: str, parent: int | None, new: dict | None = None,
@@ -212,8 +233,8 @@ def write_version(session, *, name, joint_type, frf, cond, kind, prov, qual, par
     head = _locked_head(conn, name)
     history = []
     if head is None:
-        history.append(_insert_history(conn, "joint", {"name": name, "joint_type": joint_type, "created_at": now,
-                                                       "created_by": actor}))
+        history += _insert_history(conn, [("joint", {"name": name, "joint_type": joint_type, "created_at": now,
+                                                     "created_by": actor})])
         jid, latest, state = history[0][1], None, None
     else:
         jid, latest, state = head.id, head.version, head.state
@@ -230,10 +251,10 @@ def write_version(session, *, name, joint_type, frf, cond, kind, prov, qual, par
     number = (latest or 0) + 1
     row = _version_row(name, joint_type, jid, number, now, actor, frf, cond, kind, prov, qual, blob, raw_blobs,
                        parent if parent is not None else latest)
-    history.append(_insert_history(conn, "version", dict(vars(row))))
-    row.id = history[-1][1]
-    history.append(_insert_history(conn, "audit", {"at": now, "actor": actor, "action": "catalogue",
-                                                   "joint_name": name, "version": number, "details": details}))
+    audit = {"at": now, "actor": actor, "action": "catalogue", "joint_name": name, "version": number,
+             "details": details}
+    history += _insert_history(conn, [("version", dict(vars(row))), ("audit", audit)])
+    row.id = history[-2][1]
     append_chain(session, history)
     found = head is not None
     _remember(conn, idempotency, name, number, 201, now)

@@ -115,8 +115,9 @@ def stored_columns(kind: str, dialect: str) -> list:
 
 
 def content_hash(kind: str, row: Any) -> str:
-    """SHA-256 of a row's canonical content: every column, by name (``row`` is a result row)."""
-    mapping = dict(row._mapping)
+    """SHA-256 of a row's canonical content: every column, by name (``row`` is a result row, or a
+    mapping of column name to value as a result row holds them)."""
+    mapping = dict(row._mapping) if hasattr(row, "_mapping") else dict(row)
     content = {"kind": kind, **{k: _plain(v) for k, v in mapping.items()}}
     data = json.dumps(content, sort_keys=True, separators=(",", ":"), ensure_ascii=True, default=str)
     return hashlib.sha256(data.encode()).hexdigest()
