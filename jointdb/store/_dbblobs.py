@@ -17,11 +17,12 @@ writes it again, so a writer can never reference a collected blob.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Iterator
 from concurrent import futures
 from datetime import datetime, timezone
 
-from sqlalchemy import Engine, delete, select
+from sqlalchemy import Engine, bindparam, delete, select
 from sqlalchemy.orm import Session
 
 from jointdb.errors import IntegrityError, NotFoundError
@@ -37,6 +38,23 @@ DATABASE = "database"
 
 def _now() -> datetime:
     return datetime.now(timezone.utc)
+
+
+@functools.cache
+def _blob_insert(dialect: str, touch: bool):
+    """``INSERT`` of a blob row (parameters ``sha256``, ``data``, ``size``, ``now``) that, when the row
+    exists, does nothing and returns no row (``touch=False``: a returned row says it was inserted) or
+    refreshes its ``touched_at`` (``ON CONFLICT``; PostgreSQL and SQLite); built once per dialect."""
+    if dialect == "postgresql":
+        from sqlalchemy.dialects.postgresql import insert
+    else:
+        from sqlalchemy.dialects.sqlite import insert
+    now = bindparam("now", type_=BlobRow.__table__.c.created_at.type)
+    stmt = insert(BlobRow).values(sha256=bindparam("sha256"), data=bindparam("data"), size=bindparam("size"),
+                                  created_at=now, touched_at=now)
+    if touch:
+        return stmt.on_conflict_do_update(index_elements=["sha256"], set_={"touched_at": stmt.excluded.touched_at})
+    return stmt.on_conflict_do_nothing(index_elements=["sha256"]).returning(BlobRow.sha256)
 
 
 def _encoded(frf: FRF, digest: str) -> bytes:
@@ -95,18 +113,6 @@ class DatabaseBlobStore(VerifyingBlobs):
 
     _key = staticmethod(check_digest)
 
-    def _insert(self, digest: str, data: bytes, now: datetime, *, touch: bool):
-        """``INSERT`` of a blob row that, when the row exists, does nothing (``touch=False``) or
-        refreshes its ``touched_at`` (``ON CONFLICT``; PostgreSQL and SQLite)."""
-        if self.engine.dialect.name == "postgresql":
-            from sqlalchemy.dialects.postgresql import insert
-        else:
-            from sqlalchemy.dialects.sqlite import insert
-        stmt = insert(BlobRow).values(sha256=digest, data=data, size=len(data), created_at=now, touched_at=now)
-        if touch:
-            return stmt.on_conflict_do_update(index_elements=["sha256"], set_={"touched_at": now})
-        return stmt.on_conflict_do_nothing(index_elements=["sha256"])
-
     # ------------------------------------------------------------------ write
     def put(self, frf: FRF) -> str:
         """Store an FRF durably (committed in a transaction of its own); return its SHA-256.
@@ -129,14 +135,14 @@ class DatabaseBlobStore(VerifyingBlobs):
         waits for a ``gc`` holding the row's lock and writes it again if ``gc`` deleted it)."""
         now = _now()
         conn = session.connection()
+        params = {"sha256": digest, "data": data, "size": len(data), "now": now}
         if conn.dialect.insert_returning:  # a row back: inserted (SQLite >= 3.35 and PostgreSQL)
-            new = self._insert(digest, data, now, touch=False).returning(BlobRow.sha256)
-            if conn.execute(new).first() is not None:
+            if conn.execute(_blob_insert(conn.dialect.name, False), params).first() is not None:
                 return
         existing = session.get(BlobRow, digest)
         if existing is not None and bytes(existing.data) != data and self._check(digest, existing.data):
             existing.data, existing.size = data, len(data)
-        session.execute(self._insert(digest, data, now, touch=True))
+        session.execute(_blob_insert(conn.dialect.name, True), params)
 
     # ------------------------------------------------------------------- read
     @staticmethod
