@@ -165,8 +165,9 @@ def _append(conn, rows: list[tuple[str, int, str | None]]) -> None:
         seq += 1
         head = next_head(head, seq, kind, row_id, content)
         entries.append({"seq": seq, "kind": kind, "row_id": row_id, "content_sha256": content, "head_sha256": head})
-    for at in range(0, len(entries), 1000):  # multi-row INSERTs (one for a write; within the drivers' parameter limits)
-        conn.execute(insert(ChainRow.__table__).values(entries[at:at + 1000]))
+    # executemany: psycopg sends the rows in one pipeline (one round trip), and the statement is compiled
+    # once (a multi-row VALUES statement would be compiled again for every call: 10x the CPU time)
+    conn.execute(insert(ChainRow.__table__), entries)
 
 
 _HEAD = "SELECT seq, head_sha256 FROM history_chain ORDER BY seq DESC LIMIT 1"
