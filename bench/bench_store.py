@@ -11,9 +11,17 @@ Prints numbers and ratios against references measured in the same process:
 
 3. With ``--pg URL`` also catalogue throughput on PostgreSQL with the blobs in the
    database (``blobs="database"``: blob and row in one transaction, one commit), in a
-   fresh schema that is dropped afterwards, against the same bare-write reference.
+   fresh schema that is dropped afterwards, against a bare durable ``INSERT`` + ``COMMIT``
+   of the same blob bytes into a plain table (``synchronous_commit`` as the server has it,
+   printed), with the client's CPU time, the SQL statements and the round trips (psycopg
+   waits for the server) per version (:mod:`bench._pgwrite`).
+4. With ``--compare REV`` (a git revision, e.g. the main branch before a change) the
+   catalogue runs of 1 and 3 alternate between that revision's code (``git archive`` into a
+   temporary directory) and this tree's, each run in a process of its own, ``--rounds``
+   times (default 3), with the load average before and after.
 
-Run: ``.venv/bin/python bench/bench_store.py [--quick] [--pg postgresql+psycopg://...]``.
+Run: ``.venv/bin/python bench/bench_store.py [--quick] [--pg postgresql+psycopg://...]
+[--compare REV [--rounds N]]``.
 """
 
 from __future__ import annotations
@@ -85,38 +93,22 @@ def bench_catalogue(root: Path, n: int, url: str | None = None, blobs=None, what
 
 
 def main() -> None:
-    quick = "--quick" in sys.argv
+    args = sys.argv[1:]
+    quick = "--quick" in args
+    pg = args[args.index("--pg") + 1] if "--pg" in args else None
+    if "--compare" in args:
+        from _pgwrite import compare
+
+        rounds = int(args[args.index("--rounds") + 1]) if "--rounds" in args else 3
+        compare(args[args.index("--compare") + 1], pg, rounds, 30 if quick else 100, 30 if quick else 200)
+        return
     with tempfile.TemporaryDirectory(prefix="jointdb-bench-") as tmp:
         root = Path(tmp)
         bench_catalogue(root, 30 if quick else 100)
-        if "--pg" in sys.argv:
-            bench_catalogue_pg(root / "pg", sys.argv[sys.argv.index("--pg") + 1], 30 if quick else 200)
+        if pg:
+            from _pgwrite import bench_catalogue_pg
 
-
-def bench_catalogue_pg(root: Path, base: str, n: int) -> None:
-    """:func:`bench_catalogue` on PostgreSQL, blobs in the database, in a fresh schema."""
-    import sqlalchemy as sa
-
-    from jointdb.store import upgrade
-
-    root.mkdir()
-    schema = "bench_" + uuid.uuid4().hex[:10]
-    engine = sa.create_engine(base)
-    with engine.begin() as conn:
-        conn.exec_driver_sql(f"CREATE SCHEMA {schema}")
-    url = f"{base}{'&' if '?' in base else '?'}options=-csearch_path%3D{schema}"
-    try:
-        upgrade(url)
-        bench_catalogue(root, n, url=url, blobs="database", what="PostgreSQL, blobs in the database")
-    finally:
-        from jointdb.store._guards import event_trigger_names, guard_function
-
-        with engine.begin() as conn:  # the DDL guard a superuser migration installed refuses the drop
-            for name in event_trigger_names(schema):
-                conn.exec_driver_sql(f'DROP EVENT TRIGGER IF EXISTS "{name}"')
-            conn.exec_driver_sql(f"DROP FUNCTION IF EXISTS {guard_function(schema)}()")
-            conn.exec_driver_sql(f"DROP SCHEMA {schema} CASCADE")
-        engine.dispose()
+            bench_catalogue_pg(root / "pg", pg, 30 if quick else 200)
 
 
 if __name__ == "__main__":

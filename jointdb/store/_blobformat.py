@@ -178,6 +178,17 @@ def blob_bytes(frf: FRF, digest: str | None = None) -> tuple[str, bytes]:
     return digest, _userblock(hashlib.sha256(body).hexdigest()) + body
 
 
+def _open_image(data: bytes):
+    """An HDF5 file opened read-only on the bytes of a blob file, in memory (``with`` it)."""
+    import h5py
+
+    fapl = h5py.h5p.create(h5py.h5p.FILE_ACCESS)
+    fapl.set_fapl_core(backing_store=False)
+    fapl.set_file_image(data)
+    name = f"jointdb-blob-{uuid.uuid4().hex}".encode()
+    return h5py.File(h5py.h5f.open(name, h5py.h5f.ACC_RDONLY, fapl=fapl))
+
+
 def decode_blob_bytes(data: bytes, where: str, digest: str | None = None) -> FRF:
     """The FRF in the bytes of a blob file, every check of a read applied (module docstring).
 
@@ -188,15 +199,9 @@ def decode_blob_bytes(data: bytes, where: str, digest: str | None = None) -> FRF
         read it (a chunk checksum fails) or the decoded FRF does not hash to its
         ``sha256`` attribute (or to ``digest``, when given: the blob's name).
     """
-    import h5py
-
     _check_userblock(data[:USERBLOCK], hashlib.sha256(memoryview(data)[USERBLOCK:]).hexdigest(), f"{where} is corrupt")
     try:
-        fapl = h5py.h5p.create(h5py.h5p.FILE_ACCESS)
-        fapl.set_fapl_core(backing_store=False)
-        fapl.set_file_image(data)
-        name = f"jointdb-blob-{uuid.uuid4().hex}".encode()
-        with h5py.File(h5py.h5f.open(name, h5py.h5f.ACC_RDONLY, fapl=fapl)) as f:
+        with _open_image(data) as f:
             frf, stored = read_frf_group(f, where)
     except (OSError, KeyError, ValueError) as exc:  # a stored blob that does not validate is corrupt too
         raise IntegrityError(f"{where} is corrupt: {exc}") from None
@@ -206,6 +211,45 @@ def decode_blob_bytes(data: bytes, where: str, digest: str | None = None) -> FRF
     if digest is not None and actual != digest:
         raise IntegrityError(f"{where} is corrupt: its content hashes to {actual}")
     return frf
+
+
+def verify_blob_bytes(data: bytes, frf: FRF, digest: str) -> None:
+    """Check that the bytes :func:`blob_bytes` just built for ``frf`` read back as ``frf``, bit for bit.
+
+    HDF5 decodes them (every chunk's fletcher32 checksum, the filters) and the arrays and
+    attributes read are compared with the FRF's own: the same guarantee as decoding them with
+    :func:`decode_blob_bytes` and comparing content hashes, without hashing again what was just
+    hashed (the content hash and the whole-file hash of these bytes are :func:`blob_bytes`' own).
+
+    Parameters
+    ----------
+    data
+        The blob file's bytes, as :func:`blob_bytes` returned them.
+    frf
+        The FRF they were built from.
+    digest
+        Its content hash (the blob's name; also the ``sha256`` attribute written).
+
+    Raises
+    ------
+    IntegrityError
+        The bytes do not read back (HDF5 refuses them) or read back as anything else.
+    """
+    where = f"blob {digest}"
+    try:
+        with _open_image(data) as f:
+            a = f.attrs
+            attrs = [str(a[k]) for k in ("format", "sha256", "quantity", "outputs", "inputs")]
+            version = int(a["format_version"])
+            freq, packed = f["freq"][...], f["values"][...]
+    except (OSError, KeyError, ValueError) as exc:
+        raise IntegrityError(f"{where} did not read back: {exc}") from None
+    wanted = [FORMAT, digest, frf.quantity.value, ",".join(map(str, frf.outputs)), ",".join(map(str, frf.inputs))]
+    values = np.stack([frf.values.real, frf.values.imag], axis=-1).astype("<f8")
+    if (attrs != wanted or version != FORMAT_VERSION or len(data) <= USERBLOCK
+            or freq.dtype != np.dtype("<f8") or freq.tobytes() != np.asarray(frf.freq, dtype="<f8").tobytes()
+            or packed.dtype != np.dtype("<f8") or packed.shape != values.shape or packed.tobytes() != values.tobytes()):
+        raise IntegrityError(f"{where} did not read back: the decoded FRF differs from the one encoded")
 
 
 def write_frf_file(path: str | os.PathLike, frf: FRF) -> str:

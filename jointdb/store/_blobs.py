@@ -5,10 +5,11 @@ canonical form; the file format (HDF5 layout, whole-file checksum in a user bloc
 is described in :mod:`jointdb.store._blobformat`.
 
 A write builds the file's bytes in memory, writes them to a temporary file in
-the same directory and fsyncs it while it decodes them again with every check
-of a read, then renames the file atomically into place and fsyncs the
+the same directory and fsyncs it while it decodes them again and compares them
+with the FRF, then renames the file atomically into place and fsyncs the
 directory. Reads always verify the whole-file checksum, the HDF5 chunk
-checksums and the content hash.
+checksums and the content hash. The background durability (temporary file, fsync, rename,
+directory fsync on a worker thread) is :mod:`jointdb.store._durable`.
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ from pathlib import Path
 from jointdb.errors import InputError, IntegrityError, NotFoundError
 from jointdb.frf import FRF
 from jointdb.io._atomic import fsync_dir as _fsync_dir
+from jointdb.store import _durable
 from jointdb.store._blobformat import (  # noqa: F401 - re-exported: the blob format's names live here too
     _FILE_MAGIC,
     _HEX64,
@@ -40,9 +42,11 @@ from jointdb.store._blobformat import (  # noqa: F401 - re-exported: the blob fo
     frf_sha256,
     read_frf_file,
     read_frf_group,
+    verify_blob_bytes,
     write_frf_file,
     write_frf_group,
 )
+from jointdb.store._durable import PendingPut, make_durable
 
 __all__ = ["BlobStore", "frf_sha256", "file_sha256", "FORMAT_VERSION", "write_frf_file", "read_frf_file", "blob_bytes",
            "decode_blob_bytes"]
@@ -94,6 +98,9 @@ class BlobStore(VerifyingBlobs):
     root
         Directory holding the blobs (created on first write).
     """
+
+    #: a blob file is durable before the row that references it is committed (not in its transaction)
+    writes_in_version_transaction = False
 
     def __init__(self, root: str | os.PathLike):
         self.root = Path(root)
@@ -178,7 +185,7 @@ class BlobStore(VerifyingBlobs):
 
         The blob file's bytes are built in memory (:func:`blob_bytes`) and written to a
         temporary file, whose fsync runs on a worker thread while the bytes are decoded
-        again with every check of a read (:func:`decode_blob_bytes`); only when they
+        again and compared with the FRF (:func:`verify_blob_bytes`); only when they
         pass is the file renamed into place and the directory fsynced (on the worker),
         so that a caller can prepare its database transaction meanwhile; when they do
         not, the temporary file is removed and IntegrityError raised.
@@ -205,7 +212,7 @@ class BlobStore(VerifyingBlobs):
         tmp = final.parent / f"{_TMP_PREFIX}{uuid.uuid4().hex}.h5"
         try:
             final.parent.mkdir(parents=True, exist_ok=True)
-            fd = _write_tmp(tmp, data)
+            fd = _durable.write_tmp(tmp, data)
         except OSError as exc:  # read-only or full blob directory: one line for the user, nothing kept
             tmp.unlink(missing_ok=True)
             raise InputError(f"cannot write to the blob store {self.root}: {exc.strerror or exc}") from None
@@ -214,22 +221,7 @@ class BlobStore(VerifyingBlobs):
             raise
 
         def finish(verified) -> None:
-            """fsync the temporary file; once ``verified()`` says so rename it into place, fsync the directory."""
-            try:
-                try:
-                    os.fsync(fd)
-                finally:
-                    os.close(fd)
-                if verified():
-                    os.replace(tmp, final)
-            except OSError as exc:
-                raise InputError(f"cannot write to the blob store {self.root}: {exc.strerror or exc}") from None
-            finally:
-                if tmp.exists():
-                    tmp.unlink()
-            _fsync_dir(final.parent)  # the rename (or the removal) is durable
-            if new_dir:
-                _fsync_dir(self.root)  # and so is the new shard directory
+            make_durable(fd, tmp, final, self.root, new_dir, verified)
 
         try:
             pending = PendingPut(digest, finish)  # the fsync runs while the bytes are verified
@@ -237,12 +229,10 @@ class BlobStore(VerifyingBlobs):
             os.close(fd)
             tmp.unlink(missing_ok=True)
             raise
-        try:  # decoded again with every check of a read: nothing can reference a blob that does not
-            decode_blob_bytes(data, f"blob {digest}", digest)
-        except BaseException as exc:
+        try:  # decoded again and compared with the FRF: nothing can reference a blob that does not read back
+            verify_blob_bytes(data, frf, digest)
+        except BaseException:
             pending.cancel()  # removes the temporary file
-            if isinstance(exc, IntegrityError):
-                raise IntegrityError(f"blob {digest} did not read back: {exc}") from None
             raise
         pending.release()
         return pending
@@ -414,95 +404,3 @@ class BlobStore(VerifyingBlobs):
             return time.time() - path.stat().st_mtime
         except OSError:
             return 0.0
-
-
-def _write_tmp(path: Path, data: bytes) -> int:
-    """Create ``path`` (it must not exist) holding ``data``; returns the open descriptor to fsync.
-
-    Raises
-    ------
-    OSError
-        The directory refuses the file (the caller removes a partial one).
-    """
-    fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
-    try:
-        view = memoryview(data)
-        while view:
-            view = view[os.write(fd, view):]
-    except BaseException:
-        os.close(fd)
-        raise
-    return fd
-
-
-_workers = None  # (pid, ThreadPoolExecutor): the threads that make blobs durable, started once per process
-
-
-def _executor():
-    global _workers
-    if _workers is None or _workers[0] != os.getpid():  # a forked child has none of its parent's threads
-        from concurrent.futures import ThreadPoolExecutor
-
-        _workers = (os.getpid(), ThreadPoolExecutor(max_workers=8, thread_name_prefix="jointdb-blob"))
-    return _workers[1]
-
-
-class PendingPut:
-    """A blob being made durable by a worker thread (:meth:`BlobStore.put_pending`).
-
-    ``finish(verified)`` runs in the worker; ``verified()`` blocks until the creator
-    calls :meth:`release` (go on: put the blob in place) or :meth:`cancel` (drop it)
-    and returns which. The creator must call one of them (a worker waits for no other
-    task, so a queued task always runs once a worker finishes its own).
-    """
-
-    def __init__(self, digest: str, finish=None):
-        import threading
-
-        self.digest = digest
-        self._error: BaseException | None = None
-        self._thread = None  # the worker's Future
-        self._decided = threading.Event()
-        self._go = False
-        if finish is not None:
-            def run() -> None:
-                try:
-                    finish(self._verified)
-                except BaseException as exc:  # noqa: BLE001 - handed to wait()
-                    self._error = exc
-
-            self._thread = _executor().submit(run)
-
-    def _verified(self) -> bool:
-        self._decided.wait()
-        return self._go
-
-    def release(self) -> None:
-        """The bytes verified: let the thread put the blob in place."""
-        self._go = True
-        self._decided.set()
-
-    def cancel(self) -> None:
-        """Drop the blob (the thread removes its temporary file) and wait for the thread."""
-        self._go = False
-        self._decided.set()
-        self.join()
-
-    def join(self) -> None:
-        """Wait for the worker's task, without raising what it met."""
-        if self._thread is not None:
-            self._thread.result()  # run() keeps what finish() raised for wait()
-
-    def wait(self, session=None) -> str:
-        """The digest once the blob is durable in place (``session``: the version's transaction,
-        which a file blob does not take part in; the database store writes into it).
-
-        Raises
-        ------
-        InputError
-            The blob directory refused the write (nothing is left behind).
-        """
-        self.join()
-        if self._error is not None:
-            raise self._error
-        return self.digest

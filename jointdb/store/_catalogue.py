@@ -3,15 +3,20 @@
 One new version is, inside the caller's write transaction:
 
 1. the joint row, locked (``FOR UPDATE`` on PostgreSQL; SQLite writers are already
-   serialised by ``BEGIN IMMEDIATE``), or a new joint row;
-2. for an existing joint, one SELECT of its latest version number and of the state
-   that applies to the next one (the latest state row naming the joint or that number);
-3. the version row with its record hash, and its audit row;
-4. the query index (:mod:`jointdb.store._index`): the joint's other versions lose the
+   serialised by ``BEGIN IMMEDIATE``), with its latest version row and the state that
+   applies to the next one (the latest state row naming the joint or that number), in
+   one SELECT; or a new joint row. On PostgreSQL that SELECT skips a joint row another
+   writer holds (``SKIP LOCKED``): then the lock is waited for in a SELECT of its own and
+   the latest version read after it (a read in the locking statement itself would see the
+   snapshot from before the other writer committed);
+2. the version row with its record hash, and its audit row: on PostgreSQL one statement
+   (an ``INSERT ... RETURNING`` in a CTE for each) that returns the rows as stored, whose
+   history-chain entries (:mod:`jointdb.store._chain`) are hashed from that, not read again;
+3. the query index (:mod:`jointdb.store._index`): the joint's other versions lose the
    ``newest`` (and, unless the new one is deprecated, ``newest_active``) flags, the new
    version's index and geometry rows, and the stamp's generation is increased.
 
-Before step 3, under the joint row's lock (so two concurrent writers cannot both pass):
+Before step 2, under the joint row's lock (so two concurrent writers cannot both pass):
 the new version must be the same joint as the latest one (:mod:`jointdb.store._identity`:
 a contradiction is refused unless forced), and content identical to the latest version
 writes nothing (the latest version is the answer). A request made with an idempotency key
@@ -30,10 +35,10 @@ import functools
 import uuid as uuidlib
 from types import SimpleNamespace
 
-from sqlalchemy import bindparam, false, func, insert, or_, select, update
+from sqlalchemy import and_, bindparam, false, func, insert, or_, select, true, update
 
 from jointdb.errors import ConflictError, InputError
-from jointdb.store._chain import append_chain
+from jointdb.store._chain import append_chain, content_hash, stored_columns
 from jointdb.store._identity import contradiction, identity_changes, same_content
 from jointdb.store._index import add_counts, bump, index_values
 from jointdb.store._models import (
@@ -54,27 +59,28 @@ from jointdb.store._vocabulary import dof_strings
 def _statements() -> SimpleNamespace:
     j, v, s = JointRow.__table__, VersionRow.__table__, StateRow.__table__
     q = QueryVersionRow.__table__
-    latest = select(func.max(v.c.version)).where(v.c.joint_id == bindparam("jid")).scalar_subquery()
-    state = (select(s.c.state)
-             .where(s.c.joint_id == bindparam("jid"),
-                    or_(s.c.version.is_(None), s.c.version == func.coalesce(latest, 0) + 1))
-             .order_by(s.c.at.desc(), s.c.id.desc()).limit(1).scalar_subquery())
-    latest_of_name = select(func.max(v.c.version)).where(v.c.joint_id == j.c.id).scalar_subquery()
+    others = v.alias("others")
+    latest_of_name = select(func.max(others.c.version)).where(others.c.joint_id == j.c.id).correlate(j).scalar_subquery()
     idem = IdempotencyRow.__table__
+    # the joint, its latest version row (outer join: a joint without one has NULLs) and the state that
+    # applies to the version after it
+    state = (select(s.c.state)
+             .where(s.c.joint_id == j.c.id, or_(s.c.version.is_(None), s.c.version == func.coalesce(v.c.version, 0) + 1))
+             .order_by(s.c.at.desc(), s.c.id.desc()).limit(1).correlate(j, v).scalar_subquery())
+    head = (select(j.c.id, j.c.joint_type, state.label("state"), *[v.c[c] for c in _PREV])
+            .select_from(j.outerjoin(v, and_(v.c.joint_id == j.c.id, v.c.version == latest_of_name)))
+            .where(j.c.name == bindparam("name")))
     return SimpleNamespace(
-        latest_row=(select(v.c.version, v.c.materials, v.c.preload_n, v.c.torque_nm, v.c.geometry, v.c.extra,
-                           v.c.model_kind, v.c.dofs, v.c.blob_sha256)
-                    .where(v.c.joint_id == bindparam("jid")).order_by(v.c.version.desc()).limit(1)),
         latest_of_joint=select(j.c.id).where(j.c.name == bindparam("name")),
+        latest_row=(select(*[v.c[c] for c in _PREV]).where(v.c.joint_id == bindparam("jid"))
+                    .order_by(v.c.version.desc()).limit(1)),
         idempotency=select(idem.c.request_sha256, idem.c.joint_name, idem.c.version, idem.c.status)
         .where(idem.c.owner == bindparam("owner"), idem.c.key == bindparam("key")),
         insert_idempotency=insert(idem),
-        joint=select(j.c.id, j.c.joint_type).where(j.c.name == bindparam("name")).with_for_update(),
+        joint=select(j.c.id).where(j.c.name == bindparam("name")).with_for_update(),
+        head=head,
+        head_unless_locked=head.with_for_update(of=j, skip_locked=True),
         precheck=select(j.c.joint_type, latest_of_name).where(j.c.name == bindparam("name")),
-        latest_and_state=select(latest, state),
-        insert_joint=insert(j),
-        insert_version=insert(v),
-        insert_audit=insert(AuditRow.__table__),
         # the joint's other versions are no longer the newest (nor the newest active or listed one,
         # unless the new version is deprecated: then the newest active version stays what it was, and
         # stays listed; a listed version that is deprecated itself hands the head to the new one)
@@ -86,6 +92,53 @@ def _statements() -> SimpleNamespace:
         insert_index=insert(q),
         insert_geometry=insert(QueryGeometryRow.__table__),
     )
+
+
+#: the latest version's columns the identity check reads
+_PREV = ("version", "materials", "preload_n", "torque_nm", "geometry", "extra", "model_kind", "dofs", "blob_sha256")
+_TABLES = {"joint": JointRow, "version": VersionRow, "audit": AuditRow}
+
+
+@functools.cache
+def _insert(kind: str) -> object:
+    return insert(_TABLES[kind].__table__)
+
+
+@functools.cache
+def _insert_returning(shape: tuple[tuple[str, tuple[str, ...]], ...]) -> object:
+    """PostgreSQL: one statement inserting one row of each ``(kind, columns)`` of ``shape``, each in a
+    data-modifying CTE ``rN`` that returns the row as stored (:func:`jointdb.store._chain.stored_columns`);
+    the SELECT returns them side by side, as ``rN_<column>``. Parameters: ``rN_<column>``."""
+    ctes = []
+    for n, (kind, columns) in enumerate(shape):
+        table = _TABLES[kind].__table__
+        values = {c: bindparam(f"r{n}_{c}", type_=table.c[c].type) for c in columns}
+        ctes.append(insert(table).values(values).returning(*stored_columns(kind, "postgresql")).cte(f"r{n}"))
+    joined = ctes[0]
+    for cte in ctes[1:]:
+        joined = joined.join(cte, true())
+    return select(*[c.label(f"r{n}_{c.name}") for n, cte in enumerate(ctes) for c in cte.c]).select_from(joined)
+
+
+def _insert_history(conn, rows: list[tuple[str, dict]]) -> list[tuple]:
+    """Insert history rows ``(kind, values)``; ``(kind, id, content hash)`` of each, for :func:`append_chain`.
+
+    PostgreSQL: all in one statement (:func:`_insert_returning`), each row's hash taken from the row
+    as stored that it returned. SQLite: one INSERT each and no hash (the chain reads the rows: SQLite
+    returns a REAL column's integral value as an integer, before its affinity is applied, so a hash
+    of the returned row would differ from the stored row's).
+    """
+    if conn.dialect.name != "postgresql":
+        return [(kind, conn.execute(_insert(kind), values).inserted_primary_key[0], None) for kind, values in rows]
+    shape = tuple((kind, tuple(sorted(values))) for kind, values in rows)
+    params = {f"r{n}_{c}": v for n, (_, values) in enumerate(rows) for c, v in values.items()}
+    stored = conn.execute(_insert_returning(shape), params).one()._mapping
+    out = []
+    for n, (kind, _) in enumerate(rows):
+        prefix = f"r{n}_"
+        row = {k[len(prefix):]: v for k, v in stored.items() if k.startswith(prefix)}
+        out.append((kind, row["id"], content_hash(kind, row)))
+    return out
 
 
 def precheck(conn, name: str, joint_type: str, parent: int | None, new: dict | None = None,
@@ -175,47 +228,41 @@ def write_version(session, *, name, joint_type, frf, cond, kind, prov, qual, par
     if answer is not None:
         return SimpleNamespace(version=None, name=answer[0], number=answer[1], created=answer[2] == 201)
     now = utcnow()
-    found = conn.execute(st.joint, {"name": name}).first()
-    if found is None:
-        jid = conn.execute(st.insert_joint, {"name": name, "joint_type": joint_type, "created_at": now,
-                                             "created_by": actor}).inserted_primary_key[0]
-        latest, state = None, None
+    head = _locked_head(conn, name)
+    history = []
+    if head is None:
+        history += _insert_history(conn, [("joint", {"name": name, "joint_type": joint_type, "created_at": now,
+                                                     "created_by": actor})])
+        jid, latest, state = history[0][1], None, None
     else:
-        jid, have_type = found
-        if have_type != joint_type:
-            raise ConflictError(f"joint {name!r} is a {have_type} joint, not {joint_type}; use another name")
-        latest, state = conn.execute(st.latest_and_state, {"jid": jid}).first()
+        jid, latest, state = head.id, head.version, head.state
+        if head.joint_type != joint_type:
+            raise ConflictError(f"joint {name!r} is a {head.joint_type} joint, not {joint_type}; use another name")
     if parent is not None and (latest is None or parent > latest):
         raise ConflictError(f"parent version {parent} of joint {name!r} does not exist (latest is {latest or 'none'})")
     details = {"blob_sha256": blob, "method": prov.method}
     if latest is not None:
-        same = _same_joint(conn, name, jid, identity_of(frf, cond, kind, blob), force, allow_identical, details)
+        same = _same_joint(name, head, identity_of(frf, cond, kind, blob), force, allow_identical, details)
         if same is not None:
             _remember(conn, idempotency, name, same, 200, now)
             return SimpleNamespace(version=None, name=name, number=same, created=False)
     number = (latest or 0) + 1
-    row = SimpleNamespace(
-        joint_id=jid, version=number, uuid=str(uuidlib.uuid4()), created_at=now, author=actor,
-        materials=list(cond.materials), preload_n=cond.preload_n, torque_nm=cond.torque_nm,
-        geometry=dict(cond.geometry), extra=dict(cond.extra), model_kind=kind, dofs=list(dof_strings(frf.outputs)),
-        quantity=frf.quantity.value, n_freq=frf.n_freq, freq_min_hz=float(frf.freq[0]),
-        freq_max_hz=float(frf.freq[-1]), blob_sha256=blob, raw_blobs=raw_blobs, input_files=dict(prov.input_files),
-        method=prov.method, method_params=dict(prov.parameters),
-        software_version=prov.software_version or software_version(),
-        parent_version=parent if parent is not None else latest, quality=qual)
-    row.record_sha256 = record_sha256(record_dict(name, joint_type, row))
-    row.id = conn.execute(st.insert_version, dict(vars(row))).inserted_primary_key[0]
-    audit_id = conn.execute(st.insert_audit, {"at": now, "actor": actor, "action": "catalogue", "joint_name": name,
-                                              "version": number, "details": details}).inserted_primary_key[0]
-    append_chain(session, [("joint", jid if found is None else None), ("version", row.id), ("audit", audit_id)])
+    row = _version_row(name, joint_type, jid, number, now, actor, frf, cond, kind, prov, qual, blob, raw_blobs,
+                       parent if parent is not None else latest)
+    audit = {"at": now, "actor": actor, "action": "catalogue", "joint_name": name, "version": number,
+             "details": details}
+    history += _insert_history(conn, [("version", dict(vars(row))), ("audit", audit)])
+    row.id = history[-2][1]
+    append_chain(session, history)
+    found = head is not None
     _remember(conn, idempotency, name, number, 201, now)
     deprecated = state == "deprecated"
     # the joint's listed version was a deprecated one (it has no active version): the new one takes its place
-    moved = found is not None and conn.execute(st.clear_listed_deprecated, {"jid": jid}).rowcount > 0
-    if found is not None:
+    moved = found and conn.execute(st.clear_listed_deprecated, {"jid": jid}).rowcount > 0
+    if found:
         conn.execute(st.clear_newest if deprecated else st.clear_all, {"jid": jid})
-    listed = found is None or moved or not deprecated
-    if found is None:
+    listed = not found or moved or not deprecated
+    if not found:
         add_counts(conn, {(joint_type, deprecated): 1})
     elif moved and not deprecated:
         add_counts(conn, {(joint_type, True): -1, (joint_type, False): 1})
@@ -230,12 +277,39 @@ def write_version(session, *, name, joint_type, frf, cond, kind, prov, qual, par
     if label is not None:
         move_label(session, joint, name, number, label, actor, now)
         labels = (label,)
-    return SimpleNamespace(version=to_version(joint, row, labels=labels), name=name, number=number, created=True)
+    # the record hash was just computed from this row: not computed again
+    version = to_version(joint, row, labels=labels, verify=False)
+    return SimpleNamespace(version=version, name=name, number=number, created=True)
 
 
-def _same_joint(conn, name: str, jid: int, new: dict, force: bool, allow_identical: bool,
-                details: dict) -> int | None:
-    """Check the new version against the joint's latest one (under the joint row's lock).
+def _version_row(name, joint_type, jid, number, now, actor, frf, cond, kind, prov, qual, blob, raw_blobs,
+                 parent) -> SimpleNamespace:
+    """The ``joint_versions`` row of a new version, its record hash included."""
+    row = SimpleNamespace(
+        joint_id=jid, version=number, uuid=str(uuidlib.uuid4()), created_at=now, author=actor,
+        materials=list(cond.materials), preload_n=cond.preload_n, torque_nm=cond.torque_nm,
+        geometry=dict(cond.geometry), extra=dict(cond.extra), model_kind=kind, dofs=list(dof_strings(frf.outputs)),
+        quantity=frf.quantity.value, n_freq=frf.n_freq, freq_min_hz=float(frf.freq[0]),
+        freq_max_hz=float(frf.freq[-1]), blob_sha256=blob, raw_blobs=raw_blobs, input_files=dict(prov.input_files),
+        method=prov.method, method_params=dict(prov.parameters),
+        software_version=prov.software_version or software_version(), parent_version=parent, quality=qual)
+    row.record_sha256 = record_sha256(record_dict(name, joint_type, row))
+    return row
+
+
+def _locked_head(conn, name: str):
+    """The joint's row (locked), its latest version's columns and the next version's state, or None
+    for a new joint (module docstring, step 1)."""
+    st = _statements()
+    head = conn.execute(st.head_unless_locked, {"name": name}).first()
+    if head is None and conn.dialect.name == "postgresql":  # locked by another writer (or not there)
+        if conn.execute(st.joint, {"name": name}).first() is not None:  # waits for that writer's commit
+            head = conn.execute(st.head, {"name": name}).first()
+    return head
+
+
+def _same_joint(name: str, prev, new: dict, force: bool, allow_identical: bool, details: dict) -> int | None:
+    """Check the new version against the joint's latest one ``prev`` (read under the joint row's lock).
 
     Returns the latest version's number when the content is identical (nothing to write),
     else None; adds ``forced`` / ``filled_in`` to the audit ``details``.
@@ -245,9 +319,6 @@ def _same_joint(conn, name: str, jid: int, new: dict, force: bool, allow_identic
     ConflictError
         A defining condition contradicts the latest version and ``force`` is not given.
     """
-    prev = conn.execute(_statements().latest_row, {"jid": jid}).first()
-    if prev is None:
-        return None
     if not allow_identical and same_content(prev, new):
         return int(prev.version)
     changes, filled = identity_changes(prev, new)

@@ -94,9 +94,30 @@ def _columns(cls, dialect: str):
     return out
 
 
+def stored_columns(kind: str, dialect: str) -> list:
+    """The columns of a history row as :func:`content_hash` reads them (the stored text of JSON
+    columns), for ``INSERT ... RETURNING``: the row as stored comes back with its insert, and
+    :func:`append_chain` takes its content hash without reading it again.
+
+    Parameters
+    ----------
+    kind
+        One of :data:`KINDS`.
+    dialect
+        ``"postgresql"`` or ``"sqlite"``.
+
+    Returns
+    -------
+    list
+        SQLAlchemy column expressions, labelled with the column names.
+    """
+    return _columns(KINDS[kind], dialect)
+
+
 def content_hash(kind: str, row: Any) -> str:
-    """SHA-256 of a row's canonical content: every column, by name (``row`` is a result row)."""
-    mapping = dict(row._mapping)
+    """SHA-256 of a row's canonical content: every column, by name (``row`` is a result row, or a
+    mapping of column name to value as a result row holds them)."""
+    mapping = dict(row._mapping) if hasattr(row, "_mapping") else dict(row)
     content = {"kind": kind, **{k: _plain(v) for k, v in mapping.items()}}
     data = json.dumps(content, sort_keys=True, separators=(",", ":"), ensure_ascii=True, default=str)
     return hashlib.sha256(data.encode()).hexdigest()
@@ -123,34 +144,70 @@ def _lock(conn) -> None:
                           "hashtext(current_schema()))"))
 
 
-def _append(conn, rows: list[tuple[str, int]]) -> None:
-    # the rows' content first (this transaction's own rows: no lock needed), then, under the lock
-    # held to commit, only the chain's head and the insert
+def _append(conn, rows: list[tuple[str, int, str | None]]) -> None:
+    # the rows' content first (this transaction's own rows: no lock needed; a content hash taken from
+    # the row its INSERT returned is not read again), then, under the lock held to commit, only the
+    # chain's head and the insert
+    known = {(k, i): c for k, i, c in rows if c is not None}
     todo = []
     for kind in KINDS:
-        ids = sorted({i for k, i in rows if k == kind})
-        contents = _contents(conn, kind, ids) if ids else {}
+        ids = sorted({i for k, i, _ in rows if k == kind})
+        missing = [i for i in ids if (kind, i) not in known]
+        contents = _contents(conn, kind, missing) if missing else {}
         for row_id in ids:
-            if row_id not in contents:
+            content = known.get((kind, row_id)) or contents.get(row_id)
+            if content is None:
                 raise IntegrityError(f"history row {kind} {row_id} vanished before its chain entry was written")
-            todo.append((kind, row_id, contents[row_id]))
-    _lock(conn)
-    chain = ChainRow.__table__
-    last = conn.execute(select(chain.c.seq, chain.c.head_sha256).order_by(chain.c.seq.desc()).limit(1)).first()
-    seq, head = (int(last[0]), last[1]) if last else (0, ZERO)
+            todo.append((kind, row_id, content))
+    seq, head = _locked_head(conn)
     entries = []
     for kind, row_id, content in todo:
         seq += 1
         head = next_head(head, seq, kind, row_id, content)
         entries.append({"seq": seq, "kind": kind, "row_id": row_id, "content_sha256": content, "head_sha256": head})
-    conn.execute(insert(chain), entries)
+    # executemany: psycopg sends the rows in one pipeline (one round trip), and the statement is compiled
+    # once (a multi-row VALUES statement would be compiled again for every call: 10x the CPU time)
+    conn.execute(insert(ChainRow.__table__), entries)
 
 
-def append_chain(session: Session, rows: Iterable[tuple[str, int]]) -> None:
-    """Note history rows inserted with Core statements (``(kind, id)``; kind in :data:`KINDS`); they
-    are appended to the chain when ``session`` commits, with the ORM rows of the transaction."""
+_HEAD = "SELECT seq, head_sha256 FROM history_chain ORDER BY seq DESC LIMIT 1"
+_LOCK = "SELECT pg_advisory_xact_lock(hashtext('jointdb_history_chain'), hashtext(current_schema()))"
+
+
+def _locked_head(conn) -> tuple[int, str]:
+    """``(seq, head)`` of the chain's last entry (``(0, ZERO)`` when empty), read under the chain's lock.
+
+    PostgreSQL (psycopg): the advisory lock and the head's SELECT are sent in one pipeline (one
+    round trip; the SELECT runs after the lock is granted, on a snapshot of its own, as two
+    statements would); errors come back as SQLAlchemy's, as from ``conn.execute``.
+    """
+    if conn.dialect.name != "postgresql" or conn.dialect.driver != "psycopg":
+        _lock(conn)
+        return chain_head(conn)
+    import psycopg
+    from sqlalchemy.exc import DBAPIError
+
+    raw = conn.connection.driver_connection
+    try:
+        with raw.pipeline():  # sent together; leaving the block syncs once and receives both results
+            raw.execute(_LOCK)
+            head = raw.execute(_HEAD)
+        last = head.fetchone()
+    except psycopg.Error as exc:
+        raise DBAPIError.instance(_LOCK + "; " + _HEAD, None, exc, psycopg.Error,
+                                  dialect=conn.dialect) from exc
+    return (int(last[0]), last[1]) if last else (0, ZERO)
+
+
+def append_chain(session: Session, rows: Iterable[tuple]) -> None:
+    """Note history rows inserted with Core statements (``(kind, id)``, or ``(kind, id, content
+    hash)`` when the caller has the row as stored: see :func:`stored_columns`; kind in
+    :data:`KINDS`); they are appended to the chain when ``session`` commits, with the ORM rows of
+    the transaction."""
     pending = session.info.setdefault(_PENDING, [])
-    pending.extend((k, int(i)) for k, i in rows if i is not None)
+    for kind, row_id, *content in rows:
+        if row_id is not None:
+            pending.append((kind, int(row_id), content[0] if content else None))
 
 
 @event.listens_for(Session, "after_flush")
@@ -158,7 +215,7 @@ def _note_new_rows(session: Session, flush_context) -> None:
     for obj in session.new:
         kind = _KIND_OF.get(type(obj))
         if kind is not None:
-            session.info.setdefault(_PENDING, []).append((kind, obj.id))
+            session.info.setdefault(_PENDING, []).append((kind, obj.id, None))
 
 
 @event.listens_for(Session, "before_commit")
@@ -182,7 +239,7 @@ def build_chain(conn) -> int:
     chain = ChainRow.__table__
     have = {(k, i) for k, i in conn.execute(select(chain.c.kind, chain.c.row_id))}
     tables = set(inspect(conn).get_table_names())  # migration 0006 runs before the tables of later kinds exist
-    rows = [(kind, i) for kind, cls in KINDS.items() if cls.__tablename__ in tables
+    rows = [(kind, i, None) for kind, cls in KINDS.items() if cls.__tablename__ in tables
             for (i,) in conn.execute(select(cls.__table__.c.id).order_by(cls.__table__.c.id)) if (kind, i) not in have]
     if rows:
         _append(conn, rows)

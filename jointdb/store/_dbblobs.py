@@ -6,8 +6,10 @@ Same guarantees as the file store (:class:`jointdb.store._blobs.BlobStore`), sam
 a row's ``data`` is exactly a blob file (user block with the whole-file SHA-256, then the
 HDF5 layout with fletcher32 chunks), so every read checks the whole-file hash, the chunk
 checksums and that the decoded FRF hashes to the row's key. ``put`` is idempotent
-(``INSERT ... ON CONFLICT DO UPDATE touched_at``), committed before it returns and read
-back. ``collect`` (gc) locks the row (``FOR UPDATE`` on PostgreSQL, the write lock on
+(``INSERT ... ON CONFLICT``: a new blob is inserted, an existing one touched), its bytes
+decoded once and compared with the FRF before they are written, and committed before it
+returns; :meth:`DatabaseBlobStore.put_pending` writes it in the transaction of the version
+that references it instead. ``collect`` (gc) locks the row (``FOR UPDATE`` on PostgreSQL, the write lock on
 SQLite), re-reads its age and asks the database whether a row references it, all in one
 transaction; a concurrent ``put`` of the same blob waits for that transaction and then
 writes it again, so a writer can never reference a collected blob.
@@ -15,16 +17,19 @@ writes it again, so a writer can never reference a collected blob.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Iterator
+from concurrent import futures
 from datetime import datetime, timezone
 
-from sqlalchemy import Engine, delete, select
+from sqlalchemy import Engine, bindparam, delete, select
 from sqlalchemy.orm import Session
 
 from jointdb.errors import IntegrityError, NotFoundError
 from jointdb.frf import FRF
-from jointdb.store._blobformat import blob_bytes, check_digest, decode_blob_bytes
+from jointdb.store._blobformat import blob_bytes, check_digest, decode_blob_bytes, frf_sha256, verify_blob_bytes
 from jointdb.store._blobs import BlobInfo, VerifyingBlobs
+from jointdb.store._durable import executor
 from jointdb.store._models import BlobRow
 
 #: the value of ``blobs=`` / ``JOINTDB_BLOBS`` that selects this store
@@ -35,31 +40,69 @@ def _now() -> datetime:
     return datetime.now(timezone.utc)
 
 
-class SessionPut:
-    """A database blob waiting to be written in the transaction of its version (see
-    :meth:`DatabaseBlobStore.put_pending`); the interface of :class:`~jointdb.store._blobs.PendingPut`."""
+@functools.cache
+def _blob_insert(dialect: str, touch: bool):
+    """``INSERT`` of a blob row (parameters ``sha256``, ``data``, ``size``, ``now``) that, when the row
+    exists, does nothing and returns no row (``touch=False``: a returned row says it was inserted) or
+    refreshes its ``touched_at`` (``ON CONFLICT``; PostgreSQL and SQLite); built once per dialect."""
+    if dialect == "postgresql":
+        from sqlalchemy.dialects.postgresql import insert
+    else:
+        from sqlalchemy.dialects.sqlite import insert
+    now = bindparam("now", type_=BlobRow.__table__.c.created_at.type)
+    stmt = insert(BlobRow).values(sha256=bindparam("sha256"), data=bindparam("data"), size=bindparam("size"),
+                                  created_at=now, touched_at=now)
+    if touch:
+        return stmt.on_conflict_do_update(index_elements=["sha256"], set_={"touched_at": stmt.excluded.touched_at})
+    return stmt.on_conflict_do_nothing(index_elements=["sha256"]).returning(BlobRow.sha256)
 
-    def __init__(self, store: "DatabaseBlobStore", digest: str, data: bytes):
-        self.store, self.digest, self._data = store, digest, data
+
+def _encoded(frf: FRF, digest: str) -> bytes:
+    """The blob file's bytes of ``frf``, decoded once and compared with it (IntegrityError if not)."""
+    _, data = blob_bytes(frf, digest)
+    verify_blob_bytes(data, frf, digest)  # the one decode: these bytes give back this FRF
+    return data
+
+
+class SessionPut:
+    """A database blob being encoded and verified on a worker thread, written in the transaction of
+    its version (see :meth:`DatabaseBlobStore.put_pending`); the interface of
+    :class:`~jointdb.store._durable.PendingPut`."""
+
+    def __init__(self, store: "DatabaseBlobStore", digest: str, frf: FRF):
+        self.store, self.digest = store, digest
+        self._encoding = executor().submit(_encoded, frf, digest)
 
     def wait(self, session: Session | None = None) -> str:
-        """Write the blob in ``session`` (committed with it), or in its own transaction; its digest."""
+        """Write the blob in ``session`` (committed with it), or in its own transaction; its digest.
+
+        Raises
+        ------
+        IntegrityError
+            The encoded bytes did not read back as the FRF (nothing is written).
+        """
+        data = self._encoding.result()  # the same bytes again when a retried transaction waits again
         if session is None:
             with Session(self.store.engine) as own, own.begin():
-                self.store._write(own, self.digest, self._data)
+                self.store._write(own, self.digest, data)
         else:
-            self.store._write(session, self.digest, self._data)
+            self.store._write(session, self.digest, data)
         return self.digest
 
     def join(self) -> None:
-        """Nothing runs in the background."""
+        """Wait for the worker's encoding, without raising what it met."""
+        futures.wait([self._encoding])
 
     def cancel(self) -> None:
-        """Nothing was written."""
+        """Nothing was written; wait for the worker."""
+        self.join()
 
 
 class DatabaseBlobStore(VerifyingBlobs):
     """Content-addressed FRF blobs in the ``frf_blobs`` table of the repository's database."""
+
+    #: a blob is written in the transaction of the version that references it (``put_pending``)
+    writes_in_version_transaction = True
 
     def __init__(self, engine: Engine, where: str = "database"):
         self.engine = engine
@@ -70,41 +113,36 @@ class DatabaseBlobStore(VerifyingBlobs):
 
     _key = staticmethod(check_digest)
 
-    def _upsert(self, session: Session, digest: str, data: bytes, now: datetime) -> None:
-        dialect = self.engine.dialect.name
-        if dialect == "postgresql":
-            from sqlalchemy.dialects.postgresql import insert
-        else:
-            from sqlalchemy.dialects.sqlite import insert
-        stmt = insert(BlobRow).values(sha256=digest, data=data, size=len(data), created_at=now, touched_at=now)
-        session.execute(stmt.on_conflict_do_update(index_elements=["sha256"], set_={"touched_at": now}))
-
     # ------------------------------------------------------------------ write
     def put(self, frf: FRF) -> str:
-        """Store an FRF durably (committed); return its SHA-256. Idempotent; read back and verified."""
-        digest, data = blob_bytes(frf)
-        with Session(self.engine) as s, s.begin():
-            existing = s.get(BlobRow, digest)
-            if existing is not None and self._check(digest, existing.data) is not None:
-                existing.data, existing.size = data, len(data)  # corrupt copy: replace it
-            self._upsert(s, digest, data, _now())
-        self.get(digest)
-        return digest
+        """Store an FRF durably (committed in a transaction of its own); return its SHA-256.
+        Idempotent; the encoded bytes are verified before they are written."""
+        return self.put_pending(frf).wait()
 
     def put_pending(self, frf: FRF) -> "SessionPut":
-        """The blob encoded and verified now, written by ``wait(session)`` in the transaction of
-        the version that references it (one commit for blob and row; nothing written when the
-        version is refused). ``wait()`` without a session writes it in its own transaction."""
-        digest, data = blob_bytes(frf)
-        self._decode(digest, data)  # the one decode: the bytes about to be stored give back this FRF
-        return SessionPut(self, digest, data)
+        """The blob's content hash now; its bytes encoded and verified on a worker thread while the
+        caller runs the transaction of the version that references it, and written by
+        ``wait(session)`` in that transaction (one commit for blob and row; nothing written when
+        the version is refused or the bytes do not verify). ``wait()`` without a session writes it
+        in its own transaction."""
+        return SessionPut(self, frf_sha256(frf), frf)
 
     def _write(self, session: Session, digest: str, data: bytes) -> None:
-        """Insert (or touch) a verified blob in ``session``; a damaged stored copy is replaced."""
+        """Insert (or touch) a verified blob in ``session``; a damaged stored copy is replaced.
+
+        A new blob is one ``INSERT ... ON CONFLICT DO NOTHING RETURNING``; only when the row exists is it
+        read (and replaced when damaged) and its ``touched_at`` refreshed (in one upsert, which
+        waits for a ``gc`` holding the row's lock and writes it again if ``gc`` deleted it)."""
+        now = _now()
+        conn = session.connection()
+        params = {"sha256": digest, "data": data, "size": len(data), "now": now}
+        if conn.dialect.insert_returning:  # a row back: inserted (SQLite >= 3.35 and PostgreSQL)
+            if conn.execute(_blob_insert(conn.dialect.name, False), params).first() is not None:
+                return
         existing = session.get(BlobRow, digest)
         if existing is not None and bytes(existing.data) != data and self._check(digest, existing.data):
             existing.data, existing.size = data, len(data)
-        self._upsert(session, digest, data, _now())
+        session.execute(_blob_insert(conn.dialect.name, True), params)
 
     # ------------------------------------------------------------------- read
     @staticmethod

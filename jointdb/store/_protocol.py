@@ -46,6 +46,9 @@ class BlobStoreProtocol(Protocol):
     """
 
     root: Any
+    #: True when ``put_pending(...).wait(session)`` writes the blob in the version's own transaction
+    #: (nothing is left behind when the version is refused); False when the blob is made durable first
+    writes_in_version_transaction: bool
 
     def put(self, frf: FRF) -> str:
         """Store ``frf`` durably (idempotent, read back and verified); its SHA-256 hex digest."""

@@ -284,9 +284,12 @@ def state_of(version: int, states: Iterable["StateRow"]) -> str:
     return state
 
 
-def to_version(joint: "JointRow", row: "VersionRow", state: str = "active", labels: Iterable[str] = ()) -> JointVersion:
-    """The public value of a row, after :func:`check_record` (every read verifies the record hash)."""
-    check_record(joint.name, joint.joint_type, row)
+def to_version(joint: "JointRow", row: "VersionRow", state: str = "active", labels: Iterable[str] = (),
+               verify: bool = True) -> JointVersion:
+    """The public value of a row, after :func:`check_record` (every read verifies the record hash;
+    ``verify=False`` only for the row a writer just built and hashed itself, never for one read)."""
+    if verify:
+        check_record(joint.name, joint.joint_type, row)
     conditions = Conditions.__new__(Conditions)  # stored data was validated on the way in
     object.__setattr__(conditions, "materials", tuple(row.materials))
     object.__setattr__(conditions, "preload_n", row.preload_n)

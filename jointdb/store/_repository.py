@@ -282,10 +282,12 @@ class Repository(VersionReads, WholeRepository, LabelsAndStates, PartsStore):
         known = self.idempotent_answer(idempotency)
         if known is not None:
             return known
-        with self.read_engine.connect() as conn:  # refuse conflicts before writing any blob
-            precheck(conn, name, joint_type, parent, identity_of(frf, cond, kind, frf_sha256(frf)), force)
-        # encoded, verified and written now, made durable (fsync, rename, directory fsync) while the
-        # row is prepared; the transaction commits only after pending.wait(): never a row without its blob
+        if not self.blobs.writes_in_version_transaction:  # refuse conflicts before writing a blob file
+            with self.read_engine.connect() as conn:  # (a database blob is written with the row, or not at all)
+                precheck(conn, name, joint_type, parent, identity_of(frf, cond, kind, frf_sha256(frf)), force)
+        # a blob file is encoded, verified and written now, made durable (fsync, rename, directory fsync)
+        # while the row is prepared; a database blob is encoded and verified on a worker meanwhile and
+        # inserted by pending.wait(session); the transaction commits only after it: never a row without its blob
         pending = self.blobs.put_pending(frf)
         try:
             blob = pending.digest

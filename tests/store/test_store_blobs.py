@@ -234,14 +234,14 @@ def test_gc_racing_catalogues_of_an_old_stored_blob_never_loses_it(repo):
 def test_unwritable_blob_store_is_one_line_and_writes_no_row(repo, monkeypatch):
     import errno
 
-    import jointdb.store._blobs as blobs_mod
+    import jointdb.store._durable as durable_mod
     from jointdb.errors import InputError
 
     def refuse(path, data):  # the blob directory refuses the temporary file (as a read-only one would)
         open(path, "wb").close()  # even after creating it: nothing may be left behind
         raise PermissionError(errno.EACCES, "Permission denied")
 
-    monkeypatch.setattr(blobs_mod, "_write_tmp", refuse)
+    monkeypatch.setattr(durable_mod, "write_tmp", refuse)
     with pytest.raises(InputError, match="cannot write to the blob store .*Permission denied"):
         repo.catalogue("T1", "tool-holder", spring_joint(), planar_conditions(), "spring-damper-planar")
     monkeypatch.undo()
@@ -276,16 +276,34 @@ def test_a_blob_collected_between_the_check_and_the_read_is_missing_and_put_rewr
 
 
 def test_a_blob_that_does_not_read_back_is_never_put_in_place(repo, monkeypatch):
-    """The bytes are verified while their temporary file is fsynced: a failed check drops the file."""
+    """The bytes are verified while their temporary file is fsynced: bytes that do not decode to the
+    FRF (a byte of the values' first HDF5 chunk flipped after encoding) drop the file."""
     import jointdb.store._blobs as blobs_mod
 
-    def garbled(data, where, digest=None):
-        raise IntegrityError(f"{where} is corrupt: decoded to something else")
+    real = blobs_mod.blob_bytes
 
-    monkeypatch.setattr(blobs_mod, "decode_blob_bytes", garbled)
+    def garbled(frf, digest=None):
+        digest, data = real(frf, digest)
+        return digest, flip_in_values_chunk(data)
+
+    monkeypatch.setattr(blobs_mod, "blob_bytes", garbled)
     frf = spring_joint()
     with pytest.raises(IntegrityError, match="did not read back"):
         repo.catalogue("T1", "tool-holder", frf, planar_conditions(), "spring-damper-planar")
     monkeypatch.undo()
     assert repo.list_joints() == [] and not repo.blobs.temporaries()
     assert not repo.blobs.exists(frf_sha256(frf)) and not list(repo.blobs.walk())
+
+
+def flip_in_values_chunk(data: bytes) -> bytes:
+    """The bytes of a blob file with one byte of the ``values`` dataset's first chunk flipped."""
+    import io
+
+    import h5py
+
+    from jointdb.store._blobformat import USERBLOCK
+
+    with h5py.File(io.BytesIO(data), "r") as f:
+        chunk = f["values"].id.get_chunk_info(0)
+    at = USERBLOCK + chunk.byte_offset + chunk.size // 2  # HDF5 addresses start after the user block
+    return data[:at] + bytes([data[at] ^ 0x55]) + data[at + 1:]

@@ -36,21 +36,24 @@ def _writer(url: str, blobs: str, proc: int, n: int, queue) -> None:
         queue.put((proc, repr(exc)))
 
 
-@pytest.mark.skipif(sys.platform == "win32", reason="uses fork")
-def test_eight_processes_hundred_versions_each(backend):
+def _run_writers(backend, blobs: str, n_proc: int, n_each: int):
+    """``n_proc`` forked writers of ``n_each`` versions each; the repository to check them in."""
     ctx = mp.get_context("fork")
     queue = ctx.Queue()
-    procs = [
-        ctx.Process(target=_writer, args=(backend.url, str(backend.blobs), p, N_EACH, queue)) for p in range(N_PROC)
-    ]
+    procs = [ctx.Process(target=_writer, args=(backend.url, blobs, p, n_each, queue)) for p in range(n_proc)]
     for p in procs:
         p.start()
     results = dict(queue.get(timeout=600) for _ in procs)
     for p in procs:
         p.join(timeout=60)
-    assert results == {p: None for p in range(N_PROC)}
+    assert results == {p: None for p in range(n_proc)}
+    from jointdb.store import Repository
 
-    repo = backend.repo()
+    return Repository(backend.url, blobs=blobs)
+
+
+def _check_written(repo, n_proc: int, n_each: int) -> None:
+    """Every writer's versions are there once, numbered without gaps, audited, and ``check`` passes."""
     seen = set()
     total = 0
     for j in range(SHARED):
@@ -60,20 +63,38 @@ def test_eight_processes_hundred_versions_each(backend):
         for v in hist:
             seen.add((v.conditions.extra["writer"], v.conditions.extra["seq"]))
         total += len(hist)
-    assert total == N_PROC * N_EACH
-    assert seen == {(p, j) for p in range(N_PROC) for j in range(N_EACH)}  # none lost, none doubled
+    assert total == n_proc * n_each
+    assert seen == {(p, j) for p in range(n_proc) for j in range(n_each)}  # none lost, none doubled
     with repo.read_engine.connect() as conn:
         n_uuid = conn.execute(sa.text("SELECT count(DISTINCT uuid) FROM joint_versions")).scalar_one()
         n_joints = conn.execute(sa.text("SELECT count(*) FROM joints")).scalar_one()
-    assert n_uuid == N_PROC * N_EACH and n_joints == SHARED
+    assert n_uuid == n_proc * n_each and n_joints == SHARED
     per_writer = defaultdict(int)
     for a in repo.audit(limit=10_000):
         if a["action"] == "catalogue":
             per_writer[a["actor"]] += 1
-    assert per_writer == {f"writer-{p}": N_EACH for p in range(N_PROC)}
+    assert per_writer == {f"writer-{p}": n_each for p in range(n_proc)}
     report = repo.check()
     assert report.ok, report.problems
-    assert report.versions_checked == 800
+    assert report.versions_checked == n_proc * n_each
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="uses fork")
+def test_eight_processes_hundred_versions_each(backend):
+    _check_written(_run_writers(backend, str(backend.blobs), N_PROC, N_EACH), N_PROC, N_EACH)
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="uses fork")
+def test_four_processes_with_database_blobs(backend):
+    """The same with the blobs in the database (blob and rows in one transaction; on PostgreSQL
+    the joint row is read with SKIP LOCKED and a locked joint is waited for in a second SELECT)."""
+    repo = _run_writers(backend, "database", 4, 30)
+    try:
+        _check_written(repo, 4, 30)
+        with repo.read_engine.connect() as conn:
+            assert conn.execute(sa.text("SELECT count(*) FROM frf_blobs")).scalar_one() == 4 * 30
+    finally:
+        repo.close()
 
 
 N_MOVERS = 8

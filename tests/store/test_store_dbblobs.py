@@ -93,3 +93,44 @@ def test_blob_and_version_commit_in_one_transaction(dbrepo, monkeypatch):
     monkeypatch.undo()
     jv = dbrepo.catalogue("DB-TX", "tool-holder", spring_joint(), planar_conditions(), "spring-damper-planar")
     assert dbrepo.load_frf(jv).allclose(spring_joint(), rtol=0) and dbrepo.check().ok
+
+
+def _count(repo, table: str) -> int:
+    with repo.write_engine.connect() as conn:
+        return conn.execute(sa.text(f"select count(*) from {table}")).scalar()
+
+
+def test_blob_bytes_that_do_not_read_back_write_nothing(dbrepo, monkeypatch):
+    """The bytes are decoded (on a worker, while the transaction runs) and compared with the FRF
+    before they are inserted: bytes with a flipped byte in a data chunk are refused, with no blob
+    and no version row."""
+    import jointdb.store._dbblobs as dbblobs_mod
+    from test_store_blobs import flip_in_values_chunk
+
+    real = dbblobs_mod.blob_bytes
+    monkeypatch.setattr(dbblobs_mod, "blob_bytes", lambda frf, digest=None: (
+        digest, flip_in_values_chunk(real(frf, digest)[1])))
+    with pytest.raises(IntegrityError, match="did not read back"):
+        dbrepo.catalogue("DB-BAD", "tool-holder", spring_joint(), planar_conditions(), "spring-damper-planar")
+    assert _count(dbrepo, "frf_blobs") == 0 and _count(dbrepo, "joint_versions") == 0
+    monkeypatch.undo()
+    jv = dbrepo.catalogue("DB-BAD", "tool-holder", spring_joint(), planar_conditions(), "spring-damper-planar")
+    assert dbrepo.load_frf(jv).allclose(spring_joint(), rtol=0) and dbrepo.check().ok
+
+
+def test_a_refused_version_writes_no_blob(dbrepo):
+    """No conflict check runs before the transaction with database blobs: the refusal inside it
+    (a contradicting torque, the joint's type) rolls the new blob back with it."""
+    from jointdb.errors import ConflictError
+
+    dbrepo.catalogue("DB-R", "tool-holder", spring_joint(), planar_conditions(), "spring-damper-planar")
+    cond = planar_conditions(torque=999.0)
+    with pytest.raises(ConflictError, match="not the same joint"):
+        dbrepo.catalogue("DB-R", "tool-holder", spring_joint(k=(7e6, 9e4)), cond, "spring-damper-planar")
+    with pytest.raises(ConflictError, match="is a tool-holder joint"):
+        dbrepo.catalogue("DB-R", "holder-spindle", spring_joint(k=(8e6, 9e4)), planar_conditions(),
+                         "spring-damper-planar")
+    assert _count(dbrepo, "frf_blobs") == 1 and _count(dbrepo, "joint_versions") == 1
+    forced = dbrepo.catalogue("DB-R", "tool-holder", spring_joint(k=(7e6, 9e4)), cond, "spring-damper-planar",
+                              force=True)
+    assert forced.version == 2 and _count(dbrepo, "frf_blobs") == 2 and dbrepo.check().ok
