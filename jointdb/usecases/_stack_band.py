@@ -27,6 +27,22 @@ TERMS = ("measurement noise", "joint choice", "prediction path")
 #: the catalogue (each per-line joint reproduces its own campaign): calibrated on the tuning seeds of
 #: bench/_stack_truth_b.py, with LINE_CALIBRATION (docs/validation/stack-prediction.md, *Bands*).
 MODEL_FORM_SIGMA = 0.02
+#: Mean of the joint-choice amplitude of a line left out along an axis, in units of the request's gap ratio (0: a band
+#: centred on the interpolated joint; 1: centred on the joint the leave-one-out error extrapolates to, the second-order
+#: correction of the interpolation). The catalogue's own line errors have a sign (an axis that bends one way, e.g. a
+#: contact stiffness linear in the shank diameter interpolated in ln d, is interpolated too stiff everywhere on it), so
+#: the band leans that way. Calibrated with LINE_CALIBRATION on the tuning seeds (docs/validation/stack-prediction.md).
+LINE_BIAS = 0.0
+
+
+def _with_bias(resolution, perturbation):
+    """The joint-choice perturbation ``(relative, scale, group)`` with each line point's mean amplitude appended."""
+    from jointdb.usecases._stack import LINE_CALIBRATION
+
+    rel, scale, group = perturbation
+    lines = np.array([bool(p.axis) for p in resolution.choice_error.points])
+    shift = np.where(lines, LINE_BIAS * scale / LINE_CALIBRATION, 0.0)
+    return rel, scale, group, shift
 
 
 def _inputs(result, terms=TERMS) -> tuple[dict, dict, list[str]]:
@@ -38,7 +54,7 @@ def _inputs(result, terms=TERMS) -> tuple[dict, dict, list[str]]:
         for name, r in result.joints.items():
             s = r.choice_perturbations(result.prediction.tip.freq)
             if s is not None:
-                sigma[name] = s
+                sigma[name] = _with_bias(r, s)
             elif r.kind in ("query", "interpolated") and r.choice_error is None:
                 notes.append(f"{name}: no joint-choice error — fewer than 3 catalogued joints of its kind share the "
                              "conditions the query names, so leave-one-out cannot estimate one")
