@@ -32,7 +32,7 @@ MODEL_FORM_SIGMA = 0.02
 #: correction of the interpolation). The catalogue's own line errors have a sign (an axis that bends one way, e.g. a
 #: contact stiffness linear in the shank diameter interpolated in ln d, is interpolated too stiff everywhere on it), so
 #: the band leans that way. Calibrated with LINE_CALIBRATION on the tuning seeds (docs/validation/stack-prediction.md).
-LINE_BIAS = 0.0
+LINE_BIAS = 0.5
 
 
 def _with_bias(resolution, perturbation):
