@@ -18,7 +18,7 @@ import numpy as np
 
 from jointdb.errors import InputError
 
-__all__ = ["BandTerms", "prediction_band", "band_terms", "TERMS"]
+__all__ = ["BandTerms", "prediction_band", "band_terms", "choice_perturbation", "TERMS", "LINE_BIAS"]
 
 #: The error terms a band can carry, in the order they are reported.
 TERMS = ("measurement noise", "joint choice", "prediction path")
@@ -45,6 +45,29 @@ def _with_bias(resolution, perturbation):
     return rel, scale, group, shift
 
 
+def choice_perturbation(resolution, freq):
+    """The joint-choice error of one resolved joint as the band samples it, or None.
+
+    Parameters
+    ----------
+    resolution
+        A :class:`jointdb.usecases.JointResolution`.
+    freq : ndarray, shape (n_freq,)
+        Lines [Hz] of the prediction.
+
+    Returns
+    -------
+    tuple or None
+        ``(relative, scale, group, shift)`` for :func:`jointdb.stack._band.choice_perturbed`: the leave-one-out
+        errors on ``freq``, their calibrated spread, axis and mean amplitude (:data:`LINE_BIAS` × the request's
+        gap ratio for lines left out, 0 for single joints); None without a joint-choice error.
+    """
+    if getattr(resolution, "choice_error", None) is None:
+        return None
+    s = resolution.choice_perturbations(freq)
+    return None if s is None else _with_bias(resolution, s)
+
+
 def _inputs(result, terms=TERMS) -> tuple[dict, dict, list[str]]:
     from jointdb.stack._band import sampleable_uncertainties
 
@@ -52,9 +75,9 @@ def _inputs(result, terms=TERMS) -> tuple[dict, dict, list[str]]:
     sigma = {}
     if "joint choice" in terms:
         for name, r in result.joints.items():
-            s = r.choice_perturbations(result.prediction.tip.freq)
+            s = choice_perturbation(r, result.prediction.tip.freq)
             if s is not None:
-                sigma[name] = _with_bias(r, s)
+                sigma[name] = s
             elif r.kind in ("query", "interpolated") and r.choice_error is None:
                 notes.append(f"{name}: no joint-choice error — fewer than 3 catalogued joints of its kind share the "
                              "conditions the query names, so leave-one-out cannot estimate one")
