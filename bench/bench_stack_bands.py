@@ -8,7 +8,8 @@ joint choice), and compares the band with the truth's dominant peak |H| and lobe
     # on a shared machine, one process per seed, then merge:
     python bench/bench_stack_bands.py --catalogue /tmp/b --seeds 7201 --rows-out /tmp/7201.json   # (build first)
     python bench/bench_stack_bands.py --merge /tmp/72*.json --report docs/validation/stack-prediction.md
-    # a quick look (≈ 3 min on a quiet machine, catalogue included): python bench/bench_stack_bands.py --n 3 --seeds 7205
+    # a quick look (≈ 3 min on a quiet machine, catalogue included):
+    python bench/bench_stack_bands.py --n 3 --seeds 7205
 
 The calibration factor (``jointdb.usecases._stack.CHOICE_CALIBRATION``) is set from the tuning seeds'
 coverage only; the reported seed's table is what it is. With ``--report`` the *Bands* section of the page

@@ -232,8 +232,8 @@ def tip_band(spec: StackSpec, resolved_joints: Mapping[str, FRF], uncertainties:
         Interface name → uncertainty record of its joint (measurement noise through the fit's
         covariance); interfaces not named keep their nominal joint.
     choice
-        Interface name → ``(relative, scale[, group[, shift]])`` of its joint-choice error (:func:`choice_perturbed`, arrays on
-        the prediction's lines), applied on top of the covariance samples.
+        Interface name → ``(relative, scale[, group[, shift]])`` of its joint-choice error
+        (:func:`choice_perturbed`, arrays on the prediction's lines), applied on top of the covariance samples.
     tip_sigma
         Relative standard error of the prediction path itself (model form: beams joined at points where the
         real stack has distributed contact): each sample's tip receptance is scaled by ``exp(tip_sigma ξ)``.

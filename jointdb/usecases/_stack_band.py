@@ -4,7 +4,8 @@
 covariance (measurement noise) and, for a queried joint, the leave-one-out joint-choice error
 (:mod:`jointdb.store._loo`: whole condition lines left out for an interpolated joint, calibrated by
 :data:`jointdb.usecases._stack.LINE_CALIBRATION`; single joints for a nearest one, by ``CHOICE_CALIBRATION``) — plus the
-prediction path's own model-form error (:data:`MODEL_FORM_SIGMA`), and couples them all
+prediction path's own model-form error (:data:`MODEL_FORM_SIGMA`), and couples them all; the draws of a line left out
+lean the way its signed error points (:data:`LINE_BIAS`)
 (:func:`jointdb.stack._band.tip_band`). :func:`band_terms` also samples each term alone,
 to say which one dominates.
 """
