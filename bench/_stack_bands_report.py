@@ -66,7 +66,8 @@ FINDINGS = (
     "≈ 55 N·m and the other above, so the 70 N·m line left out between 30 and 150 N·m averages the two and shows "
     "little — a three-line torque grid cannot tell the band how wrong the interpolation is near its low end, and "
     "only a catalogued line near 45–50 N·m would.",
-    "Cause of v3's misses (`bench/stack_bands_cause.py`, tuning seeds 7101 and 7102 only): the error is set by "
+    "Cause of v3's misses (`bench/stack_bands_cause.py`, output in `docs/validation/stack-bands-cause.json`; "
+    "tuning seeds 7101 and 7102 only): the error is set by "
     "where the stack lies against the *diameter* lines. On a diameter line (21 stacks) the peak error's median is "
     "+0.2 %, none beyond 5 %, 9 of 21 under-estimated; between Ø8 and Ø12 (16) the median is −6.2 %, 15 "
     "under-estimated, 10 beyond 5 %; between Ø12 and Ø16 (11) −2.7 %, 10 under-estimated, 3 beyond 5 %. Insertion "
