@@ -32,37 +32,71 @@ HISTORY = (
     "between the Ø8 and Ø12 lines (Ø9, Ø10 short tools, errors −15 to −25 %: a joint left out alone is "
     "interpolated from neighbours on its own lines, which says nothing of interpolating *across* a diameter gap) "
     "and S02-21, +684 % peak from a negatively damped resonance of the per-line joints.",
-    "Calibration v3 (this one): whole lines left out, scaled by the gap product, multiplicative draws, the "
+    "Calibration v3: whole lines left out, scaled by the gap product, multiplicative draws, the "
     "passivity guard. Its factor was chosen on the tuning seeds 7101 and 7102 only (48 stacks): factors 0.5 / "
     "0.75 / 1.0 / 1.5 put the truth inside on 44 / 46 / 46 / 48 peaks and 42 / 44 / 43 / 46 floors, at "
     "half-width / error 2.5 / 3.1 / 3.7 / 5.6× (peak) and 2.2 / 2.8 / 3.4 / 4.7× (floor); 0.5 is the largest "
-    "within the 3× goal. Seeds 7203 and 7204 were drawn for the first time after that (blind; 7204 after 7203's result was read, "
-    "with the calibration unchanged); 7201 and 7202 are seen.",
+    "within the 3× goal. Seeds 7203 and 7204 were drawn for the first time after that (blind; 7204 after 7203's "
+    "result was read, with the calibration unchanged). Its results (the band centred on the prediction): 7201 22 / "
+    "23 of 24 (peak / floor, 3.7× / 2.6×), 7202 22 / 22 (1.9× / 1.7×), 7203 (blind) 17 (71 %) / 16 (67 %) (0.9× / "
+    "0.9×), 7204 (blind) 22 / 22 (1.9× / 1.7×). 7203 missed the goal; its misses under-estimated the peak (the "
+    "prediction did so on 21 of its 24 stacks).",
+    "Calibration v4 (this one): the joint-choice draws of a line left out lean the way its signed error points, "
+    "mean amplitude β = LINE_BIAS times the request's gap ratio (the second-order correction of the interpolation "
+    "is β = 1). Chosen on the tuning seeds before 7205 and 7206 were drawn: 7101 and 7102 (48 stacks) and, for "
+    "more data, the first 16 stacks of 7105 and of 7106 (stopped for time); see *What this shows*.",
 )
 
 
 #: What the reported run shows (written after reading it; review it when the bench is rerun).
 FINDINGS = (
-    "What this shows: over all 96 stacks the truth is inside the 90 % band for 83 of 96 peaks and 83 of 96 floors "
-    "(86 %), with median half-width ≤ 3× the median error on every seed but 7201's peak (3.7×, its errors are "
-    "unusually small, median 1.1 %). Of the two blind seeds, 7204 meets both goals (22 and 22 of 24, 92 %, "
-    "1.9× / 1.7×); 7203 does not: 17 (71 %) peaks and 16 (67 %) floors, the band narrower than the error (0.9×). "
-    "Seeds 7201 and 7202 (seen): 22 of 24 peaks and 23 / 22 of 24 floors (≥ 92 %). The line leave-out covers the "
-    "stacks between the Ø8 and Ø12 lines that v2 missed (S02-10, S02-15, S02-16, S02-17, S02-19 now inside), and "
-    "the passivity guard turns S02-21 from +684 % into −7.1 % (both joints' constant k, c on the 27 lines within "
-    "4740–5000 Hz around the spurious 4980 Hz peak, the per-line joints elsewhere; still just outside its ±4.9 % "
-    "band); S04-24 (inside its band) and a stack of the reduced catalogue of tests/stack/test_band_truth_b.py are "
-    "repaired the same way.",
-    "Seed 7203's misses are short or joint-dominated tools close to catalogued lines (Ø8 × 30 mm, Ø13 × 40 mm, "
-    "35 N·m stacks), peak errors −5 to −8 %, where the joint choice adds little and the prediction-path term "
-    "(±3.3 %) is all the band has: the error of carrying a per-line joint from its campaign's tool to another "
-    "tool grows with how much the tip depends on the joint, which a constant σ does not know. The peak errors are "
-    "also one-sided (the prediction under-estimates the peak on 21 of 24 stacks of 7203, 17 of 24 of 7204), "
-    "which a band centred on the prediction cannot represent. A joint-transfer term (every catalogued joint's Z "
-    "scaled by exp(σξ), σ = 5 %) was tried on the tuning seeds and dropped: it widened every band (median "
-    "half-width 3.9 → 6.5 %) without covering more stacks there. Sensitivity, after the fact and not the "
-    "reported calibration: with the joint-choice factor 0.75 (the next one on the tuning grid, 3.1× wide there) "
-    "seed 7203 would have 20 and 20 of 24 inside (83 %), half-width 5.2 % / 6.7 % against errors 4.9 % / 5.5 %.",
+    "What this shows: the two blind seeds of calibration v4 meet both goals: 7205 has the truth inside the 90 % band "
+    "for 24 of 24 peaks and 23 of 24 floors (half-width 1.9× / 1.6× the median error), 7206 for 23 and 22 of 24 "
+    "(2.8× / 2.0×); every stack, interpolated on both joints or one, carries a band. Their misses: S06-22 (Ø13 end "
+    "mill, 41 mm gauge, 40 N·m: −13.4 % peak against a ±6.1 % band; a short tool between the Ø12 and Ø16 lines and "
+    "near the 30 N·m line, where the torque and diameter errors add), and two floors missed by less than 0.5 % of "
+    "the floor (S05-05, S06-11).",
+    "The seen seeds, rerun with v4 (not evidence for it: 7203's misses motivated it): 7201 24 / 23 of 24 (peak / "
+    "floor), 7202 24 / 21, 7203 21 (88 %) / 20 (83 %), 7204 23 / 22 — all ≥ 80 %; half-width / error 4.3× on "
+    "7201's peak (its errors are unusually small, median 1.1 %) and 1.0–2.5× elsewhere. Against v3, v4 brings inside "
+    "14 peaks or floors that v3 missed (among them 7203's S03-05, S03-08, S03-11, S03-14, S03-17 and 7202's S02-05, "
+    "S02-21) and loses two floors by less than 0.5 % (S02-06, S02-20). Still outside: 7203's S03-07 (Ø8 × 30 mm), "
+    "S03-15 and S03-18 (Ø13), all at 35 N·m, just above the 30 N·m line. There the torque axis is the one that "
+    "errs: the contact stiffness saturates in torque, 1 − exp(−T/55 N·m), which in ln T bends one way below "
+    "≈ 55 N·m and the other above, so the 70 N·m line left out between 30 and 150 N·m averages the two and shows "
+    "little — a three-line torque grid cannot tell the band how wrong the interpolation is near its low end, and "
+    "only a catalogued line near 45–50 N·m would.",
+    "Cause of v3's misses (`bench/stack_bands_cause.py`, output in `docs/validation/stack-bands-cause.json`; "
+    "tuning seeds 7101 and 7102 only): the error is set by "
+    "where the stack lies against the *diameter* lines. On a diameter line (21 stacks) the peak error's median is "
+    "+0.2 %, none beyond 5 %, 9 of 21 under-estimated; between Ø8 and Ø12 (16) the median is −6.2 %, 15 "
+    "under-estimated, 10 beyond 5 %; between Ø12 and Ø16 (11) −2.7 %, 10 under-estimated, 3 beyond 5 %. Insertion "
+    "(32–34 / 35 / 36–38 mm: medians −0.8 / −2.1 / −1.5 %) and fluted or blank (−1.5 / −1.0 %) do not separate the "
+    "errors; short gauges amplify them (≤ 40 mm: median −3.6 %, 7 of 14 beyond 5 %; the tip depends more on the "
+    "joint). On catalogued conditions (no joint choice at all) carrying a per-line joint to a tool unlike its "
+    "campaign's (gauge 30–65 mm instead of 45, inserted 32 or 38 mm instead of 35, fluted) errs by 0–3.3 %, at most "
+    "4.6 % (Ø8, 30 mm gauge, 32 mm inserted): within what the prediction-path term (σ 2 %) carries, so neither the "
+    "insertion held at 35 mm nor the joint's transfer to another tool is the cause. The cause is interpolating "
+    "across the diameter gap: the contact stiffness grows ∝ d while the interpolation is linear in ln d, so every "
+    "joint between two diameter lines comes out too stiff and its peak too low — one-sided, and the Ø12 line left "
+    "out shows that error *with its sign*. Calibration v4 lets the band lean that way (`LINE_BIAS`; "
+    "`tests/stack/test_band_bias.py` checks on a k ∝ T^0.5 catalogue that the lean is the signed interpolation "
+    "error to second order and that the leaning band's median is ≥ 3× closer to the true tip peak).",
+    "Its tuning (tuning seeds only; factor 0.5 unless said): on 7101 and 7102 (48 stacks) a lean of 0 / 0.5 / 1, and "
+    "0.5 with factor 0.75, put the truth inside on 44 / 46 / 47 / 48 peaks and 42 / 44 / 45 / 46 floors at "
+    "half-width / error 2.5 / 2.8 / 3.4 / 3.5× (peak) and 2.2 / 2.5 / 3.0 / 2.9× (floor); on the first 16 stacks of "
+    "7105 and of 7106, 31 / 31 / 30 of 32 peaks and 27 / 29 / 30 floors at 2.4 / 3.5 / 4.9× and 1.5 / 1.7 / 2.3×. The "
+    "rule (most coverage within the 3× goal) picked a lean of 0.5 with factor 0.5, frozen before 7205 and 7206 were "
+    "first drawn (the pooled 75 stacks then read 3.0× / 2.6×).",
+    "Terms: the prediction path dominates on 13 of 24 stacks of each blind seed, the joint choice on 11 (the stacks "
+    "between lines); no stack is dominated by measurement noise (0.2 % in the campaigns). Not yet terms: the spindle's own uncertainty when it is estimated from extension-bar "
+    "translations (family B's spindle is given as its exact receptance, so it has none here), and the substructure "
+    "model's error shown by a campaign's validation assembly (family B's campaigns have none). Weak: where the "
+    "diameter gap is wide (Ø9–Ø10 stacks) the leaning draws have a long upper tail — half-widths of ±132 % to "
+    "±610 % on the peak (S06-01, S06-07; S05-09 ±214 %); the median stays within 3×, but such a band says only "
+    "that the joint choice dominates there, and the peak error itself (−7 to −10 %) is what a planner should read. "
+    "The prediction still under-estimates the peak on most stacks (14 of 24 of 7205, 22 of 24 of 7206): v4 widens "
+    "the band that way but does not correct the prediction.",
 )
 
 
@@ -99,7 +133,7 @@ def section(results: dict, seconds: float) -> str:
     import _stack_truth_b as tb
     from jointdb.store._loo import CAP_OVER_MEDIAN
     from jointdb.usecases._stack import CHOICE_CALIBRATION, LINE_CALIBRATION
-    from jointdb.usecases._stack_band import MODEL_FORM_SIGMA
+    from jointdb.usecases._stack_band import LINE_BIAS, MODEL_FORM_SIGMA
 
     lines = [BEGIN, "", "## Bands: do they contain the truth? (issue 22)", "",
              "Produced by `bench/bench_stack_bands.py --report docs/validation/stack-prediction.md` (do not edit "
@@ -112,7 +146,8 @@ def section(results: dict, seconds: float) -> str:
              "campaigns (machines at 10 and 25 kN; Ø8 / Ø12 / Ø16 at 30 / 70 / 150 N·m), 0.2 % noise. Stacks are "
              "drawn inside that range (Ø8–16 mm, 30–150 N·m, 10–25 kN, insertion 32–38 mm, fluted or blank); "
              "the "
-             f"calibration (joint-choice factor {LINE_CALIBRATION:g} for lines left out, {CHOICE_CALIBRATION:g} "
+             f"calibration (joint-choice factor {LINE_CALIBRATION:g} and lean {LINE_BIAS:g} for lines left out, "
+             f"{CHOICE_CALIBRATION:g} "
              f"for single joints, leave-one-out errors capped at "
              f"{CAP_OVER_MEDIAN:g}× their median per line, prediction-path σ {MODEL_FORM_SIGMA:.1%}) was set on the "
              f"tuning seeds {', '.join(map(str, tb.TUNING_SEEDS))} only.", "",
@@ -123,7 +158,10 @@ def section(results: dict, seconds: float) -> str:
              "interpolated, and scales each such error by the request's gap product over the line's, "
              "(r − v₋)(v₊ − r) / ((v − v₋)(v₊ − v)) in ln units: zero on a catalogued line, largest mid-way, one "
              "independent draw per axis (an axis with two lines only: a quarter of the difference between them at "
-             "mid-way). A prediction whose dominant tip peak is not passive (Im H > 0 near it: a negatively damped "
+             "mid-way). The draws of a line left out are not centred: their mean is "
+             f"{LINE_BIAS:g} × the request's gap ratio (`LINE_BIAS`), so the band leans the way the catalogue's own "
+             "line errors point (a draw of 1 × the gap ratio is the interpolation's second-order correction). "
+             "A prediction whose dominant tip peak is not passive (Im H > 0 near it: a negatively damped "
              "resonance from per-line joints) is redone with the joints' constant k, c fit "
              "(`jointdb/usecases/_stack_guard.py`), marked *constant k, c fallback* below. "
              "*Dominant term*: the term whose band alone is widest. Goals: truth inside on ≥ 80 % of the stacks, "
@@ -137,7 +175,9 @@ def section(results: dict, seconds: float) -> str:
 
         pooled = [r for res in results.values() for r in res["rows"]]
         lines += _summary_rows(f"all {len(results)} seeds", summary(pooled))
-    lines += ["", "History: " + " ".join(HISTORY), "", *FINDINGS, ""]
+    lines += ["", "History: " + " ".join(HISTORY), ""]
+    for paragraph in FINDINGS:
+        lines += [paragraph, ""]
     for seed, res in results.items():
         dom: dict[str, int] = {}
         for r in res["rows"]:

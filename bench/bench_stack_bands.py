@@ -8,6 +8,8 @@ joint choice), and compares the band with the truth's dominant peak |H| and lobe
     # on a shared machine, one process per seed, then merge:
     python bench/bench_stack_bands.py --catalogue /tmp/b --seeds 7201 --rows-out /tmp/7201.json   # (build first)
     python bench/bench_stack_bands.py --merge /tmp/72*.json --report docs/validation/stack-prediction.md
+    # a quick look (≈ 3 min on a quiet machine, catalogue included):
+    python bench/bench_stack_bands.py --n 3 --seeds 7205
 
 The calibration factor (``jointdb.usecases._stack.CHOICE_CALIBRATION``) is set from the tuning seeds'
 coverage only; the reported seed's table is what it is. With ``--report`` the *Bands* section of the page
@@ -18,6 +20,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 import tempfile
 import time
@@ -83,6 +86,7 @@ def run(n: int, samples: int, seeds, say=print, catalogue: Path | None = None) -
     from jointdb.store import Repository
 
     t0 = time.time()
+    say(f"load average at start: {', '.join(f'{v:.2f}' for v in os.getloadavg())}")
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(catalogue) if catalogue is not None else Path(tmp)
         folder.mkdir(parents=True, exist_ok=True)
@@ -96,6 +100,8 @@ def run(n: int, samples: int, seeds, say=print, catalogue: Path | None = None) -
                 say(f"catalogue of family B reused from {folder}")
             out = _seeds(repo, n, samples, seeds, say)
     out["seconds"] = time.time() - t0
+    out["load_average"] = list(os.getloadavg())
+    say(f"{out['seconds']:.0f} s; load average at the end: {', '.join(f'{v:.2f}' for v in out['load_average'])}")
     return out
 
 
@@ -135,8 +141,9 @@ def main(argv=None) -> None:
         for part in args.merge:
             got = json.loads(part.read_text(encoding="utf-8"))
             res["seconds"] = max(res["seconds"], got.pop("seconds"))
+            got.pop("load_average", None)
             res.update({int(k): v for k, v in got.items()})
-        seeds = sorted(k for k in res if k != "seconds")
+        seeds = sorted(k for k in res if isinstance(k, int))
     else:
         res = run(args.n, args.samples, seeds, catalogue=args.catalogue)
     if args.rows_out is not None:

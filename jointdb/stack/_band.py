@@ -119,12 +119,13 @@ def _sampled_planes(record: Mapping, f: np.ndarray, n: int, seed: int, what: str
 
 
 def choice_perturbed(planes: np.ndarray, relative: np.ndarray, scale: np.ndarray,
-                     rng: np.random.Generator, group: np.ndarray | None = None) -> np.ndarray:
+                     rng: np.random.Generator, group: np.ndarray | None = None,
+                     shift: np.ndarray | None = None) -> np.ndarray:
     """Joint receptance samples with the joint-choice error applied (docs/stacks.md, *Bands*).
 
     Each sample draws, per group (a condition axis whose lines were left out, :mod:`jointdb.store._loo`), one
     of the catalogue's leave-one-out errors ``R_j`` (the relative error per line, ``Z_j = (I + R_j) Ẑ_j``, of
-    catalogued joints predicted from the others) and a normal amplitude ``t_j = scale_j ξ``, and applies them
+    catalogued joints predicted from the others) and a normal amplitude ``t_j = shift_j + scale_j ξ``, and applies them
     multiplicatively to its dynamic stiffness: ``Z' = exp(Σ_g t_g ln(I + R_{j_g})) Z`` (per line; ``t = 1``
     reproduces the left-out error exactly, ``t = −1`` its inverse, so a stiffness or damping error is as likely
     ×2 as ×½ and no draw drives the joint's damping through zero).
@@ -142,6 +143,10 @@ def choice_perturbed(planes: np.ndarray, relative: np.ndarray, scale: np.ndarray
         Random generator.
     group
         ``(m,)`` integer group of each error (None: one group); the groups' draws are independent and add.
+    shift
+        ``(m,)`` mean amplitude of each error (None: 0, a band centred on the prediction). A line left out along
+        an axis is interpolated wrong in the same direction wherever the axis bends the same way, so its error
+        scaled to the request (``shift = b · gap ratio``) is a bias the catalogue itself shows.
 
     Returns
     -------
@@ -151,12 +156,13 @@ def choice_perturbed(planes: np.ndarray, relative: np.ndarray, scale: np.ndarray
     n = z.shape[0]
     scale = np.asarray(scale, float)
     group = np.zeros(scale.size, dtype=int) if group is None else np.asarray(group, dtype=int)
+    shift = np.zeros(scale.size) if shift is None else np.asarray(shift, float)
     log_r = _matrix_log(np.eye(relative.shape[-1]) + relative)
     s = np.zeros((n,) + log_r.shape[1:], dtype=complex)
     for g in np.unique(group):
         idx = np.flatnonzero(group == g)
         j = idx[rng.integers(idx.size, size=n)]
-        t = scale[j] * rng.standard_normal(n)
+        t = shift[j] + scale[j] * rng.standard_normal(n)
         s += t[:, None, None, None] * log_r[j]
     from scipy.linalg import expm
 
@@ -226,8 +232,8 @@ def tip_band(spec: StackSpec, resolved_joints: Mapping[str, FRF], uncertainties:
         Interface name → uncertainty record of its joint (measurement noise through the fit's
         covariance); interfaces not named keep their nominal joint.
     choice
-        Interface name → ``(relative, scale[, group])`` of its joint-choice error (:func:`choice_perturbed`, arrays on
-        the prediction's lines), applied on top of the covariance samples.
+        Interface name → ``(relative, scale[, group[, shift]])`` of its joint-choice error
+        (:func:`choice_perturbed`, arrays on the prediction's lines), applied on top of the covariance samples.
     tip_sigma
         Relative standard error of the prediction path itself (model form: beams joined at points where the
         real stack has distributed contact): each sample's tip receptance is scaled by ``exp(tip_sigma ξ)``.

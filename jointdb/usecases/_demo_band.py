@@ -19,15 +19,14 @@ def journey_bands(spec, resolutions, grid, say: Callable[[str], None], lobe_grid
     """
     from jointdb.stability._band import milling_lobes_band
     from jointdb.stack._band import sampleable_uncertainties, tip_band
-    from jointdb.usecases._stack_band import MODEL_FORM_SIGMA
+    from jointdb.usecases._stack_band import MODEL_FORM_SIGMA, choice_perturbation
 
     unc, notes = sampleable_uncertainties(resolutions)
     for note in notes:
         say(f"      note: {note}")
 
     def choice(lines):
-        out = {n: r.choice_perturbations(lines) for n, r in resolutions.items()
-               if getattr(r, "choice_error", None) is not None}
+        out = {n: choice_perturbation(r, lines) for n, r in resolutions.items()}
         return {n: c for n, c in out.items() if c is not None}
 
     if not unc and not choice(grid):

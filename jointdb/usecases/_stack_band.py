@@ -4,7 +4,8 @@
 covariance (measurement noise) and, for a queried joint, the leave-one-out joint-choice error
 (:mod:`jointdb.store._loo`: whole condition lines left out for an interpolated joint, calibrated by
 :data:`jointdb.usecases._stack.LINE_CALIBRATION`; single joints for a nearest one, by ``CHOICE_CALIBRATION``) — plus the
-prediction path's own model-form error (:data:`MODEL_FORM_SIGMA`), and couples them all
+prediction path's own model-form error (:data:`MODEL_FORM_SIGMA`), and couples them all; the draws of a line left out
+lean the way its signed error points (:data:`LINE_BIAS`)
 (:func:`jointdb.stack._band.tip_band`). :func:`band_terms` also samples each term alone,
 to say which one dominates.
 """
@@ -18,7 +19,7 @@ import numpy as np
 
 from jointdb.errors import InputError
 
-__all__ = ["BandTerms", "prediction_band", "band_terms", "TERMS"]
+__all__ = ["BandTerms", "prediction_band", "band_terms", "choice_perturbation", "TERMS", "LINE_BIAS"]
 
 #: The error terms a band can carry, in the order they are reported.
 TERMS = ("measurement noise", "joint choice", "prediction path")
@@ -27,6 +28,45 @@ TERMS = ("measurement noise", "joint choice", "prediction path")
 #: the catalogue (each per-line joint reproduces its own campaign): calibrated on the tuning seeds of
 #: bench/_stack_truth_b.py, with LINE_CALIBRATION (docs/validation/stack-prediction.md, *Bands*).
 MODEL_FORM_SIGMA = 0.02
+#: Mean of the joint-choice amplitude of a line left out along an axis, in units of the request's gap ratio (0: a band
+#: centred on the interpolated joint; 1: centred on the joint the leave-one-out error extrapolates to, the second-order
+#: correction of the interpolation). The catalogue's own line errors have a sign (an axis that bends one way, e.g. a
+#: contact stiffness linear in the shank diameter interpolated in ln d, is interpolated too stiff everywhere on it), so
+#: the band leans that way. Calibrated with LINE_CALIBRATION on the tuning seeds (docs/validation/stack-prediction.md).
+LINE_BIAS = 0.5
+
+
+def _with_bias(resolution, perturbation):
+    """The joint-choice perturbation ``(relative, scale, group)`` with each line point's mean amplitude appended."""
+    from jointdb.usecases._stack import LINE_CALIBRATION
+
+    rel, scale, group = perturbation
+    lines = np.array([bool(p.axis) for p in resolution.choice_error.points])
+    shift = np.where(lines, LINE_BIAS * scale / LINE_CALIBRATION, 0.0)
+    return rel, scale, group, shift
+
+
+def choice_perturbation(resolution, freq):
+    """The joint-choice error of one resolved joint as the band samples it, or None.
+
+    Parameters
+    ----------
+    resolution
+        A :class:`jointdb.usecases.JointResolution`.
+    freq : ndarray, shape (n_freq,)
+        Lines [Hz] of the prediction.
+
+    Returns
+    -------
+    tuple or None
+        ``(relative, scale, group, shift)`` for :func:`jointdb.stack._band.choice_perturbed`: the leave-one-out
+        errors on ``freq``, their calibrated spread, axis and mean amplitude (:data:`LINE_BIAS` × the request's
+        gap ratio for lines left out, 0 for single joints); None without a joint-choice error.
+    """
+    if getattr(resolution, "choice_error", None) is None:
+        return None
+    s = resolution.choice_perturbations(freq)
+    return None if s is None else _with_bias(resolution, s)
 
 
 def _inputs(result, terms=TERMS) -> tuple[dict, dict, list[str]]:
@@ -36,7 +76,7 @@ def _inputs(result, terms=TERMS) -> tuple[dict, dict, list[str]]:
     sigma = {}
     if "joint choice" in terms:
         for name, r in result.joints.items():
-            s = r.choice_perturbations(result.prediction.tip.freq)
+            s = choice_perturbation(r, result.prediction.tip.freq)
             if s is not None:
                 sigma[name] = s
             elif r.kind in ("query", "interpolated") and r.choice_error is None:
