@@ -3,12 +3,12 @@
 One new version is, inside the caller's write transaction:
 
 1. the joint row, locked (``FOR UPDATE`` on PostgreSQL; SQLite writers are already
-   serialised by ``BEGIN IMMEDIATE``), with its latest version row and the state that
+   serialised by ``BEGIN IMMEDIATE``), then its latest version row and the state that
    applies to the next one (the latest state row naming the joint or that number), in
-   one SELECT; or a new joint row. On PostgreSQL that SELECT skips a joint row another
-   writer holds (``SKIP LOCKED``): then the lock is waited for in a SELECT of its own and
-   the latest version read after it (a read in the locking statement itself would see the
-   snapshot from before the other writer committed);
+   one SELECT; or a new joint row. On PostgreSQL the lock is its own statement and the
+   read comes after it: a read inside the locking statement would use that statement's
+   snapshot, taken before a writer that held the lock (a new version, a deprecation)
+   committed, and could write the index from stale state;
 2. the version row with its record hash, and its audit row: on PostgreSQL one statement
    (an ``INSERT ... RETURNING`` in a CTE for each) that returns the rows as stored, whose
    history-chain entries (:mod:`jointdb.store._chain`) are hashed from that, not read again;
@@ -79,7 +79,6 @@ def _statements() -> SimpleNamespace:
         insert_idempotency=insert(idem),
         joint=select(j.c.id).where(j.c.name == bindparam("name")).with_for_update(),
         head=head,
-        head_unless_locked=head.with_for_update(of=j, skip_locked=True),
         precheck=select(j.c.joint_type, latest_of_name).where(j.c.name == bindparam("name")),
         # the joint's other versions are no longer the newest (nor the newest active or listed one,
         # unless the new version is deprecated: then the newest active version stays what it was, and
@@ -301,11 +300,10 @@ def _locked_head(conn, name: str):
     """The joint's row (locked), its latest version's columns and the next version's state, or None
     for a new joint (module docstring, step 1)."""
     st = _statements()
-    head = conn.execute(st.head_unless_locked, {"name": name}).first()
-    if head is None and conn.dialect.name == "postgresql":  # locked by another writer (or not there)
-        if conn.execute(st.joint, {"name": name}).first() is not None:  # waits for that writer's commit
-            head = conn.execute(st.head, {"name": name}).first()
-    return head
+    if conn.dialect.name == "postgresql" and conn.execute(st.joint, {"name": name}).first() is None:
+        return None  # a new joint (a concurrent creator of the same name fails on the unique name)
+    # after the lock: this statement's snapshot includes what the lock's previous holder committed
+    return conn.execute(st.head, {"name": name}).first()
 
 
 def _same_joint(name: str, prev, new: dict, force: bool, allow_identical: bool, details: dict) -> int | None:

@@ -29,6 +29,7 @@ to extend the checkpoint (same head at that size).
 from __future__ import annotations
 
 import base64
+import functools
 import hashlib
 import json
 from datetime import datetime, timezone
@@ -174,6 +175,15 @@ _HEAD = "SELECT seq, head_sha256 FROM history_chain ORDER BY seq DESC LIMIT 1"
 _LOCK = "SELECT pg_advisory_xact_lock(hashtext('jointdb_history_chain'), hashtext(current_schema()))"
 
 
+@functools.cache
+def _pipelines() -> bool:
+    """Whether psycopg's libpq has pipeline mode (libpq >= 14; a distribution's psycopg may link an
+    older one): without it the lock and the SELECT are two round trips."""
+    import psycopg
+
+    return bool(psycopg.Pipeline.is_supported())
+
+
 def _locked_head(conn) -> tuple[int, str]:
     """``(seq, head)`` of the chain's last entry (``(0, ZERO)`` when empty), read under the chain's lock.
 
@@ -181,7 +191,7 @@ def _locked_head(conn) -> tuple[int, str]:
     round trip; the SELECT runs after the lock is granted, on a snapshot of its own, as two
     statements would); errors come back as SQLAlchemy's, as from ``conn.execute``.
     """
-    if conn.dialect.name != "postgresql" or conn.dialect.driver != "psycopg":
+    if conn.dialect.name != "postgresql" or conn.dialect.driver != "psycopg" or not _pipelines():
         _lock(conn)
         return chain_head(conn)
     import psycopg

@@ -69,19 +69,35 @@ def postgres_target(db: str | os.PathLike | None) -> str | None:
 
 
 def _libpq(url: str) -> tuple[str, dict]:
-    """``(conninfo URI, connect keyword arguments)`` of a SQLAlchemy-style PostgreSQL URL, with the
-    engine's options (:func:`jointdb.store._db.make_engines`): ``-c jit=off`` added to ``options``,
-    a connect timeout unless given."""
-    from urllib.parse import parse_qsl, quote, urlencode, urlsplit, urlunsplit
+    """``("", connect keyword arguments)`` of a SQLAlchemy-style PostgreSQL URL, with the engine's
+    options (:func:`jointdb.store._db.make_engines`): ``-c jit=off`` added to ``options``, a connect
+    timeout unless given. The URL is taken apart here (user, password, host, port and database
+    percent-decoded as SQLAlchemy does) and handed to libpq as keywords, never as a URI: libpq's URI
+    parser repeats a token it cannot read in its error, which could show the password.
+
+    Raises
+    ------
+    InputError
+        The port is not a number (the message does not repeat the URL).
+    """
+    from urllib.parse import parse_qsl, unquote, urlsplit
+
+    from jointdb.errors import InputError
 
     parts = urlsplit(url)
     query = parse_qsl(parts.query, keep_blank_values=True)
     options = " ".join(v for k, v in query if k == "options")
-    rest = [(k, v) for k, v in query if k != "options"]
-    if not any(k == "connect_timeout" for k, _ in rest):
-        rest.append(("connect_timeout", str(PG_CONNECT_TIMEOUT_S)))
-    conninfo = urlunsplit(("postgresql", parts.netloc, parts.path, urlencode(rest, quote_via=quote), ""))
-    return conninfo, {"options": f"{options} -c jit=off".strip()}
+    kwargs: dict = {k: v for k, v in query if k != "options"}
+    kwargs.setdefault("connect_timeout", str(PG_CONNECT_TIMEOUT_S))
+    try:
+        port = parts.port
+    except ValueError:
+        raise InputError("the database URL's port is not a number") from None
+    given = {"user": parts.username, "password": parts.password, "host": parts.hostname,
+             "port": None if port is None else str(port), "dbname": parts.path.lstrip("/") or None}
+    kwargs.update({k: unquote(v) for k, v in given.items() if v})
+    kwargs["options"] = f"{options} -c jit=off".strip()
+    return "", kwargs
 
 
 def open_postgres_reader(url: str) -> Reader:

@@ -289,9 +289,11 @@ class Repository(VersionReads, WholeRepository, LabelsAndStates, PartsStore):
         # while the row is prepared; a database blob is encoded and verified on a worker meanwhile and
         # inserted by pending.wait(session); the transaction commits only after it: never a row without its blob
         pending = self.blobs.put_pending(frf)
+        # the raw measurements' blobs the same way: a refused version leaves none of them in the database
+        raw_pending = {str(k): self.blobs.put_pending(v) for k, v in sorted(raw.items())}
         try:
             blob = pending.digest
-            raw_blobs = {str(k): self.blobs.put(v) for k, v in sorted(raw.items())}
+            raw_blobs = {k: p.digest for k, p in raw_pending.items()}
 
             def write(session: Session):
                 out = write_version(session, name=name, joint_type=joint_type, frf=frf, cond=cond, kind=kind,
@@ -299,11 +301,15 @@ class Repository(VersionReads, WholeRepository, LabelsAndStates, PartsStore):
                                     raw_blobs=raw_blobs, move_label=self._move_label, force=force,
                                     allow_identical=allow_identical, idempotency=idempotency)
                 pending.wait(session)  # the blob is durable before (file) or with (database) the row
+                for p in raw_pending.values():
+                    p.wait(session)
                 return out
 
             out = self._retrying(write)
         finally:
             pending.join()
+            for p in raw_pending.values():
+                p.join()
         return Catalogued(out.version or self.get(out.name, out.number), out.created)
 
     @_db.with_db_errors

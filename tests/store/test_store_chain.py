@@ -182,6 +182,15 @@ def test_every_history_row_is_chained_and_the_chain_is_linear(repo):
         assert problems == [] and len(heads) == counts and chain_head(conn) == (counts, heads[-1])
 
 
+def test_the_chain_without_libpq_pipeline_mode(repo, monkeypatch):
+    """A psycopg linked to libpq < 14 has no pipeline mode: the chain's lock and head are then two
+    statements, and the chain is the same."""
+    from jointdb.store import _chain
+
+    monkeypatch.setattr(_chain, "_pipelines", lambda: False)
+    test_every_history_row_is_chained_and_the_chain_is_linear(repo)
+
+
 def test_concurrent_writers_never_fork_the_chain(backend):
     from jointdb.store._chain import recompute
 

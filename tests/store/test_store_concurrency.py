@@ -87,7 +87,7 @@ def test_eight_processes_hundred_versions_each(backend):
 @pytest.mark.skipif(sys.platform == "win32", reason="uses fork")
 def test_four_processes_with_database_blobs(backend):
     """The same with the blobs in the database (blob and rows in one transaction; on PostgreSQL
-    the joint row is read with SKIP LOCKED and a locked joint is waited for in a second SELECT)."""
+    the joint row is locked in one SELECT and its latest version read in the next)."""
     repo = _run_writers(backend, "database", 4, 30)
     try:
         _check_written(repo, 4, 30)

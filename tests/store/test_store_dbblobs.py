@@ -131,6 +131,16 @@ def test_a_refused_version_writes_no_blob(dbrepo):
         dbrepo.catalogue("DB-R", "holder-spindle", spring_joint(k=(8e6, 9e4)), planar_conditions(),
                          "spring-damper-planar")
     assert _count(dbrepo, "frf_blobs") == 1 and _count(dbrepo, "joint_versions") == 1
+    # the raw measurements' blobs too are written in the refused version's transaction, not before it
+    raw = {"g11": spring_joint(k=(3e6, 5e4)), "g22": spring_joint(k=(4e6, 6e4))}
+    with pytest.raises(ConflictError, match="is a tool-holder joint"):
+        dbrepo.catalogue("DB-R", "holder-spindle", spring_joint(k=(8e6, 9e4)), planar_conditions(),
+                         "spring-damper-planar", raw_frfs=raw)
+    assert _count(dbrepo, "frf_blobs") == 1
+    with_raw = dbrepo.catalogue("DB-W", "tool-holder", spring_joint(k=(5e6, 9e4)), planar_conditions(),
+                                "spring-damper-planar", raw_frfs=raw)
+    assert _count(dbrepo, "frf_blobs") == 4 and set(with_raw.raw_blobs) == {"g11", "g22"}
+    assert dbrepo.load_frf(with_raw).allclose(spring_joint(k=(5e6, 9e4)), rtol=0)
     forced = dbrepo.catalogue("DB-R", "tool-holder", spring_joint(k=(7e6, 9e4)), cond, "spring-damper-planar",
                               force=True)
-    assert forced.version == 2 and _count(dbrepo, "frf_blobs") == 2 and dbrepo.check().ok
+    assert forced.version == 2 and _count(dbrepo, "frf_blobs") == 5 and dbrepo.check().ok

@@ -95,10 +95,21 @@ def test_connection_settings_match_the_engines():
 
     assert _light.PG_CONNECT_TIMEOUT_S == _db.PG_CONNECT_TIMEOUT_S
     info, kw = _light._libpq("postgresql+psycopg://u:p%40w@h:5/db?options=-csearch_path%3Dx&sslmode=disable")
-    assert info == "postgresql://u:p%40w@h:5/db?sslmode=disable&connect_timeout=10"
-    assert kw == {"options": "-csearch_path=x -c jit=off"}
-    assert _light._libpq("postgresql://h/db?connect_timeout=3")[0] == "postgresql://h/db?connect_timeout=3"
+    assert info == ""  # keywords only: libpq never parses (and never quotes back) the URL
+    assert kw == {"user": "u", "password": "p@w", "host": "h", "port": "5", "dbname": "db", "sslmode": "disable",
+                  "connect_timeout": "10", "options": "-csearch_path=x -c jit=off"}
+    assert _light._libpq("postgresql://h/db?connect_timeout=3")[1]["connect_timeout"] == "3"
     assert _light.postgres_target("postgresql+psycopg2://h/db") is None  # another driver: the Repository
+
+
+def test_a_password_libpq_cannot_parse_is_not_shown(capsys):
+    """A password with a stray ``%`` (``50%of``) made libpq's URI parser quote it back in its error."""
+    from jointdb.errors import InputError
+
+    url = "postgresql+psycopg://bob:50%offsecret@127.0.0.1:9/postgres?connect_timeout=2"
+    line = assert_one_line_error(run_main(capsys, "query", "--db", url, "--type", "tool-holder", "--torque", "40"),
+                                 InputError.exit_code, "cannot open database")
+    assert "offsecret" not in line and "50%" not in line
 
 
 def test_the_candidate_fetch_has_its_own_work_mem(pg):
