@@ -19,7 +19,7 @@ demo: install
 	cd /tmp && OPENBLAS_NUM_THREADS=1 $(abspath $(BIN))/jointdb demo --out $(abspath $(OUT))
 
 test: install
-	OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 $(BIN)/pytest -q -p no:cacheprovider -n auto --dist loadfile tests
+	OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 $(BIN)/pytest -q -p no:cacheprovider -n auto --dist loadfile --no-loadscope-reorder tests
 
 bench: install
 	for f in bench/bench_*.py; do echo "== $$f"; OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 $(BIN)/python $$f || exit 1; done

@@ -25,6 +25,7 @@ from ``_stack_validation``.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import replace
 from pathlib import Path
 
@@ -105,6 +106,13 @@ def truth_tip(case: sv.Case) -> FRF:
 
 
 def spindle_frf() -> FRF:
+    """The spindle alone at its nose (node 5: x, ry), exact; solved once (deterministic), each caller gets a copy."""
+    frf = _spindle_frf()
+    return replace(frf, freq=frf.freq.copy(), values=frf.values.copy())
+
+
+@functools.lru_cache(maxsize=1)
+def _spindle_frf() -> FRF:
     model = BeamModel(tuple(spindle_segments()), points=(NamedPoint("nose", 0.0, 5),),
                       ingredients=(*spindle_ingredients(0.0), HystereticDamping(sv.ETA)), max_element_length=0.003)
     return model.frf(FREQ, ["nose"])

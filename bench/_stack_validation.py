@@ -37,6 +37,7 @@ Used by ``bench/bench_stack_prediction.py`` (the report) and by
 
 from __future__ import annotations
 
+import functools
 import json
 import zlib
 from dataclasses import dataclass, replace
@@ -183,10 +184,19 @@ def truth_tip(case: Case, freq=FREQ) -> FRF:
 
 
 def spindle_frf(taper: str, freq=FREQ) -> FRF:
-    """The spindle alone at its nose (node 5: x, ry), as measured (exact: no noise)."""
+    """The spindle alone at its nose (node 5: x, ry), as measured (exact: no noise).
+
+    The model is deterministic and the catalogue asks for the same spindle once per campaign and stack: it is
+    solved once per taper and band, and each caller gets its own copy of the values."""
+    frf = _spindle_frf(taper, tuple(np.asarray(freq, dtype=float).tolist()))
+    return replace(frf, freq=frf.freq.copy(), values=frf.values.copy())
+
+
+@functools.lru_cache(maxsize=8)
+def _spindle_frf(taper: str, freq: tuple) -> FRF:
     model = BeamModel(tuple(spindle_segments(taper)), points=(NamedPoint("nose", 0.0, 5),),
                       ingredients=(*spindle_ingredients(0.0), HystereticDamping(ETA)), max_element_length=0.003)
-    return model.frf(freq, ["nose"])
+    return model.frf(np.array(freq), ["nose"])
 
 
 def stack_doc(case: Case, joints: dict, fluted_mass: bool = True) -> dict:

@@ -29,18 +29,28 @@ def run(*args, cwd=None):
                           cwd=cwd, stdin=subprocess.DEVNULL)
 
 
-@pytest.fixture
-def setup(tmp_path):
-    """A database with a spindle (5 mm mesh, as the holder model's) and the demo holder; a test folder."""
-    db = tmp_path / "j.sqlite"
+@pytest.fixture(scope="module")
+def _parts_db(tmp_path_factory):
+    """A folder with a database holding a spindle (5 mm mesh, as the holder model's) and the demo holder, added
+    once per module by `jointdb parts add` (the set-up of every test here, not its subject)."""
+    d = tmp_path_factory.mktemp("parts-db")
+    db = d / "j.sqlite"
     spindle = json.loads((CAT / "models" / "spindle-alone.json").read_text())
     spindle["max_element_length"] = 0.005
-    (tmp_path / "spindle.json").write_text(json.dumps(spindle))
-    r = run("parts", "add", "spindle", "rig", "--model", tmp_path / "spindle.json", "--point", "nose",
+    (d / "spindle.json").write_text(json.dumps(spindle))
+    r = run("parts", "add", "spindle", "rig", "--model", d / "spindle.json", "--point", "nose",
             "--machine", "rig", "--db", db)
     assert r.returncode == 0, r.stderr
     r = run("parts", "add", "holder", "er32", "--from-stack", CAT / "demo-stack.json", "--db", db)
     assert r.returncode == 0, r.stderr
+    return d
+
+
+@pytest.fixture
+def setup(_parts_db, tmp_path):
+    """A test's own copy of that database (file and blob store); a test folder."""
+    shutil.copytree(_parts_db, tmp_path, dirs_exist_ok=True)
+    db = tmp_path / "j.sqlite"
     folder = tmp_path / "th"
     folder.mkdir()
     shutil.copy(CHAIN / "assembly.uff", folder / "assembly.uff")
