@@ -27,9 +27,9 @@ BARE_SQL = ("SELECT q.version_id, q.joint_id, q.version, q.torque_nm, q.preload_
             "FROM query_versions q LEFT JOIN query_geometry g ON g.key = 'diameter_m' AND g.version_id = q.version_id "
             "WHERE q.joint_type = 'tool-holder' AND q.newest_active")
 BARE = r"""
-import sys, psycopg
-with psycopg.connect(sys.argv[1], options=sys.argv[2]) as c:
-    rows = c.execute(sys.argv[3]).fetchall()
+import json, sys, psycopg
+with psycopg.connect("", **json.loads(sys.argv[1])) as c:
+    rows = c.execute(sys.argv[2]).fetchall()
 print(len(rows))
 """
 
@@ -155,7 +155,7 @@ def bench_pg(base: str, n: int, root: Path, *, quick: bool, refill: bool, check_
     query = [sys.executable, "-m", "jointdb", "query", *REQUEST, "--db", url]
     from jointdb.store._light import _libpq
 
-    bare = [sys.executable, "-c", BARE, *_libpq(url)[0:1], _libpq(url)[1]["options"]]
+    bare = [sys.executable, "-c", BARE, json.dumps(_libpq(url)[1])]
     first = _run(query, env)  # the first query after the fill: no cache file yet
     spilled, _ = explain(url, None)
     no_spill, plan = explain(url, _nearest_work_mem())

@@ -20,7 +20,8 @@ Pages start after a random joint (keyset cursor), every 4th is the first page, e
 filtered on a joint type. Reported: p50 and p99 in ms and each path's p50 over the bare SQL's.
 Goal: p99 <= 50 ms for ``list_page`` and for the HTTP page, on both backends.
 
-Run: ``PYTHONPATH=. .venv/bin/python bench/bench_listing.py [--requests 300] [--per-joint 1] [--no-pg] [--no-sqlite]``
+Run: ``PYTHONPATH=. .venv/bin/python bench/bench_listing.py [--requests 300] [--per-joint 1] [--no-pg] [--no-sqlite]``;
+``--pg-versions 1000000`` lists the kept 1M schema of ``bench/bench_store_rows.py --pg`` instead.
 """
 
 from __future__ import annotations
@@ -62,7 +63,7 @@ def _requests(repo, n_joints: int, n: int, seed: int = 11) -> list[dict]:
     out = []
     for i in range(n):
         joint_type = TYPES[i % 2] if i % 5 == 0 else None
-        after = None if i % 4 == 0 else encode_cursor(f"bulk-{int(rng.integers(n_joints)):06d}", totals[joint_type])
+        after = None if i % 4 == 0 else encode_cursor(f"bulk-{int(rng.integers(n_joints)):07d}", totals[joint_type])
         out.append({"after": after, "joint_type": joint_type})
     return out
 
@@ -111,20 +112,24 @@ async def _measure(repo, requests: list[dict]) -> dict[str, list[float]]:
     return times
 
 
-def run_backend(label: str, url: str, per_joint: int, n_requests: int, blobs: Path) -> list[str]:
+def run_backend(label: str, url: str, per_joint: int, n_requests: int, blobs: Path,
+                kept: tuple[int, str] | None = None) -> list[str]:
+    """One backend's rows; ``kept``: ``(versions, note)`` of an already filled database (no fill)."""
     from jointdb.store import Repository
 
-    repo = Repository(url, blobs=blobs, auto_create=True)  # no blob is read: a listing touches rows only
+    repo = Repository(url, blobs=blobs, auto_create=kept is None)  # no blob is read: a listing touches rows only
+    n_versions = kept[0] if kept else N_VERSIONS
     try:
         t0 = time.perf_counter()
-        bulk_fill(repo, N_VERSIONS, per_joint)
-        fill_s = time.perf_counter() - t0
-        times = asyncio.run(_measure(repo, _requests(repo, N_VERSIONS // per_joint, n_requests)))
+        if kept is None:
+            bulk_fill(repo, N_VERSIONS, per_joint)
+        filled = kept[1] if kept else f"filled in {time.perf_counter() - t0:.0f} s"
+        times = asyncio.run(_measure(repo, _requests(repo, n_versions // per_joint, n_requests)))
     finally:
         repo.close()
     ref = statistics.median(times["bare SQL"])
-    lines = [f"{label}: {N_VERSIONS} versions, {per_joint} per joint ({N_VERSIONS // per_joint} joints), "
-             f"filled in {fill_s:.0f} s; {n_requests} pages of {PAGE}"]
+    lines = [f"{label}: {n_versions} versions, {per_joint} per joint ({n_versions // per_joint} joints), "
+             f"{filled}; {n_requests} pages of {PAGE}"]
     for path, values in times.items():
         ratio = "" if path == "bare SQL" else f"  p50 ratio to bare SQL {statistics.median(values) / ref:.2f}"
         goal = "" if path == "bare SQL" else ("  (goal p99 <= 50 ms: met)" if _pct(values, 99) <= 50
@@ -176,7 +181,19 @@ def main(argv=None) -> None:
     ap.add_argument("--per-joint", type=int, default=1, help="versions per joint (1: 100,000 joints)")
     ap.add_argument("--no-pg", action="store_true")
     ap.add_argument("--no-sqlite", action="store_true")
+    ap.add_argument("--pg-versions", type=int, default=None,
+                    help="PostgreSQL only: list the kept bench schema of bench_store_rows.py with this many "
+                         "versions, 1 per joint (filled by COPY when missing), e.g. 1000000")
     args = ap.parse_args(argv)
+    if args.pg_versions:
+        from _bench_pg_rows import prepare
+
+        url, note = prepare(_pg_url(args) or DEV_PG, args.pg_versions, refill=False, check_index=False)
+        with tempfile.TemporaryDirectory() as tmp:
+            for line in run_backend("PostgreSQL", url, 1, args.requests, Path(tmp) / "blobs",
+                                    kept=(args.pg_versions, note)):
+                print(line, flush=True)
+        return
     print(f"bench_listing  {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}  load average "
           f"{' '.join(f'{x:.1f}' for x in os.getloadavg())} on {os.cpu_count()} cores")
     with tempfile.TemporaryDirectory() as tmp:

@@ -70,7 +70,7 @@ def prebuilt(rng: random.Random, n: int, host: str, token: str, downloads, n_joi
     for _ in range(n):
         kind = rng.choice(KINDS)
         if kind == "show":
-            req = build("GET", f"/api/v1/joints/bulk-{rng.randrange(n_joints):06d}/versions/{rng.randint(1, 10)}",
+            req = build("GET", f"/api/v1/joints/bulk-{rng.randrange(n_joints):07d}/versions/{rng.randint(1, 10)}",
                         host, token)
         elif kind == "download":
             name, version = rng.choice(downloads)
@@ -113,6 +113,8 @@ def run(server, clients: int, per_client: int, downloads, seed_: int, n_joints: 
     statuses = collections.Counter(status for _, status, _, _ in results)
     if any(n == 0 for k, s, _, n in results if s == 200):
         raise RuntimeError("an empty 200 response")
+    if any(s != 200 for s in statuses):  # every request names something that exists: any other status is a fault
+        raise RuntimeError(f"not every request answered 200: {dict(statuses)}")
     table = {}
     for kind in KINDS:
         t = np.array([dt for k, s, dt, _ in results if k == kind and s == 200]) * 1e3

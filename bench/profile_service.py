@@ -35,7 +35,7 @@ DEV_PG = "postgresql+psycopg://postgres@127.0.0.1:54330/postgres"
 
 def requests_of(kind: str, rng: random.Random, n_joints: int, downloads) -> tuple[str, str, str, bytes]:
     if kind == "show":
-        return "GET", f"/api/v1/joints/bulk-{rng.randrange(n_joints):06d}/versions/{rng.randint(1, 10)}", "", b""
+        return "GET", f"/api/v1/joints/bulk-{rng.randrange(n_joints):07d}/versions/{rng.randint(1, 10)}", "", b""
     if kind == "download":
         name, version = rng.choice(downloads)
         return "GET", f"/api/v1/joints/{name}/versions/{version}/frf", "format=hdf5", b""
