@@ -63,6 +63,13 @@ def _cell(text: str, markdown: bool = False):
     return Text(text.replace("|", "\\|") if markdown else text)
 
 
+def _title(title: str | None):
+    """A table title taken literally, like a cell (``[/]`` in a name is text, not rich markup), in Rich's title style."""
+    from rich.text import Text
+
+    return None if title is None else Text(title, style="table.title")
+
+
 def emit(
     data: Any,
     *,
@@ -110,7 +117,7 @@ def emit(
         console.print(data, highlight=False, markup=False)
         return
     if isinstance(data, Mapping):
-        table = Table(title=title, show_header=not tty, **style)
+        table = Table(title=_title(title), show_header=not tty, **style)
         table.add_column("field", style="bold")
         table.add_column("value")
         for key, value in data.items():
@@ -122,7 +129,7 @@ def emit(
         console.print("(no rows)", highlight=False)
         return
     cols = list(columns) if columns else list(rows[0].keys())
-    table = Table(title=title, **style)
+    table = Table(title=_title(title), **style)
     for col in cols:
         table.add_column(_cell(header(col), not tty), overflow="fold")
     for row in rows:

@@ -5,7 +5,7 @@ import io
 import sys
 
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 import jointdb.cli._output as output
@@ -52,6 +52,8 @@ def test_rows_are_written_as_rich_writes_them(keys, data, title):
 
 @settings(max_examples=200, deadline=None)
 @given(record=st.dictionaries(TEXT, VALUE, max_size=5), title=st.one_of(st.none(), TEXT))
+@example(record={}, title="[/]")  # a title is text, never rich markup (Rich raised MarkupError on these)
+@example(record={"a": 1}, title="[/0] [bold]x :smile:")
 def test_a_record_is_written_as_rich_writes_it(record, title):
     with pytest.MonkeyPatch.context() as mp:
         want = _emit(mp, record, rich=True, title=title)
