@@ -288,27 +288,27 @@ class Repository(VersionReads, WholeRepository, LabelsAndStates, PartsStore):
         # a blob file is encoded, verified and written now, made durable (fsync, rename, directory fsync)
         # while the row is prepared; a database blob is encoded and verified on a worker meanwhile and
         # inserted by pending.wait(session); the transaction commits only after it: never a row without its blob
-        pending = self.blobs.put_pending(frf)
         # the raw measurements' blobs the same way: a refused version leaves none of them in the database
-        raw_pending = {str(k): self.blobs.put_pending(v) for k, v in sorted(raw.items())}
+        pending = [self.blobs.put_pending(frf)]
         try:
-            blob = pending.digest
-            raw_blobs = {k: p.digest for k, p in raw_pending.items()}
+            raw_items = sorted(raw.items())
+            for _, v in raw_items:  # appended one by one: a failure still joins those already started
+                pending.append(self.blobs.put_pending(v))
+            blob = pending[0].digest
+            raw_blobs = {str(k): p.digest for (k, _), p in zip(raw_items, pending[1:])}
 
             def write(session: Session):
                 out = write_version(session, name=name, joint_type=joint_type, frf=frf, cond=cond, kind=kind,
                                     prov=prov, qual=qual, parent=parent, actor=actor, label=label, blob=blob,
                                     raw_blobs=raw_blobs, move_label=self._move_label, force=force,
                                     allow_identical=allow_identical, idempotency=idempotency)
-                pending.wait(session)  # the blob is durable before (file) or with (database) the row
-                for p in raw_pending.values():
+                for p in pending:  # each blob is durable before (file) or with (database) the row
                     p.wait(session)
                 return out
 
             out = self._retrying(write)
         finally:
-            pending.join()
-            for p in raw_pending.values():
+            for p in pending:
                 p.join()
         return Catalogued(out.version or self.get(out.name, out.number), out.created)
 
