@@ -138,6 +138,20 @@ def _line(label: str, xs: list[float], ref: float, goal: float | None = None) ->
     return text
 
 
+def candidate_arrays(repo):
+    """The current tool-holder candidates (with ``diameter_m``) as the nearest query holds them: the
+    arrays the numpy reference ranks."""
+    from jointdb.store._nearest import Reader, Selection, current_candidates
+
+    raw = repo.read_engine.raw_connection()
+    try:
+        reader = Reader(raw, repo.read_engine.dialect.name)
+        with reader.snapshot():
+            return current_candidates(reader, repo.url, Selection("tool-holder"), ["diameter_m"])
+    finally:
+        raw.close()
+
+
 def bench_pg(base: str, n: int, root: Path, *, quick: bool, refill: bool, check_index: bool,
              requests, reference) -> None:
     """All PostgreSQL rows (module docstring of bench_store_rows.py)."""
@@ -145,8 +159,6 @@ def bench_pg(base: str, n: int, root: Path, *, quick: bool, refill: bool, check_
     from bench_store import joint_frf
 
     from jointdb.store import Conditions, OutsideCatalogueWarning, Repository
-    from jointdb.store._nearest import Reader, Selection, current_candidates
-
     url, note = prepare(base, n, refill, check_index)
     runs = 3 if quick else 7
     # as installed: byte code compiled once (a PYTHONDONTWRITEBYTECODE=1 shell would recompile jointdb every run)
@@ -181,13 +193,7 @@ def bench_pg(base: str, n: int, root: Path, *, quick: bool, refill: bool, check_
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", OutsideCatalogueWarning)
         repo.nearest("tool-holder", reqs[0], k=5)
-        raw = repo.read_engine.raw_connection()
-        try:
-            reader = Reader(raw, "postgresql")
-            with reader.snapshot():
-                cand = current_candidates(reader, repo.url, Selection("tool-holder"), ["diameter_m"])
-        finally:
-            raw.close()
+        cand = candidate_arrays(repo)
         for req in reqs:
             t0 = time.perf_counter()
             repo.nearest("tool-holder", req, k=5)

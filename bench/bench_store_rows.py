@@ -56,7 +56,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _bulk import bulk_fill  # noqa: E402
-from _bench_pg_rows import bench_pg  # noqa: E402
+from _bench_pg_rows import bench_pg, candidate_arrays  # noqa: E402
 
 from jointdb.store import Conditions, OutsideCatalogueWarning, Repository  # noqa: E402
 
@@ -145,8 +145,6 @@ def check_old(repo, rev: str, reqs) -> str:
 
 
 def bench_query(root: Path, per_joint: int, n_warm: int, n_cold: int, old_rev: str | None) -> None:
-    from jointdb.store._nearest import Reader, Selection, current_candidates
-
     db = root / f"q-{per_joint}.sqlite"
     repo = Repository(db)
     t0 = time.perf_counter()
@@ -154,13 +152,7 @@ def bench_query(root: Path, per_joint: int, n_warm: int, n_cold: int, old_rev: s
     t_fill = time.perf_counter() - t0
     reqs = requests(n_warm)
     timed_nearest(repo, reqs[0])  # fills this process's cache
-    raw = repo.read_engine.raw_connection()
-    try:
-        reader = Reader(raw, "sqlite")
-        with reader.snapshot():
-            cand = current_candidates(reader, repo.url, Selection("tool-holder"), ["diameter_m"])
-    finally:
-        raw.close()
+    cand = candidate_arrays(repo)
     warm, ref = [], []
     for req in reqs:  # interleaved: both see the same machine load
         warm.append(timed_nearest(repo, req)[0])

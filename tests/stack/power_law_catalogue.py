@@ -4,12 +4,16 @@ five torques on one frequency grid."""
 
 from __future__ import annotations
 
+import json
+from pathlib import Path
+
 import numpy as np
 
 from jointdb.coupling import spring_damper_joint
 from jointdb.store import Conditions, Provenance, Repository
 
 TORQUES = (30.0, 50.0, 80.0, 130.0, 200.0)
+STACK = Path(__file__).resolve().parents[2] / "fixtures" / "stacks" / "endmill-modelled-spindle.json"
 F = np.linspace(20.0, 6000.0, 300)
 
 
@@ -27,3 +31,16 @@ def catalogue_power_law(db) -> None:
             repo.catalogue(f"th-{t:03.0f}", "tool-holder", spring_damper_joint(F, k, c, ["3x", "3ry"]),
                            Conditions(("tungsten-carbide", "steel"), torque_nm=t), "spring-damper-planar",
                            Provenance(method="output-error-planar"))
+
+
+def spec_at(d: Path, torque: float, joint):
+    """The end-mill stack of :data:`STACK` with ``joint`` as its tool–holder interface, on a 20–6000 Hz grid,
+    written to ``d / stack-<torque>.json`` and loaded."""
+    from jointdb import usecases
+
+    doc = json.loads(STACK.read_text())
+    doc["interfaces"]["tool-holder"] = joint
+    doc["frequency"] = {"min": 20, "max": 6000, "step": 10}
+    path = d / f"stack-{torque:g}.json"
+    path.write_text(json.dumps(doc))
+    return usecases.load_stack(path)

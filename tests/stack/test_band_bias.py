@@ -10,17 +10,11 @@ explicit k, c) gives the true tip.
 
 from __future__ import annotations
 
-import json
-from pathlib import Path
-
 import numpy as np
 import pytest
 
 from jointdb.store import Repository
-from power_law_catalogue import F, catalogue_power_law, law
-
-ROOT = Path(__file__).resolve().parents[2]
-STACK = ROOT / "fixtures" / "stacks" / "endmill-modelled-spindle.json"
+from power_law_catalogue import F, catalogue_power_law, law, spec_at
 
 
 @pytest.fixture(scope="module")
@@ -29,17 +23,6 @@ def catalogue(tmp_path_factory):
     db = d / "j.sqlite"
     catalogue_power_law(db)
     return d, db
-
-
-def _spec(d: Path, torque: float, joint):
-    from jointdb import usecases
-
-    doc = json.loads(STACK.read_text())
-    doc["interfaces"]["tool-holder"] = joint
-    doc["frequency"] = {"min": 20, "max": 6000, "step": 10}
-    path = d / f"stack-{torque:g}.json"
-    path.write_text(json.dumps(doc))
-    return usecases.load_stack(path)
 
 
 def _query(torque: float) -> dict:
@@ -57,7 +40,7 @@ def test_the_shift_is_the_signed_interpolation_error_to_second_order(catalogue, 
 
     monkeypatch.setattr(sb, "LINE_BIAS", 1.0)
     d, db = catalogue
-    res = usecases.predict_stack(_spec(d, torque, _query(torque)), str(db)).joints["tool-holder"]
+    res = usecases.predict_stack(spec_at(d, torque, _query(torque)), str(db)).joints["tool-holder"]
     rel, scale, group, shift = sb._with_bias(res, res.choice_perturbations(F))
     assert set(group) == {0} and np.all(shift > 0)
     k_hat = np.linalg.inv(res.frf.resample(F).values)[0, 0, 0].real
@@ -77,7 +60,7 @@ def test_single_joints_left_out_carry_no_shift(catalogue, monkeypatch):
     d, db = catalogue
     q = _query(65.0)
     q["query"]["interpolate"] = False
-    res = usecases.predict_stack(_spec(d, 65.0, q), str(db)).joints["tool-holder"]
+    res = usecases.predict_stack(spec_at(d, 65.0, q), str(db)).joints["tool-holder"]
     assert res.method == "nearest"
     _, scale, _, shift = sb._with_bias(res, res.choice_perturbations(F))
     assert np.all(scale > 0) and np.all(shift == 0)
@@ -91,9 +74,9 @@ def test_the_biased_band_is_centred_nearer_the_true_tip(catalogue, monkeypatch):
 
     monkeypatch.setattr(sb, "LINE_BIAS", 1.0)
     d, db = catalogue
-    result = usecases.predict_stack(_spec(d, 65.0, _query(65.0)), str(db))
+    result = usecases.predict_stack(spec_at(d, 65.0, _query(65.0)), str(db))
     k, c = law(65.0)
-    truth = usecases.predict_stack(_spec(d, 65.0, {"k": k, "c": c}), str(db)).prediction
+    truth = usecases.predict_stack(spec_at(d, 65.0, {"k": k, "c": c}), str(db)).prediction
     true_peak = np.abs(truth.tip.values[:, 0, 0]).max()
     nominal = np.abs(result.prediction.tip.values[:, 0, 0]).max()
     band, _ = sb.prediction_band(result, n=300, seed=5, terms=("joint choice",))

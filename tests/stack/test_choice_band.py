@@ -9,16 +9,12 @@ ln T of T^0.5 over the doubled spacing, computed here independently.
 from __future__ import annotations
 
 import json
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 from jointdb.store import Conditions, Repository
-from power_law_catalogue import TORQUES, catalogue_power_law, law
-
-ROOT = Path(__file__).resolve().parents[2]
-STACK = ROOT / "fixtures" / "stacks" / "endmill-modelled-spindle.json"
+from power_law_catalogue import TORQUES, catalogue_power_law, law, spec_at
 
 
 @pytest.fixture(scope="module")
@@ -27,17 +23,6 @@ def catalogue(tmp_path_factory):
     db = d / "j.sqlite"
     catalogue_power_law(db)
     return d, db
-
-
-def spec_at(d: Path, torque: float, joint):
-    from jointdb import usecases
-
-    doc = json.loads(STACK.read_text())
-    doc["interfaces"]["tool-holder"] = joint
-    doc["frequency"] = {"min": 20, "max": 6000, "step": 10}
-    path = d / f"stack-{torque:g}.json"
-    path.write_text(json.dumps(doc))
-    return usecases.load_stack(path)
 
 
 def test_leave_one_out_error_of_an_interior_joint_is_the_interpolation_error(catalogue):
