@@ -50,7 +50,7 @@ class Candidates:
     materials: list[str]  # distinct JSON texts of sorted material lists
     materials_index: np.ndarray  # per candidate, index into ``materials``
     geometry: dict[str, np.ndarray] = field(default_factory=dict)
-    #: values derived from the arrays alone, kept by the ranking (:func:`jointdb.store._nearest.rank`)
+    #: values derived from the arrays alone, kept by the ranking (:func:`jointdb.store._rank.rank`)
     memo: dict = field(default_factory=dict, repr=False, compare=False)
 
     @classmethod

@@ -170,7 +170,8 @@ def _candidates(pool: Sequence[Match], keys: Sequence[str]) -> Candidates:
 def pool_distances(pool: Sequence[Match], request: Conditions) -> list[Match]:
     """The pool re-ranked against ``request`` with the query distance computed over the pool itself
     (same spread normalisation for the request and every left-out joint). Order as given."""
-    from jointdb.store._nearest import rank, unvaried_machine_conditions
+    from jointdb.store._nearest import unvaried_machine_conditions
+    from jointdb.store._rank import rank
 
     cand = _candidates(pool, list(request.geometry))
     with warnings.catch_warnings():

@@ -22,7 +22,8 @@ from store_helpers import spring_joint
 
 from jointdb.errors import InputError, NotFoundError
 from jointdb.store import Conditions, OutsideCatalogueWarning
-from jointdb.store._nearest import Selection, rank
+from jointdb.store._nearest import Selection
+from jointdb.store._rank import rank
 from jointdb.store._query import candidates_from_history
 
 TORQUES = (10.0, 20.0, 20.0, 40.0, None, 80.0)  # 20 twice: ties
