@@ -16,7 +16,7 @@ from typing import Annotated, Any, Optional
 
 import typer
 
-from jointdb.cli._store import DbOpt
+from jointdb.cli._target import DbOpt
 from jointdb.errors import InputError
 
 CAMPAIGN_HELP = "Scaffold a measurement campaign from a folder of files, or check one."
@@ -179,11 +179,11 @@ def _substructure_a(folder: Path, force: bool, db, **given):
     if missing:
         raise InputError(f"{', '.join(missing)}: substructure A from catalogued parts needs "
                          + ", ".join(flags.values()))
-    from jointdb.cli._store import _repo
+    from jointdb.cli._target import open_repo
     from jointdb.usecases._substructure_a import through_joint_choice, write_substructure_a
 
     given["through_joint"] = through_joint_choice(given["through_joint"])
-    with _repo(db) as repo:
+    with open_repo(db) as repo:
         return write_substructure_a(folder, force=force, store=repo, **given)
 
 

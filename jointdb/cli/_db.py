@@ -1,7 +1,7 @@
 """CLI for database administration: ``db upgrade | downgrade | check | gc | audit | info``.
 
-Thin like :mod:`jointdb.cli._store`, whose ``--db``/``--blobs``/``--json`` options
-and repository opening it shares.
+Thin like :mod:`jointdb.cli._store`; the ``--db``/``--blobs``/``--json`` options and the repository
+opening are :mod:`jointdb.cli._target`'s.
 """
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ from typing import Annotated, Optional
 import typer
 
 from jointdb.cli._output import emit, message
-from jointdb.cli._store import BlobsOpt, DbOpt, JsonOpt, _repo, check_db_target
+from jointdb.cli._target import BlobsOpt, DbOpt, JsonOpt, check_db_target, open_repo
 from jointdb.errors import InputError, IntegrityError
 
 YesOpt = Annotated[bool, typer.Option("--yes", help="Confirm an operation that removes data or guards.")]
@@ -140,7 +140,7 @@ def db_check(
         verified, signer = parse_checkpoint(read_checkpoint_file(checkpoint), keys)
         message(f"checkpoint: {verified['tree_size']} entries at {verified['time']}, signature verified "
                 f"({'trusted key' if keys else 'key named in the checkpoint'} {signer})")
-    report = check(_repo(db, blobs), verify_blobs=not quick, checkpoint=verified)
+    report = check(open_repo(db, blobs), verify_blobs=not quick, checkpoint=verified)
     data = {"ok": report.ok, "versions_checked": report.versions_checked, "blobs_checked": report.blobs_checked,
             "problems": list(report.problems), "orphan_blobs": len(report.orphan_blobs),
             "temporaries": len(report.temporaries), "notes": list(report.notes)}
@@ -171,7 +171,7 @@ def db_checkpoint(
     from jointdb.store._signing import load_private_key
 
     key = load_private_key(sign)
-    with snapshot(_repo(db, blobs)) as s:
+    with snapshot(open_repo(db, blobs)) as s:
         cp = signed_checkpoint(s.connection(), key)
     text = json.dumps(cp, indent=1) + "\n"
     if out is None:
@@ -198,7 +198,7 @@ def db_gc(
         raise InputError(f"--min-age must be >= 0 seconds, got {min_age:g}")
     if not dry_run and not yes:
         raise InputError("db gc deletes unreferenced blob files; look first with --dry-run, then add --yes")
-    removed = _repo(db, blobs).gc(min_age_s=min_age, dry_run=dry_run)
+    removed = open_repo(db, blobs).gc(min_age_s=min_age, dry_run=dry_run)
     if as_json:  # always a list for machines (empty when nothing was removed)
         emit([{"removed" if not dry_run else "would_remove": r} for r in removed], as_json=True)
     else:
@@ -214,7 +214,7 @@ def db_audit(
     """The append-only audit log: who catalogued, labelled, deprecated, imported what. Example: jointdb db audit --joint T1"""
     if limit < 1:
         raise InputError(f"--limit must be >= 1, got {limit}")
-    rows = _repo(db, blobs).audit(joint, limit)
+    rows = open_repo(db, blobs).audit(joint, limit)
     if not as_json:
         rows = [{**r, "details": json.dumps(r["details"], default=str)} for r in rows]
     emit(rows, as_json=as_json, title="audit log", columns=["at", "actor", "action", "joint", "version", "details"])
@@ -224,7 +224,7 @@ def db_info(db: DbOpt = None, blobs: BlobsOpt = None, as_json: JsonOpt = False) 
     """Where the database and blobs are, and the schema revision. Example: jointdb db info"""
     from jointdb.store import current_revision, head_revision
 
-    repo = _repo(db, blobs)
+    repo = open_repo(db, blobs)
     from jointdb.store._db import safe_url
 
     emit({"database": safe_url(repo.url), "blobs": str(repo.blobs.root), "revision": current_revision(repo.url),

@@ -82,7 +82,7 @@ def optimize(
     Example: jointdb optimize fixtures/optimize/optimize-catalogue.json --db demo-out/joints.sqlite --out opt
     """
     from jointdb.cli._output import emit, message, progress_line
-    from jointdb.cli._store import check_db_target
+    from jointdb.cli._target import check_db_target
     from jointdb.errors import InputError
     from jointdb.store import Repository
     from jointdb.usecases import load_problem, optimize_stack

@@ -12,7 +12,7 @@ from typing import Annotated, Any, Optional
 import typer
 
 from jointdb.cli._output import emit, message
-from jointdb.cli._store import BlobsOpt, DbOpt, JsonOpt, _repo
+from jointdb.cli._target import BlobsOpt, DbOpt, JsonOpt, open_repo
 
 KINDS_HELP = "spindle, holder or tool"
 
@@ -61,7 +61,7 @@ def parts_add(
     attributes = {k: v for k, v in (("machine", machine), ("family", family), ("taper", taper),
                                     ("bore_mm", bore_mm), ("description", description)) if v is not None}
     part = part_from_files(kind, model=model, point=point, frf=frf, node=node, from_stack=from_stack, file=file)
-    with _repo(db, blobs, create=True) as r:
+    with open_repo(db, blobs, create=True) as r:
         before = {p.version for p in _history_or_empty(r, name)}
         pv = r.add_part(name, kind, part.payload, frf=part.frf, attributes=attributes,
                         provenance=part.provenance, author=author, label=label)
@@ -88,7 +88,7 @@ def parts_list(
 
     Example: jointdb parts list --kind holder
     """
-    with _repo(db) as r:
+    with open_repo(db) as r:
         items = r.list_parts(kind, family=family, machine=machine)
     if as_json:
         emit([p.to_dict() for p in items], as_json=True)
@@ -104,7 +104,7 @@ def parts_show(
 
     Example: jointdb parts show er32-hsk63@1 --json
     """
-    with _repo(db) as r:
+    with open_repo(db) as r:
         versions = [r.resolve_part(ref)] if "@" in ref else r.part_history(ref)
     if as_json:
         emit(versions[0].to_dict() if "@" in ref else [v.to_dict() for v in versions], as_json=True)
@@ -127,7 +127,7 @@ def parts_label(
     name, version = parse_part_ref(ref)
     if not isinstance(version, int):
         raise InputError(f"{ref!r}: label a version number, NAME@VERSION")
-    with _repo(db) as r:
+    with open_repo(db) as r:
         pv = r.label_part(name, version, label)
     message(f"{label} -> {pv.ref}")
     emit(pv.to_dict() if as_json else [_row(pv)], as_json=as_json)

@@ -42,9 +42,9 @@ def _load_stack(stack_file: Path, db: str | None):
 
     if not usecases.part_refs(read_json_file(stack_file, "stack file")):
         return usecases.load_stack(stack_file)
-    from jointdb.cli._store import _repo
+    from jointdb.cli._target import open_repo
 
-    with _repo(db) as store:
+    with open_repo(db) as store:
         spec = usecases.load_stack(stack_file, store)
     for used in spec.parts:
         message(f"{used['slot']}: part {used['part']}" + (f" ({used['ref']})" if used["ref"] != used["part"] else ""))
@@ -114,16 +114,16 @@ def predict(
         usecases.frf_format(out, "--out")
     spec = _load_stack(stack_file, db)
     freq = _frequency_override(spec, fmin, fmax, df)
-    from jointdb.cli._store import check_db_target
+    from jointdb.cli._target import check_db_target
 
     source = db
     if any(j.kind in ("catalogued", "query") for j in spec.interfaces.values()):  # only then is a db read
         import os
 
         if db is None and os.environ.get("JOINTDB_SERVER"):  # jointdb --server URL: joints read over HTTP
-            from jointdb.cli._store import _repo
+            from jointdb.cli._target import open_repo
 
-            source = _repo(None)
+            source = open_repo(None)
         else:
             check_db_target(db)  # after every option is checked; a mistyped --db is not found, not created empty
     result = usecases.predict_stack(spec, source, freq)

@@ -9,7 +9,7 @@ from typing import Annotated, Optional
 import typer
 
 from jointdb.cli._output import emit, message
-from jointdb.cli._store import BlobsOpt, DbOpt, JsonOpt, _repo, check_db_target
+from jointdb.cli._target import BlobsOpt, DbOpt, JsonOpt, check_db_target, open_repo
 from jointdb.errors import InputError
 
 
@@ -110,7 +110,7 @@ def tokens_create(
     from jointdb.store._tokens import check_owner, check_role, check_team, create_token, parse_expiry
 
     check_owner(name), check_role(role), check_team(team), parse_expiry(expires)  # before the database is opened
-    token, info = create_token(_repo(db, blobs), name, role, expires, team=team)
+    token, info = create_token(open_repo(db, blobs), name, role, expires, team=team)
     message("store this token now: it is not shown again")
     emit({"token": token, **info.to_dict()}, as_json=as_json)
 
@@ -119,7 +119,7 @@ def tokens_list(db: DbOpt = None, blobs: BlobsOpt = None, as_json: JsonOpt = Fal
     """List tokens: id, owner, role, status, expiry (never the token)."""
     from jointdb.store._tokens import list_tokens
 
-    emit([t.to_dict() for t in list_tokens(_repo(db, blobs))], as_json=as_json, title="tokens",
+    emit([t.to_dict() for t in list_tokens(open_repo(db, blobs))], as_json=as_json, title="tokens",
          columns=["token_id", "name", "role", "team", "status", "created_at", "expires_at"])
 
 
@@ -130,7 +130,7 @@ def tokens_revoke(
     """Revoke a token at once (every worker refuses it on its next request)."""
     from jointdb.store._tokens import revoke_token
 
-    emit(revoke_token(_repo(db, blobs), token_id).to_dict(), as_json=as_json)
+    emit(revoke_token(open_repo(db, blobs), token_id).to_dict(), as_json=as_json)
 
 
 def register(app: typer.Typer) -> None:

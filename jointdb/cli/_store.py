@@ -15,80 +15,8 @@ from typing import Annotated, Any, Optional
 import typer
 
 from jointdb.cli._output import emit, message
+from jointdb.cli._target import BlobsOpt, DbOpt, JsonOpt, open_local_repo, open_repo, refuse_server
 from jointdb.errors import InputError, IntegrityError, NotFoundError
-
-DbOpt = Annotated[
-    Optional[str],
-    typer.Option("--db", help="Database URL or SQLite file (default: $JOINTDB_URL or the per-user database)."),
-]
-JsonOpt = Annotated[bool, typer.Option("--json", help="Write JSON to stdout instead of a table.")]
-BlobsOpt = Annotated[
-    Optional[Path], typer.Option("--blobs", help="Blob directory, or 'database' to keep blobs in the database (default: $JOINTDB_BLOBS or beside the SQLite file).")
-]
-
-
-def check_db_target(db: str | None, create: bool = False) -> None:
-    """Refuse an unusable SQLite ``--db``/``$JOINTDB_URL`` before anything is opened or created.
-
-    A directory, an empty (0-byte) or non-SQLite file is refused (InputError);
-    a missing file is NotFoundError unless ``create`` (``catalogue``,
-    ``joints import``, ``db upgrade``), and even then its directory must exist
-    (the per-user default directory is created).
-
-    Raises
-    ------
-    NotFoundError, InputError
-    """
-    import os
-
-    from jointdb.store._db import check_sqlite_file, is_sqlite, resolve_url, sqlite_path
-
-    given = db if db is not None else os.environ.get("JOINTDB_URL")
-    url = resolve_url(given)
-    if not is_sqlite(url):
-        return
-    path = sqlite_path(url)
-    if check_sqlite_file(path):
-        return
-    if not create:
-        raise NotFoundError(f"database {path} does not exist (`jointdb catalogue`, `jointdb joints import` "
-                            "or `jointdb db upgrade` creates it)")
-    if given and not path.parent.is_dir():
-        raise InputError(f"database {path}: directory {path.parent} does not exist")
-
-
-def _repo(db: str | None, blobs: Path | None = None, *, create: bool = False):
-    """The repository of ``--db``; only writing commands (``create``) may create a new SQLite file.
-
-    Without ``--db``, a server named by ``jointdb --server URL`` / ``$JOINTDB_SERVER`` is used
-    instead (token from ``$JOINTDB_TOKEN``): :class:`jointdb.client.RemoteRepository`.
-    """
-    import os
-
-    if db is None and os.environ.get("JOINTDB_SERVER"):
-        from jointdb.client import RemoteRepository
-
-        return RemoteRepository(os.environ["JOINTDB_SERVER"], os.environ.get("JOINTDB_TOKEN") or None)
-    from jointdb.store import Repository
-
-    check_db_target(db, create)
-    return Repository(db, blobs=blobs, auto_create=None if create else False)
-
-
-def refuse_server(db: str | None, command: str) -> None:
-    """A command that needs the database itself says so over ``--server`` (instead of using a local one)."""
-    import os
-
-    if db is None and os.environ.get("JOINTDB_SERVER"):
-        raise InputError(f"`jointdb {command}` does not work over --server (the API has no such call); "
-                         "give --db URL (run it where the database is)")
-
-
-def _local_repo(db: str | None, blobs: Path | None, command: str, *, create: bool = False):
-    """:func:`_repo` for a command that needs the database itself: refused over ``--server``."""
-    refuse_server(db, command)
-    return _repo(db, blobs, create=create)
-
 
 def _check_output(path: Path | None) -> None:
     """Refuse an output file whose directory does not exist before any work (or warning) is done."""
@@ -224,7 +152,7 @@ def catalogue(
         label = check_label(label)
     if parent is not None and parent < 1:
         raise InputError(f"--parent must be a version number >= 1, got {parent}")
-    repo = _repo(db, blobs, create=True)
+    repo = open_repo(db, blobs, create=True)
     jv, created = repo.catalogue_outcome(name, parent=parent, author=author, label=label, force=force,
                                          allow_identical=allow_identical, **args)
     if not created:
@@ -273,7 +201,7 @@ def query(
     fast = interpolate is None and at is None and not remote
     light = sqlite_target(db) if fast else None
     pg = postgres_target(db) if fast and light is None else None
-    repo = None if light is not None or pg is not None else _repo(db, blobs)
+    repo = None if light is not None or pg is not None else open_repo(db, blobs)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         if light is not None:  # a SQLite file: rank without loading SQLAlchemy (fast start)
@@ -328,7 +256,7 @@ def list_(
 ) -> None:
     """List joints with their current version. Example: jointdb joints list --type tool-holder"""
     damaged: list = []
-    emit([_version_row(v) for v in _repo(db, blobs).list_joints(joint_type, damaged=damaged)], as_json=as_json,
+    emit([_version_row(v) for v in open_repo(db, blobs).list_joints(joint_type, damaged=damaged)], as_json=as_json,
          title="joints", columns=["name", "type", "version", "state", "materials", "torque_nm"])
     _refuse_damaged(damaged)
 
@@ -343,7 +271,7 @@ def show(
 ) -> None:
     """Show one version (latest, pinned, at a time, or by label). Example: jointdb joints show T1 --version 2"""
     _check_output(frf_out)
-    repo = _repo(db, blobs)
+    repo = open_repo(db, blobs)
     jv = repo.get(name, version=version, at=at, label=label)
     if frf_out is not None:
         from jointdb.usecases import write_joint_file
@@ -371,7 +299,7 @@ def history(name: Annotated[str, typer.Argument(help="Joint name.")],
             db: DbOpt = None, blobs: BlobsOpt = None, as_json: JsonOpt = False) -> None:
     """All versions of a joint, oldest first. Example: jointdb joints history T1"""
     damaged: list = []
-    emit([_version_row(v) for v in _repo(db, blobs).history(name, damaged=damaged)], as_json=as_json,
+    emit([_version_row(v) for v in open_repo(db, blobs).history(name, damaged=damaged)], as_json=as_json,
          title=f"history of {name}", columns=_TABLE + ["created_at"])
     _refuse_damaged(damaged)
 
@@ -387,7 +315,7 @@ def diff(
 
     Example: jointdb joints diff T1 1 2
     """
-    d = _repo(db, blobs).diff(name, version_a, version_b, other)
+    d = open_repo(db, blobs).diff(name, version_a, version_b, other)
     if as_json:
         emit(d, as_json=True)
         return
@@ -406,7 +334,7 @@ def label_(
     db: DbOpt = None, blobs: BlobsOpt = None, as_json: JsonOpt = False,
 ) -> None:
     """Point a label at a version (create or move it). Example: jointdb joints label T1 2 released"""
-    jv = _repo(db, blobs).label(name, version, label, author=author)
+    jv = open_repo(db, blobs).label(name, version, label, author=author)
     emit({k: v for k, v in _version_row(jv).items() if k in _TABLE}, as_json=as_json)
 
 
@@ -419,7 +347,7 @@ def deprecate(
     db: DbOpt = None, blobs: BlobsOpt = None, as_json: JsonOpt = False,
 ) -> None:
     """Deprecate a joint or version (nothing is deleted). Example: jointdb joints deprecate T1 --version 1 --reason 'loose bolt'"""
-    hist = _repo(db, blobs).deprecate(name, version, reason=reason, author=author, undo=undo)
+    hist = open_repo(db, blobs).deprecate(name, version, reason=reason, author=author, undo=undo)
     emit([_version_row(v) for v in hist], as_json=as_json, title=f"history of {name}", columns=_TABLE)
 
 
@@ -438,7 +366,7 @@ def export(
         from jointdb.store._signing import load_private_key
 
         key = load_private_key(sign)  # before anything is read or written
-    counts = _local_repo(db, blobs, "joints export").export(names or None, bundle, sign_key=key)
+    counts = open_local_repo(db, blobs, "joints export").export(names or None, bundle, sign_key=key)
     emit({"bundle": str(bundle), **counts}, as_json=as_json)
 
 
@@ -467,7 +395,7 @@ def import_(
     refuse_server(db, "joints import")
     check_db_target(db, create=True)  # a bad --db is reported before the bundle is read
     verified = read_bundle(bundle, keys, require_signature)
-    summary = _repo(db, blobs, create=True).import_(verified, author=author, force=force)
+    summary = open_repo(db, blobs, create=True).import_(verified, author=author, force=force)
     for note in verified.notes:  # after the import: a refusal stays one line
         message(note)
     summary["labels_skipped"] = ", ".join(summary["labels_skipped"]) or None

@@ -6,7 +6,7 @@ from typing import Annotated, Optional
 
 import typer
 
-from jointdb.cli._store import BlobsOpt, DbOpt
+from jointdb.cli._target import BlobsOpt, DbOpt
 from jointdb.errors import InputError
 
 
@@ -37,13 +37,13 @@ def worker(
 
     Example: jointdb worker --db postgresql+psycopg://jointdb_app@dbhost/jointdb --blobs database --concurrency 2
     """
-    from jointdb.cli._store import _repo
+    from jointdb.cli._target import open_repo
 
     if not 1 <= concurrency <= 64:
         raise InputError(f"--concurrency must be 1..64, got {concurrency}")
     if not (0 < heartbeat < stalled_after):
         raise InputError("need 0 < --heartbeat < --stalled-after (seconds)")
-    repo = _repo(db, blobs)
+    repo = open_repo(db, blobs)
     if getattr(repo, "write_engine", None) is None or repo.write_engine.dialect.name != "postgresql":
         raise InputError("jointdb worker runs the PostgreSQL job queue; on SQLite `jointdb serve` runs its jobs "
                          "itself (give --db postgresql+psycopg://...)")
