@@ -58,7 +58,8 @@ def list_joints(
     r=Depends(repo), _who=reader,
 ) -> JSONResponse:
     """One page, by joint name, in one SQL statement that reads O(page) index rows. Continue with
-    ``after=<next>`` (keyset) or ``offset=<next_offset>``; ``damaged`` lists versions of this page
+    ``after=<next>`` (keyset) or ``offset=<next_offset>`` (given only to a page asked for without
+    ``after``: an offset counts from the start of the list); ``damaged`` lists versions of this page
     whose stored rows are damaged (left out of ``items``). ``total``: the matches when the listing
     started — read from maintained counts without a filter (or with only type / state), else
     counted on the first page and carried in ``next`` (see docs/service.md)."""
@@ -67,10 +68,12 @@ def list_joints(
                         torque_max=torque_max, preload_min=preload_min, preload_max=preload_max,
                         name_contains=q or None, after=after, offset=page.offset, limit=page.limit)
     shown = len(found.items) + len(found.damaged)
+    # an offset counts from the start of the list; after a cursor it would not, so only `next` continues
+    next_offset = page.offset + shown if found.next and after is None else None
     # plain JSON already (version_json): encoded directly, without FastAPI's generic re-encoding pass
     return JSONResponse({"items": [version_json(v) for v in found.items], "total": found.total,
                          "offset": page.offset, "limit": page.limit,
-                         "next_offset": page.offset + shown if found.next else None, "next": found.next,
+                         "next_offset": next_offset, "next": found.next,
                          "damaged": damaged_json(found.damaged)})
 
 

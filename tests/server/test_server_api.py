@@ -30,6 +30,10 @@ def test_reads_and_pagination(catalogued):
         assert page["total"] == 3 and len(page["items"]) == 2 and page["next_offset"] == 2
         rest = c.get("/api/v1/joints", params={"limit": 2, "offset": 2}).json()
         assert [j["name"] for j in page["items"] + rest["items"]] == ["TH-0", "TH-1", "TH-2"]
+        # after a cursor only the cursor continues: an offset would count from the start of the list
+        one = c.get("/api/v1/joints", params={"limit": 1}).json()
+        two = c.get("/api/v1/joints", params={"limit": 1, "after": one["next"]}).json()
+        assert [j["name"] for j in two["items"]] == ["TH-1"] and two["next"] and two["next_offset"] is None
         f = c.get("/api/v1/joints", params={"torque_min": 30, "torque_max": 70, "material": "carbide"}).json()
         assert [j["name"] for j in f["items"]] == ["TH-1", "TH-2"]
         assert c.get("/api/v1/joints/TH-0").json()["version"] == 2
