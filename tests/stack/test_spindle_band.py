@@ -1,0 +1,108 @@
+"""The band's spindle-estimate term (issue 22 item 1): a spindle estimated from extension-bar taps.
+
+Known answers: a modelled spindle (the fixture stack's shaft on two bearing sets) is the truth; a Ø40 × 100 mm
+bar fixed to its nose is tapped at 50 and 100 mm (the exact coupled assembly, then seeded relative complex noise);
+the extension method recovers the spindle exactly from noise-free taps, so the term must vanish there, and with
+noisy taps the band of the tip peak must contain the tip peak of the *exact* spindle about as often as it says.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from jointdb.coupling import Interface, couple, rotations_by_extension
+from jointdb.fe import BeamModel, HystereticDamping, NamedPoint, Segment
+from jointdb.stack import MeasuredSpindle, predict_tool_tip, prediction_grid, stack_from_dict
+from jointdb.stack._band import tip_band
+from jointdb.stack._predict import spindle_model
+from jointdb.stack._spindle_band import SpindleEstimate, spindle_deviations, tap_noise_level
+
+ROOT = Path(__file__).resolve().parents[2]
+STACK = ROOT / "fixtures" / "stacks" / "endmill-modelled-spindle.json"
+NOISE = 0.0075  # the issue's campaigns' tap noise
+
+
+@pytest.fixture(scope="module")
+def setup():
+    spec = stack_from_dict(json.loads(STACK.read_text()))
+    f = prediction_grid(spec)
+    spindle = spindle_model(spec).frf(f, ["nose"], directions=("x", "ry"))  # node 5: the truth
+    bar = BeamModel(segments=(Segment(0.10, 0.04),),
+                    points=(NamedPoint("joint", 0.0, 10), NamedPoint("p1", 0.05, 11), NamedPoint("p2", 0.10, 12)),
+                    ingredients=(HystereticDamping(0.002),), max_element_length=0.005)
+    bar_frf = bar.frf(f)
+    taps = couple({"A": spindle, "E": bar_frf}, [Interface("A", ["5x", "5ry"], "E", ["10x", "10ry"])],
+                  [("E", "11x"), ("E", "12x")])
+    exact = spec.replace(spindle=MeasuredSpindle("spindle.uff", 5, spindle))
+    true_peak = float(np.abs(predict_tool_tip(exact, {}, f).tip.values[:, 0, 0]).max())
+    return spec, f, spindle, bar_frf, taps, true_peak
+
+
+def noisy(frf, level, seed):
+    rng = np.random.default_rng(seed)
+    z = (rng.standard_normal(frf.values.shape) + 1j * rng.standard_normal(frf.values.shape)) / np.sqrt(2)
+    return frf.replace(values=frf.values * (1 + level * z))
+
+
+def estimated(setup, taps, noise=None):
+    """The stack on the spindle the extension method estimates from ``taps``, with its estimate record."""
+    spec, _, _, bar_frf, _, _ = setup
+    h33, _ = rotations_by_extension(taps, bar_frf, 10, (11, 12), 5)
+    est = SpindleEstimate(taps, bar_frf, 10, (11, 12), noise)
+    return spec.replace(spindle=MeasuredSpindle("spindle.uff", 5, h33, estimate=est)), est, h33
+
+
+def test_tap_noise_level_recovers_the_seeded_level(setup):
+    taps = setup[4]
+    # ~4,800 real/imaginary parts: the median's standard error is ~2 %; the FRF's own curvature adds ~2 % at 0.2 %
+    for level in (0.002, NOISE, 0.02):
+        for seed in range(3):
+            assert tap_noise_level(noisy(taps, level, seed)) / level == pytest.approx(1.0, abs=0.08)
+    assert tap_noise_level(taps) < 1e-6  # noise-free: the fourth differences of a smooth FRF
+
+
+def test_noise_free_taps_give_a_zero_spindle_term(setup):
+    spec, f, spindle, _, taps, _ = setup
+    s, est, h33 = estimated(setup, taps)
+    assert np.max(np.abs(h33.values - spindle.values) / np.abs(spindle.values)) < 1e-6  # the estimate is exact
+    b = tip_band(s, {}, None, f, n=200, seed=1, spindle_estimate=est)
+    p = b.peak["x"]
+    assert (p[2] - p[0]) / 2 / p[1] < 1e-4  # against ~0.4 with 0.75 % noise on the taps (below)
+    zero = SpindleEstimate(taps, est.extension, 10, (11, 12), noise=0.0)
+    assert not np.any(spindle_deviations(zero, f, 5, np.random.default_rng(0)))
+    assert zero.noise_level() == (0.0, "stated") and est.noise_level()[1] == "estimated from the taps"
+
+
+def test_band_covers_the_exact_spindle_about_as_often_as_it_says(setup):
+    """40 independent noisy tap sets: where the exact spindle's tip peak falls among each band's samples.
+
+    Calibrated, that rank is uniform: inside the 5–95 % band on 90 % (binomial sd 4.7 % over 40: at least 31
+    of 40 within 3 sd) and inside the central 50 % on half (sd 7.9 %: 11 to 29 of 40)."""
+    _, f, _, _, taps, true_peak = setup
+    ranks, widths = [], []
+    for t in range(40):
+        s, est, _ = estimated(setup, noisy(taps, NOISE, 100 + t))
+        b = tip_band(s, {}, None, f, n=200, seed=t, spindle_estimate=est)
+        peaks = np.abs(b.tips["x"]).max(axis=1)
+        ranks.append(float(np.mean(peaks < true_peak)))
+        widths.append((b.peak["x"][2] - b.peak["x"][0]) / 2 / b.peak["x"][1])
+    ranks = np.array(ranks)
+    inside90 = int(np.sum((ranks >= 0.05) & (ranks <= 0.95)))
+    inside50 = int(np.sum((ranks >= 0.25) & (ranks <= 0.75)))
+    assert inside90 >= 31, (inside90, np.median(widths))
+    assert 11 <= inside50 <= 29, (inside50, np.median(widths))
+
+
+def test_a_noise_understated_tenfold_is_caught_by_the_coverage(setup):
+    """The coverage check has power: stating a tenth of the taps' real noise leaves the exact spindle outside."""
+    _, f, _, _, taps, true_peak = setup
+    inside = 0
+    for t in range(20):
+        s, est, _ = estimated(setup, noisy(taps, NOISE, 300 + t), noise=NOISE / 10)
+        p = tip_band(s, {}, None, f, n=200, seed=t, spindle_estimate=est).peak["x"]
+        inside += bool(p[0] <= true_peak <= p[2])
+    assert inside <= 10
