@@ -224,12 +224,11 @@ def band_terms(result, n: int = 200, seed: int = 0) -> BandTerms:
     full, notes = prediction_band(result, n, seed)
     widths = {"all": _half_widths(full)}
     zero = absent_terms(result)
-    if full is not None:
-        for term in TERMS:
-            if term in zero:
-                widths[term] = {}
-                continue
-            alone, _ = prediction_band(result, n, seed, terms=(term,))
-            widths[term] = _half_widths(alone)
+    for term in TERMS:
+        if term in zero or full is None:
+            widths[term] = {}
+            continue
+        alone, _ = prediction_band(result, n, seed, terms=(term,))
+        widths[term] = _half_widths(alone)
     notes += model_error(result.joints)[1]
     return BandTerms(full, tuple(notes), widths, zero)
