@@ -24,7 +24,7 @@ from jointdb.coupling._linalg import condition
 from jointdb.errors import InputError, NumericalError
 from jointdb.frf import FRF, Dof, Quantity
 
-__all__ = ["rotations_by_extension", "rotations_by_finite_difference", "extension_receptance"]
+__all__ = ["rotations_by_extension", "rotations_by_finite_difference"]
 
 
 def rotations_by_extension(

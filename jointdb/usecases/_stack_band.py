@@ -105,8 +105,12 @@ def model_error(joints) -> tuple[float, list[str]]:
 def _spindle_estimate(spec):
     """``(estimate or None, reason)``: the spindle's :class:`jointdb.stack._spindle_band.SpindleEstimate`, or
     None with the reason its term is 0."""
+    from jointdb.stack._spindle_band import SpindleEstimate
+
     est = getattr(spec.spindle, "estimate", None)
-    if est is None:
+    if isinstance(est, dict):
+        return None, "the spindle's extension-bar taps are named but were not read (load the stack from its file)"
+    if not isinstance(est, SpindleEstimate):
         return None, ("the spindle is taken as exact (a model, or a measured receptance that names no "
                       "extension-bar taps it was estimated from)")
     frf = getattr(spec.spindle, "frf", None)
