@@ -117,7 +117,11 @@ def _rows_table(rows: list[dict]) -> list[str]:
 def _summary_rows(seed, s: dict) -> list[str]:
     import _stack_truth_b as tb
 
-    status = "seen" if seed in tb.SEEN_SEEDS else "blind" if isinstance(seed, int) else ""
+    base = str(seed).split("+")[0]
+    status = ("" if not base.isdigit() else "seen" if int(base) in tb.SEEN_SEEDS else "blind")
+    if status and "+" in str(seed):
+        status += ", spindle estimated from taps"
+        seed = base
     out = []
     for key, label in (("peak", "dominant peak magnitude"), ("floor", "lobe floor")):
         q = s[key]
