@@ -78,23 +78,28 @@ def test_noise_free_taps_give_a_zero_spindle_term(setup):
 
 
 def test_band_covers_the_exact_spindle_about_as_often_as_it_says(setup):
-    """40 independent noisy tap sets: where the exact spindle's tip peak falls among each band's samples.
+    """40 independent noisy tap sets (0.75 %): does each band contain the tip of the *exact* spindle?
 
-    Calibrated, that rank is uniform: inside the 5–95 % band on 90 % (binomial sd 4.7 % over 40: at least 31
-    of 40 within 3 sd) and inside the central 50 % on half (sd 7.9 %: 11 to 29 of 40)."""
-    _, f, _, _, taps, true_peak = setup
-    ranks, widths = [], []
+    Per line, the 5–95 % band of |H| must contain the exact tip's |H| on 90 % of the lines and tap sets: the
+    200-sample percentiles put each tail's level within ±1.5 % (one standard error), so the mean over 40 × 599
+    lines lies within ±3 % of 90 % (measured: 89.2 %, per tap set 85–92 %). The dominant peak's band contains the
+    exact peak on ≥ 31 of 40 (binomial sd 4.7 % at 90 %: 3 sd; measured 37) — but not symmetrically: a per-line
+    estimate puts spikes on the tip FRF, which only ever raise its largest |H|, so the exact peak sits in the
+    lower part of the band (its rank among the samples has median ≈ 0.2, not 0.5)."""
+    spec, f, spindle, _, taps, true_peak = setup
+    exact = np.abs(predict_tool_tip(spec.replace(spindle=MeasuredSpindle("s.uff", 5, spindle)), {}, f)
+                   .tip.values[:, 0, 0])
+    per_line, ranks = [], []
     for t in range(40):
         s, est, _ = estimated(setup, noisy(taps, NOISE, 100 + t))
         b = tip_band(s, {}, None, f, n=200, seed=t, spindle_estimate=est)
-        peaks = np.abs(b.tips["x"]).max(axis=1)
-        ranks.append(float(np.mean(peaks < true_peak)))
-        widths.append((b.peak["x"][2] - b.peak["x"][0]) / 2 / b.peak["x"][1])
+        m = b.magnitude["x"]
+        per_line.append(np.mean((m[0] <= exact) & (exact <= m[2])))
+        ranks.append(float(np.mean(np.abs(b.tips["x"]).max(axis=1) < true_peak)))
+    assert np.mean(per_line) == pytest.approx(0.90, abs=0.03), np.mean(per_line)
     ranks = np.array(ranks)
-    inside90 = int(np.sum((ranks >= 0.05) & (ranks <= 0.95)))
-    inside50 = int(np.sum((ranks >= 0.25) & (ranks <= 0.75)))
-    assert inside90 >= 31, (inside90, np.median(widths))
-    assert 11 <= inside50 <= 29, (inside50, np.median(widths))
+    assert int(np.sum((ranks >= 0.05) & (ranks <= 0.95))) >= 31
+    assert np.median(ranks) < 0.5  # the documented skew (if this fails, the docs' wording must change too)
 
 
 def test_a_noise_understated_tenfold_is_caught_by_the_coverage(setup):
