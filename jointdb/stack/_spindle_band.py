@@ -71,8 +71,8 @@ def tap_noise_level(taps: FRF) -> float:
 
     A smooth FRF on a fine grid has small fourth differences ``Δ⁴G = G₋₂ − 4G₋₁ + 6G₀ − 4G₁ + G₂``;
     independent relative noise of level ε (each of the real and imaginary parts ε/√2 of |G|) gives them a
-    standard deviation ``ε √35 |G|`` per part. ``ε = √(2/70) · 1.4826 · median |Δ⁴G / G|`` over the parts, lines
-    and entries (the median keeps the few lines near sharp resonances, where the FRF itself curves, from
+    standard deviation ``ε √35 |G|`` per part. ``ε = √(2/70) · 1.4826 · median |Δ⁴G / G|`` over the parts,
+    lines and entries (the median keeps the few lines near sharp resonances, where the FRF itself curves, from
     counting; second differences would leave a curvature bias of ~25 % at 0.2 % noise).
 
     Parameters

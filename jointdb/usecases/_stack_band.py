@@ -22,7 +22,8 @@ import numpy as np
 
 from jointdb.errors import InputError
 
-__all__ = ["BandTerms", "prediction_band", "band_terms", "choice_perturbation", "TERMS", "LINE_BIAS"]
+__all__ = ["BandTerms", "prediction_band", "band_terms", "choice_perturbation", "model_error", "spindle_estimate",
+           "absent_terms", "TERMS", "LINE_BIAS"]
 
 #: The error terms a band can carry, in the order they are reported.
 TERMS = ("measurement noise", "joint choice", "spindle estimate", "substructure model", "prediction path")
@@ -102,9 +103,20 @@ def model_error(joints) -> tuple[float, list[str]]:
     return float(np.sqrt(total)), parts
 
 
-def _spindle_estimate(spec):
-    """``(estimate or None, reason)``: the spindle's :class:`jointdb.stack._spindle_band.SpindleEstimate`, or
-    None with the reason its term is 0."""
+def spindle_estimate(spec):
+    """The spindle's extension-bar estimate, if the band can sample it.
+
+    Parameters
+    ----------
+    spec
+        A :class:`jointdb.stack.StackSpec`.
+
+    Returns
+    -------
+    (SpindleEstimate or None, str)
+        The :class:`jointdb.stack._spindle_band.SpindleEstimate` and ``""``, or None and the reason the
+        spindle-estimate term is 0.
+    """
     from jointdb.stack._spindle_band import SpindleEstimate
 
     est = getattr(spec.spindle, "estimate", None)
@@ -129,7 +141,7 @@ def absent_terms(result) -> dict[str, str]:
         out["measurement noise"] = "no joint used carries a sampleable fit covariance"
     if not any(choice_perturbation(r, result.prediction.tip.freq) is not None for r in result.joints.values()):
         out["joint choice"] = "every joint is pinned, rigid, explicit or on a catalogued condition"
-    est, why = _spindle_estimate(result.spec)
+    est, why = spindle_estimate(result.spec)
     if est is None:
         out["spindle estimate"] = why
     if model_error(result.joints)[0] == 0:
@@ -174,7 +186,7 @@ def prediction_band(result, n: int = 200, seed: int = 0, terms=TERMS):
 
     unc, sigma, notes = _inputs(result, terms)
     tip_sigma = MODEL_FORM_SIGMA if "prediction path" in terms else 0.0
-    est = _spindle_estimate(result.spec)[0] if "spindle estimate" in terms else None
+    est = spindle_estimate(result.spec)[0] if "spindle estimate" in terms else None
     m_sigma = model_error(result.joints)[0] if "substructure model" in terms else 0.0
     queried = any(r.kind in ("query", "interpolated") for r in result.joints.values())
     if (not unc and not sigma and not queried and est is None and m_sigma == 0
