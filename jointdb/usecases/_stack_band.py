@@ -133,7 +133,18 @@ def spindle_estimate(spec):
 
 
 def absent_terms(result) -> dict[str, str]:
-    """Term → why it is 0 for this prediction (terms not named carry an error estimate)."""
+    """The terms that are 0 for a prediction, and why.
+
+    Parameters
+    ----------
+    result
+        A :class:`jointdb.usecases.StackPrediction`.
+
+    Returns
+    -------
+    dict[str, str]
+        Term (of :data:`TERMS`) → the reason it is 0; terms not named carry an error estimate.
+    """
     from jointdb.stack._band import sampleable_uncertainties
 
     out = {}
@@ -145,7 +156,10 @@ def absent_terms(result) -> dict[str, str]:
     if est is None:
         out["spindle estimate"] = why
     if model_error(result.joints)[0] == 0:
-        out["substructure model"] = "no campaign of the catalogued joints used recorded a validation assembly"
+        shown = any(e is not None for r in result.joints.values() for _, _, e in getattr(r, "validation_errors", ()))
+        out["substructure model"] = ("the validation assemblies of the joints used show no error at their dominant "
+                                     "peaks" if shown else
+                                     "no campaign of the catalogued joints used recorded a validation assembly")
     return out
 
 

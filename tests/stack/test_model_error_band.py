@@ -70,6 +70,8 @@ def _stack_result(joints_patch=None, repo=None, interfaces=None):
 def test_a_known_5_percent_model_error_gives_its_band_and_absent_is_zero_stated():
     plain = band_terms(_stack_result(), n=100)
     assert "validation assembly" in plain.zero["substructure model"] and plain.half_width["substructure model"] == {}
+    exact = band_terms(_stack_result({"tool-holder": (("th@1", 1.0, 0.0),)}), n=100)
+    assert "show no error" in exact.zero["substructure model"]  # a validation assembly met exactly: 0, said so
     five = _stack_result({"tool-holder": (("th@1", 1.0, 0.05),)})
     assert model_error(five.joints)[0] == pytest.approx(np.log(1.05))
     terms = band_terms(five, n=400)
