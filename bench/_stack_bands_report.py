@@ -91,9 +91,10 @@ FINDINGS = (
     "Blind seeds 7207 and 7208 (first drawn after the spindle-estimate and substructure-model terms were committed, "
     "calibration v4 unchanged), exact spindle: 7207 22 / 22 of 24 (peak / floor; half-width 2.3× / 1.5× the "
     "median error), 7208 24 / 22 (1.8× / 1.4×) — both goals met again. 7207's misses: S07-13 (Ø13 end mill, 49 mm, "
-    "60 N·m, 11.5 kN), +307 % peak against a ±117 % band whose lower edge is still +73 % — both joints "
-    "interpolated, no constant k, c fallback, the joint choice dominating: a prediction gone wrong on the per-line "
-    "joints that the passivity guard does not see, not yet looked into; S07-14 by 0.2 % of the peak; the floors of "
+    "60 N·m, 11.5 kN), +307 % peak against a ±117 % band whose lower edge is still +73 %: the prediction puts a "
+    "sharp (passive) mode at 4,990 Hz, the grid's last line but one, where the truth's mode lies above 5 kHz, and "
+    "that mode becomes the dominant one — a dominant-mode swap at the band edge (the truth's own peak, 2,540 Hz, "
+    "is not what is compared), not a band too narrow; S07-14 by 0.2 % of the peak; the floors of "
     "S07-14, S07-16, S08-05 and S08-24 by 1.4–4.2 % of the floor.",
     "The spindle estimated from extension-bar taps (same seeds, `--spindle-estimate`): the goals are **not** met. "
     "7207: 17 (71 %) peaks and 19 (79 %) floors of 24 inside (half-width 4.0× / 3.7× the median error); 7208: 16 "
