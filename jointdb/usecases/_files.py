@@ -156,7 +156,7 @@ def load_stack(path: Path | str, repo=None) -> StackSpec:
     sp = spec.spindle
     if isinstance(sp, MeasuredSpindle) and sp.frf is None:
         frf = read_frf_file(p.parent / sp.file)
-        est = spindle_estimate(p, sp.estimate) if isinstance(sp.estimate, dict) else sp.estimate
+        est = load_spindle_estimate(p, sp.estimate) if isinstance(sp.estimate, dict) else sp.estimate
         spec = spec.replace(spindle=MeasuredSpindle(sp.file, sp.node, frf, estimate=est))
     elif isinstance(sp, ModelledSpindle) and isinstance(sp.model, str):
         model = read_json_file(p.parent / sp.model, "spindle model file")
@@ -166,7 +166,7 @@ def load_stack(path: Path | str, repo=None) -> StackSpec:
 
 
 
-def spindle_estimate(stack_path: Path, desc: dict):
+def load_spindle_estimate(stack_path: Path, desc: dict):
     """The :class:`jointdb.stack._spindle_band.SpindleEstimate` a stack file's ``spindle.estimate`` describes.
 
     Parameters
