@@ -10,6 +10,8 @@ joint choice), and compares the band with the truth's dominant peak |H| and lobe
     python bench/bench_stack_bands.py --merge /tmp/72*.json --report docs/validation/stack-prediction.md
     # a quick look (≈ 3 min on a quiet machine, catalogue included):
     python bench/bench_stack_bands.py --n 3 --seeds 7205
+    # the spindle estimated from each stack's noisy extension-bar taps (issue 22 item 1):
+    python bench/bench_stack_bands.py --catalogue /tmp/b --seeds 7207 --spindle-estimate --rows-out /tmp/7207s.json
 
 The calibration factor (``jointdb.usecases._stack.CHOICE_CALIBRATION``) is set from the tuning seeds'
 coverage only; the reported seed's table is what it is. With ``--report`` the *Bands* section of the page
@@ -34,15 +36,23 @@ import _stack_truth_b as tb  # noqa: E402
 import _stack_validation as sv  # noqa: E402
 
 N_SAMPLES = 200
+#: Suffix of a seed's key when its stacks' spindle is estimated from extension-bar taps (``--spindle-estimate``).
+SPINDLE_TAG = "+spindle-estimate"
 
 
-def band_row(case, repo, n: int = N_SAMPLES) -> dict:
-    """Truth vs prediction and band for one stack: dominant peak |H| (x) and lobe floor."""
+def seed_key(k: str):
+    """A rows file's seed key: the seed as an int, or ``"7207+spindle-estimate"`` as it is."""
+    return int(k) if k.isdigit() else k
+
+
+def band_row(case, repo, n: int = N_SAMPLES, spindle_estimated: bool = False) -> dict:
+    """Truth vs prediction and band for one stack: dominant peak |H| (x) and lobe floor (``spindle_estimated``:
+    the prediction's spindle is its extension-bar estimate from the stack's own noisy taps)."""
     from jointdb import usecases
     from jointdb.usecases._stack_band import band_terms
 
     truth = tb.truth_tip(case).values[:, 0, 0]
-    result = usecases.predict_stack(tb.spec_for(case, tb.queries(case)), repo, tb.FREQ)
+    result = usecases.predict_stack(tb.spec_for(case, tb.queries(case), spindle_estimated), repo, tb.FREQ)
     terms = band_terms(result, n=n, seed=1)
     h = result.prediction.tip.values[:, 0, 0]
     _, at = sv._dominant(truth)
@@ -51,7 +61,8 @@ def band_row(case, repo, n: int = N_SAMPLES) -> dict:
            "pred_floor": sv._floor(h), "dominant_term": terms.dominant, "half_widths": terms.half_width,
            "methods": {k: r.method + (" (constant k, c fallback)" if any("constant k, c fit" in w for w in r.warnings)
                                       else "") for k, r in result.joints.items()},
-           "extrapolating": any(r.extrapolating for r in result.joints.values())}
+           "extrapolating": any(r.extrapolating for r in result.joints.values()),
+           "spindle_estimated": spindle_estimated}
     b = terms.band
     if b is None:
         row.update(peak_band=None, floor_band=None)
@@ -80,7 +91,7 @@ def summary(rows: list[dict]) -> dict:
     return out
 
 
-def run(n: int, samples: int, seeds, say=print, catalogue: Path | None = None) -> dict:
+def run(n: int, samples: int, seeds, say=print, catalogue: Path | None = None, spindle_estimated: bool = False) -> dict:
     """Build (or reuse, ``catalogue``: a folder kept between runs) the family-B catalogue and check the bands of
     ``n`` stacks per seed."""
     from jointdb.store import Repository
@@ -98,26 +109,27 @@ def run(n: int, samples: int, seeds, say=print, catalogue: Path | None = None) -
                 tb.build_catalogue(folder, repo, say=say)
             else:
                 say(f"catalogue of family B reused from {folder}")
-            out = _seeds(repo, n, samples, seeds, say)
+            out = _seeds(repo, n, samples, seeds, say, spindle_estimated)
     out["seconds"] = time.time() - t0
     out["load_average"] = list(os.getloadavg())
     say(f"{out['seconds']:.0f} s; load average at the end: {', '.join(f'{v:.2f}' for v in out['load_average'])}")
     return out
 
 
-def _seeds(repo, n: int, samples: int, seeds, say) -> dict:
+def _seeds(repo, n: int, samples: int, seeds, say, spindle_estimated: bool = False) -> dict:
     out = {}
     for seed in seeds:
         rows = []
         for case in tb.draw(n, seed):
-            rows.append(band_row(case, repo, samples))
+            rows.append(band_row(case, repo, samples, spindle_estimated))
             r = rows[-1]
             say(f"  {r['case']}: peak {r.get('peak_err', float('nan')):+.1%} band ±{r.get('peak_half', 0):.1%} "
                 f"{'in' if r.get('peak_covered') else 'OUT'}; floor {r.get('floor_err', float('nan')):+.1%} band "
                 f"±{r.get('floor_half', 0):.1%} {'in' if r.get('floor_covered') else 'OUT'}; "
                 f"dominant term: {r['dominant_term']}")
-        out[seed] = {"rows": rows, "summary": summary(rows)}
-        say(f"seed {seed}: {out[seed]['summary']}")
+        key = f"{seed}{SPINDLE_TAG}" if spindle_estimated else seed
+        out[key] = {"rows": rows, "summary": summary(rows)}
+        say(f"seed {key}: {out[key]['summary']}")
     return out
 
 
@@ -131,6 +143,9 @@ def main(argv=None) -> None:
                     help="folder to keep the family-B catalogue in and reuse on the next run (built if empty)")
     ap.add_argument("--seeds", type=int, nargs="*", default=None, help="these seeds instead (e.g. one per process)")
     ap.add_argument("--rows-out", type=Path, default=None, help="write this run's rows as JSON (to merge later)")
+    ap.add_argument("--spindle-estimate", action="store_true",
+                    help="predict with the spindle estimated from each stack's noisy extension-bar taps "
+                         "(bench/_stack_truth_b.py: estimated_spindle) instead of its exact receptance")
     ap.add_argument("--merge", type=Path, nargs="*", default=None,
                     help="write --report from these --rows-out files (seeds run in separate processes) instead")
     args = ap.parse_args(argv)
@@ -142,10 +157,11 @@ def main(argv=None) -> None:
             got = json.loads(part.read_text(encoding="utf-8"))
             res["seconds"] = max(res["seconds"], got.pop("seconds"))
             got.pop("load_average", None)
-            res.update({int(k): v for k, v in got.items()})
-        seeds = sorted(k for k in res if isinstance(k, int))
+            res.update({seed_key(k): v for k, v in got.items()})
+        seeds = sorted((k for k in res if k != "seconds"), key=str)
     else:
-        res = run(args.n, args.samples, seeds, catalogue=args.catalogue)
+        res = run(args.n, args.samples, seeds, catalogue=args.catalogue, spindle_estimated=args.spindle_estimate)
+        seeds = [f"{s}{SPINDLE_TAG}" if args.spindle_estimate else s for s in seeds]
     if args.rows_out is not None:
         args.rows_out.write_text(json.dumps({str(k): v for k, v in res.items()}, default=str) + "\n", encoding="utf-8")
     if args.report is not None and not args.tuning:

@@ -83,15 +83,11 @@ def rotations_by_extension(
     e = fetch("extension", E, j, pts)  # (nf, 2 [x0, θ0], 2 [force at 1, 2])
     he = fetch("extension", E, pts, pts)
     g = fetch("assembly", G, pts, pts)
-    m = he - g
-    m = 0.5 * (m + np.swapaxes(m, 1, 2))
     cond = condition(e)
     if np.all(~np.isfinite(cond)):
         raise NumericalError("the extension's joint-to-point receptances are singular at every line")
     try:
-        einv = np.linalg.inv(e)
-        s = np.swapaxes(einv, 1, 2) @ m @ einv
-        h33 = np.linalg.inv(s) - h00
+        h33 = extension_receptance(h00, e, he, g)
     except np.linalg.LinAlgError:
         bad = np.flatnonzero(~np.isfinite(cond))
         where = f" (e.g. {freq[bad[0]]:g} Hz)" if bad.size else ""
@@ -99,9 +95,37 @@ def rotations_by_extension(
             f"the extension equations are singular at some line{where}; choose measured points at "
             "other distances from the joint, or drop that line"
         ) from None
-    h33 = 0.5 * (h33 + np.swapaxes(h33, 1, 2))
     a = [Dof(a_point, t), Dof(a_point, r)]
     return FRF(freq, h33, a, a, Quantity.RECEPTANCE), cond
+
+
+def extension_receptance(h00: np.ndarray, e: np.ndarray, he: np.ndarray, g: np.ndarray) -> np.ndarray:
+    """The algebra of :func:`rotations_by_extension` on arrays, batched over any leading axes.
+
+    Parameters
+    ----------
+    h00
+        E's receptance at its joint point over (x, θ), ``(..., 2, 2)``.
+    e
+        E's joint-point response to forces at the two measured points, ``(..., 2, 2)``.
+    he, g
+        E's free and the assembly's measured translational receptances among the two points, ``(..., 2, 2)``.
+
+    Returns
+    -------
+    ndarray ``(..., 2, 2)``
+        A's symmetric 2×2 receptance at the contact point.
+
+    Raises
+    ------
+    numpy.linalg.LinAlgError
+        A singular system at some line.
+    """
+    m = he - g
+    m = 0.5 * (m + np.swapaxes(m, -1, -2))
+    einv = np.linalg.inv(e)
+    h33 = np.linalg.inv(np.swapaxes(einv, -1, -2) @ m @ einv) - h00
+    return 0.5 * (h33 + np.swapaxes(h33, -1, -2))
 
 
 def rotations_by_finite_difference(

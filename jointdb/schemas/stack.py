@@ -47,9 +47,24 @@ class Holder(Strict):
     loss_factor: NonNeg = 0.0
 
 
+class SpindleEstimate(Strict):
+    """The extension-bar taps a measured spindle was estimated from (``jointdb rotations --method extension``)."""
+
+    taps: str = Field(min_length=1, description="the bar's measured translational FRFs (G11, G12, G22), relative "
+                                                "to this file")
+    extension: Union[str, BeamModelFile] = Field(description="the bar's beam model, inline or as a file path")
+    joint_point: str = Field(min_length=1, description="the bar's named point fixed to the spindle nose")
+    points: list[Annotated[str, Field(min_length=1)]] = Field(min_length=2, max_length=2,
+                                                             description="the bar's two tapped named points")
+    noise: Union[Annotated[float, Field(ge=0.0, lt=1.0)], None] = Field(
+        default=None, description="relative noise level of the taps (e.g. 0.0075); omitted: estimated from them")
+
+
 class MeasuredSpindle(Strict):
     file: str = Field(min_length=1, description="FRF file with rotations (.uff, .h5, .csv), relative to this file")
     node: Annotated[int, Field(ge=0)]
+    estimate: Union[SpindleEstimate, None] = Field(
+        default=None, description="the extension-bar taps the FRF was estimated from: the band samples their noise")
 
 
 class ModelledSpindle(Strict):

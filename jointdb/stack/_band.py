@@ -221,7 +221,7 @@ def _interface_samples(name, spec, resolved, f, n, seed, uncertainties, choice, 
 
 def tip_band(spec: StackSpec, resolved_joints: Mapping[str, FRF], uncertainties: Mapping[str, Mapping] | None = None,
              freq=None, n: int = 200, seed: int = 0, choice: Mapping[str, tuple] | None = None,
-             tip_sigma: float = 0.0) -> TipBand:
+             tip_sigma: float = 0.0, spindle_estimate=None, model_sigma: float = 0.0) -> TipBand:
     """5/50/95 % band of the tool-tip receptance from sampled joints.
 
     Parameters
@@ -237,6 +237,13 @@ def tip_band(spec: StackSpec, resolved_joints: Mapping[str, FRF], uncertainties:
     tip_sigma
         Relative standard error of the prediction path itself (model form: beams joined at points where the
         real stack has distributed contact): each sample's tip receptance is scaled by ``exp(tip_sigma ξ)``.
+    spindle_estimate
+        A :class:`jointdb.stack._spindle_band.SpindleEstimate` of a single-plane measured spindle: each sample's
+        spindle is the nominal one plus the estimate's change under the taps' noise
+        (:func:`jointdb.stack._spindle_band.spindle_deviations`); None: the spindle is exact.
+    model_sigma
+        Relative standard error of the substructure model shown by validation assemblies (log units): each
+        sample's tip receptance is scaled by ``exp(model_sigma ξ)``, independently of ``tip_sigma``.
     n, seed
         Ensemble size and random seed.
 
@@ -258,6 +265,10 @@ def tip_band(spec: StackSpec, resolved_joints: Mapping[str, FRF], uncertainties:
     active = set(uncertainties) | set(choice)
     if tip_sigma > 0:
         active.add("prediction path")
+    if spindle_estimate is not None:
+        active.add("spindle")
+    if model_sigma > 0:
+        active.add("substructure model")
     if not active:
         raise InputError("no interface joint carries an uncertainty record or a joint-choice error; "
                          "nothing to sample")
@@ -277,6 +288,14 @@ def tip_band(spec: StackSpec, resolved_joints: Mapping[str, FRF], uncertainties:
     joints = {k: None if v is None else {p: flat(v[p]) for p in ("x", "y")} for k, v in joints.items()}
     tool, holder = flat(parts["tool"].values), flat(parts["holder"].values)
     spindle4 = spindle_four(parts["spindle"], node) if has_y else None
+    if spindle_estimate is not None:
+        if has_y:
+            raise InputError("a spindle estimate describes one bending plane; a spindle measured in both planes "
+                             "is not sampled")
+        from jointdb.stack._spindle_band import spindle_deviations
+
+        sampled = spindle["x"][None] + spindle_deviations(spindle_estimate, f, n, rng)
+        spindle = {"x": sampled, "y": sampled}
     full = np.zeros((n, f.size, 2, 2), dtype=complex)
     if spindle4 is not None:
         t4 = two_plane_tip(tool, holder, flat(spindle4), joints["tool-holder"], joints["holder-spindle"])
@@ -285,8 +304,9 @@ def tip_band(spec: StackSpec, resolved_joints: Mapping[str, FRF], uncertainties:
         for k, plane in enumerate(("x", "y")):
             jt, jh = (None if j is None else j[plane] for j in (joints["tool-holder"], joints["holder-spindle"]))
             full[:, :, k, k] = tool_tip_chain(tool, holder, flat(spindle[plane]), jt, jh)[:, 0, 0].reshape(n, f.size)
-    if tip_sigma > 0:
-        full *= np.exp(tip_sigma * rng.standard_normal(n))[:, None, None, None]
+    for sigma in (tip_sigma, model_sigma):
+        if sigma > 0:
+            full *= np.exp(sigma * rng.standard_normal(n))[:, None, None, None]
     tips, mags, peaks, peak_hz = {}, {}, {}, {}
     for k, plane in enumerate(("x", "y")):
         tips[plane] = full[:, :, k, k]

@@ -161,11 +161,16 @@ class MeasuredSpindle:
         from them, otherwise it is taken equal to the x plane (axisymmetric).
     frf
         The loaded FRF (set by :func:`jointdb.usecases.load_stack`; ``None`` until then).
+    estimate
+        How ``frf`` was estimated from extension-bar taps
+        (:class:`jointdb.stack._spindle_band.SpindleEstimate`), for the band's spindle-estimate term;
+        ``None``: the spindle is taken as exact.
     """
 
     file: str
     node: int
     frf: FRF | None = field(default=None, compare=False)
+    estimate: Any = field(default=None, compare=False)
 
 
 @dataclass(frozen=True)

@@ -88,7 +88,8 @@ def _holder(h: "schema.Holder", path: str) -> Holder:
 
 def _spindle(sp: Any, raw: dict[str, Any], path: str) -> MeasuredSpindle | ModelledSpindle:
     if hasattr(sp, "file"):
-        return MeasuredSpindle(sp.file.strip(), sp.node)
+        est = raw.get("estimate")  # the description as written: the application layer reads its files
+        return MeasuredSpindle(sp.file.strip(), sp.node, estimate=dict(est) if est is not None else None)
     model = raw["model"]  # the description as written: the model reader builds it later
     if isinstance(model, dict):
         try:
@@ -323,7 +324,8 @@ def stack_to_dict(spec: StackSpec) -> dict[str, Any]:
             ],
         },
         "spindle": (
-            {"file": spec.spindle.file, "node": spec.spindle.node}
+            {"file": spec.spindle.file, "node": spec.spindle.node,
+             **({"estimate": spec.spindle.estimate} if isinstance(spec.spindle.estimate, dict) else {})}
             if isinstance(spec.spindle, MeasuredSpindle)
             else {"model": spec.spindle.model, "point": spec.spindle.point}
         ),

@@ -173,6 +173,8 @@ def _identification_quality(outcome) -> dict[str, float]:
             quality[f"kc_misfit_{d.direction}"] = float(e)
     if outcome.validation is not None:
         quality["validation_error"] = float(outcome.validation["identified_joint_error_mean"])
+        # the dominant peaks' error of the validation assembly: the band's substructure-model term (issue 22)
+        quality["validation_peak_error"] = float(outcome.validation.get("peak_model_error", float("nan")))
     return {k: v for k, v in quality.items() if np.isfinite(v)}
 
 

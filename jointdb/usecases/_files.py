@@ -156,13 +156,49 @@ def load_stack(path: Path | str, repo=None) -> StackSpec:
     sp = spec.spindle
     if isinstance(sp, MeasuredSpindle) and sp.frf is None:
         frf = read_frf_file(p.parent / sp.file)
-        spec = spec.replace(spindle=MeasuredSpindle(sp.file, sp.node, frf))
+        est = load_spindle_estimate(p, sp.estimate) if isinstance(sp.estimate, dict) else sp.estimate
+        spec = spec.replace(spindle=MeasuredSpindle(sp.file, sp.node, frf, estimate=est))
     elif isinstance(sp, ModelledSpindle) and isinstance(sp.model, str):
         model = read_json_file(p.parent / sp.model, "spindle model file")
         spec = spec.replace(spindle=ModelledSpindle(model, sp.point))
     return spec
 
 
+
+
+def load_spindle_estimate(stack_path: Path, desc: dict):
+    """The :class:`jointdb.stack._spindle_band.SpindleEstimate` a stack file's ``spindle.estimate`` describes.
+
+    Parameters
+    ----------
+    stack_path
+        The stack file (relative paths are read beside it).
+    desc
+        ``{"taps", "extension", "joint_point", "points", "noise"?}`` as written in the file.
+
+    Returns
+    -------
+    SpindleEstimate
+        The taps as read, the bar's free receptance over its joint point (x, ry) and tapped points on the taps'
+        lines, and the stated noise level (None: estimated from the taps).
+
+    Raises
+    ------
+    InputError
+        Unknown named points, unreadable files (naming ``spindle.estimate``).
+    """
+    from jointdb.fe import load_model, model_from_dict
+    from jointdb.stack._spindle_band import SpindleEstimate
+
+    taps = read_frf_file(stack_path.parent / desc["taps"]).to("receptance")
+    ext = desc["extension"]
+    try:
+        bar = load_model(stack_path.parent / ext) if isinstance(ext, str) else model_from_dict(ext)
+        pts = [bar.point(desc["joint_point"]), *(bar.point(q) for q in desc["points"])]
+    except InputError as exc:
+        raise InputError(f"spindle.estimate: {exc}") from None
+    e_frf = bar.frf(taps.freq, [q.name for q in pts])
+    return SpindleEstimate(taps, e_frf, pts[0].node, (pts[1].node, pts[2].node), desc.get("noise"))
 
 
 def write_joint_file(path: Path, frf: FRF, meta: dict[str, Any]) -> None:

@@ -71,6 +71,9 @@ class JointResolution:
     choice_error
         The leave-one-out joint-choice error model of a queried joint
         (:class:`jointdb.store._loo.ChoiceErrorModel`), or None when the pool allows none.
+    validation_errors
+        Per catalogued version used, ``(name@version, weight, error)``: ``error`` is the relative error at the
+        dominant peaks of its campaign's validation assembly (quality ``validation_peak_error``), None without one.
     """
 
     interface: str
@@ -89,6 +92,7 @@ class JointResolution:
     method: str = ""  # one of METHODS for database joints
     neighbours: tuple[tuple[str, int, float, float], ...] = ()  # (name, version, weight, distance) used
     choice_error: Any = None  # jointdb.store._loo.ChoiceErrorModel of a queried joint, if the pool allows one
+    validation_errors: tuple[tuple[str, float, float | None], ...] = ()  # (name@version, weight, peak error)
 
     def choice_perturbations(self, freq):
         """``(relative, scale)`` of the joint-choice error on ``freq`` over (x, θ), calibrated
@@ -141,6 +145,7 @@ class JointResolution:
                 "damping_error_by_dof": dict(zip(self.choice_error.dofs, self.choice_error.sigma[:, 1].tolist())),
                 "leave_one_out_joints": [f"{p.name}@{p.version}" for p in self.choice_error.points],
                 "calibration": {"lines": LINE_CALIBRATION, "single_joints": CHOICE_CALIBRATION}},
+            "validation_peak_error": [{"joint": j, "weight": w, "error": e} for j, w, e in self.validation_errors],
             "warnings": "; ".join(self.warnings) or None,
         }
 
@@ -159,6 +164,15 @@ def _uncertainty_of(version) -> Mapping[str, Any] | None:
     params = getattr(getattr(version, "provenance", None), "parameters", None) or {}
     unc = params.get("uncertainty") if isinstance(params, Mapping) else None
     return unc if isinstance(unc, Mapping) else None
+
+
+def _validation_errors(versions_weights) -> tuple[tuple[str, float, float | None], ...]:
+    """``(name@version, weight, validation_peak_error or None)`` of the catalogued versions a joint uses."""
+    out = []
+    for v, w in versions_weights:
+        e = (getattr(v, "quality", None) or {}).get("validation_peak_error")
+        out.append((f"{v.name}@{v.version}", float(w), None if e is None else float(e)))
+    return tuple(out)
 
 
 def resolve_joints(spec: StackSpec, repo=None) -> dict[str, JointResolution]:
@@ -206,7 +220,8 @@ def resolve_joints(spec: StackSpec, repo=None) -> dict[str, JointResolution]:
                 out[name] = JointResolution(name, "catalogued", handle.load_frf(jv), jv.name, jv.version, 0.0,
                                             warnings=notes, description=choice.reference,
                                             uncertainty=_uncertainty_of(jv), method="pinned",
-                                            neighbours=((jv.name, jv.version, 1.0, 0.0),))
+                                            neighbours=((jv.name, jv.version, 1.0, 0.0),),
+                                            validation_errors=_validation_errors([(jv, 1.0)]))
                 continue
             conditions = Conditions.from_dict(dict(choice.conditions or {}))
             matches, texts = _pool(handle, choice, conditions)
@@ -294,17 +309,20 @@ def _queried(name, choice, handle, matches, conditions, texts) -> JointResolutio
     if choice.interpolate and len(matches) > 1:
         joint = handle.interpolate(matches, conditions)
         used = tuple((n, v, float(w), dist.get((n, v), float("nan"))) for n, v, w in joint.neighbours)
+        by_key = {(m.version.name, m.version.version): m.version for m in matches}
+        val = _validation_errors([(by_key[(n, v)], w) for n, v, w, _ in used if (n, v) in by_key])
         method = ("edge" if best.extrapolating else
                   "catalogued condition" if len(used) == 1 and used[0][3] <= 1e-12 else "simplex interpolation")
         return JointResolution(name, "interpolated", joint.frf, best.version.name, best.version.version,
                                float(best.distance), description=joint.describe(), method=method,
-                               neighbours=used, **common)
+                               neighbours=used, validation_errors=val, **common)
     method = "edge" if best.extrapolating else "nearest"
     return JointResolution(name, "query", handle.load_frf(best.version), best.version.name, best.version.version,
                            float(best.distance), description=choice.reference,
                            uncertainty=_uncertainty_of(best.version),
                            method=method, neighbours=((best.version.name, best.version.version, 1.0,
-                                                       float(best.distance)),), **common)
+                                                       float(best.distance)),),
+                           validation_errors=_validation_errors([(best.version, 1.0)]), **common)
 
 
 @dataclass(frozen=True, eq=False)

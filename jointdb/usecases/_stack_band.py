@@ -1,4 +1,5 @@
-"""The predictive band of a stack prediction: measurement noise and joint choice, term by term (issue 22).
+"""The predictive band of a stack prediction, term by term (issue 22): measurement noise, joint choice, the
+spindle's estimate, the substructure model and the prediction path.
 
 :func:`prediction_band` samples every interface whose joint carries an error estimate — its fit's
 covariance (measurement noise) and, for a queried joint, the leave-one-out joint-choice error
@@ -6,8 +7,10 @@ covariance (measurement noise) and, for a queried joint, the leave-one-out joint
 :data:`jointdb.usecases._stack.LINE_CALIBRATION`; single joints for a nearest one, by ``CHOICE_CALIBRATION``) — plus the
 prediction path's own model-form error (:data:`MODEL_FORM_SIGMA`), and couples them all; the draws of a line left out
 lean the way its signed error points (:data:`LINE_BIAS`)
-(:func:`jointdb.stack._band.tip_band`). :func:`band_terms` also samples each term alone,
-to say which one dominates.
+(:func:`jointdb.stack._band.tip_band`). A spindle estimated from extension-bar taps carries its estimate's
+noise (:mod:`jointdb.stack._spindle_band`); joints whose campaigns recorded a validation assembly carry the
+substructure model's error it showed (:func:`model_error`). :func:`band_terms` also samples each term alone,
+to say which one dominates, and says why a term is 0.
 """
 
 from __future__ import annotations
@@ -19,10 +22,11 @@ import numpy as np
 
 from jointdb.errors import InputError
 
-__all__ = ["BandTerms", "prediction_band", "band_terms", "choice_perturbation", "TERMS", "LINE_BIAS"]
+__all__ = ["BandTerms", "prediction_band", "band_terms", "choice_perturbation", "model_error", "spindle_estimate",
+           "absent_terms", "TERMS", "LINE_BIAS"]
 
 #: The error terms a band can carry, in the order they are reported.
-TERMS = ("measurement noise", "joint choice", "prediction path")
+TERMS = ("measurement noise", "joint choice", "spindle estimate", "substructure model", "prediction path")
 #: Relative standard error of the prediction path's own tip receptance (model form: three beams joined at two
 #: points where a real stack has distributed contact, a holder model, a spindle receptance). Not estimable from
 #: the catalogue (each per-line joint reproduces its own campaign): calibrated on the tuning seeds of
@@ -69,6 +73,96 @@ def choice_perturbation(resolution, freq):
     return None if s is None else _with_bias(resolution, s)
 
 
+def model_error(joints) -> tuple[float, list[str]]:
+    """The substructure model's relative error (log units) shown by validation assemblies, and what it is made of.
+
+    Per interface, the RMS of ``ln(1 + e)`` over the catalogued versions it uses that carry a validation error
+    ``e`` (quality ``validation_peak_error``: the dominant peaks of a validation assembly, measured against
+    its prediction), weighted by their interpolation weights; interfaces add independently (root sum of squares).
+
+    Parameters
+    ----------
+    joints
+        Interface → :class:`jointdb.usecases.JointResolution`.
+
+    Returns
+    -------
+    (float, list[str])
+        σ (0 when no joint used has a validation assembly) and one line per interface that contributes.
+    """
+    total, parts = 0.0, []
+    for name, r in joints.items():
+        have = [(j, w, e) for j, w, e in getattr(r, "validation_errors", ()) if e is not None and w > 0]
+        if not have:
+            continue
+        wsum = sum(w for _, w, _ in have)
+        s2 = sum(w * np.log1p(e) ** 2 for _, w, e in have) / wsum
+        total += s2
+        parts.append(f"{name}: validation assemblies of {', '.join(j for j, _, _ in have)} "
+                     f"(peak error {np.expm1(np.sqrt(s2)):.1%})")
+    return float(np.sqrt(total)), parts
+
+
+def spindle_estimate(spec):
+    """The spindle's extension-bar estimate, if the band can sample it.
+
+    Parameters
+    ----------
+    spec
+        A :class:`jointdb.stack.StackSpec`.
+
+    Returns
+    -------
+    (SpindleEstimate or None, str)
+        The :class:`jointdb.stack._spindle_band.SpindleEstimate` and ``""``, or None and the reason the
+        spindle-estimate term is 0.
+    """
+    from jointdb.stack._spindle_band import SpindleEstimate
+
+    est = getattr(spec.spindle, "estimate", None)
+    if isinstance(est, dict):
+        return None, "the spindle's extension-bar taps are named but were not read (load the stack from its file)"
+    if not isinstance(est, SpindleEstimate):
+        return None, ("the spindle is taken as exact (a model, or a measured receptance that names no "
+                      "extension-bar taps it was estimated from)")
+    frf = getattr(spec.spindle, "frf", None)
+    if frf is not None and any(d.direction in ("y", "rx") for d in frf.outputs):
+        return None, ("the spindle is measured in both bending planes; its extension-bar estimate describes one "
+                      "plane and is not sampled")
+    return est, ""
+
+
+def absent_terms(result) -> dict[str, str]:
+    """The terms that are 0 for a prediction, and why.
+
+    Parameters
+    ----------
+    result
+        A :class:`jointdb.usecases.StackPrediction`.
+
+    Returns
+    -------
+    dict[str, str]
+        Term (of :data:`TERMS`) → the reason it is 0; terms not named carry an error estimate.
+    """
+    from jointdb.stack._band import sampleable_uncertainties
+
+    out = {}
+    if not sampleable_uncertainties(result.joints)[0]:
+        out["measurement noise"] = "no joint used carries a sampleable fit covariance"
+    if not any(choice_perturbation(r, result.prediction.tip.freq) is not None for r in result.joints.values()):
+        out["joint choice"] = "every joint is pinned, rigid, explicit or on a catalogued condition"
+    est, why = spindle_estimate(result.spec)
+    if est is None:
+        out["spindle estimate"] = why
+    if model_error(result.joints)[0] == 0:
+        shown = any(e is not None for r in result.joints.values() for _, _, e in getattr(r, "validation_errors", ()))
+        out["substructure model"] = ("the validation assemblies of the joints used show no error at their dominant "
+                                     "peaks" if shown else
+                                     "no campaign of the catalogued joints used recorded a validation assembly")
+    return out
+
+
 def _inputs(result, terms=TERMS) -> tuple[dict, dict, list[str]]:
     from jointdb.stack._band import sampleable_uncertainties
 
@@ -106,15 +200,18 @@ def prediction_band(result, n: int = 200, seed: int = 0, terms=TERMS):
 
     unc, sigma, notes = _inputs(result, terms)
     tip_sigma = MODEL_FORM_SIGMA if "prediction path" in terms else 0.0
+    est = spindle_estimate(result.spec)[0] if "spindle estimate" in terms else None
+    m_sigma = model_error(result.joints)[0] if "substructure model" in terms else 0.0
     queried = any(r.kind in ("query", "interpolated") for r in result.joints.values())
-    if not unc and not sigma and not queried and tuple(terms) != ("prediction path",):
+    if (not unc and not sigma and not queried and est is None and m_sigma == 0
+            and tuple(terms) != ("prediction path",)):
         notes.append("no band: no interface joint carries a covariance or a joint-choice error "
                      "(rigid, explicit or pinned joints without an uncertainty record)")
         return None, notes
     resolved = {name: r.frf for name, r in result.joints.items() if r.frf is not None}
     try:
         b = tip_band(result.spec, resolved, unc, result.prediction.tip.freq, n=n, seed=seed, choice=sigma,
-                     tip_sigma=tip_sigma)
+                     tip_sigma=tip_sigma, spindle_estimate=est, model_sigma=m_sigma)
     except InputError as exc:
         notes.append(f"no band: {exc}")
         return None, notes
@@ -124,11 +221,19 @@ def prediction_band(result, n: int = 200, seed: int = 0, terms=TERMS):
 @dataclass(frozen=True, eq=False)
 class BandTerms:
     """The band with every term, and with each term alone: ``half_width[term][direction]`` is the relative
-    5–95 % half-width of the tip's dominant peak |H|; ``dominant``: the term with the widest band."""
+    5–95 % half-width of the tip's dominant peak |H|; ``dominant``: the term with the widest band;
+    ``zero``: term → why it is 0 (a term not sampled for this prediction)."""
 
     band: object
     notes: tuple[str, ...]
     half_width: Mapping[str, Mapping[str, float]]
+    zero: Mapping[str, str] = None
+
+    def term_rows(self) -> list[dict]:
+        """One row per term of :data:`TERMS`: its peak half-width alone per direction (0 when absent) and why."""
+        zero = self.zero or {}
+        return [{"term": t, "peak_half_width": dict(self.half_width.get(t) or {}),
+                 "zero_because": zero.get(t)} for t in TERMS]
 
     @property
     def dominant(self) -> str | None:
@@ -136,7 +241,8 @@ class BandTerms:
         return max(alone, key=alone.get) if alone else None
 
     def to_json(self) -> dict:
-        return {"peak_half_width": {t: dict(v) for t, v in self.half_width.items()}, "dominant_term": self.dominant}
+        return {"peak_half_width": {t: dict(v) for t, v in self.half_width.items()}, "dominant_term": self.dominant,
+                "terms": self.term_rows()}
 
 
 def _half_widths(b) -> dict[str, float]:
@@ -147,8 +253,12 @@ def band_terms(result, n: int = 200, seed: int = 0) -> BandTerms:
     """The full band and each term's own (:class:`BandTerms`)."""
     full, notes = prediction_band(result, n, seed)
     widths = {"all": _half_widths(full)}
-    if full is not None:
-        for term in TERMS:
-            alone, _ = prediction_band(result, n, seed, terms=(term,))
-            widths[term] = _half_widths(alone)
-    return BandTerms(full, tuple(notes), widths)
+    zero = absent_terms(result)
+    for term in TERMS:
+        if term in zero or full is None:
+            widths[term] = {}
+            continue
+        alone, _ = prediction_band(result, n, seed, terms=(term,))
+        widths[term] = _half_widths(alone)
+    notes += model_error(result.joints)[1]
+    return BandTerms(full, tuple(notes), widths, zero)

@@ -6,10 +6,11 @@ from __future__ import annotations
 
 
 def tip_band_of(result, n: int = 200, seed: int = 0):
-    """``(band, terms, notes)``: the 5–95 % band of the tool tip from every error term the chosen joints
-    carry — measurement noise, joint choice (leave-one-out over the catalogue) and the prediction
+    """``(band, terms, notes)``: the 5–95 % band of the tool tip from every error term the prediction
+    carries — measurement noise, joint choice (leave-one-out over the catalogue), the spindle's estimate
+    from extension-bar taps, the substructure model's error shown by validation assemblies and the prediction
     path's model error (:func:`jointdb.usecases._stack_band.band_terms`) — each term alone, and the
-    notes that say what was sampled, which term dominates, or why there is no band.
+    notes that say what was sampled, which terms are 0 and why, which term dominates, or why there is no band.
 
     Parameters
     ----------
@@ -38,6 +39,8 @@ def tip_band_of(result, n: int = 200, seed: int = 0):
         notes.append(f"band ({b.samples} samples: {', '.join(b.interfaces)}): tip peak {d} "
                      f"{row['peak_m_per_n_p05']:.4g} – {row['peak_m_per_n_p95']:.4g} m/N (5–95 %), "
                      f"{row['peak_hz_p05']:.5g} – {row['peak_hz_p95']:.5g} Hz; {parts}")
+    for term, why in (terms.zero or {}).items():
+        notes.append(f"band: {term} 0 — {why}")
     if terms.dominant:
         notes.append(f"band: the dominant term is {terms.dominant}")
     return b, terms, notes
