@@ -52,6 +52,38 @@ def numeric_metrics(data: Any, prefix: str = "") -> dict[str, float]:
     return out
 
 
+def identification_peak_error(quality: Any) -> float | None:
+    """The dominant-peak error of a campaign's own identification assembly re-coupled with the kept joint.
+
+    ``exp(RMS ln r) − 1`` over the ``peaks`` rows of an identified joint's quality record (``r``: re-coupled /
+    measured peak |H|, :func:`jointdb.campaign._run.peak_model_error`): in-sample, 0 for a joint that gives back
+    its own campaign. The band's substructure-model term uses it for tool–holder joints
+    (:func:`jointdb.usecases._stack_band.model_error`).
+
+    Parameters
+    ----------
+    quality
+        The ``quality`` mapping of a joint file's metadata (anything else, or rows that are not finite positive
+        ratios: None).
+
+    Returns
+    -------
+    float or None
+    """
+    peaks = quality.get("peaks") if isinstance(quality, dict) else None
+    if not isinstance(peaks, list) or not peaks:
+        return None
+    ratios = []
+    for p in peaks:
+        r = p.get("amplitude_ratio") if isinstance(p, dict) else None
+        if isinstance(r, bool) or not isinstance(r, (int, float)) or not math.isfinite(r) or r <= 0:
+            return None
+        ratios.append(float(r))
+    from jointdb.campaign._run import peak_model_error
+
+    return float(peak_model_error([{"amplitude_ratio": r} for r in ratios]))
+
+
 @dataclass(frozen=True, eq=False)
 class JointSource:
     """What a joint or campaign file holds for the catalogue.
@@ -305,6 +337,9 @@ def catalogue_inputs(joint_file: Path | str, given=None, *, joint_type: str | No
     if not jtype:
         raise InputError(f"{joint_file}: the file does not say its joint type; give --type")
     q = numeric_metrics(meta.get("quality"))
+    own = identification_peak_error(meta.get("quality"))
+    if own is not None:
+        q.setdefault("identification_peak_error", own)
     q.update(quality or {})
     params = {k: meta[k] for k in PROVENANCE_PARAMETERS if k in meta}
     file_method = meta.get("method") or (f"irc-{meta['joint_model']}" if meta.get("joint_model") else None)

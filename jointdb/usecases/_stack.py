@@ -74,6 +74,10 @@ class JointResolution:
     validation_errors
         Per catalogued version used, ``(name@version, weight, error)``: ``error`` is the relative error at the
         dominant peaks of its campaign's validation assembly (quality ``validation_peak_error``), None without one.
+    identification_errors
+        Per catalogued version used, ``(name@version, weight, error)``: the relative error at the dominant peaks of
+        its campaign's own identification assembly re-coupled with the catalogued joint (quality
+        ``identification_peak_error``, in-sample), None for a version catalogued without it.
     """
 
     interface: str
@@ -93,6 +97,7 @@ class JointResolution:
     neighbours: tuple[tuple[str, int, float, float], ...] = ()  # (name, version, weight, distance) used
     choice_error: Any = None  # jointdb.store._loo.ChoiceErrorModel of a queried joint, if the pool allows one
     validation_errors: tuple[tuple[str, float, float | None], ...] = ()  # (name@version, weight, peak error)
+    identification_errors: tuple[tuple[str, float, float | None], ...] = ()  # the same, identification assembly
 
     def choice_perturbations(self, freq):
         """``(relative, scale)`` of the joint-choice error on ``freq`` over (x, θ), calibrated
@@ -146,6 +151,8 @@ class JointResolution:
                 "leave_one_out_joints": [f"{p.name}@{p.version}" for p in self.choice_error.points],
                 "calibration": {"lines": LINE_CALIBRATION, "single_joints": CHOICE_CALIBRATION}},
             "validation_peak_error": [{"joint": j, "weight": w, "error": e} for j, w, e in self.validation_errors],
+            "identification_peak_error": [{"joint": j, "weight": w, "error": e}
+                                          for j, w, e in self.identification_errors],
             "warnings": "; ".join(self.warnings) or None,
         }
 
@@ -166,13 +173,21 @@ def _uncertainty_of(version) -> Mapping[str, Any] | None:
     return unc if isinstance(unc, Mapping) else None
 
 
-def _validation_errors(versions_weights) -> tuple[tuple[str, float, float | None], ...]:
-    """``(name@version, weight, validation_peak_error or None)`` of the catalogued versions a joint uses."""
+def _validation_errors(versions_weights, key: str = "validation_peak_error") -> tuple[tuple[str, float, float | None], ...]:
+    """``(name@version, weight, quality[key] or None)`` of the catalogued versions a joint uses (``key``: the
+    validation or the identification assembly's dominant-peak error)."""
     out = []
     for v, w in versions_weights:
-        e = (getattr(v, "quality", None) or {}).get("validation_peak_error")
+        e = (getattr(v, "quality", None) or {}).get(key)
         out.append((f"{v.name}@{v.version}", float(w), None if e is None else float(e)))
     return tuple(out)
+
+
+def _peak_errors(versions_weights) -> dict[str, tuple]:
+    """The ``validation_errors`` and ``identification_errors`` fields of a resolution using these versions."""
+    pairs = list(versions_weights)
+    return {"validation_errors": _validation_errors(pairs),
+            "identification_errors": _validation_errors(pairs, "identification_peak_error")}
 
 
 def resolve_joints(spec: StackSpec, repo=None) -> dict[str, JointResolution]:
@@ -221,7 +236,7 @@ def resolve_joints(spec: StackSpec, repo=None) -> dict[str, JointResolution]:
                                             warnings=notes, description=choice.reference,
                                             uncertainty=_uncertainty_of(jv), method="pinned",
                                             neighbours=((jv.name, jv.version, 1.0, 0.0),),
-                                            validation_errors=_validation_errors([(jv, 1.0)]))
+                                            **_peak_errors([(jv, 1.0)]))
                 continue
             conditions = Conditions.from_dict(dict(choice.conditions or {}))
             matches, texts = _pool(handle, choice, conditions)
@@ -310,19 +325,19 @@ def _queried(name, choice, handle, matches, conditions, texts) -> JointResolutio
         joint = handle.interpolate(matches, conditions)
         used = tuple((n, v, float(w), dist.get((n, v), float("nan"))) for n, v, w in joint.neighbours)
         by_key = {(m.version.name, m.version.version): m.version for m in matches}
-        val = _validation_errors([(by_key[(n, v)], w) for n, v, w, _ in used if (n, v) in by_key])
+        val = _peak_errors([(by_key[(n, v)], w) for n, v, w, _ in used if (n, v) in by_key])
         method = ("edge" if best.extrapolating else
                   "catalogued condition" if len(used) == 1 and used[0][3] <= 1e-12 else "simplex interpolation")
         return JointResolution(name, "interpolated", joint.frf, best.version.name, best.version.version,
                                float(best.distance), description=joint.describe(), method=method,
-                               neighbours=used, validation_errors=val, **common)
+                               neighbours=used, **val, **common)
     method = "edge" if best.extrapolating else "nearest"
     return JointResolution(name, "query", handle.load_frf(best.version), best.version.name, best.version.version,
                            float(best.distance), description=choice.reference,
                            uncertainty=_uncertainty_of(best.version),
                            method=method, neighbours=((best.version.name, best.version.version, 1.0,
                                                        float(best.distance)),),
-                           validation_errors=_validation_errors([(best.version, 1.0)]), **common)
+                           **_peak_errors([(best.version, 1.0)]), **common)
 
 
 @dataclass(frozen=True, eq=False)
