@@ -136,7 +136,7 @@ def main(argv=None) -> None:
                     help="write --report from these --rows-out files (seeds run in separate processes) instead")
     ap.add_argument("--family", choices=("b", "c"), default="b",
                     help="truth family: b (bench/_stack_truth_b.py) or c (bench/_stack_truth_c.py: never used to tune "
-                         "the band; its reported seeds only, rows with --rows-out, page by bench/_stack_bands_c_doc.py)")
+                         "the band; its reported seeds only: rows with --rows-out, page by bench/bench_stack_bands_c.py)")
     args = ap.parse_args(argv)
     if args.family == "c":
         import _stack_truth_c as tb
