@@ -6,16 +6,19 @@ script adds what explains the result and writes the page's generated part and it
 
 - the catalogue's joints: which model each campaign kept (constant k, c or per-line), how far constant k, c
   misfits its own campaign (× the noise) and how well the kept joint reproduces the campaign's assembly;
-- a *transfer sweep*: stacks ON catalogued conditions (Ø6 / Ø10 / Ø20 at 60 N·m on the 8 kN machine, no joint
-  choice at all) at other gauges than the campaigns' 50 mm: the error of carrying a catalogued joint to another
-  tool, which only the prediction-path term of the band can carry.
+- a *transfer sweep*, stacks ON catalogued conditions (no joint choice at all): each tool–holder campaign's own
+  stack (does the catalogued joint give back the stack it was identified on?), and Ø6 / Ø10 / Ø20 at 60 N·m on
+  the 8 kN machine at other gauges than the campaigns' 50 mm (the error of carrying a catalogued joint to another
+  tool); only the prediction-path term of the band can carry either.
 
 One command, the reported run (≈ 25 min on a loaded 2-core machine, catalogue included):
 
     python bench/bench_stack_bands.py --family c --n 24 --catalogue /tmp/c --rows-out /tmp/c-rows.json
-    python bench/bench_stack_bands_c.py --catalogue /tmp/c --rows /tmp/c-rows.json --doc docs/validation/stack-bands-family-c.md
+    python bench/bench_stack_bands.py --n 0 --seeds 7101 --catalogue /tmp/b    # family B's catalogue only
+    python bench/bench_stack_bands_c.py --catalogue /tmp/c --rows /tmp/c-rows.json --b-catalogue /tmp/b \
+        --doc docs/validation/stack-bands-family-c.md
 
-(add ``--no-transfer`` to skip the sweep, ≈ 5 min). The page's text outside the generated markers is kept.
+(``--no-transfer`` skips the sweep, ≈ 5 min loaded). The page's text outside the generated markers is kept.
 """
 
 from __future__ import annotations
@@ -24,6 +27,8 @@ import argparse
 import json
 import sys
 import time
+from collections import Counter
+from dataclasses import replace
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -37,10 +42,11 @@ DIAMETERS = tuple(d for d, _ in tc.TH_GRID)
 TORQUES = tc.TH_GRID[0][1]
 
 
-def joint_rows(repo) -> list[dict]:
-    """Per catalogued joint of family C: the model its campaign kept and how well it fits that campaign."""
+def joint_rows(repo, family=tc) -> list[dict]:
+    """Per catalogued joint of ``family`` (a truth module): the model its campaign kept and how well it fits that
+    campaign."""
     out = []
-    for case in [*tc.HS_CAMPAIGNS, *tc.TH_CAMPAIGNS]:
+    for case in [*family.HS_CAMPAIGNS, *family.TH_CAMPAIGNS]:
         v = repo.get(case.name)
         q = {k.removeprefix("model_adequacy."): x for k, x in (v.quality or {}).items()}
         out.append({"joint": case.name,
@@ -52,13 +58,31 @@ def joint_rows(repo) -> list[dict]:
 
 
 def transfer_cases() -> list[sv.Case]:
-    """On catalogued conditions (no joint choice): each catalogued Ø at 60 N·m, 8 kN, gauges 3, 4, 5 Ø and 50 mm."""
-    out = []
+    """On catalogued conditions (no joint choice): every tool–holder campaign's own stack (its blank, 50 mm gauge,
+    40 mm inserted), then each catalogued Ø at 60 N·m, 8 kN at gauges of 3, 4 and 5 Ø."""
+    out = [replace(c, name=f"{c.name}: its own stack") for c in tc.TH_CAMPAIGNS]
     for d in DIAMETERS:
-        for g in sorted({round(min(max(k * d, 0.025), 0.090), 3) for k in (3.0, 4.0, 5.0)} | {tc.CAMPAIGN_GAUGE}):
+        for g in sorted({round(min(max(k * d, 0.025), 0.090), 3) for k in (3.0, 4.0, 5.0)} - {tc.CAMPAIGN_GAUGE}):
             out.append(sv.Case(f"Ø{d * 1e3:.0f} blank, {g * 1e3:.0f} mm gauge ({g / d:.1f} Ø), 40 mm in, 60 N·m, 8 kN",
                                d, g, tc.CAMPAIGN_INSERTION, 60.0, "BT40", 8e3))
     return out
+
+
+def what_if_per_line(folder: Path, n: int, seeds) -> dict:
+    """The same stacks on a catalogue whose campaigns all keep their per-line IRC joint (``options.method: irc``):
+    a diagnostic of the adequacy check's choice, not a band result. The catalogue is kept in ``folder``."""
+    from jointdb.store import Repository
+
+    old = tc.CAMPAIGN_OPTIONS
+    tc.CAMPAIGN_OPTIONS = {**old, "method": "irc"}
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        with Repository(f"sqlite:///{folder / 'b.sqlite'}") as repo:
+            if not repo.list_joints():
+                tc.build_catalogue(folder, repo, say=lambda s: None)
+            return bb._seeds(repo, n, bb.N_SAMPLES, seeds, print)
+    finally:
+        tc.CAMPAIGN_OPTIONS = old
 
 
 def where(case: sv.Case) -> dict:
@@ -105,17 +129,35 @@ def _by_gap(results: dict) -> list[str]:
     return lines
 
 
-def section(results: dict, joints: list[dict], transfer: list[dict] | None) -> str:
-    from _stack_bands_report import _rows_table, _summary_rows
+def _joints_table(joints: list[dict]) -> list[str]:
+    lines = ["| joint | kept | constant k, c misfit / noise | dominant peaks (constant / per-line, × tolerance) | "
+             "assembly reconstruction error (mean) |", "|---|---|---|---|---|"]
+    for j in joints:
+        lines.append(f"| {j['joint']} | {j['kept']} | {j['misfit_to_noise']:.1f} | {j['constant_peak_score']:.2f} / "
+                     f"{j['per_line_peak_score']:.2f} | {j['reconstruction_error_mean']:.1%} |")
+    return lines
 
-    lines = [BEGIN, "", "Generated by `bench/bench_stack_bands_c.py` from the rows of "
-             "`bench/bench_stack_bands.py --family c` (do not edit between the markers).", "",
-             "| seed | quantity | stacks with a band | truth inside the 90 % band | median half-width | "
+
+def _summary_table(results: dict, label: str) -> list[str]:
+    from _stack_bands_report import _summary_rows
+
+    lines = ["| seed | quantity | stacks with a band | truth inside the 90 % band | median half-width | "
              "median abs error | half-width / error |", "|---|---|---|---|---|---|---|"]
     for seed, res in results.items():
         lines += _summary_rows(int(seed), res["summary"])
     pooled = [r for res in results.values() for r in res["rows"]]
-    lines += _summary_rows(f"both seeds ({len(pooled)} stacks)", bb.summary(pooled))
+    return lines + _summary_rows(f"{label} ({len(pooled)} stacks)", bb.summary(pooled))
+
+
+def section(results: dict, extra: dict) -> str:
+    """The generated part of the page: ``results`` {seed: {rows, summary}}; ``extra``: catalogue, catalogue_b,
+    transfer, what_if_per_line (each may be None)."""
+    from _stack_bands_report import _rows_table
+
+    lines = [BEGIN, "", "Generated by `bench/bench_stack_bands_c.py` from the rows of "
+             "`bench/bench_stack_bands.py --family c` (do not edit between the markers).", "",
+             *_summary_table(results, "both seeds")]
+    pooled = [r for res in results.values() for r in res["rows"]]
     no_band = [r["case"] for r in pooled if r.get("peak_band") is None]
     interp = [r for r in pooled if any("interpolation" in m for m in r["methods"].values())]
     lines += ["", f"Interpolated predictions: {len(interp)} of {len(pooled)}; with a band: "
@@ -124,32 +166,35 @@ def section(results: dict, joints: list[dict], transfer: list[dict] | None) -> s
               "### Misses and their conditions", "", *_misses_table(results), "",
               "### By position against the diameter lines (both seeds)", "", *_by_gap(results), ""]
     for seed, res in results.items():
-        dom: dict[str, int] = {}
-        for r in res["rows"]:
-            dom[r["dominant_term"]] = dom.get(r["dominant_term"], 0) + 1
-        lines += [f"### Seed {seed}", "", *_rows_table(res["rows"]), "",
-                  "Dominant term over the stacks: " + ", ".join(f"{k}: {v}" for k, v in sorted(dom.items())) + ".", ""]
-    lines += ["### The catalogue's joints", "", "| joint | kept | constant k, c misfit / noise | dominant peaks "
-              "(constant / per-line, × tolerance) | assembly reconstruction error (mean) |", "|---|---|---|---|---|"]
-    for j in joints:
-        lines.append(f"| {j['joint']} | {j['kept']} | {j['misfit_to_noise']:.1f} | {j['constant_peak_score']:.2f} / "
-                     f"{j['per_line_peak_score']:.2f} | {j['reconstruction_error_mean']:.1%} |")
-    if transfer:
-        lines += ["", "### Transfer sweep: catalogued conditions, other gauges (no joint choice)", "",
-                  *_rows_table(transfer)]
+        terms = Counter(r["dominant_term"] for r in res["rows"])
+        lines += [f"### Seed {seed}", "", *_rows_table(res["rows"]), "", "Dominant term over the stacks: "
+                  + ", ".join(f"{term}: {count}" for term, count in sorted(terms.items())) + ".", ""]
+    lines += ["### The catalogue's joints", "", *_joints_table(extra["catalogue"])]
+    if extra.get("catalogue_b"):
+        lines += ["", "For comparison, family B's catalogue (`bench/_stack_truth_b.py`, built the same way):", "",
+                  *_joints_table(extra["catalogue_b"])]
+    if extra.get("transfer"):
+        lines += ["", "### Transfer sweep: catalogued conditions (no joint choice): each campaign's own stack, "
+                  "then other gauges", "", *_rows_table(extra["transfer"])]
+    if extra.get("what_if_per_line"):
+        what = extra["what_if_per_line"]
+        lines += ["", "### Diagnostic: the same stacks on a catalogue of per-line joints only", "",
+                  "Every campaign identified with `options.method: irc` (no constant k, c anywhere); not a band "
+                  "result, a test of the adequacy check's choice.", "", *_summary_table(what, "both seeds"), "",
+                  *_rows_table([r for res in what.values() for r in res["rows"]])]
     lines += ["", END]
     return "\n".join(lines)
 
 
-def write(doc: Path, results: dict, joints: list[dict], transfer: list[dict] | None, seconds: float) -> None:
+def write(doc: Path, results: dict, extra: dict) -> None:
     text = doc.read_text(encoding="utf-8") if doc.exists() else "# The band on truth family C\n"
-    new = section(results, joints, transfer)
+    new = section(results, extra)
     if BEGIN in text and END in text:
         text = text[:text.index(BEGIN)] + new + text[text.index(END) + len(END):]
     else:
         text = text.rstrip("\n") + "\n\n" + new + "\n"
     doc.write_text(text, encoding="utf-8")
-    payload = {"seeds": results, "catalogue": joints, "transfer": transfer, "transfer_seconds": seconds}
+    payload = {"seeds": results, **extra}
     doc.with_suffix(".json").write_text(json.dumps(payload, indent=1, default=str) + "\n", encoding="utf-8")
 
 
@@ -159,27 +204,42 @@ def main(argv=None) -> None:
     ap.add_argument("--rows", type=Path, nargs="+", required=True, help="--rows-out files of the family-C run")
     ap.add_argument("--doc", type=Path, required=True)
     ap.add_argument("--no-transfer", action="store_true")
+    ap.add_argument("--b-catalogue", type=Path, default=None,
+                    help="a family-B --catalogue folder of bench/bench_stack_bands.py: list its joints for comparison")
+    ap.add_argument("--what-if-per-line", type=Path, default=None, metavar="FOLDER",
+                    help="also predict the stacks on a per-line-only catalogue kept in FOLDER (≈ 10 min loaded)")
     args = ap.parse_args(argv)
     from jointdb.store import Repository
 
+    bb.tb = tc
     results: dict = {}
     for part in args.rows:
         got = json.loads(part.read_text(encoding="utf-8"))
         results.update({k: v for k, v in got.items() if k.isdigit()})
+    results = dict(sorted(results.items()))
     t0 = time.time()
+    extra: dict = {"catalogue_b": None, "transfer": None, "what_if_per_line": None}
     with Repository(f"sqlite:///{args.catalogue / 'b.sqlite'}") as repo:
-        joints = joint_rows(repo)
-        transfer = None
+        extra["catalogue"] = joint_rows(repo)
         if not args.no_transfer:
-            bb.tb = tc
-            transfer = []
+            extra["transfer"] = []
             for case in transfer_cases():
-                transfer.append(bb.band_row(case, repo))
-                r = transfer[-1]
+                r = bb.band_row(case, repo)
+                extra["transfer"].append(r)
                 print(f"  {r['case']}: peak {r['peak_err']:+.1%} ±{r['peak_half']:.1%}, "
                       f"floor {r['floor_err']:+.1%} ±{r['floor_half']:.1%}", flush=True)
-    write(args.doc, dict(sorted(results.items())), joints, transfer, time.time() - t0)
-    print(f"wrote {args.doc} and {args.doc.with_suffix('.json')} ({time.time() - t0:.0f} s)")
+    if args.b_catalogue is not None:
+        import _stack_truth_b as tb
+
+        with Repository(f"sqlite:///{args.b_catalogue / 'b.sqlite'}") as repo:
+            extra["catalogue_b"] = joint_rows(repo, tb)
+    if args.what_if_per_line is not None:
+        n = len(next(iter(results.values()))["rows"])
+        extra["what_if_per_line"] = {str(k): v for k, v in
+                                     what_if_per_line(args.what_if_per_line, n, [int(s) for s in results]).items()}
+    extra["seconds"] = time.time() - t0
+    write(args.doc, results, extra)
+    print(f"wrote {args.doc} and {args.doc.with_suffix('.json')} ({extra['seconds']:.0f} s)")
 
 
 if __name__ == "__main__":
