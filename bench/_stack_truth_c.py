@@ -9,8 +9,8 @@ tuning seeds only. Family C was built after that freeze to check the band *blind
   (A: ``(T/80)^0.5``, no diameter law, 0.05; B: ``1 − exp(−T/55)``, ∝ d, 0.08);
 - **taper contact law**: hyperbolic saturation in the drawbar force, ``k' = k'_∞ F / (F + 10 kN)``,
   loss factor 0.04 (A: ``(F/20 kN)^0.35``, 0.05; B: ``1 + 0.45 ln(F/15 kN)``, 0.03);
-- **taper**: a long steep taper (BT40-like: Ø44 mm inserted over 65 mm, gauge Ø44.45) where A's and B's
-  catalogued stacks are HSK-A63 (Ø48 × 32 mm) — the taper contact is less stiff per length and longer;
+- **taper**: a long steep taper only (BT40-like: Ø44 mm inserted over 65 mm, gauge Ø44.45), where B has the short
+  HSK-A63 (Ø48 × 32 mm) only and A both (its BT40: the same taper, with A's power law and A's spindle);
 - **holder geometry**: an ER-collet-like holder, a 26 mm × Ø50 nut zone and a 34 mm × Ø42 collet body
   (both bored to the shank) and a 16 mm × Ø63 flange (A: 40 mm × Ø32 + 30 mm × Ø50; B: 55 mm × Ø36 +
   20 mm × Ø63); the bore (60 mm) is longer than the clamped length, as in A and B;
