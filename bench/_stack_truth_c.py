@@ -239,7 +239,8 @@ def build_catalogue(workdir: Path, repo, say=print) -> None:
 
 def draw(n: int, seed: int) -> list[sv.Case]:
     """``n`` stacks inside the catalogued range: carbide Ø6–20 mm, gauge 3–5 diameters within 25–90 mm,
-    insertion 37–43 mm, torque log-uniform 25–120 N·m, drawbar 8–20 kN, fluted (40–70 % of the gauge) or blank."""
+    insertion 37–43 mm, torque log-uniform 25–120 N·m, drawbar 8–20 kN, fluted (40–70 % of the gauge) or
+    blank."""
     rng = np.random.default_rng(seed)
     out = []
     for i in range(n):

@@ -135,8 +135,9 @@ def main(argv=None) -> None:
     ap.add_argument("--merge", type=Path, nargs="*", default=None,
                     help="write --report from these --rows-out files (seeds run in separate processes) instead")
     ap.add_argument("--family", choices=("b", "c"), default="b",
-                    help="truth family: b (bench/_stack_truth_b.py) or c (bench/_stack_truth_c.py: never used to tune "
-                         "the band; its reported seeds only: rows with --rows-out, page by bench/bench_stack_bands_c.py)")
+                    help="truth family: b (bench/_stack_truth_b.py) or c (bench/_stack_truth_c.py: never used to "
+                         "tune the band; its reported seeds only: rows with --rows-out, page by "
+                         "bench/bench_stack_bands_c.py)")
     args = ap.parse_args(argv)
     if args.family == "c":
         import _stack_truth_c as tb

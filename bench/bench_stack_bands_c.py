@@ -18,7 +18,8 @@ One command, the reported run (≈ 25 min on a loaded 2-core machine, catalogue 
     python bench/bench_stack_bands_c.py --catalogue /tmp/c --rows /tmp/c-rows.json --b-catalogue /tmp/b \
         --what-if per_line /tmp/c-irc --what-if gauge_4d /tmp/c-4d --doc docs/validation/stack-bands-family-c.md
 
-(``--no-transfer`` skips the sweep, ≈ 5 min loaded; each ``--what-if`` ≈ 10 min loaded, see :data:`WHAT_IF`). The page's text outside the generated markers is kept.
+(``--no-transfer`` skips the sweep, ≈ 5 min loaded; each ``--what-if`` ≈ 10 min loaded, see :data:`WHAT_IF`).
+The page's text outside the generated markers is kept.
 """
 
 from __future__ import annotations
@@ -63,8 +64,8 @@ def transfer_cases() -> list[sv.Case]:
     out = [replace(c, name=f"{c.name}: its own stack") for c in tc.TH_CAMPAIGNS]
     for d in DIAMETERS:
         for g in sorted({round(min(max(k * d, 0.025), 0.090), 3) for k in (3.0, 4.0, 5.0)} - {tc.CAMPAIGN_GAUGE}):
-            out.append(sv.Case(f"Ø{d * 1e3:.0f} blank, {g * 1e3:.0f} mm gauge ({g / d:.1f} Ø), 40 mm in, 60 N·m, 8 kN",
-                               d, g, tc.CAMPAIGN_INSERTION, 60.0, "BT40", 8e3))
+            name = f"Ø{d * 1e3:.0f} blank, {g * 1e3:.0f} mm gauge ({g / d:.1f} Ø), 40 mm in, 60 N·m, 8 kN"
+            out.append(sv.Case(name, d, g, tc.CAMPAIGN_INSERTION, 60.0, "BT40", 8e3))
     return out
 
 
@@ -127,7 +128,8 @@ def _misses_table(results: dict) -> list[str]:
                 continue
             w = where(cases[r["case"]])
             lines.append(f"| {r['case']} | {w['diameter_gap']} | {w['torque_gap']} | {w['gauge_over_d']:.1f} | "
-                         f"{r['peak_err']:+.1%} | {r['peak_half']:.1%} | {r['floor_err']:+.1%} | {r['floor_half']:.1%} | "
+                         f"{r['peak_err']:+.1%} | {r['peak_half']:.1%} | {r['floor_err']:+.1%} | "
+                         f"{r['floor_half']:.1%} | "
                          f"{' and '.join(missed)} | {r['dominant_term']} |")
     return lines
 
@@ -198,7 +200,8 @@ def section(results: dict, extra: dict) -> str:
     for name, what in (extra.get("what_if") or {}).items():
         lines += ["", f"### Diagnostic ({name}): the same stacks on a catalogue built another way", "",
                   f"{WHAT_IF[name][0][0].upper()}{WHAT_IF[name][0][1:]}; not a band result.", "",
-                  *_summary_table(what, "both seeds"), "", *_rows_table([r for res in what.values() for r in res["rows"]])]
+                  *_summary_table(what, "both seeds"), "",
+                  *_rows_table([r for res in what.values() for r in res["rows"]])]
     lines += ["", END]
     return "\n".join(lines)
 
