@@ -141,9 +141,13 @@ def _spindle_frf() -> FRF:
     return spindle_model().frf(FREQ, ["nose"])
 
 
-def spec_for(case: sv.Case, joints: dict):
-    """The prediction path's stack (the family's holder; spindle: its exact nose receptance)."""
+def spec_for(case: sv.Case, joints: dict, spindle_estimated: bool = False):
+    """The prediction path's stack (the family's holder; spindle: its exact nose receptance; family C has no
+    extension-bar estimate of its spindle)."""
     from jointdb.stack import MeasuredSpindle
+
+    if spindle_estimated:
+        raise ValueError("family C gives its spindle exactly; --spindle-estimate is family B's")
 
     doc = sv.stack_doc(case, joints)
     doc["holder"]["segments"] = [{"length": length, "outer_diameter": outer,
