@@ -134,6 +134,7 @@ def _seeds(repo, n: int, samples: int, seeds, say, spindle_estimated: bool = Fal
 
 
 def main(argv=None) -> None:
+    global tb
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--n", type=int, default=24)
     ap.add_argument("--samples", type=int, default=N_SAMPLES)
@@ -148,7 +149,15 @@ def main(argv=None) -> None:
                          "(bench/_stack_truth_b.py: estimated_spindle) instead of its exact receptance")
     ap.add_argument("--merge", type=Path, nargs="*", default=None,
                     help="write --report from these --rows-out files (seeds run in separate processes) instead")
+    ap.add_argument("--family", choices=("b", "c"), default="b",
+                    help="truth family: b (bench/_stack_truth_b.py) or c (bench/_stack_truth_c.py: never used to "
+                         "tune the band; its reported seeds only: rows with --rows-out, page by "
+                         "bench/bench_stack_bands_c.py)")
     args = ap.parse_args(argv)
+    if args.family == "c":
+        import _stack_truth_c as tb
+        if args.report is not None:
+            ap.error("--report rewrites family B's section of stack-prediction.md; for family C use --rows-out")
     seeds = tb.TUNING_SEEDS if args.tuning else tb.REPORT_SEEDS
     seeds = args.seeds or seeds
     if args.merge:
