@@ -150,6 +150,20 @@ def _by_gap(results: dict) -> list[str]:
     return lines
 
 
+def _own_stack_bound(extra: dict) -> str:
+    """Does the kept joint's recorded dominant-peak score (× the 25 % amplitude tolerance) bound the peak error of
+    its own stack?"""
+    from jointdb.coupling._quality import PEAK_AMPLITUDE_TOL
+
+    kept = {j["joint"]: j["constant_peak_score"] if j["kept"].startswith("constant") else j["per_line_peak_score"]
+            for j in extra["catalogue"]}
+    own = [(r, kept[r["case"].split(":")[0]]) for r in extra["transfer"] if r["case"].endswith("its own stack")]
+    n = sum(abs(r["peak_err"]) <= score * PEAK_AMPLITUDE_TOL for r, score in own)
+    return (f"The kept joint's recorded dominant-peak score (quality `model_adequacy.*_peak_score`) × the "
+            f"{PEAK_AMPLITUDE_TOL:.0%} amplitude tolerance bounds the peak error of its own stack on {n} of "
+            f"{len(own)} tool–holder joints.")
+
+
 def _joints_table(joints: list[dict]) -> list[str]:
     lines = ["| joint | kept | constant k, c misfit / noise | dominant peaks (constant / per-line, × tolerance) | "
              "assembly reconstruction error (mean) |", "|---|---|---|---|---|"]
@@ -196,7 +210,7 @@ def section(results: dict, extra: dict) -> str:
                   *_joints_table(extra["catalogue_b"])]
     if extra.get("transfer"):
         lines += ["", "### Transfer sweep: catalogued conditions (no joint choice): each campaign's own stack, "
-                  "then other gauges", "", *_rows_table(extra["transfer"])]
+                  "then other gauges", "", *_rows_table(extra["transfer"]), "", _own_stack_bound(extra)]
     for name, what in (extra.get("what_if") or {}).items():
         lines += ["", f"### Diagnostic ({name}): the same stacks on a catalogue built another way", "",
                   f"{WHAT_IF[name][0][0].upper()}{WHAT_IF[name][0][1:]}; not a band result.", "",
