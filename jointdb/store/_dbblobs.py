@@ -29,6 +29,7 @@ from jointdb.errors import IntegrityError, NotFoundError
 from jointdb.frf import FRF
 from jointdb.store._blobformat import blob_bytes, check_digest, decode_blob_bytes, frf_sha256, verify_blob_bytes
 from jointdb.store._blobs import BlobInfo, VerifyingBlobs
+from jointdb.store._chain import pipelined, queue
 from jointdb.store._durable import executor
 from jointdb.store._models import BlobRow
 
@@ -132,17 +133,31 @@ class DatabaseBlobStore(VerifyingBlobs):
 
         A new blob is one ``INSERT ... ON CONFLICT DO NOTHING RETURNING``; only when the row exists is it
         read (and replaced when damaged) and its ``touched_at`` refreshed (in one upsert, which
-        waits for a ``gc`` holding the row's lock and writes it again if ``gc`` deleted it)."""
+        waits for a ``gc`` holding the row's lock and writes it again if ``gc`` deleted it). On a
+        pipelined PostgreSQL connection the INSERT is sent at commit, in the round trip of the
+        history chain's entries (:func:`jointdb.store._chain.queue`), and the rest follows there."""
         now = _now()
         conn = session.connection()
         params = {"sha256": digest, "data": data, "size": len(data), "now": now}
+        insert = _blob_insert(conn.dialect.name, False)
+        if pipelined(conn):
+            def then(cursor) -> None:
+                if cursor.fetchone() is None:  # the row exists
+                    self._existing(session, digest, data, params)
+
+            queue(session, insert, params, then)
+            return
         if conn.dialect.insert_returning:  # a row back: inserted (SQLite >= 3.35 and PostgreSQL)
-            if conn.execute(_blob_insert(conn.dialect.name, False), params).first() is not None:
+            if conn.execute(insert, params).first() is not None:
                 return
+        self._existing(session, digest, data, params)
+
+    def _existing(self, session: Session, digest: str, data: bytes, params: dict) -> None:
+        """The blob's row exists (or existed): replace it when damaged, refresh ``touched_at``."""
         existing = session.get(BlobRow, digest)
         if existing is not None and bytes(existing.data) != data and self._check(digest, existing.data):
             existing.data, existing.size = data, len(data)
-        session.execute(_blob_insert(conn.dialect.name, True), params)
+        session.execute(_blob_insert(session.connection().dialect.name, True), params)
 
     # ------------------------------------------------------------------- read
     @staticmethod
