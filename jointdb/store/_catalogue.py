@@ -38,7 +38,15 @@ from types import SimpleNamespace
 from sqlalchemy import and_, bindparam, false, func, insert, or_, select, text, true, update
 
 from jointdb.errors import ConflictError, InputError
-from jointdb.store._chain import append_chain, content_hash, head_of, hold_head, lock_and_head, pipelined, stored_columns
+from jointdb.store._chain import (
+    append_chain,
+    content_hash,
+    head_of,
+    hold_head,
+    lock_and_head,
+    pipelined,
+    stored_columns,
+)
 from jointdb.store._identity import contradiction, identity_changes, same_content
 from jointdb.store._index import bump, bump_params, bump_pg, count_params, count_upsert, index_values, prune
 from jointdb.store._pgpipe import Batch
