@@ -118,23 +118,119 @@ def _chunk_rows(n_freq: int, n_entries: int) -> int:
     return max(1, min(n_freq, (1 << 16) // max(1, 16 * n_entries)))
 
 
+#: the filters of both datasets, in HDF5's order: shuffle, deflate (gzip) at this level, fletcher32
+GZIP_LEVEL = 4
+_FILTERS = dict(shuffle=True, compression="gzip", compression_opts=GZIP_LEVEL, fletcher32=True)
+
+
 def write_frf_group(group, frf: FRF, digest: str) -> None:
-    """Write an FRF into an open h5py group/file in the blob layout."""
+    """Write an FRF into an open h5py group/file in the blob layout.
+
+    The chunks are filtered here (:func:`_filtered_chunk`: shuffle, deflate, fletcher32, as
+    HDF5's own filters do it, byte for byte) and written as they are (``write_direct_chunk``):
+    the deflate runs without Python's global lock, so a blob encoded on a worker thread lets
+    the caller's thread run meanwhile. (HDF5 keeps a deflated chunk even when it came out larger
+    than the raw one, as here; ``tests/store/test_store_blob_encoding.py`` compares the bytes.)
+    """
     n_freq, n_out, n_in = frf.values.shape
     rows = _chunk_rows(n_freq, n_out * n_in)
-    opts = dict(shuffle=True, compression="gzip", compression_opts=4, fletcher32=True)
-    group.create_dataset("freq", data=np.asarray(frf.freq, dtype="<f8"), chunks=(rows,), **opts)
+    freq = np.asarray(frf.freq, dtype="<f8")
     packed = np.stack([frf.values.real, frf.values.imag], axis=-1).astype("<f8")
-    group.create_dataset("values", data=packed, chunks=(rows, n_out, n_in, 2), **opts)
-    a = group.attrs
-    a["format"] = FORMAT
-    a["format_version"] = FORMAT_VERSION
-    a["sha256"] = digest
-    a["quantity"] = frf.quantity.value
-    a["outputs"] = ",".join(map(str, frf.outputs))
-    a["inputs"] = ",".join(map(str, frf.inputs))
-    a["complex_convention"] = COMPLEX_CONVENTION
-    a["harmonic_convention"] = HARMONIC_CONVENTION
+    for name, data in (("freq", freq), ("values", packed)):
+        dset = group.create_dataset(name, shape=data.shape, dtype="<f8", chunks=(rows, *data.shape[1:]), **_FILTERS)
+        zeros = (0,) * (data.ndim - 1)
+        for i in range(0, n_freq, rows):
+            dset.id.write_direct_chunk((i, *zeros), _filtered_chunk(data[i:i + rows], rows))
+    _write_attrs(group.id, (("format", FORMAT), ("format_version", FORMAT_VERSION), ("sha256", digest),
+                            ("quantity", frf.quantity.value), ("outputs", ",".join(map(str, frf.outputs))),
+                            ("inputs", ",".join(map(str, frf.inputs))), ("complex_convention", COMPLEX_CONVENTION),
+                            ("harmonic_convention", HARMONIC_CONVENTION)))
+
+
+def _filtered_chunk(block: np.ndarray, rows: int) -> bytes:
+    """One chunk of ``rows`` rows (an edge chunk padded with HDF5's fill value, zeros) as HDF5's filters
+    store it: the bytes shuffled (all first bytes of the float64 values, then all second bytes, ...),
+    deflated at :data:`GZIP_LEVEL` (zlib format), then HDF5's Fletcher-32 checksum appended
+    (little-endian)."""
+    import zlib
+
+    if len(block) < rows:
+        full = np.zeros((rows, *block.shape[1:]), dtype="<f8")
+        full[:len(block)] = block
+        block = full
+    raw = np.ascontiguousarray(block, dtype="<f8").view(np.uint8).reshape(-1, 8)
+    deflated = zlib.compress(raw.T.tobytes(), GZIP_LEVEL)  # (zlib lets go of the GIL while it deflates)
+    return deflated + fletcher32(deflated).to_bytes(4, "little")
+
+
+def fletcher32(data: bytes) -> int:
+    """HDF5's Fletcher-32 checksum (``H5_checksum_fletcher32``) of ``data``.
+
+    Parameters
+    ----------
+    data
+        The bytes (read as big-endian 16-bit words; an odd last byte as the high byte of one more).
+
+    Returns
+    -------
+    int
+        The 32-bit checksum: ``sum2 << 16 | sum1``, both reduced as HDF5 does (end-around carry
+        after every 360 words and at the end).
+    """
+    n = len(data)
+    words = np.frombuffer(data, dtype=">u2", count=n // 2).astype(np.int64)
+    blocks = max(1, -(-len(words) // 360))
+    grid = np.zeros(blocks * 360, np.int64)
+    grid[:len(words)] = words
+    grid = grid.reshape(blocks, 360)
+    lengths = np.full(blocks, 360, np.int64)
+    lengths[-1] = len(words) - 360 * (blocks - 1)
+    # per block of t words w_k: sum1 grows by sum(w), sum2 by t*sum1 + sum_k (t - k) w_k (no overflow in 64 bits)
+    sums = grid.sum(axis=1).tolist()
+    weighted = (grid * (lengths[:, None] - np.arange(360))).sum(axis=1).tolist()
+    s1 = s2 = 0
+    for t, w, v in zip(lengths.tolist(), sums, weighted):
+        if t:
+            s2 += t * s1 + v
+            s1 += w
+            s1, s2 = (s1 & 0xFFFF) + (s1 >> 16), (s2 & 0xFFFF) + (s2 >> 16)
+    if n % 2:
+        s1 += data[-1] << 8
+        s2 += s1
+        s1, s2 = (s1 & 0xFFFF) + (s1 >> 16), (s2 & 0xFFFF) + (s2 >> 16)
+    s1, s2 = (s1 & 0xFFFF) + (s1 >> 16), (s2 & 0xFFFF) + (s2 >> 16)
+    return (s2 << 16) | s1
+
+
+def _write_attrs(gid, items) -> None:
+    """Scalar attributes on the object ``gid`` (a low-level h5py id), each as h5py's ``attrs[name] = value``
+    writes it on a new object (a ``str`` as a variable-length UTF-8 string, an ``int`` as int64)."""
+    import h5py
+
+    for name, value in items:
+        if isinstance(value, str):
+            data = np.array(value, dtype=h5py.string_dtype())
+        else:
+            data = np.array(value, dtype=np.int64)
+        file_type, memory_type = _attr_types(data.dtype)
+        attr = h5py.h5a.create(gid, name.encode(), file_type, h5py.h5s.create_simple(()))
+        try:
+            attr.write(data, mtype=memory_type)
+        finally:
+            attr.close()
+
+
+_TYPES: dict = {}
+
+
+def _attr_types(dtype):
+    """h5py's HDF5 types of an attribute of ``dtype``: the logical one it stores, the one it writes from."""
+    key = str(dtype) + repr(getattr(dtype, "metadata", None))
+    if key not in _TYPES:
+        from h5py import h5t
+
+        _TYPES[key] = (h5t.py_create(dtype, logical=True), h5t.py_create(dtype))
+    return _TYPES[key]
 
 
 def read_frf_group(group, where: str) -> tuple[FRF, str]:
