@@ -132,3 +132,32 @@ def test_a_changed_byte_of_a_chunk_is_refused_by_hdf5s_checksum():
     block = bf._userblock(hashlib.sha256(tail).hexdigest())  # a consistent whole-file hash: only HDF5 can tell
     with pytest.raises(bf.IntegrityError):
         bf.decode_blob_bytes(block + tail, "test")
+
+
+@pytest.mark.parametrize("damage", ["no format_version", "no values", "values as float32", "other outputs",
+                                    "other FRF"])
+def test_verify_refuses_bytes_that_are_not_this_frf(damage):
+    """verify_blob_bytes (low-level reads) refuses a missing attribute or dataset, another type, other
+    labels or other numbers, with the message the write paths report."""
+    frf = _frf(np.random.default_rng(7), 300, 2, 2, "smooth")
+    digest = bf.frf_sha256(frf)
+
+    def write(f, x, d):
+        _reference_group(f, x, d)
+        if damage == "no format_version":
+            del f.attrs["format_version"]
+        elif damage == "no values":
+            del f["values"]
+        elif damage == "values as float32":
+            data = f["values"][...]
+            del f["values"]
+            f.create_dataset("values", data=data.astype("<f4"))
+        elif damage == "other outputs":
+            f.attrs["outputs"] = "3x,3y"
+
+    other = _frf(np.random.default_rng(8), 300, 2, 2, "smooth") if damage == "other FRF" else frf
+    body = _image(write, other, digest)
+    data = bf._userblock(hashlib.sha256(body).hexdigest()) + body
+    with pytest.raises(bf.IntegrityError, match="did not read back"):
+        bf.verify_blob_bytes(data, frf, digest)
+    bf.verify_blob_bytes(bf.blob_bytes(frf, digest)[1], frf, digest)  # and the true bytes pass
