@@ -27,6 +27,14 @@ The statements are built once per process and executed on the transaction's
 connection (no ORM unit of work: the rows are only inserted, never changed, so
 the immutability hook of the ORM has nothing to check). The rows are the ones
 the ORM path wrote before; ``jointdb db check`` recomputes the index from history.
+
+On PostgreSQL through psycopg (:func:`jointdb.store._chain.pipelined`) the statements
+go in batches, each one round trip (:class:`jointdb.store._pgpipe.Batch`; the server
+runs them in order, each on its own snapshot): after the BEGIN, (1) the joint's lock,
+then its head and ``nextval`` of the version ids; (2) the version and audit rows, the
+query index, the stamp, then the history chain's advisory lock and its head; (3) at
+commit, the chain's entries and the blob's row (:func:`jointdb.store._chain.queue`);
+then the COMMIT: five round trips (a new joint: one more, its row).
 """
 
 from __future__ import annotations
@@ -249,7 +257,7 @@ def write_version(session, *, name, joint_type, frf, cond, kind, prov, qual, par
     if answer is not None:
         return SimpleNamespace(version=None, name=answer[0], number=answer[1], created=answer[2] == 201)
     now = utcnow()
-    fast = pipelined(conn)  # PostgreSQL: the statements in three round trips (module docstring)
+    fast = pipelined(conn)  # PostgreSQL: the statements in batches, one round trip each (module docstring)
     head, next_id = _locked_head(conn, name, fast)
     history = []
     if head is None:
