@@ -144,3 +144,29 @@ def test_a_refused_version_writes_no_blob(dbrepo):
     forced = dbrepo.catalogue("DB-R", "tool-holder", spring_joint(k=(7e6, 9e4)), cond, "spring-damper-planar",
                               force=True)
     assert forced.version == 2 and _count(dbrepo, "frf_blobs") == 5 and dbrepo.check().ok
+
+
+def test_a_postgresql_version_is_five_round_trips(dbrepo, backend, monkeypatch):
+    """On PostgreSQL a new version of a joint is BEGIN, three batches of statements (one round trip each:
+    the lock and head; the rows, index, stamp and chain head; the chain entries and the blob) and COMMIT
+    (jointdb/store/_catalogue.py). Counted at psycopg: every statement or command it waits for outside
+    a pipeline, and every pipeline sync; the rows and the chain are checked afterwards."""
+    if backend.name != "postgresql":
+        pytest.skip("round trips of the PostgreSQL catalogue")
+    import psycopg._cursor_base as cursor_base
+    import psycopg._pipeline_base as pipeline_base
+    import psycopg.generators as generators
+
+    trips = []
+    for module, name in ((cursor_base, "execute"), (generators, "execute"), (pipeline_base.BasePipeline, "_sync_gen"),
+                         (pipeline_base.BasePipeline, "_exit_gen")):
+        real = getattr(module, name)
+        monkeypatch.setattr(module, name, lambda *a, _real=real, _name=name, **k: trips.append(_name) or _real(*a, **k))
+    dbrepo.catalogue("RT", "tool-holder", spring_joint(k=(1e6, 1e4)), planar_conditions(), "spring-damper-planar")
+    for n in range(3):
+        trips.clear()
+        dbrepo.catalogue("RT", "tool-holder", spring_joint(k=(2e6 + n, 1e4)), planar_conditions(),
+                         "spring-damper-planar", force=True)
+        assert len(trips) <= 5, trips
+    monkeypatch.undo()
+    assert [v.version for v in dbrepo.history("RT")] == [1, 2, 3, 4] and dbrepo.check().ok
