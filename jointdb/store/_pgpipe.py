@@ -73,7 +73,7 @@ class Batch:
         compiled, sql, processors = _compiled(stmt, self.conn.dialect, keys)
         converted = []
         for row in rows:
-            values = compiled.construct_params(row, _check=False)
+            values = compiled.construct_params(row)
             for name, processor in processors.items():
                 if name in values:
                     values[name] = processor(values[name])

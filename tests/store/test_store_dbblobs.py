@@ -170,3 +170,32 @@ def test_a_postgresql_version_is_five_round_trips(dbrepo, backend, monkeypatch):
         assert len(trips) <= 5, trips
     monkeypatch.undo()
     assert [v.version for v in dbrepo.history("RT")] == [1, 2, 3, 4] and dbrepo.check().ok
+
+
+def test_a_statement_refused_inside_a_batch_rolls_back_everything(dbrepo, monkeypatch):
+    """A statement the server refuses in the middle of the version's statements (here a CHECK constraint
+    of the version row; on PostgreSQL inside a batch sent in one round trip) fails the catalogue with the
+    server's message, writes nothing (no version, no index row, no blob, no chain entry), and the
+    connection goes on working."""
+    from jointdb.errors import JointdbError
+    from jointdb.store import _catalogue
+
+    dbrepo.catalogue("BATCH", "tool-holder", spring_joint(k=(1e6, 1e4)), planar_conditions(), "spring-damper-planar")
+    counts = {t: _count(dbrepo, t) for t in ("joint_versions", "query_versions", "frf_blobs", "history_chain")}
+    real = _catalogue._version_row
+
+    def negative_preload(*args):
+        row = real(*args)
+        row.preload_n = -1.0  # the table's CHECK (preload_n >= 0) refuses it
+        return row
+
+    monkeypatch.setattr(_catalogue, "_version_row", negative_preload)
+    with pytest.raises(JointdbError, match="preload_nonneg"):
+        dbrepo.catalogue("BATCH", "tool-holder", spring_joint(k=(2e6, 1e4)), planar_conditions(),
+                         "spring-damper-planar", force=True)
+    monkeypatch.undo()
+    assert {t: _count(dbrepo, t) for t in counts} == counts
+    jv = dbrepo.catalogue("BATCH", "tool-holder", spring_joint(k=(3e6, 1e4)), planar_conditions(),
+                          "spring-damper-planar", force=True)
+    assert jv.version == 2 and dbrepo.load_frf(jv).allclose(spring_joint(k=(3e6, 1e4)), rtol=0)
+    assert dbrepo.check().ok
