@@ -36,6 +36,7 @@ then the user block) and decoded with every check of a read
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import os
 import re
@@ -207,30 +208,29 @@ def _write_attrs(gid, items) -> None:
     writes it on a new object (a ``str`` as a variable-length UTF-8 string, an ``int`` as int64)."""
     import h5py
 
+    types = _attr_types()
+    scalar = h5py.h5s.create_simple(())
     for name, value in items:
-        if isinstance(value, str):
-            data = np.array(value, dtype=h5py.string_dtype())
-        else:
-            data = np.array(value, dtype=np.int64)
-        file_type, memory_type = _attr_types(data.dtype)
-        attr = h5py.h5a.create(gid, name.encode(), file_type, h5py.h5s.create_simple(()))
+        kind = "str" if isinstance(value, str) else "int"
+        data = np.array(value, dtype=types[kind][0])
+        attr = h5py.h5a.create(gid, name.encode(), types[kind][1], scalar)
         try:
-            attr.write(data, mtype=memory_type)
+            attr.write(data, mtype=types[kind][2])
         finally:
             attr.close()
 
 
-_TYPES: dict = {}
+@functools.cache
+def _attr_types() -> dict:
+    """``{kind: (numpy dtype, HDF5 type stored, HDF5 type written from)}`` as h5py chooses them for a
+    ``str`` and an ``int`` attribute."""
+    import h5py
+    from h5py import h5t
 
-
-def _attr_types(dtype):
-    """h5py's HDF5 types of an attribute of ``dtype``: the logical one it stores, the one it writes from."""
-    key = str(dtype) + repr(getattr(dtype, "metadata", None))
-    if key not in _TYPES:
-        from h5py import h5t
-
-        _TYPES[key] = (h5t.py_create(dtype, logical=True), h5t.py_create(dtype))
-    return _TYPES[key]
+    out = {}
+    for kind, dtype in (("str", h5py.string_dtype()), ("int", np.dtype(np.int64))):
+        out[kind] = (dtype, h5t.py_create(dtype, logical=True), h5t.py_create(dtype))
+    return out
 
 
 def read_frf_group(group, where: str) -> tuple[FRF, str]:
