@@ -121,7 +121,22 @@ def _chunk_rows(n_freq: int, n_entries: int) -> int:
 
 #: the filters of both datasets, in HDF5's order: shuffle, deflate (gzip) at this level, fletcher32
 GZIP_LEVEL = 4
-_FILTERS = dict(shuffle=True, compression="gzip", compression_opts=GZIP_LEVEL, fletcher32=True)
+
+
+def _new_dataset(gid, name: str, shape: tuple, chunks: tuple):
+    """A new float64 dataset (low-level id) as h5py's ``create_dataset(name, shape, "<f8", chunks=chunks,
+    shuffle=True, compression="gzip", compression_opts=GZIP_LEVEL, fletcher32=True)`` makes it: the same
+    creation properties in the same order (chunks, shuffle, deflate, fletcher32, no times)."""
+    from h5py import h5d, h5p, h5s, h5t
+
+    dcpl = h5p.create(h5p.DATASET_CREATE)
+    dcpl.set_chunk(chunks)
+    dcpl.set_shuffle()
+    dcpl.set_deflate(GZIP_LEVEL)
+    dcpl.set_fletcher32()
+    dcpl.set_obj_track_times(False)
+    return h5d.create(gid, name.encode(), h5t.py_create(np.dtype("<f8"), logical=1), h5s.create_simple(shape),
+                      dcpl=dcpl)
 
 
 def write_frf_group(group, frf: FRF, digest: str) -> None:
@@ -138,10 +153,10 @@ def write_frf_group(group, frf: FRF, digest: str) -> None:
     freq = np.asarray(frf.freq, dtype="<f8")
     packed = np.stack([frf.values.real, frf.values.imag], axis=-1).astype("<f8")
     for name, data in (("freq", freq), ("values", packed)):
-        dset = group.create_dataset(name, shape=data.shape, dtype="<f8", chunks=(rows, *data.shape[1:]), **_FILTERS)
+        dset = _new_dataset(group.id, name, data.shape, (rows, *data.shape[1:]))
         zeros = (0,) * (data.ndim - 1)
         for i in range(0, n_freq, rows):
-            dset.id.write_direct_chunk((i, *zeros), _filtered_chunk(data[i:i + rows], rows))
+            dset.write_direct_chunk((i, *zeros), _filtered_chunk(data[i:i + rows], rows))
     _write_attrs(group.id, (("format", FORMAT), ("format_version", FORMAT_VERSION), ("sha256", digest),
                             ("quantity", frf.quantity.value), ("outputs", ",".join(map(str, frf.outputs))),
                             ("inputs", ",".join(map(str, frf.inputs))), ("complex_convention", COMPLEX_CONVENTION),
