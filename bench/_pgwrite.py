@@ -307,8 +307,8 @@ def _round_line(per: dict, what: str, commit: str) -> str:
     parts = []
     for label, name in (("before", commit), ("after", "this tree")):
         x = per[(what, label)]
-        parts.append(f"{name} {x['n'] / x['ms'] * 1e3:.1f}/s (CPU {x['cpu_ms'] / x['n']:.2f} ms, "
-                     f"{x['statements'] / x['n']:.1f} statements, {x['trips'] / x['n']:.1f} round trips)")
+        sql = f", {x['statements'] / x['n']:.1f} statements, {x['trips'] / x['n']:.1f} round trips" if what == "pg" else ""
+        parts.append(f"{name} {x['n'] / x['ms'] * 1e3:.1f}/s (CPU {x['cpu_ms'] / x['n']:.2f} ms{sql})")
     ratio = per[(what, "before")]["ms"] / per[(what, "after")]["ms"]
     return f"{_NAMES[what]} " + ", ".join(parts) + f" = {ratio:.2f}x"
 
