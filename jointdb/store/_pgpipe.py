@@ -25,7 +25,7 @@ import functools
 from typing import Any
 
 
-@functools.cache
+@functools.lru_cache(maxsize=512)  # (per engine's dialect: bounded, for processes that open many)
 def _compiled(stmt, dialect, keys: tuple[str, ...] | None):
     """``(compiled, sql, {bind name: processor})`` of a statement (``keys``: the columns an INSERT or
     UPDATE without explicit values is compiled for)."""
