@@ -273,17 +273,20 @@ def _alternate(kids: dict, commit: str, base, rounds: int, n_sqlite: int, n_pg: 
     """Run the blocks of :func:`compare`; print each round and the summary."""
     whats = [("sqlite", n_sqlite)] + ([("pg", n_pg), ("ref", n_pg)] if base else [])
     totals: dict = {}
+    blocks: dict = {}  # what -> [old/new time ratio of each block pair]
     for r in range(rounds):
         per: dict = {}
         for what, n in whats:
             for b, start in enumerate(range(r * n, (r + 1) * n, block)):
                 count = min(block, (r + 1) * n - start)
+                pair = {}
                 for label in (("before", "after") if (b + r) % 2 == 0 else ("after", "before")):
-                    out = _ask(kids[label], what, start, count)
+                    out = pair[label] = _ask(kids[label], what, start, count)
                     acc = per.setdefault((what, label), dict.fromkeys(("n", "ms", "cpu_ms", "statements", "trips"), 0))
                     acc["n"] += count
                     for key in ("ms", "cpu_ms", "statements", "trips"):
                         acc[key] += out[key] * count
+                blocks.setdefault(what, []).append(pair["before"]["ms"] / pair["after"]["ms"])
         for key, acc in per.items():
             totals.setdefault(key, []).append(acc)
         print(f"round {r + 1}: " + " | ".join(_round_line(per, what, commit) for what, _ in whats), flush=True)
@@ -294,7 +297,8 @@ def _alternate(kids: dict, commit: str, base, rounds: int, n_sqlite: int, n_pg: 
             rate = {label: [x["n"] / x["ms"] * 1e3 for x in totals[(what, label)]] for label in ("before", "after")}
             print(f"{_NAMES[what]}: {commit} {min(rate['before']):.1f}-{max(rate['before']):.1f}, this tree "
                   f"{min(rate['after']):.1f}-{max(rate['after']):.1f} versions/s; new/old {ratios[0]:.2f}-"
-                  f"{ratios[-1]:.2f}x (median {ratios[len(ratios) // 2]:.2f}x)")
+                  f"{ratios[-1]:.2f}x (median {ratios[len(ratios) // 2]:.2f}x); median of the "
+                  f"{len(blocks[what])} block pairs {sorted(blocks[what])[len(blocks[what]) // 2]:.2f}x")
 
 
 _NAMES = {"sqlite": "SQLite", "pg": "PostgreSQL"}
