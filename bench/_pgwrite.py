@@ -11,8 +11,9 @@ for: psycopg's ``execute`` generator (a statement, or BEGIN / COMMIT) or one pip
 while the loop runs.
 
 ``compare(rev, ...)``: the same measurement (and the SQLite catalogue of ``bench_store.py``)
-run alternately on the code of git revision ``rev`` and on this tree, each run in a process
-of its own, so that a loaded machine affects both alike.
+on the code of git revision ``rev`` and on this tree, in two processes set up side by side
+that run it in turns, blocks of 10 versions each (who goes first alternates), so that a loaded
+machine affects both alike; a round's ratio is total time old / total time new.
 """
 
 from __future__ import annotations
@@ -31,13 +32,14 @@ BENCH = Path(__file__).resolve().parent
 
 
 class Counts:
-    """SQL statements (SQLAlchemy's, plus the driver's own) and round trips, while ``on``."""
+    """SQL statements (every ``execute`` / ``executemany`` of a psycopg cursor: SQLAlchemy's and those
+    sent in a pipeline; BEGIN and COMMIT are not counted) and round trips, while ``on``."""
 
     def __init__(self):
+        import psycopg
         import psycopg._cursor_base as cursor_base
         import psycopg._pipeline_base as pipeline_base
         import psycopg.generators as generators
-        from sqlalchemy import engine, event
 
         self.on, self.statements, self.trips = False, 0, 0
 
@@ -56,10 +58,18 @@ class Counts:
         counted(pipeline_base.BasePipeline, "_sync_gen")  # a pipeline's sync (its statements: one trip)
         counted(pipeline_base.BasePipeline, "_exit_gen")  # the sync on leaving a pipeline
 
-        @event.listens_for(engine.Engine, "before_cursor_execute")
-        def statement(*_):
-            if self.on:
-                self.statements += 1
+        def statement(name):
+            real = getattr(psycopg.Cursor, name)
+
+            def wrapper(*args, **kwargs):
+                if self.on:
+                    self.statements += 1
+                return real(*args, **kwargs)
+
+            setattr(psycopg.Cursor, name, wrapper)
+
+        statement("execute")
+        statement("executemany")
 
 
 @contextmanager
@@ -132,24 +142,6 @@ def measure_pg(base: str, n: int, counts: Counts) -> dict:
     return out
 
 
-def measure_sqlite(n: int) -> dict:
-    """The SQLite catalogue of ``bench_store.py`` (blobs in files), its CPU time too."""
-    from bench_store import joint_frf
-
-    from jointdb.store import Conditions, Repository
-
-    frfs = [joint_frf(1e6 * (1 + i)) for i in range(n)]
-    with tempfile.TemporaryDirectory(prefix="jointdb-bench-") as tmp:
-        repo = Repository(Path(tmp) / "cat.sqlite")
-        t0, c0 = time.perf_counter(), time.process_time()
-        for i, frf in enumerate(frfs):
-            repo.catalogue(f"J{i % 10}", "tool-holder", frf, Conditions(("steel",), torque_nm=10.0 + i),
-                           "spring-damper-planar", quality={"residual": 1e-3}, force=True)
-        wall, cpu = time.perf_counter() - t0, time.process_time() - c0
-        repo.close()
-    return {"per_s": n / wall, "ms": wall / n * 1e3, "cpu_ms": cpu / n * 1e3}
-
-
 def print_pg(out: dict, n: int) -> None:
     cat, ref = out["catalogue"], out["reference"]
     print(f"catalogue (PostgreSQL, blobs in the database): {n} versions of a 1000-line 2x2 joint FRF")
@@ -165,8 +157,79 @@ def bench_catalogue_pg(root: Path, base: str, n: int) -> None:
     print_pg(measure_pg(base, n, Counts()), n)
 
 
-def compare(rev: str, base: str | None, rounds: int, n_sqlite: int, n_pg: int) -> None:
-    """Alternate the measurements between git revision ``rev`` and this tree (module docstring)."""
+def _steppers(n: int, base: str, stack) -> dict:
+    """``{what: step(i)}``: one catalogue call each, SQLite (blobs in files) and, with ``base``,
+    PostgreSQL (blobs in the database, a fresh schema; ``ref``: the bare INSERT + COMMIT reference
+    on a psycopg connection of its own), each catalogue warmed with 10 versions first."""
+    from bench_store import joint_frf
+
+    from jointdb.store import Conditions, Repository, upgrade
+
+    frfs = [joint_frf(1e6 * (1 + i)) for i in range(n + 10)]  # every version a new FRF (a new blob)
+    tmp = stack.enter_context(tempfile.TemporaryDirectory(prefix="jointdb-bench-"))
+    repos = {"sqlite": Repository(Path(tmp) / "cat.sqlite")}
+    if base:
+        url, schema = stack.enter_context(fresh_schema(base))
+        upgrade(url)
+        repos["pg"] = Repository(url, blobs="database")
+    steps = {}
+    for what, repo in repos.items():
+        stack.callback(repo.close)
+
+        def step(i: int, repo=repo) -> None:
+            repo.catalogue(f"J{i % 10}", "tool-holder", frfs[i], Conditions(("steel",), torque_nm=10.0 + i),
+                           "spring-damper-planar", quality={"residual": 1e-3}, force=True)
+
+        steps[what] = step
+    if base:
+        steps["ref"] = _bare_insert(stack, base, schema, frfs[:n])
+    for what, step in steps.items():
+        for i in range(n, n + 10):  # warm: joints exist, statements prepared, pool filled
+            step(i)
+    return steps
+
+
+def _bare_insert(stack, base: str, schema: str, frfs: list):
+    """The reference step: INSERT the blob bytes of an FRF into a plain table and COMMIT."""
+    import psycopg
+
+    from jointdb.store._blobformat import blob_bytes
+
+    payloads = [blob_bytes(f) for f in frfs]
+    dsn = base.replace("postgresql+psycopg://", "postgresql://", 1)
+    conn = stack.enter_context(psycopg.connect(dsn, options=f"-csearch_path={schema}"))
+    conn.execute("CREATE TABLE bench_ref (sha256 varchar(80) PRIMARY KEY, data bytea NOT NULL)")
+    conn.commit()
+
+    def bare(i: int) -> None:
+        digest, data = payloads[i % len(payloads)]  # (the table's key is new every time)
+        conn.execute("INSERT INTO bench_ref (sha256, data) VALUES (%s, %s)", (f"{i}-{digest}", data))
+        conn.commit()
+
+    return bare
+
+
+def _serve(n: int, base: str) -> None:
+    """A comparison's child: set up (:func:`_steppers`, ``n`` versions at most), say where jointdb came
+    from, then answer each line ``<what> <start> <count>`` from stdin with one JSON line of :func:`_timed`."""
+    from contextlib import ExitStack
+
+    import jointdb
+
+    counts = Counts()
+    with ExitStack() as stack:
+        steps = _steppers(n, base, stack)
+        print(json.dumps({"jointdb": jointdb.__file__}), flush=True)
+        for line in sys.stdin:
+            what, start, count = line.split()
+            start, count = int(start), int(count)
+            print(json.dumps(_timed(counts, count, lambda i: steps[what](start + i))), flush=True)
+
+
+def compare(rev: str, base: str | None, rounds: int, n_sqlite: int, n_pg: int, block: int = 10) -> None:
+    """Compare git revision ``rev`` with this tree (module docstring): two child processes, one per
+    code tree, set up side by side; each measurement is split into blocks of ``block`` versions
+    run by the two in turn (who goes first alternates), so that both see the same load."""
     tree = BENCH.parent
     with tempfile.TemporaryDirectory(prefix="jointdb-before-") as before:
         archive = subprocess.run(["git", "-C", str(tree), "archive", rev, "jointdb", "migrations"], check=True,
@@ -174,46 +237,85 @@ def compare(rev: str, base: str | None, rounds: int, n_sqlite: int, n_pg: int) -
         subprocess.run(["tar", "-x", "-C", before], input=archive, check=True)
         commit = subprocess.run(["git", "-C", str(tree), "rev-parse", "--short", rev], check=True,
                                 capture_output=True, text=True).stdout.strip()
-        print(f"load average before: {os.getloadavg()[0]:.2f} {os.getloadavg()[1]:.2f} {os.getloadavg()[2]:.2f}")
-        results: dict[str, list] = {"before": [], "after": []}
-        for r in range(rounds):
-            for label, code in (("before", before), ("after", str(tree))):
+        print(f"load average before: {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
+        trees = {"before": before, "after": str(tree)}
+        kids = {}
+        try:
+            for label, code in trees.items():
                 env = {**os.environ, "PYTHONPATH": code, "OPENBLAS_NUM_THREADS": "1"}
-                cmd = [sys.executable, str(BENCH / "_pgwrite.py"), str(n_sqlite), str(n_pg), base or ""]
-                run = subprocess.run(cmd, env=env, capture_output=True, text=True)
-                if run.returncode:
-                    raise RuntimeError(f"the {label} run failed:\n{run.stderr[-3000:]}")
-                out = json.loads(run.stdout.splitlines()[-1])
-                if not Path(out["jointdb"]).resolve().is_relative_to(Path(code).resolve()):
-                    raise RuntimeError(f"the {label} run imported jointdb from {out['jointdb']}, not {code}")
-                results[label].append(out)
-                line = f"round {r + 1} {label:6s} ({commit if label == 'before' else 'this tree'}): SQLite " \
-                       f"{out['sqlite']['per_s']:6.1f} versions/s (CPU {out['sqlite']['cpu_ms']:.2f} ms)"
-                if base:
-                    cat, ref = out["pg"]["catalogue"], out["pg"]["reference"]
-                    line += (f" | PostgreSQL {cat['per_s']:6.1f} versions/s, CPU {cat['cpu_ms']:.2f} ms, "
-                             f"{cat['statements']:.1f} statements, {cat['trips']:.1f} round trips; bare "
-                             f"INSERT+COMMIT {ref['ms']:.2f} ms -> {cat['ms'] / ref['ms']:.1f}x")
-                print(line, flush=True)
-        print(f"load average after: {os.getloadavg()[0]:.2f} {os.getloadavg()[1]:.2f} {os.getloadavg()[2]:.2f}")
-        for what in (["sqlite"] + (["pg"] if base else [])):
-            pick = (lambda o: o["sqlite"]) if what == "sqlite" else (lambda o: o["pg"]["catalogue"])
-            b = [pick(o)["per_s"] for o in results["before"]]
-            a = [pick(o)["per_s"] for o in results["after"]]
-            print(f"{'SQLite' if what == 'sqlite' else 'PostgreSQL'}: before {min(b):.1f}-{max(b):.1f}, "
-                  f"after {min(a):.1f}-{max(a):.1f} versions/s (median ratio "
-                  f"{sorted(a)[len(a) // 2] / sorted(b)[len(b) // 2]:.2f}x)")
+                cmd = [sys.executable, str(BENCH / "_pgwrite.py"), str(rounds * max(n_sqlite, n_pg)), base or ""]
+                kids[label] = subprocess.Popen(cmd, env=env, stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+            for label, code in trees.items():
+                hello = kids[label].stdout.readline()
+                if not hello:
+                    raise RuntimeError(f"the {label} child failed to start (its error is above)")
+                where = json.loads(hello)["jointdb"]
+                if not Path(where).resolve().is_relative_to(Path(code).resolve()):
+                    raise RuntimeError(f"the {label} run imported jointdb from {where}, not {code}")
+            _alternate(kids, commit, base, rounds, n_sqlite, n_pg, block)
+        finally:
+            for kid in kids.values():
+                kid.stdin.close()
+                kid.wait(timeout=300)
+        print(f"load average after: {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
 
 
-def _child(n_sqlite: int, n_pg: int, base: str) -> None:
-    """One run of a comparison: JSON on the last line of stdout."""
-    import jointdb
+def _ask(kid, what: str, start: int, count: int) -> dict:
+    kid.stdin.write(f"{what} {start} {count}\n")
+    kid.stdin.flush()
+    line = kid.stdout.readline()
+    if not line:
+        raise RuntimeError("a child of the comparison died (its error is above)")
+    return json.loads(line)
 
-    out = {"jointdb": jointdb.__file__, "sqlite": measure_sqlite(n_sqlite)}
-    if base:
-        out["pg"] = measure_pg(base, n_pg, Counts())
-    print(json.dumps(out))
+
+def _alternate(kids: dict, commit: str, base, rounds: int, n_sqlite: int, n_pg: int, block: int) -> None:
+    """Run the blocks of :func:`compare`; print each round and the summary."""
+    whats = [("sqlite", n_sqlite)] + ([("pg", n_pg), ("ref", n_pg)] if base else [])
+    totals: dict = {}
+    blocks: dict = {}  # what -> [old/new time ratio of each block pair]
+    for r in range(rounds):
+        per: dict = {}
+        for what, n in whats:
+            for b, start in enumerate(range(r * n, (r + 1) * n, block)):
+                count = min(block, (r + 1) * n - start)
+                pair = {}
+                for label in (("before", "after") if (b + r) % 2 == 0 else ("after", "before")):
+                    out = pair[label] = _ask(kids[label], what, start, count)
+                    acc = per.setdefault((what, label), dict.fromkeys(("n", "ms", "cpu_ms", "statements", "trips"), 0))
+                    acc["n"] += count
+                    for key in ("ms", "cpu_ms", "statements", "trips"):
+                        acc[key] += out[key] * count
+                blocks.setdefault(what, []).append(pair["before"]["ms"] / pair["after"]["ms"])
+        for key, acc in per.items():
+            totals.setdefault(key, []).append(acc)
+        print(f"round {r + 1}: " + " | ".join(_round_line(per, what, commit) for what, _ in whats), flush=True)
+    for what, _ in whats:
+        if what != "ref":
+            pairs = list(zip(totals[(what, "before")], totals[(what, "after")]))
+            ratios = sorted(b["ms"] / a["ms"] for b, a in pairs)
+            rate = {label: [x["n"] / x["ms"] * 1e3 for x in totals[(what, label)]] for label in ("before", "after")}
+            print(f"{_NAMES[what]}: {commit} {min(rate['before']):.1f}-{max(rate['before']):.1f}, this tree "
+                  f"{min(rate['after']):.1f}-{max(rate['after']):.1f} versions/s; new/old {ratios[0]:.2f}-"
+                  f"{ratios[-1]:.2f}x (median {ratios[len(ratios) // 2]:.2f}x); median of the "
+                  f"{len(blocks[what])} block pairs {sorted(blocks[what])[len(blocks[what]) // 2]:.2f}x")
+
+
+_NAMES = {"sqlite": "SQLite", "pg": "PostgreSQL"}
+
+
+def _round_line(per: dict, what: str, commit: str) -> str:
+    if what == "ref":
+        ref = per[("ref", "after")]
+        return f"bare INSERT+COMMIT {ref['ms'] / ref['n']:.2f} ms"
+    parts = []
+    for label, name in (("before", commit), ("after", "this tree")):
+        x = per[(what, label)]
+        sql = f", {x['statements'] / x['n']:.1f} statements, {x['trips'] / x['n']:.1f} round trips" if what == "pg" else ""
+        parts.append(f"{name} {x['n'] / x['ms'] * 1e3:.1f}/s (CPU {x['cpu_ms'] / x['n']:.2f} ms{sql})")
+    ratio = per[(what, "before")]["ms"] / per[(what, "after")]["ms"]
+    return f"{_NAMES[what]} " + ", ".join(parts) + f" = {ratio:.2f}x"
 
 
 if __name__ == "__main__":
-    _child(int(sys.argv[1]), int(sys.argv[2]), sys.argv[3])
+    _serve(int(sys.argv[1]), sys.argv[2])

@@ -16,9 +16,11 @@ Prints numbers and ratios against references measured in the same process:
    printed), with the client's CPU time, the SQL statements and the round trips (psycopg
    waits for the server) per version (:mod:`bench._pgwrite`).
 4. With ``--compare REV`` (a git revision, e.g. the main branch before a change) the
-   catalogue runs of 1 and 3 alternate between that revision's code (``git archive`` into a
-   temporary directory) and this tree's, each run in a process of its own, ``--rounds``
-   times (default 3), with the load average before and after.
+   catalogues of 1 and 3 run on that revision's code (``git archive`` into a temporary
+   directory) and on this tree's, in two processes set up side by side that take turns in
+   blocks of 10 versions (who goes first alternates; every version a new FRF), ``--rounds``
+   rounds (default 3) of 100 (SQLite) and 200 (PostgreSQL) versions each; per round the
+   ratio old/new of the total times, with the load average before and after.
 
 Run: ``.venv/bin/python bench/bench_store.py [--quick] [--pg postgresql+psycopg://...]
 [--compare REV [--rounds N]]``.

@@ -27,6 +27,14 @@ The statements are built once per process and executed on the transaction's
 connection (no ORM unit of work: the rows are only inserted, never changed, so
 the immutability hook of the ORM has nothing to check). The rows are the ones
 the ORM path wrote before; ``jointdb db check`` recomputes the index from history.
+
+On PostgreSQL through psycopg (:func:`jointdb.store._chain.pipelined`) the statements
+go in batches, each one round trip (:class:`jointdb.store._pgpipe.Batch`; the server
+runs them in order, each on its own snapshot): after the BEGIN, (1) the joint's lock,
+then its head and ``nextval`` of the version ids; (2) the version and audit rows, the
+query index, the stamp, then the history chain's advisory lock and its head; (3) at
+commit, the chain's entries and the blob's row (:func:`jointdb.store._chain.queue`);
+then the COMMIT: five round trips (a new joint: one more, its row).
 """
 
 from __future__ import annotations
@@ -35,12 +43,21 @@ import functools
 import uuid as uuidlib
 from types import SimpleNamespace
 
-from sqlalchemy import and_, bindparam, false, func, insert, or_, select, true, update
+from sqlalchemy import and_, bindparam, false, func, insert, or_, select, text, true, update
 
 from jointdb.errors import ConflictError, InputError
-from jointdb.store._chain import append_chain, content_hash, stored_columns
+from jointdb.store._chain import (
+    append_chain,
+    content_hash,
+    head_of,
+    hold_head,
+    lock_and_head,
+    pipelined,
+    stored_columns,
+)
 from jointdb.store._identity import contradiction, identity_changes, same_content
-from jointdb.store._index import add_counts, bump, index_values
+from jointdb.store._index import bump, bump_params, bump_pg, count_params, count_upsert, index_values, prune
+from jointdb.store._pgpipe import Batch
 from jointdb.store._models import (
     AuditRow,
     IdempotencyRow,
@@ -67,7 +84,10 @@ def _statements() -> SimpleNamespace:
     state = (select(s.c.state)
              .where(s.c.joint_id == j.c.id, or_(s.c.version.is_(None), s.c.version == func.coalesce(v.c.version, 0) + 1))
              .order_by(s.c.at.desc(), s.c.id.desc()).limit(1).correlate(j, v).scalar_subquery())
-    head = (select(j.c.id, j.c.joint_type, state.label("state"), *[v.c[c] for c in _PREV])
+    # the joint's listed version is a deprecated one (it has no active version): a new version takes its place
+    moved = (select(q.c.version_id).where(q.c.joint_id == j.c.id, q.c.listed, q.c.newest_active == false())
+             .correlate(j).exists())
+    head = (select(j.c.id, j.c.joint_type, state.label("state"), moved.label("moved"), *[v.c[c] for c in _PREV])
             .select_from(j.outerjoin(v, and_(v.c.joint_id == j.c.id, v.c.version == latest_of_name)))
             .where(j.c.name == bindparam("name")))
     return SimpleNamespace(
@@ -89,6 +109,8 @@ def _statements() -> SimpleNamespace:
         clear_all=(update(q).where(q.c.joint_id == bindparam("jid"), or_(q.c.newest, q.c.newest_active, q.c.listed))
                    .values(newest=False, newest_active=False, listed=False)),
         insert_index=insert(q),
+        # PostgreSQL: the new version's row id, taken before its INSERT (its index rows are sent with it)
+        next_version_id=text("SELECT nextval(pg_get_serial_sequence('joint_versions', 'id'))"),
         insert_geometry=insert(QueryGeometryRow.__table__),
     )
 
@@ -129,11 +151,20 @@ def _insert_history(conn, rows: list[tuple[str, dict]]) -> list[tuple]:
     """
     if conn.dialect.name != "postgresql":
         return [(kind, conn.execute(_insert(kind), values).inserted_primary_key[0], None) for kind, values in rows]
+    shape, params = _history_params(rows)
+    return _hashed(shape, conn.execute(_insert_returning(shape), params).one()._mapping)
+
+
+def _history_params(rows: list[tuple[str, dict]]) -> tuple[tuple, dict]:
+    """The shape and the parameters of :func:`_insert_returning` for history rows ``(kind, values)``."""
     shape = tuple((kind, tuple(sorted(values))) for kind, values in rows)
-    params = {f"r{n}_{c}": v for n, (_, values) in enumerate(rows) for c, v in values.items()}
-    stored = conn.execute(_insert_returning(shape), params).one()._mapping
+    return shape, {f"r{n}_{c}": v for n, (_, values) in enumerate(rows) for c, v in values.items()}
+
+
+def _hashed(shape: tuple, stored) -> list[tuple]:
+    """``(kind, id, content hash)`` of each row :func:`_insert_returning` returned (``stored``: a mapping)."""
     out = []
-    for n, (kind, _) in enumerate(rows):
+    for n, (kind, _) in enumerate(shape):
         prefix = f"r{n}_"
         row = {k[len(prefix):]: v for k, v in stored.items() if k.startswith(prefix)}
         out.append((kind, row["id"], content_hash(kind, row)))
@@ -221,20 +252,20 @@ def write_version(session, *, name, joint_type, frf, cond, kind, prov, qual, par
     InputError
         ``idempotency``'s key was used for another request.
     """
-    st = _statements()
     conn = session.connection()
     answer = idempotent_answer(conn, idempotency)
     if answer is not None:
         return SimpleNamespace(version=None, name=answer[0], number=answer[1], created=answer[2] == 201)
     now = utcnow()
-    head = _locked_head(conn, name)
+    fast = pipelined(conn)  # PostgreSQL: the statements in batches, one round trip each (module docstring)
+    head, next_id = _locked_head(conn, name, fast)
     history = []
     if head is None:
         history += _insert_history(conn, [("joint", {"name": name, "joint_type": joint_type, "created_at": now,
                                                      "created_by": actor})])
-        jid, latest, state = history[0][1], None, None
+        jid, latest, state, moved = history[0][1], None, None, False
     else:
-        jid, latest, state = head.id, head.version, head.state
+        jid, latest, state, moved = head.id, head.version, head.state, bool(head.moved)
         if head.joint_type != joint_type:
             raise ConflictError(f"joint {name!r} is a {head.joint_type} joint, not {joint_type}; use another name")
     if parent is not None and (latest is None or parent > latest):
@@ -250,27 +281,19 @@ def write_version(session, *, name, joint_type, frf, cond, kind, prov, qual, par
                        parent if parent is not None else latest)
     audit = {"at": now, "actor": actor, "action": "catalogue", "joint_name": name, "version": number,
              "details": details}
-    history += _insert_history(conn, [("version", dict(vars(row))), ("audit", audit)])
-    row.id = history[-2][1]
-    append_chain(session, history)
-    found = head is not None
-    _remember(conn, idempotency, name, number, 201, now)
     deprecated = state == "deprecated"
-    # the joint's listed version was a deprecated one (it has no active version): the new one takes its place
-    moved = found and conn.execute(st.clear_listed_deprecated, {"jid": jid}).rowcount > 0
-    if found:
-        conn.execute(st.clear_newest if deprecated else st.clear_all, {"jid": jid})
-    listed = not found or moved or not deprecated
-    if not found:
-        add_counts(conn, {(joint_type, deprecated): 1})
-    elif moved and not deprecated:
-        add_counts(conn, {(joint_type, True): -1, (joint_type, False): 1})
-    values, geometry = index_values(row.id, (jid, name, joint_type), number, row.materials, row.torque_nm,
-                                    row.preload_n, row.geometry, (deprecated, True, not deprecated, listed))
-    conn.execute(st.insert_index, values)
-    if geometry:
-        conn.execute(st.insert_geometry, geometry)
-    bump(conn, [jid])  # the stamp and the query index's change log
+    standing = (head is not None, moved, deprecated)
+    if fast:
+        row.id = next_id
+        history += _write_rows_pipelined(session, conn, row, audit, (jid, name, joint_type), standing)
+    else:
+        history += _insert_history(conn, [("version", dict(vars(row))), ("audit", audit)])
+        row.id = history[-2][1]
+        for stmt, params in _index_plan(conn, row, (jid, name, joint_type), standing):
+            conn.execute(stmt, params)
+        bump(conn, [jid])  # the stamp and the query index's change log
+    append_chain(session, history)
+    _remember(conn, idempotency, name, number, 201, now)
     joint = SimpleNamespace(id=jid, name=name, joint_type=joint_type)
     labels: tuple[str, ...] = ()
     if label is not None:
@@ -296,14 +319,71 @@ def _version_row(name, joint_type, jid, number, now, actor, frf, cond, kind, pro
     return row
 
 
-def _locked_head(conn, name: str):
-    """The joint's row (locked), its latest version's columns and the next version's state, or None
-    for a new joint (module docstring, step 1)."""
+def _index_plan(conn, row, joint: tuple[int, str, str], standing: tuple[bool, bool, bool]) -> list[tuple]:
+    """The query index's statements ``(statement, parameters)`` for the new version ``row`` (its id set)
+    of ``joint`` ``(id, name, type)``; ``standing``: ``(the joint existed, its listed version is
+    deprecated, the new version is deprecated)``, as read under the joint row's lock."""
     st = _statements()
+    jid, _, joint_type = joint
+    found, moved, deprecated = standing
+    plan = []
+    if moved and deprecated:  # the deprecated listed version hands the head to the new (deprecated) one
+        plan.append((st.clear_listed_deprecated, {"jid": jid}))
+    if found:  # (clear_all also clears the listed flag of a deprecated listed version)
+        plan.append((st.clear_newest if deprecated else st.clear_all, {"jid": jid}))
+    counts = {}
+    if not found:
+        counts = {(joint_type, deprecated): 1}
+    elif moved and not deprecated:
+        counts = {(joint_type, True): -1, (joint_type, False): 1}
+    plan += [(count_upsert(conn.dialect.name), params) for params in count_params(counts)]
+    listed = not found or moved or not deprecated
+    values, geometry = index_values(row.id, joint, row.version, row.materials, row.torque_nm, row.preload_n,
+                                    row.geometry, (deprecated, True, not deprecated, listed))
+    plan.append((st.insert_index, values))
+    if geometry:
+        plan.append((st.insert_geometry, geometry))
+    return plan
+
+
+def _write_rows_pipelined(session, conn, row, audit: dict, joint: tuple[int, str, str],
+                          standing: tuple[bool, bool, bool]) -> list[tuple]:
+    """PostgreSQL: the version and audit rows, the query index, the stamp, and the history chain's
+    lock and head, in one round trip (:class:`~jointdb.store._pgpipe.Batch`); returns the history
+    rows ``(kind, id, content hash)`` (hashed from the rows as stored) and notes the chain's head
+    as held (:func:`~jointdb.store._chain.hold_head`): their entries go out with the commit."""
+    batch = Batch(conn)
+    shape, params = _history_params([("version", dict(vars(row))), ("audit", audit)])
+    inserted = batch.add(_insert_returning(shape), params)
+    for stmt, values in _index_plan(conn, row, joint, standing):
+        batch.add(stmt, values)
+    bumped = batch.add(bump_pg(), bump_params([joint[0]]))
+    for stmt in lock_and_head():
+        chain = batch.add(stmt)
+    cursors = batch.run()
+    prune(conn, int(cursors[bumped].fetchone()[0]))
+    hold_head(session, *head_of(cursors[chain].fetchone()))
+    return _hashed(shape, cursors[inserted].fetchone()._asdict())
+
+
+def _locked_head(conn, name: str, fast: bool) -> tuple:
+    """``(head, next version id)``: the joint's row (locked), its latest version's columns, whether
+    its listed version is deprecated and the next version's state, or None for a new joint
+    (module docstring, step 1); with ``fast`` (PostgreSQL, pipelined), the new version's row id
+    too, all in one round trip, else None."""
+    st = _statements()
+    if fast:  # the lock, then the head in a statement of its own (its snapshot after the lock's grant)
+        batch = Batch(conn)
+        for stmt in (st.joint, st.head):
+            batch.add(stmt, {"name": name})
+        batch.add(st.next_version_id)
+        locked, head, next_id = batch.run()
+        found = locked.fetchone() is not None
+        return (head.fetchone() if found else None), int(next_id.fetchone()[0])
     if conn.dialect.name == "postgresql" and conn.execute(st.joint, {"name": name}).first() is None:
-        return None  # a new joint (a concurrent creator of the same name fails on the unique name)
+        return None, None  # a new joint (a concurrent creator of the same name fails on the unique name)
     # after the lock: this statement's snapshot includes what the lock's previous holder committed
-    return conn.execute(st.head, {"name": name}).first()
+    return conn.execute(st.head, {"name": name}).first(), None
 
 
 def _same_joint(name: str, prev, new: dict, force: bool, allow_identical: bool, details: dict) -> int | None:

@@ -40,6 +40,7 @@ from sqlalchemy.orm import Mapped, Session, mapped_column
 
 from jointdb.errors import InputError, IntegrityError
 from jointdb.store._models import AuditRow, Base, JointRow, PartRow, PartVersionRow, StateRow, VersionRow
+from jointdb.store._pgpipe import Batch
 
 ZERO = "0" * 64
 CHECKPOINT_FORMAT = "jointdb-checkpoint/1"
@@ -49,6 +50,8 @@ KINDS = {"joint": JointRow, "version": VersionRow, "state": StateRow, "audit": A
          "part": PartRow, "part_version": PartVersionRow}  # parts: migration 0009
 _KIND_OF = {cls: kind for kind, cls in KINDS.items()}
 _PENDING = "jointdb_chain_pending"
+_HELD = "jointdb_chain_held"  # (seq, head) read under the lock by this transaction
+_QUEUED = "jointdb_chain_queued"  # statements sent with the chain's entries at commit
 
 
 class ChainRow(Base):
@@ -145,10 +148,12 @@ def _lock(conn) -> None:
                           "hashtext(current_schema()))"))
 
 
-def _append(conn, rows: list[tuple[str, int, str | None]]) -> None:
+def _append(conn, rows: list[tuple[str, int, str | None]], held: tuple[int, str] | None = None,
+            queued: list | None = None) -> None:
     # the rows' content first (this transaction's own rows: no lock needed; a content hash taken from
     # the row its INSERT returned is not read again), then, under the lock held to commit, only the
-    # chain's head and the insert
+    # chain's head and the insert. ``held``: the head this transaction read under the lock already
+    # (:func:`hold_head`); ``queued``: statements sent with the insert (:func:`queue`)
     known = {(k, i): c for k, i, c in rows if c is not None}
     todo = []
     for kind in KINDS:
@@ -160,15 +165,32 @@ def _append(conn, rows: list[tuple[str, int, str | None]]) -> None:
             if content is None:
                 raise IntegrityError(f"history row {kind} {row_id} vanished before its chain entry was written")
             todo.append((kind, row_id, content))
-    seq, head = _locked_head(conn)
+    if held is None and todo:
+        held = _locked_head(conn)
+    seq, head = held or (0, ZERO)
     entries = []
     for kind, row_id, content in todo:
         seq += 1
         head = next_head(head, seq, kind, row_id, content)
         entries.append({"seq": seq, "kind": kind, "row_id": row_id, "content_sha256": content, "head_sha256": head})
-    # executemany: psycopg sends the rows in one pipeline (one round trip), and the statement is compiled
-    # once (a multi-row VALUES statement would be compiled again for every call: 10x the CPU time)
-    conn.execute(insert(ChainRow.__table__), entries)
+    if not queued:
+        # executemany: psycopg sends the rows in one pipeline (one round trip), and the statement is compiled
+        # once (a multi-row VALUES statement would be compiled again for every call: 10x the CPU time)
+        conn.execute(_chain_insert(), entries)
+        return
+    batch = Batch(conn)  # the entries and the queued statements in one round trip
+    if entries:
+        batch.add(_chain_insert(), entries)
+    positions = [(batch.add(stmt, params), then) for stmt, params, then in queued]
+    cursors = batch.run()
+    for position, then in positions:
+        if then is not None:
+            then(cursors[position])
+
+
+@functools.cache
+def _chain_insert():
+    return insert(ChainRow.__table__)
 
 
 _HEAD = "SELECT seq, head_sha256 FROM history_chain ORDER BY seq DESC LIMIT 1"
@@ -184,6 +206,34 @@ def _pipelines() -> bool:
     return bool(psycopg.Pipeline.is_supported())
 
 
+def pipelined(conn) -> bool:
+    """Whether statements can be sent to ``conn``'s database several in one round trip
+    (:class:`jointdb.store._pgpipe.Batch`: PostgreSQL through psycopg, libpq with pipeline mode).
+
+    Parameters
+    ----------
+    conn
+        A SQLAlchemy Connection.
+
+    Returns
+    -------
+    bool
+    """
+    return conn.dialect.name == "postgresql" and conn.dialect.driver == "psycopg" and _pipelines()
+
+
+@functools.cache
+def lock_and_head() -> tuple:
+    """The chain's advisory lock and its head's SELECT, for a :class:`~jointdb.store._pgpipe.Batch`
+    (queued in this order: the SELECT runs after the lock is granted, on a snapshot of its own)."""
+    return text(_LOCK), text(_HEAD)
+
+
+def head_of(row) -> tuple[int, str]:
+    """``(seq, head)`` from the row of the head's SELECT (None: the chain is empty)."""
+    return (int(row[0]), row[1]) if row else (0, ZERO)
+
+
 def _locked_head(conn) -> tuple[int, str]:
     """``(seq, head)`` of the chain's last entry (``(0, ZERO)`` when empty), read under the chain's lock.
 
@@ -191,22 +241,25 @@ def _locked_head(conn) -> tuple[int, str]:
     round trip; the SELECT runs after the lock is granted, on a snapshot of its own, as two
     statements would); errors come back as SQLAlchemy's, as from ``conn.execute``.
     """
-    if conn.dialect.name != "postgresql" or conn.dialect.driver != "psycopg" or not _pipelines():
+    if not pipelined(conn):
         _lock(conn)
         return chain_head(conn)
-    import psycopg
-    from sqlalchemy.exc import DBAPIError
+    batch = Batch(conn)
+    for stmt in lock_and_head():
+        batch.add(stmt)
+    return head_of(batch.run()[1].fetchone())
 
-    raw = conn.connection.driver_connection
-    try:
-        with raw.pipeline():  # sent together; leaving the block syncs once and receives both results
-            raw.execute(_LOCK)
-            head = raw.execute(_HEAD)
-        last = head.fetchone()
-    except psycopg.Error as exc:
-        raise DBAPIError.instance(_LOCK + "; " + _HEAD, None, exc, psycopg.Error,
-                                  dialect=conn.dialect) from exc
-    return (int(last[0]), last[1]) if last else (0, ZERO)
+
+def hold_head(session: Session, seq: int, head: str) -> None:
+    """Note that ``session``'s transaction holds the chain's lock and read its head ``(seq, head)``
+    (:func:`lock_and_head`): its rows are appended at commit without reading the head again."""
+    session.info[_HELD] = (seq, head)
+
+
+def queue(session: Session, stmt, params: dict, then=None) -> None:
+    """Send ``stmt`` (with ``params``) at commit, in the round trip that inserts the chain's entries
+    (only on a :func:`pipelined` connection); ``then(cursor)`` gets its result there."""
+    session.info.setdefault(_QUEUED, []).append((stmt, params, then))
 
 
 def append_chain(session: Session, rows: Iterable[tuple]) -> None:
@@ -232,13 +285,15 @@ def _note_new_rows(session: Session, flush_context) -> None:
 def _append_pending(session: Session) -> None:
     session.flush()
     rows = session.info.pop(_PENDING, None)
-    if rows:
-        _append(session.connection(), rows)
+    held, queued = session.info.pop(_HELD, None), session.info.pop(_QUEUED, None)
+    if rows or queued:
+        _append(session.connection(), rows or [], held, queued)
 
 
 @event.listens_for(Session, "after_soft_rollback")
 def _forget_pending(session: Session, previous_transaction) -> None:
-    session.info.pop(_PENDING, None)
+    for key in (_PENDING, _HELD, _QUEUED):
+        session.info.pop(key, None)
 
 
 def build_chain(conn) -> int:

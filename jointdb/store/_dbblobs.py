@@ -18,6 +18,7 @@ writes it again, so a writer can never reference a collected blob.
 from __future__ import annotations
 
 import functools
+import threading
 from collections.abc import Iterator
 from concurrent import futures
 from datetime import datetime, timezone
@@ -29,6 +30,7 @@ from jointdb.errors import IntegrityError, NotFoundError
 from jointdb.frf import FRF
 from jointdb.store._blobformat import blob_bytes, check_digest, decode_blob_bytes, frf_sha256, verify_blob_bytes
 from jointdb.store._blobs import BlobInfo, VerifyingBlobs
+from jointdb.store._chain import pipelined, queue
 from jointdb.store._durable import executor
 from jointdb.store._models import BlobRow
 
@@ -57,36 +59,62 @@ def _blob_insert(dialect: str, touch: bool):
     return stmt.on_conflict_do_nothing(index_elements=["sha256"]).returning(BlobRow.sha256)
 
 
-def _encoded(frf: FRF, digest: str) -> bytes:
-    """The blob file's bytes of ``frf``, decoded once and compared with it (IntegrityError if not)."""
-    _, data = blob_bytes(frf, digest)
-    verify_blob_bytes(data, frf, digest)  # the one decode: these bytes give back this FRF
-    return data
-
-
 class SessionPut:
     """A database blob being encoded and verified on a worker thread, written in the transaction of
     its version (see :meth:`DatabaseBlobStore.put_pending`); the interface of
-    :class:`~jointdb.store._durable.PendingPut`."""
+    :class:`~jointdb.store._durable.PendingPut`.
+
+    The worker encodes the bytes, hands them over (:meth:`wait` can queue their INSERT) and then
+    decodes them and compares them with the FRF; the transaction commits only after that
+    verification passed (on a pipelined PostgreSQL connection it runs while the INSERT travels)."""
 
     def __init__(self, store: "DatabaseBlobStore", digest: str, frf: FRF):
         self.store, self.digest = store, digest
-        self._encoding = executor().submit(_encoded, frf, digest)
+        self._data: bytes | None = None
+        self._encoded = threading.Event()
+        self._encoding = executor().submit(self._encode_and_verify, frf)
+
+    def _encode_and_verify(self, frf: FRF) -> bytes:
+        try:
+            _, data = blob_bytes(frf, self.digest)
+            self._data = data
+        finally:
+            self._encoded.set()  # (no data: the error is the future's)
+        verify_blob_bytes(data, frf, self.digest)  # the one decode: these bytes give back this FRF
+        return data
+
+    def _bytes(self) -> bytes:
+        """The encoded bytes, once the worker has them (not yet verified)."""
+        self._encoded.wait()
+        if self._data is None:
+            self._encoding.result()  # raises what the encoder met
+        return self._data
+
+    def verified(self) -> bytes:
+        """The bytes once they read back as the FRF.
+
+        Raises
+        ------
+        IntegrityError
+            They did not (the transaction that holds them must not commit).
+        """
+        return self._encoding.result()
 
     def wait(self, session: Session | None = None) -> str:
-        """Write the blob in ``session`` (committed with it), or in its own transaction; its digest.
+        """Write the blob in ``session`` (committed with it, after its verification), or in its own
+        transaction; its digest.
 
         Raises
         ------
         IntegrityError
             The encoded bytes did not read back as the FRF (nothing is written).
         """
-        data = self._encoding.result()  # the same bytes again when a retried transaction waits again
         if session is None:
+            data = self.verified()
             with Session(self.store.engine) as own, own.begin():
                 self.store._write(own, self.digest, data)
         else:
-            self.store._write(session, self.digest, data)
+            self.store._write(session, self.digest, self._bytes(), self.verified)
         return self.digest
 
     def join(self) -> None:
@@ -127,22 +155,42 @@ class DatabaseBlobStore(VerifyingBlobs):
         in its own transaction."""
         return SessionPut(self, frf_sha256(frf), frf)
 
-    def _write(self, session: Session, digest: str, data: bytes) -> None:
-        """Insert (or touch) a verified blob in ``session``; a damaged stored copy is replaced.
+    def _write(self, session: Session, digest: str, data: bytes, verified=None) -> None:
+        """Insert (or touch) a blob in ``session``; a damaged stored copy is replaced.
 
         A new blob is one ``INSERT ... ON CONFLICT DO NOTHING RETURNING``; only when the row exists is it
         read (and replaced when damaged) and its ``touched_at`` refreshed (in one upsert, which
-        waits for a ``gc`` holding the row's lock and writes it again if ``gc`` deleted it)."""
+        waits for a ``gc`` holding the row's lock and writes it again if ``gc`` deleted it). On a
+        pipelined PostgreSQL connection the INSERT is sent at commit, in the round trip of the
+        history chain's entries (:func:`jointdb.store._chain.queue`), and the rest follows there.
+        ``verified()`` (when given) returns once the bytes are known to read back, or raises: it is
+        waited for before the commit (before the INSERT when that is not sent at commit)."""
         now = _now()
         conn = session.connection()
         params = {"sha256": digest, "data": data, "size": len(data), "now": now}
+        insert = _blob_insert(conn.dialect.name, False)
+        if pipelined(conn):
+            def then(cursor) -> None:
+                if verified is not None:
+                    verified()  # IntegrityError: the transaction does not commit
+                if cursor.fetchone() is None:  # the row exists
+                    self._existing(session, digest, data, params)
+
+            queue(session, insert, params, then)
+            return
+        if verified is not None:
+            verified()
         if conn.dialect.insert_returning:  # a row back: inserted (SQLite >= 3.35 and PostgreSQL)
-            if conn.execute(_blob_insert(conn.dialect.name, False), params).first() is not None:
+            if conn.execute(insert, params).first() is not None:
                 return
+        self._existing(session, digest, data, params)
+
+    def _existing(self, session: Session, digest: str, data: bytes, params: dict) -> None:
+        """The blob's row exists (or existed): replace it when damaged, refresh ``touched_at``."""
         existing = session.get(BlobRow, digest)
         if existing is not None and bytes(existing.data) != data and self._check(digest, existing.data):
             existing.data, existing.size = data, len(data)
-        session.execute(_blob_insert(conn.dialect.name, True), params)
+        session.execute(_blob_insert(session.connection().dialect.name, True), params)
 
     # ------------------------------------------------------------------- read
     @staticmethod

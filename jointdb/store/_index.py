@@ -31,13 +31,14 @@ of migrations ``0002``/``0003`` do not apply to them; :func:`index_problems`
 
 from __future__ import annotations
 
+import functools
 import json
 import struct
 import uuid
 from collections.abc import Iterable, Sequence
 from typing import Any
 
-from sqlalchemy import Connection, delete, insert, inspect, select, text, update
+from sqlalchemy import Connection, bindparam, delete, insert, inspect, select, text, update
 from sqlalchemy.orm import Session
 
 from jointdb.store._models import (
@@ -135,21 +136,35 @@ def index_values(version_id: int, joint: tuple[int, str, str], number: int, mate
     return row, geo
 
 
+@functools.cache
+def count_upsert(dialect: str):
+    """The statement that adds ``joints`` to the ``query_counts`` row ``(joint_type, deprecated)``
+    (parameters of those names; inserted when missing: ``ON CONFLICT DO UPDATE``), per dialect."""
+    t = QueryCountRow.__table__
+    if dialect == "postgresql":
+        from sqlalchemy.dialects.postgresql import insert as upsert
+    else:
+        from sqlalchemy.dialects.sqlite import insert as upsert
+    stmt = upsert(t).values(joint_type=bindparam("joint_type"), deprecated=bindparam("deprecated"),
+                            joints=bindparam("joints"))
+    return stmt.on_conflict_do_update(index_elements=[t.c.joint_type, t.c.deprecated],
+                                      set_={"joints": t.c.joints + stmt.excluded.joints})
+
+
+def count_params(deltas: dict[tuple[str, bool], int]) -> list[dict]:
+    """The parameters of :func:`count_upsert`, one dict per changed row, for ``{(joint_type, deprecated):
+    change}`` (in a fixed order: two writers lock the rows in the same order)."""
+    return [{"joint_type": joint_type, "deprecated": bool(deprecated), "joints": change}
+            for (joint_type, deprecated), change in sorted(deltas.items()) if change]
+
+
 def add_counts(session: Session | Connection, deltas: dict[tuple[str, bool], int]) -> None:
     """Add ``{(joint_type, deprecated): change}`` to ``query_counts`` (in the caller's write
     transaction). One upsert per changed row: two writers adding the first joints of a new type
     at once do not collide on the missing row (PostgreSQL and SQLite ``ON CONFLICT DO UPDATE``)."""
-    t = QueryCountRow.__table__
     conn = session.connection() if isinstance(session, Session) else session
-    if conn.dialect.name == "postgresql":
-        from sqlalchemy.dialects.postgresql import insert as upsert
-    else:
-        from sqlalchemy.dialects.sqlite import insert as upsert
-    for (joint_type, deprecated), change in sorted(deltas.items()):
-        if change:
-            stmt = upsert(t).values(joint_type=joint_type, deprecated=bool(deprecated), joints=change)
-            conn.execute(stmt.on_conflict_do_update(index_elements=[t.c.joint_type, t.c.deprecated],
-                                                    set_={"joints": t.c.joints + stmt.excluded.joints}))
+    for params in count_params(deltas):
+        conn.execute(count_upsert(conn.dialect.name), params)
 
 
 def _count_changes(joint_type: str, before: Iterable[tuple], after: Iterable[tuple]) -> dict[tuple[str, bool], int]:
@@ -187,20 +202,38 @@ def bump(session: Session | Connection, joint_ids: Iterable[int] | None = None) 
         The new generation.
     """
     t, c = QueryStampRow.__table__, QueryChangeRow.__table__
-    ids = sorted({int(j) for j in joint_ids}) if joint_ids is not None else []
     conn = session.connection() if isinstance(session, Session) else session
     if conn.dialect.name == "postgresql":  # one round trip: the stamp and the log in one statement
-        generation = int(conn.execute(text(
-            "WITH s AS (UPDATE query_stamp SET generation = generation + 1 WHERE id = 1 RETURNING generation) "
-            "INSERT INTO query_changes (generation, joint_id) SELECT s.generation, j "
-            "FROM s, unnest(CAST(:ids AS integer[])) AS j RETURNING generation"), {"ids": ids or [None]}).first()[0])
+        generation = int(conn.execute(bump_pg(), bump_params(joint_ids)).first()[0])
     else:
+        ids = sorted({int(j) for j in joint_ids}) if joint_ids is not None else []
         generation = int(conn.execute(update(t).where(t.c.id == 1).values(generation=t.c.generation + 1)
                                       .returning(t.c.generation)).scalar_one())
         conn.execute(insert(c), [{"generation": generation, "joint_id": j} for j in ids or [None]])
-    if generation % PRUNE_EVERY == 0:
-        conn.execute(delete(c).where(c.c.generation <= generation - KEEP_GENERATIONS))
+    prune(conn, generation)
     return generation
+
+
+@functools.cache
+def bump_pg():
+    """PostgreSQL: :func:`bump` in one statement (parameter ``ids``: :func:`bump_params`), which
+    returns the new generation (then :func:`prune`)."""
+    return text("WITH s AS (UPDATE query_stamp SET generation = generation + 1 WHERE id = 1 RETURNING generation) "
+                "INSERT INTO query_changes (generation, joint_id) SELECT s.generation, j "
+                "FROM s, unnest(CAST(:ids AS integer[])) AS j RETURNING generation")
+
+
+def bump_params(joint_ids: Iterable[int] | None) -> dict:
+    """The parameters of :func:`bump_pg` (no joints: one NULL entry, "refetch everything")."""
+    ids = sorted({int(j) for j in joint_ids}) if joint_ids is not None else []
+    return {"ids": ids or [None]}
+
+
+def prune(conn: Connection, generation: int) -> None:
+    """Every :data:`PRUNE_EVERY` generations, drop the change log older than :data:`KEEP_GENERATIONS`."""
+    if generation % PRUNE_EVERY == 0:
+        c = QueryChangeRow.__table__
+        conn.execute(delete(c).where(c.c.generation <= generation - KEEP_GENERATIONS))
 
 
 def refresh_joints(session: Session, joint_ids: Iterable[int]) -> None:

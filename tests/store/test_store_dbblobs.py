@@ -144,3 +144,58 @@ def test_a_refused_version_writes_no_blob(dbrepo):
     forced = dbrepo.catalogue("DB-R", "tool-holder", spring_joint(k=(7e6, 9e4)), cond, "spring-damper-planar",
                               force=True)
     assert forced.version == 2 and _count(dbrepo, "frf_blobs") == 5 and dbrepo.check().ok
+
+
+def test_a_postgresql_version_is_five_round_trips(dbrepo, backend, monkeypatch):
+    """On PostgreSQL a new version of a joint is BEGIN, three batches of statements (one round trip each:
+    the lock and head; the rows, index, stamp and chain head; the chain entries and the blob) and COMMIT
+    (jointdb/store/_catalogue.py). Counted at psycopg: every statement or command it waits for outside
+    a pipeline, and every pipeline sync; the rows and the chain are checked afterwards."""
+    if backend.name != "postgresql":
+        pytest.skip("round trips of the PostgreSQL catalogue")
+    import psycopg._cursor_base as cursor_base
+    import psycopg._pipeline_base as pipeline_base
+    import psycopg.generators as generators
+
+    trips = []
+    for module, name in ((cursor_base, "execute"), (generators, "execute"), (pipeline_base.BasePipeline, "_sync_gen"),
+                         (pipeline_base.BasePipeline, "_exit_gen")):
+        real = getattr(module, name)
+        monkeypatch.setattr(module, name, lambda *a, _real=real, _name=name, **k: trips.append(_name) or _real(*a, **k))
+    dbrepo.catalogue("RT", "tool-holder", spring_joint(k=(1e6, 1e4)), planar_conditions(), "spring-damper-planar")
+    for n in range(3):
+        trips.clear()
+        dbrepo.catalogue("RT", "tool-holder", spring_joint(k=(2e6 + n, 1e4)), planar_conditions(),
+                         "spring-damper-planar", force=True)
+        assert len(trips) <= 5, trips
+    monkeypatch.undo()
+    assert [v.version for v in dbrepo.history("RT")] == [1, 2, 3, 4] and dbrepo.check().ok
+
+
+def test_a_statement_refused_inside_a_batch_rolls_back_everything(dbrepo, monkeypatch):
+    """A statement the server refuses in the middle of the version's statements (here a CHECK constraint
+    of the version row; on PostgreSQL inside a batch sent in one round trip) fails the catalogue with the
+    server's message, writes nothing (no version, no index row, no blob, no chain entry), and the
+    connection goes on working."""
+    from jointdb.errors import JointdbError
+    from jointdb.store import _catalogue
+
+    dbrepo.catalogue("BATCH", "tool-holder", spring_joint(k=(1e6, 1e4)), planar_conditions(), "spring-damper-planar")
+    counts = {t: _count(dbrepo, t) for t in ("joint_versions", "query_versions", "frf_blobs", "history_chain")}
+    real = _catalogue._version_row
+
+    def negative_preload(*args):
+        row = real(*args)
+        row.preload_n = -1.0  # the table's CHECK (preload_n >= 0) refuses it
+        return row
+
+    monkeypatch.setattr(_catalogue, "_version_row", negative_preload)
+    with pytest.raises(JointdbError, match="preload_nonneg"):
+        dbrepo.catalogue("BATCH", "tool-holder", spring_joint(k=(2e6, 1e4)), planar_conditions(),
+                         "spring-damper-planar", force=True)
+    monkeypatch.undo()
+    assert {t: _count(dbrepo, t) for t in counts} == counts
+    jv = dbrepo.catalogue("BATCH", "tool-holder", spring_joint(k=(3e6, 1e4)), planar_conditions(),
+                          "spring-damper-planar", force=True)
+    assert jv.version == 2 and dbrepo.load_frf(jv).allclose(spring_joint(k=(3e6, 1e4)), rtol=0)
+    assert dbrepo.check().ok
