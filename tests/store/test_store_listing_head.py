@@ -195,3 +195,26 @@ def test_the_fast_check_of_a_stored_field_accepts_only_what_the_full_check_accep
     for bad in ([float("nan")], {"a": float("inf")}, [10**400], {"a": {"b": 1}}, [[1]], {1: "a"}):
         assert not _flat_within_limits(bad)
     assert _flat_within_limits({"diameter_m": 0.02, "taper": "HSK-A63", "ok": True, "none": None})
+
+
+def test_deprecate_waits_for_the_joint_row_lock_a_catalogue_holds(repo):
+    """A catalogue reads whether the listed version is deprecated under the joint's row lock (``FOR UPDATE``); a
+    deprecation of the same joint must wait for that lock, or it could commit between that read and the catalogue's
+    write. It does: its state row's foreign key takes ``FOR KEY SHARE`` on the joint row, which conflicts."""
+    import threading
+
+    if repo.write_engine.dialect.name != "postgresql":
+        pytest.skip("SQLite serialises writers with the database lock; the row lock is PostgreSQL's")
+    repo.catalogue("L1", "tool-holder", spring_joint(), planar_conditions(), KIND)
+    done = threading.Event()
+    with repo.write_engine.connect() as other:
+        tx = other.begin()
+        other.execute(sa.text("SELECT id FROM joints WHERE name = 'L1' FOR UPDATE"))  # as a catalogue of L1 holds it
+        worker = threading.Thread(target=lambda: (repo.deprecate("L1", None, reason="gone"), done.set()))
+        worker.start()
+        assert not done.wait(1.5), "deprecate went ahead while the joint row was locked"
+        tx.rollback()
+    worker.join(30)
+    assert done.is_set()
+    _check(repo, {"L1"}, {"L1": "tool-holder"})
+    assert [(v.version, v.state) for v in repo.list_page().items] == [(1, "deprecated")]
