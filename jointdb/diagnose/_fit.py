@@ -30,6 +30,7 @@ import scipy.optimize
 
 from jointdb.diagnose._uncertainty import linearised_sigmas
 from jointdb.errors import InputError, NumericalError
+from jointdb.fe import natural_frequencies
 
 __all__ = ["Fit", "ModelEvaluator", "fit_candidate", "MEMO_SIZE"]
 
@@ -353,7 +354,7 @@ def _prefit_frequencies(nominal, cand, params, u0, lo, hi, target):
     def fun(u):
         vals = {q.name: q.from_u(x) for q, x in zip(params, u)}
         try:
-            f = cand.apply(nominal, vals, 0).modes(n_modes).freq_hz
+            f = natural_frequencies(cand.apply(nominal, vals, 0).assemble(), n_modes)   # = .modes(n).freq_hz
         except (NumericalError, np.linalg.LinAlgError, InputError):
             return np.full(n, 10.0)
         f = f[f > 1e-6 * target.max()]
