@@ -22,6 +22,7 @@ squares of the two.
 
 from __future__ import annotations
 
+from collections import OrderedDict
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -29,8 +30,12 @@ import scipy.optimize
 
 from jointdb.diagnose._uncertainty import linearised_sigmas
 from jointdb.errors import InputError, NumericalError
+from jointdb.fe import natural_frequencies
 
-__all__ = ["Fit", "ModelEvaluator", "fit_candidate"]
+__all__ = ["Fit", "ModelEvaluator", "fit_candidate", "MEMO_SIZE"]
+
+#: Predictions an evaluator remembers by their fit coordinates (:meth:`ModelEvaluator.predict_u`).
+MEMO_SIZE = 64
 
 
 class ModelEvaluator:
@@ -63,6 +68,9 @@ class ModelEvaluator:
         self.oi = [labels.index((p, d)) for p, d in zip(obs.out_points, obs.out_dirs)]
         self.ii = [labels.index((p, d)) for p, d in zip(obs.in_points, obs.in_dirs)]
         self.n = int(2 * np.count_nonzero(self.w))
+        # predictions by fit coordinates (they do not depend on the weights: shared with copies of this
+        # evaluator that weight other lines, e.g. the jackknife's)
+        self._memo: OrderedDict = OrderedDict()
 
     def frf(self, model) -> np.ndarray:
         """Receptance ``(n_freq, n_out, n_in)`` of ``model`` at the recorded DOFs.
@@ -144,6 +152,39 @@ class ModelEvaluator:
                 H = H * factor[:, None, None]
             out.append(H)
         return np.stack(out)
+
+    def predict_u(self, nominal, cand, u: np.ndarray) -> np.ndarray:
+        """:meth:`predict` at the fit coordinates ``u`` of ``cand``'s parameters, remembered.
+
+        A least-squares fit asks for the same point more than once (its start after a first look at
+        it, its optimum once more for the mismatch; every block of a jackknife starts at the same
+        optimum with the same finite-difference Jacobian): the last :data:`MEMO_SIZE` predictions are
+        kept, keyed by the exact bytes of ``u``, so a repeated point costs nothing and gives the
+        identical array.
+
+        Parameters
+        ----------
+        nominal, cand
+            As for :meth:`predict`.
+        u
+            The candidate's fit coordinates, ``(p,)``.
+
+        Returns
+        -------
+        ndarray, complex, shape (n_level, n_freq, n_out, n_in), read-only
+        """
+        u = np.asarray(u, dtype=float)
+        key = (id(nominal), id(cand), u.tobytes())
+        hit = self._memo.get(key)
+        if hit is not None and hit[0] is nominal and hit[1] is cand:
+            self._memo.move_to_end(key)
+            return hit[2]
+        H = self.predict(nominal, cand, _values_of(cand.params, u))
+        H.flags.writeable = False
+        self._memo[key] = (nominal, cand, H)      # the objects are kept: their ids are not reused
+        if len(self._memo) > MEMO_SIZE:
+            self._memo.popitem(last=False)
+        return H
 
     def log_ratio(self, H: np.ndarray) -> np.ndarray:
         """``log(H / H_rec)``, 0 where the weight is 0 or the ratio is not finite.
@@ -313,7 +354,7 @@ def _prefit_frequencies(nominal, cand, params, u0, lo, hi, target):
     def fun(u):
         vals = {q.name: q.from_u(x) for q, x in zip(params, u)}
         try:
-            f = cand.apply(nominal, vals, 0).modes(n_modes).freq_hz
+            f = natural_frequencies(cand.apply(nominal, vals, 0).assemble(), n_modes)   # = .modes(n).freq_hz
         except (NumericalError, np.linalg.LinAlgError, InputError):
             return np.full(n, 10.0)
         f = f[f > 1e-6 * target.max()]
@@ -365,7 +406,7 @@ def fit_candidate(ev: ModelEvaluator, nominal, cand, start: dict | None = None, 
     values = _values_of(params, res.x)
     sigmas, cov, inflate = linearised_sigmas(params, res, rss, ev)
     at_bound = [q.name for q, x, a, b in zip(params, res.x, lo, hi) if min(x - a, b - x) < 1e-3]
-    H = ev.predict(nominal, cand, values)
+    H = ev.predict_u(nominal, cand, res.x)
     return Fit(cand, values, sigmas, rss, ev.n, p, _bic(rss, ev.n, p), ev.mismatch(H), ev.mismatch(H, True),
                nfev, at_bound, chi2_red=rss / max(ev.n - p, 1), tau=inflate, sigmas_stat=dict(sigmas), cov_u=cov)
 
@@ -379,7 +420,7 @@ def _residual_function(ev: ModelEvaluator, nominal, cand):
     """The weighted residual as a function of the fit's coordinates (1e3 everywhere where the model fails)."""
     def fun(u):
         try:
-            return ev.residual(ev.predict(nominal, cand, _values_of(cand.params, u)))
+            return ev.residual(ev.predict_u(nominal, cand, u))
         except (NumericalError, np.linalg.LinAlgError):
             return np.full(ev.n if ev.n else 1, 1e3)
 

@@ -136,9 +136,8 @@ def jackknife_spread(ev, nominal, fit, blocks: int = JACKKNIFE_BLOCKS) -> dict:
         sub.n = int(2 * np.count_nonzero(w))
 
         def fun(u, sub=sub):
-            vals = {q.name: q.from_u(x) for q, x in zip(params, u)}
             try:
-                return sub.residual(sub.predict(nominal, cand, vals))
+                return sub.residual(sub.predict_u(nominal, cand, u))
             except (NumericalError, np.linalg.LinAlgError):
                 return np.full(sub.n if sub.n else 1, 1e3)
 

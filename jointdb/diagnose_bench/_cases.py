@@ -91,8 +91,9 @@ def _rayleigh_for(beam, zeta=0.01):
     return float(a), float(b), w / (2 * np.pi)
 
 
-def _measure(rng, beam, g, f_max, df, level=None, law=None, chain=None):
-    """Bin-averaged receptances of the beam truth at the recorded lines, plus noise and coherence."""
+def _receptances(beam, g, f_max, df, levels, law=None):
+    """Noise-free receptances of the beam truth on the fine grid, one per level (the recorded lines
+    and the labels with them): ``(freq, [H_fine], labels)``."""
     pts = _points(g)
     nodes_out = [beam.node_at(pts[n][1]) for n in POINT_NAMES]
     outs = [2 * n for n in nodes_out]
@@ -100,11 +101,11 @@ def _measure(rng, beam, g, f_max, df, level=None, law=None, chain=None):
     freq, fine = lines(f_max, df)
     if law is None:
         H = beam.receptance(fine, outs, ins)
+        Hs = [H] * len(levels)
     else:
-        cols = [beam.receptance_amplitude_dependent(fine, outs, [i], level, law) for i in ins]
-        H = np.concatenate(cols, axis=2)
-    labels = dof_labels(pts[n][0] for n in POINT_NAMES)
-    return record(rng, freq, H, labels, labels[:2], level=level, chain=chain)
+        # the force acts at each input in turn; the linear receptance is shared by all levels
+        Hs = beam.amplitude_dependent_levels(fine, outs, ins, levels, law)
+    return freq, Hs, dof_labels(pts[n][0] for n in POINT_NAMES)
 
 
 @dataclass
@@ -227,8 +228,9 @@ def generate_case(effect: str, seed: int) -> BenchCase:
 
     recs = []
     noise = []
-    for level in levels:
-        rec, rel = _measure(rng, beam, g, h.f_max, df, level=level, law=law, chain=h.chain)
+    freq, Hs, labels = _receptances(beam, g, h.f_max, df, levels, law)
+    for level, H in zip(levels, Hs):
+        rec, rel = record(rng, freq, H, labels, labels[:2], level=level, chain=h.chain)
         recs.append(rec)
         noise.append(rel)
     truth.update(noise_rel=noise, resolution_hz=df, geometry=g)

@@ -255,13 +255,30 @@ def diagnose_case(case: BenchCase):
     return model, diagnose(model, ms)
 
 
-def run_case(case: BenchCase) -> CaseResult:
-    """Diagnose one generated case and score it."""
+def run_case(case: BenchCase, diagnosis=None) -> CaseResult:
+    """Diagnose one generated case and score it.
+
+    Parameters
+    ----------
+    case
+        A :class:`BenchCase` from :func:`generate_case`.
+    diagnosis
+        The case's :class:`jointdb.diagnose.Diagnosis` if it was already made by
+        :func:`diagnose_case` (then only scored; its ``seconds`` is the wall time, the CPU time is
+        not known).
+
+    Returns
+    -------
+    CaseResult
+    """
     from jointdb.diagnose._identify import unidentified
 
-    t0, c0 = time.perf_counter(), time.process_time()
-    _, d = diagnose_case(case)
-    dt, cpu = time.perf_counter() - t0, time.process_time() - c0
+    if diagnosis is None:
+        t0, c0 = time.perf_counter(), time.process_time()
+        _, d = diagnose_case(case)
+        dt, cpu = time.perf_counter() - t0, time.process_time() - c0
+    else:
+        d, dt, cpu = diagnosis, diagnosis.seconds, None
     best = d.best
 
     def first_family(f):

@@ -35,6 +35,10 @@ import scipy.linalg
 
 __all__ = ["TruthBeam", "cowper_kappa"]
 
+#: A fixed-point step smaller than this fraction of the largest bed stiffness is round-off: the line
+#: has converged (see TruthBeam._bed_fixed_point).
+ROUND_OFF_STEP = 1e-15
+
 
 def cowper_kappa(nu: float) -> float:
     """Cowper's shear coefficient of a solid circle, ``6(1+ν)/(7+6ν)``."""
@@ -234,35 +238,73 @@ class TruthBeam:
         return H[:, nb:, nb:] - np.einsum("fob,b,fbi->foi", H[:, nb:, :nb], d, corr)
 
     def receptance_amplitude_dependent(self, freq_hz, out_dofs, in_dofs, force_amplitude,
-                                       law, n_iter=60, relax=0.5):
+                                       law, n_iter=60, relax=0.5, each_input=False):
         """Receptance with the bed springs following an amplitude law (harmonic balance).
 
         Every bed spring ``i`` is replaced by ``k_i·σ(a_i) (1 + i η(a_i))`` with
         ``a_i`` the displacement amplitude at its node for a force of amplitude
-        ``force_amplitude`` [N] at ``in_dofs[0]``; ``law(a) -> (σ, η)``. The
-        linear reference (``σ=1``, ``η=bed_loss``) is corrected by a low-rank
-        (Woodbury) update and iterated to a fixed point at every line at once.
+        ``force_amplitude`` [N] at ``in_dofs[0]`` (with ``each_input``: at each input
+        in turn, column ``j`` of the result being the response to a force at
+        ``in_dofs[j]``); ``law(a) -> (σ, η)``. The linear reference (``σ=1``,
+        ``η=bed_loss``) is corrected by a low-rank (Woodbury) update and iterated to
+        a fixed point at every line at once (:meth:`_bed_fixed_point`).
         """
         nodes = sorted(self.bed)
         bed_dofs = [2 * n for n in nodes]
-        k0 = np.array([self.bed[n] for n in nodes])
         outs = list(out_dofs)
         ins = list(in_dofs)
         H = self.receptance(freq_hz, bed_dofs + outs, bed_dofs + ins)
-        nb = len(bed_dofs)
+        return self._amplitude_dependent(H, len(bed_dofs), force_amplitude, law, n_iter, relax, each_input)
+
+    def amplitude_dependent_levels(self, freq_hz, out_dofs, in_dofs, force_amplitudes, law,
+                                   n_iter=60, relax=0.5):
+        """:meth:`receptance_amplitude_dependent` (``each_input``) at several force amplitudes [N],
+        ``[(n_freq, n_out, n_in)]`` one per level; the linear receptance is computed once."""
+        nodes = sorted(self.bed)
+        bed_dofs = [2 * n for n in nodes]
+        H = self.receptance(freq_hz, bed_dofs + list(out_dofs), bed_dofs + list(in_dofs))
+        return [self._amplitude_dependent(H, len(bed_dofs), f, law, n_iter, relax, True) for f in force_amplitudes]
+
+    def _amplitude_dependent(self, H, nb, force_amplitude, law, n_iter, relax, each_input):
+        """The amplitude-dependent receptance from the linear one over ``bed + outputs`` × ``bed + inputs``."""
         Hbb, Hbi = H[:, :nb, :nb], H[:, :nb, nb:]
         Hob, Hoi = H[:, nb:, :nb], H[:, nb:, nb:]
-        nf = H.shape[0]
+        k0 = np.array([self.bed[n] for n in sorted(self.bed)])
+        eye = np.eye(nb)
+        cols = []
+        for j in range(Hbi.shape[2] if each_input else 1):
+            dk = self._bed_fixed_point(Hbb, Hbi[:, :, j], k0, force_amplitude, law, n_iter, relax)
+            S = eye[None] + Hbb * dk[:, None, :]
+            rhs = Hbi[:, :, j:j + 1] if each_input else Hbi
+            corr = np.linalg.solve(S, rhs)
+            cols.append(Hoi[:, :, j:j + 1] if each_input else Hoi)
+            cols[-1] = cols[-1] - np.einsum("fob,fb,fbi->foi", Hob, dk, corr)
+        return np.concatenate(cols, axis=2)
+
+    def _bed_fixed_point(self, Hbb, hbi, k0, force_amplitude, law, n_iter, relax):
+        """Bed stiffness changes ``dk`` ``(n_freq, n_bed)``: ``n_iter`` relaxed fixed-point steps per line.
+
+        A line whose step no longer moves any spring by more than round-off (``1e-15`` of the largest
+        bed stiffness) has reached its fixed point and leaves the working set (a further step would
+        change it by round-off only), so the result is that of ``n_iter`` steps on every line.
+        """
+        nf, nb = hbi.shape
         dk = np.zeros((nf, nb), dtype=complex)
         eye = np.eye(nb)
+        lin = 1 + 1j * self.bed_loss
+        still = ROUND_OFF_STEP * float(k0.max())
+        act, A, b = np.arange(nf), Hbb, hbi
         for _ in range(n_iter):  # fixed-point iteration; each step batched over lines
             # G = H - Hb· dK (I + Hbb dK)^-1 · H_b.
-            S = eye[None] + Hbb * dk[:, None, :]
-            xb = np.linalg.solve(S, Hbi[:, :, :1])[:, :, 0]      # bed displacement / force
-            amp = np.abs(xb) * force_amplitude
-            sigma, eta = law(amp)
-            target = k0[None] * (sigma * (1 + 1j * eta) - (1 + 1j * self.bed_loss))
-            dk = (1 - relax) * dk + relax * target
-        S = eye[None] + Hbb * dk[:, None, :]
-        corr = np.linalg.solve(S, Hbi)
-        return Hoi - np.einsum("fob,fb,fbi->foi", Hob, dk, corr)
+            S = eye[None] + A * dk[act][:, None, :]
+            xb = np.linalg.solve(S, b[:, :, None])[:, :, 0]      # bed displacement / force
+            sigma, eta = law(np.abs(xb) * force_amplitude)
+            target = k0[None] * (sigma * (1 + 1j * eta) - lin)
+            new = (1 - relax) * dk[act] + relax * target
+            moving = np.abs(new - dk[act]).max(axis=1) > still
+            dk[act] = new
+            if not moving.any():
+                break
+            if moving.sum() < 0.9 * act.size:                 # compact the working set
+                act, A, b = act[moving], A[moving], b[moving]
+        return dk

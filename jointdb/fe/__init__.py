@@ -48,6 +48,7 @@ Model files
 Solution
 --------
    natural_modes       -- natural frequencies [Hz] and mass-normalised shapes
+   natural_frequencies -- the natural frequencies alone (cheaper)
    frf_direct          -- receptances by direct solution, batched over frequency
    frf_modal           -- receptances by modal superposition with residual compensation
    rigid_body_count    -- number of rigid-body modes left after constraints
@@ -108,7 +109,7 @@ from jointdb.fe._joints import Contact, Insertion, Joint
 from jointdb.fe._materials import MATERIALS, Material, get_material
 from jointdb.fe._model import BeamModel, FEMatrices, Mesh, Modes, NamedPoint, Segment
 from jointdb.fe._modelfile import FORMAT, load_model, model_from_dict, model_to_dict
-from jointdb.fe._synthesis import frf_direct, frf_modal, natural_modes, rigid_body_count
+from jointdb.fe._synthesis import frf_direct, frf_modal, natural_frequencies, natural_modes, rigid_body_count
 
 __all__ = [
     "Material",
@@ -130,6 +131,7 @@ __all__ += [
     "model_from_dict",
     "model_to_dict",
     "FORMAT",
+    "natural_frequencies",
     "natural_modes",
     "frf_direct",
     "frf_modal",

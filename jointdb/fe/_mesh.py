@@ -11,6 +11,7 @@ so a position's node index is the same with or without interfaces.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -207,12 +208,20 @@ class Mesh:
         if cached is not None:
             return cached
         labels: dict[int, Dof] = {}
-        for node in range(self.n_nodes):
-            for k, d in enumerate(self.directions):
-                labels.setdefault(int(self.dof_table[node, k]), Dof(node, d))
+        for node, row in enumerate(self.dof_table.tolist()):
+            for dof, d in zip(row, self.directions):
+                if dof not in labels:
+                    labels[dof] = _dof_label(node, d)
         out = tuple(labels[i] for i in range(self.n_dof))
         self.__dict__["_labels"] = out
         return out
+
+
+@functools.lru_cache(maxsize=65536)
+def _dof_label(node: int, direction: str) -> Dof:
+    """``Dof(node, direction)``, shared: a label is immutable, and every mesh of a fit (one per model
+    evaluated) asks for the same few hundred."""
+    return Dof(node, direction)
 
 
 def _merge_tol(length: float, max_element_length: float = 0.0) -> float:

@@ -11,7 +11,8 @@ import numpy as np
 from jointdb.errors import InputError, NumericalError
 from jointdb.fe._matrices import Modes
 
-__all__ = ["eigen_free", "rigid_body_count", "rigid_body_modes", "natural_modes", "frf_direct", "frf_modal"]
+__all__ = ["eigen_free", "rigid_body_count", "rigid_body_modes", "natural_modes", "natural_frequencies", "frf_direct",
+           "frf_modal"]
 
 #: Memory budget [bytes] for one chunk of stacked dynamic-stiffness matrices.
 CHUNK_BYTES = 64 * 2**20
@@ -41,12 +42,19 @@ def _rigid_null_space(matrices) -> np.ndarray:
     R = _rigid_vectors(matrices)
     scale = np.abs(R).max(axis=0)
     R = R / np.where(scale > 0, scale, 1.0)
-    kscale = float(np.abs(matrices.K).max()) or 1.0
-    A = np.vstack([matrices.K @ R / kscale, R[matrices.fixed]])
-    _, s, vt = np.linalg.svd(A, full_matrices=True)
+    _, s, vt = np.linalg.svd(_rigid_system(matrices, R, scaled=True), full_matrices=True)
     s = np.concatenate([s, np.zeros(R.shape[1] - s.size)])
     null = vt[s <= 1e-9 * max(1.0, s.max(initial=0.0))]
     return R @ null.T
+
+
+def _rigid_system(matrices, R: np.ndarray, scaled: bool = False) -> np.ndarray:
+    """``[K R / max|K|; R_fixed]`` with each rigid motion scaled to max 1 (``scaled``: R already is)."""
+    if not scaled:
+        scale = np.abs(R).max(axis=0)
+        R = R / np.where(scale > 0, scale, 1.0)
+    kscale = float(np.abs(matrices.K).max()) or 1.0
+    return np.vstack([matrices.K @ R / kscale, R[matrices.fixed]])
 
 
 def rigid_body_count(matrices) -> int:
@@ -65,7 +73,10 @@ def rigid_body_count(matrices) -> int:
     -------
     int
     """
-    return int(_rigid_null_space(matrices).shape[1])
+    R = _rigid_vectors(matrices)
+    s = np.linalg.svd(_rigid_system(matrices, R), compute_uv=False)   # the singular values are all it needs
+    s = np.concatenate([s, np.zeros(R.shape[1] - s.size)])
+    return int(np.count_nonzero(s <= 1e-9 * max(1.0, s.max(initial=0.0))))
 
 
 def rigid_body_modes(matrices) -> np.ndarray:
@@ -78,20 +89,23 @@ def rigid_body_modes(matrices) -> np.ndarray:
     return np.linalg.solve(chol, phi.T).T
 
 
-def eigen_free(matrices, n: int | None, max_value: float | None = None):
+def eigen_free(matrices, n: int | None, max_value: float | None = None, vectors: bool = True):
     """Eigen-solution of the constrained (free-DOF) problem ``K φ = λ M φ``.
+
+    With ``vectors=False`` only the eigenvalues are computed (the same LAPACK driver without the
+    shapes: the same eigenvalues, at about half the cost) and ``phi`` is None.
 
     Returns
     -------
     lam : ndarray ``(m,)``
         Eigenvalues ω² [rad²/s²], ascending; the rigid-body ones set to 0.
-    phi : ndarray ``(n_free, m)``
-        Mass-normalised shapes on the free DOFs.
+    phi : ndarray ``(n_free, m)`` or None
+        Mass-normalised shapes on the free DOFs (None with ``vectors=False``).
     n_rb : int
         Number of rigid-body modes (the first ``n_rb`` columns).
     """
     cached = getattr(matrices, "eigen_solution", None)
-    if (cached is not None and n is None and max_value is None and cached[0] is matrices.K
+    if (vectors and cached is not None and n is None and max_value is None and cached[0] is matrices.K
             and cached[1] is matrices.M and cached[2] is matrices.fixed):
         return cached[3], cached[4], cached[5]  # the same problem, already solved (modal damping)
     free = ~matrices.fixed
@@ -101,19 +115,19 @@ def eigen_free(matrices, n: int | None, max_value: float | None = None):
     if nf == 0:
         raise InputError("every DOF of the model is fixed; nothing can move")
     n_rb = rigid_body_count(matrices)
-    import scipy.linalg  # deferred: importing jointdb.fe stays cheap (CLI start-up)
-
     kwargs = {}
     if max_value is not None:
         kwargs["subset_by_value"] = (-np.inf, max_value)
     elif n is not None and n < nf:
         kwargs["subset_by_index"] = (0, max(n, n_rb, 1) - 1)
+    if not vectors:
+        kwargs["eigvals_only"] = True
     try:
-        lam, phi = scipy.linalg.eigh(Kf, Mf, **kwargs)
+        lam, phi = _eigh(Kf, Mf, kwargs)
     except np.linalg.LinAlgError as exc:
         raise NumericalError(f"eigenvalue problem failed ({exc}); is the mass matrix positive definite?") from None
     if lam.size < n_rb and max_value is not None:  # make sure all rigid-body modes are there
-        lam, phi = scipy.linalg.eigh(Kf, Mf, subset_by_index=(0, n_rb - 1))
+        lam, phi = _eigh(Kf, Mf, {"subset_by_index": (0, n_rb - 1), "eigvals_only": not vectors})
     lam = lam.copy()
     lam[: min(n_rb, lam.size)] = 0.0
     if np.any(lam[n_rb:] <= 0.0):
@@ -122,6 +136,35 @@ def eigen_free(matrices, n: int | None, max_value: float | None = None):
             "(a mechanism, or a badly conditioned mesh: check supports and very short elements)"
         )
     return lam, phi, n_rb
+
+
+def _eigh(K, M, kwargs: dict):
+    """``(λ, φ)`` of ``scipy.linalg.eigh`` (φ None when only eigenvalues are asked for)."""
+    import scipy.linalg  # deferred: importing jointdb.fe stays cheap (CLI start-up)
+
+    out = scipy.linalg.eigh(K, M, **kwargs)
+    return (out, None) if kwargs.get("eigvals_only") else out
+
+
+def natural_frequencies(matrices, n: int) -> np.ndarray:
+    """The ``n`` lowest natural frequencies [Hz] without the mode shapes (cheaper than
+    :func:`natural_modes`, whose ``freq_hz`` it equals).
+
+    Parameters
+    ----------
+    matrices
+        :class:`FEMatrices` of an assembled model.
+    n
+        Number of lowest modes, >= 1.
+
+    Returns
+    -------
+    ndarray, shape (n,) or fewer when the model has fewer DOFs
+    """
+    if isinstance(n, bool) or int(n) < 1:
+        raise InputError(f"number of modes must be >= 1, got {n!r}")
+    lam, _, _ = eigen_free(matrices, int(n), vectors=False)
+    return np.sqrt(lam[: int(n)]) / (2.0 * np.pi)
 
 
 def natural_modes(matrices, n: int | None = None):

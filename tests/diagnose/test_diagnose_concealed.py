@@ -60,8 +60,10 @@ def test_distributed_contact_needs_no_surrogate_second_effect(seed):
 
 
 def test_run_case_scores_like_the_diagnosis():
-    r = run_case(generate_case("gain", 1))
+    case, _, d = _diagnosed("gain", 1)            # the diagnosis run_case would make, already made above
+    r = run_case(case, d)
     assert r.named == "gain" and r.first and r.in_top3 and r.improvement >= 3.0
+    assert r.mismatch_after == d.mismatch_after and r.fitted == d.best.values and r.verdict == d.verdict
 
 
 def test_sensor_mass_is_located_and_fitted_near_the_truth():

@@ -79,3 +79,46 @@ def test_amplitude_dependent_bed_with_a_constant_law_is_the_linear_bed():
     b2.add_winkler_bed(-0.03, 0.0, 2.5e11)
     b2.bed_loss = 0.05
     assert np.allclose(soft, b2.receptance(f, [tip], [tip]), rtol=1e-8)
+
+
+def _plain_balance(b, f, outs, ins, force, law, n_iter=60, relax=0.5):
+    """The harmonic balance as first written: every line iterated n_iter times, one input at a time."""
+    nodes = sorted(b.bed)
+    bd = [2 * n for n in nodes]
+    k0 = np.array([b.bed[n] for n in nodes])
+    cols = []
+    for i in ins:
+        H = b.receptance(f, bd + outs, bd + [i])
+        nb = len(bd)
+        Hbb, Hbi, Hob, Hoi = H[:, :nb, :nb], H[:, :nb, nb:], H[:, nb:, :nb], H[:, nb:, nb:]
+        dk = np.zeros((f.size, nb), dtype=complex)
+        for _ in range(n_iter):
+            xb = np.linalg.solve(np.eye(nb)[None] + Hbb * dk[:, None, :], Hbi[:, :, :1])[:, :, 0]
+            sigma, eta = law(np.abs(xb) * force)
+            dk = (1 - relax) * dk + relax * k0[None] * (sigma * (1 + 1j * eta) - (1 + 1j * b.bed_loss))
+        corr = np.linalg.solve(np.eye(nb)[None] + Hbb * dk[:, None, :], Hbi)
+        cols.append(Hoi - np.einsum("fob,fb,fbi->foi", Hob, dk, corr))
+    return np.concatenate(cols, axis=2)
+
+
+def test_converged_lines_leave_the_balance_without_changing_the_result():
+    """Lines whose fixed-point step is round-off stop early (and both inputs, all levels share one linear
+    receptance): equal to the plain 60-step iteration to round-off, at a softening strong enough that
+    lines near the resonance need most of the 60 steps."""
+    b = TruthBeam.cylinder(-0.03, 0.12, 0.016, E, NU, RHO, h=0.003, breaks=(0.0,))
+    b.add_winkler_bed(-0.03, 0.0, 5e11)
+    b.bed_loss = 0.05
+    b.rayleigh = (20.0, 1e-6)
+    tip, mid = 2 * b.node_at(0.12), 2 * b.node_at(0.06)
+    f = np.linspace(200, 3000, 120)
+    ref = np.abs(b.receptance(f, [2 * b.node_at(0.0)], [tip])).max()
+
+    def law(a, a_c=ref * 5.0):
+        r = a / a_c
+        return 1.0 - 0.6 * r / (1.0 + r), 0.05 + 0.3 * r / (1.0 + r)
+
+    got = b.amplitude_dependent_levels(f, [tip, mid], [tip, mid], [1.0, 10.0], law)
+    for force, H in zip([1.0, 10.0], got):
+        want = _plain_balance(b, f, [tip, mid], [tip, mid], force, law)
+        assert np.max(np.abs(H - want)) <= 1e-12 * np.max(np.abs(want))
+        assert np.max(np.abs(H - b.receptance(f, [tip, mid], [tip, mid]))) > 1e-3 * np.max(np.abs(want))  # not linear

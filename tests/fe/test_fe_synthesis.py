@@ -350,3 +350,23 @@ def test_modal_damping_eigen_solution_is_reused_only_for_the_same_matrices():
     assert lam_stiff is not lam_cached
     elastic = lam_cached > 0
     assert np.allclose(lam_stiff[elastic], 1.21 * lam_cached[elastic], rtol=1e-9)
+
+
+@pytest.mark.parametrize(
+    "ingredients",
+    [(Clamp(0.0), ModalDamping(0.02)), (ModalDamping(0.01),), (Clamp(0.0), HystereticDamping(0.01))],
+    ids=["clamped", "free-free", "clamped-hysteretic"],
+)
+def test_natural_frequencies_alone_equal_those_of_natural_modes(ingredients):
+    """The eigenvalues-only solve (same LAPACK driver, no shapes) gives bit-identical frequencies,
+    rigid-body modes at 0 Hz included; and the rigid-body count from singular values alone agrees with
+    the null space the shapes path builds."""
+    from jointdb.fe import natural_frequencies, natural_modes, rigid_body_count
+    from jointdb.fe._synthesis import _rigid_null_space
+
+    mats = shaft(ingredients).assemble()
+    for n in (1, 4, 9):
+        assert np.array_equal(natural_frequencies(mats, n), natural_modes(mats, n).freq_hz)
+    assert rigid_body_count(mats) == _rigid_null_space(mats).shape[1] == (0 if isinstance(ingredients[0], Clamp) else 2)
+    with pytest.raises(InputError, match="number of modes"):
+        natural_frequencies(mats, 0)

@@ -43,6 +43,26 @@ def without_ingredient(model, ingredient):
     return model.without(lambda i: i is ingredient)
 
 
+def swap_ingredients(model, drop, *new):
+    """``model.without(drop).with_ingredient(*new)`` built as one model: the same model, validated
+    once (the intermediate one, which a fit would build and check at every evaluation, is skipped).
+
+    Parameters
+    ----------
+    model
+        A :class:`jointdb.fe.BeamModel`.
+    drop
+        ``Ingredient -> bool``: True for the ingredients to leave out.
+    *new
+        Ingredients appended after the kept ones.
+
+    Returns
+    -------
+    BeamModel
+    """
+    return model.replace(ingredients=tuple(i for i in model.ingredients if not drop(i)) + tuple(new))
+
+
 class AtClamp:
     """Mixin for candidates that sit at a model's clamp (``self.clamp``): where they are, in metres and words."""
 

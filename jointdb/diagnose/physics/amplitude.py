@@ -12,7 +12,7 @@ offered when there are at least two levels.
 from __future__ import annotations
 
 from jointdb.diagnose.physics._candidate import register
-from jointdb.diagnose.physics._util import first_mode_rad_s, single_clamp, without_ingredient
+from jointdb.diagnose.physics._util import first_mode_rad_s, single_clamp, swap_ingredients
 from jointdb.diagnose.physics.joint import CompliantJoint
 from jointdb.diagnose.physics.microslip import _law_params, _state
 
@@ -37,9 +37,8 @@ class AmplitudeDependentJoint(CompliantJoint):
         return _state(self.law, self.levels, values, level)
 
     def apply(self, model, values, level=0):
-        model = without_ingredient(model, self.clamp)
         s, eta = self.state(values, level)
-        return model.with_ingredient(self.support(values, scale=s, eta=eta, omega=self.omega1))
+        return swap_ingredients(model, lambda i: i is self.clamp, self.support(values, scale=s, eta=eta, omega=self.omega1))
 
     def level_table(self, values, sigmas=None, **_):
         """Per level: (level, k_x, k_ry, loss factor)."""

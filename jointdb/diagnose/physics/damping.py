@@ -12,6 +12,7 @@ from __future__ import annotations
 import dataclasses
 
 from jointdb.diagnose.physics._candidate import Candidate, Param, register
+from jointdb.diagnose.physics._util import swap_ingredients
 from jointdb.fe import HystereticDamping, ModalDamping, RayleighDamping
 
 VISCOUS = (RayleighDamping, ModalDamping)
@@ -25,8 +26,8 @@ class Hysteretic(Candidate):
     params = (Param("eta", "-", 1e-4, 0.3, 0.02),)
 
     def apply(self, model, values, level=0):
-        model = model.without(lambda i: isinstance(i, VISCOUS + (HystereticDamping,)))
-        return model.with_ingredient(HystereticDamping(values["eta"]))
+        return swap_ingredients(model, lambda i: isinstance(i, VISCOUS + (HystereticDamping,)),
+                                HystereticDamping(values["eta"]))
 
 
 class DampingLevel(Candidate):

@@ -44,7 +44,7 @@ import numpy as np
 import scipy.optimize
 
 from jointdb.diagnose.physics._candidate import Candidate, Param, register
-from jointdb.diagnose.physics._util import full_clamps
+from jointdb.diagnose.physics._util import full_clamps, swap_ingredients
 from jointdb.fe import Contact, Insertion, Joint, get_material
 
 __all__ = ["Site", "interface_sites", "screen_sites", "InterfaceJoint", "InterfaceContact", "SITES_KEPT"]
@@ -268,7 +268,7 @@ class InterfaceContact(_Located):
             new = Insertion(self.existing.start, self.existing.end, self.existing.outer_diameter,
                             self.existing.inner_diameter, self.existing.material, self.existing.joined_at,
                             self.contact(values), self.existing.label)
-            return model.without(lambda i: i is self.existing or i == self.existing).with_ingredient(new)
+            return swap_ingredients(model, lambda i: i is self.existing or i == self.existing, new)
         L = float(values["insertion"])
         s = self.section
         start, end, joined = (z - L, z, "end") if self.inner_is_upper else (z, z + L, "start")

@@ -15,7 +15,7 @@ from jointdb.diagnose.physics._util import (
     bending_stiffness_at,
     first_mode_rad_s,
     single_clamp,
-    without_ingredient,
+    swap_ingredients,
 )
 from jointdb.fe import Clamp, Support
 
@@ -54,10 +54,9 @@ class CompliantJoint(AtClamp, Candidate):
         return Support(self.clamp.position, stiffness=k, damping=c)
 
     def apply(self, model, values, level=0):
-        model = without_ingredient(model, self.clamp)
         keep = tuple(d for d in ("x", "ry") if d not in self.dirs)
         extra = (Clamp(self.clamp.position, directions=keep),) if keep else ()
-        return model.with_ingredient(*extra, self.support(values))
+        return swap_ingredients(model, lambda i: i is self.clamp, *extra, self.support(values))
 
 
 class DampedJoint(CompliantJoint):
@@ -72,8 +71,8 @@ class DampedJoint(CompliantJoint):
         self.params = self.params + (Param("eta_joint", "-", 1e-3, 2.0, 0.1, starts=(0.5,), key=False),)
 
     def apply(self, model, values, level=0):
-        model = without_ingredient(model, self.clamp)
-        return model.with_ingredient(self.support(values, eta=values["eta_joint"], omega=self.omega1))
+        return swap_ingredients(model, lambda i: i is self.clamp,
+                                self.support(values, eta=values["eta_joint"], omega=self.omega1))
 
 
 @register
