@@ -49,6 +49,12 @@ def _own_pg_database() -> None:
 
 _own_pg_database()
 
+# New SQLite catalogues of this process start as a copy of one built by the real migrations (see
+# tests/sqlite_template.py); tests marked `real_migrations` run Alembic for every database.
+import sqlite_template  # noqa: E402  (tests/ is on sys.path: pytest puts a conftest's directory there)
+
+sqlite_template.install()
+
 
 def _load_script(relative: str):
     """The repository script ``relative`` (e.g. ``fixtures/make_catalogue.py``) imported as a module under its
@@ -95,6 +101,11 @@ def pytest_collection_modifyitems(session, config, items):
     """Files of ``LONGEST_FIRST`` first, in that order; the order of tests inside a file is kept."""
     rank = {path: k for k, path in enumerate(LONGEST_FIRST)}
     items.sort(key=lambda item: rank.get(item.nodeid.split("::", 1)[0], len(rank)))
+
+
+def pytest_runtest_setup(item):
+    """A test marked ``real_migrations`` creates its SQLite databases with every Alembic migration."""
+    sqlite_template.ENABLED["on"] = item.get_closest_marker("real_migrations") is None
 
 
 @pytest.fixture(scope="session")
