@@ -44,7 +44,7 @@ SELECT coalesce(string_agg(line, E'\n' ORDER BY line), '') FROM (
   SELECT 'trg ' || t.tgname || ' ' || t.tgenabled::text || ' ' || pg_get_triggerdef(t.oid)
   FROM pg_trigger t JOIN pg_class c ON c.oid = t.tgrelid JOIN s ON c.relnamespace = s.oid WHERE NOT t.tgisinternal
   UNION ALL
-  SELECT 'fn ' || n.nspname || '.' || p.proname || ' ' || md5(p.prosrc) || ' ' || coalesce(p.proacl::text, '') || ' '
+  SELECT 'fn ' || n.nspname || '.' || p.proname || ' ' || md5(replace(p.prosrc, :schema, '<schema>')) || ' ' || coalesce(p.proacl::text, '') || ' '
          || pg_get_userbyid(p.proowner) || p.prosecdef::text
   FROM pg_proc p JOIN pg_namespace n ON n.oid = p.pronamespace
   WHERE n.oid = (SELECT oid FROM s) OR (n.nspname = 'jointdb_guard' AND p.proname = :guard)
