@@ -131,3 +131,17 @@ def run_cli(monkeypatch, capsys):
         return code, out.out, out.err
 
     return run
+
+
+@pytest.fixture
+def cli(run_cli):
+    """``cli("identify", path)``: ``jointdb ARGS`` in this process as :func:`run_cli` runs it, the result shaped as
+    ``subprocess.run``'s (``returncode``, ``stdout``, ``stderr``) for tests written against a subprocess: for a
+    command under test, not for what only a real process shows (exit by signal, environment, start-up)."""
+    from types import SimpleNamespace
+
+    def call(*args):
+        code, out, err = run_cli(*args)
+        return SimpleNamespace(returncode=code, stdout=out, stderr=err)
+
+    return call

@@ -13,7 +13,6 @@ import shutil
 import subprocess
 import sys
 from pathlib import Path
-from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -26,19 +25,10 @@ PARTS = ["--spindle", "rig@1", "--holder", "er32@1", "--insertion", "0.035", "--
 
 
 def run(*args, cwd=None):
+    """``jointdb ARGS`` in a process of its own (the module's set-up; the tests run the commands in-process,
+    the ``cli`` fixture of tests/conftest.py)."""
     return subprocess.run([sys.executable, "-m", "jointdb", *map(str, args)], capture_output=True, text=True,
                           cwd=cwd, stdin=subprocess.DEVNULL)
-
-
-@pytest.fixture
-def cli(run_cli):
-    """``jointdb ARGS`` in this process (the console entry point; the set-up above keeps a real process):
-    an object with ``returncode``, ``stdout``, ``stderr`` as :func:`run` gives."""
-    def call(*args):
-        code, out, err = run_cli(*args)
-        return SimpleNamespace(returncode=code, stdout=out, stderr=err)
-
-    return call
 
 
 @pytest.fixture(scope="module")
