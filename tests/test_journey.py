@@ -5,9 +5,6 @@ the job for the whole file)."""
 from __future__ import annotations
 
 import json
-import os
-import subprocess
-import sys
 
 import numpy as np
 import pytest
@@ -92,14 +89,12 @@ def test_journey_tip_plot_legend_and_refined_lobes(journey):
     assert n > 400  # 400 base speeds plus the refinement near minima and pockets
 
 
-def test_joints_show_prints_constant_k_c(journey):
+def test_joints_show_prints_constant_k_c(journey, cli):
     out, db, result, _ = journey
     row = next(r for r in result.catalogued if r["joint"].startswith("th-er32-carbide-120nm"))
     truth = json.loads(next((p for p in _campaign_dirs() if p.name == "th-er32-carbide-120nm")).joinpath(
         "truth.json").read_text(encoding="utf-8"))
-    env = {**os.environ, "OPENBLAS_NUM_THREADS": "1"}
-    r = subprocess.run([sys.executable, "-m", "jointdb", "joints", "show", "th-er32-carbide-120nm", "--db",
-                        str(db)], capture_output=True, text=True, env=env, timeout=120)
+    r = cli("joints", "show", "th-er32-carbide-120nm", "--db", db)
     assert r.returncode == 0, r.stderr
     assert "constant k, c per DOF: median of Re(1/h)" in r.stdout
     lines = {ln.split("|")[1].strip(): [c.strip() for c in ln.split("|")[2:-1]]
@@ -111,8 +106,7 @@ def test_joints_show_prints_constant_k_c(journey):
     # the synthetic campaign's true joint; identification is within 1 % of it (catalogue: row["k_x_error"])
     assert k_x == pytest.approx(truth["k"][0], rel=0.02) and k_t == pytest.approx(truth["k"][1], rel=0.02)
     assert abs(row["k_x_error"]) < 0.02
-    rj = subprocess.run([sys.executable, "-m", "jointdb", "joints", "show", "th-er32-carbide-120nm", "--db",
-                         str(db), "--json"], capture_output=True, text=True, env=env, timeout=120)
+    rj = cli("joints", "show", "th-er32-carbide-120nm", "--db", db, "--json")
     kc = json.loads(rj.stdout)["constant_kc"]
     assert [d["dof"] for d in kc["dofs"]] == ["3x", "3ry"] and kc["dofs"][0]["k_unit"] == "N/m"
     assert kc["dofs"][0]["k"] == pytest.approx(k_x, rel=1e-3)  # 4 digits shown
@@ -124,12 +118,10 @@ def _campaign_dirs():
     return [p for p in resources.files("jointdb").joinpath("data", "catalogue", "campaigns").iterdir() if p.is_dir()]
 
 
-def test_query_out_equals_json_rows(journey, tmp_path):
+def test_query_out_equals_json_rows(journey, tmp_path, cli):
     out, db, _, _ = journey
-    env = {**os.environ, "OPENBLAS_NUM_THREADS": "1"}
-    args = [sys.executable, "-m", "jointdb", "query", "--type", "tool-holder", "--material", "carbide+steel",
-            "--torque", "100", "-k", "3", "--db", str(db)]
-    rj = subprocess.run([*args, "--json"], capture_output=True, text=True, env=env, timeout=120)
-    ro = subprocess.run([*args, "--out", str(tmp_path / "m.json")], capture_output=True, text=True, env=env, timeout=120)
+    args = ["query", "--type", "tool-holder", "--material", "carbide+steel", "--torque", "100", "-k", "3", "--db", db]
+    rj = cli(*args, "--json")
+    ro = cli(*args, "--out", tmp_path / "m.json")
     assert rj.returncode == 0 and ro.returncode == 0, ro.stderr
     assert json.loads((tmp_path / "m.json").read_text(encoding="utf-8"))["rows"] == json.loads(rj.stdout)
