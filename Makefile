@@ -18,8 +18,10 @@ install: $(BIN)/python
 demo: install
 	cd /tmp && OPENBLAS_NUM_THREADS=1 $(abspath $(BIN))/jointdb demo --out $(abspath $(OUT))
 
+# PYTHONDONTWRITEBYTECODE is cleared for the test run: with it set, every worker and every `python -m jointdb`
+# the tests start would compile (and pytest assertion-rewrite) the same modules again, ~5 s of CPU per worker.
 test: install
-	OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 $(BIN)/pytest -q -p no:cacheprovider -n auto --dist loadfile --no-loadscope-reorder tests
+	PYTHONDONTWRITEBYTECODE= OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 $(BIN)/pytest -q -p no:cacheprovider -n auto --dist loadfile --no-loadscope-reorder tests
 
 bench: install
 	for f in bench/bench_*.py; do echo "== $$f"; OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 $(BIN)/python $$f || exit 1; done

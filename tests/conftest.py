@@ -49,6 +49,12 @@ def _own_pg_database() -> None:
 
 _own_pg_database()
 
+# New SQLite catalogues of this process start as a copy of one built by the real migrations (see
+# tests/sqlite_template.py); tests marked `real_migrations` run Alembic for every database.
+import sqlite_template  # noqa: E402  (tests/ is on sys.path: pytest puts a conftest's directory there)
+
+sqlite_template.install()
+
 
 def _load_script(relative: str):
     """The repository script ``relative`` (e.g. ``fixtures/make_catalogue.py``) imported as a module under its
@@ -97,6 +103,11 @@ def pytest_collection_modifyitems(session, config, items):
     items.sort(key=lambda item: rank.get(item.nodeid.split("::", 1)[0], len(rank)))
 
 
+def pytest_runtest_setup(item):
+    """A test marked ``real_migrations`` creates its SQLite databases with every Alembic migration."""
+    sqlite_template.ENABLED["on"] = item.get_closest_marker("real_migrations") is None
+
+
 @pytest.fixture(scope="session")
 def load_script():
     """``load_script("fixtures/make_catalogue.py")``: a repository script as a module (not an installed package)."""
@@ -120,3 +131,17 @@ def run_cli(monkeypatch, capsys):
         return code, out.out, out.err
 
     return run
+
+
+@pytest.fixture
+def cli(run_cli):
+    """``cli("identify", path)``: ``jointdb ARGS`` in this process as :func:`run_cli` runs it, the result shaped as
+    ``subprocess.run``'s (``returncode``, ``stdout``, ``stderr``) for tests written against a subprocess: for a
+    command under test, not for what only a real process shows (exit by signal, environment, start-up)."""
+    from types import SimpleNamespace
+
+    def call(*args):
+        code, out, err = run_cli(*args)
+        return SimpleNamespace(returncode=code, stdout=out, stderr=err)
+
+    return call

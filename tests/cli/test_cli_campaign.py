@@ -18,6 +18,8 @@ CAT = ROOT / "jointdb" / "data" / "catalogue"
 
 
 def run(*args, cwd=None):
+    """``jointdb ARGS`` in a process of its own: the first test's whole session from a folder; the others run
+    their commands in-process (the ``cli`` fixture of tests/conftest.py)."""
     return subprocess.run([sys.executable, "-m", "jointdb", *map(str, args)], capture_output=True, text=True,
                           cwd=cwd, stdin=subprocess.DEVNULL)
 
@@ -67,54 +69,54 @@ def test_init_check_identify_catalogue_from_a_folder_of_measurements_and_models(
     assert np.median(k[band]) == pytest.approx(truth["kx"], rel=0.05)
 
 
-def test_init_finds_a_modelled_spindle_as_substructure_a_for_a_holder_spindle_campaign(tmp_path):
+def test_init_finds_a_modelled_spindle_as_substructure_a_for_a_holder_spindle_campaign(tmp_path, cli):
     folder = tmp_path / "hsk"
     folder.mkdir()
     shutil.copy(CAT / "campaigns" / "hs-hsk-a63-18kn" / "assembly.uff", folder / "g.uff")
     shutil.copy(CAT / "models" / "spindle-alone.json", folder / "spindle.json")
     shutil.copy(CAT / "models" / "hs-test-arbor-in-er32.json", folder / "arbor.json")
-    init = run("campaign", "init", folder, "--type", "holder-spindle", "--material", "steel", "--material", "steel",
+    init = cli("campaign", "init", folder, "--type", "holder-spindle", "--material", "steel", "--material", "steel",
                "--preload", "18000", "--geometry", "taper_diameter_m=0.063", "--extra", "taper=HSK-A63")
     assert init.returncode == 0, init.stderr
     doc = json.loads((folder / "campaign.json").read_text())
     assert doc["interface"] == {"a": "spindle", "a_dofs": ["5x", "5ry"], "b": "arbor", "b_dofs": ["4x", "4ry"]}
     assert doc["conditions"]["extra"] == {"taper": "HSK-A63"} and doc["conditions"]["preload_n"] == 18000.0
-    check = run("campaign", "check", folder / "campaign.json")
+    check = cli("campaign", "check", folder / "campaign.json")
     assert check.returncode == 0, check.stderr
 
 
-def test_init_without_the_joint_type_names_the_flag_and_writes_nothing(tmp_path):
+def test_init_without_the_joint_type_names_the_flag_and_writes_nothing(tmp_path, cli):
     folder = tmp_path / "f"
     folder.mkdir()
     for name in ("assembly.uff", "holder.uff", "tool.json"):
         shutil.copy(TH / name, folder / name)
-    out = run("campaign", "init", folder)
+    out = cli("campaign", "init", folder)
     assert out.returncode != 0 and "--type" in out.stderr and "Traceback" not in out.stderr
-    out = run("campaign", "init", folder, "--type", "tool-holder", "--smoothing", "20")
+    out = cli("campaign", "init", folder, "--type", "tool-holder", "--smoothing", "20")
     assert out.returncode != 0 and "--smoothing" in out.stderr
     assert not (folder / "campaign.json").exists()
     (folder / "tool.json").unlink()
-    out = run("campaign", "init", folder, "--type", "tool-holder")
+    out = cli("campaign", "init", folder, "--type", "tool-holder")
     assert out.returncode != 0 and "substructure B" in out.stderr and "Traceback" not in out.stderr
 
 
-def test_check_names_the_field_that_is_wrong(tmp_path):
+def test_check_names_the_field_that_is_wrong(tmp_path, cli):
     folder = tmp_path / "f"
     folder.mkdir()
     for name in ("assembly.uff", "holder.uff", "tool.json"):
         shutil.copy(TH / name, folder / name)
-    assert run("campaign", "init", folder, "--type", "tool-holder").returncode == 0
+    assert cli("campaign", "init", folder, "--type", "tool-holder").returncode == 0
     camp = folder / "campaign.json"
     doc = json.loads(camp.read_text())
     doc["interface"]["b_dofs"] = ["7x", "7ry"]
     camp.write_text(json.dumps(doc))
-    out = run("campaign", "check", camp)
+    out = cli("campaign", "check", camp)
     assert out.returncode != 0 and "Traceback" not in out.stderr
     assert "interface.b_dofs" in out.stderr and "7x" in out.stderr
     doc["interface"]["b_dofs"] = ["2x", "2ry"]
     doc["planar"]["b_tip"] = 9
     camp.write_text(json.dumps(doc))
-    out = run("campaign", "check", camp)
+    out = cli("campaign", "check", camp)
     assert out.returncode != 0 and "measurements" in out.stderr and "b_tip" in out.stderr
 
 
@@ -142,11 +144,11 @@ def _rotation_rig(tmp_path):
     return a.frf(freq, ["c"])
 
 
-def test_rotations_by_extension_recover_the_contact_receptance_and_report_noise_amplification(tmp_path):
+def test_rotations_by_extension_recover_the_contact_receptance_and_report_noise_amplification(tmp_path, cli):
     from jointdb.usecases import read_frf_file
 
     truth = _rotation_rig(tmp_path)
-    out = run("rotations", tmp_path / "ext.h5", "--extension", tmp_path / "ext.json", "--joint-point", "base",
+    out = cli("rotations", tmp_path / "ext.h5", "--extension", tmp_path / "ext.json", "--joint-point", "base",
               "--points", "p1,p2", "--node", "3", "--out", tmp_path / "a.h5", "--json", "--trials", "8")
     assert out.returncode == 0, out.stderr
     got = read_frf_file(tmp_path / "a.h5")
@@ -159,22 +161,22 @@ def test_rotations_by_extension_recover_the_contact_receptance_and_report_noise_
     assert report["condition_median"] > 1
 
 
-def test_rotations_by_finite_difference_amplify_noise_more_when_the_points_are_closer(tmp_path):
+def test_rotations_by_finite_difference_amplify_noise_more_when_the_points_are_closer(tmp_path, cli):
     _rotation_rig(tmp_path)
     amps = {}
     for inner, spacing in ((4, 0.01), (6, 0.03)):
-        out = run("rotations", tmp_path / "fd.h5", "--method", "finite-difference", "--node", "3", "--inner", inner,
+        out = cli("rotations", tmp_path / "fd.h5", "--method", "finite-difference", "--node", "3", "--inner", inner,
                   "--spacing", spacing, "--out", tmp_path / f"fd{inner}.csv", "--json", "--trials", "8")
         assert out.returncode == 0, out.stderr
         amps[spacing] = {r["entry"]: r["amplification_median"] for r in json.loads(out.stdout)["amplification"]}
     # n = (h33 - h43)/s: the closer the points, the smaller the difference of two noisy numbers
     assert amps[0.01]["n"] > 2 * amps[0.03]["n"] > 2
-    missing = run("rotations", tmp_path / "fd.h5", "--method", "finite-difference", "--node", "3",
+    missing = cli("rotations", tmp_path / "fd.h5", "--method", "finite-difference", "--node", "3",
                   "--out", tmp_path / "x.csv")
     assert missing.returncode != 0 and "--inner" in missing.stderr and "Traceback" not in missing.stderr
 
 
-def test_rotations_fill_reciprocity_completes_a_uff58_file_with_one_cross_entry(tmp_path):
+def test_rotations_fill_reciprocity_completes_a_uff58_file_with_one_cross_entry(tmp_path, cli):
     """G11, G21, G22 measured (no G12): refused with a hint, then completed by --fill reciprocity; the result
     equals that of the full matrix."""
     from jointdb.frf import FRF
@@ -191,11 +193,11 @@ def test_rotations_fill_reciprocity_completes_a_uff58_file_with_one_cross_entry(
     (tmp_path / "ext.uff").write_text("".join(parts))
     args = ("rotations", tmp_path / "ext.uff", "--extension", tmp_path / "ext.json", "--joint-point", "base",
             "--points", "p1,p2", "--node", "3", "--trials", "4")
-    refused = run(*args, "--out", tmp_path / "r.h5")
+    refused = cli(*args, "--out", tmp_path / "r.h5")
     assert refused.returncode != 0 and "--fill reciprocity" in refused.stderr and "Traceback" not in refused.stderr
-    done = run(*args, "--out", tmp_path / "a.h5", "--fill", "reciprocity")
+    done = cli(*args, "--out", tmp_path / "a.h5", "--fill", "reciprocity")
     assert done.returncode == 0, done.stderr
-    ref = run("rotations", tmp_path / "ext.h5", "--extension", tmp_path / "ext.json", "--joint-point", "base",
+    ref = cli("rotations", tmp_path / "ext.h5", "--extension", tmp_path / "ext.json", "--joint-point", "base",
               "--points", "p1,p2", "--node", "3", "--trials", "4", "--out", tmp_path / "b.h5")
     assert ref.returncode == 0, ref.stderr
     got, want = read_frf_file(tmp_path / "a.h5"), read_frf_file(tmp_path / "b.h5")

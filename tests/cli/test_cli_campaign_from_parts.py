@@ -25,6 +25,8 @@ PARTS = ["--spindle", "rig@1", "--holder", "er32@1", "--insertion", "0.035", "--
 
 
 def run(*args, cwd=None):
+    """``jointdb ARGS`` in a process of its own (the module's set-up; the tests run the commands in-process,
+    the ``cli`` fixture of tests/conftest.py)."""
     return subprocess.run([sys.executable, "-m", "jointdb", *map(str, args)], capture_output=True, text=True,
                           cwd=cwd, stdin=subprocess.DEVNULL)
 
@@ -58,9 +60,9 @@ def setup(_parts_db, tmp_path):
     return db, folder
 
 
-def test_rigid_taper_gives_the_monolithic_holder_on_spindle(setup, load_script):
+def test_rigid_taper_gives_the_monolithic_holder_on_spindle(setup, load_script, cli):
     db, folder = setup
-    r = run("campaign", "init", folder, "--type", "tool-holder", "--torque", "60", "--through-joint", "rigid",
+    r = cli("campaign", "init", folder, "--type", "tool-holder", "--torque", "60", "--through-joint", "rigid",
             *PARTS, "--db", db)
     assert r.returncode == 0, r.stderr
     doc = json.loads((folder / "campaign.json").read_text())
@@ -79,7 +81,7 @@ def test_rigid_taper_gives_the_monolithic_holder_on_spindle(setup, load_script):
     assert [str(d) for d in got.outputs] == ["3x", "3ry"]
     scale = np.abs(want.values).max(axis=0)
     assert np.max(np.abs(got.values - want.values) / scale) < 1e-8
-    check = run("campaign", "check", folder / "campaign.json")
+    check = cli("campaign", "check", folder / "campaign.json")
     assert check.returncode == 0, check.stderr
 
 
@@ -94,16 +96,16 @@ def test_rigid_taper_gives_the_monolithic_holder_on_spindle(setup, load_script):
     (["--through-joint", "rigid", *PARTS, "--fit-band", "4000,100"], "--fit-band"),
     (["--through-joint", "rigid", *PARTS, "--smoothing", "4"], "--smoothing"),
 ])
-def test_refusals_name_the_option_and_write_nothing(setup, args, message):
+def test_refusals_name_the_option_and_write_nothing(setup, args, message, cli):
     db, folder = setup
     before = sorted(p.name for p in folder.iterdir())
-    r = run("campaign", "init", folder, "--type", "tool-holder", "--torque", "60", *args, "--db", db)
+    r = cli("campaign", "init", folder, "--type", "tool-holder", "--torque", "60", *args, "--db", db)
     assert r.returncode != 0 and message in r.stderr, r.stderr
     assert "Traceback" not in r.stderr
     assert sorted(p.name for p in folder.iterdir()) == before
 
 
-def _a_file(folder: Path, db: Path, *args) -> tuple[np.ndarray, dict]:
+def _a_file(run, folder: Path, db: Path, *args) -> tuple[np.ndarray, dict]:
     """Run init with ``args`` in a fresh copy of ``folder``; substructure A's receptance and provenance."""
     from jointdb.io import read_frf_uff58
 
@@ -115,45 +117,45 @@ def _a_file(folder: Path, db: Path, *args) -> tuple[np.ndarray, dict]:
     return read_frf_uff58(target / "holder-on-spindle.uff").values, doc["substructures"]["holder-on-spindle"]
 
 
-def test_a_measured_spindle_part_gives_the_same_a_as_its_model(setup, tmp_path):
+def test_a_measured_spindle_part_gives_the_same_a_as_its_model(setup, tmp_path, cli):
     """The spindle as a measured nose FRF set (here: its model's, written as a file) instead of a beam model."""
     db, folder = setup
-    r = run("frf", tmp_path / "spindle.json", "--points", "nose", "--directions", "x,ry", "--fmin", "10",
+    r = cli("frf", tmp_path / "spindle.json", "--points", "nose", "--directions", "x,ry", "--fmin", "10",
             "--fmax", "6000", "--df", "10", "--out", tmp_path / "nose.h5")
     assert r.returncode == 0, r.stderr
-    r = run("parts", "add", "spindle", "rig-measured", "--frf", tmp_path / "nose.h5", "--node", "5",
+    r = cli("parts", "add", "spindle", "rig-measured", "--frf", tmp_path / "nose.h5", "--node", "5",
             "--machine", "rig", "--db", db)
     assert r.returncode == 0, r.stderr
-    model, _ = _a_file(folder, db, "--through-joint", "rigid", *PARTS)
-    measured, prov = _a_file(folder, db, "--through-joint", "rigid", "--spindle", "rig-measured@1", *PARTS[2:])
+    model, _ = _a_file(cli, folder, db, "--through-joint", "rigid", *PARTS)
+    measured, prov = _a_file(cli, folder, db, "--through-joint", "rigid", "--spindle", "rig-measured@1", *PARTS[2:])
     assert {p["part"] for p in prov["provenance"]["parts"]} == {"rig-measured@1", "er32@1"}
     scale = np.abs(model).max(axis=0)
     assert np.max(np.abs(measured - model) / scale) < 1e-8
 
 
-def test_a_queried_taper_joint_is_the_nearest_catalogued_one(setup):
+def test_a_queried_taper_joint_is_the_nearest_catalogued_one(setup, cli):
     """--through-joint as a JSON query: chosen as `jointdb predict` chooses, recorded with its method; on a
     catalogued condition it is that joint, so A equals A through the pinned version."""
     db, folder = setup
     for name in ("hs-hsk-a63-18kn", "hs-hsk-a63-24kn"):
-        r = run("catalogue", CAT / "campaigns" / name / "campaign.json", "--name", name, "--db", db)
+        r = cli("catalogue", CAT / "campaigns" / name / "campaign.json", "--name", name, "--db", db)
         assert r.returncode == 0, r.stderr
     query = json.dumps({"joint_type": "holder-spindle", "materials": ["steel", "steel"], "preload_n": 18000,
                         "geometry": {"taper_diameter_m": 0.063}})
-    pinned, _ = _a_file(folder, db, "--through-joint", "hs-hsk-a63-18kn@1", *PARTS)
-    queried, entry = _a_file(folder, db, "--through-joint", query, *PARTS)
+    pinned, _ = _a_file(cli, folder, db, "--through-joint", "hs-hsk-a63-18kn@1", *PARTS)
+    queried, entry = _a_file(cli, folder, db, "--through-joint", query, *PARTS)
     tj = entry["provenance"]["through_joint"]
     assert tj["joint"] == "hs-hsk-a63-18kn@1" and tj["distance"] == pytest.approx(0.0, abs=1e-12)
     assert tj["method"] in ("nearest", "catalogued condition")
     assert [u["joint"] for u in tj["joints_used"]] == ["hs-hsk-a63-18kn@1"]
     np.testing.assert_allclose(queried, pinned, rtol=1e-12, atol=0)
-    other, _ = _a_file(folder, db, "--through-joint", "hs-hsk-a63-24kn@1", *PARTS)
+    other, _ = _a_file(cli, folder, db, "--through-joint", "hs-hsk-a63-24kn@1", *PARTS)
     assert np.max(np.abs(other - pinned)) > 1e-3 * np.max(np.abs(pinned))  # the joint matters
 
 
-def test_a_failed_forced_init_leaves_the_earlier_substructure_a_as_it_was(setup):
+def test_a_failed_forced_init_leaves_the_earlier_substructure_a_as_it_was(setup, cli):
     db, folder = setup
-    r = run("campaign", "init", folder, "--type", "tool-holder", "--torque", "60", "--through-joint", "rigid",
+    r = cli("campaign", "init", folder, "--type", "tool-holder", "--torque", "60", "--through-joint", "rigid",
             *PARTS, "--db", db)
     assert r.returncode == 0, r.stderr
     a_before = (folder / "holder-on-spindle.uff").read_bytes()
@@ -162,7 +164,7 @@ def test_a_failed_forced_init_leaves_the_earlier_substructure_a_as_it_was(setup)
     # a second, forced run that fails after A would have been rebuilt (the tool-holder type is refused late:
     # an unknown shank material), then one whose option check fails first
     for extra in (["--shank-material", "unobtainium"], ["--fit-band", "x"]):
-        r = run("campaign", "init", folder, "--type", "tool-holder", "--torque", "60", "--through-joint", "rigid",
+        r = cli("campaign", "init", folder, "--type", "tool-holder", "--torque", "60", "--through-joint", "rigid",
                 *PARTS, *extra, "--db", db, "--force")
         assert r.returncode != 0 and "Traceback" not in r.stderr, r.stderr
         assert sorted(p.name for p in folder.iterdir()) == names

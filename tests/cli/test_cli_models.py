@@ -1,4 +1,5 @@
-"""CLI: ``jointdb modes``, ``jointdb frf`` and ``jointdb demo`` (run as a subprocess, like a user)."""
+"""CLI: ``jointdb modes``, ``jointdb frf`` (the console entry point in-process, the ``cli`` fixture) and ``jointdb demo``
+(run as a subprocess outside the source tree, like a user)."""
 
 import json
 import subprocess
@@ -16,10 +17,10 @@ def run(*args, cwd=None):
     return subprocess.run([sys.executable, "-m", "jointdb", *map(str, args)], capture_output=True, text=True, cwd=cwd)
 
 
-def test_modes_json_matches_the_library():
+def test_modes_json_matches_the_library(cli):
     from jointdb.fe import load_model
 
-    out = run("modes", MODEL, "--n", "4", "--json")
+    out = cli("modes", MODEL, "--n", "4", "--json")
     assert out.returncode == 0, out.stderr
     data = json.loads(out.stdout)
     expected = load_model(MODEL).modes(4).freq_hz
@@ -28,15 +29,15 @@ def test_modes_json_matches_the_library():
     assert data["kind"] == "planar" and data["theory"] == "timoshenko" and data["n_rigid"] == 0
 
 
-def test_modes_table_for_people():
-    out = run("modes", FIXTURES / "carbide-end-mill-12mm.json", "--n", "3")
+def test_modes_table_for_people(cli):
+    out = cli("modes", FIXTURES / "carbide-end-mill-12mm.json", "--n", "3")
     assert out.returncode == 0, out.stderr
     assert "rigid body" in out.stdout and "bending" in out.stdout
 
 
-def test_frf_writes_csv_and_bode_plot(tmp_path):
+def test_frf_writes_csv_and_bode_plot(tmp_path, cli):
     csv, png = tmp_path / "tip.csv", tmp_path / "tip.png"
-    out = run("frf", MODEL, "--points", "tip,gauge", "--fmax", "4000", "--df", "10", "--out", csv, "--plot", png, "--json")
+    out = cli("frf", MODEL, "--points", "tip,gauge", "--fmax", "4000", "--df", "10", "--out", csv, "--plot", png, "--json")
     assert out.returncode == 0, out.stderr
     summary = json.loads(out.stdout)
     assert summary["lines"] == 401 and summary["dofs"] == "1x 1ry 2x 2ry"
@@ -51,9 +52,9 @@ def test_frf_writes_csv_and_bode_plot(tmp_path):
 
 
 @pytest.mark.parametrize("suffix", [".uff", ".h5"])
-def test_frf_writes_uff58_and_hdf5(tmp_path, suffix):
+def test_frf_writes_uff58_and_hdf5(tmp_path, suffix, cli):
     path = tmp_path / f"tip{suffix}"
-    out = run("frf", FIXTURES / "carbide-end-mill-12mm.json", "--points", "tip", "--directions", "x",
+    out = cli("frf", FIXTURES / "carbide-end-mill-12mm.json", "--points", "tip", "--directions", "x",
               "--fmax", "20000", "--n-lines", "200", "--quantity", "accelerance", "--method", "modal", "--out", path,
               "--binary")
     assert out.returncode == 0, out.stderr
@@ -77,13 +78,14 @@ def test_frf_writes_uff58_and_hdf5(tmp_path, suffix):
         (["modes", "{broken}"], "segments[1].outer_diameter: must be > 0"),
     ],
 )
-def test_user_errors_exit_nonzero_with_one_line_and_no_traceback(tmp_path, args, message):
+def test_user_errors_exit_nonzero_with_one_line_and_no_traceback(tmp_path, args, message, cli, monkeypatch):
     broken = json.loads(MODEL.read_text())
     broken["segments"][1]["outer_diameter"] = -0.012
     (tmp_path / "broken.json").write_text(json.dumps(broken))
     subs = {"{bad}": str(FIXTURES / "carbide-end-mill-12mm.json"), "{model}": str(MODEL),
             "{broken}": str(tmp_path / "broken.json")}
-    out = run(*[subs.get(a, a) for a in args], cwd=tmp_path)
+    monkeypatch.chdir(tmp_path)
+    out = cli(*[subs.get(a, a) for a in args])
     assert out.returncode != 0
     assert "Traceback" not in out.stderr
     lines = out.stderr.strip().splitlines()

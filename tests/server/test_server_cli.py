@@ -1,25 +1,35 @@
 """The same commands against a server (``jointdb --server URL`` / ``JOINTDB_SERVER`` with
-``JOINTDB_TOKEN``) and against the database directly give the same answers."""
+``JOINTDB_TOKEN``) and against the database directly give the same answers (the commands run in-process; the
+server is a real process)."""
 
 from __future__ import annotations
 
 import json
-import os
-import subprocess
-import sys
+from types import SimpleNamespace
+
+import pytest
 
 from server_helpers import spring_joint
 
 
-def _jointdb(*args, env=None, ok=True):
-    r = subprocess.run([sys.executable, "-m", "jointdb", *map(str, args)], capture_output=True, text=True,
-                       env={**os.environ, "OPENBLAS_NUM_THREADS": "1", **(env or {})}, timeout=120)
-    if ok:
-        assert r.returncode == 0, r.stderr
-    return r
+@pytest.fixture
+def _jointdb(run_cli, monkeypatch):
+    """``_jointdb(*args, env=..., ok=True)``: the console entry point in this process with ``env`` set for the
+    call (the CLI reads ``JOINTDB_SERVER``/``JOINTDB_TOKEN`` when it runs); the result as ``subprocess.run``'s."""
+
+    def call(*args, env=None, ok=True):
+        with monkeypatch.context() as m:
+            for key, value in {"OPENBLAS_NUM_THREADS": "1", **(env or {})}.items():
+                m.setenv(key, value)
+            code, out, err = run_cli(*args)
+        if ok:
+            assert code == 0, err
+        return SimpleNamespace(returncode=code, stdout=out, stderr=err)
+
+    return call
 
 
-def test_cli_over_http_matches_the_database(server, tmp_path):
+def test_cli_over_http_matches_the_database(server, tmp_path, _jointdb):
     from jointdb import io
 
     path = tmp_path / "joint.h5"
@@ -52,7 +62,7 @@ def test_cli_over_http_matches_the_database(server, tmp_path):
     assert r.returncode == 2 and "token" in r.stderr and len(r.stderr.strip().splitlines()) == 1
 
 
-def test_tokens_commands(tmp_path):
+def test_tokens_commands(tmp_path, _jointdb):
     db = tmp_path / "t.sqlite"
     _jointdb("db", "upgrade", "--db", db)
     created = json.loads(_jointdb("tokens", "create", "--name", "alice", "--role", "writer", "--expires", "30d",

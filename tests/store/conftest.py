@@ -92,13 +92,83 @@ def drop_pg_schema(engine, schema: str) -> None:
         conn.exec_driver_sql(f"DROP SCHEMA {schema} CASCADE")
 
 
-@pytest.fixture
-def backend(empty_backend):
-    """A migrated backend."""
-    from jointdb.store import upgrade
+class _SchemaPool:
+    """Migrated PostgreSQL schemas of this process that a finished test left as migrated (tests/store/pg_schema_pool.py)."""
 
-    upgrade(empty_backend.url)
-    return empty_backend
+    def __init__(self):
+        self.free: list[tuple[str, str]] = []  # (schema, url)
+        self.fresh: dict[str, object] = {}  # schema -> FreshState
+        self.engines: dict[str, object] = {}  # base url -> engine
+
+    def engine(self, base: str):
+        import sqlalchemy as sa
+
+        if base not in self.engines:
+            self.engines[base] = sa.create_engine(base)
+        return self.engines[base]
+
+    def take(self, base: str) -> tuple[str, str]:
+        """A migrated schema: a used one emptied again, else a new one migrated by Alembic."""
+        for k, (schema, url) in enumerate(self.free):
+            if url.startswith(base):
+                return self.free.pop(k)
+        from pg_schema_pool import FreshState
+
+        from jointdb.store import upgrade
+
+        engine, schema, url = _pg_schema(base)
+        try:
+            upgrade(url)
+            with engine.connect() as conn:
+                self.fresh[schema] = FreshState(conn, schema)
+        finally:
+            engine.dispose()
+        return schema, url
+
+    def give_back(self, base: str, schema: str, url: str) -> None:
+        """Empty ``schema`` for the next test, or drop it when the test changed more than its rows."""
+        from pg_schema_pool import empty_again
+
+        engine = self.engine(base)
+        if empty_again(engine, schema, self.fresh[schema]):
+            self.free.append((schema, url))
+        else:
+            self.fresh.pop(schema)
+            drop_pg_schema(engine, schema)
+
+    def close(self) -> None:
+        for schema, url in self.free:
+            base = next(b for b in self.engines if url.startswith(b))
+            drop_pg_schema(self.engines[base], schema)
+        self.free.clear()
+        for engine in self.engines.values():
+            engine.dispose()
+
+
+@pytest.fixture(scope="session")
+def pg_schema_pool():
+    pool = _SchemaPool()
+    yield pool
+    pool.close()
+
+
+@pytest.fixture(params=["sqlite", "postgresql"])
+def backend(request, tmp_path):
+    """A migrated backend (on PostgreSQL a schema of the process's pool, as freshly migrated)."""
+    if request.param == "sqlite":
+        from jointdb.store import upgrade
+
+        b = Backend("sqlite", f"sqlite:///{tmp_path / 'j.sqlite'}", tmp_path / "j.sqlite.blobs")
+        upgrade(b.url)
+        yield b
+        return
+    base = pg_base_url()
+    pool = request.getfixturevalue("pg_schema_pool")
+    schema, url = pool.take(base)
+    try:
+        yield Backend("postgresql", url, tmp_path / "pgblobs")
+    finally:
+        pool.give_back(base, schema, url)
 
 
 @pytest.fixture

@@ -12,6 +12,9 @@ from store_helpers import planar_conditions, spring_joint
 from jointdb.errors import InputError
 from jointdb.store import current_revision, downgrade, head_revision, upgrade
 
+#: these tests are about creating and migrating databases: no copy of a migrated template (tests/sqlite_template.py)
+pytestmark = pytest.mark.real_migrations
+
 
 def _tables(url):
     engine = sa.create_engine(url)

@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import sqlalchemy as sa
-from store_helpers import alter_version_row, refused_statements, reseal, run_cli
+from store_helpers import alter_version_row, refused_statements, reseal
 
 from jointdb.errors import ConflictError, InputError, IntegrityError, NotFoundError
 
@@ -215,7 +215,8 @@ def test_stack_with_a_measured_spindle_part_predicts_as_the_file(repo, tmp_path)
     assert np.allclose(a.tip.values, c.tip.values, rtol=1e-9, atol=1e-15)
 
 
-def test_cli_parts_add_list_show_label_and_predict(tmp_path):
+def test_cli_parts_add_list_show_label_and_predict(tmp_path, run_cli):
+    """The parts commands through the console entry point, in this process (``run_cli`` of tests/conftest.py)."""
     db = tmp_path / "j.sqlite"
     stack = DEMO_STACK
     rc, out, err = run_cli("parts", "add", "holder", "er32-hsk63", "--from-stack", stack, "--family", "ER32",
@@ -280,7 +281,7 @@ def test_app_role_appends_parts_but_cannot_rewrite_them(two_roles):
 from test_store_roles import two_roles  # noqa: E402,F401  (the two-role PostgreSQL fixture)
 
 
-def test_downgrade_below_0009_is_refused_while_parts_exist(tmp_path):
+def test_downgrade_below_0009_is_refused_while_parts_exist(tmp_path, run_cli):
     db = tmp_path / "d.sqlite"
     from jointdb.store import Repository
 
