@@ -242,7 +242,8 @@ def tip_band(spec: StackSpec, resolved_joints: Mapping[str, FRF], uncertainties:
         spindle is the nominal one plus the estimate's change under the taps' noise
         (:func:`jointdb.stack._spindle_band.spindle_deviations`); None: the spindle is exact.
     model_sigma
-        Relative standard error of the substructure model shown by validation assemblies (log units): each
+        Relative standard error of the substructure model shown by the campaigns' validation (or tool–holder
+        identification) assemblies (log units): each
         sample's tip receptance is scaled by ``exp(model_sigma ξ)``, independently of ``tip_sigma``.
     n, seed
         Ensemble size and random seed.

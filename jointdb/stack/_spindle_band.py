@@ -158,6 +158,9 @@ def spindle_deviations(est: SpindleEstimate, freq, n: int, rng: np.random.Genera
     if eps == 0:
         return np.zeros((int(n), f.size, 2, 2), dtype=complex)
     h00, e, he, g = _blocks(est, f)
+    # the reciprocal part of the taps: the samples set G_21 = G_12, so the nominal estimate must too, or every
+    # sample would differ from it by (G_12 − G_21) / 2 carried through the algebra (an offset, not noise)
+    g = 0.5 * (g + np.swapaxes(g, -1, -2))
     z = (rng.standard_normal((int(n), f.size, 3)) + 1j * rng.standard_normal((int(n), f.size, 3))) / np.sqrt(2)
     gs = np.broadcast_to(g, (int(n),) + g.shape).copy()
     gs[..., 0, 0] *= 1 + eps * z[..., 0]

@@ -63,8 +63,8 @@ def identification_peak_error(quality: Any) -> float | None:
     Parameters
     ----------
     quality
-        The ``quality`` mapping of a joint file's metadata (anything else, or rows that are not finite positive
-        ratios: None).
+        The ``quality`` mapping of a joint file's metadata (anything else, rows that are not finite positive
+        ratios, or ratios so far from 1 that the error overflows: None).
 
     Returns
     -------
@@ -81,7 +81,9 @@ def identification_peak_error(quality: Any) -> float | None:
         ratios.append(float(r))
     from jointdb.campaign._run import peak_model_error
 
-    return float(peak_model_error([{"amplitude_ratio": r} for r in ratios]))
+    with np.errstate(over="ignore"):
+        e = float(peak_model_error([{"amplitude_ratio": r} for r in ratios]))
+    return e if math.isfinite(e) else None
 
 
 @dataclass(frozen=True, eq=False)
@@ -338,8 +340,8 @@ def catalogue_inputs(joint_file: Path | str, given=None, *, joint_type: str | No
         raise InputError(f"{joint_file}: the file does not say its joint type; give --type")
     q = numeric_metrics(meta.get("quality"))
     own = identification_peak_error(meta.get("quality"))
-    if own is not None:
-        q.setdefault("identification_peak_error", own)
+    if own is not None:  # computed from the file's own peaks: it wins over a flat value of the same name
+        q["identification_peak_error"] = own
     q.update(quality or {})
     params = {k: meta[k] for k in PROVENANCE_PARAMETERS if k in meta}
     file_method = meta.get("method") or (f"irc-{meta['joint_model']}" if meta.get("joint_model") else None)

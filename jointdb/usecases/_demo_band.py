@@ -1,6 +1,6 @@
 """The main job's bands: tool-tip and lobe percentiles from the chosen joints' covariance, the joint-choice
 error estimated from the catalogue by leave-one-out, the spindle's estimate and the substructure model's error
-shown by validation assemblies, when there are any, and the prediction path (issues 13 and 22)."""
+shown by the campaigns' assemblies, when there are any, and the prediction path (issues 13 and 22)."""
 
 from __future__ import annotations
 
@@ -27,7 +27,8 @@ def journey_bands(spec, resolutions, grid, say: Callable[[str], None], lobe_grid
         say(f"      note: {note}")
     est, why = spindle_estimate(spec)
     m_sigma, sources = model_error(resolutions)
-    none = "0 — no campaign of the joints used recorded a validation assembly"
+    none = ("0 — no campaign of the joints used recorded a validation assembly, and no tool–holder joint used "
+            "records its identification assembly's peak error")
     say(f"      spindle estimate: {'sampled from its taps' if est is not None else '0 — ' + why}; "
         f"substructure model: {'; '.join(sources) if sources else none}")
 

@@ -8,13 +8,15 @@ covariance (measurement noise) and, for a queried joint, the leave-one-out joint
 prediction path's own model-form error (:data:`MODEL_FORM_SIGMA`), and couples them all; the draws of a line left out
 lean the way its signed error points (:data:`LINE_BIAS`)
 (:func:`jointdb.stack._band.tip_band`). A spindle estimated from extension-bar taps carries its estimate's
-noise (:mod:`jointdb.stack._spindle_band`); joints whose campaigns recorded a validation assembly carry the
-substructure model's error it showed (:func:`model_error`). :func:`band_terms` also samples each term alone,
+noise (:mod:`jointdb.stack._spindle_band`); joints whose campaigns recorded a validation assembly (or, for tool–holder
+joints, whose own identification assembly the catalogued joint does not give back) carry the substructure model's
+error it showed (:func:`model_error`). :func:`band_terms` also samples each term alone,
 to say which one dominates, and says why a term is 0.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 
@@ -81,6 +83,17 @@ def choice_perturbation(resolution, freq):
 IDENTIFICATION_TERM_INTERFACES = ("tool-holder",)
 
 
+#: The largest peak error the substructure-model term takes from a catalogued record (σ ≤ ln 11): a record's quality
+#: can come from an uploaded file, and a value outside [0, MAX_PEAK_ERROR] is no error estimate (left out, said so).
+MAX_PEAK_ERROR = 10.0
+
+
+def usable_peak_error(e) -> bool:
+    """Whether a recorded peak error is a finite number in ``[0, MAX_PEAK_ERROR]``."""
+    return (isinstance(e, (int, float)) and not isinstance(e, bool) and math.isfinite(e)
+            and 0.0 <= e <= MAX_PEAK_ERROR)
+
+
 def _interface_rows(name: str, r) -> list[tuple[str, float, float | None]]:
     """Per version used, ``(name@version, weight, error or None)``: its validation assembly's error, else (on
     :data:`IDENTIFICATION_TERM_INTERFACES`) its identification assembly's."""
@@ -91,7 +104,7 @@ def _interface_rows(name: str, r) -> list[tuple[str, float, float | None]]:
 def _interface_errors(name: str, r) -> tuple[list[tuple[str, float, float]], str]:
     """``([(name@version, weight, error)], source)``: the rows of :func:`_interface_rows` that carry an error."""
     validated = {j for j, _, e in getattr(r, "validation_errors", ()) if e is not None}
-    have = [(j, w, e) for j, w, e in _interface_rows(name, r) if w > 0 and e is not None]
+    have = [(j, w, e) for j, w, e in _interface_rows(name, r) if w > 0 and usable_peak_error(e)]
     sources = {"validation" if j in validated else "identification" for j, _, _ in have}
     return have, " and ".join(f"{s} assemblies" for s in sorted(sources, reverse=True))
 
@@ -120,6 +133,9 @@ def model_error(joints) -> tuple[float, list[str]]:
     total, parts = 0.0, []
     for name, r in joints.items():
         have, source = _interface_errors(name, r)
+        bad = [j for j, w, e in _interface_rows(name, r) if w > 0 and e is not None and not usable_peak_error(e)]
+        if bad:
+            parts.append(f"{name}: peak error of {', '.join(bad)} left out (not a number in 0..{MAX_PEAK_ERROR:g})")
         if not have:
             continue
         wsum = sum(w for _, w, _ in have)

@@ -79,3 +79,16 @@ def test_a_known_identification_error_reaches_the_tip_band():
     # 400 samples: each 5 %/95 % quantile of a normal has a standard error of 0.11 σ -> half-width within ±10 %
     for d in ("x", "y"):
         assert terms.half_width["substructure model"][d] == pytest.approx(expected, rel=0.1)
+
+
+def test_a_peak_error_that_is_not_a_number_in_range_is_left_out_and_said_so():
+    # quality values can come from an uploaded file: -1 would make σ infinite, -2 NaN, 1e300 absurd
+    for bad in (-1.0, -2.0, 1e300, float("nan"), 10.5):
+        _, j = _joints(tool_holder=(("th@1", 1.0, None, bad),))
+        s, parts = model_error(j)
+        assert s == 0.0 and any("th@1 left out" in p for p in parts)
+        _, j = _joints(tool_holder=(("a@1", 0.5, bad, None), ("b@1", 0.5, None, 0.05)))
+        s, parts = model_error(j)
+        assert s == pytest.approx(np.log(1.05)) and np.isfinite(s)  # the usable version alone (weights renormalised)
+    # ratios so far from 1 that the error overflows give no error, not inf
+    assert identification_peak_error({"peaks": [{"amplitude_ratio": 5e-324}]}) is None

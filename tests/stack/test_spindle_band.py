@@ -157,3 +157,19 @@ def test_a_stack_file_names_the_taps_and_predict_reports_the_spindle_term(setup,
 
     assert bad.exit_code != 0 and isinstance(bad.exception, InputError)  # the CLI's main maps it to one line
     assert "spindle.estimate: unknown point 'nowhere'" in str(bad.exception)
+
+
+def test_taps_that_are_not_reciprocal_give_deviations_without_an_offset(setup):
+    """A measured tap matrix has G_12 ≠ G_21 (noise on every entry); the samples set G_21 = G_12, so the
+    nominal estimate they are compared with must use the same reciprocal part: at a vanishing noise level
+    the deviations vanish with it (an offset of (G_12 − G_21) / 2 would stay)."""
+    from jointdb.stack._spindle_band import SpindleEstimate, spindle_deviations
+
+    _, f, spindle, bar_frf, taps, _ = setup
+    measured = noisy(taps, 0.0075, 3)
+    v = measured.values
+    assert np.median(np.abs(v[:, 0, 1] - v[:, 1, 0]) / np.abs(v[:, 0, 1])) > 0.005  # the case in point
+    d = spindle_deviations(SpindleEstimate(measured, bar_frf, 10, (11, 12), 1e-9), f, 20, np.random.default_rng(0))
+    h = np.abs(spindle.values[:, 0, 0])
+    # linear in the noise level: 1e-9 relative noise moves the estimate by ~1e-9 × its conditioning (≤ 1e3 here)
+    assert np.median(np.abs(d.mean(axis=0)[:, 0, 0]) / h) < 1e-5
