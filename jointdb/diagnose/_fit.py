@@ -32,10 +32,13 @@ from jointdb.diagnose._uncertainty import linearised_sigmas
 from jointdb.errors import InputError, NumericalError
 from jointdb.fe import natural_frequencies
 
-__all__ = ["Fit", "ModelEvaluator", "fit_candidate", "MEMO_SIZE"]
+__all__ = ["Fit", "ModelEvaluator", "fit_candidate", "MEMO_SIZE", "MEMO_BYTES"]
 
-#: Predictions an evaluator remembers by their fit coordinates (:meth:`ModelEvaluator.predict_u`).
+#: Predictions an evaluator remembers by their fit coordinates (:meth:`ModelEvaluator.predict_u`), at most this many
+#: and at most MEMO_BYTES of arrays (a server runs several diagnoses at once; 3 levels × 4,000 lines × 3 × 3 entries
+#: are 0.9 MB a prediction).
 MEMO_SIZE = 64
+MEMO_BYTES = 32 * 2**20
 
 
 class ModelEvaluator:
@@ -71,6 +74,7 @@ class ModelEvaluator:
         # predictions by fit coordinates (they do not depend on the weights: shared with copies of this
         # evaluator that weight other lines, e.g. the jackknife's)
         self._memo: OrderedDict = OrderedDict()
+        self._memo_bytes = [0]  # a list: shared, like the memo, with shallow copies of this evaluator
 
     def frf(self, model) -> np.ndarray:
         """Receptance ``(n_freq, n_out, n_in)`` of ``model`` at the recorded DOFs.
@@ -182,8 +186,9 @@ class ModelEvaluator:
         H = self.predict(nominal, cand, _values_of(cand.params, u))
         H.flags.writeable = False
         self._memo[key] = (nominal, cand, H)      # the objects are kept: their ids are not reused
-        if len(self._memo) > MEMO_SIZE:
-            self._memo.popitem(last=False)
+        self._memo_bytes[0] += H.nbytes
+        while len(self._memo) > 1 and (len(self._memo) > MEMO_SIZE or self._memo_bytes[0] > MEMO_BYTES):
+            self._memo_bytes[0] -= self._memo.popitem(last=False)[1][2].nbytes
         return H
 
     def log_ratio(self, H: np.ndarray) -> np.ndarray:

@@ -56,3 +56,16 @@ def test_the_memo_keeps_the_last_points_only():
     assert len(ev._memo) == MEMO_SIZE
     again = ev.predict_u(model, cand, np.zeros(len(cand.params)))
     assert again is not first and np.array_equal(again, first)
+
+
+def test_the_memo_keeps_at_most_its_byte_budget(monkeypatch):
+    import jointdb.diagnose._fit as fit
+
+    model, ev, cands = _setup()
+    cand = cands[0]
+    one = ev.predict_u(model, cand, np.zeros(len(cand.params))).nbytes
+    monkeypatch.setattr(fit, "MEMO_BYTES", 3 * one)                   # room for three predictions
+    sub = copy.copy(ev)                                               # a copy counts into the same budget
+    for k in range(6):
+        (sub if k % 2 else ev).predict_u(model, cand, np.full(len(cand.params), 1e-3 * (k + 1)))
+    assert len(ev._memo) == 3 and ev._memo_bytes[0] == 3 * one
