@@ -15,7 +15,7 @@ from typing import Annotated, Any, Optional
 import typer
 
 from jointdb.cli._output import emit, message
-from jointdb.cli._target import BlobsOpt, DbOpt, JsonOpt, open_local_repo, open_repo, refuse_server
+from jointdb.cli._target import BlobsOpt, DbOpt, JsonOpt, check_db_target, open_local_repo, open_repo, refuse_server
 from jointdb.errors import InputError, IntegrityError, NotFoundError
 
 def _check_output(path: Path | None) -> None:

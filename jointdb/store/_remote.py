@@ -111,9 +111,12 @@ class RemoteRepository(RemoteParts):
 
                 damaged.extend(DamagedVersion(str(d["name"]), int(d["version"]), str(d["error"]))
                                for d in page["damaged"])
-            if page.get("next_offset") is None:
+            if page.get("next"):  # a page asked for by cursor has no next_offset (an offset counts from the start)
+                position = {"after": page["next"]}
+            elif page.get("next_offset") is not None:
+                position = {"offset": page["next_offset"]}
+            else:
                 return items
-            position = {"after": page["next"]} if page.get("next") else {"offset": page["next_offset"]}
 
     # ----------------------------------------------------------------- reads
     def get(self, name: str, version: int | None = None, at=None, label: str | None = None):
