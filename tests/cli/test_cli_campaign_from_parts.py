@@ -109,7 +109,9 @@ def _a_file(run, folder: Path, db: Path, *args) -> tuple[np.ndarray, dict]:
     """Run init with ``args`` in a fresh copy of ``folder``; substructure A's receptance and provenance."""
     from jointdb.io import read_frf_uff58
 
-    target = folder.parent / f"{folder.name}-{len(list(folder.parent.iterdir()))}"
+    k = 0  # the first free name: counting the folder's entries is not, the database's -wal/-shm files come and go
+    while (target := folder.parent / f"{folder.name}-{k}").exists():
+        k += 1
     shutil.copytree(folder, target)
     r = run("campaign", "init", target, "--type", "tool-holder", "--torque", "60", *args, "--db", db)
     assert r.returncode == 0, r.stderr
