@@ -20,23 +20,23 @@ seeds (:data:`TUNING_SEEDS`) set the band's calibration, the reported seeds
 (:data:`REPORT_SEEDS`) did not.
 
 Generic pieces (the FE solve per line, the noise, the peak and lobe-floor measures) come
-from ``_stack_validation``.
+from ``_stack_validation``; the campaigns, the catalogue, the truth tip, the spindle alone and the
+queries are ``_stack_family``'s, bound to this family.
 """
 
 from __future__ import annotations
 
 import functools
-from dataclasses import replace
-from pathlib import Path
+import sys
 
 import numpy as np
 
+import _stack_family as family
 import _stack_validation as sv
-from jointdb.fe import BeamModel, HystereticDamping, NamedPoint, PointMass, Segment, Support, model_to_dict
+from jointdb.fe import BeamModel, HystereticDamping, NamedPoint, PointMass, Segment, Support
 from jointdb.fe._joints import Contact, Insertion
-from jointdb.frf import FRF, Dof
-from jointdb.io import write_uff58
-from jointdb.stack import attach, holder_model, stack_from_dict, tool_model
+from jointdb.frf import FRF
+from jointdb.stack import stack_from_dict
 
 FREQ = sv.FREQ
 TH_ETA, HS_ETA = 0.08, 0.03
@@ -48,6 +48,8 @@ SPINDLE = ((0.100, 0.080, 0.030), (0.260, 0.065, 0.025))  # after the taper zone
 BEARINGS = ((0.025, {"x": 4e8, "ry": 3e5}, {"x": 5000.0}), (0.090, {"x": 2e8}, {"x": 2500.0}),
             (0.330, {"x": 1e8}, {"x": 1500.0}))
 ROTOR = (0.22, 5.0, 5e-3)
+NOISE_TAG = "B"  # the seed prefix of its measurement noise
+CAMPAIGN_OPTIONS = {"smoothing": 9, "fit_band": [100.0, 5000.0]}
 HS_FORCES = (10e3, 15e3, 20e3, 25e3)
 TH_MACHINES = (10e3, 25e3)
 TH_GRID = ((0.008, (30.0, 70.0, 150.0)), (0.012, (30.0, 70.0, 150.0)), (0.016, (30.0, 70.0, 150.0)))
@@ -100,25 +102,17 @@ def truth_model(case: sv.Case, element: float = 0.003):
     return model, th, hs
 
 
-def truth_tip(case: sv.Case) -> FRF:
-    model, _, _ = truth_model(case)
-    mesh = model.mesh()
-    h = sv.solve_frf(model, [mesh.node_at(0.0)], [mesh.node_at(0.0)], FREQ)
-    return FRF(FREQ, h, (Dof(1, "x"),), (Dof(1, "x"),), "receptance")
-
-
-def spindle_frf() -> FRF:
-    """The spindle alone at its nose (node 5: x, ry), exact; solved once (deterministic), each caller gets a copy."""
-    frf = _spindle_frf()
-    return replace(frf, freq=frf.freq.copy(), values=frf.values.copy())
-
-
-@functools.lru_cache(maxsize=1)
-def _spindle_frf() -> FRF:
-    model = BeamModel(tuple(spindle_segments()), points=(NamedPoint("nose", 0.0, 5),),
-                      ingredients=(*spindle_ingredients(0.0), HystereticDamping(sv.ETA)), max_element_length=0.003)
-    return model.frf(FREQ, ["nose"])
-
+# the pieces every family shares, bound to this one (bench/_stack_family.py)
+_THIS = sys.modules[__name__]
+truth_tip = functools.partial(family.truth_tip, _THIS)
+spindle_model = functools.partial(family.spindle_model, _THIS)
+spindle_frf = functools.partial(family.spindle_frf, _THIS)
+hs_conditions = functools.partial(family.hs_conditions, _THIS)
+th_conditions = functools.partial(family.th_conditions, _THIS)
+queries = functools.partial(family.queries, _THIS)
+write_hs_campaign = functools.partial(family.write_hs_campaign, _THIS)
+write_th_campaign = functools.partial(family.write_th_campaign, _THIS)
+build_catalogue = functools.partial(family.build_catalogue, _THIS)
 
 def spec_for(case: sv.Case, joints: dict, spindle_estimated: bool = False):
     """The prediction path's stack (the family's holder; spindle: its exact nose receptance, or with
@@ -167,67 +161,6 @@ def estimated_spindle(key: str):
     return h33, SpindleEstimate(noisy, e, 10, (11, 12), None)
 
 
-def hs_conditions(case: sv.Case) -> dict:
-    return {"materials": ["steel", "steel"], "preload_n": case.drawbar, "geometry": {"taper_diameter_m": TAPER[0]}}
-
-
-def th_conditions(case: sv.Case) -> dict:
-    return {"materials": ["tungsten-carbide", "steel"], "torque_nm": case.torque, "preload_n": case.drawbar,
-            "geometry": {"shank_diameter_m": case.diameter, "taper_diameter_m": TAPER[0]}}
-
-
-def queries(case: sv.Case) -> dict:
-    return {"tool-holder": {"query": {"joint_type": "tool-holder", **th_conditions(case), "interpolate": True}},
-            "holder-spindle": {"query": {"joint_type": "holder-spindle", **hs_conditions(case), "interpolate": True}}}
-
-
-def _campaign(folder: Path, case: sv.Case, a: tuple, b_model: BeamModel, joint_type: str, conds: dict,
-              a_file: tuple[str, FRF], mouth) -> Path:
-    """Measure the assembly (tip x over tip x and the contact point x) and write a planar campaign."""
-    folder.mkdir(parents=True, exist_ok=True)
-    model, th, hs = truth_model(case)
-    mesh = model.mesh()
-    tip, face = mesh.node_at(0.0), sv._mouth_node(model, mesh, model.assemble().K, th if mouth == "th" else hs)
-    g = sv._noisy(sv.solve_frf(model, [tip], [tip, face], FREQ), "B-" + folder.name)
-    b_node = 2 if joint_type == "tool-holder" else 4
-    write_uff58(folder / "assembly.uff", FRF(FREQ, g, (Dof(1, "x"),), (Dof(1, "x"), Dof(b_node, "x")), "receptance"),
-                round_freq=False)
-    write_uff58(folder / a_file[0], a_file[1], round_freq=False)
-    sv._dump(folder / "b.json", model_to_dict(b_model))
-    sv._dump(folder / "campaign.json", {
-        "format": "jointdb-campaign/1", "name": folder.name, "joint_type": joint_type, "conditions": conds,
-        "joint_model": "planar",
-        "substructures": {"a": {"uff58": a_file[0], "dofs": [f"{a[0]}x", f"{a[0]}ry"]}, "b": {"model": "b.json"}},
-        "interface": {"a": "a", "a_dofs": [f"{a[0]}x", f"{a[0]}ry"], "b": "b",
-                      "b_dofs": [f"{b_node}x", f"{b_node}ry"]},
-        "measurements": ["assembly.uff"], "planar": {"b_tip": 1},
-        "options": {"smoothing": 9, "fit_band": [100.0, 5000.0]},
-    })
-    return folder / "campaign.json"
-
-
-def write_hs_campaign(folder: Path, case: sv.Case) -> Path:
-    """A = the measured spindle at its nose, B = holder with a bonded Ø12 arbor (model)."""
-    case = replace(case, bonded=True)
-    spec = spec_for(case, {"tool-holder": "rigid", "holder-spindle": "rigid"})
-    tool, holder = tool_model(spec), holder_model(spec)
-    b = BeamModel(tool.segments + holder.segments,
-                  points=(NamedPoint("tip", 0.0, 1), NamedPoint("base", tool.length + holder.length, 4)),
-                  ingredients=(HystereticDamping(sv.ETA),), max_element_length=0.005, name="holder + bonded arbor")
-    return _campaign(folder, case, (5,), b, "holder-spindle", hs_conditions(case), ("spindle.uff", spindle_frf()), "hs")
-
-
-def write_th_campaign(folder: Path, case: sv.Case, hs_joint: FRF) -> Path:
-    """A = holder on the spindle through the machine's catalogued taper joint, B = blank overhang (model)."""
-    spec = spec_for(case, {"tool-holder": "rigid", "holder-spindle": "rigid"})
-    h = holder_model(spec).frf(FREQ, ["nose", "base"]).values
-    j = hs_joint.resample(FREQ).values if hs_joint.n_freq != FREQ.size else hs_joint.values
-    a33 = attach(h[:, :2, :2], h[:, :2, 2:], h[:, 2:, :2], h[:, 2:, 2:], spindle_frf().values, j)
-    a = (Dof(3, "x"), Dof(3, "ry"))
-    return _campaign(folder, case, (3,), tool_model(spec), "tool-holder", th_conditions(case),
-                     ("holder-on-spindle.uff", FRF(FREQ, a33, a, a, "receptance")), "th")
-
-
 def hs_name(force: float) -> str:
     return f"b-hs-{int(round(force / 1e3)):02d}kn"
 
@@ -235,19 +168,6 @@ def hs_name(force: float) -> str:
 HS_CAMPAIGNS = [sv.Case(hs_name(f), 0.012, 0.045, 0.035, 70.0, "HSK-A63", f) for f in HS_FORCES]
 TH_CAMPAIGNS = [sv.Case(f"b-th-{int(f / 1e3):02d}kn-d{int(d * 1e3):02d}-{int(t):03d}nm", d, 0.045, 0.035, t,
                         "HSK-A63", f) for f in TH_MACHINES for d, ts in TH_GRID for t in ts]
-
-
-def build_catalogue(workdir: Path, repo, say=print) -> None:
-    """Identify and catalogue every campaign of family B (holder–spindle first)."""
-    from jointdb import usecases
-
-    for case in HS_CAMPAIGNS:
-        out = usecases.catalogue_campaign(repo, write_hs_campaign(workdir / case.name, case))
-        say(f"  catalogued {out.row()['joint']}")
-    hs = {f: repo.load_frf(repo.get(hs_name(f))) for f in TH_MACHINES}
-    for case in TH_CAMPAIGNS:
-        out = usecases.catalogue_campaign(repo, write_th_campaign(workdir / case.name, case, hs[case.drawbar]))
-        say(f"  catalogued {out.row()['joint']}")
 
 
 def draw(n: int, seed: int) -> list[sv.Case]:

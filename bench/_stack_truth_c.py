@@ -31,23 +31,22 @@ inside the catalogued range with a seed; the reported seeds (:data:`REPORT_SEEDS
 stack of this family was predicted and are never re-drawn.
 
 Generic pieces (the FE solve per line, the noise, the mouth node, the stack document, the peak and
-lobe-floor measures) come from ``_stack_validation``.
+lobe-floor measures) come from ``_stack_validation``; the campaigns, the catalogue, the truth tip, the spindle
+alone and the queries are ``_stack_family``'s, bound to this family (as family B's are).
 """
 
 from __future__ import annotations
 
 import functools
-from dataclasses import replace
-from pathlib import Path
+import sys
 
 import numpy as np
 
+import _stack_family as family
 import _stack_validation as sv
-from jointdb.fe import BeamModel, HystereticDamping, NamedPoint, PointMass, Segment, Support, model_to_dict
+from jointdb.fe import BeamModel, HystereticDamping, NamedPoint, PointMass, Segment, Support
 from jointdb.fe._joints import Contact, Insertion
-from jointdb.frf import FRF, Dof
-from jointdb.io import write_uff58
-from jointdb.stack import attach, holder_model, stack_from_dict, tool_model
+from jointdb.stack import stack_from_dict
 
 FREQ = sv.FREQ
 TH_ETA, HS_ETA = 0.06, 0.04
@@ -67,6 +66,7 @@ CAMPAIGN_GAUGE, CAMPAIGN_INSERTION = 0.050, 0.040
 #: The campaigns' identification options (``options`` of campaign.json; the method is the library's default: the
 #: output-error constant k, c, kept unless the adequacy check rejects it for the per-line joint).
 CAMPAIGN_OPTIONS = {"smoothing": 9, "fit_band": [100.0, 5000.0]}
+NOISE_TAG = "C"  # the seed prefix of its measurement noise
 #: Reported seeds, fixed before any family-C stack was predicted (blind: nothing was tuned on family C).
 REPORT_SEEDS = (7301, 7302)
 TUNING_SEEDS = ()  # none: the band is not tuned on family C
@@ -117,29 +117,17 @@ def truth_model(case: sv.Case, element: float = 0.003):
     return model, th, hs
 
 
-def truth_tip(case: sv.Case) -> FRF:
-    model, _, _ = truth_model(case)
-    mesh = model.mesh()
-    h = sv.solve_frf(model, [mesh.node_at(0.0)], [mesh.node_at(0.0)], FREQ)
-    return FRF(FREQ, h, (Dof(1, "x"),), (Dof(1, "x"),), "receptance")
-
-
-def spindle_model() -> BeamModel:
-    """The spindle alone (nose at z = 0, point "nose" = node 5)."""
-    return BeamModel(tuple(spindle_segments()), points=(NamedPoint("nose", 0.0, 5),),
-                     ingredients=(*spindle_ingredients(0.0), HystereticDamping(sv.ETA)), max_element_length=0.003)
-
-
-def spindle_frf() -> FRF:
-    """The spindle alone at its nose (node 5: x, ry), exact; solved once (deterministic), each caller gets a copy."""
-    frf = _spindle_frf()
-    return replace(frf, freq=frf.freq.copy(), values=frf.values.copy())
-
-
-@functools.lru_cache(maxsize=1)
-def _spindle_frf() -> FRF:
-    return spindle_model().frf(FREQ, ["nose"])
-
+# the pieces every family shares, bound to this one (bench/_stack_family.py)
+_THIS = sys.modules[__name__]
+truth_tip = functools.partial(family.truth_tip, _THIS)
+spindle_model = functools.partial(family.spindle_model, _THIS)
+spindle_frf = functools.partial(family.spindle_frf, _THIS)
+hs_conditions = functools.partial(family.hs_conditions, _THIS)
+th_conditions = functools.partial(family.th_conditions, _THIS)
+queries = functools.partial(family.queries, _THIS)
+write_hs_campaign = functools.partial(family.write_hs_campaign, _THIS)
+write_th_campaign = functools.partial(family.write_th_campaign, _THIS)
+build_catalogue = functools.partial(family.build_catalogue, _THIS)
 
 def spec_for(case: sv.Case, joints: dict, spindle_estimated: bool = False):
     """The prediction path's stack (the family's holder; spindle: its exact nose receptance; family C has no
@@ -156,68 +144,6 @@ def spec_for(case: sv.Case, joints: dict, spindle_estimated: bool = False):
     return stack_from_dict(doc).replace(spindle=MeasuredSpindle("spindle.uff", 5, spindle_frf()))
 
 
-def hs_conditions(case: sv.Case) -> dict:
-    return {"materials": ["steel", "steel"], "preload_n": case.drawbar, "geometry": {"taper_diameter_m": TAPER[0]}}
-
-
-def th_conditions(case: sv.Case) -> dict:
-    return {"materials": ["tungsten-carbide", "steel"], "torque_nm": case.torque, "preload_n": case.drawbar,
-            "geometry": {"shank_diameter_m": case.diameter, "taper_diameter_m": TAPER[0]}}
-
-
-def queries(case: sv.Case) -> dict:
-    return {"tool-holder": {"query": {"joint_type": "tool-holder", **th_conditions(case), "interpolate": True}},
-            "holder-spindle": {"query": {"joint_type": "holder-spindle", **hs_conditions(case), "interpolate": True}}}
-
-
-def _campaign(folder: Path, case: sv.Case, joint_type: str, b_model: BeamModel, a_file: tuple[str, FRF]) -> Path:
-    """Measure the assembly (tip x over tip x and x at the mouth of the campaign's joint) and write a planar
-    campaign: substructure A from ``a_file`` (x, ry at its interface node), B = ``b_model``."""
-    folder.mkdir(parents=True, exist_ok=True)
-    model, th, hs = truth_model(case)
-    mesh = model.mesh()
-    th_side = joint_type == "tool-holder"
-    tip, mouth = mesh.node_at(0.0), sv._mouth_node(model, mesh, model.assemble().K, th if th_side else hs)
-    g = sv._noisy(sv.solve_frf(model, [tip], [tip, mouth], FREQ), "C-" + folder.name)
-    a_node, b_node = (3, 2) if th_side else (5, 4)
-    write_uff58(folder / "assembly.uff", FRF(FREQ, g, (Dof(1, "x"),), (Dof(1, "x"), Dof(b_node, "x")), "receptance"),
-                round_freq=False)
-    write_uff58(folder / a_file[0], a_file[1], round_freq=False)
-    sv._dump(folder / "b.json", model_to_dict(b_model))
-    a_dofs, b_dofs = [f"{a_node}x", f"{a_node}ry"], [f"{b_node}x", f"{b_node}ry"]
-    sv._dump(folder / "campaign.json", {
-        "format": "jointdb-campaign/1", "name": folder.name, "joint_type": joint_type,
-        "conditions": th_conditions(case) if th_side else hs_conditions(case), "joint_model": "planar",
-        "substructures": {"a": {"uff58": a_file[0], "dofs": a_dofs}, "b": {"model": "b.json"}},
-        "interface": {"a": "a", "a_dofs": a_dofs, "b": "b", "b_dofs": b_dofs},
-        "measurements": ["assembly.uff"], "planar": {"b_tip": 1},
-        "options": dict(CAMPAIGN_OPTIONS),
-    })
-    return folder / "campaign.json"
-
-
-def write_hs_campaign(folder: Path, case: sv.Case) -> Path:
-    """A = the measured spindle at its nose, B = the holder with a bonded test arbor (model)."""
-    case = replace(case, bonded=True)
-    spec = spec_for(case, {"tool-holder": "rigid", "holder-spindle": "rigid"})
-    tool, holder = tool_model(spec), holder_model(spec)
-    b = BeamModel(tool.segments + holder.segments,
-                  points=(NamedPoint("tip", 0.0, 1), NamedPoint("base", tool.length + holder.length, 4)),
-                  ingredients=(HystereticDamping(sv.ETA),), max_element_length=0.005, name="holder + bonded arbor")
-    return _campaign(folder, case, "holder-spindle", b, ("spindle.uff", spindle_frf()))
-
-
-def write_th_campaign(folder: Path, case: sv.Case, hs_joint: FRF) -> Path:
-    """A = the holder on the spindle through the machine's catalogued taper joint, B = the blank overhang (model)."""
-    spec = spec_for(case, {"tool-holder": "rigid", "holder-spindle": "rigid"})
-    h = holder_model(spec).frf(FREQ, ["nose", "base"]).values
-    j = hs_joint.resample(FREQ).values if hs_joint.n_freq != FREQ.size else hs_joint.values
-    a33 = attach(h[:, :2, :2], h[:, :2, 2:], h[:, 2:, :2], h[:, 2:, 2:], spindle_frf().values, j)
-    a = (Dof(3, "x"), Dof(3, "ry"))
-    return _campaign(folder, case, "tool-holder", tool_model(spec),
-                     ("holder-on-spindle.uff", FRF(FREQ, a33, a, a, "receptance")))
-
-
 def hs_name(force: float) -> str:
     return f"c-hs-{int(round(force / 1e3)):02d}kn"
 
@@ -225,20 +151,6 @@ def hs_name(force: float) -> str:
 HS_CAMPAIGNS = [sv.Case(hs_name(f), 0.016, CAMPAIGN_GAUGE, CAMPAIGN_INSERTION, 60.0, "BT40", f) for f in HS_FORCES]
 TH_CAMPAIGNS = [sv.Case(f"c-th-{int(f / 1e3):02d}kn-d{int(d * 1e3):02d}-{int(t):03d}nm", d, CAMPAIGN_GAUGE,
                         CAMPAIGN_INSERTION, t, "BT40", f) for f in TH_MACHINES for d, ts in TH_GRID for t in ts]
-
-
-def build_catalogue(workdir: Path, repo, say=print) -> None:
-    """Identify and catalogue every campaign of family C (holder–spindle first), through the library path the
-    CLI's ``jointdb campaign catalogue`` uses (``usecases.catalogue_campaign``)."""
-    from jointdb import usecases
-
-    for case in HS_CAMPAIGNS:
-        out = usecases.catalogue_campaign(repo, write_hs_campaign(workdir / case.name, case))
-        say(f"  catalogued {out.row()['joint']}")
-    hs = {f: repo.load_frf(repo.get(hs_name(f))) for f in TH_MACHINES}
-    for case in TH_CAMPAIGNS:
-        out = usecases.catalogue_campaign(repo, write_th_campaign(workdir / case.name, case, hs[case.drawbar]))
-        say(f"  catalogued {out.row()['joint']}")
 
 
 def draw(n: int, seed: int) -> list[sv.Case]:

@@ -16,6 +16,7 @@ import pytest
 @pytest.fixture(scope="module")
 def bench(load_script):
     load_script("bench/_stack_validation.py")
+    load_script("bench/_stack_family.py")
     tb = load_script("bench/_stack_truth_b.py")
     bb = load_script("bench/bench_stack_bands.py")
     return tb, bb

@@ -24,6 +24,7 @@ import scipy.linalg as sla
 @pytest.fixture(scope="module")
 def tc(load_script):
     load_script("bench/_stack_validation.py")
+    load_script("bench/_stack_family.py")
     return load_script("bench/_stack_truth_c.py")
 
 
