@@ -73,16 +73,14 @@ def identification_peak_error(quality: Any) -> float | None:
     peaks = quality.get("peaks") if isinstance(quality, dict) else None
     if not isinstance(peaks, list) or not peaks:
         return None
-    ratios = []
     for p in peaks:
         r = p.get("amplitude_ratio") if isinstance(p, dict) else None
         if isinstance(r, bool) or not isinstance(r, (int, float)) or not math.isfinite(r) or r <= 0:
             return None
-        ratios.append(float(r))
     from jointdb.campaign._run import peak_model_error
 
     with np.errstate(over="ignore"):
-        e = float(peak_model_error([{"amplitude_ratio": r} for r in ratios]))
+        e = float(peak_model_error(peaks))
     return e if math.isfinite(e) else None
 
 

@@ -101,12 +101,15 @@ def _interface_rows(name: str, r) -> list[tuple[str, float, float | None]]:
     return [(j, w, e if e is not None else ident.get(j)) for j, w, e in getattr(r, "validation_errors", ())]
 
 
-def _interface_errors(name: str, r) -> tuple[list[tuple[str, float, float]], str]:
-    """``([(name@version, weight, error)], source)``: the rows of :func:`_interface_rows` that carry an error."""
+def _interface_errors(name: str, r) -> tuple[list[tuple[str, float, float]], str, list[str]]:
+    """``([(name@version, weight, error)], source, left_out)``: the rows of :func:`_interface_rows` that carry a
+    usable error, where it comes from, and the versions whose recorded error is not usable."""
     validated = {j for j, _, e in getattr(r, "validation_errors", ()) if e is not None}
-    have = [(j, w, e) for j, w, e in _interface_rows(name, r) if w > 0 and usable_peak_error(e)]
+    rows = [(j, w, e) for j, w, e in _interface_rows(name, r) if w > 0 and e is not None]
+    have = [row for row in rows if usable_peak_error(row[2])]
     sources = {"validation" if j in validated else "identification" for j, _, _ in have}
-    return have, " and ".join(f"{s} assemblies" for s in sorted(sources, reverse=True))
+    return (have, " and ".join(f"{s} assemblies" for s in sorted(sources, reverse=True)),
+            [j for j, _, e in rows if not usable_peak_error(e)])
 
 
 def model_error(joints) -> tuple[float, list[str]]:
@@ -132,8 +135,7 @@ def model_error(joints) -> tuple[float, list[str]]:
     """
     total, parts = 0.0, []
     for name, r in joints.items():
-        have, source = _interface_errors(name, r)
-        bad = [j for j, w, e in _interface_rows(name, r) if w > 0 and e is not None and not usable_peak_error(e)]
+        have, source, bad = _interface_errors(name, r)
         if bad:
             parts.append(f"{name}: peak error of {', '.join(bad)} left out (not a number in 0..{MAX_PEAK_ERROR:g})")
         if not have:
