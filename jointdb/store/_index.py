@@ -206,10 +206,9 @@ def bump(session: Session | Connection, joint_ids: Iterable[int] | None = None) 
     if conn.dialect.name == "postgresql":  # one round trip: the stamp and the log in one statement
         generation = int(conn.execute(bump_pg(), bump_params(joint_ids)).first()[0])
     else:
-        ids = sorted({int(j) for j in joint_ids}) if joint_ids is not None else []
         generation = int(conn.execute(update(t).where(t.c.id == 1).values(generation=t.c.generation + 1)
                                       .returning(t.c.generation)).scalar_one())
-        conn.execute(insert(c), [{"generation": generation, "joint_id": j} for j in ids or [None]])
+        conn.execute(insert(c), [{"generation": generation, "joint_id": j} for j in bump_params(joint_ids)["ids"]])
     prune(conn, generation)
     return generation
 
