@@ -13,6 +13,7 @@ where they cannot.
 
 from __future__ import annotations
 
+import functools
 import importlib.util
 import re
 from pathlib import Path
@@ -27,6 +28,25 @@ PATH = re.compile(r"(?<![\w./~-])((?:%s)/[\w./*<>{},-]*)" % "|".join(TOP))
 MD_LINK = re.compile(r"\]\(([^)#\s]+)(?:#[^)]*)?\)")
 BARE_MD = re.compile(r"(?<![\w./-])([\w-]+\.md)\b")
 MOD_REF = re.compile(r":mod:`~?(jointdb(?:\.\w+)*)`")
+
+
+@functools.cache
+def _markdown_names() -> frozenset[str]:
+    """The names of the repository's Markdown files (walked once, the virtual environment left out)."""
+    return frozenset(p.name for p in _repo_files("*.md"))
+
+
+def _repo_files(pattern: str) -> list[Path]:
+    """Files of the repository matching ``pattern``, without descending into ``.venv``, ``.git`` or build folders."""
+    out = []
+    for top in REPO.iterdir():
+        if top.name in (".venv", ".git", "build", "node_modules") or top.name.endswith(".egg-info"):
+            continue
+        if top.is_dir():
+            out += top.rglob(pattern)
+        elif top.match(pattern):
+            out.append(top)
+    return out
 
 
 def _sources() -> list[Path]:
@@ -73,7 +93,7 @@ def _problems_in(text: str, rel: str, source: Path) -> list[str]:
                 continue
             if not _exists(target, source.parent):
                 problems.append(f"{rel}: links to {target}, which is not in the repository")
-    markdown_names = {p.name for p in REPO.rglob("*.md") if ".venv" not in p.parts}
+    markdown_names = _markdown_names()
     for m in BARE_MD.finditer(text):
         name = m.group(1)
         if re.search(r"--[\w-]+[ =]$", text[max(0, m.start() - 40):m.start()]):
