@@ -169,8 +169,15 @@ async def recover_stalled(app, rows: JobRows, stalled_after_s: float) -> list[tu
 
 
 def run_worker(repo, *, concurrency: int = 1, queues: list[str] | None = None, heartbeat_s: float = 10.0,
-               stalled_after_s: float = 30.0, recover_every_s: float = 10.0, name: str | None = None) -> None:
-    """Run a procrastinate worker for jointdb's jobs until SIGTERM/SIGINT (``jointdb worker``)."""
+               stalled_after_s: float = 30.0, recover_every_s: float | None = None, name: str | None = None) -> None:
+    """Run a procrastinate worker for jointdb's jobs until SIGTERM/SIGINT (``jointdb worker``).
+
+    A job of a worker that stopped heart-beating for ``stalled_after_s`` is taken back at the next recovery
+    round, every ``recover_every_s`` seconds (default: half of ``stalled_after_s``, at most 10 s), so it
+    waits at most about 1.5 × ``stalled_after_s`` before it runs again.
+    """
+    if recover_every_s is None:
+        recover_every_s = min(10.0, stalled_after_s / 2)
     ensure_schema(repo.write_engine)
     app = make_app(repo.url, repo)
     rows = JobRows(repo.write_engine)

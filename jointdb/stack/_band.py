@@ -164,9 +164,33 @@ def choice_perturbed(planes: np.ndarray, relative: np.ndarray, scale: np.ndarray
         j = idx[rng.integers(idx.size, size=n)]
         t = shift[j] + scale[j] * rng.standard_normal(n)
         s += t[:, None, None, None] * log_r[j]
-    from scipy.linalg import expm
+    return np.linalg.inv(_expm(s) @ z)
 
-    return np.linalg.inv(expm(s) @ z)
+
+def _expm(a: np.ndarray) -> np.ndarray:
+    """Matrix exponential of each matrix of ``a`` (``(..., n, n)``): in closed form for 2×2 blocks, batched;
+    otherwise :func:`scipy.linalg.expm` (which loops over the batch in Python).
+
+    For a 2×2 ``A`` with ``μ = tr A / 2`` and ``q = det(μI − A)·(−1) = ((a₁₁ − a₂₂)/2)² + a₁₂ a₂₁``,
+    ``exp A = e^μ [cosh √q · I + (sinh √q / √q) (A − μI)]`` (Cayley–Hamilton: ``(A − μI)² = q I``; both
+    functions are even in √q, so its branch does not matter; near ``q = 0`` their series are used).
+    """
+    if a.shape[-2:] != (2, 2):
+        from scipy.linalg import expm
+
+        return expm(a)
+    mu = 0.5 * (a[..., 0, 0] + a[..., 1, 1])
+    q = (0.5 * (a[..., 0, 0] - a[..., 1, 1])) ** 2 + a[..., 0, 1] * a[..., 1, 0]
+    r = np.sqrt(q.astype(complex))
+    small = np.abs(q) < 1e-6
+    safe = np.where(small, 1.0, r)
+    cosh = np.where(small, 1 + q / 2 + q * q / 24, np.cosh(safe))
+    sinhc = np.where(small, 1 + q / 6 + q * q / 120, np.sinh(safe) / safe)
+    out = sinhc[..., None, None] * a
+    diag = cosh - sinhc * mu
+    out[..., 0, 0] += diag
+    out[..., 1, 1] += diag
+    return np.exp(mu)[..., None, None] * out
 
 
 #: Smallest real part kept for an eigenvalue of ``I + R`` in :func:`_matrix_log`: a relative error

@@ -16,6 +16,7 @@ from jointdb.errors import InputError
 from jointdb.fe import BeamModel, model_from_dict
 from jointdb.frf import FRF, Dof, Quantity
 from jointdb.stack._chain import tool_tip_chain
+from jointdb.stack._partcache import cached_part, spindle_key
 from jointdb.stack._parts import NODES, TIP_NODE, holder_model, tool_model
 from jointdb.stack._twoplane import spindle_four, two_plane_tip
 from jointdb.stack._spec import INTERFACE_NAMES, FrequencyGrid, MeasuredSpindle, ModelledSpindle, StackSpec
@@ -212,9 +213,10 @@ def stack_parts(spec: StackSpec, freq=None) -> dict[str, FRF]:
         Bad grid, a spindle file not loaded or not covering the grid.
     """
     f = prediction_grid(spec, freq)
+    shape = (spec.tool, spec.holder, spec.gauge_length)  # everything the tool and holder models read
     parts = {
-        "tool": tool_model(spec).frf(f, ["tip", "base"]),
-        "holder": holder_model(spec).frf(f, ["nose", "base"]),
+        "tool": cached_part("tool", shape, f, lambda: tool_model(spec).frf(f, ["tip", "base"])),
+        "holder": cached_part("holder", shape, f, lambda: holder_model(spec).frf(f, ["nose", "base"])),
     }
     sp = spec.spindle
     if isinstance(sp, MeasuredSpindle):
@@ -222,13 +224,20 @@ def stack_parts(spec: StackSpec, freq=None) -> dict[str, FRF]:
             raise InputError(f"spindle.file: {sp.file!r} is not loaded; load the stack with jointdb.usecases.load_stack")
         parts["spindle"] = _on_grid(sp.frf, f, f"spindle.file {sp.file!r}")
     else:
-        model = spindle_model(spec)
-        point = model.point(sp.point)
-        dirs = ("x", "ry") if model.kind == "planar" else ("x", "y", "rx", "ry")
-        frf = model.frf(f, [point.name], directions=dirs)
-        parts["spindle"] = frf.replace(outputs=tuple(Dof(NODES["spindle_nose"], d.direction) for d in frf.outputs),
-                                       inputs=tuple(Dof(NODES["spindle_nose"], d.direction) for d in frf.inputs))
+        key = spindle_key(sp.model)
+        parts["spindle"] = cached_part("spindle", None if key is None else (key, sp.point), f,
+                                       lambda: _modelled_spindle_frf(spec, f))
     return parts
+
+
+def _modelled_spindle_frf(spec: StackSpec, f: np.ndarray) -> FRF:
+    """The modelled spindle's receptance at its nose point (node ``NODES["spindle_nose"]``)."""
+    model = spindle_model(spec)
+    point = model.point(spec.spindle.point)
+    dirs = ("x", "ry") if model.kind == "planar" else ("x", "y", "rx", "ry")
+    frf = model.frf(f, [point.name], directions=dirs)
+    return frf.replace(outputs=tuple(Dof(NODES["spindle_nose"], d.direction) for d in frf.outputs),
+                       inputs=tuple(Dof(NODES["spindle_nose"], d.direction) for d in frf.inputs))
 
 
 def _joint_planes(name: str, spec: StackSpec, resolved: Mapping[str, FRF], f: np.ndarray):
