@@ -158,8 +158,8 @@ def _damping_law(r) -> tuple[tuple[float, float] | None, str]:
         return None, "the joint records no catalogued version it was identified from"
     const = [row for row in refs if row[3]]
     if not const:
-        return None, ("per-line joint (" + ", ".join(j for j, *_ in refs) + "): its loss is measured line by line "
-                      "over its campaign's band, not assumed by a law")
+        return None, ("per-line joint (" + ", ".join(j for j, *_ in refs) + "): no constant k, c fit describes its "
+                      "catalogued FRF; its loss is measured line by line over its campaign's band, not assumed by a law")
     missing = [j for j, _, f, _ in const if not (isinstance(f, (int, float)) and math.isfinite(f) and f > 0)]
     if missing:
         return None, (f"constant k, c of {', '.join(missing)} records no identification frequency "
@@ -193,7 +193,7 @@ def damping_laws(joints) -> tuple[dict[str, tuple[float, float]], dict[str, str]
     """
     laws, why = {}, {}
     for name, r in joints.items():
-        if r.kind == "rigid" or r.frf is None:
+        if r.kind == "rigid":
             continue
         law, reason = _damping_law(r)
         if law is None:
