@@ -29,7 +29,8 @@ __all__ = ["BandTerms", "prediction_band", "band_terms", "choice_perturbation", 
            "absent_terms", "damping_laws", "TERMS", "LINE_BIAS"]
 
 #: The error terms a band can carry, in the order they are reported.
-TERMS = ("measurement noise", "joint choice", "damping law", "spindle estimate", "substructure model", "prediction path")
+TERMS = ("measurement noise", "joint choice", "damping law", "spindle estimate", "substructure model",
+         "prediction path")
 #: Relative standard error of the prediction path's own tip receptance (model form: three beams joined at two
 #: points where a real stack has distributed contact, a holder model, a spindle receptance). Not estimable from
 #: the catalogue (each per-line joint reproduces its own campaign): calibrated on the tuning seeds of
@@ -159,7 +160,8 @@ def _damping_law(r) -> tuple[tuple[float, float] | None, str]:
     const = [row for row in refs if row[3]]
     if not const:
         return None, ("per-line joint (" + ", ".join(j for j, *_ in refs) + "): no constant k, c fit describes its "
-                      "catalogued FRF; its loss is measured line by line over its campaign's band, not assumed by a law")
+                      "catalogued FRF; its loss is measured line by line over its campaign's band, not assumed "
+                      "by a law")
     missing = [j for j, _, f, _ in const if not (isinstance(f, (int, float)) and math.isfinite(f) and f > 0)]
     if missing:
         return None, (f"constant k, c of {', '.join(missing)} records no identification frequency "
