@@ -52,6 +52,12 @@ def numeric_metrics(data: Any, prefix: str = "") -> dict[str, float]:
     return out
 
 
+def _quality_peaks(quality: Any) -> list | None:
+    """The non-empty ``peaks`` list of a quality record, else None."""
+    peaks = quality.get("peaks") if isinstance(quality, dict) else None
+    return peaks if isinstance(peaks, list) and peaks else None
+
+
 def identification_peak_error(quality: Any) -> float | None:
     """The dominant-peak error of a campaign's own identification assembly re-coupled with the kept joint.
 
@@ -70,8 +76,8 @@ def identification_peak_error(quality: Any) -> float | None:
     -------
     float or None
     """
-    peaks = quality.get("peaks") if isinstance(quality, dict) else None
-    if not isinstance(peaks, list) or not peaks:
+    peaks = _quality_peaks(quality)
+    if peaks is None:
         return None
     for p in peaks:
         r = p.get("amplitude_ratio") if isinstance(p, dict) else None
@@ -102,8 +108,8 @@ def identification_peak_hz(quality: Any) -> float | None:
     -------
     float or None
     """
-    peaks = quality.get("peaks") if isinstance(quality, dict) else None
-    if not isinstance(peaks, list) or not peaks:
+    peaks = _quality_peaks(quality)
+    if peaks is None:
         return None
     rows = []
     for p in peaks:
