@@ -181,8 +181,9 @@ def section(results: dict, seconds: float) -> str:
              f"{CAP_OVER_MEDIAN:g}× their median per line, prediction-path σ {MODEL_FORM_SIGMA:.1%}) was set on the "
              f"tuning seeds {', '.join(map(str, tb.TUNING_SEEDS))} only.", "",
              "The band is the 5–95 % range of 200 samples: measurement noise (the fit covariance of joints kept "
-             "as constant k, c), joint choice, the spindle's estimate, the substructure model and the prediction "
-             "path's own model-form error (docs/stacks.md, *Bands*). Family B's spindle is its exact receptance "
+             "as constant k, c), joint choice, the damping law of joints kept as constant k, c (0 on family B: "
+             "all its catalogued joints are per-line), the spindle's estimate, the substructure model and the "
+             "prediction path's own model-form error (docs/stacks.md, *Bands*). Family B's spindle is its exact receptance "
              "(spindle term 0) except on the seeds marked *spindle estimated from taps*: there each stack's spindle "
              "is what the extension method makes of its own taps on a Ø40 × 100 mm bar (tapped at 50 and 100 mm, "
              "0.2 % noise and 6 digits like the campaigns, the noise level estimated from the taps; "

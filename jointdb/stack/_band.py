@@ -1,13 +1,16 @@
-"""Tool-tip prediction bands: measurement noise and joint choice (issues 13 and 22; docs/stacks.md, *Bands*).
+"""Tool-tip prediction bands: measurement noise, joint choice and damping law (issues 13 and 22; docs/stacks.md,
+*Bands*).
 
-Two sources of error are sampled, per interface:
+Three sources of error are sampled, per interface:
 
 - *measurement noise*: a catalogued joint that carries an uncertainty record (``theta`` and its
   covariance, see :mod:`jointdb.coupling._propagate`) is drawn from it;
 - *joint choice*: a joint taken from the catalogue for conditions it was not identified at is
   wrong by what the choice (nearest joint or interpolation) cannot know; its relative error in
   stiffness and damping, estimated from the catalogue by leave-one-out
-  (:mod:`jointdb.store._loo`), scales each sample's dynamic stiffness (:func:`choice_perturbed`).
+  (:mod:`jointdb.store._loo`), scales each sample's dynamic stiffness (:func:`choice_perturbed`);
+- *damping law*: a constant spring–damper identified at one mode is viscous by construction; away from that
+  mode's frequency its loss could follow any law between viscous and hysteretic (:func:`damping_law`).
 
 Every sample of the stack is coupled in one batched chain (samples stacked on the frequency axis;
 both bending planes, cross terms included when the spindle couples them) and the 5 / 50 / 95 %
@@ -29,7 +32,7 @@ from jointdb.stack._parts import NODES
 from jointdb.stack._predict import _joint_planes, _planes, prediction_grid, stack_parts
 from jointdb.stack._spec import INTERFACE_NAMES, MeasuredSpindle, StackSpec
 
-__all__ = ["TipBand", "tip_band", "sampleable_uncertainties"]
+__all__ = ["TipBand", "tip_band", "sampleable_uncertainties", "damping_law"]
 
 QUANTILES = (0.05, 0.5, 0.95)
 
@@ -218,7 +221,71 @@ def _matrix_log(a: np.ndarray) -> np.ndarray:
     return out
 
 
-def _interface_samples(name, spec, resolved, f, n, seed, uncertainties, choice, rng):
+def damping_law(planes: np.ndarray, freq: np.ndarray, f_ref: float, beta: np.ndarray,
+                share: float = 1.0) -> np.ndarray:
+    """Joint receptance samples whose loss follows a fractional-derivative law instead of the viscous one.
+
+    A constant spring–damper ``Z(f) = K + i 2πf C`` identified at one mode (frequency ``f_ref``) fixes its loss
+    there, not its law: a viscous damper (``Im Z ∝ f``) and structural (hysteretic) damping
+    (``Im Z = η K``, loss factor ``η = 2π f_ref C / K`` independent of frequency; Ewins, *Modal Testing*, §2.2-2.3)
+    give the same joint at ``f_ref`` and differ away from it. The family between them is the fractional-derivative
+    damper (Bagley & Torvik 1983, AIAA J. 21(5)): ``Im Z(f) ∝ f^β``, ``0 ≤ β ≤ 1``. Each sample keeps ``Re Z`` and
+    scales ``Im Z`` per line:
+
+        ``Im Z'(f) = Im Z(f) · [share · (f_ref / f)^(1−β) + (1 − share)]``
+
+    (β = 1: as catalogued; β = 0: hysteretic at the loss the joint has at ``f_ref``; at ``f = f_ref`` nothing
+    changes). ``share`` is the interpolation weight of the constant joints in a joint mixed with per-line ones (1
+    for a constant joint): the per-line part keeps its measured loss.
+
+    Parameters
+    ----------
+    planes
+        Joint receptance samples ``(n, n_freq, m, m)`` [m/N, rad/N·m, ...], e.g. over (x, θ).
+    freq
+        ``(n_freq,)`` lines [Hz], all > 0.
+    f_ref
+        Frequency [Hz] where the constant joint was identified (> 0).
+    beta
+        ``(n,)`` damping-law exponent of each sample, in [0, 1].
+    share
+        Weight in [0, 1] of the law's change.
+
+    Returns
+    -------
+    ndarray ``(n, n_freq, m, m)``
+        The samples' receptance with the law applied (the same draw for every DOF pair of a sample).
+
+    Raises
+    ------
+    InputError
+        ``f_ref`` or a line not positive, β outside [0, 1], or a share outside [0, 1].
+    """
+    f = np.asarray(freq, float)
+    beta = np.asarray(beta, float)
+    if not (np.isfinite(f_ref) and f_ref > 0) or f.size and f.min() <= 0:
+        raise InputError(f"damping law: the reference frequency ({f_ref!r} Hz) and every line must be > 0 Hz")
+    if beta.shape != (planes.shape[0],) or np.any((beta < 0) | (beta > 1)):
+        raise InputError("damping law: one exponent β in [0, 1] per sample is needed")
+    if not 0.0 <= share <= 1.0:
+        raise InputError(f"damping law: share {share!r} must lie in [0, 1]")
+    z = np.linalg.inv(planes)
+    factor = share * (f_ref / f)[None, :] ** (1.0 - beta)[:, None] + (1.0 - share)
+    return np.linalg.inv(z.real + 1j * z.imag * factor[:, :, None, None])
+
+
+def _law_applied(planes: dict, law, f, n, seed, name) -> dict:
+    """The planes of one interface with the damping law ``law = (f_ref, share)`` drawn (β uniform on [0, 1], its own
+    stream: the other terms' draws do not change) and applied, the same β in both planes (one joint)."""
+    if law is None:
+        return planes
+    beta = np.random.default_rng([seed, 2718, INTERFACE_NAMES.index(name)]).uniform(0.0, 1.0, n)
+    x = damping_law(planes["x"], f, *law[:1], beta, *law[1:])
+    same = planes["x"] is planes["y"] or np.array_equal(planes["x"], planes["y"])
+    return {"x": x, "y": x if same else damping_law(planes["y"], f, *law[:1], beta, *law[1:])}
+
+
+def _interface_samples(name, spec, resolved, f, n, seed, uncertainties, choice, rng, law=None):
     """``None`` (rigid) or per plane ``(n, n_freq, 2, 2)`` samples of one interface's joint."""
     if name in uncertainties:
         s = _sampled_planes(uncertainties[name], f, n, seed + 7919 * INTERFACE_NAMES.index(name),
@@ -229,6 +296,7 @@ def _interface_samples(name, spec, resolved, f, n, seed, uncertainties, choice, 
         if nominal is None:
             return None
         planes = {p: np.broadcast_to(nominal[p], (n,) + nominal[p].shape) for p in ("x", "y")}
+    planes = _law_applied(planes, law, f, n, seed, name)
     choice = (choice or {}).get(name)
     if choice is None:
         return planes
@@ -245,7 +313,8 @@ def _interface_samples(name, spec, resolved, f, n, seed, uncertainties, choice, 
 
 def tip_band(spec: StackSpec, resolved_joints: Mapping[str, FRF], uncertainties: Mapping[str, Mapping] | None = None,
              freq=None, n: int = 200, seed: int = 0, choice: Mapping[str, tuple] | None = None,
-             tip_sigma: float = 0.0, spindle_estimate=None, model_sigma: float = 0.0) -> TipBand:
+             tip_sigma: float = 0.0, spindle_estimate=None, model_sigma: float = 0.0,
+             damping: Mapping[str, tuple] | None = None) -> TipBand:
     """5/50/95 % band of the tool-tip receptance from sampled joints.
 
     Parameters
@@ -269,6 +338,9 @@ def tip_band(spec: StackSpec, resolved_joints: Mapping[str, FRF], uncertainties:
         Relative standard error of the substructure model shown by the campaigns' validation (or tool–holder
         identification) assemblies (log units): each
         sample's tip receptance is scaled by ``exp(model_sigma ξ)``, independently of ``tip_sigma``.
+    damping
+        Interface name → ``(f_ref, share)`` of a constant spring–damper joint whose damping law is unknown
+        (:func:`damping_law`): each sample draws β uniform on [0, 1] and applies it before the joint-choice error.
     n, seed
         Ensemble size and random seed.
 
@@ -287,7 +359,10 @@ def tip_band(spec: StackSpec, resolved_joints: Mapping[str, FRF], uncertainties:
 
     uncertainties = dict(uncertainties or {})
     choice = {k: v for k, v in (choice or {}).items() if v is not None}
+    damping = {k: v for k, v in (damping or {}).items() if v is not None}
     active = set(uncertainties) | set(choice)
+    if damping:
+        active.add("damping law")
     if tip_sigma > 0:
         active.add("prediction path")
     if spindle_estimate is not None:
@@ -295,8 +370,8 @@ def tip_band(spec: StackSpec, resolved_joints: Mapping[str, FRF], uncertainties:
     if model_sigma > 0:
         active.add("substructure model")
     if not active:
-        raise InputError("no interface joint carries an uncertainty record or a joint-choice error; "
-                         "nothing to sample")
+        raise InputError("no interface joint carries an uncertainty record, a joint-choice error or an unknown "
+                         "damping law; nothing to sample")
     f = prediction_grid(spec, freq)
     parts = stack_parts(spec, f)
     node = spec.spindle.node if isinstance(spec.spindle, MeasuredSpindle) else NODES["spindle_nose"]
@@ -308,7 +383,7 @@ def tip_band(spec: StackSpec, resolved_joints: Mapping[str, FRF], uncertainties:
         a = np.broadcast_to(a, (n,) + a.shape[-3:]) if a.ndim == 3 else a
         return np.ascontiguousarray(a).reshape((n * f.size,) + a.shape[2:])
 
-    joints = {name: _interface_samples(name, spec, resolved, f, n, seed, uncertainties, choice, rng)
+    joints = {name: _interface_samples(name, spec, resolved, f, n, seed, uncertainties, choice, rng, damping.get(name))
               for name in INTERFACE_NAMES}
     joints = {k: None if v is None else {p: flat(v[p]) for p in ("x", "y")} for k, v in joints.items()}
     tool, holder = flat(parts["tool"].values), flat(parts["holder"].values)

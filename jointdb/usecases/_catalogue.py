@@ -52,6 +52,12 @@ def numeric_metrics(data: Any, prefix: str = "") -> dict[str, float]:
     return out
 
 
+def _quality_peaks(quality: Any) -> list | None:
+    """The non-empty ``peaks`` list of a quality record, else None."""
+    peaks = quality.get("peaks") if isinstance(quality, dict) else None
+    return peaks if isinstance(peaks, list) and peaks else None
+
+
 def identification_peak_error(quality: Any) -> float | None:
     """The dominant-peak error of a campaign's own identification assembly re-coupled with the kept joint.
 
@@ -70,8 +76,8 @@ def identification_peak_error(quality: Any) -> float | None:
     -------
     float or None
     """
-    peaks = quality.get("peaks") if isinstance(quality, dict) else None
-    if not isinstance(peaks, list) or not peaks:
+    peaks = _quality_peaks(quality)
+    if peaks is None:
         return None
     for p in peaks:
         r = p.get("amplitude_ratio") if isinstance(p, dict) else None
@@ -82,6 +88,40 @@ def identification_peak_error(quality: Any) -> float | None:
     with np.errstate(over="ignore"):
         e = float(peak_model_error(peaks))
     return e if math.isfinite(e) else None
+
+
+def identification_peak_hz(quality: Any) -> float | None:
+    """The frequency [Hz] of the dominant measured peak of a campaign's own identification assembly.
+
+    The ``peaks`` row (of an identified joint's quality record) with the largest measured |H| among the
+    translational driving-point entries (all entries when none is translational: a rotational receptance is in
+    other units), its ``f_measured_hz``. The frequency at which the joint's constant k, c was identified: the band's
+    damping-law term (:mod:`jointdb.usecases._stack_band`) scales the joint's loss away from it.
+
+    Parameters
+    ----------
+    quality
+        The ``quality`` mapping of a joint file's metadata (anything else, or rows without a finite positive
+        ``f_measured_hz`` and ``amplitude_measured``: None).
+
+    Returns
+    -------
+    float or None
+    """
+    peaks = _quality_peaks(quality)
+    if peaks is None:
+        return None
+    rows = []
+    for p in peaks:
+        f, a = (p.get("f_measured_hz"), p.get("amplitude_measured")) if isinstance(p, dict) else (None, None)
+        if not all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) and v > 0
+                   for v in (f, a)):
+            return None
+        out = str(p.get("entry", "")).split("/")[0]
+        translational = out[-1:] in ("x", "y", "z") and out[-2:-1] != "r"  # "1x" yes, "1rx" no
+        rows.append((translational, float(a), float(f)))
+    use = [r for r in rows if r[0]] or rows
+    return max(use, key=lambda r: r[1])[2]
 
 
 @dataclass(frozen=True, eq=False)
@@ -340,6 +380,9 @@ def catalogue_inputs(joint_file: Path | str, given=None, *, joint_type: str | No
     own = identification_peak_error(meta.get("quality"))
     if own is not None:  # computed from the file's own peaks: it wins over a flat value of the same name
         q["identification_peak_error"] = own
+    f_ref = identification_peak_hz(meta.get("quality"))
+    if f_ref is not None:  # where the constant k, c was identified: the band's damping-law term (issue 22)
+        q["identification_peak_hz"] = f_ref
     q.update(quality or {})
     params = {k: meta[k] for k in PROVENANCE_PARAMETERS if k in meta}
     file_method = meta.get("method") or (f"irc-{meta['joint_model']}" if meta.get("joint_model") else None)

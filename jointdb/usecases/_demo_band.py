@@ -1,6 +1,7 @@
 """The main job's bands: tool-tip and lobe percentiles from the chosen joints' covariance, the joint-choice
-error estimated from the catalogue by leave-one-out, the spindle's estimate and the substructure model's error
-shown by the campaigns' assemblies, when there are any, and the prediction path (issues 13 and 22)."""
+error estimated from the catalogue by leave-one-out, the damping law of constant k, c joints away from their
+campaigns' modes, the spindle's estimate and the substructure model's error shown by the campaigns' assemblies,
+when there are any, and the prediction path (issues 13 and 22)."""
 
 from __future__ import annotations
 
@@ -20,7 +21,13 @@ def journey_bands(spec, resolutions, grid, say: Callable[[str], None], lobe_grid
     """
     from jointdb.stability._band import milling_lobes_band
     from jointdb.stack._band import sampleable_uncertainties, tip_band
-    from jointdb.usecases._stack_band import MODEL_FORM_SIGMA, choice_perturbation, model_error, spindle_estimate
+    from jointdb.usecases._stack_band import (
+        MODEL_FORM_SIGMA,
+        choice_perturbation,
+        damping_laws,
+        model_error,
+        spindle_estimate,
+    )
 
     unc, notes = sampleable_uncertainties(resolutions)
     for note in notes:
@@ -29,19 +36,23 @@ def journey_bands(spec, resolutions, grid, say: Callable[[str], None], lobe_grid
     m_sigma, sources = model_error(resolutions)
     none = ("0 — no campaign of the joints used recorded a validation assembly, and no tool–holder joint used "
             "records its identification assembly's peak error")
+    laws, law_why = damping_laws(resolutions)
     say(f"      spindle estimate: {'sampled from its taps' if est is not None else '0 — ' + why}; "
         f"substructure model: {'; '.join(sources) if sources else none}")
+    say("      damping law: " + ("; ".join(f"{n}: between viscous and hysteretic about {f:.4g} Hz"
+                                          for n, (f, _) in laws.items())
+                                 or "0 — " + ("; ".join(f"{n}: {w}" for n, w in law_why.items()) or "no joint")))
 
     def choice(lines):
         out = {n: choice_perturbation(r, lines) for n, r in resolutions.items()}
         return {n: c for n, c in out.items() if c is not None}
 
-    if not unc and not choice(grid) and est is None and m_sigma == 0:
+    if not unc and not choice(grid) and est is None and m_sigma == 0 and not laws:
         say("      no band: the chosen joints carry no parameter covariance and no joint-choice error")
         return None, None, {}
     b = tip_band(spec, {n: r.frf for n, r in resolutions.items() if r.frf is not None}, unc, grid,
                  n=N_TIP_SAMPLES, choice=choice(grid), tip_sigma=MODEL_FORM_SIGMA, spindle_estimate=est,
-                 model_sigma=m_sigma)
+                 model_sigma=m_sigma, damping=laws)
     for row in b.summary():
         say(f"      5–95 % band ({b.samples} samples of {', '.join(b.interfaces)}): "
             "tip peak "
@@ -52,7 +63,8 @@ def journey_bands(spec, resolutions, grid, say: Callable[[str], None], lobe_grid
     def make(cut, speeds):
         lb = b if lobe_grid is None else tip_band(
             spec, {n: r.frf for n, r in resolutions.items() if r.frf is not None}, unc, lobe_grid, n=N_LOBE_SAMPLES,
-            choice=choice(lobe_grid), tip_sigma=MODEL_FORM_SIGMA, spindle_estimate=est, model_sigma=m_sigma)
+            choice=choice(lobe_grid), tip_sigma=MODEL_FORM_SIGMA, spindle_estimate=est, model_sigma=m_sigma,
+            damping=laws)
         xs, ys = lb.tip_frfs("x")[:N_LOBE_SAMPLES], lb.tip_frfs("y")[:N_LOBE_SAMPLES]
         return milling_lobes_band(xs, ys, cut, speeds)
 

@@ -78,6 +78,11 @@ class JointResolution:
         Per catalogued version used, ``(name@version, weight, error)``: the relative error at the dominant peaks of
         its campaign's own identification assembly re-coupled with the catalogued joint (quality
         ``identification_peak_error``, in-sample), None for a version catalogued without it.
+    damping_references
+        Per catalogued version used, ``(name@version, weight, f_ref, constant)``: ``f_ref`` [Hz] the frequency of
+        the dominant peak of its campaign's identification assembly (quality ``identification_peak_hz``, None for a
+        version catalogued without it), ``constant`` whether its catalogued FRF is the constant k, c of an
+        output-error fit (its fit covariance describes it) rather than a per-line joint.
     """
 
     interface: str
@@ -98,6 +103,7 @@ class JointResolution:
     choice_error: Any = None  # jointdb.store._loo.ChoiceErrorModel of a queried joint, if the pool allows one
     validation_errors: tuple[tuple[str, float, float | None], ...] = ()  # (name@version, weight, peak error)
     identification_errors: tuple[tuple[str, float, float | None], ...] = ()  # the same, identification assembly
+    damping_references: tuple[tuple[str, float, float | None, bool], ...] = ()  # (name@version, weight, f_ref, const.)
 
     def choice_perturbations(self, freq):
         """``(relative, scale)`` of the joint-choice error on ``freq`` over (x, θ), calibrated
@@ -153,6 +159,8 @@ class JointResolution:
             "validation_peak_error": [{"joint": j, "weight": w, "error": e} for j, w, e in self.validation_errors],
             "identification_peak_error": [{"joint": j, "weight": w, "error": e}
                                           for j, w, e in self.identification_errors],
+            "damping_reference": [{"joint": j, "weight": w, "identification_peak_hz": f, "constant_kc": c}
+                                  for j, w, f, c in self.damping_references],
             "warnings": "; ".join(self.warnings) or None,
         }
 
@@ -184,10 +192,22 @@ def _validation_errors(versions_weights, key: str = "validation_peak_error") -> 
 
 
 def _peak_errors(versions_weights) -> dict[str, tuple]:
-    """The ``validation_errors`` and ``identification_errors`` fields of a resolution using these versions."""
+    """The ``validation_errors``, ``identification_errors`` and ``damping_references`` fields of a resolution using
+    these versions."""
     pairs = list(versions_weights)
+    hz = _validation_errors(pairs, "identification_peak_hz")
     return {"validation_errors": _validation_errors(pairs),
-            "identification_errors": _validation_errors(pairs, "identification_peak_error")}
+            "identification_errors": _validation_errors(pairs, "identification_peak_error"),
+            "damping_references": tuple((j, w, f, _is_constant_kc(v)) for (j, w, f), (v, _) in zip(hz, pairs))}
+
+
+def _is_constant_kc(version) -> bool:
+    """Whether a catalogued version's FRF is a constant spring–damper: its provenance carries the output-error fit's
+    covariance of constant k, c and that fit is the catalogued joint (not information beside a per-line joint). A
+    full-matrix model (``K + iD − ω²M``: structural damping ``D`` already) is not one."""
+    unc = _uncertainty_of(version)
+    return (getattr(version, "model_kind", None) != "full-matrix" and unc is not None
+            and unc.get("describes_catalogued_joint", True) is not False)
 
 
 def resolve_joints(spec: StackSpec, repo=None) -> dict[str, JointResolution]:

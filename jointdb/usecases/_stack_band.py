@@ -1,5 +1,5 @@
-"""The predictive band of a stack prediction, term by term (issue 22): measurement noise, joint choice, the
-spindle's estimate, the substructure model and the prediction path.
+"""The predictive band of a stack prediction, term by term (issue 22): measurement noise, joint choice, the damping
+law of constant joints, the spindle's estimate, the substructure model and the prediction path.
 
 :func:`prediction_band` samples every interface whose joint carries an error estimate — its fit's
 covariance (measurement noise) and, for a queried joint, the leave-one-out joint-choice error
@@ -10,7 +10,8 @@ lean the way its signed error points (:data:`LINE_BIAS`)
 (:func:`jointdb.stack._band.tip_band`). A spindle estimated from extension-bar taps carries its estimate's
 noise (:mod:`jointdb.stack._spindle_band`); joints whose campaigns recorded a validation assembly (or, for tool–holder
 joints, whose own identification assembly the catalogued joint does not give back) carry the substructure model's
-error it showed (:func:`model_error`). :func:`band_terms` also samples each term alone,
+error it showed (:func:`model_error`); joints kept as constant k, c carry the unknown law of their loss away from
+the frequency they were identified at (:func:`damping_laws`). :func:`band_terms` also samples each term alone,
 to say which one dominates, and says why a term is 0.
 """
 
@@ -25,10 +26,11 @@ import numpy as np
 from jointdb.errors import InputError
 
 __all__ = ["BandTerms", "prediction_band", "band_terms", "choice_perturbation", "model_error", "spindle_estimate",
-           "absent_terms", "TERMS", "LINE_BIAS"]
+           "absent_terms", "damping_laws", "TERMS", "LINE_BIAS"]
 
 #: The error terms a band can carry, in the order they are reported.
-TERMS = ("measurement noise", "joint choice", "spindle estimate", "substructure model", "prediction path")
+TERMS = ("measurement noise", "joint choice", "damping law", "spindle estimate", "substructure model",
+         "prediction path")
 #: Relative standard error of the prediction path's own tip receptance (model form: three beams joined at two
 #: points where a real stack has distributed contact, a holder model, a spindle receptance). Not estimable from
 #: the catalogue (each per-line joint reproduces its own campaign): calibrated on the tuning seeds of
@@ -148,6 +150,61 @@ def model_error(joints) -> tuple[float, list[str]]:
     return float(np.sqrt(total)), parts
 
 
+def _damping_law(r) -> tuple[tuple[float, float] | None, str]:
+    """``((f_ref, share), "")`` of one resolved joint for the damping-law term, or ``(None, why it is 0)``."""
+    if r.kind == "explicit":
+        return None, "an explicit joint file: the frequency it was identified at is not known"
+    refs = [row for row in getattr(r, "damping_references", ()) if row[1] > 0]
+    if not refs:
+        return None, "the joint records no catalogued version it was identified from"
+    const = [row for row in refs if row[3]]
+    if not const:
+        return None, ("per-line joint (" + ", ".join(j for j, *_ in refs) + "): no constant k, c fit describes its "
+                      "catalogued FRF; its loss is measured line by line over its campaign's band, not assumed "
+                      "by a law")
+    missing = [j for j, _, f, _ in const if not (isinstance(f, (int, float)) and math.isfinite(f) and f > 0)]
+    if missing:
+        return None, (f"constant k, c of {', '.join(missing)} records no identification frequency "
+                      "(quality identification_peak_hz; catalogued before it was recorded: catalogue it again)")
+    wc = sum(w for _, w, _, _ in const)
+    f_ref = math.exp(sum(w * math.log(f) for _, w, f, _ in const) / wc)
+    return (f_ref, min(1.0, wc / sum(w for _, w, _, _ in refs))), ""
+
+
+def damping_laws(joints) -> tuple[dict[str, tuple[float, float]], dict[str, str]]:
+    """Which joints the damping-law term samples, and why the others do not.
+
+    A joint kept as constant k, c (``Z = K + i 2πf C``, a viscous damper) was fitted to its campaign's
+    identification assembly, whose dominant mode (frequency ``f_ref``) fixes its loss there and not its law away
+    from it: viscous, hysteretic (``Im Z = η K``) or between (fractional derivative,
+    :func:`jointdb.stack._band.damping_law`). Each sample draws the law's exponent β uniform on [0, 1] — the
+    campaign at one mode cannot tell the laws apart, so every exponent between the two classical limits is taken
+    as equally likely. For an interpolation, ``f_ref`` is the interpolation-weighted geometric mean over the
+    constant versions used and ``share`` their total weight (the per-line versions keep their measured loss).
+
+    Parameters
+    ----------
+    joints
+        Interface → :class:`jointdb.usecases.JointResolution`.
+
+    Returns
+    -------
+    (dict, dict)
+        Interface → ``(f_ref [Hz], share)`` of the joints sampled; interface → why a joint is not (rigid
+        interfaces are in neither).
+    """
+    laws, why = {}, {}
+    for name, r in joints.items():
+        if r.kind == "rigid":
+            continue
+        law, reason = _damping_law(r)
+        if law is None:
+            why[name] = reason
+        else:
+            laws[name] = law
+    return laws, why
+
+
 def spindle_estimate(spec):
     """The spindle's extension-bar estimate, if the band can sample it.
 
@@ -197,6 +254,10 @@ def absent_terms(result) -> dict[str, str]:
         out["measurement noise"] = "no joint used carries a sampleable fit covariance"
     if not any(choice_perturbation(r, result.prediction.tip.freq) is not None for r in result.joints.values()):
         out["joint choice"] = "every joint is pinned, rigid, explicit or on a catalogued condition"
+    laws, why_not = damping_laws(result.joints)
+    if not laws:
+        out["damping law"] = ("; ".join(f"{k}: {v}" for k, v in why_not.items())
+                              or "no catalogued joint is used (rigid interfaces)")
     est, why = spindle_estimate(result.spec)
     if est is None:
         out["spindle estimate"] = why
@@ -247,8 +308,9 @@ def prediction_band(result, n: int = 200, seed: int = 0, terms=TERMS):
     tip_sigma = MODEL_FORM_SIGMA if "prediction path" in terms else 0.0
     est = spindle_estimate(result.spec)[0] if "spindle estimate" in terms else None
     m_sigma = model_error(result.joints)[0] if "substructure model" in terms else 0.0
+    laws = damping_laws(result.joints)[0] if "damping law" in terms else {}
     queried = any(r.kind in ("query", "interpolated") for r in result.joints.values())
-    if (not unc and not sigma and not queried and est is None and m_sigma == 0
+    if (not unc and not sigma and not queried and est is None and m_sigma == 0 and not laws
             and tuple(terms) != ("prediction path",)):
         notes.append("no band: no interface joint carries a covariance or a joint-choice error "
                      "(rigid, explicit or pinned joints without an uncertainty record)")
@@ -256,7 +318,7 @@ def prediction_band(result, n: int = 200, seed: int = 0, terms=TERMS):
     resolved = {name: r.frf for name, r in result.joints.items() if r.frf is not None}
     try:
         b = tip_band(result.spec, resolved, unc, result.prediction.tip.freq, n=n, seed=seed, choice=sigma,
-                     tip_sigma=tip_sigma, spindle_estimate=est, model_sigma=m_sigma)
+                     tip_sigma=tip_sigma, spindle_estimate=est, model_sigma=m_sigma, damping=laws)
     except InputError as exc:
         notes.append(f"no band: {exc}")
         return None, notes
@@ -306,4 +368,9 @@ def band_terms(result, n: int = 200, seed: int = 0) -> BandTerms:
         alone, _ = prediction_band(result, n, seed, terms=(term,))
         widths[term] = _half_widths(alone)
     notes += model_error(result.joints)[1]
+    laws, why_not = damping_laws(result.joints)
+    notes += [f"{k}: damping law sampled between viscous and hysteretic about f_ref {f:.4g} Hz"
+              + (f" (constant joints' interpolation weight {w:.2f})" if w < 1 else "") for k, (f, w) in laws.items()]
+    if laws:
+        notes += [f"{k}: damping law not sampled — {v}" for k, v in why_not.items()]
     return BandTerms(full, tuple(notes), widths, zero)

@@ -7,7 +7,8 @@ from __future__ import annotations
 
 def tip_band_of(result, n: int = 200, seed: int = 0):
     """``(band, terms, notes)``: the 5–95 % band of the tool tip from every error term the prediction
-    carries — measurement noise, joint choice (leave-one-out over the catalogue), the spindle's estimate
+    carries — measurement noise, joint choice (leave-one-out over the catalogue), the damping law of joints kept
+    as constant k, c away from the frequency they were identified at, the spindle's estimate
     from extension-bar taps, the substructure model's error shown by validation assemblies and the prediction
     path's model error (:func:`jointdb.usecases._stack_band.band_terms`) — each term alone, and the
     notes that say what was sampled, which terms are 0 and why, which term dominates, or why there is no band.

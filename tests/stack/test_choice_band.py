@@ -114,9 +114,10 @@ def test_predict_cli_shows_every_choice_and_the_band_terms(catalogue):
     assert th["method"] == "simplex interpolation" and len(th["joints_used"]) == 2
     band = rep["band"]
     assert band["interfaces"] == ["prediction path", "tool-holder"]
-    assert set(band["peak_half_width"]) == {"all", "measurement noise", "joint choice", "spindle estimate",
-                                            "substructure model", "prediction path"}
+    assert set(band["peak_half_width"]) == {"all", "measurement noise", "joint choice", "damping law",
+                                            "spindle estimate", "substructure model", "prediction path"}
     zero = {t["term"]: t["zero_because"] for t in band["terms"]}
+    assert "per-line joint (th-080@1, th-130@1)" in zero["damping law"]  # no fit covariance: not constant k, c
     assert "taken as exact" in zero["spindle estimate"] and "validation assembly" in zero["substructure model"]
     assert zero["joint choice"] is None and zero["prediction path"] is None
     assert "band: spindle estimate 0 — the spindle is taken as exact" in r.stderr
