@@ -67,33 +67,42 @@ def _load_script(relative: str):
     return module
 
 
-#: Test files that keep one worker busy longest, longest first (per-file sums of `--durations=0` of a full
-#: `-n 2 --dist loadfile` run, 2026-11-26, on the loaded machine; only their order matters here).
+#: Test files that keep one worker busy longest, longest first (per-file wall time of a full `-n 2 --dist loadfile`
+#: run, 2026-11-26 14:00Z, on the quiet machine; only their order matters here).
 #: `make test` hands out whole files (`--dist loadfile`) in collection order (`--no-loadscope-reorder`): started
 #: first, these run while the other worker takes the many short files, instead of one of them starting near the
 #: end and leaving the other worker idle. Files not listed follow in pytest's order. Only the order changes:
 #: every test still runs. A new slow file belongs here.
 LONGEST_FIRST = (
-    "tests/test_readme.py",
-    "tests/stack/test_stack_validation.py",
     "tests/diagnose/test_diagnose_concealed.py",
-    "tests/stack/test_band_truth_b.py",
+    "tests/test_readme.py",
     "tests/diagnose/test_diagnose_stack_joints.py",
-    "tests/diagnose/test_diagnose_cli.py",
-    "tests/optimize/test_optimize_job.py",
     "tests/server/test_server_jobs.py",
-    "tests/server/test_web_flow.py",
+    "tests/diagnose/test_diagnose_cli.py",
     "tests/store/test_store_chain.py",
-    "tests/cli/test_cli_campaign_from_parts.py",
-    "tests/store/test_store_concurrency.py",
-    "tests/optimize/test_optimize.py",
-    "tests/server/test_server_optimize_job.py",
-    "tests/test_campaign_walk.py",
-    "tests/server/test_server_load.py",
-    "tests/diagnose/test_diagnose_bench_cases.py",
+    "tests/server/test_web_flow.py",
     "tests/optimize/test_optimize_catalogue.py",
-    "tests/server/test_server_cli.py",
+    "tests/store/test_store_crash.py",
+    "tests/server/test_server_optimize_job.py",
+    "tests/store/test_store_query_selection.py",
+    "tests/server/test_server_load.py",
+    "tests/store/test_store_concurrency.py",
+    "tests/stack/test_spindle_band.py",
     "tests/diagnose/test_diagnose_artefacts.py",
+    "tests/security/test_attack_suite.py",
+    "tests/diagnose/test_diagnose_bench_cases.py",
+    "tests/optimize/test_optimize.py",
+    "tests/optimize/test_simulate.py",
+    "tests/stack/test_band_truth_b.py",
+    "tests/server/test_server_browser.py",
+    "tests/server/test_server_web_security.py",
+    "tests/cli/test_cli_output.py",
+    "tests/test_campaign_walk.py",
+    "tests/server/test_server_idempotency.py",
+    "tests/stack/test_stack_validation.py",
+    "tests/optimize/test_optimize_job.py",
+    "tests/cli/test_cli_campaign_from_parts.py",
+    "tests/server/test_server_cli.py",
 )
 
 
