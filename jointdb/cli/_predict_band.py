@@ -8,7 +8,7 @@ from jointdb.cli._output import message
 
 def band_for(result, n: int = 200, seed: int = 0):
     """``(TipBand or None, BandTerms)``: the 5–95 % band of the tip from every error term the chosen joints
-    carry (measurement noise, joint choice, prediction path), and each term alone; the band and which term
+    carry (:data:`jointdb.usecases._stack_band.TERMS`), and each term alone; the band and which term
     dominates go to stderr, and when there is no band, the reason (:func:`jointdb.usecases._tip_band.tip_band_of`)."""
     from jointdb.usecases._tip_band import tip_band_of
 

@@ -165,7 +165,7 @@ def _tip_panels(axes, d: str, curves, rigid, band) -> None:
         ax_m.plot(frf.freq, np.abs(h), style, color=colour, lw=1.4, label=name)
         ax_c.plot(frf.freq, h.real, style, color=colour, lw=1.1)
         ax_c.plot(frf.freq, h.imag, style, color=colour, lw=1.1, alpha=0.45)
-    if band is not None and d in band.magnitude:  # 5–95 %: measurement noise, joint choice, prediction path
+    if band is not None and d in band.magnitude:  # 5–95 % of every term of usecases._stack_band.TERMS
         p05, p50, p95 = band.peak[d]
         width = (p95 - p05) / 2 / p50 if p50 > 0 else 0.0
         ax_m.fill_between(band.freq, band.magnitude[d][0] * _UM, band.magnitude[d][2] * _UM, color="tab:orange",
