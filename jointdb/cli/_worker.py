@@ -17,7 +17,8 @@ def worker(
     heartbeat: Annotated[float, typer.Option("--heartbeat", help="Seconds between the worker's heartbeats.")] = 10.0,
     stalled_after: Annotated[float, typer.Option(
         "--stalled-after", help="Seconds without a heartbeat after which another worker's running jobs are "
-        "resumed (or failed after the last attempt).")] = 30.0,
+        "resumed (or failed after the last attempt); workers look for such jobs every half of it "
+        "(at most 10 s).")] = 30.0,
     init_schema: Annotated[bool, typer.Option(
         "--init-schema", help="Only apply the job queue's schema (procrastinate's and jointdb_jobs) and exit; "
         "run as the owner role.")] = False,
@@ -30,7 +31,7 @@ def worker(
     start one or more `jointdb worker` processes, on this host or others, with the same
     --db and a blob store they share (--blobs database, or one shared folder). On the
     SQLite default the server runs its jobs itself and no worker is needed. A worker
-    killed mid-job is noticed by the others after --stalled-after seconds: its job is run
+    killed mid-job is noticed by the others within 1.5 × --stalled-after seconds: its job is run
     again (or failed with the reason after the last attempt). Linear algebra runs on one
     BLAS thread per job unless the root option --blas-threads says otherwise.
     Stops on SIGTERM/SIGINT after the jobs in progress.
