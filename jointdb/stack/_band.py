@@ -55,6 +55,15 @@ class TipBand:
     tips: Mapping[str, np.ndarray]
     cross: np.ndarray | None = None  # (n, n_freq, 2, 2) samples over (1x, 1y) when the spindle couples the planes
 
+    @property
+    def sources(self) -> str:
+        """What the samples vary, in words: the interfaces whose joints were drawn, then the other terms
+        (``interfaces`` holds both: e.g. "the holder-spindle and tool-holder joints, damping law, prediction path")."""
+        joints = [s for s in self.interfaces if s in INTERFACE_NAMES]
+        terms = [s for s in self.interfaces if s not in INTERFACE_NAMES]
+        named = [f"the {' and '.join(joints)} joint{'s' if len(joints) > 1 else ''}"] if joints else []
+        return ", ".join(named + terms)
+
     def summary(self) -> list[dict]:
         return [{"direction": d, "peak_m_per_n_p05": float(self.peak[d][0]),
                  "peak_m_per_n_p50": float(self.peak[d][1]), "peak_m_per_n_p95": float(self.peak[d][2]),

@@ -392,5 +392,5 @@ def _lobes(spec, tip: _Tip, result: JourneyResult, say: Callable[[str], None], n
         band_summary["lobes"] = lobe_band.to_json()
         lo, mid, hi = lobe_band.critical_depth_m * 1e3
         say(f"      critical depth 5–95 %: {lo:.3f} – {hi:.3f} mm (median {mid:.3f} mm, "
-            f"{lobe_band.samples} samples: measurement noise, joint choice, prediction path)")
+            f"{lobe_band.samples} samples of the tip band's terms)")
     return band_summary

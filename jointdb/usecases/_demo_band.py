@@ -54,7 +54,7 @@ def journey_bands(spec, resolutions, grid, say: Callable[[str], None], lobe_grid
                  n=N_TIP_SAMPLES, choice=choice(grid), tip_sigma=MODEL_FORM_SIGMA, spindle_estimate=est,
                  model_sigma=m_sigma, damping=laws)
     for row in b.summary():
-        say(f"      5–95 % band ({b.samples} samples of {', '.join(b.interfaces)}): "
+        say(f"      5–95 % band ({b.samples} samples of {b.sources}): "
             "tip peak "
             f"{row['direction']} {row['peak_m_per_n_p05']:.3e} – {row['peak_m_per_n_p95']:.3e} m/N, "
             f"{row['peak_hz_p05']:.0f} – {row['peak_hz_p95']:.0f} Hz")

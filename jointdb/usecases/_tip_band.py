@@ -37,7 +37,7 @@ def tip_band_of(result, n: int = 200, seed: int = 0):
     for row in b.summary():
         d = row["direction"]
         parts = ", ".join(f"{t} alone ±{w[d]:.1%}" for t, w in terms.half_width.items() if t != "all" and d in w)
-        notes.append(f"band ({b.samples} samples: {', '.join(b.interfaces)}): tip peak {d} "
+        notes.append(f"band ({b.samples} samples of {b.sources}): tip peak {d} "
                      f"{row['peak_m_per_n_p05']:.4g} – {row['peak_m_per_n_p95']:.4g} m/N (5–95 %), "
                      f"{row['peak_hz_p05']:.5g} – {row['peak_hz_p95']:.5g} Hz; {parts}")
     for term, why in (terms.zero or {}).items():

@@ -87,7 +87,7 @@ def test_predict_json_and_plot_carry_the_band(catalogued_with_covariance):
         assert p["peak_m_per_n_p95"] / p["peak_m_per_n_p05"] > 1.01
     mag = band["magnitude_m_per_n"]["x"]
     assert len(mag["p05"]) == len(band["frequency_hz"]) and np.all(np.array(mag["p05"]) <= np.array(mag["p95"]))
-    assert "band (200 samples: prediction path, tool-holder): tip peak x" in r.stderr
+    assert "band (200 samples of the tool-holder joint, prediction path): tip peak x" in r.stderr
     # two catalogued joints are too few for a leave-one-out estimate of the joint choice: said, not hidden
     assert "no joint-choice error" in r.stderr
     assert plot.stat().st_size > 10_000
