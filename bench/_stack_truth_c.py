@@ -49,7 +49,7 @@ from jointdb.fe._joints import Contact, Insertion
 from jointdb.stack import stack_from_dict
 
 #: The family's lines, measured and predicted: 100 Hz – 12 kHz every 10 Hz (family A's and B's stop at 5 kHz). Its
-#: shortest tools (Ø6–Ø8 at the 25 mm gauge floor) have their dominant tip mode up to 10.5 kHz — the end mills' fluted
+#: shortest tools (Ø6–Ø8 at the 25 mm gauge floor) have their dominant tip mode up to 10.7 kHz — the end mills' fluted
 #: tip bending at 25 N·m / 8 kN – 120 N·m / 20 kN (docs/validation/stack-bands-family-c.md, *Lines that cover the
 #: modes*) — so 12 kHz keeps every drawn stack's dominant mode below 0.9 f_max, as a tap test of a short tool with a
 #: miniature hammer and a hard tip would (a fix of the evaluation: the band's code and constants are unchanged).
