@@ -108,10 +108,10 @@ def run(n: int, samples: int, seeds, say=print, catalogue: Path | None = None, s
         fresh = not db.exists()
         with Repository(f"sqlite:///{db}") as repo:
             if fresh:
-                say("catalogue of family B:")
+                say(f"catalogue of family {tb.NOISE_TAG}:")
                 tb.build_catalogue(folder, repo, say=say)
             else:
-                say(f"catalogue of family B reused from {folder}")
+                say(f"catalogue of family {tb.NOISE_TAG} reused from {folder}")
             out = _seeds(repo, n, samples, seeds, say, spindle_estimated)
     out["seconds"] = time.time() - t0
     out["load_average"] = list(os.getloadavg())
