@@ -71,9 +71,10 @@ def change_table(seeds: dict[str, dict], before: dict[str, dict]) -> str:
 
 
 def misses(seeds: dict[str, dict]) -> str:
-    """The rows with a miss: case, peak error and band, floor error, dominant term, and the damping-law term alone."""
-    lines = ["| stack | peak error | peak band ± | in | floor error | in | dominant term | damping law alone ± |",
-             "|---|---|---|---|---|---|---|---|"]
+    """The rows with a miss: case, peak error and band, floor error, dominant term, the damping-law term alone, and
+    (rows that record them) the truth's and the prediction's dominant-peak frequencies."""
+    lines = ["| stack | peak error | peak band ± | in | floor error | in | dominant term | damping law alone ± | "
+             "dominant peak truth / predicted [Hz] |", "|---|---|---|---|---|---|---|---|---|"]
     yes = {True: "yes", False: "**no**"}
     for v in seeds.values():
         for r in v["rows"]:
@@ -82,7 +83,26 @@ def misses(seeds: dict[str, dict]) -> str:
             law = (r.get("half_widths") or {}).get("damping law") or {}
             lines.append(f"| {r['case']} | {r['peak_err']:+.1%} | {r['peak_half']:.1%} | {yes[r['peak_covered']]} | "
                          f"{r['floor_err']:+.1%} | {yes[r['floor_covered']]} | {r['dominant_term']} | "
-                         f"{law.get('x', 0.0):.1%} |")
+                         f"{law.get('x', 0.0):.1%} | {_hz(r)} |")
+    return "\n".join(lines)
+
+
+def _hz(r: dict) -> str:
+    return f"{r['truth_hz']:.0f} / {r['pred_hz']:.0f}" if "truth_hz" in r else "–"
+
+
+def lines_table(seeds: dict[str, dict]) -> str:
+    """Per seed: the grid's last line and how close the truths' dominant peaks come to it."""
+    lines = ["| seed | last line [Hz] | largest truth dominant-peak frequency [Hz] | its share of the last line | "
+             "truths' dominant |H| on the last line | predictions' |", "|---|---|---|---|---|---|"]
+    for seed, v in seeds.items():
+        rows = [r for r in v["rows"] if "truth_hz" in r]
+        if not rows:
+            continue
+        top = rows[0]["grid_hz"][1]
+        fmax = max(r["truth_hz"] for r in rows)
+        lines.append(f"| {seed} | {top:.0f} | {fmax:.0f} | {fmax / top:.2f} | "
+                     f"{sum(r['truth_hz'] >= top - 1e-6 for r in rows)} | {sum(r['pred_hz'] >= top - 1e-6 for r in rows)} |")
     return "\n".join(lines)
 
 
@@ -100,6 +120,8 @@ def main(argv=None) -> None:
         print(change_table(seeds, _seeds(args.before)))
     print()
     print(misses(seeds))
+    print()
+    print(lines_table(seeds))
 
 
 if __name__ == "__main__":

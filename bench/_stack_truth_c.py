@@ -48,7 +48,13 @@ from jointdb.fe import BeamModel, HystereticDamping, NamedPoint, PointMass, Segm
 from jointdb.fe._joints import Contact, Insertion
 from jointdb.stack import stack_from_dict
 
-FREQ = sv.FREQ
+#: The family's lines, measured and predicted: 100 Hz – 12 kHz every 10 Hz (family A's and B's stop at 5 kHz). Its
+#: shortest tools (Ø6–Ø8 at the 25 mm gauge floor) have their dominant tip mode up to 10.7 kHz — the end mills' fluted
+#: tip bending at 25 N·m / 8 kN – 120 N·m / 20 kN (docs/validation/stack-bands-family-c.md, *Lines that cover the
+#: modes*) — so 12 kHz keeps every drawn stack's dominant mode below 0.9 f_max, as a tap test of a short tool with a
+#: miniature hammer and a hard tip would (a fix of the evaluation: the band's code and constants are unchanged).
+FREQ_MAX = 12000.0
+FREQ = np.arange(100.0, FREQ_MAX + 1e-9, 10.0)
 TH_ETA, HS_ETA = 0.06, 0.04
 TH_KREF = (2.2e9, 1.1e7)         # tool–holder contact per length at 60 N·m, Ø10 shank: N/m², N·m/rad/m
 HS_KINF = (2.4e10, 1.8e7)        # taper contact per length as the drawbar force → ∞
@@ -65,15 +71,18 @@ TH_GRID = ((0.006, (25.0, 60.0, 120.0)), (0.010, (25.0, 60.0, 120.0)), (0.020, (
 CAMPAIGN_GAUGE, CAMPAIGN_INSERTION = 0.050, 0.040
 #: The campaigns' identification options (``options`` of campaign.json; the method is the library's default: the
 #: output-error constant k, c, kept unless the adequacy check rejects it for the per-line joint).
-CAMPAIGN_OPTIONS = {"smoothing": 9, "fit_band": [100.0, 5000.0]}
+CAMPAIGN_OPTIONS = {"smoothing": 9, "fit_band": [100.0, FREQ_MAX]}
 NOISE_TAG = "C"  # the seed prefix of its measurement noise
 #: Reported seeds, fixed before any family-C stack was predicted (blind: nothing was tuned on family C).
 REPORT_SEEDS = (7301, 7302)
 TUNING_SEEDS = ()  # none: the band is not tuned on family C
-#: Seeds 7301-7304 have been seen (the identification-assembly and damping-law terms were added after reading them);
-#: these two were drawn only after the damping-law term was committed (r6-damplaw 1674c98) and run once:
-#: docs/validation/stack-bands-family-c.md, *The damping-law term*.
-HELD_OUT_SEEDS = (7305, 7306)
+#: Seeds 7301-7304 have been seen (the identification-assembly and damping-law terms were added after reading them),
+#: 7305 / 7306 were held out for the damping-law term (r6-damplaw 1674c98, 5 kHz lines) and are seen now; these two
+#: were run only after the 12 kHz lines were committed (r6-gridedge), once: docs/validation/stack-bands-family-c.md,
+#: *Lines that cover the modes*. (Their truth tips' dominant frequencies — nothing else — were computed before, to
+#: check the grid covers them.)
+SEEN_SEEDS = (7301, 7302, 7303, 7304, 7305, 7306)
+HELD_OUT_SEEDS = (7307, 7308)
 
 
 def th_contact(torque: float, diameter: float) -> dict:
@@ -142,6 +151,7 @@ def spec_for(case: sv.Case, joints: dict, spindle_estimated: bool = False):
         raise ValueError("family C gives its spindle exactly; --spindle-estimate is family B's")
 
     doc = sv.stack_doc(case, joints)
+    doc["frequency"] = {"min": float(FREQ[0]), "max": float(FREQ[-1]), "step": float(FREQ[1] - FREQ[0])}
     doc["holder"]["segments"] = [{"length": length, "outer_diameter": outer,
                                   **({"inner_diameter": case.diameter} if bored else {})}
                                  for length, outer, bored in HOLDER]

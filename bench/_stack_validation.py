@@ -390,18 +390,18 @@ def queries(case: Case, interpolate: bool = True) -> dict:
     }
 
 
-def _refine(h: np.ndarray, k: int) -> tuple[float, float]:
-    """Frequency and |H| of the peak at line ``k``, by a parabola through log|H| on the 10 Hz grid."""
+def _refine(h: np.ndarray, k: int, freq: np.ndarray = FREQ) -> tuple[float, float]:
+    """Frequency and |H| of the peak at line ``k``, by a parabola through log|H| on the (uniform) grid ``freq``."""
     if 0 < k < h.size - 1:
         a, b, c = np.log(h[k - 1:k + 2])
         d = 0.5 * (a - c) / (a - 2 * b + c)
-        return float(FREQ[k] + d * (FREQ[1] - FREQ[0])), float(np.exp(b - 0.25 * (a - c) * d))
-    return float(FREQ[k]), float(h[k])
+        return float(freq[k] + d * (freq[1] - freq[0])), float(np.exp(b - 0.25 * (a - c) * d))
+    return float(freq[k]), float(h[k])
 
 
-def _dominant(frf_values: np.ndarray) -> tuple[float, float]:
+def _dominant(frf_values: np.ndarray, freq: np.ndarray = FREQ) -> tuple[float, float]:
     h = np.abs(frf_values)
-    return _refine(h, int(np.argmax(h)))
+    return _refine(h, int(np.argmax(h)), freq)
 
 
 def _nearest_peak(frf_values: np.ndarray, f_hz: float) -> tuple[float, float]:
@@ -420,14 +420,14 @@ def second_peak_ratio(frf_values: np.ndarray) -> float:
     return float(tops[1] / tops[0]) if tops.size > 1 else 0.0
 
 
-def _floor(h: np.ndarray) -> float:
+def _floor(h: np.ndarray, freq: np.ndarray = FREQ) -> float:
     from jointdb.stability import MillingCut, milling_lobes_zoa
 
     cut = MillingCut(n_teeth=4, kt=7.96e8, kr=0.212 * 7.96e8, radial_immersion=0.5, down_milling=True)
     out = (Dof(1, "x"), Dof(1, "y"))
-    v = np.zeros((FREQ.size, 2, 2), dtype=complex)
+    v = np.zeros((freq.size, 2, 2), dtype=complex)
     v[:, 0, 0] = v[:, 1, 1] = h
-    return float(milling_lobes_zoa(FRF(FREQ, v, out, out, "receptance"), cut,
+    return float(milling_lobes_zoa(FRF(freq, v, out, out, "receptance"), cut,
                                    spindle_speed_rpm=np.linspace(3000, 30000, 200)).min_depth_m)
 
 

@@ -55,10 +55,12 @@ def band_row(case, repo, n: int = N_SAMPLES, spindle_estimated: bool = False) ->
     result = usecases.predict_stack(tb.spec_for(case, tb.queries(case), spindle_estimated), repo, tb.FREQ)
     terms = band_terms(result, n=n, seed=1)
     h = result.prediction.tip.values[:, 0, 0]
-    _, at = sv._dominant(truth)
-    lt = sv._floor(truth)
-    row = {"case": case.name, "truth_peak": at, "truth_floor": lt, "pred_peak": sv._dominant(h)[1],
-           "pred_floor": sv._floor(h), "dominant_term": terms.dominant, "half_widths": terms.half_width,
+    f = tb.FREQ
+    truth_hz, at = sv._dominant(truth, f)
+    lt = sv._floor(truth, f)
+    pred_hz, pred_peak = sv._dominant(h, f)
+    row = {"case": case.name, "truth_peak": at, "truth_floor": lt, "pred_peak": pred_peak,
+           "pred_floor": sv._floor(h, f), "truth_hz": truth_hz, "pred_hz": pred_hz, "grid_hz": [f[0], f[-1]], "dominant_term": terms.dominant, "half_widths": terms.half_width,
            "methods": {k: r.method + (" (constant k, c fallback)" if any("constant k, c fit" in w for w in r.warnings)
                                       else "") for k, r in result.joints.items()},
            "extrapolating": any(r.extrapolating for r in result.joints.values()),
@@ -67,9 +69,10 @@ def band_row(case, repo, n: int = N_SAMPLES, spindle_estimated: bool = False) ->
     if b is None:
         row.update(peak_band=None, floor_band=None)
         return row
-    peaks = np.array([sv._dominant(s)[1] for s in b.tips["x"]])
-    floors = np.array([sv._floor(s) for s in b.tips["x"]])
-    row["peak_band"] = np.quantile(peaks, [0.05, 0.5, 0.95]).tolist()
+    peaks = np.array([sv._dominant(s, f) for s in b.tips["x"]])
+    floors = np.array([sv._floor(s, f) for s in b.tips["x"]])
+    row["peak_band"] = np.quantile(peaks[:, 1], [0.05, 0.5, 0.95]).tolist()
+    row["peak_hz_band"] = np.quantile(peaks[:, 0], [0.05, 0.5, 0.95]).tolist()
     row["floor_band"] = np.quantile(floors, [0.05, 0.5, 0.95]).tolist()
     for key, truth_v, pred_v in (("peak", at, row["pred_peak"]), ("floor", lt, row["pred_floor"])):
         lo, _, hi = row[f"{key}_band"]
@@ -105,10 +108,10 @@ def run(n: int, samples: int, seeds, say=print, catalogue: Path | None = None, s
         fresh = not db.exists()
         with Repository(f"sqlite:///{db}") as repo:
             if fresh:
-                say("catalogue of family B:")
+                say(f"catalogue of family {tb.NOISE_TAG}:")
                 tb.build_catalogue(folder, repo, say=say)
             else:
-                say(f"catalogue of family B reused from {folder}")
+                say(f"catalogue of family {tb.NOISE_TAG} reused from {folder}")
             out = _seeds(repo, n, samples, seeds, say, spindle_estimated)
     out["seconds"] = time.time() - t0
     out["load_average"] = list(os.getloadavg())

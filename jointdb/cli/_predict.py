@@ -149,7 +149,8 @@ def predict(
         message(f"wrote {plot}")
     joints = [r.row() for r in result.joints.values()]
     if as_json:
-        emit({"stack": spec.name, "parts": list(spec.parts), "joints": joints, "prediction": pred.summary(), "notes": list(pred.notes),
+        emit({"stack": spec.name, "parts": list(spec.parts), "joints": joints, "prediction": pred.summary(),
+              "notes": [*pred.notes, *terms.grid_edge],
               "frequency_hz": [float(pred.tip.freq[0]), float(pred.tip.freq[-1]), int(pred.tip.n_freq)],
               "files": files, "band": None if tip_band is None else {**tip_band.to_json(), **terms.to_json()},
               "joint_choice_sensitivity": choice}, as_json=True)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -384,7 +384,8 @@ def predict_with_joints(spec: StackSpec, joints: Mapping[str, JointResolution], 
 
     A prediction whose dominant tip peak is not passive (a negatively damped resonance from a per-line joint)
     is predicted again with constant k, c joints (:func:`jointdb.usecases._stack_guard.guarded`); the replaced
-    joints' resolutions say so.
+    joints' resolutions say so. A largest tip |H| on the first or last line adds a note to the prediction's
+    ``notes`` (a mode may lie outside the lines: :func:`jointdb.usecases._stack_edge.tip_edge_notes`).
 
     Parameters
     ----------
@@ -400,6 +401,7 @@ def predict_with_joints(spec: StackSpec, joints: Mapping[str, JointResolution], 
     -------
     StackPrediction
     """
+    from jointdb.usecases._stack_edge import tip_edge_notes
     from jointdb.usecases._stack_guard import guarded
 
     f = prediction_grid(spec, freq)
@@ -407,6 +409,9 @@ def predict_with_joints(spec: StackSpec, joints: Mapping[str, JointResolution], 
     # a per-line joint can create a negatively damped tip resonance: fall back to its constant k, c (and say so)
     prediction, joints = guarded(spec, joints, predict_tool_tip(spec, resolved, f),
                                  lambda s, frfs: predict_tool_tip(s, frfs, f))
+    edge = tip_edge_notes(prediction.tip)  # a dominant |H| on the first / last line: a mode may lie outside
+    if edge:
+        prediction = replace(prediction, notes=(*prediction.notes, *edge))
     return StackPrediction(spec, prediction, joints)
 
 

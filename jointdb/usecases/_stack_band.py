@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from jointdb.errors import InputError
+from jointdb.usecases._stack_edge import band_edge_notes
 
 __all__ = ["BandTerms", "prediction_band", "band_terms", "choice_perturbation", "model_error", "spindle_estimate",
            "absent_terms", "damping_laws", "TERMS", "LINE_BIAS"]
@@ -329,12 +330,15 @@ def prediction_band(result, n: int = 200, seed: int = 0, terms=TERMS):
 class BandTerms:
     """The band with every term, and with each term alone: ``half_width[term][direction]`` is the relative
     5–95 % half-width of the tip's dominant peak |H|; ``dominant``: the term with the widest band;
-    ``zero``: term → why it is 0 (a term not sampled for this prediction)."""
+    ``zero``: term → why it is 0 (a term not sampled for this prediction); ``grid_edge``: the notes (also in
+    ``notes``) saying the band's dominant |H| reaches the first or last line predicted
+    (:func:`jointdb.usecases._stack_edge.band_edge_notes`)."""
 
     band: object
     notes: tuple[str, ...]
     half_width: Mapping[str, Mapping[str, float]]
     zero: Mapping[str, str] = None
+    grid_edge: tuple[str, ...] = ()
 
     def term_rows(self) -> list[dict]:
         """One row per term of :data:`TERMS`: its peak half-width alone per direction (0 when absent) and why."""
@@ -349,7 +353,7 @@ class BandTerms:
 
     def to_json(self) -> dict:
         return {"peak_half_width": {t: dict(v) for t, v in self.half_width.items()}, "dominant_term": self.dominant,
-                "terms": self.term_rows()}
+                "terms": self.term_rows(), "grid_edge": list(self.grid_edge)}
 
 
 def _half_widths(b) -> dict[str, float]:
@@ -373,4 +377,5 @@ def band_terms(result, n: int = 200, seed: int = 0) -> BandTerms:
               + (f" (constant joints' interpolation weight {w:.2f})" if w < 1 else "") for k, (f, w) in laws.items()]
     if laws:
         notes += [f"{k}: damping law not sampled — {v}" for k, v in why_not.items()]
-    return BandTerms(full, tuple(notes), widths, zero)
+    edge = band_edge_notes(full, result.prediction.tip)
+    return BandTerms(full, (*notes, *edge), widths, zero, edge)
