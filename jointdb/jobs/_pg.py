@@ -178,6 +178,7 @@ def run_worker(repo, *, concurrency: int = 1, queues: list[str] | None = None, h
     """
     if recover_every_s is None:
         recover_every_s = min(10.0, stalled_after_s / 2)
+    recover_every_s = max(0.5, float(recover_every_s))  # never a loop polling the database
     ensure_schema(repo.write_engine)
     app = make_app(repo.url, repo)
     rows = JobRows(repo.write_engine)

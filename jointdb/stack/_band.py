@@ -196,13 +196,20 @@ def _expm(a: np.ndarray) -> np.ndarray:
     r = np.sqrt(q.astype(complex))
     small = np.abs(q) < 1e-6
     safe = np.where(small, 1.0, r)
-    cosh = np.where(small, 1 + q / 2 + q * q / 24, np.cosh(safe))
-    sinhc = np.where(small, 1 + q / 6 + q * q / 120, np.sinh(safe) / safe)
-    out = sinhc[..., None, None] * a
-    diag = cosh - sinhc * mu
-    out[..., 0, 0] += diag
-    out[..., 1, 1] += diag
-    return np.exp(mu)[..., None, None] * out
+    with np.errstate(over="ignore", invalid="ignore"):  # overflowing entries are redone below
+        cosh = np.where(small, 1 + q / 2 + q * q / 24, np.cosh(safe))
+        sinhc = np.where(small, 1 + q / 6 + q * q / 120, np.sinh(safe) / safe)
+        out = sinhc[..., None, None] * a
+        diag = cosh - sinhc * mu
+        out[..., 0, 0] += diag
+        out[..., 1, 1] += diag
+        out = np.exp(mu)[..., None, None] * out
+    bad = ~np.isfinite(out).all(axis=(-2, -1))
+    if bad.any():  # cosh √q overflows (|√q| > ~710) where e^μ would bring the product back: scipy's scaling
+        from scipy.linalg import expm
+
+        out[bad] = expm(a[bad])
+    return out
 
 
 #: Smallest real part kept for an eigenvalue of ``I + R`` in :func:`_matrix_log`: a relative error
@@ -236,16 +243,17 @@ def damping_law(planes: np.ndarray, freq: np.ndarray, f_ref: float, beta: np.nda
 
     A constant spring–damper ``Z(f) = K + i 2πf C`` identified at one mode (frequency ``f_ref``) fixes its loss
     there, not its law: a viscous damper (``Im Z ∝ f``) and structural (hysteretic) damping
-    (``Im Z = η K``, loss factor ``η = 2π f_ref C / K`` independent of frequency; Ewins, *Modal Testing*, §2.2-2.3)
-    give the same joint at ``f_ref`` and differ away from it. The family between them is the fractional-derivative
-    damper (Bagley & Torvik 1983, AIAA J. 21(5)): ``Im Z(f) ∝ f^β``, ``0 ≤ β ≤ 1``. Each sample keeps ``Re Z`` and
-    scales ``Im Z`` per line:
+    (``Im Z = η K``, loss factor ``η = 2π f_ref C / K`` independent of frequency; Ewins, *Modal Testing*, §2)
+    give the same joint at ``f_ref`` and differ away from it. Between them lies a power-law loss ``Im Z(f) ∝ f^β``,
+    ``0 ≤ β ≤ 1``, with the storage stiffness held fixed (the loss law of fractional-derivative models, Bagley &
+    Torvik 1983, AIAA J. 21(5), without their change of ``Re Z``; β = 0 is ideal hysteretic damping, which is not
+    causal). Each sample keeps ``Re Z`` and scales ``Im Z`` per line:
 
         ``Im Z'(f) = Im Z(f) · [share · (f_ref / f)^(1−β) + (1 − share)]``
 
     (β = 1: as catalogued; β = 0: hysteretic at the loss the joint has at ``f_ref``; at ``f = f_ref`` nothing
-    changes). ``share`` is the interpolation weight of the constant joints in a joint mixed with per-line ones (1
-    for a constant joint): the per-line part keeps its measured loss.
+    changes). ``share`` < 1 scales only that part of the change (the band uses 1: it samples the law of constant
+    joints only, :func:`jointdb.usecases._stack_band.damping_laws`).
 
     Parameters
     ----------

@@ -5,8 +5,8 @@ many times with different joints (the nominal prediction, each next-nearest join
 ensembles): their beam-model FRFs, one direct FE solve per line each, are the same every time.
 :func:`cached_part` keeps the most recent ones, keyed by *content* (the frozen tool / holder
 dataclasses, the spindle model's canonical JSON, the gauge length and the grid's bytes), never by
-object identity, so an edited stack never meets a stale FRF. Cached arrays are read-only: a caller
-that wrote into one would raise instead of corrupting the next prediction.
+object identity, so an edited stack never meets a stale FRF (an FRF's values are read-only, so no caller
+can change a kept one). A spindle model given as a path or as a ``BeamModel`` is not kept.
 """
 
 from __future__ import annotations
@@ -38,19 +38,13 @@ def _grid_key(freq: np.ndarray) -> str:
 
 
 def spindle_key(model) -> Hashable | None:
-    """A content key of a modelled spindle's model (a dict, a path or a hashable model), or None (not cached)."""
+    """A content key of a modelled spindle's model given as a dict (its canonical JSON), or None (not kept)."""
     if isinstance(model, dict):
         try:
             return json.dumps(model, sort_keys=True, allow_nan=True)
         except (TypeError, ValueError):
             return None
-    if isinstance(model, str):
-        return None  # a path: its file may change between calls
-    try:
-        hash(model)
-    except TypeError:
-        return None
-    return model
+    return None  # a path (its file may change) or a BeamModel (its supports hold mutable dicts): not kept
 
 
 def cached_part(kind: str, key: Hashable | None, freq: np.ndarray, build: Callable[[], FRF]) -> FRF:
@@ -70,7 +64,6 @@ def cached_part(kind: str, key: Hashable | None, freq: np.ndarray, build: Callab
     Returns
     -------
     FRF
-        With read-only ``values``.
     """
     if key is None:
         return build()
@@ -85,7 +78,6 @@ def cached_part(kind: str, key: Hashable | None, freq: np.ndarray, build: Callab
             _memo.move_to_end(full)
             return hit
     frf = build()
-    frf.values.setflags(write=False)
     with _lock:
         _memo[full] = frf
         _memo.move_to_end(full)

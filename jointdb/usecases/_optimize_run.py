@@ -49,7 +49,7 @@ class OptimizeOutcome:
 
 def lobe_band_of(problem: OptimizeProblem, result: CandidateResult, repo):
     """A candidate's zero-order lobe band on its lobes' speeds, from the uncertainty of its joints
-    (measurement noise, joint choice, prediction path, as ``jointdb predict`` samples it); None when its
+    (every term of :data:`jointdb.usecases._stack_band.TERMS`, as ``jointdb predict`` samples it); None when its
     joints carry no uncertainty.
 
     Parameters

@@ -83,6 +83,9 @@ class JointResolution:
         the dominant peak of its campaign's identification assembly (quality ``identification_peak_hz``, None for a
         version catalogued without it), ``constant`` whether its catalogued FRF is the constant k, c of an
         output-error fit (its fit covariance describes it) rather than a per-line joint.
+    constant_fallback
+        True when the passivity guard (:mod:`jointdb.usecases._stack_guard`) replaced the joint's FRF by its constant
+        k, c fit over a whole band (everywhere or near a spurious peak).
     """
 
     interface: str
@@ -104,6 +107,7 @@ class JointResolution:
     validation_errors: tuple[tuple[str, float, float | None], ...] = ()  # (name@version, weight, peak error)
     identification_errors: tuple[tuple[str, float, float | None], ...] = ()  # the same, identification assembly
     damping_references: tuple[tuple[str, float, float | None, bool], ...] = ()  # (name@version, weight, f_ref, const.)
+    constant_fallback: bool = False  # the passivity guard replaced its FRF by a constant k, c fit over a whole band
 
     def choice_perturbations(self, freq):
         """``(relative, scale)`` of the joint-choice error on ``freq`` over (x, θ), calibrated
@@ -204,9 +208,18 @@ def _peak_errors(versions_weights) -> dict[str, tuple]:
 def _is_constant_kc(version) -> bool:
     """Whether a catalogued version's FRF is a constant spring–damper: its provenance carries the output-error fit's
     covariance of constant k, c and that fit is the catalogued joint (not information beside a per-line joint). A
-    full-matrix model (``K + iD − ω²M``: structural damping ``D`` already) is not one."""
+    full-matrix model (``K + iD − ω²M``: structural damping ``D`` already), a joint body or a spring–damper whose
+    log k(f), log c(f) are fitted polynomials (``order > 0``: its law is fitted) is not one."""
     unc = _uncertainty_of(version)
-    return (getattr(version, "model_kind", None) != "full-matrix" and unc is not None
+    if unc is None or getattr(version, "model_kind", None) == "full-matrix":
+        return False
+    try:
+        order = int(unc.get("order", 0) or 0)
+    except (TypeError, ValueError):
+        return False
+    # a frequency-dependent k(f), c(f) (order > 0) has its law fitted already; a joint body (K + iD - w^2 M) is
+    # hysteretic already
+    return (unc.get("model", "spring-damper") == "spring-damper" and order == 0
             and unc.get("describes_catalogued_joint", True) is not False)
 
 

@@ -154,7 +154,10 @@ def model_error(joints) -> tuple[float, list[str]]:
 def _damping_law(r) -> tuple[tuple[float, float] | None, str]:
     """``((f_ref, share), "")`` of one resolved joint for the damping-law term, or ``(None, why it is 0)``."""
     if r.kind == "explicit":
-        return None, "an explicit joint file: the frequency it was identified at is not known"
+        return None, "explicit k, c written in the stack: the frequency they were identified at is not known"
+    if getattr(r, "constant_fallback", False):
+        return None, ("the passivity guard replaced the catalogued joint by its constant k, c fit over a whole band "
+                      "(not at one mode): its damping law is not sampled")
     refs = [row for row in getattr(r, "damping_references", ()) if row[1] > 0]
     if not refs:
         return None, "the joint records no catalogued version it was identified from"
@@ -163,13 +166,17 @@ def _damping_law(r) -> tuple[tuple[float, float] | None, str]:
         return None, ("per-line joint (" + ", ".join(j for j, *_ in refs) + "): no constant k, c fit describes its "
                       "catalogued FRF; its loss is measured line by line over its campaign's band, not assumed "
                       "by a law")
+    if len(const) < len(refs):
+        return None, ("an interpolation of constant k, c (" + ", ".join(j for j, *_ in const) + ") and per-line ("
+                      + ", ".join(j for j, _, _, c in refs if not c) + ") joints: the constant part's loss cannot be "
+                      "separated from the interpolated dynamic stiffness, so its law is not sampled")
     missing = [j for j, _, f, _ in const if not (isinstance(f, (int, float)) and math.isfinite(f) and f > 0)]
     if missing:
         return None, (f"constant k, c of {', '.join(missing)} records no identification frequency "
                       "(quality identification_peak_hz; catalogued before it was recorded: catalogue it again)")
     wc = sum(w for _, w, _, _ in const)
     f_ref = math.exp(sum(w * math.log(f) for _, w, f, _ in const) / wc)
-    return (f_ref, min(1.0, wc / sum(w for _, w, _, _ in refs))), ""
+    return (f_ref, 1.0), ""
 
 
 def damping_laws(joints) -> tuple[dict[str, tuple[float, float]], dict[str, str]]:
@@ -180,8 +187,9 @@ def damping_laws(joints) -> tuple[dict[str, tuple[float, float]], dict[str, str]
     from it: viscous, hysteretic (``Im Z = η K``) or between (fractional derivative,
     :func:`jointdb.stack._band.damping_law`). Each sample draws the law's exponent β uniform on [0, 1] — the
     campaign at one mode cannot tell the laws apart, so every exponent between the two classical limits is taken
-    as equally likely. For an interpolation, ``f_ref`` is the interpolation-weighted geometric mean over the
-    constant versions used and ``share`` their total weight (the per-line versions keep their measured loss).
+    as equally likely. For an interpolation of constant joints, ``f_ref`` is the interpolation-weighted geometric mean
+    of theirs; an interpolation mixing constant and per-line joints is not sampled (said why), nor is a joint the
+    passivity guard replaced by its constant fit over a whole band.
 
     Parameters
     ----------
@@ -191,7 +199,7 @@ def damping_laws(joints) -> tuple[dict[str, tuple[float, float]], dict[str, str]
     Returns
     -------
     (dict, dict)
-        Interface → ``(f_ref [Hz], share)`` of the joints sampled; interface → why a joint is not (rigid
+        Interface → ``(f_ref [Hz], 1.0)`` of the joints sampled; interface → why a joint is not (rigid
         interfaces are in neither).
     """
     laws, why = {}, {}

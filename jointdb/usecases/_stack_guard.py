@@ -197,5 +197,6 @@ def _fall_back(joints: dict, names, frfs: Mapping, bad: list[str], window: str |
         note = (f"the catalogued joint's FRF gave a non-physical tool-tip resonance ({'; '.join(bad)}); "
                 f"{where}its constant k, c fit over {PEAK_BAND_HZ[0]:g}–{PEAK_BAND_HZ[1]:g} Hz is used instead")
         joints[n] = replace(joints[n], frf=frfs[n], warnings=tuple(joints[n].warnings) + (note,),
+                            constant_fallback=True,
                             description=f"{joints[n].description} (constant k, c fallback"
                                         f"{' near the spurious peak' if window else ''})")

@@ -151,21 +151,50 @@ def _with_refs(refs):
 def test_the_term_is_zero_with_its_reason_and_weighted_over_an_interpolation():
     plain = predict_with_joints(_spec(), resolve_joints(_spec(), None), np.arange(20.0, 5000.1, 10.0))
     why = absent_terms(plain)["damping law"]
-    assert "explicit joint file" in why  # the fixture's joints are written in the stack: no f_ref known
+    assert "explicit k, c written in the stack" in why  # the fixture's joints are written in the stack: no f_ref known
     r = _with_refs([("th@1", 1.0, None, True)])
     assert "records no identification frequency" in absent_terms(r)["damping law"]
     r = _with_refs([("th@1", 0.6, 900.0, False), ("th@2", 0.4, 1200.0, False)])
     assert "per-line joint (th@1, th@2)" in absent_terms(r)["damping law"]
     terms = band_terms(r, n=50)
     assert terms.half_width["damping law"] == {} and "damping law" in terms.zero
-    # an interpolation: f_ref the weighted geometric mean of the constant versions, share their weight
+    # an interpolation mixing constant and per-line joints: not sampled (the constant part's loss cannot be taken
+    # apart from the interpolated Z), said why
     r = _with_refs([("a@1", 0.25, 800.0, True), ("b@1", 0.5, 1800.0, True), ("c@1", 0.25, 3000.0, False)])
     laws, why = damping_laws(r.joints)
+    assert "tool-holder" not in laws and "constant k, c (a@1, b@1) and per-line (c@1)" in why["tool-holder"]
+    # the passivity guard's constant fallback: not sampled, and not called a per-line joint
+    fell = replace(r.joints["tool-holder"], constant_fallback=True, damping_references=(("a@1", 1.0, 800.0, True),))
+    laws, why = damping_laws({**r.joints, "tool-holder": fell})
+    assert "tool-holder" not in laws and "passivity guard" in why["tool-holder"]
+    # an interpolation of constant joints: f_ref their weighted geometric mean
+    r = _with_refs([("a@1", 0.25, 800.0, True), ("b@1", 0.75, 1800.0, True)])
+    laws, why = damping_laws(r.joints)
     f_ref, share = laws["tool-holder"]
-    assert f_ref == pytest.approx(np.exp((0.25 * np.log(800.0) + 0.5 * np.log(1800.0)) / 0.75), rel=1e-12)
-    assert share == pytest.approx(0.75) and "holder-spindle" in why
+    assert f_ref == pytest.approx(np.exp(0.25 * np.log(800.0) + 0.75 * np.log(1800.0)), rel=1e-12)
+    assert share == 1.0 and "holder-spindle" in why
     terms = band_terms(r, n=50)
     assert "damping law" not in terms.zero and terms.half_width["damping law"]["x"] > 0
     assert any("damping law sampled between viscous and hysteretic about f_ref" in n for n in terms.notes)
     rows = {t["term"]: t for t in terms.to_json()["terms"]}
     assert rows["damping law"]["zero_because"] is None and rows["damping law"]["peak_half_width"]["x"] > 0
+
+
+def test_only_a_constant_spring_damper_is_given_the_law():
+    """A spring–damper of order 0 whose covariance describes the catalogued FRF gets the law; a fitted
+    frequency law (order > 0), a joint body (K + iD − ω²M: hysteretic already), a full matrix, a record kept as
+    information beside a per-line joint, or no record do not."""
+    from types import SimpleNamespace
+
+    from jointdb.usecases._stack import _is_constant_kc
+
+    def version(unc, kind="spring-damper"):
+        return SimpleNamespace(model_kind=kind, provenance=SimpleNamespace(parameters={"uncertainty": unc}))
+
+    assert _is_constant_kc(version({"model": "spring-damper", "order": 0}))
+    assert _is_constant_kc(version({}))  # records written before the model was named: a constant spring-damper
+    assert not _is_constant_kc(version({"model": "spring-damper", "order": 2}))
+    assert not _is_constant_kc(version({"model": "joint-body"}))
+    assert not _is_constant_kc(version({"model": "spring-damper"}, kind="full-matrix"))
+    assert not _is_constant_kc(version({"model": "spring-damper", "describes_catalogued_joint": False}))
+    assert not _is_constant_kc(version(None))

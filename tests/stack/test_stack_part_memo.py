@@ -88,3 +88,10 @@ def test_closed_form_exponential_of_2x2_blocks_equals_scipy():
         assert np.max(np.abs(got - want) / scale) < 1e-12
     a = rng.normal(size=(3, 4, 3, 3)) + 0j      # other sizes go to scipy
     np.testing.assert_allclose(_expm(a), expm(a), rtol=1e-12)
+
+
+def test_the_closed_form_falls_back_where_cosh_overflows():
+    """cosh √q overflows for |√q| > ~710 while e^μ brings exp A back to finite values: scipy's scaling and squaring."""
+    a = np.array([[[-800.0, 800.0], [800.0, -800.0]]], dtype=complex)
+    np.testing.assert_allclose(_expm(a), expm(a[0])[None], rtol=1e-12)
+    assert np.allclose(_expm(a), 0.5)
