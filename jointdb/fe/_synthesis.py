@@ -6,6 +6,9 @@ Harmonic convention ``x = X e^{iωt}`` (docs/theory.md §0): the dynamic stiffne
 
 from __future__ import annotations
 
+import threading
+from collections import OrderedDict
+
 import numpy as np
 
 from jointdb.errors import InputError, NumericalError
@@ -20,10 +23,34 @@ CHUNK_BYTES = 64 * 2**20
 AUTO_LU_WORK = 2e9
 
 
+#: Rigid-body motions remembered per mesh (its DOF labels and node positions, by identity: a fit's
+#: models share one mesh), at most this many.
+RIGID_CACHE_SIZE = 64
+_RIGID_CACHE: OrderedDict = OrderedDict()
+_RIGID_LOCK = threading.Lock()
+
+
 def _rigid_vectors(matrices) -> np.ndarray:
-    """Rigid-body motions of the whole mesh, shape ``(n_dof, r)``."""
-    labels = matrices.dof_labels
-    z = matrices.node_positions[[d.node for d in labels]]
+    """Rigid-body motions of the whole mesh, shape ``(n_dof, r)`` (read-only; shared by the models of a mesh)."""
+    labels, z_nodes = matrices.dof_labels, matrices.node_positions
+    key = (id(labels), id(z_nodes))
+    with _RIGID_LOCK:
+        hit = _RIGID_CACHE.get(key)
+        if hit is not None and hit[0] is labels and hit[1] is z_nodes:
+            _RIGID_CACHE.move_to_end(key)
+            return hit[2]
+    R = _rigid_motions(labels, z_nodes)
+    R.flags.writeable = False
+    with _RIGID_LOCK:
+        _RIGID_CACHE[key] = (labels, z_nodes, R)     # the objects are kept: their ids are not reused
+        while len(_RIGID_CACHE) > RIGID_CACHE_SIZE:
+            _RIGID_CACHE.popitem(last=False)
+    return R
+
+
+def _rigid_motions(labels, node_positions) -> np.ndarray:
+    """Rigid-body motions of the DOFs ``labels`` of nodes at ``node_positions``, ``(n_dof, r)``."""
+    z = node_positions[[d.node for d in labels]]
     dirs = np.array([d.direction for d in labels])
     cols = []
     if set(dirs) <= {"x", "ry"}:
