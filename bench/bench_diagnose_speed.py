@@ -3,11 +3,12 @@ in one run, with the results compared case by case (not a test: prints numbers).
 
 Usage::
 
-    .venv/bin/python bench/bench_diagnose_speed.py [--reference d22c5f5] [--cases joint_damping:0,...]
+    .venv/bin/python bench/bench_diagnose_speed.py [--reference a4619c1] [--cases joint_damping:0,...]
         [--repeat 1] [--json out.json]
 
 The reference is the code of a git commit (default: the last commit before the speed-ups of
-round 3 session 5), extracted with ``git archive`` into a temporary directory. Each side runs
+round 3 session 6, task "diagspeed"; ``--reference d22c5f5`` measures against the code before
+those of session 5), extracted with ``git archive`` into a temporary directory. Each side runs
 in its own subprocess on one BLAS thread (``OPENBLAS_NUM_THREADS=1``), alternately case by
 case (reference, this tree, reference, ...), so that a change of the machine's load hits both
 alike. Timed per case: the CPU time of generating the case (the benchmark's truth models) and of
@@ -19,6 +20,11 @@ three names and the located position must be identical; each fitted value must a
 of the answer), and the mismatch before and after within 1e-4 relative. The engine's changes are
 exact (bit-identical fits on the same recordings); the generator's harmonic balance changes the
 recordings of a softening joint by round-off (~1e-15), which moves that fit by ~1e-3 σ.
+
+Session 6 ("diagspeed"): models of one geometry share a mesh, DOF labels, bare beam matrices and
+rigid-body motions; an insertion's contact layer is added in one ``np.add.at``; the evaluator
+synthesises at the recorded DOFs without building an FRF object. All exact: the same fits bit for
+bit (checked here case by case, and by tests/fe/test_fe_mesh_sharing.py).
 """
 
 from __future__ import annotations
@@ -34,8 +40,8 @@ import tempfile
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-#: the last commit before the speed-ups (round 3, session 5, task "diagfast")
-REFERENCE = "d22c5f5"
+#: the last commit before the speed-ups of round 3, session 6 (task "diagspeed"); d22c5f5: before session 5's
+REFERENCE = "a4619c1"
 #: a fixed workload: beam cases with one and with three levels, chain effects, a stack case
 CASES = ("joint_damping:0", "sensor_mass:0", "gain:1", "fluted_diameter:0", "softening_joint:0", "interface_joint:0")
 #: fitted values must agree within this fraction of their reported σ
