@@ -115,6 +115,11 @@ def compare(old: dict, new: dict) -> list[str]:
     return bad
 
 
+def identical(old: dict, new: dict) -> bool:
+    """The same answer bit for bit: every fitted value, σ and mismatch equal (JSON keeps a float exactly)."""
+    return all(old[k] == new[k] for k in ("verdict", "best", "ranking", "position", "values", "sigmas", "mismatch"))
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--reference", default=REFERENCE, help="git commit of the reference code")
@@ -135,21 +140,25 @@ def main() -> None:
                 best = {side: {k: min(r[i][k] for r in runs) for k in ("gen_cpu", "diag_cpu")}
                         for i, side in enumerate(("old", "new"))}
                 diff = compare(old, new)
-                rows.append((case, best, diff))
-                out.append({"case": case, "old": old, "new": new, "cpu": best, "differences": diff})
+                exact = identical(old, new)
+                rows.append((case, best, diff, exact))
+                out.append({"case": case, "old": old, "new": new, "cpu": best, "differences": diff,
+                            "bit_identical": exact})
                 print(f"{case:22s} diagnose {best['old']['diag_cpu']:6.1f} -> {best['new']['diag_cpu']:6.1f} s "
                       f"({best['old']['diag_cpu'] / best['new']['diag_cpu']:.2f}x)  generate "
                       f"{best['old']['gen_cpu']:5.1f} -> {best['new']['gen_cpu']:5.1f} s  "
-                      f"{'same answer' if not diff else 'DIFFERS: ' + '; '.join(diff)}", flush=True)
+                      f"{('same answer' + (', bit-identical' if exact else '')) if not diff else 'DIFFERS: ' + '; '.join(diff)}",
+                      flush=True)
         finally:
             for p in (ref, cur):
                 p.stdin.close()
                 p.wait()
-    tot = {side: {k: sum(b[side][k] for _, b, _ in rows) for k in ("gen_cpu", "diag_cpu")} for side in ("old", "new")}
+    tot = {side: {k: sum(r[1][side][k] for r in rows) for k in ("gen_cpu", "diag_cpu")} for side in ("old", "new")}
     print(f"total CPU: diagnose {tot['old']['diag_cpu']:.1f} -> {tot['new']['diag_cpu']:.1f} s "
           f"({tot['old']['diag_cpu'] / tot['new']['diag_cpu']:.2f}x); generate {tot['old']['gen_cpu']:.1f} -> "
           f"{tot['new']['gen_cpu']:.1f} s ({tot['old']['gen_cpu'] / max(tot['new']['gen_cpu'], 1e-9):.2f}x); "
-          f"same answer in {sum(not d for _, _, d in rows)} / {len(rows)} cases (reference {args.reference})")
+          f"same answer in {sum(not r[2] for r in rows)} / {len(rows)} cases, bit-identical in "
+          f"{sum(r[3] for r in rows)} (reference {args.reference})")
     print("load average at end: %.2f %.2f %.2f (1, 5, 15 min)" % os.getloadavg())
     if args.json:
         Path(args.json).write_text(json.dumps(out, indent=1, default=float))
