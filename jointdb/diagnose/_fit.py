@@ -223,7 +223,9 @@ class ModelEvaluator:
         """
         with np.errstate(divide="ignore", invalid="ignore"):
             lr = np.log(H / self.rec)
-        return np.where(self.w > 0, np.nan_to_num(lr, nan=0.0, posinf=0.0, neginf=0.0), 0.0)
+        if not np.isfinite(lr).all():          # (the usual case, all finite, needs no copy)
+            lr = np.nan_to_num(lr, nan=0.0, posinf=0.0, neginf=0.0)
+        return np.where(self.w > 0, lr, 0.0)
 
     def residual(self, H: np.ndarray) -> np.ndarray:
         """The weighted residual ``w log(H / H_rec)``, real and imaginary parts stacked.

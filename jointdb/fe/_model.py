@@ -31,9 +31,13 @@ KINDS = ("planar", "frame3d")
 #: Meshes shared between models of the same geometry (a fit makes one model per evaluation that differs
 #: from the last only in a stiffness, a mass or a damping): at most this many, least recently used dropped.
 MESH_CACHE_SIZE = 64
-#: Bare beam matrices kept per shared mesh (one per set of sections and theory).
-BARE_CACHE_SIZE = 8
+#: Bare beam matrices (K, M) remembered per shared mesh, sections and theory: at most this many pairs and
+#: this many bytes in all (a server runs several diagnoses at once), least recently used dropped.
+BARE_CACHE_SIZE = 32
+BARE_CACHE_BYTES = 32 * 2**20
 _MESH_CACHE: OrderedDict = OrderedDict()
+_BARE_CACHE: OrderedDict = OrderedDict()
+_BARE_BYTES = [0]
 _MESH_LOCK = threading.Lock()
 
 
@@ -276,7 +280,7 @@ class BeamModel:
                     _MESH_CACHE.move_to_end(key)
             if base is None:
                 cached = self._make_mesh()
-                cached.__dict__["_bare"] = OrderedDict()     # shared by every model bound to this mesh
+                cached.__dict__["_bare"] = object()          # names the bare matrices of every model bound to it
                 cached.dof_labels()                            # computed once, shared likewise
                 if key is not None:
                     with _MESH_LOCK:
@@ -349,17 +353,22 @@ class BeamModel:
     def _bare(self, mesh: Mesh) -> tuple[np.ndarray, np.ndarray]:
         """Bare beam ``(K, M)`` of ``mesh``, remembered with the mesh (callers get copies to change)."""
         segs = mesh.sections or self.segments
-        shared = mesh.__dict__.get("_bare")
-        key = (self.theory, segs)
-        hit = shared.get(key) if shared is not None else None
-        if hit is None:
-            hit = self._bare_matrices(mesh, segs)
-            if shared is not None:
-                with _MESH_LOCK:
-                    shared[key] = hit
-                    while len(shared) > BARE_CACHE_SIZE:
-                        shared.popitem(last=False)
-        return hit[0].copy(), hit[1].copy()
+        token = mesh.__dict__.get("_bare")
+        if token is None:
+            return self._bare_matrices(mesh, segs)
+        key = (id(token), self.theory, segs)
+        with _MESH_LOCK:
+            hit = _BARE_CACHE.get(key)
+            if hit is not None and hit[0] is token:
+                _BARE_CACHE.move_to_end(key)
+                return hit[1].copy(), hit[2].copy()
+        K, M = self._bare_matrices(mesh, segs)
+        with _MESH_LOCK:
+            _BARE_CACHE[key] = (token, K.copy(), M.copy())    # the token is kept: its id is not reused
+            _BARE_BYTES[0] += 2 * K.nbytes
+            while len(_BARE_CACHE) > 1 and (len(_BARE_CACHE) > BARE_CACHE_SIZE or _BARE_BYTES[0] > BARE_CACHE_BYTES):
+                _BARE_BYTES[0] -= 2 * _BARE_CACHE.popitem(last=False)[1][1].nbytes
+        return K, M
 
     def _bare_matrices(self, mesh: Mesh, segs: tuple) -> tuple[np.ndarray, np.ndarray]:
         seg = mesh.element_section

@@ -21,6 +21,8 @@ def empty_caches(monkeypatch):
     from collections import OrderedDict
 
     monkeypatch.setattr(fe_model, "_MESH_CACHE", OrderedDict())
+    monkeypatch.setattr(fe_model, "_BARE_CACHE", OrderedDict())
+    monkeypatch.setattr(fe_model, "_BARE_BYTES", [0])
     monkeypatch.setattr(fe_synthesis, "_RIGID_CACHE", OrderedDict())
 
 
@@ -114,3 +116,13 @@ def test_contact_layer_equals_the_element_by_element_sum():
             want[[i, j], [i, j]] += k
             want[[i, j], [j, i]] -= k
     np.testing.assert_array_equal(got, want)
+
+
+def test_the_bare_matrices_kept_stay_within_their_byte_budget(empty_caches, monkeypatch):
+    n = _model().assemble().K.shape[0]
+    monkeypatch.setattr(fe_model, "BARE_CACHE_BYTES", 3 * 2 * n * n * 8)      # room for three (K, M) pairs
+    for d in (0.0110, 0.0111, 0.0112, 0.0113, 0.0114):                        # a diameter fit: new sections
+        got = _model(diameter=d).assemble()
+        np.testing.assert_array_equal(got.K, _fresh(lambda: _model(diameter=d))[1].K)
+    assert len(fe_model._BARE_CACHE) == 3
+    assert fe_model._BARE_BYTES[0] == sum(2 * v[1].nbytes for v in fe_model._BARE_CACHE.values())
