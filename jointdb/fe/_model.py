@@ -265,7 +265,11 @@ class BeamModel:
         """Nodes at segment ends, point and ingredient positions, refined to ``max_element_length``;
         then the interfaces: splits for joints, extra nodes for inserted parts (see :mod:`jointdb.fe._joints`).
 
-        Computed once per model (a model is immutable; :meth:`replace` makes a new one).
+        Computed once per model (a model is immutable; :meth:`replace` makes a new one), and shared by
+        models of the same geometry (segment lengths, element length, kind, every position, the interfaces'
+        kinds, places and free directions): a fit's models, which differ in a stiffness, a mass or a
+        damping, reuse one set of nodes, elements, DOF numbering, labels and bare beam matrices; the
+        entries that name interfaces name this model's own ingredients.
 
         Returns
         -------
