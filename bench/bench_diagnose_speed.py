@@ -3,11 +3,12 @@ in one run, with the results compared case by case (not a test: prints numbers).
 
 Usage::
 
-    .venv/bin/python bench/bench_diagnose_speed.py [--reference d22c5f5] [--cases joint_damping:0,...]
+    .venv/bin/python bench/bench_diagnose_speed.py [--reference a4619c1] [--cases joint_damping:0,...]
         [--repeat 1] [--json out.json]
 
 The reference is the code of a git commit (default: the last commit before the speed-ups of
-round 3 session 5), extracted with ``git archive`` into a temporary directory. Each side runs
+round 3 session 6, task "diagspeed"; ``--reference d22c5f5`` measures against the code before
+those of session 5), extracted with ``git archive`` into a temporary directory. Each side runs
 in its own subprocess on one BLAS thread (``OPENBLAS_NUM_THREADS=1``), alternately case by
 case (reference, this tree, reference, ...), so that a change of the machine's load hits both
 alike. Timed per case: the CPU time of generating the case (the benchmark's truth models) and of
@@ -19,6 +20,11 @@ three names and the located position must be identical; each fitted value must a
 of the answer), and the mismatch before and after within 1e-4 relative. The engine's changes are
 exact (bit-identical fits on the same recordings); the generator's harmonic balance changes the
 recordings of a softening joint by round-off (~1e-15), which moves that fit by ~1e-3 σ.
+
+Session 6 ("diagspeed"): models of one geometry share a mesh, DOF labels, bare beam matrices and
+rigid-body motions; an insertion's contact layer is added in one ``np.add.at``; the evaluator
+synthesises at the recorded DOFs without building an FRF object. All exact: the same fits bit for
+bit (checked here case by case, and by tests/fe/test_fe_mesh_sharing.py).
 """
 
 from __future__ import annotations
@@ -34,8 +40,8 @@ import tempfile
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-#: the last commit before the speed-ups (round 3, session 5, task "diagfast")
-REFERENCE = "d22c5f5"
+#: the last commit before the speed-ups of round 3, session 6 (task "diagspeed"); d22c5f5: before session 5's
+REFERENCE = "a4619c1"
 #: a fixed workload: beam cases with one and with three levels, chain effects, a stack case
 CASES = ("joint_damping:0", "sensor_mass:0", "gain:1", "fluted_diameter:0", "softening_joint:0", "interface_joint:0")
 #: fitted values must agree within this fraction of their reported σ
@@ -109,6 +115,11 @@ def compare(old: dict, new: dict) -> list[str]:
     return bad
 
 
+def identical(old: dict, new: dict) -> bool:
+    """The same answer bit for bit: every fitted value, σ and mismatch equal (JSON keeps a float exactly)."""
+    return all(old[k] == new[k] for k in ("verdict", "best", "ranking", "position", "values", "sigmas", "mismatch"))
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--reference", default=REFERENCE, help="git commit of the reference code")
@@ -129,21 +140,25 @@ def main() -> None:
                 best = {side: {k: min(r[i][k] for r in runs) for k in ("gen_cpu", "diag_cpu")}
                         for i, side in enumerate(("old", "new"))}
                 diff = compare(old, new)
-                rows.append((case, best, diff))
-                out.append({"case": case, "old": old, "new": new, "cpu": best, "differences": diff})
+                exact = identical(old, new)
+                rows.append((case, best, diff, exact))
+                out.append({"case": case, "old": old, "new": new, "cpu": best, "differences": diff,
+                            "bit_identical": exact})
                 print(f"{case:22s} diagnose {best['old']['diag_cpu']:6.1f} -> {best['new']['diag_cpu']:6.1f} s "
                       f"({best['old']['diag_cpu'] / best['new']['diag_cpu']:.2f}x)  generate "
                       f"{best['old']['gen_cpu']:5.1f} -> {best['new']['gen_cpu']:5.1f} s  "
-                      f"{'same answer' if not diff else 'DIFFERS: ' + '; '.join(diff)}", flush=True)
+                      f"{('same answer' + (', bit-identical' if exact else '')) if not diff else 'DIFFERS: ' + '; '.join(diff)}",
+                      flush=True)
         finally:
             for p in (ref, cur):
                 p.stdin.close()
                 p.wait()
-    tot = {side: {k: sum(b[side][k] for _, b, _ in rows) for k in ("gen_cpu", "diag_cpu")} for side in ("old", "new")}
+    tot = {side: {k: sum(r[1][side][k] for r in rows) for k in ("gen_cpu", "diag_cpu")} for side in ("old", "new")}
     print(f"total CPU: diagnose {tot['old']['diag_cpu']:.1f} -> {tot['new']['diag_cpu']:.1f} s "
           f"({tot['old']['diag_cpu'] / tot['new']['diag_cpu']:.2f}x); generate {tot['old']['gen_cpu']:.1f} -> "
           f"{tot['new']['gen_cpu']:.1f} s ({tot['old']['gen_cpu'] / max(tot['new']['gen_cpu'], 1e-9):.2f}x); "
-          f"same answer in {sum(not d for _, _, d in rows)} / {len(rows)} cases (reference {args.reference})")
+          f"same answer in {sum(not r[2] for r in rows)} / {len(rows)} cases, bit-identical in "
+          f"{sum(r[3] for r in rows)} (reference {args.reference})")
     print("load average at end: %.2f %.2f %.2f (1, 5, 15 min)" % os.getloadavg())
     if args.json:
         Path(args.json).write_text(json.dumps(out, indent=1, default=float))

@@ -30,7 +30,7 @@ import scipy.optimize
 
 from jointdb.diagnose._uncertainty import linearised_sigmas
 from jointdb.errors import InputError, NumericalError
-from jointdb.fe import natural_frequencies
+from jointdb.fe import frf_direct, frf_modal, natural_frequencies
 
 __all__ = ["Fit", "ModelEvaluator", "fit_candidate", "MEMO_SIZE", "MEMO_BYTES"]
 
@@ -88,12 +88,29 @@ class ModelEvaluator:
         -------
         ndarray, complex
         """
+        idx = self._point_dofs(model)
+        mats = model.assemble()
         if self.method == "modal":
             n = min(self.n_modes, max(1, model.mesh().n_dof - 4))
-            H = model.frf(self.freq, points=self.points, directions=self.dirs, method="modal", n_modes=n).values
+            H = frf_modal(mats, self.freq, idx, n_modes=n)
         else:
-            H = model.frf(self.freq, points=self.points, directions=self.dirs).values
+            H = frf_direct(mats, self.freq, idx)
+        if not np.all(np.isfinite(H)):      # what model.frf's FRF would refuse
+            raise InputError(f"FRF values contain {int(np.count_nonzero(~np.isfinite(H)))} NaN or inf entries")
         return H[:, self.oi][:, :, self.ii]
+
+    def _point_dofs(self, model) -> list[int]:
+        """Global DOFs of the evaluator's points × directions in ``model``'s mesh (what ``model.frf`` would
+        use), remembered for the last mesh numbering and point positions (a fit's models share them)."""
+        mesh = model.mesh()
+        where = tuple(model.point(name).position for name in self.points)
+        last = getattr(self, "_dofs_of", None)
+        if last is not None and last[0] is mesh.dof_table and last[1] is mesh.node_positions and last[2] == where:
+            return last[3]
+        idx = [mesh.dof(mesh.node_at(z, f"point {name!r}"), d) for name, z in zip(self.points, where)
+               for d in self.dirs]
+        self._dofs_of = (mesh.dof_table, mesh.node_positions, where, idx)
+        return idx
 
     def dof_indices(self, model) -> tuple[list[int], list[int]]:
         """Global DOF indices in ``model``'s mesh of the recorded outputs and inputs.
@@ -206,7 +223,9 @@ class ModelEvaluator:
         """
         with np.errstate(divide="ignore", invalid="ignore"):
             lr = np.log(H / self.rec)
-        return np.where(self.w > 0, np.nan_to_num(lr, nan=0.0, posinf=0.0, neginf=0.0), 0.0)
+        if not np.isfinite(lr).all():          # (the usual case, all finite, needs no copy)
+            lr = np.nan_to_num(lr, nan=0.0, posinf=0.0, neginf=0.0)
+        return np.where(self.w > 0, lr, 0.0)
 
     def residual(self, H: np.ndarray) -> np.ndarray:
         """The weighted residual ``w log(H / H_rec)``, real and imaginary parts stacked.

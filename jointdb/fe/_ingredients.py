@@ -19,7 +19,7 @@ import numpy as np
 
 from jointdb.errors import InputError
 from jointdb.fe._fields import FieldError, _number
-from jointdb.fe._synthesis import eigen_free
+from jointdb.fe._synthesis import eigen_free, free_block
 
 if TYPE_CHECKING:  # pragma: no cover
     from jointdb.fe._matrices import FEMatrices
@@ -317,7 +317,7 @@ class ModalDamping(Ingredient):
         omega[:n_rb] = 0.0
         zeta = np.zeros_like(omega)
         zeta[n_rb:] = self.ratios(omega.size - n_rb)
-        Mf = matrices.M[np.ix_(free, free)]
+        Mf = free_block(matrices.M, matrices.fixed)
         mp = Mf @ phi
         Cf = (mp * (2.0 * zeta * omega)) @ mp.T
         C = matrices.C.copy()

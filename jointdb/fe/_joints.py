@@ -289,13 +289,20 @@ class Insertion(Ingredient):
             kp = k_per.get(d, 0.0)
             if kp <= 0 or t not in mesh.directions:
                 continue
-            for ia, ib, ha, hb, h in mesh.contact_elements(self):
-                kf = _foundation(kp, h, sign)
-                inner = [mesh.dof(ia, t), mesh.dof(ia, r), mesh.dof(ib, t), mesh.dof(ib, r)]
-                host = [mesh.dof(ha, t), mesh.dof(ha, r), mesh.dof(hb, t), mesh.dof(hb, r)]
-                for rows, cols, s in ((inner, inner, 1.0), (host, host, 1.0), (inner, host, -1.0),
-                                      (host, inner, -1.0)):
-                    Kc[np.ix_(rows, cols)] += s * kf
+            elems = mesh.contact_elements(self)
+            if not elems:
+                continue
+            h = np.array([e[4] for e in elems])
+            kf = _foundation(kp, h, sign)                               # (n_el, 4, 4)
+            dof = mesh.dof_table[:, [mesh.directions.index(t), mesh.directions.index(r)]]
+            ends = np.array([e[:4] for e in elems], dtype=int)
+            inner = dof[ends[:, :2]].reshape(-1, 4)                     # (w_a, θ_a, w_b, θ_b) of each element
+            host = dof[ends[:, 2:4]].reshape(-1, 4)
+            # the four blocks of every element in the order a loop over elements would add them
+            rows = np.stack([inner, host, inner, host], axis=1)         # (n_el, 4 blocks, 4)
+            cols = np.stack([inner, host, host, inner], axis=1)
+            vals = kf[:, None] * np.array([1.0, 1.0, -1.0, -1.0])[None, :, None, None]
+            np.add.at(Kc, (rows[:, :, :, None], cols[:, :, None, :]), vals)
         # other directions (rotations, axial, torsion): springs lumped at the nodes
         for inner, host, trib in mesh.contact_pairs(self):
             for d, kp in k_per.items():
@@ -307,15 +314,19 @@ class Insertion(Ingredient):
         return dataclasses.replace(matrices, K=matrices.K + Kc, K_loss=L)
 
 
-def _foundation(k_per_length: float, h: float, sign: float = 1.0) -> np.ndarray:
+def _foundation(k_per_length: float, h, sign: float = 1.0) -> np.ndarray:
     """Consistent Winkler-foundation matrix ``∫ k' NᵀN dz`` of a cubic Hermite element ``(w1, θ1, w2, θ2)``.
 
+    ``h``: element length [m], a number (``(4, 4)`` result) or an array ``(n,)`` (``(n, 4, 4)``);
     ``sign = −1`` for a plane whose rotation is ``−dw/dz`` (the y–z plane of a 3-D frame).
     """
-    m = np.array([[156, 22 * h, 54, -13 * h],
-                  [22 * h, 4 * h * h, 13 * h, -3 * h * h],
-                  [54, 13 * h, 156, -22 * h],
-                  [-13 * h, -3 * h * h, -22 * h, 4 * h * h]]) * (k_per_length * h / 420.0)
+    h = np.asarray(h, dtype=float)
+    c156, c54 = np.full_like(h, 156.0), np.full_like(h, 54.0)
+    m = np.stack([np.stack(row, axis=-1) for row in (
+        [c156, 22 * h, c54, -13 * h],
+        [22 * h, 4 * h * h, 13 * h, -3 * h * h],
+        [c54, 13 * h, c156, -22 * h],
+        [-13 * h, -3 * h * h, -22 * h, 4 * h * h])], axis=-2) * (k_per_length * h / 420.0)[..., None, None]
     s = np.array([1.0, sign, 1.0, sign])
     return m * np.outer(s, s)
 

@@ -2,8 +2,11 @@
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import math
+import threading
+from collections import OrderedDict
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
@@ -13,7 +16,7 @@ from jointdb.errors import InputError
 from jointdb.fe._elements import bar_matrices, bending_matrices, section_properties, shear_coefficient
 from jointdb.fe._fields import FieldError, _number
 from jointdb.fe._ingredients import Ingredient
-from jointdb.fe._joints import interface_mesh
+from jointdb.fe._joints import Insertion, Joint, interface_mesh
 from jointdb.fe._matrices import FEMatrices, Modes
 from jointdb.fe._mesh import Mesh, _merge_tol
 from jointdb.fe._segments import Segment
@@ -24,6 +27,18 @@ __all__ = ["Segment", "NamedPoint", "Mesh", "FEMatrices", "Modes", "BeamModel", 
 
 THEORIES = ("timoshenko", "euler-bernoulli")
 KINDS = ("planar", "frame3d")
+
+#: Meshes shared between models of the same geometry (a fit makes one model per evaluation that differs
+#: from the last only in a stiffness, a mass or a damping): at most this many, least recently used dropped.
+MESH_CACHE_SIZE = 64
+#: Bare beam matrices (K, M) remembered per shared mesh, sections and theory: at most this many pairs and
+#: this many bytes in all (a server runs several diagnoses at once), least recently used dropped.
+BARE_CACHE_SIZE = 32
+BARE_CACHE_BYTES = 32 * 2**20
+_MESH_CACHE: OrderedDict = OrderedDict()
+_BARE_CACHE: OrderedDict = OrderedDict()
+_BARE_BYTES = [0]
+_MESH_LOCK = threading.Lock()
 
 
 @dataclass(frozen=True)
@@ -250,7 +265,11 @@ class BeamModel:
         """Nodes at segment ends, point and ingredient positions, refined to ``max_element_length``;
         then the interfaces: splits for joints, extra nodes for inserted parts (see :mod:`jointdb.fe._joints`).
 
-        Computed once per model (a model is immutable; :meth:`replace` makes a new one).
+        Computed once per model (a model is immutable; :meth:`replace` makes a new one), and shared by
+        models of the same geometry (segment lengths, element length, kind, every position, the interfaces'
+        kinds, places and free directions): a fit's models, which differ in a stiffness, a mass or a
+        damping, reuse one set of nodes, elements, DOF numbering, labels and bare beam matrices; the
+        entries that name interfaces name this model's own ingredients.
 
         Returns
         -------
@@ -258,9 +277,56 @@ class BeamModel:
         """
         cached = self.__dict__.get("_mesh")
         if cached is None:
-            cached = self._make_mesh()
+            key = self._mesh_key()
+            with _MESH_LOCK:
+                base = _MESH_CACHE.get(key) if key is not None else None
+                if base is not None:
+                    _MESH_CACHE.move_to_end(key)
+            if base is None:
+                cached = self._make_mesh()
+                cached.__dict__["_bare"] = object()          # names the bare matrices of every model bound to it
+                cached.dof_labels()                            # computed once, shared likewise
+                if key is not None:
+                    with _MESH_LOCK:
+                        _MESH_CACHE[key] = cached
+                        while len(_MESH_CACHE) > MESH_CACHE_SIZE:
+                            _MESH_CACHE.popitem(last=False)
+            else:
+                cached = self._bind(base)
             self.__dict__["_mesh"] = cached
         return cached
+
+    def _mesh_key(self) -> "tuple | None":
+        """Everything :meth:`_make_mesh` reads but the identities of the ingredients and the sections'
+        materials and diameters (None: an interface of a kind this does not know; not shared)."""
+        extra = [p.position for p in self.points]
+        topo = []
+        for ing in self.ingredients:
+            extra.extend(ing.positions())
+            if not getattr(ing, "splits", False):
+                continue
+            if type(ing) is Joint:
+                topo.append(("joint", ing.split_position(), tuple(sorted(ing.free_directions()))))
+            elif type(ing) is Insertion:
+                topo.append(("insertion", ing.start, ing.end, ing.joined_at, ing.rigid))
+            else:
+                return None
+        return (tuple(s.length for s in self.segments), self.max_element_length, self.kind,
+                tuple(sorted(extra)), tuple(topo))
+
+    def _bind(self, base: Mesh) -> Mesh:
+        """``base`` (the mesh of a model of the same geometry) for this model: the same nodes, elements and
+        DOFs, with this model's sections and its interfaces in the entries that name them."""
+        topo = [i for i in self.ingredients if getattr(i, "splits", False)]
+        split = iter([i for i in topo if i.split_position() is not None])
+        contact = iter([i for i in topo if isinstance(i, Insertion) and not i.rigid])
+        splits = tuple((next(split), *rest) for _, *rest in base.splits)
+        contacts = tuple((next(contact), *rest) for _, *rest in base.contacts)
+        sections = self.segments + tuple(i.section for i in topo if isinstance(i, Insertion))
+        mesh = copy.copy(base)                  # shares the arrays, the DOF labels and the bare matrices
+        for name, value in (("splits", splits), ("contacts", contacts), ("sections", sections)):
+            object.__setattr__(mesh, name, value)
+        return mesh
 
     def _make_mesh(self) -> Mesh:
         ends = np.concatenate([[0.0], np.cumsum([s.length for s in self.segments])])
@@ -289,7 +355,26 @@ class BeamModel:
         return interface_mesh(self, nodes, seg, tol, topo)
 
     def _bare(self, mesh: Mesh) -> tuple[np.ndarray, np.ndarray]:
+        """Bare beam ``(K, M)`` of ``mesh``, remembered with the mesh (callers get copies to change)."""
         segs = mesh.sections or self.segments
+        token = mesh.__dict__.get("_bare")
+        if token is None:
+            return self._bare_matrices(mesh, segs)
+        key = (id(token), self.theory, segs)
+        with _MESH_LOCK:
+            hit = _BARE_CACHE.get(key)
+            if hit is not None and hit[0] is token:
+                _BARE_CACHE.move_to_end(key)
+                return hit[1].copy(), hit[2].copy()
+        K, M = self._bare_matrices(mesh, segs)
+        with _MESH_LOCK:
+            _BARE_CACHE[key] = (token, K.copy(), M.copy())    # the token is kept: its id is not reused
+            _BARE_BYTES[0] += 2 * K.nbytes
+            while len(_BARE_CACHE) > 1 and (len(_BARE_CACHE) > BARE_CACHE_SIZE or _BARE_BYTES[0] > BARE_CACHE_BYTES):
+                _BARE_BYTES[0] -= 2 * _BARE_CACHE.popitem(last=False)[1][1].nbytes
+        return K, M
+
+    def _bare_matrices(self, mesh: Mesh, segs: tuple) -> tuple[np.ndarray, np.ndarray]:
         seg = mesh.element_section
         mats = [s.mat for s in segs]
         E = np.array([m.E for m in mats])[seg]

@@ -6,6 +6,9 @@ Harmonic convention ``x = X e^{iωt}`` (docs/theory.md §0): the dynamic stiffne
 
 from __future__ import annotations
 
+import threading
+from collections import OrderedDict
+
 import numpy as np
 
 from jointdb.errors import InputError, NumericalError
@@ -20,10 +23,37 @@ CHUNK_BYTES = 64 * 2**20
 AUTO_LU_WORK = 2e9
 
 
-def _rigid_vectors(matrices) -> np.ndarray:
-    """Rigid-body motions of the whole mesh, shape ``(n_dof, r)``."""
-    labels = matrices.dof_labels
-    z = matrices.node_positions[[d.node for d in labels]]
+#: Rigid-body motions remembered per mesh (its DOF labels and node positions, by identity: a fit's
+#: models share one mesh), at most this many.
+RIGID_CACHE_SIZE = 64
+_RIGID_CACHE: OrderedDict = OrderedDict()
+_RIGID_LOCK = threading.Lock()
+
+
+def _rigid_vectors(matrices, scaled: bool = False) -> np.ndarray:
+    """Rigid-body motions of the whole mesh, shape ``(n_dof, r)`` (read-only; shared by the models of a mesh);
+    ``scaled``: each divided by its largest entry."""
+    labels, z_nodes = matrices.dof_labels, matrices.node_positions
+    key = (id(labels), id(z_nodes))
+    with _RIGID_LOCK:
+        hit = _RIGID_CACHE.get(key)
+        if hit is not None and hit[0] is labels and hit[1] is z_nodes:
+            _RIGID_CACHE.move_to_end(key)
+            return hit[3] if scaled else hit[2]
+    R = _rigid_motions(labels, z_nodes)
+    scale = np.abs(R).max(axis=0)
+    Rs = R / np.where(scale > 0, scale, 1.0)
+    R.flags.writeable = Rs.flags.writeable = False
+    with _RIGID_LOCK:
+        _RIGID_CACHE[key] = (labels, z_nodes, R, Rs)     # the objects are kept: their ids are not reused
+        while len(_RIGID_CACHE) > RIGID_CACHE_SIZE:
+            _RIGID_CACHE.popitem(last=False)
+    return Rs if scaled else R
+
+
+def _rigid_motions(labels, node_positions) -> np.ndarray:
+    """Rigid-body motions of the DOFs ``labels`` of nodes at ``node_positions``, ``(n_dof, r)``."""
+    z = node_positions[[d.node for d in labels]]
     dirs = np.array([d.direction for d in labels])
     cols = []
     if set(dirs) <= {"x", "ry"}:
@@ -37,22 +67,36 @@ def _rigid_vectors(matrices) -> np.ndarray:
     return np.stack(cols, axis=1)
 
 
+def free_block(a: np.ndarray, fixed: np.ndarray) -> np.ndarray:
+    """``a[np.ix_(free, free)]`` over the free DOFs (``free = ~fixed``), by two ``take`` s (the same
+    values, a few times cheaper than the 2-D fancy index for these sizes).
+
+    Parameters
+    ----------
+    a
+        A matrix over all DOFs, ``(n_dof, n_dof)``.
+    fixed
+        Boolean mask of the fixed DOFs, ``(n_dof,)``.
+
+    Returns
+    -------
+    ndarray, ``(n_free, n_free)``
+    """
+    idx = np.flatnonzero(~fixed)
+    return a.take(idx, axis=0).take(idx, axis=1)
+
+
 def _rigid_null_space(matrices) -> np.ndarray:
     """Combinations of rigid motions that strain nothing and move no fixed DOF, ``(n_dof, n_rb)``."""
-    R = _rigid_vectors(matrices)
-    scale = np.abs(R).max(axis=0)
-    R = R / np.where(scale > 0, scale, 1.0)
-    _, s, vt = np.linalg.svd(_rigid_system(matrices, R, scaled=True), full_matrices=True)
+    R = _rigid_vectors(matrices, scaled=True)
+    _, s, vt = np.linalg.svd(_rigid_system(matrices, R), full_matrices=True)
     s = np.concatenate([s, np.zeros(R.shape[1] - s.size)])
     null = vt[s <= 1e-9 * max(1.0, s.max(initial=0.0))]
     return R @ null.T
 
 
-def _rigid_system(matrices, R: np.ndarray, scaled: bool = False) -> np.ndarray:
-    """``[K R / max|K|; R_fixed]`` with each rigid motion scaled to max 1 (``scaled``: R already is)."""
-    if not scaled:
-        scale = np.abs(R).max(axis=0)
-        R = R / np.where(scale > 0, scale, 1.0)
+def _rigid_system(matrices, R: np.ndarray) -> np.ndarray:
+    """``[K R / max|K|; R_fixed]``; ``R``: the rigid motions, each scaled to max 1."""
     kscale = float(np.abs(matrices.K).max()) or 1.0
     return np.vstack([matrices.K @ R / kscale, R[matrices.fixed]])
 
@@ -73,8 +117,8 @@ def rigid_body_count(matrices) -> int:
     -------
     int
     """
-    R = _rigid_vectors(matrices)
-    s = np.linalg.svd(_rigid_system(matrices, R), compute_uv=False)   # the singular values are all it needs
+    R = _rigid_vectors(matrices, scaled=True)
+    s = np.linalg.svd(_rigid_system(matrices, R), compute_uv=False)   # the values are all it needs
     s = np.concatenate([s, np.zeros(R.shape[1] - s.size)])
     return int(np.count_nonzero(s <= 1e-9 * max(1.0, s.max(initial=0.0))))
 
@@ -84,7 +128,7 @@ def rigid_body_modes(matrices) -> np.ndarray:
     phi = _rigid_null_space(matrices)[~matrices.fixed]
     if phi.shape[1] == 0:
         return phi
-    Mf = matrices.M[np.ix_(~matrices.fixed, ~matrices.fixed)]
+    Mf = free_block(matrices.M, matrices.fixed)
     chol = np.linalg.cholesky(phi.T @ Mf @ phi)
     return np.linalg.solve(chol, phi.T).T
 
@@ -108,9 +152,8 @@ def eigen_free(matrices, n: int | None, max_value: float | None = None, vectors:
     if (vectors and cached is not None and n is None and max_value is None and cached[0] is matrices.K
             and cached[1] is matrices.M and cached[2] is matrices.fixed):
         return cached[3], cached[4], cached[5]  # the same problem, already solved (modal damping)
-    free = ~matrices.fixed
-    Kf = matrices.K[np.ix_(free, free)]
-    Mf = matrices.M[np.ix_(free, free)]
+    Kf = free_block(matrices.K, matrices.fixed)
+    Mf = free_block(matrices.M, matrices.fixed)
     nf = Kf.shape[0]
     if nf == 0:
         raise InputError("every DOF of the model is fixed; nothing can move")
@@ -276,14 +319,14 @@ def frf_direct(
             return out
         if algorithm == "spectral":
             raise InputError("the spectral algorithm needs classical damping (no dampers in supports); use 'lu'")
-    Kc = (matrices.K + 1j * matrices.K_loss)[np.ix_(free, free)]
-    Mf = matrices.M[np.ix_(free, free)]
-    Cf = matrices.C[np.ix_(free, free)]
+    Kc = free_block(matrices.K, matrices.fixed) + 1j * free_block(matrices.K_loss, matrices.fixed)
+    Mf = free_block(matrices.M, matrices.fixed)
+    Cf = free_block(matrices.C, matrices.fixed)
     rhs = np.zeros((nf, int(ok.sum())), dtype=complex)
     rhs[pos[ok], np.arange(rhs.shape[1])] = 1.0
     out = np.zeros((f.size, m, m), dtype=complex)
     w = 2.0 * np.pi * f
-    Lf = matrices.K_loss[np.ix_(free, free)]
+    Lf = free_block(matrices.K_loss, matrices.fixed)
     deflation = _rigid_deflation(Kc.real, Mf, Cf, Lf, rigid_body_modes(matrices))
     rigid_rhs = None
     if deflation is not None:
@@ -394,7 +437,7 @@ def _project(a, free, phi) -> np.ndarray:
     """``φᵀ A φ`` over the free DOFs; a zero matrix (no such damping) costs no product."""
     if not a.any():
         return np.zeros((phi.shape[1], phi.shape[1]))
-    return phi.T @ (a[np.ix_(free, free)] @ phi)
+    return phi.T @ (free_block(a, ~free) @ phi)
 
 
 def _modal_sum(matrices, f, lam, phi, n_rb, pos, ok, coupled: str = "solve"):
@@ -452,9 +495,8 @@ def _modal_sum(matrices, f, lam, phi, n_rb, pos, ok, coupled: str = "solve"):
 
 
 def _static_residual(matrices, lam, phi, n_rb, Lm, pos, ok) -> np.ndarray:
-    free = ~matrices.fixed
-    Kc = (matrices.K + 1j * matrices.K_loss)[np.ix_(free, free)]
-    Mf = matrices.M[np.ix_(free, free)]
+    Kc = free_block(matrices.K, matrices.fixed) + 1j * free_block(matrices.K_loss, matrices.fixed)
+    Mf = free_block(matrices.M, matrices.fixed)
     shift = 1.0
     if n_rb:
         # move the rigid-body modes to ω² = shift, of the order of the elastic ones (conditioning)
