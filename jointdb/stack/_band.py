@@ -291,15 +291,21 @@ def damping_law(planes: np.ndarray, freq: np.ndarray, f_ref: float, beta: np.nda
     return np.linalg.inv(z.real + 1j * z.imag * factor[:, :, None, None])
 
 
+def _both_planes(planes: dict, fn) -> dict:
+    """``fn`` applied to the samples of each bending plane, once when both planes hold the same joint."""
+    x = fn(planes["x"])
+    same = planes["x"] is planes["y"] or np.array_equal(planes["x"], planes["y"])
+    return {"x": x, "y": x if same else fn(planes["y"])}
+
+
 def _law_applied(planes: dict, law, f, n, seed, name) -> dict:
     """The planes of one interface with the damping law ``law = (f_ref, share)`` drawn (β uniform on [0, 1], its own
     stream: the other terms' draws do not change) and applied, the same β in both planes (one joint)."""
     if law is None:
         return planes
+    f_ref, share = law
     beta = np.random.default_rng([seed, 2718, INTERFACE_NAMES.index(name)]).uniform(0.0, 1.0, n)
-    x = damping_law(planes["x"], f, *law[:1], beta, *law[1:])
-    same = planes["x"] is planes["y"] or np.array_equal(planes["x"], planes["y"])
-    return {"x": x, "y": x if same else damping_law(planes["y"], f, *law[:1], beta, *law[1:])}
+    return _both_planes(planes, lambda p: damping_law(p, f, f_ref, beta, share))
 
 
 def _interface_samples(name, spec, resolved, f, n, seed, uncertainties, choice, rng, law=None):
@@ -317,15 +323,13 @@ def _interface_samples(name, spec, resolved, f, n, seed, uncertainties, choice, 
     choice = (choice or {}).get(name)
     if choice is None:
         return planes
-    same = planes["x"] is planes["y"] or np.array_equal(planes["x"], planes["y"])
     state = rng.bit_generator.state
-    out = {"x": choice_perturbed(planes["x"], *choice[:2], rng, *choice[2:])}
-    if same:
-        out["y"] = out["x"]
-    else:
+
+    def perturbed(p):
         rng.bit_generator.state = state  # the same draws in both planes: one joint
-        out["y"] = choice_perturbed(planes["y"], *choice[:2], rng, *choice[2:])
-    return out
+        return choice_perturbed(p, *choice[:2], rng, *choice[2:])
+
+    return _both_planes(planes, perturbed)
 
 
 def tip_band(spec: StackSpec, resolved_joints: Mapping[str, FRF], uncertainties: Mapping[str, Mapping] | None = None,
@@ -377,15 +381,9 @@ def tip_band(spec: StackSpec, resolved_joints: Mapping[str, FRF], uncertainties:
     uncertainties = dict(uncertainties or {})
     choice = {k: v for k, v in (choice or {}).items() if v is not None}
     damping = {k: v for k, v in (damping or {}).items() if v is not None}
-    active = set(uncertainties) | set(choice)
-    if damping:
-        active.add("damping law")
-    if tip_sigma > 0:
-        active.add("prediction path")
-    if spindle_estimate is not None:
-        active.add("spindle")
-    if model_sigma > 0:
-        active.add("substructure model")
+    active = set(uncertainties) | set(choice) | {term for term, on in (
+        ("damping law", bool(damping)), ("prediction path", tip_sigma > 0), ("spindle", spindle_estimate is not None),
+        ("substructure model", model_sigma > 0)) if on}
     if not active:
         raise InputError("no interface joint carries an uncertainty record, a joint-choice error or an unknown "
                          "damping law; nothing to sample")
@@ -424,6 +422,11 @@ def tip_band(spec: StackSpec, resolved_joints: Mapping[str, FRF], uncertainties:
     for sigma in (tip_sigma, model_sigma):
         if sigma > 0:
             full *= np.exp(sigma * rng.standard_normal(n))[:, None, None, None]
+    return _band_of(f, full, active, full if spindle4 is not None else None)
+
+
+def _band_of(f: np.ndarray, full: np.ndarray, active: set, cross) -> TipBand:
+    """The :class:`TipBand` of ``(n, n_freq, 2, 2)`` sampled tip receptances over (1x, 1y)."""
     tips, mags, peaks, peak_hz = {}, {}, {}, {}
     for k, plane in enumerate(("x", "y")):
         tips[plane] = full[:, :, k, k]
@@ -431,5 +434,4 @@ def tip_band(spec: StackSpec, resolved_joints: Mapping[str, FRF], uncertainties:
         mags[plane] = band(mag, QUANTILES)
         peaks[plane] = band(mag.max(axis=1), QUANTILES)
         peak_hz[plane] = band(f[np.argmax(mag, axis=1)], QUANTILES)
-    return TipBand(f, mags, peaks, peak_hz, int(n), tuple(sorted(active)), tips,
-                   full if spindle4 is not None else None)
+    return TipBand(f, mags, peaks, peak_hz, int(full.shape[0]), tuple(sorted(active)), tips, cross)

@@ -52,6 +52,11 @@ def numeric_metrics(data: Any, prefix: str = "") -> dict[str, float]:
     return out
 
 
+def _positive_number(v: Any) -> bool:
+    """Whether ``v`` is a finite number > 0 (not a bool)."""
+    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) and v > 0
+
+
 def _quality_peaks(quality: Any) -> list | None:
     """The non-empty ``peaks`` list of a quality record, else None."""
     peaks = quality.get("peaks") if isinstance(quality, dict) else None
@@ -79,10 +84,8 @@ def identification_peak_error(quality: Any) -> float | None:
     peaks = _quality_peaks(quality)
     if peaks is None:
         return None
-    for p in peaks:
-        r = p.get("amplitude_ratio") if isinstance(p, dict) else None
-        if isinstance(r, bool) or not isinstance(r, (int, float)) or not math.isfinite(r) or r <= 0:
-            return None
+    if not all(isinstance(p, dict) and _positive_number(p.get("amplitude_ratio")) for p in peaks):
+        return None
     from jointdb.campaign._run import peak_model_error
 
     with np.errstate(over="ignore"):
@@ -114,8 +117,7 @@ def identification_peak_hz(quality: Any) -> float | None:
     rows = []
     for p in peaks:
         f, a = (p.get("f_measured_hz"), p.get("amplitude_measured")) if isinstance(p, dict) else (None, None)
-        if not all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) and v > 0
-                   for v in (f, a)):
+        if not (_positive_number(f) and _positive_number(a)):
             return None
         out = str(p.get("entry", "")).split("/")[0]
         translational = out[-1:] in ("x", "y", "z") and out[-2:-1] != "r"  # "1x" yes, "1rx" no
