@@ -112,6 +112,27 @@ def pytest_collection_modifyitems(session, config, items):
     items.sort(key=lambda item: rank.get(item.nodeid.split("::", 1)[0], len(rank)))
 
 
+def _blas_pools() -> dict[str, int]:
+    from threadpoolctl import threadpool_info
+    return {i["filepath"]: i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"}
+
+
+@pytest.fixture(autouse=True, scope="module")
+def _blas_pools_unchanged():
+    """A test module must leave this process's BLAS thread pools as it found them.
+
+    One test once raised them to 2 threads as a side effect; every later test in the same
+    pytest worker then ran its small solves 15-45x slower on a busy 2-core machine, and the
+    suite's time depended on which worker drew that file.
+    """
+    before = _blas_pools()
+    yield
+    after = _blas_pools()
+    changed = {path: (before[path], n) for path, n in after.items() if path in before and before[path] != n}
+    if changed:
+        pytest.fail(f"this module changed the process's BLAS threads (before, after): {changed}")
+
+
 def pytest_runtest_setup(item):
     """A test marked ``real_migrations`` creates its SQLite databases with every Alembic migration."""
     sqlite_template.ENABLED["on"] = item.get_closest_marker("real_migrations") is None

@@ -93,7 +93,9 @@ def apply_thread_policy(threads: int | None, explicit: bool, environ: dict[str, 
         thread variables already in the environment. Otherwise a variable the user
         set is kept.
     environ
-        The environment to change (default ``os.environ``).
+        The environment to change (default ``os.environ``). Only when it is this
+        process's own environment are the already loaded libraries limited too: a
+        mapping built for a child process leaves this process's thread pools alone.
     """
     env = os.environ if environ is None else environ
     if threads is None:
@@ -101,7 +103,7 @@ def apply_thread_policy(threads: int | None, explicit: bool, environ: dict[str, 
     for name in THREAD_VARIABLES:
         if explicit or not env.get(name, "").strip():
             env[name] = str(threads)
-    if "numpy" in sys.modules:  # too late for the variables: limit the loaded libraries instead
+    if env is os.environ and "numpy" in sys.modules:  # too late for the variables: limit the loaded libraries
         try:
             from threadpoolctl import threadpool_limits
         except ImportError:  # pragma: no cover - threadpoolctl is a dependency

@@ -82,6 +82,26 @@ def test_apply_sets_only_unset_variables_unless_explicit():
     assert untouched == {}
 
 
+def _blas_pools() -> set[int]:
+    from threadpoolctl import threadpool_info
+    return {i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"}
+
+
+def test_a_child_environment_leaves_this_process_pools_alone_and_its_own_limits_them(monkeypatch):
+    # A mapping built for a child process once also limited *this* process's BLAS (to 2 threads
+    # here): every test after it in the same pytest worker ran its small solves 15-45x slower.
+    import numpy  # noqa: F401  (the libraries must be loaded for the run-time path)
+    from threadpoolctl import ThreadpoolController
+    with ThreadpoolController().limit(limits=1, user_api="blas"):  # restored on exit, whatever happens
+        apply_thread_policy(2, True, {})
+        assert _blas_pools() == {1}
+        for name in THREAD_VARIABLES:
+            monkeypatch.setenv(name, "1")  # monkeypatch restores the process environment
+        apply_thread_policy(2, True)
+        assert _blas_pools() == {2}
+    assert _blas_pools() == {1}
+
+
 def test_bad_thread_count_is_one_line_exit_2():
     env = {k: v for k, v in os.environ.items() if k not in THREAD_VARIABLES}
     out = subprocess.run([sys.executable, "-m", "jointdb", "--blas-threads", "x", "--version"], env=env,
