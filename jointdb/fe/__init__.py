@@ -109,7 +109,8 @@ from jointdb.fe._joints import Contact, Insertion, Joint
 from jointdb.fe._materials import MATERIALS, Material, get_material
 from jointdb.fe._model import BeamModel, FEMatrices, Mesh, Modes, NamedPoint, Segment
 from jointdb.fe._modelfile import FORMAT, load_model, model_from_dict, model_to_dict
-from jointdb.fe._synthesis import frf_direct, frf_modal, natural_frequencies, natural_modes, rigid_body_count
+from jointdb.fe._rigid import rigid_body_count
+from jointdb.fe._synthesis import frf_direct, frf_modal, natural_frequencies, natural_modes
 
 __all__ = [
     "Material",

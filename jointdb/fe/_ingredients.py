@@ -19,7 +19,8 @@ import numpy as np
 
 from jointdb.errors import InputError
 from jointdb.fe._fields import FieldError, _number
-from jointdb.fe._synthesis import eigen_free, free_block
+from jointdb.fe._matrices import free_block
+from jointdb.fe._synthesis import eigen_free
 
 if TYPE_CHECKING:  # pragma: no cover
     from jointdb.fe._matrices import FEMatrices

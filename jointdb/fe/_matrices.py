@@ -12,7 +12,7 @@ import numpy as np
 
 from jointdb.frf import Dof
 
-__all__ = ["FEMatrices", "Modes"]
+__all__ = ["FEMatrices", "Modes", "free_block"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -81,3 +81,22 @@ class Modes:
     shapes: np.ndarray
     dof_labels: tuple[Dof, ...]
     n_rigid: int = 0
+
+
+def free_block(a: np.ndarray, fixed: np.ndarray) -> np.ndarray:
+    """``a[np.ix_(free, free)]`` over the free DOFs (``free = ~fixed``), by two ``take`` s (the same
+    values, a few times cheaper than the 2-D fancy index for these sizes).
+
+    Parameters
+    ----------
+    a
+        A matrix over all DOFs, ``(n_dof, n_dof)``.
+    fixed
+        Boolean mask of the fixed DOFs, ``(n_dof,)``.
+
+    Returns
+    -------
+    ndarray, ``(n_free, n_free)``
+    """
+    idx = np.flatnonzero(~fixed)
+    return a.take(idx, axis=0).take(idx, axis=1)

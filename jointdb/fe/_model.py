@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from jointdb.errors import InputError
-from jointdb.fe._elements import bar_matrices, bending_matrices, section_properties, shear_coefficient
+from jointdb.fe._bare import remembered_bare_matrices
 from jointdb.fe._fields import FieldError, _number
 from jointdb.fe._ingredients import Ingredient
 from jointdb.fe._joints import Insertion, Joint, interface_mesh
@@ -31,13 +31,7 @@ KINDS = ("planar", "frame3d")
 #: Meshes shared between models of the same geometry (a fit makes one model per evaluation that differs
 #: from the last only in a stiffness, a mass or a damping): at most this many, least recently used dropped.
 MESH_CACHE_SIZE = 64
-#: Bare beam matrices (K, M) remembered per shared mesh, sections and theory: at most this many pairs and
-#: this many bytes in all (a server runs several diagnoses at once), least recently used dropped.
-BARE_CACHE_SIZE = 32
-BARE_CACHE_BYTES = 32 * 2**20
 _MESH_CACHE: OrderedDict = OrderedDict()
-_BARE_CACHE: OrderedDict = OrderedDict()
-_BARE_BYTES = [0]
 _MESH_LOCK = threading.Lock()
 
 
@@ -354,68 +348,6 @@ class BeamModel:
                         sections=self.segments)
         return interface_mesh(self, nodes, seg, tol, topo)
 
-    def _bare(self, mesh: Mesh) -> tuple[np.ndarray, np.ndarray]:
-        """Bare beam ``(K, M)`` of ``mesh``, remembered with the mesh (callers get copies to change)."""
-        segs = mesh.sections or self.segments
-        token = mesh.__dict__.get("_bare")
-        if token is None:
-            return self._bare_matrices(mesh, segs)
-        key = (id(token), self.theory, segs)
-        with _MESH_LOCK:
-            hit = _BARE_CACHE.get(key)
-            if hit is not None and hit[0] is token:
-                _BARE_CACHE.move_to_end(key)
-                return hit[1].copy(), hit[2].copy()
-        K, M = self._bare_matrices(mesh, segs)
-        with _MESH_LOCK:
-            _BARE_CACHE[key] = (token, K.copy(), M.copy())    # the token is kept: its id is not reused
-            _BARE_BYTES[0] += 2 * K.nbytes
-            while len(_BARE_CACHE) > 1 and (len(_BARE_CACHE) > BARE_CACHE_SIZE or _BARE_BYTES[0] > BARE_CACHE_BYTES):
-                _BARE_BYTES[0] -= 2 * _BARE_CACHE.popitem(last=False)[1][1].nbytes
-        return K, M
-
-    def _bare_matrices(self, mesh: Mesh, segs: tuple) -> tuple[np.ndarray, np.ndarray]:
-        seg = mesh.element_section
-        mats = [s.mat for s in segs]
-        E = np.array([m.E for m in mats])[seg]
-        G = np.array([m.G for m in mats])[seg]
-        rho = np.array([m.rho for m in mats])[seg]
-        nu = np.array([m.nu for m in mats])[seg]
-        do = np.array([s.outer_diameter for s in segs])[seg]
-        di = np.array([s.inner_diameter for s in segs])[seg]
-        A, I, J = section_properties(do, di)
-        kappa = shear_coefficient(nu, do, di)
-        en = mesh.element_nodes
-        L = mesh.node_positions[en[:, 1]] - mesh.node_positions[en[:, 0]]
-        timo = self.theory == "timoshenko"
-        kb, mb = bending_matrices(E, G, rho, A, I, kappa, L, shear=timo, rotary_inertia=timo)
-        n = mesh.n_dof
-        K = np.zeros((n, n))
-        M = np.zeros((n, n))
-        gd = np.concatenate([mesh.dof_table[en[:, 0]], mesh.dof_table[en[:, 1]]], axis=1)   # (n_el, 2 n_dir)
-        nd = len(mesh.directions)
-
-        def scatter(local_dofs, ke, me, sign=None):
-            idx = gd[:, local_dofs]
-            if sign is not None:
-                ke = ke * np.outer(sign, sign)
-                me = me * np.outer(sign, sign)
-            ii, jj = idx[:, :, None], idx[:, None, :]
-            np.add.at(K, (ii, jj), ke)
-            np.add.at(M, (ii, jj), me)
-
-        if self.kind == "planar":
-            scatter([0, 1, nd + 0, nd + 1], kb, mb)
-        else:
-            # x-z plane: (x, ry) with ry = +dx/dz; y-z plane: (y, rx) with rx = -dy/dz
-            scatter([0, 4, nd + 0, nd + 4], kb, mb)
-            scatter([1, 3, nd + 1, nd + 3], kb, mb, sign=np.array([1.0, -1.0, 1.0, -1.0]))
-            ka, ma = bar_matrices(E * A, rho * A, L)
-            scatter([2, nd + 2], ka, ma)
-            kt, mt = bar_matrices(G * J, rho * J, L)
-            scatter([5, nd + 5], kt, mt)
-        return K, M
-
     def assemble(self) -> FEMatrices:
         """Assemble the bare beam, then apply every ingredient in stage order.
 
@@ -425,7 +357,7 @@ class BeamModel:
             Matrices over all mesh DOFs, with constrained DOFs marked in ``fixed``.
         """
         mesh = self.mesh()
-        K, M = self._bare(mesh)
+        K, M = remembered_bare_matrices(mesh, mesh.sections or self.segments, self.theory, self.kind)
         n = mesh.n_dof
         mats = FEMatrices(
             K=K, M=M, C=np.zeros((n, n)), K_loss=np.zeros((n, n)),

@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 
 import jointdb.fe._model as fe_model
-import jointdb.fe._synthesis as fe_synthesis
+import jointdb.fe._bare as fe_bare
+import jointdb.fe._rigid as fe_rigid
 from jointdb.fe import BeamModel, Clamp, Contact, Insertion, Joint, NamedPoint, PointMass, Segment, Support
 from jointdb.fe._joints import _foundation
 
@@ -21,9 +22,9 @@ def empty_caches(monkeypatch):
     from collections import OrderedDict
 
     monkeypatch.setattr(fe_model, "_MESH_CACHE", OrderedDict())
-    monkeypatch.setattr(fe_model, "_BARE_CACHE", OrderedDict())
-    monkeypatch.setattr(fe_model, "_BARE_BYTES", [0])
-    monkeypatch.setattr(fe_synthesis, "_RIGID_CACHE", OrderedDict())
+    monkeypatch.setattr(fe_bare, "_BARE_CACHE", OrderedDict())
+    monkeypatch.setattr(fe_bare, "_BARE_BYTES", [0])
+    monkeypatch.setattr(fe_rigid, "_RIGID_CACHE", OrderedDict())
 
 
 def _model(kind="planar", k_joint=3e7, k_contact=5e11, mass=0.05, diameter=0.012):
@@ -39,15 +40,15 @@ def _model(kind="planar", k_joint=3e7, k_contact=5e11, mass=0.05, diameter=0.012
 
 def _fresh(make):
     """What ``make()`` assembles with nothing shared (the caches emptied first, restored after)."""
-    saved = fe_model._MESH_CACHE.copy(), fe_synthesis._RIGID_CACHE.copy()
+    saved = fe_model._MESH_CACHE.copy(), fe_rigid._RIGID_CACHE.copy()
     fe_model._MESH_CACHE.clear()
-    fe_synthesis._RIGID_CACHE.clear()
+    fe_rigid._RIGID_CACHE.clear()
     try:
         model = make()
         return model, model.assemble()
     finally:
         fe_model._MESH_CACHE.update(saved[0])
-        fe_synthesis._RIGID_CACHE.update(saved[1])
+        fe_rigid._RIGID_CACHE.update(saved[1])
 
 
 @pytest.mark.parametrize("kind", ["planar", "frame3d"])
@@ -120,9 +121,9 @@ def test_contact_layer_equals_the_element_by_element_sum():
 
 def test_the_bare_matrices_kept_stay_within_their_byte_budget(empty_caches, monkeypatch):
     n = _model().assemble().K.shape[0]
-    monkeypatch.setattr(fe_model, "BARE_CACHE_BYTES", 3 * 2 * n * n * 8)      # room for three (K, M) pairs
+    monkeypatch.setattr(fe_bare, "BARE_CACHE_BYTES", 3 * 2 * n * n * 8)      # room for three (K, M) pairs
     for d in (0.0110, 0.0111, 0.0112, 0.0113, 0.0114):                        # a diameter fit: new sections
         got = _model(diameter=d).assemble()
         np.testing.assert_array_equal(got.K, _fresh(lambda: _model(diameter=d))[1].K)
-    assert len(fe_model._BARE_CACHE) == 3
-    assert fe_model._BARE_BYTES[0] == sum(2 * v[1].nbytes for v in fe_model._BARE_CACHE.values())
+    assert len(fe_bare._BARE_CACHE) == 3
+    assert fe_bare._BARE_BYTES[0] == sum(2 * v[1].nbytes for v in fe_bare._BARE_CACHE.values())

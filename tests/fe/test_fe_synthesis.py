@@ -362,7 +362,7 @@ def test_natural_frequencies_alone_equal_those_of_natural_modes(ingredients):
     rigid-body modes at 0 Hz included; and the rigid-body count from singular values alone agrees with
     the null space the shapes path builds."""
     from jointdb.fe import natural_frequencies, natural_modes, rigid_body_count
-    from jointdb.fe._synthesis import _rigid_null_space
+    from jointdb.fe._rigid import _rigid_null_space
 
     mats = shaft(ingredients).assemble()
     for n in (1, 4, 9):
