@@ -97,3 +97,21 @@ def test_the_prediction_notes_the_left_out_lines_once(pair):
                      f"ones (th-d10@1 on {int(STRETCH.sum())} of {F.size} lines)",)
     req6 = Conditions(MATS, torque_nm=60.0, geometry={"shank_diameter_m": 0.006})
     assert _passivity_notes(pair.interpolate(pair.nearest("tool-holder", req6, k=2), req6)) == ()
+
+
+def test_the_remote_store_reads_passivity_moved_and_an_older_server_without_it(monkeypatch):
+    """The client keeps what the server's /query/interpolate says (and an older server, without the field, gives ())."""
+    from types import SimpleNamespace
+
+    from jointdb.client import RemoteRepository
+    from jointdb.io._frfjson import frf_json
+
+    body = {"frf": frf_json(_frf(Z6)), "joint_type": "tool-holder", "label": "interpolated",
+            "neighbours": [{"name": "th-d06", "version": 1, "weight": 0.7}, {"name": "th-d10", "version": 1, "weight": 0.3}]}
+    match = SimpleNamespace(version=SimpleNamespace(joint_type="tool-holder"))
+    req = Conditions(MATS, torque_nm=60.0, geometry={"shank_diameter_m": 0.007})
+    with RemoteRepository("http://127.0.0.1:9") as remote:
+        for extra, want in (({"passivity_moved": [{"name": "th-d10", "version": 1, "lines": 12}]}, (("th-d10", 1, 12),)),
+                            ({}, ())):
+            monkeypatch.setattr(remote, "_call", lambda method, path, **kw: {**body, **extra})
+            assert remote.interpolate([match], req).passivity_moved == want
