@@ -1,4 +1,4 @@
-"""Interpolation takes no energy-generating line of a neighbour where another neighbour is passive (issue 22:
+"""Interpolation takes no energy-generating loss of a neighbour where another neighbour is passive (issue 22:
 the short end mills' 9–10 kHz peaks, docs/validation/stack-bands-family-c.md, *High modes*)."""
 
 from __future__ import annotations
@@ -72,7 +72,9 @@ def test_interpolated_joint_is_the_passive_neighbour_on_the_stretch_and_the_mix_
     z = np.linalg.inv(ij.frf.values)
     nominal = (1 - t) * Z6 + t * Z10
     assert np.allclose(z[~STRETCH], nominal[~STRETCH], rtol=1e-9)
-    assert np.allclose(z[STRETCH], Z6[STRETCH], rtol=1e-9)
+    # on the stretch: the storage stiffness of both (barycentric), the loss of the passive Ø6 joint alone
+    assert np.allclose(z[STRETCH].real, nominal[STRETCH].real, rtol=1e-9)
+    assert np.allclose(z[STRETCH].imag, Z6[STRETCH].imag, rtol=1e-9)
     assert np.all(np.diagonal(z, axis1=1, axis2=2).imag > 0)  # passive on every line
     # the plain average would have lost the x loss on the stretch (what the short end mills suffered)
     assert np.min(nominal[STRETCH, 0, 0].imag / Z6[STRETCH, 0, 0].imag) < 0.5
