@@ -95,8 +95,8 @@ def test_the_prediction_notes_the_left_out_lines_once(pair):
 
     req = Conditions(MATS, torque_nm=60.0, geometry={"shank_diameter_m": 0.007})
     notes = _passivity_notes(pair.interpolate(pair.nearest("tool-holder", req, k=2), req))
-    assert notes == (f"note: where a neighbour is non-passive (Im Z < 0) the interpolation uses only the passive "
-                     f"ones (th-d10@1 on {int(STRETCH.sum())} of {F.size} lines)",)
+    assert notes == ("note: where a neighbour is non-passive (Im Z < 0) the interpolation takes its loss from the "
+                     f"passive ones only (th-d10@1 on {int(STRETCH.sum())} of {F.size} lines)",)
     req6 = Conditions(MATS, torque_nm=60.0, geometry={"shank_diameter_m": 0.006})
     assert _passivity_notes(pair.interpolate(pair.nearest("tool-holder", req6, k=2), req6)) == ()
 
@@ -109,11 +109,12 @@ def test_the_remote_store_reads_passivity_moved_and_an_older_server_without_it(m
     from jointdb.io._frfjson import frf_json
 
     body = {"frf": frf_json(_frf(Z6)), "joint_type": "tool-holder", "label": "interpolated",
-            "neighbours": [{"name": "th-d06", "version": 1, "weight": 0.7}, {"name": "th-d10", "version": 1, "weight": 0.3}]}
+            "neighbours": [{"name": "th-d06", "version": 1, "weight": 0.7},
+                           {"name": "th-d10", "version": 1, "weight": 0.3}]}
     match = SimpleNamespace(version=SimpleNamespace(joint_type="tool-holder"))
     req = Conditions(MATS, torque_nm=60.0, geometry={"shank_diameter_m": 0.007})
     with RemoteRepository("http://127.0.0.1:9") as remote:
-        for extra, want in (({"passivity_moved": [{"name": "th-d10", "version": 1, "lines": 12}]}, (("th-d10", 1, 12),)),
-                            ({}, ())):
+        moved = {"passivity_moved": [{"name": "th-d10", "version": 1, "lines": 12}]}
+        for extra, want in ((moved, (("th-d10", 1, 12),)), ({}, ())):
             monkeypatch.setattr(remote, "_call", lambda method, path, **kw: {**body, **extra})
             assert remote.interpolate([match], req).passivity_moved == want
