@@ -208,8 +208,10 @@ def passive_line_weights(weights: np.ndarray, z: np.ndarray, tol: float = PASSIV
     lies at a different frequency for each neighbour. Averaging such a line into the request's joint cancels
     the other neighbours' loss (family C, Ø7 between Ø6 and Ø10 at 10.3 kHz: ``Im Z_xx`` 0.5 % of the
     truth's, tip peak 10× too high: docs/validation/stack-bands-family-c.md, *High modes*). On a line where
-    a neighbour is non-passive its weight *for the loss* goes to the passive neighbours, in proportion to
-    theirs; where every neighbour is non-passive (or all passive) the nominal weights stay. The interpolation
+    the plain average is itself non-passive, a non-passive neighbour's weight *for the loss* goes to the
+    passive neighbours, in proportion to theirs; where the plain average is passive, or every neighbour is
+    non-passive (or all passive), the nominal weights stay: the rule steps in only where the interpolation
+    would otherwise make an energy-generating joint out of a passive one. The interpolation
     (:func:`interpolate`) applies these weights to ``Im Z`` only: a neighbour's storage stiffness ``Re Z``
     stays informative (taking another neighbour's with the loss moved Ø15–Ø19 stacks' 1 kHz peaks by up to
     −35 points where Ø10 and Ø20 joints differ 2× in stiffness).
@@ -232,9 +234,11 @@ def passive_line_weights(weights: np.ndarray, z: np.ndarray, tol: float = PASSIV
     weights = np.asarray(weights, float)
     diag = np.diagonal(z, axis1=2, axis2=3)  # (k, f, n)
     passive = np.all(diag.imag >= -tol * np.abs(diag), axis=2)  # (k, f)
+    mean = np.einsum("k,kfn->fn", weights, diag)  # the plain average's diagonal, (f, n)
+    mean_passive = np.all(mean.imag >= -tol * np.abs(mean), axis=1)  # (f,)
     w = weights[:, None] * passive
     total = w.sum(axis=0)
-    keep = (total > 0) & ~np.all(passive, axis=0)
+    keep = (total > 0) & ~np.all(passive, axis=0) & ~mean_passive
     w_lines = np.where(keep[None, :], w / np.where(total > 0, total, 1.0)[None, :], weights[:, None])
     moved = np.count_nonzero(keep[None, :] & ~passive & (weights[:, None] > 0), axis=1)
     return w_lines, moved

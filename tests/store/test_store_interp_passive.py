@@ -58,6 +58,18 @@ def test_weights_move_off_non_passive_lines_only_where_a_passive_neighbour_exist
     assert np.allclose(w2, np.array([[0.4], [0.6]]), atol=1e-15) and moved2.tolist() == [0, 0]
 
 
+def test_where_the_plain_average_stays_passive_the_nominal_weights_stay():
+    # 0.9 of the passive Ø6 joint outweighs 0.1 of Ø10's wrong-signed loss: the plain average is passive
+    nominal = 0.9 * Z6 + 0.1 * Z10
+    assert np.all(np.diagonal(nominal, axis1=1, axis2=2).imag > 0)
+    w, moved = passive_line_weights(np.array([0.9, 0.1]), np.stack([Z6, Z10]))
+    assert np.allclose(w, np.array([[0.9], [0.1]]), atol=1e-15) and moved.tolist() == [0, 0]
+    # 0.5 / 0.5: the plain average loses energy on the stretch; there the loss is Ø6's alone
+    w, moved = passive_line_weights(np.array([0.5, 0.5]), np.stack([Z6, Z10]))
+    assert np.all(np.diagonal(0.5 * Z6 + 0.5 * Z10, axis1=1, axis2=2).imag[STRETCH].min(axis=1) < 0)
+    assert np.allclose(w[:, STRETCH], np.array([[1.0], [0.0]])) and moved.tolist() == [0, int(STRETCH.sum())]
+
+
 def test_a_zero_weight_neighbour_counts_no_moved_lines():
     w, moved = passive_line_weights(np.array([1.0, 0.0]), np.stack([Z6, Z10]))
     assert np.allclose(w, np.array([[1.0], [0.0]])) and moved.tolist() == [0, 0]
