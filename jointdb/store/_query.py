@@ -46,8 +46,8 @@ The neighbours' receptances are inverted to dynamic stiffness ``Z_i = H_i⁻¹``
 line, batched), averaged ``Z = Σ w_i Z_i`` and inverted back. For spring–damper
 joints ``Z = k + iωc``, so this interpolates stiffness and damping linearly
 (docs/theory.md §1a), which interpolating receptances would not.
-On a line where a neighbour is non-passive (``Im Z_ii < 0``) and another is
-passive, the loss ``Im Z`` is averaged over the passive ones only
+On a line where that average would be non-passive (``Im Z_ii < 0``) and some
+neighbour is passive, the loss ``Im Z`` is averaged over the passive ones only
 (:func:`passive_line_weights`); the storage stiffness ``Re Z`` keeps the
 barycentric weights (docs/stacks.md), and ``InterpolatedJoint.passivity_moved``
 says on how many lines.

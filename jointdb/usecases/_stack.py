@@ -351,8 +351,8 @@ def _passivity_notes(joint) -> tuple[str, ...]:
     if not moved:
         return ()
     each = ", ".join(f"{n}@{v} on {k}" for n, v, k in moved)
-    return ("note: where a neighbour is non-passive (Im Z < 0) the interpolation takes its loss from the passive "
-            f"ones only ({each} of {joint.frf.n_freq} lines)",)
+    return ("note: where the weighted average would be non-passive (Im Z < 0) the interpolation takes the loss "
+            f"from the passive neighbours only ({each} of {joint.frf.n_freq} lines)",)
 
 
 def _queried(name, choice, handle, matches, conditions, texts) -> JointResolution:

@@ -107,8 +107,8 @@ def test_the_prediction_notes_the_left_out_lines_once(pair):
 
     req = Conditions(MATS, torque_nm=60.0, geometry={"shank_diameter_m": 0.007})
     notes = _passivity_notes(pair.interpolate(pair.nearest("tool-holder", req, k=2), req))
-    assert notes == ("note: where a neighbour is non-passive (Im Z < 0) the interpolation takes its loss from the "
-                     f"passive ones only (th-d10@1 on {int(STRETCH.sum())} of {F.size} lines)",)
+    assert notes == ("note: where the weighted average would be non-passive (Im Z < 0) the interpolation takes the "
+                     f"loss from the passive neighbours only (th-d10@1 on {int(STRETCH.sum())} of {F.size} lines)",)
     req6 = Conditions(MATS, torque_nm=60.0, geometry={"shank_diameter_m": 0.006})
     assert _passivity_notes(pair.interpolate(pair.nearest("tool-holder", req6, k=2), req6)) == ()
 
