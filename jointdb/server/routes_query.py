@@ -47,6 +47,7 @@ def interpolate(body: NearestIn, r=Depends(repo), _who=reader) -> dict[str, Any]
     ij = r.interpolate(matches, body.conditions.to_conditions())
     return {"label": ij.label, "description": ij.describe(), "joint_type": ij.joint_type,
             "neighbours": [{"name": n, "version": v, "weight": w} for n, v, w in ij.neighbours],
+            "passivity_moved": [{"name": n, "version": v, "lines": k} for n, v, k in ij.passivity_moved],
             "warnings": notes, "frf": frf_json(ij.frf)}
 
 

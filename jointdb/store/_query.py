@@ -46,6 +46,11 @@ The neighbours' receptances are inverted to dynamic stiffness ``Z_i = H_i⁻¹``
 line, batched), averaged ``Z = Σ w_i Z_i`` and inverted back. For spring–damper
 joints ``Z = k + iωc``, so this interpolates stiffness and damping linearly
 (docs/theory.md §1a), which interpolating receptances would not.
+On a line where that average would be non-passive (``Im Z_ii < 0``) and some
+neighbour is passive, the loss ``Im Z`` is averaged over the passive ones only
+(:func:`passive_line_weights`); the storage stiffness ``Re Z`` keeps the
+barycentric weights (docs/stacks.md), and ``InterpolatedJoint.passivity_moved``
+says on how many lines.
 """
 
 from __future__ import annotations
@@ -189,6 +194,56 @@ def _weights(distances: Sequence[float]) -> np.ndarray:
     return w / w.sum()
 
 
+#: a catalogued line is non-passive where a diagonal dynamic-stiffness term loses energy with the wrong sign,
+#: ``Im Z_ii < −tol·|Z_ii|`` (the identification's passivity test, ``jointdb.coupling.identify_planar``)
+PASSIVITY_TOL = 1e-6
+
+
+def passive_line_weights(weights: np.ndarray, z: np.ndarray, tol: float = PASSIVITY_TOL) -> tuple[np.ndarray, np.ndarray]:
+    """Per-line interpolation weights that take no energy-generating (non-passive) line of a neighbour.
+
+    A real joint dissipates: every diagonal term of its dynamic stiffness has ``Im Z_ii ≥ 0``. A per-line
+    joint can break that on a stretch of lines where the lumped joint cannot represent the campaign's contact
+    (an internal resonance of the clamped zone: its IRC flags those lines ``non_passive``), and the stretch
+    lies at a different frequency for each neighbour. Averaging such a line into the request's joint cancels
+    the other neighbours' loss (family C, Ø7 between Ø6 and Ø10 at 10.3 kHz: ``Im Z_xx`` 0.5 % of the
+    truth's, tip peak 10× too high: docs/validation/stack-bands-family-c.md, *High modes*). On a line where
+    the plain average is itself non-passive, a non-passive neighbour's weight *for the loss* goes to the
+    passive neighbours, in proportion to theirs; where the plain average is passive, or every neighbour is
+    non-passive (or all passive), the nominal weights stay: the rule steps in only where the interpolation
+    would otherwise make an energy-generating joint out of a passive one. The interpolation
+    (:func:`interpolate`) applies these weights to ``Im Z`` only: a neighbour's storage stiffness ``Re Z``
+    stays informative (taking another neighbour's with the loss moved Ø15–Ø19 stacks' 1 kHz peaks by up to
+    −35 points where Ø10 and Ø20 joints differ 2× in stiffness).
+
+    Parameters
+    ----------
+    weights
+        Nominal weights ``(n_neighbours,)``, summing to 1.
+    z
+        The neighbours' dynamic stiffness ``(n_neighbours, n_freq, n, n)``.
+    tol
+        Passivity tolerance (relative to ``|Z_ii|``).
+
+    Returns
+    -------
+    (w_lines, moved)
+        Weights per line ``(n_neighbours, n_freq)`` (each column sums to 1) and, per neighbour, the number of
+        lines whose weight was moved to the others ``(n_neighbours,)``.
+    """
+    weights = np.asarray(weights, float)
+    diag = np.diagonal(z, axis1=2, axis2=3)  # (k, f, n)
+    passive = np.all(diag.imag >= -tol * np.abs(diag), axis=2)  # (k, f)
+    mean = np.einsum("k,kfn->fn", weights, diag)  # the plain average's diagonal, (f, n)
+    mean_passive = np.all(mean.imag >= -tol * np.abs(mean), axis=1)  # (f,)
+    w = weights[:, None] * passive
+    total = w.sum(axis=0)
+    keep = (total > 0) & ~np.all(passive, axis=0) & ~mean_passive
+    w_lines = np.where(keep[None, :], w / np.where(total > 0, total, 1.0)[None, :], weights[:, None])
+    moved = np.count_nonzero(keep[None, :] & ~passive & (weights[:, None] > 0), axis=1)
+    return w_lines, moved
+
+
 def interpolate(
     load_frf: LoadFRF,
     matches: Sequence[Match],
@@ -250,16 +305,21 @@ def interpolate(
     if lo > hi:
         raise InputError("the neighbours' frequency ranges do not overlap; cannot interpolate")
     grid = frfs[0].band(lo, hi).freq
-    z = np.zeros((grid.size, len(first.dofs), len(first.dofs)), dtype=np.complex128)
+    zs = []
     for (weight, m), frf in zip(used, frfs):
         h = frf if (frf.n_freq == grid.size and np.array_equal(frf.freq, grid)) else frf.resample(grid)
         try:
-            z += weight * np.linalg.inv(h.values)
+            zs.append(np.linalg.inv(h.values))
         except np.linalg.LinAlgError:
             raise NumericalError(
                 f"{m.version.name} v{m.version.version}: receptance is singular on some line; "
                 "cannot form its dynamic stiffness"
             ) from None
+    z_all = np.stack(zs)  # (n_used, n_freq, n, n)
+    w_used = np.array([wi for wi, _ in used])
+    w_lines, moved = passive_line_weights(w_used, z_all)
+    # storage (Re Z) with the barycentric weights, loss (Im Z) with the passive-first ones
+    z = np.einsum("k,kfij->fij", w_used, z_all.real) + 1j * np.einsum("kf,kfij->fij", w_lines, z_all.imag)
     try:
         h_int = np.linalg.inv(z)
     except np.linalg.LinAlgError:
@@ -271,4 +331,5 @@ def interpolate(
         joint_type=first.joint_type,
         conditions=as_conditions(conditions) if conditions is not None else Conditions(),
         neighbours=neighbours,
+        passivity_moved=tuple((m.version.name, m.version.version, int(n)) for (_, m), n in zip(used, moved) if n),
     )

@@ -282,7 +282,8 @@ class RemoteRepository(RemoteParts):
         out = self._call("POST", "/query/interpolate", json=body)
         return InterpolatedJoint(frf_from_json(out["frf"]), out["joint_type"], cond,
                                  tuple((n["name"], n["version"], n["weight"]) for n in out["neighbours"]),
-                                 out["label"])
+                                 out["label"], tuple((n["name"], n["version"], n["lines"])
+                                                     for n in out.get("passivity_moved", ())))
 
     # ---------------------------------------------------------------- writes
     def catalogue(self, name, joint_type, frf, conditions, model_kind, provenance=None, quality=None, parent=None,

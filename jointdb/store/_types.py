@@ -337,6 +337,9 @@ class InterpolatedJoint:
         ``(name, version, weight)`` of the neighbours with weight > 0.
     label
         ``"interpolated"``.
+    passivity_moved
+        ``(name, version, n_lines)`` of the neighbours whose weight was given to the others on ``n_lines``
+        lines where they are non-passive (:func:`jointdb.store._query.passive_line_weights`).
     """
 
     frf: FRF
@@ -344,6 +347,7 @@ class InterpolatedJoint:
     conditions: Conditions
     neighbours: tuple[tuple[str, int, float], ...]
     label: str = "interpolated"
+    passivity_moved: tuple[tuple[str, int, int], ...] = ()
 
     def describe(self) -> str:
         """One line naming the neighbours and their weights.

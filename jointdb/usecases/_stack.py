@@ -345,6 +345,16 @@ def _choice_error(handle, pool, conditions, interpolate: bool):
     return choice_error_model(points, nearest.distance, first.dofs, inside=not nearest.extrapolating)
 
 
+def _passivity_notes(joint) -> tuple[str, ...]:
+    """One note naming the neighbours whose non-passive lines the interpolation left out (``passivity_moved``)."""
+    moved = getattr(joint, "passivity_moved", ()) or ()
+    if not moved:
+        return ()
+    each = ", ".join(f"{n}@{v} on {k}" for n, v, k in moved)
+    return ("note: where the weighted average would be non-passive (Im Z < 0) the interpolation takes the loss "
+            f"from the passive neighbours only ({each} of {joint.frf.n_freq} lines)",)
+
+
 def _queried(name, choice, handle, matches, conditions, texts) -> JointResolution:
     """The resolution of a queried interface: nearest or interpolated joint, with the joints used and the
     joint-choice error model."""
@@ -361,6 +371,7 @@ def _queried(name, choice, handle, matches, conditions, texts) -> JointResolutio
         val = _peak_errors([(by_key[(n, v)], w) for n, v, w, _ in used if (n, v) in by_key])
         method = ("edge" if best.extrapolating else
                   "catalogued condition" if len(used) == 1 and used[0][3] <= 1e-12 else "simplex interpolation")
+        common["warnings"] = (*texts, *_passivity_notes(joint))
         return JointResolution(name, "interpolated", joint.frf, best.version.name, best.version.version,
                                float(best.distance), description=joint.describe(), method=method,
                                neighbours=used, **val, **common)

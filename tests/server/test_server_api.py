@@ -80,6 +80,7 @@ def test_nearest_and_interpolate(catalogued):
         ij = c.post("/api/v1/query/interpolate", json={**body, "k": 2}).json()
         assert ij["label"] == "interpolated" and {n["name"] for n in ij["neighbours"]} == {"TH-1", "TH-2"}
         assert abs(sum(n["weight"] for n in ij["neighbours"]) - 1) < 1e-12
+        assert ij["passivity_moved"] == []  # spring-dampers are passive on every line: no weight moved
 
 
 def test_bad_requests_are_4xx_with_one_line(catalogued, tmp_path):

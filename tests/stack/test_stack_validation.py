@@ -45,7 +45,8 @@ def repo(sv, tmp_path_factory):
 def test_unseen_stack_inside_the_range_is_predicted_within_the_goals_and_far_better_than_rigid(sv, repo):
     case = sv.Case("Ø12 blank, 65 mm gauge, 60 N·m, HSK-A63 15 kN", 0.012, 0.065, 0.032, 60.0, "HSK-A63", 15e3)
     row = sv.validate(case, repo)
-    assert not row["extrapolating"] and not row["warnings"]
+    # no warning; notes (e.g. which neighbours' non-passive lines the interpolation left out) are information
+    assert not row["extrapolating"] and not [w for w in row["warnings"] if not w.startswith("note:")]
     # the issue's goals: 3 % / 20 % / 20 %
     assert abs(row["cat_freq_err"]) < 0.03 and abs(row["cat_peak_err"]) < 0.20 and abs(row["cat_floor_err"]) < 0.20
     # rigid joints miss the dominant mode by tens of per cent: the catalogue is several times better
