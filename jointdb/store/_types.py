@@ -338,8 +338,9 @@ class InterpolatedJoint:
     label
         ``"interpolated"``.
     passivity_moved
-        ``(name, version, n_lines)`` of the neighbours whose weight was given to the others on ``n_lines``
-        lines where they are non-passive (:func:`jointdb.store._query.passive_line_weights`).
+        ``(name, version, n_lines)`` of the neighbours whose weight for the loss (Im Z) was given to the
+        passive ones on ``n_lines`` lines where they are non-passive and the weighted average would be too
+        (:func:`jointdb.store._query.passive_line_weights`).
     """
 
     frf: FRF
