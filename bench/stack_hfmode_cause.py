@@ -19,6 +19,7 @@ Prints the load average and the time taken; the lead's quiet-machine numbers go 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import sys
 import tempfile
@@ -36,23 +37,51 @@ import _stack_validation as sv  # noqa: E402
 CASES = {"C02-23": (7302, 22), "C05-07": (7305, 6), "C05-08": (7305, 7), "C05-11": (7305, 10), "C05-21": (7305, 20)}
 
 
-def _nominal(weights, z, tol=0.0):
+def plain_weights(weights, z, tol=0.0):
     """The reference: barycentric weights on every line (no passivity rule)."""
     w = np.asarray(weights, float)
     return np.repeat(w[:, None], z.shape[1], axis=1), np.zeros(w.size, int)
 
 
-def _predict(case, repo, plain: bool):
+def predict_with(case, repo, weights=None):
+    """``predict_stack`` of family-C stack ``case`` with the interpolation's per-line weights from ``weights``
+    (a stand-in for ``jointdb.store._query.passive_line_weights``; None: the product's own)."""
     import jointdb.store._query as q
     from jointdb import usecases
 
     keep = q.passive_line_weights
-    if plain:
-        q.passive_line_weights = _nominal
+    q.passive_line_weights = weights or keep
     try:
         return usecases.predict_stack(tc.spec_for(case, tc.queries(case)), repo, tc.FREQ)
     finally:
         q.passive_line_weights = keep
+
+
+@contextlib.contextmanager
+def family_c_repo(catalogue: Path, say=print):
+    """The family-C catalogue in ``catalogue`` (built there if empty), with the load average and the time taken
+    said before and after."""
+    from jointdb.store import Repository
+
+    t0 = time.time()
+    say(f"load average at start: {', '.join(f'{v:.2f}' for v in os.getloadavg())}")
+    catalogue.mkdir(parents=True, exist_ok=True)
+    db = catalogue / "b.sqlite"
+    fresh = not db.exists()
+    with Repository(f"sqlite:///{db}") as repo:
+        if fresh:
+            tc.build_catalogue(catalogue, repo, say=lambda s: None)
+            say(f"catalogue built in {time.time() - t0:.0f} s")
+        yield repo
+    say(f"{time.time() - t0:.0f} s; load average at the end: {', '.join(f'{v:.2f}' for v in os.getloadavg())}")
+
+
+def command_line(run, doc: str, argv=None) -> None:
+    """``run(catalogue)`` from a command line with one option, ``--catalogue DIR``."""
+    ap = argparse.ArgumentParser(description=doc.splitlines()[0])
+    ap.add_argument("--catalogue", type=Path, required=True,
+                    help="family-C catalogue folder (bench_stack_bands.py --family c --catalogue); built if empty")
+    run(ap.parse_args(argv).catalogue)
 
 
 def _own_conditions(case) -> dict:
@@ -79,18 +108,9 @@ def _z_at(frf, f_hz: float) -> np.ndarray:
 
 def run(catalogue: Path, say=print) -> None:
     from jointdb.stack import predict_tool_tip
-    from jointdb.store import Repository
 
-    t0 = time.time()
-    say(f"load average at start: {', '.join(f'{v:.2f}' for v in os.getloadavg())}")
-    catalogue.mkdir(parents=True, exist_ok=True)
-    db = catalogue / "b.sqlite"
-    fresh = not db.exists()
     f = tc.FREQ
-    with Repository(f"sqlite:///{db}") as repo:
-        if fresh:
-            tc.build_catalogue(catalogue, repo, say=lambda s: None)
-            say(f"catalogue built in {time.time() - t0:.0f} s")
+    with family_c_repo(catalogue, say) as repo:
         say("| stack | truth dominant [Hz] | now: error (at Hz) | plain weights (before): error (at Hz) |")
         say("|---|---|---|---|")
         for key, (seed, i) in CASES.items():
@@ -98,7 +118,7 @@ def run(catalogue: Path, say=print) -> None:
             thz, tpk = sv._dominant(tc.truth_tip(case).values[:, 0, 0], f)
             cells, zs = [], {}
             for plain in (False, True):
-                res = _predict(case, repo, plain)
+                res = predict_with(case, repo, plain_weights if plain else None)
                 phz, ppk = sv._dominant(res.prediction.tip.values[:, 0, 0], f)
                 cells.append(f"{ppk / tpk - 1:+.1%} ({phz:.0f})")
                 zs["plain weights" if plain else "now"] = _z_at(res.joints["tool-holder"].frf, thz)
@@ -112,14 +132,10 @@ def run(catalogue: Path, say=print) -> None:
                 for label, z in zs.items():
                     say(f"  Z_xx at {thz:.0f} Hz, {label}: {z[0, 0]:.3e} N/m; own-conditions joint {zo[0, 0]:.3e} "
                         f"(Im ratio {z[0, 0].imag / zo[0, 0].imag:+.3f}, Re ratio {z[0, 0].real / zo[0, 0].real:+.3f})")
-    say(f"{time.time() - t0:.0f} s; load average at the end: {', '.join(f'{v:.2f}' for v in os.getloadavg())}")
 
 
 def main(argv=None) -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--catalogue", type=Path, required=True,
-                    help="family-C catalogue folder (bench_stack_bands.py --family c --catalogue); built if empty")
-    run(ap.parse_args(argv).catalogue)
+    command_line(run, __doc__, argv)
 
 
 if __name__ == "__main__":
