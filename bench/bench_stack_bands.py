@@ -10,6 +10,8 @@ joint choice), and compares the band with the truth's dominant peak |H| and lobe
     python bench/bench_stack_bands.py --merge /tmp/72*.json --report docs/validation/stack-prediction.md
     # a quick look (≈ 3 min on a quiet machine, catalogue included):
     python bench/bench_stack_bands.py --n 3 --seeds 7205
+    # campaigns measured at 0.75 % noise instead of 0.2 % (the level of the issue's own trial; keep its own catalogue):
+    python bench/bench_stack_bands.py --family c --noise 0.0075 --catalogue /tmp/c075 --seeds 7301 --rows-out /tmp/n.json
     # the spindle estimated from each stack's noisy extension-bar taps (issue 22 item 1):
     python bench/bench_stack_bands.py --catalogue /tmp/b --seeds 7207 --spindle-estimate --rows-out /tmp/7207s.json
 
@@ -156,7 +158,14 @@ def main(argv=None) -> None:
                     help="truth family: b (bench/_stack_truth_b.py) or c (bench/_stack_truth_c.py: never used to "
                          "tune the band; its reported seeds only: rows with --rows-out, page by "
                          "bench/bench_stack_bands_c.py)")
+    ap.add_argument("--noise", type=float, default=None,
+                    help=f"relative measurement noise of the campaigns' taps (default {sv.NOISE}); a catalogue folder "
+                         "built at one level must not be reused at another")
     args = ap.parse_args(argv)
+    if args.noise is not None:
+        if not 0.0 <= args.noise < 0.2:
+            ap.error(f"--noise {args.noise}: give a relative level in [0, 0.2), e.g. 0.0075")
+        sv.NOISE = args.noise  # read by _stack_validation._noisy at each call
     if args.family == "c":
         import _stack_truth_c as tb
         if args.report is not None:
