@@ -52,8 +52,13 @@ def hs_conditions(fam, case: sv.Case) -> dict:
 
 
 def th_conditions(fam, case: sv.Case) -> dict:
+    """A tool–holder campaign's (or query's) conditions; with ``fam.RECORD_INSERTION`` set (bench option
+    ``--record-insertion``) the insertion depth too, as ``geometry.insertion_m``."""
+    geometry = {"shank_diameter_m": case.diameter, "taper_diameter_m": fam.TAPER[0]}
+    if getattr(fam, "RECORD_INSERTION", False):
+        geometry["insertion_m"] = case.insertion
     return {"materials": ["tungsten-carbide", "steel"], "torque_nm": case.torque, "preload_n": case.drawbar,
-            "geometry": {"shank_diameter_m": case.diameter, "taper_diameter_m": fam.TAPER[0]}}
+            "geometry": geometry}
 
 
 def queries(fam, case: sv.Case) -> dict:

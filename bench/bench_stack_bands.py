@@ -12,6 +12,8 @@ joint choice), and compares the band with the truth's dominant peak |H| and lobe
     python bench/bench_stack_bands.py --n 3 --seeds 7205
     # campaigns measured at 0.75 % noise instead of 0.2 % (the level of the issue's own trial; keep its own catalogue):
     python bench/bench_stack_bands.py --family c --noise 0.0075 --catalogue /tmp/c075 --seeds 7301 --rows-out /tmp/n.json
+    # tool-holder campaigns that record their insertion depth (the shank each joint carries; own catalogue folder):
+    python bench/bench_stack_bands.py --family c --record-insertion --catalogue /tmp/cins --seeds 7301 --rows-out /tmp/i.json
     # the spindle estimated from each stack's noisy extension-bar taps (issue 22 item 1):
     python bench/bench_stack_bands.py --catalogue /tmp/b --seeds 7207 --spindle-estimate --rows-out /tmp/7207s.json
 
@@ -161,6 +163,9 @@ def main(argv=None) -> None:
     ap.add_argument("--noise", type=float, default=None,
                     help=f"relative measurement noise of the campaigns' taps (default {sv.NOISE}); a catalogue folder "
                          "built at one level must not be reused at another")
+    ap.add_argument("--record-insertion", action="store_true",
+                    help="the tool-holder campaigns record their insertion depth (geometry.insertion_m), so the "
+                         "prediction knows each catalogued joint's shank; keep such a catalogue in its own folder")
     args = ap.parse_args(argv)
     if args.noise is not None:
         if not 0.0 <= args.noise < 0.2:
@@ -170,6 +175,10 @@ def main(argv=None) -> None:
         import _stack_truth_c as tb
         if args.report is not None:
             ap.error("--report rewrites family B's section of stack-prediction.md; for family C use --rows-out")
+    if args.record_insertion:
+        if args.report is not None:
+            ap.error("--record-insertion is a check beside the report; use --rows-out")
+        tb.RECORD_INSERTION = True
     seeds = tb.TUNING_SEEDS if args.tuning else tb.REPORT_SEEDS
     seeds = args.seeds or seeds
     if args.merge:

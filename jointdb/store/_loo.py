@@ -48,6 +48,10 @@ from jointdb.frf import FRF
 from jointdb.store._candidates import _NULL, Candidates
 from jointdb.store._types import Conditions, JointVersion, Match
 
+#: Conditions → the ``(2, 2)`` inserted-shank mass matrix of a tool–holder joint over (x, ry), or None when the
+#: conditions do not give it (:class:`jointdb.usecases._stack_shank.ShankInertia`).
+Inertia = Callable[[Conditions], "np.ndarray | None"]
+
 __all__ = ["LooPoint", "ChoiceErrorModel", "leave_one_out", "leave_line_out", "request_gaps", "line_error_model",
            "choice_error_model", "pool_distances"]
 
@@ -229,7 +233,7 @@ def _capped(rel: np.ndarray) -> np.ndarray:
 
 
 def leave_one_out(load_frf: Callable[[JointVersion], FRF], pool: Sequence[Match], request: Conditions,
-                  method: str = "axes") -> list[LooPoint]:
+                  method: str = "axes", inertia: Inertia | None = None) -> list[LooPoint]:
     """Predict every joint of ``pool`` from the others (module docstring).
 
     Parameters
@@ -243,6 +247,10 @@ def leave_one_out(load_frf: Callable[[JointVersion], FRF], pool: Sequence[Match]
     method
         ``"axes"`` (interpolation between the bracketing joints, as ``interpolate: true``) or
         ``"nearest"`` (the nearest other joint, as a query without interpolation).
+    inertia
+        Conditions → the ``(2, 2)`` inserted-shank mass matrix of a tool–holder joint (or None): each prediction
+        exchanges the mixed joints' shank inertia for the left-out joint's, as a stack's prediction does
+        (:func:`jointdb.stack._shank.move_shank_inertia`). None: no exchange.
 
     Returns
     -------
@@ -256,10 +264,24 @@ def leave_one_out(load_frf: Callable[[JointVersion], FRF], pool: Sequence[Match]
     load = _cached(load_frf)
     out = []
     for j, (m, cond) in enumerate(usable):
-        p = _predicted(load, m, cond, [u[0] for i, u in enumerate(usable) if i != j], method)
+        p = _predicted(load, m, cond, [u[0] for i, u in enumerate(usable) if i != j], method, inertia=inertia)
         if p is not None:
             out.append(p)
     return out
+
+
+def _shank_moved(frf: FRF, mixed: Sequence[tuple[float, JointVersion]], own: JointVersion, inertia: Inertia) -> FRF:
+    """``frf`` mixed from ``mixed`` with their shanks' inertia exchanged for ``own``'s (unchanged when a shank is
+    unknown or the joint is not over x and ry)."""
+    from jointdb.stack._shank import move_shank_inertia, planar_x_ry
+
+    if not planar_x_ry(frf):
+        return frf
+    masses = [inertia(v.conditions) for _, v in mixed]
+    target = inertia(own.conditions)
+    if target is None or any(mi is None for mi in masses):
+        return frf
+    return move_shank_inertia(frf, [(w, mi) for (w, _), mi in zip(mixed, masses)], target)
 
 
 def _cached(load_frf: Callable[[JointVersion], FRF]) -> Callable[[JointVersion], FRF]:
@@ -275,14 +297,21 @@ def _cached(load_frf: Callable[[JointVersion], FRF]) -> Callable[[JointVersion],
 
 
 def _predicted(load, m: Match, cond: Conditions, others: Sequence[Match], method: str = "axes",
-               axis: str = "", gap: float = 0.0) -> LooPoint | None:
+               axis: str = "", gap: float = 0.0, inertia: Inertia | None = None) -> LooPoint | None:
     """``m``'s joint predicted from ``others`` at its conditions ``cond``; None when they cannot be mixed."""
     from jointdb.store._query import interpolate
 
     ranked = pool_distances(others, cond)
     ranked.sort(key=lambda x: x.distance)
     try:
-        frf_hat = load(ranked[0].version) if method == "nearest" else interpolate(load, ranked, cond).frf
+        if method == "nearest":
+            frf_hat, mixed = load(ranked[0].version), [(1.0, ranked[0].version)]
+        else:
+            joint = interpolate(load, ranked, cond)
+            by_key = {(r.version.name, r.version.version): r.version for r in ranked}
+            frf_hat, mixed = joint.frf, [(w, by_key[(n, v)]) for n, v, w in joint.neighbours]
+        if inertia is not None:
+            frf_hat = _shank_moved(frf_hat, mixed, m.version, inertia)
         own = load(m.version)
         lo, hi = max(own.freq[0], frf_hat.freq[0]), min(own.freq[-1], frf_hat.freq[-1])
         if lo >= hi:
@@ -348,7 +377,7 @@ def request_gaps(pool: Sequence[Match], request: Conditions) -> dict[str, float]
 
 
 def leave_line_out(load_frf: Callable[[JointVersion], FRF], pool: Sequence[Match],
-                   request: Conditions) -> list[LooPoint]:
+                   request: Conditions, inertia: Inertia | None = None) -> list[LooPoint]:
     """Leave out whole condition lines and interpolate them across the gap (how a request between lines is served).
 
     For each numeric axis the request names and each *interior* catalogued line on it (a diameter, a torque with
@@ -366,6 +395,8 @@ def leave_line_out(load_frf: Callable[[JointVersion], FRF], pool: Sequence[Match
         Candidates of one joint type, model kind and DOFs.
     request
         The request whose axes define the lines.
+    inertia
+        As :func:`leave_one_out`.
 
     Returns
     -------
@@ -395,14 +426,15 @@ def leave_line_out(load_frf: Callable[[JointVersion], FRF], pool: Sequence[Match
             if len(off) < 1:
                 continue
             for i in on:
-                p = _predicted(load, usable[i][0], usable[i][1], off, "axes", axis, gap)
+                p = _predicted(load, usable[i][0], usable[i][1], off, "axes", axis, gap, inertia)
                 if p is not None:
                     out.append(p)
     return out
 
 
 def line_error_model(load_frf: Callable[[JointVersion], FRF], pool: Sequence[Match], request: Conditions,
-                     distance: float, dofs: Sequence[str], inside: bool = True) -> ChoiceErrorModel | None:
+                     distance: float, dofs: Sequence[str], inside: bool = True,
+                     inertia: Inertia | None = None) -> ChoiceErrorModel | None:
     """The joint-choice error of an interpolated request: whole lines left out (:func:`leave_line_out`), scaled by
     the request's gaps (:func:`request_gaps`).
 
@@ -421,17 +453,19 @@ def line_error_model(load_frf: Callable[[JointVersion], FRF], pool: Sequence[Mat
         The joint's DOF labels.
     inside
         Whether the request lies inside the catalogued range.
+    inertia
+        As :func:`leave_one_out`.
 
     Returns
     -------
     ChoiceErrorModel or None
     """
-    lines = leave_line_out(load_frf, pool, request)
+    lines = leave_line_out(load_frf, pool, request, inertia)
     gaps = request_gaps(pool, request)
     coords = [_axis_values(c, request) for m in pool if (c := _restricted(m.version, request)) is not None]
     here = _axis_values(request, request)
     unvaried = [a for a, r in here.items() if (v := _lines(coords, a)).size == 1 and abs(v[0] - r) > 1e-6]
-    single = leave_one_out(load_frf, pool, request) if (unvaried or not lines) else []
+    single = leave_one_out(load_frf, pool, request, inertia=inertia) if (unvaried or not lines) else []
     base = choice_error_model(single, distance, dofs, inside) if single else None
     if not lines:
         return base

@@ -14,6 +14,7 @@ from jointdb.errors import NotFoundError
 from jointdb.frf import FRF
 from jointdb.stack import INTERFACE_NAMES, Prediction, StackSpec, predict_tool_tip, prediction_grid
 from jointdb.usecases._files import load_stack
+from jointdb.usecases._stack_shank import shank_inertia
 
 #: How many nearest catalogued joints a stack's interpolated query ranks before the interpolation picks the
 #: ones that bracket the request along the condition axes (jointdb.store._interp).
@@ -281,11 +282,18 @@ def resolve_joints(spec: StackSpec, repo=None) -> dict[str, JointResolution]:
                           "of the query (geometry.insertion_m, recorded by the catalogued joints)",)
             if not matches:
                 raise NotFoundError(f"interfaces.{name}: no catalogued joint of type {choice.joint_type!r}")
-            out[name] = _queried(name, choice, handle, matches, conditions, texts)
+            shank = shank_inertia(spec) if choice.joint_type == "tool-holder" else None
+            out[name] = _queried(name, choice, handle, matches, conditions, texts, shank)
     finally:
         if owned and handle is not None:
             handle.close()
     return out
+
+
+#: The note of an interpolated tool–holder joint whose catalogued shanks' inertia was exchanged for the stack's.
+SHANK_NOTE = ("note: the interpolated joint carries the stack's own inserted shank (its mass and inertia about the "
+              "holder face) instead of the mix of the catalogued joints' shanks (docs/stacks.md, *The shank inside "
+              "the holder*)")
 
 
 #: Conditions a stack supplies to a query of a joint type when the query leaves them out and the catalogued joints
@@ -330,8 +338,10 @@ def _pool(handle, choice, conditions):
     return matches, texts
 
 
-def _choice_error(handle, pool, conditions, interpolate: bool):
-    """The leave-one-out joint-choice error model of a query (None when the pool has too few joints)."""
+def _choice_error(handle, pool, conditions, interpolate: bool, shank=None):
+    """The leave-one-out joint-choice error model of a query (None when the pool has too few joints); an
+    interpolated tool–holder query's leave-one-out exchanges the shanks' inertia as its prediction does
+    (``shank``: :class:`jointdb.usecases._stack_shank.ShankInertia`)."""
     from jointdb.store._loo import choice_error_model, leave_one_out, line_error_model, pool_distances
 
     first = pool[0].version
@@ -340,7 +350,7 @@ def _choice_error(handle, pool, conditions, interpolate: bool):
     nearest = min(here, key=lambda m: m.distance)
     if interpolate:  # whole condition lines left out and interpolated across the gap, as the request is
         return line_error_model(handle.load_frf, pool, conditions, nearest.distance, first.dofs,
-                                inside=not nearest.extrapolating)
+                                inside=not nearest.extrapolating, inertia=None if shank is None else shank.of)
     points = leave_one_out(handle.load_frf, pool, conditions, "nearest")
     return choice_error_model(points, nearest.distance, first.dofs, inside=not nearest.extrapolating)
 
@@ -355,24 +365,29 @@ def _passivity_notes(joint) -> tuple[str, ...]:
             f"from the passive neighbours only ({each} of {joint.frf.n_freq} lines)",)
 
 
-def _queried(name, choice, handle, matches, conditions, texts) -> JointResolution:
+def _queried(name, choice, handle, matches, conditions, texts, shank=None) -> JointResolution:
     """The resolution of a queried interface: nearest or interpolated joint, with the joints used and the
-    joint-choice error model."""
+    joint-choice error model; an interpolated tool–holder joint takes the stack's shank inertia (``shank``,
+    :mod:`jointdb.usecases._stack_shank`)."""
     best = matches[0]
     cands = tuple((m.version.name, m.version.version, float(m.distance)) for m in matches[:choice.neighbours])
     dist = {(m.version.name, m.version.version): float(m.distance) for m in matches}
     common = dict(per_condition=dict(best.per_condition), extrapolating=bool(best.extrapolating),
                   outside_range=tuple(best.outside_range), candidates=cands, warnings=texts,
-                  choice_error=_choice_error(handle, matches, conditions, choice.interpolate))
+                  choice_error=_choice_error(handle, matches, conditions, choice.interpolate, shank))
     if choice.interpolate and len(matches) > 1:
         joint = handle.interpolate(matches, conditions)
         used = tuple((n, v, float(w), dist.get((n, v), float("nan"))) for n, v, w in joint.neighbours)
         by_key = {(m.version.name, m.version.version): m.version for m in matches}
+        frf, shank_note = joint.frf, ()
+        if shank is not None and all((n, v) in by_key for n, v, _ in joint.neighbours):
+            frf, moved = shank.moved(joint.frf, [(w, by_key[(n, v)].conditions) for n, v, w in joint.neighbours])
+            shank_note = (SHANK_NOTE,) if moved else ()
         val = _peak_errors([(by_key[(n, v)], w) for n, v, w, _ in used if (n, v) in by_key])
         method = ("edge" if best.extrapolating else
                   "catalogued condition" if len(used) == 1 and used[0][3] <= 1e-12 else "simplex interpolation")
-        common["warnings"] = (*texts, *_passivity_notes(joint))
-        return JointResolution(name, "interpolated", joint.frf, best.version.name, best.version.version,
+        common["warnings"] = (*texts, *_passivity_notes(joint), *shank_note)
+        return JointResolution(name, "interpolated", frf, best.version.name, best.version.version,
                                float(best.distance), description=joint.describe(), method=method,
                                neighbours=used, **val, **common)
     method = "edge" if best.extrapolating else "nearest"
