@@ -118,6 +118,7 @@ def init_cmd(
 
     parts = dict(spindle=spindle, holder=holder, through_joint=through_joint, insertion=insertion,
                  shank_diameter=shank_diameter, shank_material=shank_material)
+    recorded = _shank_conditions(jt, conditions["geometry"], insertion, shank_diameter)
     a_path = folder / A_FILE
     from_parts = any(v is not None for v in parts.values())
     kept = a_path.with_name(a_path.name + ".before-init") if from_parts and a_path.exists() else None
@@ -146,11 +147,25 @@ def init_cmd(
             f"({next(iter(sub[doc['interface']['a']].values()))}) at {' '.join(doc['interface']['a_dofs'])}; "
             f"B = {doc['interface']['b']} ({sub[doc['interface']['b']]['model']}) at "
             f"{' '.join(doc['interface']['b_dofs'])}, tip node {doc['planar']['b_tip']}")
-    for note in notes:
+    for note in (*notes, *recorded):
         message(f"note: {note}")
     if not doc["conditions"]:
         message("note: no conditions given; the joint can be pinned but not found by a query")
     typer.echo(str(target))
+
+
+def _shank_conditions(joint_type: str, geometry: dict, insertion, shank_diameter) -> tuple[str, ...]:
+    """Record a tool–holder campaign's clamped shank (``--insertion``, ``--shank-diameter``) in ``geometry`` as
+    ``insertion_m`` and ``shank_diameter_m`` where ``--geometry`` does not give them (the joint carries that shank:
+    docs/stacks.md, *The shank inside the holder*); the notes saying so."""
+    if str(joint_type or "").strip().lower().replace("_", "-") != "tool-holder":
+        return ()
+    added = []
+    for key, value in (("insertion_m", insertion), ("shank_diameter_m", shank_diameter)):
+        if value is not None and key not in geometry:
+            geometry[key] = float(value)
+            added.append(f"{key}={float(value):g}")
+    return (f"conditions.geometry records the clamped shank: {', '.join(added)}",) if added else ()
 
 
 def _init_options(smoothing: int | None, fit_band: str | None) -> dict[str, Any]:

@@ -172,3 +172,16 @@ def test_a_failed_forced_init_leaves_the_earlier_substructure_a_as_it_was(setup,
         assert sorted(p.name for p in folder.iterdir()) == names
         assert (folder / "holder-on-spindle.uff").read_bytes() == a_before
         assert (folder / "campaign.json").read_bytes() == doc_before
+
+
+def test_a_tool_holder_campaign_records_the_clamped_shank_in_its_conditions(setup, cli):
+    """`--insertion` and `--shank-diameter` become ``geometry.insertion_m`` / ``shank_diameter_m`` (the shank the
+    joint carries, docs/stacks.md *The shank inside the holder*); a value given by `--geometry` is kept."""
+    db, folder = setup
+    r = cli("campaign", "init", folder, "--type", "tool-holder", "--torque", "60", "--through-joint", "rigid",
+            "--geometry", "shank_diameter_m=0.0120", *PARTS, "--db", db)
+    assert r.returncode == 0, r.stderr
+    geometry = json.loads((folder / "campaign.json").read_text())["conditions"]["geometry"]
+    assert geometry == {"shank_diameter_m": 0.012, "insertion_m": 0.035}
+    assert "records the clamped shank: insertion_m=0.035" in r.stderr
+    assert "shank_diameter_m=" not in r.stderr.split("records the clamped shank")[1].splitlines()[0]
