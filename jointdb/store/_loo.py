@@ -309,8 +309,8 @@ def _predicted(load, m: Match, cond: Conditions, others: Sequence[Match], method
         else:
             joint = interpolate(load, ranked, cond)
             by_key = {(r.version.name, r.version.version): r.version for r in ranked}
-            frf_hat, mixed = joint.frf, [(w, by_key[(n, v)]) for n, v, w in joint.neighbours]
-        if inertia is not None:
+            frf_hat, mixed = joint.frf, [(w, by_key.get((n, v))) for n, v, w in joint.neighbours]
+        if inertia is not None and all(v is not None for _, v in mixed):
             frf_hat = _shank_moved(frf_hat, mixed, m.version, inertia)
         own = load(m.version)
         lo, hi = max(own.freq[0], frf_hat.freq[0]), min(own.freq[-1], frf_hat.freq[-1])
