@@ -73,13 +73,26 @@ def run(catalogue: Path, seeds, say=print) -> None:
     say(f"{time.time() - t0:.0f} s")
 
 
+def translation_only() -> None:
+    """Swap the product's shank mass matrix for its translational part ``diag(m, 0)`` (this process only)."""
+    import jointdb.usecases._stack_shank as shank
+
+    full = shank.inserted_shank_mass
+    shank.inserted_shank_mass = lambda d, length, rho, start=0.0: np.diag([full(d, length, rho, start)[0, 0], 0.0])
+
+
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--catalogue", type=Path, required=True, help="its own folder (built on first use)")
     ap.add_argument("--seeds", type=int, nargs="+", default=[7201, 7202, 7203, 7204])
     ap.add_argument("--record-insertion", action="store_true",
                     help="the campaigns record their insertion depth (geometry.insertion_m); its own folder")
+    ap.add_argument("--translation-only", action="store_true",
+                    help="exchange only the shank's translational mass (a variant: the catalogued planar joints "
+                         "are diagonal, and their Z_θθ shows no rotary inertia)")
     args = ap.parse_args(argv)
+    if args.translation_only:
+        translation_only()
     tb.FREQ = np.arange(100.0, FMAX + 1e-9, 10.0)
     tb.CAMPAIGN_OPTIONS = {"smoothing": 9, "fit_band": [100.0, FMAX]}
     tb.RECORD_INSERTION = args.record_insertion

@@ -17,6 +17,8 @@ import argparse
 import sys
 from pathlib import Path
 
+import numpy as np
+
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import _stack_truth_c as tc  # noqa: E402
@@ -53,12 +55,25 @@ def run(catalogue: Path, say=print) -> None:
             say(f"| {case.name} | {thz:.0f} | {cells[0]} | {cells[1]} |")
 
 
+def translation_only() -> None:
+    """Swap the product's shank mass matrix for its translational part ``diag(m, 0)`` (this process only)."""
+    import jointdb.usecases._stack_shank as shank
+
+    full = shank.inserted_shank_mass
+    shank.inserted_shank_mass = lambda d, length, rho, start=0.0: np.diag([full(d, length, rho, start)[0, 0], 0.0])
+
+
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--catalogue", type=Path, required=True, help="family-C catalogue folder (built if empty)")
     ap.add_argument("--record-insertion", action="store_true",
                     help="the campaigns record their insertion depth (geometry.insertion_m); its own folder")
+    ap.add_argument("--translation-only", action="store_true",
+                    help="exchange only the shank's translational mass (a variant: the catalogued planar joints "
+                         "are diagonal, and their Z_θθ shows no rotary inertia)")
     args = ap.parse_args(argv)
+    if args.translation_only:
+        translation_only()
     tc.RECORD_INSERTION = args.record_insertion
     run(args.catalogue)
 
