@@ -91,7 +91,7 @@ TUNING_SEEDS = ()  # none: the band is not tuned on family C
 #: next session with nothing changed in between (88d588a; docs/validation/stack-bands-family-c.md, *Fresh seeds*).
 #: The shank-inertia exchange was adopted by a rule written before its runs on 7301 / 7305 (seen) were read;
 #: 7317 / 7318 were run once after it was committed (803b592; *The shank inside the holder*), and 7319 / 7320 once
-#: at the end of that session (3e97733, the product unchanged since 803b592 but for the _loo guard of 2aae6f4's parent).
+#: at the end of that session (3c5f8d6: the product of 803b592 plus dc46afa's guard, which changes no number).
 SEEN_SEEDS = (7301, 7302, 7303, 7304, 7305, 7306, 7307, 7308, 7309, 7310, 7311, 7312)
 HELD_OUT_SEEDS = (7313, 7314, 7315, 7316, 7317, 7318, 7319, 7320)
 
