@@ -57,14 +57,18 @@ class ShankInertia:
 
     def moved(self, frf, mixed: Sequence[tuple[float, object]]):
         """``(frf, moved)``: the joint mixed from ``(weight, conditions)`` with their shanks' inertia exchanged for
-        the stack's; unchanged (``moved`` False) when some mixed joint records no shank diameter or the joint is not
-        over x and ry."""
+        the stack's; unchanged (``moved`` False) when some mixed joint records no shank diameter, the joint is not
+        over x and ry, or the mixed shanks already are the stack's."""
         if not planar_x_ry(frf):
             return frf, False
         masses = [self.of(c) for _, c in mixed]
         if any(m is None for m in masses):
             return frf, False
-        return move_shank_inertia(frf, [(w, m) for (w, _), m in zip(mixed, masses)], self.target), True
+        weighted = [(w, m) for (w, _), m in zip(mixed, masses)]
+        delta = sum(w * m for w, m in weighted) - self.target
+        if np.max(np.abs(delta)) <= 1e-9 * np.max(np.abs(self.target)):
+            return frf, False  # the catalogued shanks are the stack's: nothing to exchange, no note
+        return move_shank_inertia(frf, weighted, self.target), True
 
 
 def shank_inertia(spec) -> ShankInertia | None:

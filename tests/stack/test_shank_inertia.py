@@ -164,3 +164,20 @@ def test_the_leave_one_out_exchanges_the_shanks_as_the_prediction_does(tmp_path)
     assert [p.name for p in moved] == ["th-d12"] == [p.name for p in plain]
     assert np.max(np.abs(moved[0].relative)) < 1e-8
     assert np.max(np.abs(plain[0].relative)) > 1e-2
+
+
+def test_joints_of_the_stacks_own_shank_are_left_alone_without_a_note(tmp_path):
+    """Ø12 joints at two torques interpolated for the Ø12 stack (30 mm deep, as catalogued): their shanks are the
+    stack's, so the joint is the plain mix and no note claims an exchange."""
+    db = tmp_path / "c.sqlite"
+    with Repository(db) as repo:
+        for t in (50.0, 120.0):
+            repo.catalogue(f"th-{t:03.0f}", "tool-holder", _layer_minus_shank(0.012, 0.030),
+                           Conditions(("tungsten-carbide", "steel"), torque_nm=t,
+                                      geometry={"shank_diameter_m": 0.012}),
+                           "spring-damper-planar", Provenance(method="irc-planar"))
+    res = usecases.resolve_joints(_stack(tmp_path), str(db))["tool-holder"]
+    assert res.kind == "interpolated" and len(res.neighbours) == 2
+    assert not any("inserted shank" in w for w in res.warnings)
+    want = np.linalg.inv(_layer_minus_shank(0.012, 0.030).resample(res.frf.freq).values)
+    np.testing.assert_allclose(np.linalg.inv(res.frf.values), want, rtol=1e-8)
