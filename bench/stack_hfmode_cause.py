@@ -58,9 +58,9 @@ def predict_with(case, repo, weights=None):
 
 
 @contextlib.contextmanager
-def family_c_repo(catalogue: Path, say=print):
-    """The family-C catalogue in ``catalogue`` (built there if empty), with the load average and the time taken
-    said before and after."""
+def family_repo(family, catalogue: Path, say=print):
+    """A truth family's catalogue (``family``: e.g. the module ``_stack_truth_b``) in ``catalogue`` (built there if
+    empty), with the load average and the time taken said before and after."""
     from jointdb.store import Repository
 
     t0 = time.time()
@@ -70,10 +70,15 @@ def family_c_repo(catalogue: Path, say=print):
     fresh = not db.exists()
     with Repository(f"sqlite:///{db}") as repo:
         if fresh:
-            tc.build_catalogue(catalogue, repo, say=lambda s: None)
+            family.build_catalogue(catalogue, repo, say=lambda s: None)
             say(f"catalogue built in {time.time() - t0:.0f} s")
         yield repo
     say(f"{time.time() - t0:.0f} s; load average at the end: {', '.join(f'{v:.2f}' for v in os.getloadavg())}")
+
+
+def family_c_repo(catalogue: Path, say=print):
+    """:func:`family_repo` of truth family C."""
+    return family_repo(tc, catalogue, say)
 
 
 def command_line(run, doc: str, argv=None) -> None:

@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import argparse
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -27,6 +26,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import _stack_truth_b as tb  # noqa: E402
 import _stack_validation as sv  # noqa: E402
+from stack_hfmode_cause import family_repo  # noqa: E402
+from stack_shank_inertia import shank_options  # noqa: E402
 
 FMAX = 12000.0
 HIGH = 5000.0  # a truth's dominant mode above this is a "high mode" here
@@ -54,45 +55,19 @@ def _errors(case, repo, say) -> tuple[float, float, float]:
 
 
 def run(catalogue: Path, seeds, say=print) -> None:
-    from jointdb.store import Repository
-
-    t0 = time.time()
-    catalogue.mkdir(parents=True, exist_ok=True)
-    db = catalogue / "b.sqlite"
-    fresh = not db.exists()
-    with Repository(f"sqlite:///{db}") as repo:
-        if fresh:
-            tb.build_catalogue(catalogue, repo, say=lambda s: None)
-            say(f"catalogue built in {time.time() - t0:.0f} s")
+    with family_repo(tb, catalogue, say) as repo:
         rows = np.array([_errors(case, repo, say) for seed in seeds for case in tb.draw(24, seed)])
     for label, sel in (("all", np.ones(len(rows), bool)), (f"truth dominant > {HIGH:.0f} Hz", rows[:, 0] > HIGH)):
         e0, e1 = np.abs(rows[sel, 1]), np.abs(rows[sel, 2])
         if e0.size:
             say(f"{label} ({e0.size}): median |error| without {np.median(e0):.1%}, with {np.median(e1):.1%}; "
                 f"within 20 %: {int(np.sum(e0 < 0.2))} / {int(np.sum(e1 < 0.2))}")
-    say(f"{time.time() - t0:.0f} s")
-
-
-def translation_only() -> None:
-    """Swap the product's shank mass matrix for its translational part ``diag(m, 0)`` (this process only)."""
-    import jointdb.usecases._stack_shank as shank
-
-    full = shank.inserted_shank_mass
-    shank.inserted_shank_mass = lambda d, length, rho, start=0.0: np.diag([full(d, length, rho, start)[0, 0], 0.0])
 
 
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--catalogue", type=Path, required=True, help="its own folder (built on first use)")
     ap.add_argument("--seeds", type=int, nargs="+", default=[7201, 7202, 7203, 7204])
-    ap.add_argument("--record-insertion", action="store_true",
-                    help="the campaigns record their insertion depth (geometry.insertion_m); its own folder")
-    ap.add_argument("--translation-only", action="store_true",
-                    help="exchange only the shank's translational mass (a variant: the catalogued planar joints "
-                         "are diagonal, and their Z_θθ shows no rotary inertia)")
-    args = ap.parse_args(argv)
-    if args.translation_only:
-        translation_only()
+    args = shank_options(ap, argv)
     tb.FREQ = np.arange(100.0, FMAX + 1e-9, 10.0)
     tb.CAMPAIGN_OPTIONS = {"smoothing": 9, "fit_band": [100.0, FMAX]}
     tb.RECORD_INSERTION = args.record_insertion

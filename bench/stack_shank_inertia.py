@@ -63,9 +63,10 @@ def translation_only() -> None:
     shank.inserted_shank_mass = lambda d, length, rho, start=0.0: np.diag([full(d, length, rho, start)[0, 0], 0.0])
 
 
-def main(argv=None) -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--catalogue", type=Path, required=True, help="family-C catalogue folder (built if empty)")
+def shank_options(ap: argparse.ArgumentParser, argv=None) -> argparse.Namespace:
+    """``--catalogue``, ``--record-insertion`` and ``--translation-only`` added to ``ap`` and parsed; the variant
+    switched on in this process when asked for."""
+    ap.add_argument("--catalogue", type=Path, required=True, help="its own folder (built on first use)")
     ap.add_argument("--record-insertion", action="store_true",
                     help="the campaigns record their insertion depth (geometry.insertion_m); its own folder")
     ap.add_argument("--translation-only", action="store_true",
@@ -74,6 +75,11 @@ def main(argv=None) -> None:
     args = ap.parse_args(argv)
     if args.translation_only:
         translation_only()
+    return args
+
+
+def main(argv=None) -> None:
+    args = shank_options(argparse.ArgumentParser(description=__doc__.splitlines()[0]), argv)
     tc.RECORD_INSERTION = args.record_insertion
     run(args.catalogue)
 
