@@ -43,18 +43,25 @@ def plain_weights(weights, z, tol=0.0):
     return np.repeat(w[:, None], z.shape[1], axis=1), np.zeros(w.size, int)
 
 
+@contextlib.contextmanager
+def swapped(module, name: str, value):
+    """``module.name`` set to ``value`` inside the block (None: left as it is), restored after it."""
+    keep = getattr(module, name)
+    setattr(module, name, keep if value is None else value)
+    try:
+        yield
+    finally:
+        setattr(module, name, keep)
+
+
 def predict_with(case, repo, weights=None):
     """``predict_stack`` of family-C stack ``case`` with the interpolation's per-line weights from ``weights``
     (a stand-in for ``jointdb.store._query.passive_line_weights``; None: the product's own)."""
     import jointdb.store._query as q
     from jointdb import usecases
 
-    keep = q.passive_line_weights
-    q.passive_line_weights = weights or keep
-    try:
+    with swapped(q, "passive_line_weights", weights):
         return usecases.predict_stack(tc.spec_for(case, tc.queries(case)), repo, tc.FREQ)
-    finally:
-        q.passive_line_weights = keep
 
 
 @contextlib.contextmanager

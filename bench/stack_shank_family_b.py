@@ -25,33 +25,18 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import _stack_truth_b as tb  # noqa: E402
-import _stack_validation as sv  # noqa: E402
 from stack_hfmode_cause import family_repo  # noqa: E402
-from stack_shank_inertia import shank_options  # noqa: E402
+from stack_shank_inertia import errors_with_and_without, shank_options  # noqa: E402
 
 FMAX = 12000.0
 HIGH = 5000.0  # a truth's dominant mode above this is a "high mode" here
 
 
 def _errors(case, repo, say) -> tuple[float, float, float]:
-    """``(truth dominant Hz, error without, error with)`` of one stack."""
-    import jointdb.usecases._stack as stack_usecase
-    from jointdb import usecases
-
-    keep = stack_usecase.shank_inertia
-    thz, tpk = sv._dominant(tb.truth_tip(case).values[:, 0, 0], tb.FREQ)
-    out = []
-    for exchange in (False, True):
-        stack_usecase.shank_inertia = keep if exchange else (lambda spec: None)
-        try:
-            res = usecases.predict_stack(tb.spec_for(case, tb.queries(case)), repo, tb.FREQ)
-        finally:
-            stack_usecase.shank_inertia = keep
-        phz, ppk = sv._dominant(res.prediction.tip.values[:, 0, 0], tb.FREQ)
-        out.append((ppk / tpk - 1, phz))
-    say(f"  {case.name}: truth {thz:.0f} Hz | without {out[0][0]:+.1%} ({out[0][1]:.0f} Hz) | "
-        f"with {out[1][0]:+.1%} ({out[1][1]:.0f} Hz)")
-    return thz, out[0][0], out[1][0]
+    """``(truth dominant Hz, error without, error with)`` of one stack, said as a line."""
+    thz, ((e0, hz0), (e1, hz1)) = errors_with_and_without(tb, case, repo)
+    say(f"  {case.name}: truth {thz:.0f} Hz | without {e0:+.1%} ({hz0:.0f} Hz) | with {e1:+.1%} ({hz1:.0f} Hz)")
+    return thz, e0, e1
 
 
 def run(catalogue: Path, seeds, say=print) -> None:

@@ -28,7 +28,7 @@ import numpy as np
 from jointdb.errors import InputError
 from jointdb.frf import FRF
 
-__all__ = ["inserted_shank_mass", "move_shank_inertia", "planar_x_ry"]
+__all__ = ["inserted_shank_mass", "move_shank_inertia", "exchange_shanks", "planar_x_ry"]
 
 
 def inserted_shank_mass(diameter: float, length: float, density: float, start: float = 0.0) -> np.ndarray:
@@ -127,3 +127,27 @@ def move_shank_inertia(frf: FRF, weighted: Sequence[tuple[float, np.ndarray]], t
     d[np.ix_(order, order)] = delta
     z = np.linalg.inv(frf.values) + ((2 * np.pi * frf.freq) ** 2)[:, None, None] * d
     return frf.replace(values=np.linalg.inv(z))
+
+
+def exchange_shanks(frf: FRF, weighted: Sequence[tuple[float, np.ndarray | None]],
+                    target: np.ndarray | None) -> FRF | None:
+    """:func:`move_shank_inertia` where there is something to exchange, else None.
+
+    Parameters
+    ----------
+    frf, weighted, target
+        As :func:`move_shank_inertia`, but a mass matrix (or ``target``) may be None: a shank its conditions do
+        not give.
+
+    Returns
+    -------
+    FRF or None
+        None when the joint is not over x and ry, a shank is unknown, or the mixed shanks already are the
+        target's (``Σ wᵢ Mᵢ`` equal to ``M`` within 1e-9 of its largest entry): nothing to exchange.
+    """
+    if target is None or not planar_x_ry(frf) or any(m is None for _, m in weighted):
+        return None
+    delta = sum(w * np.asarray(m, float) for w, m in weighted) - np.asarray(target, float)
+    if np.max(np.abs(delta)) <= 1e-9 * np.max(np.abs(target)):
+        return None
+    return move_shank_inertia(frf, weighted, target)

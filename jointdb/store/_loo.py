@@ -270,18 +270,19 @@ def leave_one_out(load_frf: Callable[[JointVersion], FRF], pool: Sequence[Match]
     return out
 
 
-def _shank_moved(frf: FRF, mixed: Sequence[tuple[float, JointVersion]], own: JointVersion, inertia: Inertia) -> FRF:
-    """``frf`` mixed from ``mixed`` with their shanks' inertia exchanged for ``own``'s (unchanged when a shank is
-    unknown or the joint is not over x and ry)."""
-    from jointdb.stack._shank import move_shank_inertia, planar_x_ry
+def _shank_moved(frf: FRF, used: Sequence[tuple[str, int, float]], ranked: Sequence[Match], own: JointVersion,
+                 inertia: Inertia) -> FRF:
+    """``frf`` mixed from ``used`` (``(name, version, weight)`` of versions in ``ranked``) with their shanks'
+    inertia exchanged for ``own``'s (:func:`jointdb.stack._shank.exchange_shanks`; unchanged when there is
+    nothing to exchange)."""
+    from jointdb.stack._shank import exchange_shanks
 
-    if not planar_x_ry(frf):
+    by_key = {(r.version.name, r.version.version): r.version for r in ranked}
+    if any((n, v) not in by_key for n, v, _ in used):
         return frf
-    masses = [inertia(v.conditions) for _, v in mixed]
-    target = inertia(own.conditions)
-    if target is None or any(mi is None for mi in masses):
-        return frf
-    return move_shank_inertia(frf, [(w, mi) for (w, _), mi in zip(mixed, masses)], target)
+    out = exchange_shanks(frf, [(w, inertia(by_key[(n, v)].conditions)) for n, v, w in used],
+                          inertia(own.conditions))
+    return frf if out is None else out
 
 
 def _cached(load_frf: Callable[[JointVersion], FRF]) -> Callable[[JointVersion], FRF]:
@@ -305,13 +306,13 @@ def _predicted(load, m: Match, cond: Conditions, others: Sequence[Match], method
     ranked.sort(key=lambda x: x.distance)
     try:
         if method == "nearest":
-            frf_hat, mixed = load(ranked[0].version), [(1.0, ranked[0].version)]
+            first = ranked[0].version
+            frf_hat, used = load(first), ((first.name, first.version, 1.0),)
         else:
             joint = interpolate(load, ranked, cond)
-            by_key = {(r.version.name, r.version.version): r.version for r in ranked}
-            frf_hat, mixed = joint.frf, [(w, by_key.get((n, v))) for n, v, w in joint.neighbours]
-        if inertia is not None and all(v is not None for _, v in mixed):
-            frf_hat = _shank_moved(frf_hat, mixed, m.version, inertia)
+            frf_hat, used = joint.frf, joint.neighbours
+        if inertia is not None:
+            frf_hat = _shank_moved(frf_hat, used, ranked, m.version, inertia)
         own = load(m.version)
         lo, hi = max(own.freq[0], frf_hat.freq[0]), min(own.freq[-1], frf_hat.freq[-1])
         if lo >= hi:

@@ -18,7 +18,7 @@ import numpy as np
 from jointdb.errors import InputError
 from jointdb.fe import get_material
 from jointdb.stack._parts import _inserted_shank
-from jointdb.stack._shank import inserted_shank_mass, move_shank_inertia, planar_x_ry
+from jointdb.stack._shank import exchange_shanks, inserted_shank_mass
 
 __all__ = ["ShankInertia", "shank_inertia"]
 
@@ -59,16 +59,8 @@ class ShankInertia:
         """``(frf, moved)``: the joint mixed from ``(weight, conditions)`` with their shanks' inertia exchanged for
         the stack's; unchanged (``moved`` False) when some mixed joint records no shank diameter, the joint is not
         over x and ry, or the mixed shanks already are the stack's."""
-        if not planar_x_ry(frf):
-            return frf, False
-        masses = [self.of(c) for _, c in mixed]
-        if any(m is None for m in masses):
-            return frf, False
-        weighted = [(w, m) for (w, _), m in zip(mixed, masses)]
-        delta = sum(w * m for w, m in weighted) - self.target
-        if np.max(np.abs(delta)) <= 1e-9 * np.max(np.abs(self.target)):
-            return frf, False  # the catalogued shanks are the stack's: nothing to exchange, no note
-        return move_shank_inertia(frf, weighted, self.target), True
+        out = exchange_shanks(frf, [(w, self.of(c)) for w, c in mixed], self.target)
+        return (frf, False) if out is None else (out, True)
 
 
 def shank_inertia(spec) -> ShankInertia | None:

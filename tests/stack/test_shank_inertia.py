@@ -181,3 +181,19 @@ def test_joints_of_the_stacks_own_shank_are_left_alone_without_a_note(tmp_path):
     assert not any("inserted shank" in w for w in res.warnings)
     want = np.linalg.inv(_layer_minus_shank(0.012, 0.030).resample(res.frf.freq).values)
     np.testing.assert_allclose(np.linalg.inv(res.frf.values), want, rtol=1e-8)
+
+
+def test_exchange_shanks_says_when_there_is_nothing_to_exchange():
+    """None for an unknown shank, an unknown target, a joint not over x and ry, or mixed shanks equal to the
+    target; otherwise the exchange itself."""
+    from jointdb.stack._shank import exchange_shanks
+
+    h = _layer_minus_shank(0.010, 0.030)
+    m10, m12 = inserted_shank_mass(0.010, 0.030, RHO), inserted_shank_mass(0.012, 0.030, RHO)
+    assert exchange_shanks(h, [(1.0, None)], m12) is None
+    assert exchange_shanks(h, [(1.0, m10)], None) is None
+    assert exchange_shanks(h, [(0.5, m10), (0.5, m10)], m10) is None
+    xy = FRF(F, h.values, [Dof(3, "x"), Dof(3, "y")], [Dof(3, "x"), Dof(3, "y")], "receptance")
+    assert exchange_shanks(xy, [(1.0, m10)], m12) is None
+    got = exchange_shanks(h, [(1.0, m10)], m12)
+    np.testing.assert_array_equal(got.values, move_shank_inertia(h, [(1.0, m10)], m12).values)
