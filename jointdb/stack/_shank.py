@@ -58,7 +58,7 @@ def inserted_shank_mass(diameter: float, length: float, density: float, start: f
     Raises
     ------
     InputError
-        A value that is not a positive finite number.
+        A value that is not a positive finite number, or a shank so large its mass overflows.
 
     Examples
     --------
@@ -74,10 +74,15 @@ def inserted_shank_mass(diameter: float, length: float, density: float, start: f
     if isinstance(start, bool) or not isinstance(start, (int, float, np.floating)) or not np.isfinite(start) \
             or start < 0:
         raise InputError(f"inserted shank: start must be a depth ≥ 0, got {start!r}")
-    a, b = float(start), float(start) + length
-    m = density * np.pi * diameter ** 2 * length / 4.0
-    first = m * (a + b) / 2.0
-    return np.array([[m, first], [first, m * (a * a + a * b + b * b) / 3.0 + m * diameter ** 2 / 16.0]])
+    a, b = np.float64(start), np.float64(start) + np.float64(length)
+    d = np.float64(diameter)
+    with np.errstate(over="ignore", invalid="ignore"):
+        m = np.float64(density) * np.pi * d ** 2 * np.float64(length) / 4.0
+        first = m * (a + b) / 2.0
+        out = np.array([[m, first], [first, m * (a * a + a * b + b * b) / 3.0 + m * d ** 2 / 16.0]])
+    if not np.isfinite(out).all():
+        raise InputError(f"inserted shank: a Ø{diameter!r} m shank {length!r} m deep has no finite mass")
+    return out
 
 
 def planar_x_ry(frf: FRF) -> bool:

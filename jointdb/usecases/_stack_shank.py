@@ -38,7 +38,7 @@ class ShankInertia:
 
     def of(self, conditions) -> np.ndarray | None:
         """The shank mass matrix of a catalogued joint with these :class:`jointdb.store.Conditions`, or None when
-        they do not record a shank diameter (``geometry.shank_diameter_m``)."""
+        they do not record a shank diameter (``geometry.shank_diameter_m``) or record one with no finite mass."""
         geo = dict(getattr(conditions, "geometry", None) or {})
         d = geo.get("shank_diameter_m")
         if isinstance(d, bool) or not isinstance(d, (int, float)) or not d > 0:
@@ -53,7 +53,10 @@ class ShankInertia:
                 density = get_material(materials[0]).rho
             except InputError:
                 pass  # a material the FE library does not know: the stack's tool material's density
-        return inserted_shank_mass(float(d), float(length), density)
+        try:
+            return inserted_shank_mass(float(d), float(length), density)
+        except InputError:  # a recorded shank with no finite mass (a corrupt or hostile record): unknown
+            return None
 
     def moved(self, frf, mixed: Sequence[tuple[float, object]]):
         """``(frf, moved)``: the joint mixed from ``(weight, conditions)`` with their shanks' inertia exchanged for

@@ -197,3 +197,17 @@ def test_exchange_shanks_says_when_there_is_nothing_to_exchange():
     assert exchange_shanks(xy, [(1.0, m10)], m12) is None
     got = exchange_shanks(h, [(1.0, m10)], m12)
     np.testing.assert_array_equal(got.values, move_shank_inertia(h, [(1.0, m10)], m12).values)
+
+
+def test_a_record_with_an_absurd_shank_is_treated_as_unknown(tmp_path):
+    """A catalogued joint claiming a 1e200 m shank (finite numbers, as the store accepts them) overflows the mass:
+    the mass function refuses it with InputError, and the prediction treats that shank as unknown (no exchange,
+    no crash) instead of failing on an OverflowError."""
+    with pytest.raises(InputError, match="no finite mass"):
+        inserted_shank_mass(1e200, 1e200, RHO)
+    shank = shank_inertia(_stack(tmp_path))
+    huge = Conditions(("tungsten-carbide", "steel"), torque_nm=80.0,
+                      geometry={"shank_diameter_m": 1e200, "insertion_m": 1e200})
+    assert shank.of(huge) is None
+    h = _layer_minus_shank(0.012, 0.030)
+    assert shank.moved(h, [(1.0, huge)]) == (h, False)
