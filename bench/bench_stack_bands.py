@@ -69,21 +69,29 @@ def band_row(case, repo, n: int = N_SAMPLES, spindle_estimated: bool = False) ->
                                       else "") for k, r in result.joints.items()},
            "extrapolating": any(r.extrapolating for r in result.joints.values()),
            "spindle_estimated": spindle_estimated}
-    b = terms.band
+    row.update(band_verdict(terms.band, row))
+    return row
+
+
+def band_verdict(b, row: dict) -> dict:
+    """The band ``b`` (a TipBand or None) of one stack against its truth: the 5/50/95 % of the dominant peak |H|, its
+    frequency and the lobe floor, whether the truth lies inside, the prediction's error and the relative half-width
+    (``row``: the truth and prediction keys of :func:`band_row`)."""
     if b is None:
-        row.update(peak_band=None, floor_band=None)
-        return row
+        return {"peak_band": None, "floor_band": None}
+    f = tb.FREQ
     peaks = np.array([sv._dominant(s, f) for s in b.tips["x"]])
     floors = np.array([sv._floor(s, f) for s in b.tips["x"]])
-    row["peak_band"] = np.quantile(peaks[:, 1], [0.05, 0.5, 0.95]).tolist()
-    row["peak_hz_band"] = np.quantile(peaks[:, 0], [0.05, 0.5, 0.95]).tolist()
-    row["floor_band"] = np.quantile(floors, [0.05, 0.5, 0.95]).tolist()
-    for key, truth_v, pred_v in (("peak", at, row["pred_peak"]), ("floor", lt, row["pred_floor"])):
-        lo, _, hi = row[f"{key}_band"]
-        row[f"{key}_covered"] = bool(lo <= truth_v <= hi)
-        row[f"{key}_err"] = pred_v / truth_v - 1
-        row[f"{key}_half"] = (hi - lo) / 2 / pred_v
-    return row
+    out = {"peak_band": np.quantile(peaks[:, 1], [0.05, 0.5, 0.95]).tolist(),
+           "peak_hz_band": np.quantile(peaks[:, 0], [0.05, 0.5, 0.95]).tolist(),
+           "floor_band": np.quantile(floors, [0.05, 0.5, 0.95]).tolist()}
+    for key in ("peak", "floor"):
+        lo, _, hi = out[f"{key}_band"]
+        truth_v, pred_v = row[f"truth_{key}"], row[f"pred_{key}"]
+        out[f"{key}_covered"] = bool(lo <= truth_v <= hi)
+        out[f"{key}_err"] = pred_v / truth_v - 1
+        out[f"{key}_half"] = (hi - lo) / 2 / pred_v
+    return out
 
 
 def summary(rows: list[dict]) -> dict:
@@ -166,7 +174,14 @@ def main(argv=None) -> None:
     ap.add_argument("--record-insertion", action="store_true",
                     help="the tool-holder campaigns record their insertion depth (geometry.insertion_m), so the "
                          "prediction knows each catalogued joint's shank; keep such a catalogue in its own folder")
+    ap.add_argument("--law", choices=("power-law", "linear"), default=None,
+                    help="how the interpolation combines the neighbours' dynamic stiffness "
+                         "(jointdb.store._query.INTERPOLATION_LAW; default: the product's)")
     args = ap.parse_args(argv)
+    if args.law is not None:
+        import jointdb.store._query as query
+
+        query.INTERPOLATION_LAW = args.law
     if args.noise is not None:
         if not 0.0 <= args.noise < 0.2:
             ap.error(f"--noise {args.noise}: give a relative level in [0, 0.2), e.g. 0.0075")

@@ -17,12 +17,14 @@ each positive geometry key (its relative difference, as in the distance). A
 candidate lacking a value on some axis cannot be placed and takes no weight (unless
 no candidate can be placed: then the caller falls back).
 
-The caller combines the joints' dynamic stiffness linearly with these weights, so a
-law linear in ``ln(torque)`` is reproduced exactly and a power law ``k ∝ T^n``
-approximately (n = 0.5, joints at 40 and 120 N·m, request 90 N·m: +2.7 % in k).
-Combining ``ln Z`` instead (exact for a power law) was tried on the stack
-validation and was worse: per-line joints' entries change sign over frequency,
-where a complex logarithm is ill-defined.
+The caller (``jointdb.store._query.combine_stiffness``) combines each diagonal entry's
+storage ``Re Z_ii`` and loss ``Im Z_ii`` geometrically with these weights where every
+neighbour's is positive, so a power law ``k ∝ T^n d^m`` is reproduced exactly (linear
+weights would make k 2.7 % too stiff for n = 0.5, joints at 40 and 120 N·m, request
+90 N·m), and averages linearly where an entry changes sign (a shank resonating on its
+contact layer makes ``Re Z_xx`` negative above it) and off the diagonal. (A complex
+``ln Z`` of whole entries was tried before and was worse: it is ill-defined where the
+entries change sign.)
 
 Weights
 -------

@@ -43,9 +43,13 @@ Without a numeric axis in the request, or with method ``"idw"``: ``w_i ∝ 1/d_i
 over all the given neighbours (exact matches, ``d = 0``, share all the weight).
 
 The neighbours' receptances are inverted to dynamic stiffness ``Z_i = H_i⁻¹`` (per
-line, batched), averaged ``Z = Σ w_i Z_i`` and inverted back. For spring–damper
-joints ``Z = k + iωc``, so this interpolates stiffness and damping linearly
-(docs/theory.md §1a), which interpolating receptances would not.
+line, batched), combined and inverted back (docs/theory.md §1a; interpolating receptances
+would mix resonances instead). Each diagonal entry's storage ``Re Z_ii`` and loss ``Im Z_ii``
+are combined as a power law, ``exp(Σ w_i ln Re Z_ii,i)`` (and the same for the loss), on every
+line where all neighbours taking weight have that part > 0: contact stiffness and damping grow
+as powers of torque, force and shank diameter, which the log coordinates then reproduce
+exactly. Elsewhere (an entry that changes sign, a mass-like line) and for off-diagonal entries
+the average is linear, ``Σ w_i Z_i`` (:data:`INTERPOLATION_LAW`).
 On a line where that average would be non-passive (``Im Z_ii < 0``) and some
 neighbour is passive, the loss ``Im Z`` is averaged over the passive ones only
 (:func:`passive_line_weights`); the storage stiffness ``Re Z`` keeps the
@@ -244,6 +248,42 @@ def passive_line_weights(weights: np.ndarray, z: np.ndarray, tol: float = PASSIV
     return w_lines, moved
 
 
+#: How :func:`interpolate` combines the neighbours' dynamic stiffness: ``"power-law"`` (diagonal storage and loss
+#: geometrically where positive, the module docstring) or ``"linear"`` (``Σ w_i Z_i`` throughout, before round 3
+#: session 9; docs/validation/stack-bands-family-c.md, *Power-law interpolation*).
+INTERPOLATION_LAW = "power-law"
+
+
+def combine_stiffness(weights: np.ndarray, part: np.ndarray) -> np.ndarray:
+    """One part (real or imaginary) of the neighbours' dynamic stiffness combined with per-line weights.
+
+    Parameters
+    ----------
+    weights : ndarray, shape (n_neighbours, n_freq)
+        Each column sums to 1.
+    part : ndarray, shape (n_neighbours, n_freq, n, n)
+        ``Re Z`` or ``Im Z`` of each neighbour.
+
+    Returns
+    -------
+    ndarray, shape (n_freq, n, n)
+        ``Σ w_i part_i``, except on the diagonal under :data:`INTERPOLATION_LAW` ``"power-law"``: where every
+        neighbour with weight > 0 has ``part_ii > 0`` on that line, ``exp(Σ w_i ln part_ii)`` (exact for a part
+        that is a power law of the conditions whose log coordinates the weights interpolate).
+    """
+    out = np.einsum("kf,kfij->fij", weights, part)
+    if INTERPOLATION_LAW != "power-law":
+        return out
+    n = part.shape[-1]
+    diag = part[:, :, np.arange(n), np.arange(n)]  # (k, f, n)
+    w = weights[:, :, None]
+    positive = np.all((diag > 0) | (w == 0), axis=0)  # (f, n)
+    logs = np.log(np.where(diag > 0, diag, 1.0))
+    geometric = np.exp(np.sum(np.where(w > 0, w * logs, 0.0), axis=0))
+    out[:, np.arange(n), np.arange(n)] = np.where(positive, geometric, out[:, np.arange(n), np.arange(n)])
+    return out
+
+
 def interpolate(
     load_frf: LoadFRF,
     matches: Sequence[Match],
@@ -264,7 +304,6 @@ def interpolate(
         The request (None: inverse-distance weights).
     method
         ``"axes"`` or ``"idw"`` (:data:`INTERPOLATION_METHODS`).
-
     Returns
     -------
     InterpolatedJoint
@@ -319,7 +358,8 @@ def interpolate(
     w_used = np.array([wi for wi, _ in used])
     w_lines, moved = passive_line_weights(w_used, z_all)
     # storage (Re Z) with the barycentric weights, loss (Im Z) with the passive-first ones
-    z = np.einsum("k,kfij->fij", w_used, z_all.real) + 1j * np.einsum("kf,kfij->fij", w_lines, z_all.imag)
+    z = combine_stiffness(np.repeat(w_used[:, None], grid.size, axis=1), z_all.real) \
+        + 1j * combine_stiffness(w_lines, z_all.imag)
     try:
         h_int = np.linalg.inv(z)
     except np.linalg.LinAlgError:

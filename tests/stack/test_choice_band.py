@@ -17,6 +17,16 @@ from jointdb.store import Conditions, Repository
 from power_law_catalogue import TORQUES, catalogue_power_law, law, spec_at
 
 
+@pytest.fixture(autouse=True)
+def linear_combination(monkeypatch):
+    """These tests check the leave-one-out machinery against the known error of the *linear* combination of the
+    neighbours' dynamic stiffness on a power law (convex in ln T); the product's power-law combination interpolates
+    this catalogue exactly (test_line_band.py::test_the_power_law_combination_leaves_no_line_error)."""
+    import jointdb.store._query as query
+
+    monkeypatch.setattr(query, "INTERPOLATION_LAW", "linear")
+
+
 @pytest.fixture(scope="module")
 def catalogue(tmp_path_factory):
     d = tmp_path_factory.mktemp("choice")

@@ -20,6 +20,8 @@ from jointdb.campaign._run import peak_model_error
 from jointdb.stack import stack_from_dict
 from jointdb.usecases import predict_with_joints, resolve_joints
 from jointdb.usecases._catalogue import identification_peak_error
+import jointdb.usecases._stack_band as stack_band
+from jointdb.usecases._stack_band import IDENTIFICATION_CALIBRATION as KAPPA
 from jointdb.usecases._stack_band import band_terms, model_error
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -61,21 +63,33 @@ def _joints(tool_holder=(), holder_spindle=()):
 def test_the_term_uses_the_tool_holder_identification_error_and_a_validation_wins():
     _, j = _joints(tool_holder=(("th@1", 1.0, None, 0.05),))
     s, parts = model_error(j)
-    assert s == pytest.approx(np.log(1.05)) and "identification assemblies of th@1" in parts[0]
+    assert s == pytest.approx(KAPPA * np.log(1.05)) and "identification assemblies of th@1" in parts[0]
     # a holder–spindle joint's identification error does not count (the tool–holder campaigns absorb it)
     _, j = _joints(holder_spindle=(("hs@1", 1.0, None, 0.10),))
     assert model_error(j) == (0.0, [])
     # a validation assembly of the same version replaces its in-sample error; interpolation weights as documented
     _, j = _joints(tool_holder=(("a@1", 0.25, 0.02, 0.10), ("b@1", 0.75, None, 0.04)))
     s, parts = model_error(j)
-    assert s == pytest.approx(np.sqrt(0.25 * np.log(1.02) ** 2 + 0.75 * np.log(1.04) ** 2))
+    assert s == pytest.approx(np.sqrt(0.25 * np.log(1.02) ** 2 + 0.75 * (KAPPA * np.log(1.04)) ** 2))
     assert "validation assemblies and identification assemblies" in parts[0]
+
+
+def test_the_calibration_factor_scales_identification_errors_only(monkeypatch):
+    monkeypatch.setattr(stack_band, "IDENTIFICATION_CALIBRATION", 0.5)
+    _, j = _joints(tool_holder=(("th@1", 1.0, None, 0.10),))
+    s, parts = model_error(j)
+    assert s == pytest.approx(0.5 * np.log(1.10), rel=1e-12) and "taken as 4.9%, identification errors × 0.5" in parts[0]
+    _, j = _joints(tool_holder=(("th@1", 1.0, 0.10, 0.30),))  # a validation assembly: its error as it is
+    s, parts = model_error(j)
+    assert s == pytest.approx(np.log(1.10), rel=1e-12) and "×" not in parts[0]
+    _, j = _joints(tool_holder=(("a@1", 0.5, 0.10, None), ("b@1", 0.5, None, 0.10)))
+    assert model_error(j)[0] == pytest.approx(np.sqrt(0.5 * np.log(1.10) ** 2 + 0.5 * (0.5 * np.log(1.10)) ** 2))
 
 
 def test_a_known_identification_error_reaches_the_tip_band():
     spec, j = _joints(tool_holder=(("th@1", 1.0, None, 0.05),))
     terms = band_terms(predict_with_joints(spec, j, np.arange(20.0, 5000.1, 10.0)), n=400)
-    expected = np.sinh(1.645 * np.log(1.05))  # 8.0 %: the 5-95 % of exp(σ ξ) around its median
+    expected = np.sinh(1.645 * KAPPA * np.log(1.05))  # 8.0 %: the 5-95 % of exp(σ ξ) around its median
     # 400 samples: each 5 %/95 % quantile of a normal has a standard error of 0.11 σ -> half-width within ±10 %
     for d in ("x", "y"):
         assert terms.half_width["substructure model"][d] == pytest.approx(expected, rel=0.1)
@@ -89,6 +103,6 @@ def test_a_peak_error_that_is_not_a_number_in_range_is_left_out_and_said_so():
         assert s == 0.0 and any("th@1 left out" in p for p in parts)
         _, j = _joints(tool_holder=(("a@1", 0.5, bad, None), ("b@1", 0.5, None, 0.05)))
         s, parts = model_error(j)
-        assert s == pytest.approx(np.log(1.05)) and np.isfinite(s)  # the usable version alone (weights renormalised)
+        assert s == pytest.approx(KAPPA * np.log(1.05)) and np.isfinite(s)  # the usable version alone (weights renormalised)
     # ratios so far from 1 that the error overflows give no error, not inf
     assert identification_peak_error({"peaks": [{"amplitude_ratio": 5e-324}]}) is None

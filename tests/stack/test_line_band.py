@@ -18,6 +18,16 @@ from jointdb.store import Conditions, Repository
 from power_law_catalogue import F, TORQUES, catalogue_power_law
 
 
+@pytest.fixture(autouse=True)
+def linear_combination(monkeypatch):
+    """These tests check the leave-one-out machinery against the known error of the *linear* combination of the
+    neighbours' dynamic stiffness on a power law (convex in ln T); the product's power-law combination interpolates
+    this catalogue exactly (test_line_band.py::test_the_power_law_combination_leaves_no_line_error)."""
+    import jointdb.store._query as query
+
+    monkeypatch.setattr(query, "INTERPOLATION_LAW", "linear")
+
+
 
 @pytest.fixture(scope="module")
 def db(tmp_path_factory):
@@ -53,6 +63,20 @@ def chord_error_across(i: int) -> float:
     a, m, b = TORQUES[i - 1], TORQUES[i], TORQUES[i + 1]
     w = np.log(m / a) / np.log(b / a)
     return abs(np.log(((1 - w) * a ** 0.5 + w * b ** 0.5) / m ** 0.5))
+
+
+def test_the_power_law_combination_leaves_no_line_error(db, monkeypatch):
+    """The product's combination (jointdb.store._query.combine_stiffness) is exact for k, c ∝ T^0.5: every interior
+    line left out and interpolated across its two cells comes back to round-off."""
+    import jointdb.store._query as query
+    from jointdb.store._loo import leave_line_out
+
+    monkeypatch.setattr(query, "INTERPOLATION_LAW", "power-law")
+    with Repository(db) as repo:
+        pool = repo.nearest("tool-holder", Conditions(("tungsten-carbide", "steel"), torque_nm=65.0), k=5)
+        pts = leave_line_out(repo.load_frf, pool, Conditions(torque_nm=65.0))
+    assert {p.name for p in pts} == {"th-050", "th-080", "th-130"}
+    assert max(float(np.max(np.abs(p.error))) for p in pts) < 1e-9  # the linear chord errs by 1–2 % here
 
 
 @pytest.mark.parametrize("torque", [40.0, 65.0, 100.0, 165.0])

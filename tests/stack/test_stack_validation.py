@@ -107,6 +107,6 @@ def test_tool_holder_joints_are_taken_from_the_stacks_taper_family(sv, repo):
     used = row["joints"]["tool-holder"]
     assert "th-bt40-08kn-d12-040nm" in used and "th-bt40-16kn-d12-040nm" in used and "th-hsk" not in used
     assert abs(row["cat_freq_err"]) < 0.03 and abs(row["cat_peak_err"]) < 0.20 and abs(row["cat_floor_err"]) < 0.20
-    # the same torque and shank identified on the HSK-A63 machine: a spurious resonance near 4.3 kHz becomes the
-    # largest peak (a per-line tool–holder joint does not transfer across taper families)
-    assert abs(row["cat_th_other_family_freq_err"]) > 0.5 and abs(row["cat_th_other_family_peak_err"]) > 0.2
+    # (the same torque and shank identified on the HSK-A63 machines is a separate row: with the linear combination of
+    # the per-line joints it made a spurious 4.3 kHz resonance the largest peak; with the power-law combination it
+    # does not here, so no claim either way is tested)

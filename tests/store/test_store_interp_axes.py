@@ -18,8 +18,9 @@ GRID = [(0.010, 40.0), (0.010, 120.0), (0.012, 40.0), (0.012, 80.0), (0.012, 120
 
 
 def _k(d, t):
-    """A stiffness that is linear in ln(torque) and ln(diameter) (what the interpolation must reproduce)."""
-    return 1e7 * (3.0 + math.log(t / 40.0) + 2.0 * math.log(d / 0.010))
+    """A stiffness that is a power law in torque and diameter, i.e. ln k linear in ln(torque) and ln(diameter) (what
+    the interpolation must reproduce: jointdb.store._query.combine_stiffness)."""
+    return 3e7 * (t / 40.0) ** (1 / 3) * (d / 0.010) ** 2
 
 
 def _name(d, t):
@@ -54,12 +55,12 @@ def test_on_an_edge_of_the_grid_only_the_joints_bracketing_the_torque_are_used(g
     assert set(w) == {"th-d10-040nm", "th-d10-120nm"}
     t = math.log(90 / 40) / math.log(120 / 40)  # barycentric in ln(torque)
     assert w["th-d10-120nm"] == pytest.approx(t, rel=1e-9) and w["th-d10-040nm"] == pytest.approx(1 - t, rel=1e-9)
-    assert np.allclose(_k_of(ij), _k(0.010, 90.0), rtol=1e-9)  # linear in ln T: exact
+    assert np.allclose(_k_of(ij), _k(0.010, 90.0), rtol=1e-9)  # a power law of T: exact
     assert not np.allclose(_k_of(idw), _k(0.010, 90.0), rtol=1e-2)
 
 
 @pytest.mark.parametrize("d, t", [(0.014, 110.0), (0.011, 60.0), (0.013, 45.0)])
-def test_inside_the_grid_a_triangle_reproduces_a_linear_trend_exactly(grid, d, t):
+def test_inside_the_grid_a_triangle_reproduces_a_power_law_exactly(grid, d, t):
     req = _request(d, t)
     ij = grid.interpolate(grid.nearest("tool-holder", req, k=len(GRID)), req)
     assert 2 <= len(ij.neighbours) <= 3
@@ -112,7 +113,7 @@ def test_on_a_grid_cell_with_no_unique_triangulation_the_weights_do_not_depend_o
     for order in (pool, pool[::-1], pool[1:] + pool[:1]):
         ij = repo.interpolate(order, centre)
         weights.append({n: w for n, _, w in ij.neighbours})
-        assert np.allclose(_k_of(ij), _k(*[math.sqrt(0.010 * 0.016), 80.0]), rtol=1e-9)  # linear trend: exact
+        assert np.allclose(_k_of(ij), _k(*[math.sqrt(0.010 * 0.016), 80.0]), rtol=1e-9)  # a power law: exact
     for w in weights:
         assert len(w) == 4 and all(v == pytest.approx(0.25, abs=1e-9) for v in w.values())
     # off-centre in the same cell: still independent of the order
