@@ -304,6 +304,7 @@ def interpolate(
         The request (None: inverse-distance weights).
     method
         ``"axes"`` or ``"idw"`` (:data:`INTERPOLATION_METHODS`).
+
     Returns
     -------
     InterpolatedJoint
