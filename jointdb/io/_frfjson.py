@@ -68,8 +68,9 @@ def frf_from_json(data: dict[str, Any]) -> FRF:
         for part, arr in (("real", re_), ("imag", im)):  # no broadcasting: every entry given
             if arr.shape != want:
                 raise InputError(f"frf.{part}: shape {arr.shape} must be (n_freq, n_outputs, n_inputs) = {want}")
-        frf = FRF(freq, re_ + 1j * im, tuple(data["outputs"]), tuple(data["inputs"]),
-                  data.get("quantity", "receptance"))
+        values = np.empty(want, dtype=np.complex128)  # not re + 1j·im, which turns a −0.0 real part into +0.0
+        values.real, values.imag = re_, im
+        frf = FRF(freq, values, tuple(data["outputs"]), tuple(data["inputs"]), data.get("quantity", "receptance"))
     except KeyError as exc:
         raise InputError(f"frf: missing field {exc.args[0]!r} (freq_hz, outputs, inputs, real, imag)") from None
     except InputError:

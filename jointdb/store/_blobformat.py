@@ -258,7 +258,8 @@ def read_frf_group(group, where: str) -> tuple[FRF, str]:
         raise IntegrityError(f"{where}: blob format version {version} is newer than this jointdb ({FORMAT_VERSION})")
     freq = np.asarray(group["freq"][...], dtype=np.float64)
     packed = np.asarray(group["values"][...], dtype=np.float64)
-    values = packed[..., 0] + 1j * packed[..., 1]
+    values = np.empty(packed.shape[:-1], dtype=np.complex128)  # not re + 1j·im: that turns a −0.0 part into +0.0,
+    values.real, values.imag = packed[..., 0], packed[..., 1]  # and the content would no longer hash to its name
     outputs = [s for s in str(a["outputs"]).split(",") if s]
     inputs = [s for s in str(a["inputs"]).split(",") if s]
     frf = FRF(freq, values, outputs, inputs, str(a["quantity"]))

@@ -92,3 +92,27 @@ def test_a_non_hex_blob_digest_is_never_used_in_a_path(tmp_path):
     report = repo.check()
     assert not report.ok and any("not a SHA-256 hex digest" in p for p in report.problems)
     repo.close()
+
+
+def test_an_frf_with_a_negative_zero_reads_back_bit_for_bit(repo):
+    """A −0.0 part (an inverted diagonal joint has them off the diagonal) is catalogued and read back exactly: the
+    reader built the complex values as ``re + 1j·im``, which turns −0.0 into +0.0, so the content no longer hashed
+    to its name and the version could never be read ("corrupt")."""
+    import numpy as np
+
+    from jointdb.frf import FRF
+    from jointdb.io._frfjson import frf_from_json, frf_json
+    from jointdb.store import Conditions
+
+    f = np.linspace(100.0, 1000.0, 10)
+    h = np.zeros((f.size, 2, 2), complex)
+    h[:, 0, 0], h[:, 1, 1] = 1e-7 - 1e-9j, 1e-5 - 1e-7j
+    h[:, 0, 1] = complex(-0.0, 0.0)
+    frf = FRF(f, h, ["3x", "3ry"], ["3x", "3ry"])
+    v = repo.catalogue("negative-zero", "tool-holder", frf, Conditions(("steel",), torque_nm=60.0),
+                       "spring-damper-planar")
+    back = repo.load_frf(v)
+    assert np.array_equal(back.values.view(np.uint64), frf.values.view(np.uint64))
+    assert np.signbit(back.values[:, 0, 1].real).all()
+    via_json = frf_from_json(frf_json(frf))
+    assert np.signbit(via_json.values[:, 0, 1].real).all()
