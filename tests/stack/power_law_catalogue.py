@@ -8,6 +8,7 @@ import json
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from jointdb.coupling import spring_damper_joint
 from jointdb.store import Conditions, Provenance, Repository
@@ -44,3 +45,15 @@ def spec_at(d: Path, torque: float, joint):
     path = d / f"stack-{torque:g}.json"
     path.write_text(json.dumps(doc))
     return usecases.load_stack(path)
+
+
+@pytest.fixture
+def linear_combination(monkeypatch):
+    """The linear combination of the neighbours' dynamic stiffness (``jointdb.store._query.INTERPOLATION_LAW``) for
+    one test: the known answers of the leave-one-out machinery are the linear chord's errors on this catalogue's
+    power law (convex in ln T), and the shank exchange is exact only for a linear mix. The product's power-law
+    combination interpolates this catalogue exactly
+    (test_line_band.py::test_the_power_law_combination_leaves_no_line_error)."""
+    import jointdb.store._query as query
+
+    monkeypatch.setattr(query, "INTERPOLATION_LAW", "linear")

@@ -15,16 +15,10 @@ import pytest
 
 from jointdb.store import Conditions, Repository
 from power_law_catalogue import TORQUES, catalogue_power_law, law, spec_at
+from power_law_catalogue import linear_combination  # noqa: F401 (a fixture)
 
 
-@pytest.fixture(autouse=True)
-def linear_combination(monkeypatch):
-    """These tests check the leave-one-out machinery against the known error of the *linear* combination of the
-    neighbours' dynamic stiffness on a power law (convex in ln T); the product's power-law combination interpolates
-    this catalogue exactly (test_line_band.py::test_the_power_law_combination_leaves_no_line_error)."""
-    import jointdb.store._query as query
-
-    monkeypatch.setattr(query, "INTERPOLATION_LAW", "linear")
+pytestmark = pytest.mark.usefixtures("linear_combination")
 
 
 @pytest.fixture(scope="module")

@@ -18,6 +18,7 @@ from jointdb.store import Conditions, Provenance, Repository
 from jointdb.usecases._stack_shank import shank_inertia
 
 from power_law_catalogue import STACK
+from power_law_catalogue import linear_combination  # noqa: F401 (a fixture)
 
 RHO = get_material("tungsten-carbide").rho
 F = np.linspace(50.0, 12000.0, 240)
@@ -106,18 +107,9 @@ def _stack(tmp_path):
     return usecases.load_stack(path)
 
 
-@pytest.fixture
-def linear(monkeypatch):
-    """The linear combination of the neighbours' dynamic stiffness, under which the exchange is exact on a catalogue
-    of one layer; the product's power-law combination makes it first order
-    (test_under_the_power_law_combination_the_exchange_holds_on_most_lines)."""
-    import jointdb.store._query as query
-
-    monkeypatch.setattr(query, "INTERPOLATION_LAW", "linear")
-
-
+@pytest.mark.usefixtures("linear_combination")
 @pytest.mark.parametrize("recorded", [None, 0.040])
-def test_an_interpolated_tool_holder_joint_carries_the_stacks_own_shank(tmp_path, recorded, linear):
+def test_an_interpolated_tool_holder_joint_carries_the_stacks_own_shank(tmp_path, recorded):
     """Joints of Ø10 and Ø14 shanks (inserted 30 mm, or 40 mm and recorded as ``insertion_m``) interpolated for
     the stack's Ø12 shank inserted 30 mm: the joint is the layer minus the Ø12 × 30 mm shank's inertia."""
     db = tmp_path / "c.sqlite"
@@ -158,7 +150,7 @@ def _write(tmp_path, query):
     return path
 
 
-def test_under_the_power_law_combination_the_exchange_holds_on_most_lines(tmp_path):
+def test_under_the_power_law_combination_the_exchange_holds_on_most_lines(tmp_path, monkeypatch):
     """The product's combination (storage and loss of the diagonal as weighted geometric means where every neighbour's
     is positive) of the Ø10 and Ø14 layer-minus-shank joints for the Ø12 stack: with the shanks exchanged the joint
     is the truth on most lines (where the neighbours' Re Z_xx differ in sign the average is linear, and the exchange
@@ -170,12 +162,8 @@ def test_under_the_power_law_combination_the_exchange_holds_on_most_lines(tmp_pa
     _catalogue(db, (0.010, 0.014))
     spec = _stack(tmp_path)
     res = usecases.resolve_joints(spec, str(db))["tool-holder"]
-    keep = stack_usecase.shank_inertia
-    try:
-        stack_usecase.shank_inertia = lambda spec: None
-        plain = usecases.resolve_joints(spec, str(db))["tool-holder"]
-    finally:
-        stack_usecase.shank_inertia = keep
+    monkeypatch.setattr(stack_usecase, "shank_inertia", lambda spec: None)
+    plain = usecases.resolve_joints(spec, str(db))["tool-holder"]
     want = np.linalg.inv(_layer_minus_shank(0.012, 0.030).resample(res.frf.freq).values)
 
     def err(r):
@@ -184,7 +172,8 @@ def test_under_the_power_law_combination_the_exchange_holds_on_most_lines(tmp_pa
     assert np.median(err(res)) < 1e-9 and np.median(err(plain)) > 1e-2
 
 
-def test_the_leave_one_out_exchanges_the_shanks_as_the_prediction_does(tmp_path, linear):
+@pytest.mark.usefixtures("linear_combination")
+def test_the_leave_one_out_exchanges_the_shanks_as_the_prediction_does(tmp_path):
     """Three diameter lines of the same layer: the Ø12 line predicted from Ø10 and Ø14 is exact when the shanks
     are exchanged (every line error below 1e-8) and off by their mass difference when they are not."""
     from jointdb.store._loo import leave_line_out
