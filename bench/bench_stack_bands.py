@@ -69,17 +69,16 @@ def band_row(case, repo, n: int = N_SAMPLES, spindle_estimated: bool = False) ->
                                       else "") for k, r in result.joints.items()},
            "extrapolating": any(r.extrapolating for r in result.joints.values()),
            "spindle_estimated": spindle_estimated}
-    row.update(band_verdict(terms.band, row))
+    row.update(band_verdict(terms.band, row, f))
     return row
 
 
-def band_verdict(b, row: dict) -> dict:
+def band_verdict(b, row: dict, f: np.ndarray) -> dict:
     """The band ``b`` (a TipBand or None) of one stack against its truth: the 5/50/95 % of the dominant peak |H|, its
     frequency and the lobe floor, whether the truth lies inside, the prediction's error and the relative half-width
-    (``row``: the truth and prediction keys of :func:`band_row`)."""
+    (``row``: the truth and prediction keys of :func:`band_row`; ``f``: the lines [Hz] of the band's tips)."""
     if b is None:
         return {"peak_band": None, "floor_band": None}
-    f = tb.FREQ
     peaks = np.array([sv._dominant(s, f) for s in b.tips["x"]])
     floors = np.array([sv._floor(s, f) for s in b.tips["x"]])
     out = {"peak_band": np.quantile(peaks[:, 1], [0.05, 0.5, 0.95]).tolist(),

@@ -51,12 +51,11 @@ def stack_rows(case, repo, grid=GRID, n: int = bsb.N_SAMPLES) -> dict[str, dict]
         with swapped(stack_band, "IDENTIFICATION_CALIBRATION", kappa):
             band, _ = stack_band.prediction_band(result, n=n, seed=1)
             sigma = stack_band.model_error(result.joints)[0]
-        out[f"{kappa:g}"] = {**base, "model_sigma": sigma, **bsb.band_verdict(band, base)}
+        out[f"{kappa:g}"] = {**base, "model_sigma": sigma, **bsb.band_verdict(band, base, f)}
     return out
 
 
 def run(catalogue: Path, seeds, n_stacks: int, say=print) -> dict:
-    bsb.tb = tc  # band_verdict reads the family's lines from it
     res: dict = {}
     with family_c_repo(catalogue, say) as repo:
         for seed in seeds:

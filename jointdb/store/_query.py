@@ -274,13 +274,13 @@ def combine_stiffness(weights: np.ndarray, part: np.ndarray) -> np.ndarray:
     out = np.einsum("kf,kfij->fij", weights, part)
     if INTERPOLATION_LAW != "power-law":
         return out
-    n = part.shape[-1]
-    diag = part[:, :, np.arange(n), np.arange(n)]  # (k, f, n)
+    ii = np.arange(part.shape[-1])
+    diag = part[:, :, ii, ii]  # (k, f, n)
     w = weights[:, :, None]
     positive = np.all((diag > 0) | (w == 0), axis=0)  # (f, n)
     logs = np.log(np.where(diag > 0, diag, 1.0))
     geometric = np.exp(np.sum(np.where(w > 0, w * logs, 0.0), axis=0))
-    out[:, np.arange(n), np.arange(n)] = np.where(positive, geometric, out[:, np.arange(n), np.arange(n)])
+    out[:, ii, ii] = np.where(positive, geometric, out[:, ii, ii])
     return out
 
 
