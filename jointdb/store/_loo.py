@@ -211,7 +211,7 @@ def _rel_error(z_hat: np.ndarray, z: np.ndarray) -> np.ndarray:
         pa, pb = part(a), part(b)
         for k in range(d.size):
             mag = np.abs(pb[:, k])
-            keep = mag >= mag.mean() / 3 if mag.size else mag > 0
+            keep = ((mag >= mag.mean() / 3) & (mag > 0)) if mag.size else mag > 0  # a part 0 throughout: no ratio
             ratio = pa[keep, k] / pb[keep, k]
             ratio = ratio[ratio > 0]
             if ratio.size:
