@@ -254,7 +254,32 @@ def passive_line_weights(weights: np.ndarray, z: np.ndarray, tol: float = PASSIV
 INTERPOLATION_LAW = "power-law"
 
 
-def combine_stiffness(weights: np.ndarray, part: np.ndarray) -> np.ndarray:
+def contact_lines(weights: np.ndarray, z: np.ndarray) -> np.ndarray:
+    """The lines on which every neighbour taking weight behaves as a contact: each diagonal entry of its dynamic
+    stiffness has positive storage and positive loss.
+
+    Parameters
+    ----------
+    weights : ndarray, shape (n_neighbours, n_freq)
+        Per-line weights (a neighbour with weight 0 on a line does not count there).
+    z : ndarray, shape (n_neighbours, n_freq, n, n)
+        The neighbours' dynamic stiffness.
+
+    Returns
+    -------
+    ndarray of bool, shape (n_freq,)
+        Where the power law may combine them (:func:`combine_stiffness`). Off these lines some neighbour is
+        mass-like (``Re Z_ii ≤ 0``, near or above a resonance the joint model carries) or active; a power law
+        of the conditions does not describe it, and a geometric mean of one part beside a linear mean of the
+        other would mix two laws in one joint.
+    """
+    ii = np.arange(z.shape[-1])
+    diag = z[:, :, ii, ii]  # (k, f, n)
+    contact = (diag.real > 0) & (diag.imag > 0)
+    return np.all(contact | (weights[:, :, None] == 0), axis=(0, 2))
+
+
+def combine_stiffness(weights: np.ndarray, part: np.ndarray, contact: np.ndarray | None = None) -> np.ndarray:
     """One part (real or imaginary) of the neighbours' dynamic stiffness combined with per-line weights.
 
     Parameters
@@ -263,13 +288,15 @@ def combine_stiffness(weights: np.ndarray, part: np.ndarray) -> np.ndarray:
         Each column sums to 1.
     part : ndarray, shape (n_neighbours, n_freq, n, n)
         ``Re Z`` or ``Im Z`` of each neighbour.
+    contact : ndarray of bool, shape (n_freq,), optional
+        The lines the power law may be used on (:func:`contact_lines`); None: every line.
 
     Returns
     -------
     ndarray, shape (n_freq, n, n)
-        ``Σ w_i part_i``, except on the diagonal under :data:`INTERPOLATION_LAW` ``"power-law"``: where every
-        neighbour with weight > 0 has ``part_ii > 0`` on that line, ``exp(Σ w_i ln part_ii)`` (exact for a part
-        that is a power law of the conditions whose log coordinates the weights interpolate).
+        ``Σ w_i part_i``, except on the diagonal under :data:`INTERPOLATION_LAW` ``"power-law"``: on a ``contact``
+        line where every neighbour with weight > 0 has ``part_ii > 0``, ``exp(Σ w_i ln part_ii)`` (exact for a
+        part that is a power law of the conditions whose log coordinates the weights interpolate).
     """
     out = np.einsum("kf,kfij->fij", weights, part)
     if INTERPOLATION_LAW != "power-law":
@@ -278,6 +305,8 @@ def combine_stiffness(weights: np.ndarray, part: np.ndarray) -> np.ndarray:
     diag = part[:, :, ii, ii]  # (k, f, n)
     w = weights[:, :, None]
     positive = np.all((diag > 0) | (w == 0), axis=0)  # (f, n)
+    if contact is not None:
+        positive &= np.asarray(contact, bool)[:, None]
     logs = np.log(np.where(diag > 0, diag, 1.0))
     geometric = np.exp(np.sum(np.where(w > 0, w * logs, 0.0), axis=0))
     out[:, ii, ii] = np.where(positive, geometric, out[:, ii, ii])
@@ -359,8 +388,9 @@ def interpolate(
     w_used = np.array([wi for wi, _ in used])
     w_lines, moved = passive_line_weights(w_used, z_all)
     # storage (Re Z) with the barycentric weights, loss (Im Z) with the passive-first ones
-    z = combine_stiffness(np.repeat(w_used[:, None], grid.size, axis=1), z_all.real) \
-        + 1j * combine_stiffness(w_lines, z_all.imag)
+    w_storage = np.repeat(w_used[:, None], grid.size, axis=1)
+    contact = contact_lines(w_storage, z_all) & contact_lines(w_lines, z_all)
+    z = combine_stiffness(w_storage, z_all.real, contact) + 1j * combine_stiffness(w_lines, z_all.imag, contact)
     try:
         h_int = np.linalg.inv(z)
     except np.linalg.LinAlgError:

@@ -93,8 +93,10 @@ def test_interpolated_joint_is_the_passive_neighbour_on_the_stretch_and_the_mix_
     nominal = (1 - t) * Z6 + t * Z10
     mix = _power_mix(t)
     assert np.allclose(z[~STRETCH], mix[~STRETCH], rtol=1e-9)
-    # on the stretch: the storage stiffness of both (barycentric), the loss of the passive Ø6 joint alone
-    assert np.allclose(z[STRETCH].real, mix[STRETCH].real, rtol=1e-9)
+    # on the stretch: the storage stiffness of both, averaged linearly (Ø10 is no contact there: the power law is
+    # not used, jointdb.store._query.contact_lines), the loss of the passive Ø6 joint alone
+    assert np.allclose(z[STRETCH].real, nominal[STRETCH].real, rtol=1e-9)
+    assert not np.allclose(z[STRETCH].real, mix[STRETCH].real, rtol=1e-3)
     assert np.allclose(z[STRETCH].imag, Z6[STRETCH].imag, rtol=1e-9)
     assert np.all(np.diagonal(z, axis1=1, axis2=2).imag > 0)  # passive on every line
     # the plain average would have lost the x loss on the stretch (what the short end mills suffered)

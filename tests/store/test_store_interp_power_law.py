@@ -86,3 +86,30 @@ def test_positive_loss_stays_positive_and_lies_between_the_neighbours():
         assert np.all(out[:, i, i] <= d.max(axis=0) * (1 + 1e-12)) and np.all(out[:, i, i] >= d.min(axis=0) * (1 - 1e-12))
         assert np.all(out[:, i, i] <= np.einsum("kf,kf->f", w, d) * (1 + 1e-12))  # the geometric mean ≤ the mean
     assert math.isclose(float(combine_stiffness(np.ones((1, 1)), np.full((1, 1, 1, 1), 5.0))[0, 0, 0]), 5.0)
+
+
+def test_off_the_contact_lines_both_parts_of_every_entry_are_averaged_linearly():
+    """A line where a neighbour is mass-like in one entry (Re Z_θθ < 0) or active (Im Z_xx < 0) is not a contact
+    line: there storage and loss of every entry are linear means, so one joint is not built from two laws; a
+    neighbour with no weight on a line does not count (jointdb.store._query.contact_lines)."""
+    from jointdb.store._query import contact_lines
+
+    w = np.full((2, 4), 0.5)
+    z = np.empty((2, 4, 2, 2), complex)
+    z[0] = np.array([[4.0 + 4.0j, 0.5], [0.5, 9.0 + 9.0j]])
+    z[1] = np.array([[1.0 + 1.0j, -0.5], [-0.5, 1.0 + 1.0j]])
+    z[1, 1, 1, 1] = -2.0 + 1.0j  # line 1: mass-like in θ
+    z[1, 2, 0, 0] = 1.0 - 1.0j   # line 2: active in x
+    w_last = w.copy()
+    w_last[:, 3] = [1.0, 0.0]
+    z[1, 3, 0, 0] = -5.0 - 5.0j  # line 3: only the neighbour without weight there is not a contact
+    contact = contact_lines(w_last, z)
+    np.testing.assert_array_equal(contact, [True, False, False, True])
+    re = combine_stiffness(w_last, z.real, contact)
+    np.testing.assert_allclose(re[[0, 3], 0, 0], [2.0, 4.0], rtol=1e-12)  # √(4·1); line 3: the weighted one only
+    np.testing.assert_allclose(re[1, 0, 0], 2.5, rtol=1e-12)  # x is positive in both, yet linear on line 1
+    np.testing.assert_allclose(re[2, 1, 1], 5.0, rtol=1e-12)
+    im = combine_stiffness(w_last, z.imag, contact)
+    np.testing.assert_allclose(im[[0, 3], 1, 1], [3.0, 9.0], rtol=1e-12)
+    np.testing.assert_allclose(im[1, 1, 1], 5.0, rtol=1e-12)
+    np.testing.assert_allclose(combine_stiffness(w, z.real, None)[1, 0, 0], 2.0, rtol=1e-12)  # no guard given
