@@ -58,7 +58,8 @@ TUNING_SEEDS = (7101, 7102)
 #: *Bands*, history) and so are *seen*; 7203 and 7204 were first drawn after calibration v3 was frozen and read with
 #: it, so they are seen for calibration v4; 7205 and 7206 were first drawn after v4 was frozen (blind), 7207 and 7208
 #: after the spindle-estimate and substructure-model terms were frozen (blind; run with the exact spindle and with
-#: ``--spindle-estimate``).
+#: ``--spindle-estimate``). 7209 and 7210 were first drawn in round 3 session 10, after the contact-line rule was
+#: committed (once; docs/validation/stack-bands-family-c.md, *The contact-line rule*).
 REPORT_SEEDS = (7201, 7202, 7203, 7204, 7205, 7206, 7207, 7208)
 SEEN_SEEDS = (7201, 7202, 7203, 7204)
 

@@ -18,11 +18,11 @@ candidate lacking a value on some axis cannot be placed and takes no weight (unl
 no candidate can be placed: then the caller falls back).
 
 The caller (``jointdb.store._query.combine_stiffness``) combines each diagonal entry's
-storage ``Re Z_ii`` and loss ``Im Z_ii`` geometrically with these weights where every
-neighbour's is positive, so a power law ``k ∝ T^n d^m`` is reproduced exactly (linear
-weights would make k 2.7 % too stiff for n = 0.5, joints at 40 and 120 N·m, request
-90 N·m), and averages linearly where an entry changes sign (a shank resonating on its
-contact layer makes ``Re Z_xx`` negative above it) and off the diagonal. (A complex
+storage ``Re Z_ii`` and loss ``Im Z_ii`` geometrically with these weights on the lines where
+every neighbour's storage and loss are positive on every diagonal entry (``contact_lines``), so a
+power law ``k ∝ T^n d^m`` is reproduced exactly (linear weights would make k 2.7 % too stiff for
+n = 0.5, joints at 40 and 120 N·m, request 90 N·m), and averages linearly on the other lines (a
+shank resonating on its contact layer makes ``Re Z_xx`` negative above it) and off the diagonal. (A complex
 ``ln Z`` of whole entries was tried before and was worse: it is ill-defined where the
 entries change sign.)
 

@@ -46,10 +46,11 @@ The neighbours' receptances are inverted to dynamic stiffness ``Z_i = H_i⁻¹``
 line, batched), combined and inverted back (docs/theory.md §1a; interpolating receptances
 would mix resonances instead). Each diagonal entry's storage ``Re Z_ii`` and loss ``Im Z_ii``
 are combined as a power law, ``exp(Σ w_i ln Re Z_ii,i)`` (and the same for the loss), on every
-line where all neighbours taking weight have that part > 0: contact stiffness and damping grow
-as powers of torque, force and shank diameter, which the log coordinates then reproduce
-exactly. Elsewhere (an entry that changes sign, a mass-like line) and for off-diagonal entries
-the average is linear, ``Σ w_i Z_i`` (:data:`INTERPOLATION_LAW`).
+*contact line*: one where all neighbours taking weight have positive storage and loss on every
+diagonal entry (:func:`contact_lines`). Contact stiffness and damping grow as powers of torque,
+force and shank diameter, which the log coordinates then reproduce exactly. Elsewhere (a
+neighbour mass-like or active on the line) and for off-diagonal entries the average is linear,
+``Σ w_i Z_i`` (:data:`INTERPOLATION_LAW`), both parts alike.
 On a line where that average would be non-passive (``Im Z_ii < 0``) and some
 neighbour is passive, the loss ``Im Z`` is averaged over the passive ones only
 (:func:`passive_line_weights`); the storage stiffness ``Re Z`` keeps the
