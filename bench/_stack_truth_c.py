@@ -93,9 +93,10 @@ TUNING_SEEDS = ()  # none: the band is not tuned on family C
 #: 7317 / 7318 were run once after it was committed (803b592; *The shank inside the holder*), and 7319 / 7320 once
 #: at the end of that session (3c5f8d6: the product of 803b592 plus dc46afa's guard, which changes no number).
 #: Round 3 session 9: 7321-7324 run once with the identification factor checked (linear interpolation), 7325-7328
-#: once with the power-law interpolation (7325 / 7326 at 0.75 % noise). Session 10: the seen seeds 7301-7312 checked the
-#: band's lean (kept) and the contact-line rule (adopted) by rules written first; 7329-7332 (0.2 %) and 7333 / 7334 (0.75 %) were then
-#: run once (docs/validation/stack-bands-family-c.md, *The contact-line rule*). A new blind check needs seeds >= 7335.
+#: once with the power-law interpolation (7325 / 7326 at 0.75 % noise). Session 10: the seen seeds 7301-7312
+#: checked the band's lean (kept) and the contact-line rule (adopted) by rules written first; 7329-7332 (0.2 %) and
+#: 7333 / 7334 (0.75 %) were then run once (docs/validation/stack-bands-family-c.md, *The contact-line rule*). A new
+#: blind check needs seeds >= 7335.
 SEEN_SEEDS = (7301, 7302, 7303, 7304, 7305, 7306, 7307, 7308, 7309, 7310, 7311, 7312)
 HELD_OUT_SEEDS = (7313, 7314, 7315, 7316, 7317, 7318, 7319, 7320)
 
