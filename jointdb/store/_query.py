@@ -390,7 +390,7 @@ def interpolate(
     w_lines, moved = passive_line_weights(w_used, z_all)
     # storage (Re Z) with the barycentric weights, loss (Im Z) with the passive-first ones
     w_storage = np.repeat(w_used[:, None], grid.size, axis=1)
-    contact = contact_lines(w_storage, z_all) & contact_lines(w_lines, z_all)
+    contact = contact_lines(w_storage, z_all)  # every used neighbour counts (the loss weights drop some: a subset)
     z = combine_stiffness(w_storage, z_all.real, contact) + 1j * combine_stiffness(w_lines, z_all.imag, contact)
     try:
         h_int = np.linalg.inv(z)
