@@ -25,8 +25,6 @@ import sys
 from contextlib import ExitStack
 from pathlib import Path
 
-import numpy as np
-
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import _stack_truth_b as tb  # noqa: E402
@@ -66,11 +64,11 @@ def _constants(config):
     import jointdb.usecases._stack_band as stack_band
 
     bias, iota, lam = config
-    stack_ = ExitStack()
-    stack_.enter_context(swapped(stack_band, "LINE_BIAS", bias))
-    stack_.enter_context(swapped(stack_band, "IDENTIFICATION_CALIBRATION", iota))
-    stack_.enter_context(swapped(stack, "LINE_CALIBRATION", lam))
-    return stack_
+    block = ExitStack()
+    block.enter_context(swapped(stack_band, "LINE_BIAS", bias))
+    block.enter_context(swapped(stack_band, "IDENTIFICATION_CALIBRATION", iota))
+    block.enter_context(swapped(stack, "LINE_CALIBRATION", lam))
+    return block
 
 
 def stack_rows(family, case, repo, grid, n: int = bsb.N_SAMPLES) -> dict[str, dict]:
