@@ -136,7 +136,7 @@ def main(argv=None) -> None:
     ap.add_argument("--family", choices=("b", "c"), default="c")
     ap.add_argument("--grid", choices=(*GRIDS, "product"), default="session10",
                     help="a grid of configurations, or the product's constants alone")
-    ap.add_argument("--seeds", type=int, nargs="*", default=None, help="default: family C's seen seeds")
+    ap.add_argument("--seeds", type=int, nargs="*", default=None, help="default: family C's seen seeds, family B's tuning seeds")
     ap.add_argument("--n", type=int, default=24, help="stacks per seed")
     ap.add_argument("--rows-out", type=Path, default=None)
     ap.add_argument("--table", type=Path, nargs="*", default=None, help="pool these --rows-out files instead")

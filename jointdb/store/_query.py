@@ -274,8 +274,7 @@ def contact_lines(weights: np.ndarray, z: np.ndarray) -> np.ndarray:
         of the conditions does not describe it, and a geometric mean of one part beside a linear mean of the
         other would mix two laws in one joint.
     """
-    ii = np.arange(z.shape[-1])
-    diag = z[:, :, ii, ii]  # (k, f, n)
+    diag = np.diagonal(z, axis1=2, axis2=3)  # (k, f, n), a view (as passive_line_weights reads it)
     contact = (diag.real > 0) & (diag.imag > 0)
     return np.all(contact | (weights[:, :, None] == 0), axis=(0, 2))
 
