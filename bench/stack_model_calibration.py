@@ -2,8 +2,9 @@
 
 The band takes three constants that its own records cannot fix: the identification factor ι on a tool–holder
 version's identification-assembly error (``jointdb.usecases._stack_band.IDENTIFICATION_CALIBRATION``), the lean of a
-line left out (``LINE_BIAS``) and the spread of lines left out (``jointdb.usecases._stack.LINE_CALIBRATION``, λ).
-This script predicts each stack once and samples its full band at every configuration of a grid (same draws, n =
+line left out (``LINE_BIAS``) and the spread of lines left out (``jointdb.usecases._stack.LINE_CALIBRATION``, λ);
+a fourth, the joint-choice term's feature shift (``FEATURE_SHIFT``, s: 0, off, in the product), was tried in session 11
+(``--grid shift`` / ``shift2``; not adopted: every configuration wider than the product). This script predicts each stack once and samples its full band at every configuration of a grid (same draws, n =
 200, seed 1, as ``bench/bench_stack_bands.py``), then says per configuration how many true peaks and lobe floors lie
 inside and how wide the band is against the error.
 
@@ -39,32 +40,39 @@ from stack_hfmode_cause import family_repo, swapped  # noqa: E402
 GRIDS = {
     "iota": ((0.5, 1.0, 0.5), (0.5, 0.75, 0.5), (0.5, 0.5, 0.5), (0.5, 0.25, 0.5)),
     "session10": ((0.0, 1.0, 0.5), (0.0, 0.75, 0.5), (0.0, 0.5, 0.5), (0.0, 0.75, 0.35), (0.0, 0.5, 0.35)),
+    # session 11: the joint-choice term's feature shift s (4th constant) with ι lowered; grid 1 was run with the shift
+    # applied before the joint-choice error (the code then), so these rows are reproduced only by that code
+    "shift": ((0.5, 0.5, 0.5, 0.01), (0.5, 0.5, 0.5, 0.02), (0.5, 0.25, 0.5, 0.01), (0.5, 0.25, 0.5, 0.02)),
+    # grid 2: the shift applied last (to the joint with its joint-choice error), ι and λ lowered
+    "shift2": ((0.5, 0.25, 0.25, 0.02), (0.5, 0.0, 0.25, 0.02), (0.5, 0.25, 0.25, 0.01), (0.5, 0.0, 0.5, 0.01)),
 }
 #: The coverage the rule asks of the seen seeds, for peaks and floors each (the band's nominal level).
 NOMINAL = 0.90
 
 
-def _product() -> tuple[float, float, float]:
-    """The product's (LINE_BIAS, ι, λ)."""
+def _product() -> tuple[float, float, float, float]:
+    """The product's (LINE_BIAS, ι, λ, s)."""
     import jointdb.usecases._stack as stack
     import jointdb.usecases._stack_band as stack_band
 
-    return stack_band.LINE_BIAS, stack_band.IDENTIFICATION_CALIBRATION, stack.LINE_CALIBRATION
+    return (stack_band.LINE_BIAS, stack_band.IDENTIFICATION_CALIBRATION, stack.LINE_CALIBRATION,
+            stack_band.FEATURE_SHIFT)
 
 
 def config_key(config) -> str:
-    """``"bias 0.5 ι 1 λ 0.5"``: a configuration's key in the rows."""
-    bias, iota, lam = config
-    return f"bias {bias:g} ι {iota:g} λ {lam:g}"
+    """``"bias 0.5 ι 1 λ 0.5"`` (``… s 0.03`` with a feature shift): a configuration's key in the rows."""
+    bias, iota, lam, shift = (*config, 0.0)[:4]
+    return f"bias {bias:g} ι {iota:g} λ {lam:g}" + (f" s {shift:g}" if shift else "")
 
 
 def _constants(config):
-    """Context manager setting the band's three constants to ``config`` for its block."""
+    """Context manager setting the band's constants to ``config`` (β, ι, λ[, s]; s 0 when not given)."""
     import jointdb.usecases._stack as stack
     import jointdb.usecases._stack_band as stack_band
 
-    bias, iota, lam = config
+    bias, iota, lam, shift = (*config, 0.0)[:4]
     block = ExitStack()
+    block.enter_context(swapped(stack_band, "FEATURE_SHIFT", shift))
     block.enter_context(swapped(stack_band, "LINE_BIAS", bias))
     block.enter_context(swapped(stack_band, "IDENTIFICATION_CALIBRATION", iota))
     block.enter_context(swapped(stack, "LINE_CALIBRATION", lam))

@@ -179,6 +179,35 @@ def choice_perturbed(planes: np.ndarray, relative: np.ndarray, scale: np.ndarray
     return np.linalg.inv(_expm(s) @ z)
 
 
+def frequency_shifted(planes: np.ndarray, freq: np.ndarray, eps: np.ndarray) -> np.ndarray:
+    """Joint receptance samples each read at stretched frequencies: ``out[i](f) = planes[i](f (1 + eps_i))``.
+
+    The joint-choice term's feature position (docs/stacks.md, *Bands*): a per-line joint identified by IRC carries
+    frequency-localised features (where the point joint absorbs its identification assembly's dynamics), and a
+    joint interpolated between catalogued conditions cannot place them; each sample moves them by ``eps_i``.
+
+    Parameters
+    ----------
+    planes
+        Joint receptance samples ``(n, n_freq, 2, 2)``.
+    freq
+        ``(n_freq,)`` increasing lines [Hz].
+    eps
+        ``(n,)`` relative shift of each sample (0: the line itself); lines read beyond the grid take its end value.
+
+    Returns
+    -------
+    ndarray ``(n, n_freq, 2, 2)``
+        Linear interpolation between the two neighbouring lines.
+    """
+    f = np.asarray(freq, float)
+    g = np.clip(f[None, :] * (1.0 + np.asarray(eps, float))[:, None], f[0], f[-1])
+    hi = np.clip(np.searchsorted(f, g), 1, f.size - 1)
+    w = ((g - f[hi - 1]) / (f[hi] - f[hi - 1]))[:, :, None, None]
+    take = lambda i: np.take_along_axis(planes, i[:, :, None, None], axis=1)  # noqa: E731
+    return (1.0 - w) * take(hi - 1) + w * take(hi)
+
+
 def _expm(a: np.ndarray) -> np.ndarray:
     """Matrix exponential of each matrix of ``a`` (``(..., n, n)``): in closed form for 2×2 blocks, batched;
     otherwise :func:`scipy.linalg.expm` (which loops over the batch in Python).
@@ -308,7 +337,16 @@ def _law_applied(planes: dict, law, f, n, seed, name) -> dict:
     return _both_planes(planes, lambda p: damping_law(p, f, f_ref, beta, share))
 
 
-def _interface_samples(name, spec, resolved, f, n, seed, uncertainties, choice, rng, law=None):
+def _shift_applied(planes: dict, sigma, f, n, seed, name) -> dict:
+    """The planes of one interface with a relative frequency shift ``eps ~ N(0, sigma²)`` drawn (its own stream) and
+    applied, the same in both planes (one joint); unchanged for ``sigma`` None or 0."""
+    if not sigma:
+        return planes
+    eps = sigma * np.random.default_rng([seed, 5381, INTERFACE_NAMES.index(name)]).standard_normal(n)
+    return _both_planes(planes, lambda p: frequency_shifted(p, f, eps))
+
+
+def _interface_samples(name, spec, resolved, f, n, seed, uncertainties, choice, rng, law=None, shift=None):
     """``None`` (rigid) or per plane ``(n, n_freq, 2, 2)`` samples of one interface's joint."""
     if name in uncertainties:
         s = _sampled_planes(uncertainties[name], f, n, seed + 7919 * INTERFACE_NAMES.index(name),
@@ -322,20 +360,20 @@ def _interface_samples(name, spec, resolved, f, n, seed, uncertainties, choice, 
     planes = _law_applied(planes, law, f, n, seed, name)
     choice = (choice or {}).get(name)
     if choice is None:
-        return planes
+        return _shift_applied(planes, shift, f, n, seed, name)
     state = rng.bit_generator.state
 
     def perturbed(p):
         rng.bit_generator.state = state  # the same draws in both planes: one joint
         return choice_perturbed(p, *choice[:2], rng, *choice[2:])
 
-    return _both_planes(planes, perturbed)
+    return _shift_applied(_both_planes(planes, perturbed), shift, f, n, seed, name)
 
 
 def tip_band(spec: StackSpec, resolved_joints: Mapping[str, FRF], uncertainties: Mapping[str, Mapping] | None = None,
              freq=None, n: int = 200, seed: int = 0, choice: Mapping[str, tuple] | None = None,
              tip_sigma: float = 0.0, spindle_estimate=None, model_sigma: float = 0.0,
-             damping: Mapping[str, tuple] | None = None) -> TipBand:
+             damping: Mapping[str, tuple] | None = None, feature_shift: Mapping[str, float] | None = None) -> TipBand:
     """5/50/95 % band of the tool-tip receptance from sampled joints.
 
     Parameters
@@ -362,6 +400,10 @@ def tip_band(spec: StackSpec, resolved_joints: Mapping[str, FRF], uncertainties:
     damping
         Interface name → ``(f_ref, share)`` of a constant spring–damper joint whose damping law is unknown
         (:func:`damping_law`): each sample draws β uniform on [0, 1] and applies it before the joint-choice error.
+    feature_shift
+        Interface name → standard deviation of a relative shift of its joint's frequency axis
+        (:func:`frequency_shifted`), drawn per sample and applied last, to the joint with its joint-choice error
+        (the error's features move with the joint's).
     n, seed
         Ensemble size and random seed.
 
@@ -381,7 +423,8 @@ def tip_band(spec: StackSpec, resolved_joints: Mapping[str, FRF], uncertainties:
     uncertainties = dict(uncertainties or {})
     choice = {k: v for k, v in (choice or {}).items() if v is not None}
     damping = {k: v for k, v in (damping or {}).items() if v is not None}
-    active = set(uncertainties) | set(choice) | {term for term, on in (
+    feature_shift = {k: float(v) for k, v in (feature_shift or {}).items() if v}
+    active = set(uncertainties) | set(choice) | set(feature_shift) | {term for term, on in (
         ("damping law", bool(damping)), ("prediction path", tip_sigma > 0), ("spindle", spindle_estimate is not None),
         ("substructure model", model_sigma > 0)) if on}
     if not active:
@@ -398,8 +441,8 @@ def tip_band(spec: StackSpec, resolved_joints: Mapping[str, FRF], uncertainties:
         a = np.broadcast_to(a, (n,) + a.shape[-3:]) if a.ndim == 3 else a
         return np.ascontiguousarray(a).reshape((n * f.size,) + a.shape[2:])
 
-    joints = {name: _interface_samples(name, spec, resolved, f, n, seed, uncertainties, choice, rng, damping.get(name))
-              for name in INTERFACE_NAMES}
+    joints = {name: _interface_samples(name, spec, resolved, f, n, seed, uncertainties, choice, rng, damping.get(name),
+                                       feature_shift.get(name)) for name in INTERFACE_NAMES}
     joints = {k: None if v is None else {p: flat(v[p]) for p in ("x", "y")} for k, v in joints.items()}
     tool, holder = flat(parts["tool"].values), flat(parts["holder"].values)
     spindle4 = spindle_four(parts["spindle"], node) if has_y else None

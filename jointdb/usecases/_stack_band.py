@@ -43,6 +43,14 @@ MODEL_FORM_SIGMA = 0.02
 #: contact stiffness linear in the shank diameter interpolated in ln d, is interpolated too stiff everywhere on it), so
 #: the band leans that way. Calibrated with LINE_CALIBRATION on the tuning seeds (docs/validation/stack-prediction.md).
 LINE_BIAS = 0.5
+#: Standard deviation of the relative frequency shift of a chosen (interpolated or nearest) joint's features, drawn
+#: within the joint-choice term (:func:`jointdb.stack._band.frequency_shifted`). A per-line joint identified by IRC
+#: is not smooth in frequency where it absorbs its identification assembly's dynamics (family C's tool–holder joints
+#: jump, Re Z even turning negative, over 0.9–1.3 kHz at positions that move with bore and drawbar force), and a joint
+#: interpolated between catalogued conditions cannot place those features: a stack whose mode sits on one errs by
+#: its sensitivity to where they are. 0 turns the shift off. Calibrated with IDENTIFICATION_CALIBRATION on family C's
+#: seen seeds and checked on family B's tuning seeds (docs/validation/stack-bands-family-c.md, *Feature position*).
+FEATURE_SHIFT = 0.0
 
 
 def _with_bias(resolution, perturbation):
@@ -292,6 +300,11 @@ def absent_terms(result) -> dict[str, str]:
     return out
 
 
+def feature_shifts(sigma: Mapping) -> dict[str, float]:
+    """Interface → :data:`FEATURE_SHIFT` for the interfaces whose joint carries a joint-choice error (``sigma``)."""
+    return {name: FEATURE_SHIFT for name in sigma} if FEATURE_SHIFT > 0 else {}
+
+
 def _inputs(result, terms=TERMS) -> tuple[dict, dict, list[str]]:
     from jointdb.stack._band import sampleable_uncertainties
 
@@ -341,7 +354,8 @@ def prediction_band(result, n: int = 200, seed: int = 0, terms=TERMS):
     resolved = {name: r.frf for name, r in result.joints.items() if r.frf is not None}
     try:
         b = tip_band(result.spec, resolved, unc, result.prediction.tip.freq, n=n, seed=seed, choice=sigma,
-                     tip_sigma=tip_sigma, spindle_estimate=est, model_sigma=m_sigma, damping=laws)
+                     tip_sigma=tip_sigma, spindle_estimate=est, model_sigma=m_sigma, damping=laws,
+                     feature_shift=feature_shifts(sigma))
     except InputError as exc:
         notes.append(f"no band: {exc}")
         return None, notes
