@@ -13,7 +13,8 @@ A diagnostic, one point prediction per stack (no band), in one process per mode:
 ``--compare none.json plus.json minus.json`` prints the correlation of ln |error| with ln s, s the RMS of the two
 shifts' peak changes, and |error| by quartile of s. Session 11 (seen seeds 7301–7312, 0.2 % catalogue): correlation
 0.50; |error| / s at 50 / 80 / 90 / 95 %: 0.58 / 1.05 / 1.51 / 1.97; the smoothing made the median |peak error|
-3.5 % → 9.7 % (docs/validation/stack-bands-family-c.md, *Feature position*).
+3.5 % → 9.7 % (docs/validation/stack-bands-family-c.md, *Feature position*). ``--offline ROWS KEY`` adds an offline
+estimate (not a band) of a band term proportional to ``s`` with the product's other terms scaled down.
 
     python bench/stack_feature_proxy.py --catalogue /tmp/c --mode shift --eps 0.03 --seeds 7301 --out /tmp/p.json
 """
@@ -108,6 +109,27 @@ def compare(base, plus, minus, say=print) -> None:
         + " / ".join(f"{v:.2f}" for v in np.quantile(np.abs(e) / np.maximum(s, 1e-3), [0.5, 0.8, 0.9, 0.95])))
 
 
+def offline_band(band_rows, base, plus, minus, say=print) -> None:
+    """An offline estimate, not a band: coverage and width if the product's peak half-widths ``h`` (``band_rows``:
+    one configuration's rows of bench/stack_model_calibration.py, same stacks in the same order) were scaled by ``a``
+    and a term ``k·s`` added in quadrature, with |error| ≤ half-width as "inside" (the band's lean and asymmetry
+    ignored: the product shows 97.9 % this way against 95.1 % with its real edges)."""
+    e = np.array([r["peak_err"] for r in band_rows])
+    h = np.array([r["peak_half"] for r in band_rows])
+    if [r["case"] for r in band_rows] != [r["case"] for r in base]:
+        raise SystemExit("the band rows and the proxy rows are not the same stacks in the same order")
+    b = np.array([r["peak_err"] for r in base])
+    s = np.sqrt(((np.array([r["peak_err"] for r in plus]) - b) ** 2
+                 + (np.array([r["peak_err"] for r in minus]) - b) ** 2) / 2)
+    say("| a (other terms) | k (on s) | inside (symmetric) | median half-width / median abs error |")
+    say("|---|---|---|---|")
+    for a in (1.0, 0.5, 0.35, 0.25):
+        for k in (0.0, 0.5, 1.0, 1.5):
+            hw = np.hypot(a * h, k * s)
+            say(f"| {a:g} | {k:g} | {np.mean(np.abs(e) <= hw):.1%} | {np.median(hw):.1%} / {np.median(np.abs(e)):.1%} "
+                f"({np.median(hw) / np.median(np.abs(e)):.2f}×) |")
+
+
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--catalogue", type=Path, help="family-C catalogue folder (built if empty)")
@@ -116,9 +138,18 @@ def main(argv=None) -> None:
     ap.add_argument("--seeds", type=int, nargs="*", default=list(range(7301, 7313)))
     ap.add_argument("--out", type=Path)
     ap.add_argument("--compare", type=Path, nargs=3, metavar=("NONE", "PLUS", "MINUS"))
+    ap.add_argument("--offline", type=Path, nargs=2, metavar=("ROWS_JSON", "KEY"),
+                    help="with --compare: an offline estimate against one configuration's band rows (a JSON file of "
+                         "seed → configuration → rows, and the key of the block holding it, e.g. "
+                         "docs/validation/stack-bands-family-c-session10.json contact_rule_seen_7301_7312)")
     args = ap.parse_args(argv)
     if args.compare:
-        compare(*(json.loads(p.read_text(encoding="utf-8")) for p in args.compare))
+        base, plus, minus = (json.loads(p.read_text(encoding="utf-8")) for p in args.compare)
+        compare(base, plus, minus)
+        if args.offline:
+            block = json.loads(args.offline[0].read_text(encoding="utf-8"))[str(args.offline[1])]
+            rows = [r for seed in sorted(block) for per in block[seed].values() for r in per]
+            offline_band(rows, base, plus, minus)
         return
     if args.catalogue is None:
         ap.error("--catalogue is needed to run a mode")
