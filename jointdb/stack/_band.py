@@ -182,9 +182,11 @@ def choice_perturbed(planes: np.ndarray, relative: np.ndarray, scale: np.ndarray
 def frequency_shifted(planes: np.ndarray, freq: np.ndarray, eps: np.ndarray) -> np.ndarray:
     """Joint receptance samples each read at stretched frequencies: ``out[i](f) = planes[i](f (1 + eps_i))``.
 
-    The joint-choice term's feature position (docs/stacks.md, *Bands*): a per-line joint identified by IRC carries
-    frequency-localised features (where the point joint absorbs its identification assembly's dynamics), and a
-    joint interpolated between catalogued conditions cannot place them; each sample moves them by ``eps_i``.
+    A per-line joint identified by IRC can carry frequency-localised features (family C's tool–holder joints over
+    0.9–1.3 kHz), which a joint interpolated between catalogued conditions cannot place; each sample moves them by
+    ``eps_i``. Used by :func:`tip_band` (``feature_shift``), which the product leaves off
+    (:data:`jointdb.usecases._stack_band.FEATURE_SHIFT` = 0: it widened the band more than it covered,
+    docs/validation/stack-bands-family-c.md, *Feature position*), and by the benches that measure the sensitivity.
 
     Parameters
     ----------
@@ -204,8 +206,9 @@ def frequency_shifted(planes: np.ndarray, freq: np.ndarray, eps: np.ndarray) -> 
     g = np.clip(f[None, :] * (1.0 + np.asarray(eps, float))[:, None], f[0], f[-1])
     hi = np.clip(np.searchsorted(f, g), 1, f.size - 1)
     w = ((g - f[hi - 1]) / (f[hi] - f[hi - 1]))[:, :, None, None]
-    take = lambda i: np.take_along_axis(planes, i[:, :, None, None], axis=1)  # noqa: E731
-    return (1.0 - w) * take(hi - 1) + w * take(hi)
+    lo_vals = np.take_along_axis(planes, (hi - 1)[:, :, None, None], axis=1)
+    hi_vals = np.take_along_axis(planes, hi[:, :, None, None], axis=1)
+    return (1.0 - w) * lo_vals + w * hi_vals
 
 
 def _expm(a: np.ndarray) -> np.ndarray:

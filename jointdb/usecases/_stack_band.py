@@ -48,8 +48,9 @@ LINE_BIAS = 0.5
 #: is not smooth in frequency where it absorbs its identification assembly's dynamics (family C's tool–holder joints
 #: jump, Re Z even turning negative, over 0.9–1.3 kHz at positions that move with bore and drawbar force), and a joint
 #: interpolated between catalogued conditions cannot place those features: a stack whose mode sits on one errs by
-#: its sensitivity to where they are. 0 turns the shift off. Calibrated with IDENTIFICATION_CALIBRATION on family C's
-#: seen seeds and checked on family B's tuning seeds (docs/validation/stack-bands-family-c.md, *Feature position*).
+#: its sensitivity to where they are. **0: off.** Two grids on family C's seen seeds (s 0.01–0.02 with ι and λ
+#: lowered) widened the median peak band to 18–40 % against the product's 15.3 %, so it is not used
+#: (docs/validation/stack-bands-family-c.md, *Feature position*); bench/stack_model_calibration.py sets it.
 FEATURE_SHIFT = 0.0
 
 
