@@ -60,10 +60,24 @@ def smoothed(frf, lo=500.0, hi=1500.0, tol=0.2):
     return replace(frf, values=np.linalg.inv(np.where(bad[:, None, None], trend, z)))
 
 
-def _patched(repo, mode: str, eps: float):
-    """``repo.load_frf`` wrapped so tool–holder joints come back shifted or smoothed."""
+def shifted(frf, eps: float):
+    """``frf`` (a joint receptance) read at ``f (1 + eps)`` on its own lines
+    (:func:`jointdb.stack._band.frequency_shifted`)."""
     from jointdb.stack._band import frequency_shifted
 
+    return replace(frf, values=frequency_shifted(frf.values[None], frf.freq, np.array([eps]))[0])
+
+
+def peak_sensitivity(base, plus, minus) -> tuple[np.ndarray, np.ndarray]:
+    """``(error, s)`` per stack: the peak error as predicted, and the RMS of its change under the two shifts."""
+    e = np.array([r["peak_err"] for r in base])
+    s = np.sqrt(((np.array([r["peak_err"] for r in plus]) - e) ** 2
+                 + (np.array([r["peak_err"] for r in minus]) - e) ** 2) / 2)
+    return e, s
+
+
+def _patched(repo, mode: str, eps: float):
+    """``repo.load_frf`` wrapped so tool–holder joints come back shifted or smoothed."""
     load = repo.load_frf
 
     def load_frf(version, number=None):
@@ -73,7 +87,7 @@ def _patched(repo, mode: str, eps: float):
             return frf
         if mode == "smooth":
             return smoothed(frf)
-        return replace(frf, values=frequency_shifted(frf.values[None], frf.freq, np.array([eps]))[0])
+        return shifted(frf, eps)
 
     repo.load_frf = load_frf
 
@@ -98,9 +112,7 @@ def run(catalogue: Path, mode: str, eps: float, seeds, say=print) -> list[dict]:
 
 
 def compare(base, plus, minus, say=print) -> None:
-    e = np.array([r["peak_err"] for r in base])
-    s = np.sqrt(((np.array([r["peak_err"] for r in plus]) - e) ** 2
-                 + (np.array([r["peak_err"] for r in minus]) - e) ** 2) / 2)
+    e, s = peak_sensitivity(base, plus, minus)
     say(f"correlation of ln|error| with ln s: {np.corrcoef(np.log(np.abs(e) + 1e-4), np.log(s + 1e-4))[0, 1]:.2f}")
     for q in np.array_split(np.argsort(s), 4):
         say(f"  quartile of s (median {np.median(s[q]):.1%}): median |error| {np.median(np.abs(e[q])):.1%}, "
@@ -118,9 +130,7 @@ def offline_band(band_rows, base, plus, minus, say=print) -> None:
     h = np.array([r["peak_half"] for r in band_rows])
     if [r["case"] for r in band_rows] != [r["case"] for r in base]:
         raise SystemExit("the band rows and the proxy rows are not the same stacks in the same order")
-    b = np.array([r["peak_err"] for r in base])
-    s = np.sqrt(((np.array([r["peak_err"] for r in plus]) - b) ** 2
-                 + (np.array([r["peak_err"] for r in minus]) - b) ** 2) / 2)
+    s = peak_sensitivity(base, plus, minus)[1]
     say("| a (other terms) | k (on s) | inside (symmetric) | median half-width / median abs error |")
     say("|---|---|---|---|")
     for a in (1.0, 0.5, 0.35, 0.25):

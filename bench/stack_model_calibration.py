@@ -4,8 +4,9 @@ The band takes three constants that its own records cannot fix: the identificati
 version's identification-assembly error (``jointdb.usecases._stack_band.IDENTIFICATION_CALIBRATION``), the lean of a
 line left out (``LINE_BIAS``) and the spread of lines left out (``jointdb.usecases._stack.LINE_CALIBRATION``, λ);
 a fourth, the joint-choice term's feature shift (``FEATURE_SHIFT``, s: 0, off, in the product), was tried in session 11
-(``--grid shift`` / ``shift2``; not adopted: every configuration wider than the product). This script predicts each stack once and samples its full band at every configuration of a grid (same draws, n =
-200, seed 1, as ``bench/bench_stack_bands.py``), then says per configuration how many true peaks and lobe floors lie
+(``--grid shift`` / ``shift2``; not adopted: every configuration wider than the product). This script predicts each
+stack once and samples its full band at every configuration of a grid (same draws, n = 200, seed 1, as
+``bench/bench_stack_bands.py``), then says per configuration how many true peaks and lobe floors lie
 inside and how wide the band is against the error.
 
     python bench/stack_model_calibration.py --catalogue /tmp/c --seeds 7301 7302 --rows-out /tmp/k1.json
@@ -144,7 +145,8 @@ def main(argv=None) -> None:
     ap.add_argument("--family", choices=("b", "c"), default="c")
     ap.add_argument("--grid", choices=(*GRIDS, "product"), default="session10",
                     help="a grid of configurations, or the product's constants alone")
-    ap.add_argument("--seeds", type=int, nargs="*", default=None, help="default: family C's seen seeds, family B's tuning seeds")
+    ap.add_argument("--seeds", type=int, nargs="*", default=None,
+                    help="default: family C's seen seeds, family B's tuning seeds")
     ap.add_argument("--n", type=int, default=24, help="stacks per seed")
     ap.add_argument("--rows-out", type=Path, default=None)
     ap.add_argument("--table", type=Path, nargs="*", default=None, help="pool these --rows-out files instead")

@@ -2,7 +2,8 @@
 session 11; an experiment in the bench, nothing in the product).
 
 Per stack: the prediction as the product makes it, then twice more with every chosen joint (one carrying a
-joint-choice error, on the interfaces in ``SHIFTED``) read at ``f (1 ± DELTA)`` (:func:`jointdb.stack._band.frequency_shifted`); ``s`` = RMS of
+joint-choice error, on the interfaces in ``SHIFTED``) read at ``f (1 ± DELTA)``
+(:func:`jointdb.stack._band.frequency_shifted`); ``s`` = RMS of
 ``ln(peak / peak₀)`` over the two. Per configuration ``(a, k)``: the product's band with its calibrated constants
 scaled by ``a`` (ι → a·ι, λ → a·λ, the prediction path's σ → a·σ) and a log-normal tip term ``k·s`` added to the
 substructure-model σ in quadrature; the verdicts as bench/bench_stack_bands.py gives them (true peak and lobe floor
@@ -19,7 +20,6 @@ import argparse
 import json
 import sys
 from contextlib import ExitStack
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -30,6 +30,7 @@ import _stack_truth_b as tb  # noqa: E402
 import _stack_truth_c as tc  # noqa: E402
 import _stack_validation as sv  # noqa: E402
 import bench_stack_bands as bsb  # noqa: E402
+from stack_feature_proxy import shifted  # noqa: E402
 from stack_hfmode_cause import family_repo, swapped  # noqa: E402
 
 DELTA = 0.03
@@ -44,7 +45,6 @@ def sensitivity(result, f) -> float:
     """RMS of ln(peak ratio) of the x tip under the chosen joints read at ``f (1 ± DELTA)``; 0 without a chosen one."""
     import jointdb.usecases._stack_band as sb
     from jointdb.stack import predict_tool_tip
-    from jointdb.stack._band import frequency_shifted
 
     chosen = {k for k, r in result.joints.items() if k in SHIFTED and sb.choice_perturbation(r, f) is not None}
     if not chosen:
@@ -53,8 +53,7 @@ def sensitivity(result, f) -> float:
     peak0 = np.abs(result.prediction.tip.values[:, 0, 0]).max()
     logs = []
     for eps in (DELTA, -DELTA):
-        moved = {k: (replace(v, values=frequency_shifted(v.values[None], v.freq, np.array([eps]))[0]) if k in chosen
-                     else v) for k, v in resolved.items()}
+        moved = {k: shifted(v, eps) if k in chosen else v for k, v in resolved.items()}
         logs.append(np.log(np.abs(predict_tool_tip(result.spec, moved, f).tip.values[:, 0, 0]).max() / peak0))
     return float(np.sqrt(np.mean(np.square(logs))))
 
@@ -115,9 +114,9 @@ def main(argv=None) -> None:
             for case in family.draw(args.n, seed):
                 for key, row in stack_rows(family, case, repo).items():
                     per.setdefault(key, []).append(row)
-                print(f"  {case.name[:7]} s {row['sensitivity']:.3f}: " + "; ".join(
-                    f"{k}: {'in' if r[-1].get('peak_covered') else 'OUT'}/{'in' if r[-1].get('floor_covered') else 'OUT'}"
-                    for k, r in per.items()), flush=True)
+                verdicts = "; ".join(f"{k}: {'in' if r[-1].get('peak_covered') else 'OUT'}/"
+                                     f"{'in' if r[-1].get('floor_covered') else 'OUT'}" for k, r in per.items())
+                print(f"  {case.name[:7]} s {row['sensitivity']:.3f}: {verdicts}", flush=True)
             res[str(seed)] = per
     args.rows_out.write_text(json.dumps(res), encoding="utf-8")
 

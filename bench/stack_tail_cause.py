@@ -6,9 +6,11 @@
 2. ``--own C30-24 ...``: each named stack predicted with joints identified from campaigns at its *own* conditions
    (no joint to choose): within ~4 % for the five misses of the fresh seeds 7329–7332, so the tail is the joint
    choice, not the substructure model.
-3. ``--joints 600 1139 2000``: the catalogued tool–holder joints' Z_xx and Z_θθ at those lines: near the campaigns'
-   own dominant mode (~1.1 kHz) the per-line joints jump (Re Z_θθ of the Ø20 joints at 20 kN turns negative, the
-   8 kN joints' Re Z_xx too), and a stack whose dominant mode lies there takes those lines.
+3. ``--joints 600 1139 2000``: the catalogued tool–holder joints' Z_xx and Z_θθ at those lines: over about
+   0.9–1.3 kHz the per-line joints jump (Re Z_θθ of the Ø20 joints at 20 kN turns negative, the 8 kN joints' Re Z_xx
+   too) — for every bore, whatever its campaign's own dominant mode (session 11: these features are needed, smoothing
+   them makes predictions worse; bench/stack_feature_proxy.py) — and a stack whose dominant mode lies there takes
+   those lines.
 
     python bench/stack_tail_cause.py --catalogue /tmp/c --rows /tmp/7329.json --own C30-24 --joints 600 1139
 """
@@ -41,7 +43,8 @@ def by_frequency(rows: list[dict], say=print) -> None:
     for lo, hi in zip(BANDS_HZ[:-1], BANDS_HZ[1:]):
         m = (hz >= lo) & (hz < hi)
         if m.any():
-            say(f"| {lo}–{hi} | {m.sum()} | {np.median(err[m]):.1%} | {np.quantile(err[m], 0.9):.1%} | {miss[m].sum()} |")
+            say(f"| {lo}–{hi} | {m.sum()} | {np.median(err[m]):.1%} | {np.quantile(err[m], 0.9):.1%} "
+                f"| {miss[m].sum()} |")
 
 
 def own_conditions(names, say=print) -> None:
