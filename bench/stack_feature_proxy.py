@@ -4,7 +4,7 @@ A diagnostic, one point prediction per stack (no band), in one process per mode:
 
 * ``--mode none``: the prediction as it is;
 * ``--mode shift --eps 0.03`` (and ``-0.03``): every catalogued tool–holder joint read at ``f (1 + eps)``
-  (:func:`jointdb.stack._band.frequency_shifted`) — the sensitivity of each stack's dominant peak to where the
+  (:func:`jointdb.stack._feature.frequency_shifted`) — the sensitivity of each stack's dominant peak to where the
   joints' frequency features sit;
 * ``--mode smooth``: the tool–holder joints' lines between 0.5 and 1.5 kHz that depart from a robust trend
   (Re Z = a + b f², Im Z = c + d f, fitted per diagonal entry with 3-MAD rejection) by more than 20 % replaced by
@@ -62,10 +62,10 @@ def smoothed(frf, lo=500.0, hi=1500.0, tol=0.2):
 
 def shifted(frf, eps: float):
     """``frf`` (a joint receptance) read at ``f (1 + eps)`` on its own lines
-    (:func:`jointdb.stack._band.frequency_shifted`)."""
-    from jointdb.stack._band import frequency_shifted
+    (:func:`jointdb.stack._feature.read_shifted`)."""
+    from jointdb.stack._feature import read_shifted
 
-    return replace(frf, values=frequency_shifted(frf.values[None], frf.freq, np.array([eps]))[0])
+    return read_shifted(frf, eps)
 
 
 def peak_sensitivity(base, plus, minus) -> tuple[np.ndarray, np.ndarray]:

@@ -1,10 +1,11 @@
 """How wide should the band's calibrated terms be? A grid of the band's constants, one prediction per stack (issue 22).
 
-The band takes three constants that its own records cannot fix: the identification factor ι on a tool–holder
+The band takes constants that its own records cannot fix: the identification factor ι on a tool–holder
 version's identification-assembly error (``jointdb.usecases._stack_band.IDENTIFICATION_CALIBRATION``), the lean of a
-line left out (``LINE_BIAS``) and the spread of lines left out (``jointdb.usecases._stack.LINE_CALIBRATION``, λ);
-a fourth, the joint-choice term's feature shift (``FEATURE_SHIFT``, s: 0, off, in the product), was tried in session 11
-(``--grid shift`` / ``shift2``; not adopted: every configuration wider than the product). This script predicts each
+line left out (``LINE_BIAS``), the spread of lines left out (``jointdb.usecases._stack.LINE_CALIBRATION``, λ), the
+prediction path's σ (``MODEL_FORM_SIGMA``) and the factor k of the feature-position term
+(``FEATURE_POSITION_FACTOR``). (Session 11's sampled feature shift, grids ``shift`` / ``shift2``, is no longer in the
+product; its rows are in docs/validation/stack-bands-family-c-session11.json.) This script predicts each
 stack once and samples its full band at every configuration of a grid (same draws, n = 200, seed 1, as
 ``bench/bench_stack_bands.py``), then says per configuration how many true peaks and lobe floors lie
 inside and how wide the band is against the error.
@@ -36,47 +37,55 @@ import bench_stack_bands as bsb  # noqa: E402
 from _stack_bands_table import _cells  # noqa: E402
 from stack_hfmode_cause import family_repo, swapped  # noqa: E402
 
-#: (LINE_BIAS, ι, λ) per configuration. "iota": session 9 (the first was the product then); "session10": the lean
-#: removed, ι and λ lowered (the product then, (0.5, 1, 0.5), and (0.5, 0.5, 0.5) are in session 9's rows).
+#: (LINE_BIAS, ι, λ, σ_pp, k) per configuration; σ_pp and k may be left off: 0.02 and 0, what the product had before
+#: session 12. "iota": session 9 (the first was the product then); "session10": the lean removed, ι and λ lowered (the
+#: product then, (0.5, 1, 0.5), and (0.5, 0.5, 0.5) are in session 9's rows); "sensitivity4" / "sensitivity5":
+#: session 11's grid 4 and session 12's grid 5 (the feature-position term with factor k, and ι, λ, σ_pp scaled by a
+#: from (1, 0.5, 0.02): written (a, k) = (0.35, 1), (0.25, 1), (0.5, 0.5) and (0.35, 0.5), (0.25, 0.5), (0.5, 0.35)).
 GRIDS = {
     "iota": ((0.5, 1.0, 0.5), (0.5, 0.75, 0.5), (0.5, 0.5, 0.5), (0.5, 0.25, 0.5)),
     "session10": ((0.0, 1.0, 0.5), (0.0, 0.75, 0.5), (0.0, 0.5, 0.5), (0.0, 0.75, 0.35), (0.0, 0.5, 0.35)),
-    # session 11: the joint-choice term's feature shift s (4th constant) with ι lowered; grid 1 was run with the shift
-    # applied before the joint-choice error (the code then), so these rows are reproduced only by that code
-    "shift": ((0.5, 0.5, 0.5, 0.01), (0.5, 0.5, 0.5, 0.02), (0.5, 0.25, 0.5, 0.01), (0.5, 0.25, 0.5, 0.02)),
-    # grid 2: the shift applied last (to the joint with its joint-choice error), ι and λ lowered
-    "shift2": ((0.5, 0.25, 0.25, 0.02), (0.5, 0.0, 0.25, 0.02), (0.5, 0.25, 0.25, 0.01), (0.5, 0.0, 0.5, 0.01)),
+    "sensitivity4": tuple((0.5, a, 0.5 * a, 0.02 * a, k) for a, k in ((0.35, 1.0), (0.25, 1.0), (0.5, 0.5))),
+    "sensitivity5": tuple((0.5, a, 0.5 * a, 0.02 * a, k) for a, k in ((0.35, 0.5), (0.25, 0.5), (0.5, 0.35))),
 }
 #: The coverage the rule asks of the seen seeds, for peaks and floors each (the band's nominal level).
 NOMINAL = 0.90
+#: σ_pp and k of a configuration that does not give them.
+_DEFAULTS = (0.02, 0.0)
 
 
-def _product() -> tuple[float, float, float, float]:
-    """The product's (LINE_BIAS, ι, λ, s)."""
+def _full(config) -> tuple[float, float, float, float, float]:
+    return tuple(float(v) for v in (*config, *_DEFAULTS[len(config) - 3:]))
+
+
+def _product() -> tuple[float, float, float, float, float]:
+    """The product's (LINE_BIAS, ι, λ, σ_pp, k)."""
     import jointdb.usecases._stack as stack
     import jointdb.usecases._stack_band as stack_band
 
     return (stack_band.LINE_BIAS, stack_band.IDENTIFICATION_CALIBRATION, stack.LINE_CALIBRATION,
-            stack_band.FEATURE_SHIFT)
+            stack_band.MODEL_FORM_SIGMA, stack_band.FEATURE_POSITION_FACTOR)
 
 
 def config_key(config) -> str:
-    """``"bias 0.5 ι 1 λ 0.5"`` (``… s 0.03`` with a feature shift): a configuration's key in the rows."""
-    bias, iota, lam, shift = (*config, 0.0)[:4]
-    return f"bias {bias:g} ι {iota:g} λ {lam:g}" + (f" s {shift:g}" if shift else "")
+    """``"bias 0.5 ι 1 λ 0.5"`` (``… σ 0.01 k 0.5`` when σ_pp or k differ from 0.02, 0): a configuration's key."""
+    bias, iota, lam, sigma, k = _full(config)
+    return f"bias {bias:g} ι {iota:.4g} λ {lam:.4g}" + (
+        f" σ {sigma:.4g} k {k:g}" if (sigma, k) != _DEFAULTS else "")
 
 
 def _constants(config):
-    """Context manager setting the band's constants to ``config`` (β, ι, λ[, s]; s 0 when not given)."""
+    """Context manager setting the band's constants to ``config`` (:data:`GRIDS`)."""
     import jointdb.usecases._stack as stack
     import jointdb.usecases._stack_band as stack_band
 
-    bias, iota, lam, shift = (*config, 0.0)[:4]
+    bias, iota, lam, sigma, k = _full(config)
     block = ExitStack()
-    block.enter_context(swapped(stack_band, "FEATURE_SHIFT", shift))
     block.enter_context(swapped(stack_band, "LINE_BIAS", bias))
     block.enter_context(swapped(stack_band, "IDENTIFICATION_CALIBRATION", iota))
     block.enter_context(swapped(stack, "LINE_CALIBRATION", lam))
+    block.enter_context(swapped(stack_band, "MODEL_FORM_SIGMA", sigma))
+    block.enter_context(swapped(stack_band, "FEATURE_POSITION_FACTOR", k))
     return block
 
 
@@ -91,12 +100,14 @@ def stack_rows(family, case, repo, grid, n: int = bsb.N_SAMPLES) -> dict[str, di
     h = result.prediction.tip.values[:, 0, 0]
     base = {"case": case.name, "truth_peak": sv._dominant(truth, f)[1], "truth_floor": sv._floor(truth, f),
             "pred_peak": sv._dominant(h, f)[1], "pred_floor": sv._floor(h, f)}
+    with _constants((0.5, 1.0, 0.5, 0.02, 1.0)):
+        s = stack_band.feature_position(result)[0]  # k = 1: s itself
     out = {}
     for config in grid:
         with _constants(config):
-            band, _ = stack_band.prediction_band(result, n=n, seed=1)
+            band, _ = stack_band.prediction_band(result, n=n, seed=1, feature_sigma=_full(config)[4] * s)
             sigma = stack_band.model_error(result.joints)[0]
-        out[config_key(config)] = {**base, "model_sigma": sigma, **bsb.band_verdict(band, base, f)}
+        out[config_key(config)] = {**base, "model_sigma": sigma, "sensitivity": s, **bsb.band_verdict(band, base, f)}
     return out
 
 

@@ -12,6 +12,10 @@ Three sources of error are sampled, per interface:
 - *damping law*: a constant spring–damper identified at one mode is viscous by construction; away from that
   mode's frequency its loss could follow any law between viscous and hysteretic (:func:`damping_law`).
 
+Tip-level terms scale each sample's tip receptance by a log-normal factor: the prediction path's model form
+(``tip_sigma``), the substructure model's error its campaigns showed (``model_sigma``) and the sensitivity of the
+dominant peak to where a chosen joint's features sit (``feature_sigma``, :mod:`jointdb.stack._feature`).
+
 Every sample of the stack is coupled in one batched chain (samples stacked on the frequency axis;
 both bending planes, cross terms included when the spindle couples them) and the 5 / 50 / 95 %
 percentiles of |H| per line and of the tip peak are returned.
@@ -179,38 +183,6 @@ def choice_perturbed(planes: np.ndarray, relative: np.ndarray, scale: np.ndarray
     return np.linalg.inv(_expm(s) @ z)
 
 
-def frequency_shifted(planes: np.ndarray, freq: np.ndarray, eps: np.ndarray) -> np.ndarray:
-    """Joint receptance samples each read at stretched frequencies: ``out[i](f) = planes[i](f (1 + eps_i))``.
-
-    A per-line joint identified by IRC can carry frequency-localised features (family C's tool–holder joints over
-    0.9–1.3 kHz), which a joint interpolated between catalogued conditions cannot place; each sample moves them by
-    ``eps_i``. Used by :func:`tip_band` (``feature_shift``), which the product leaves off
-    (:data:`jointdb.usecases._stack_band.FEATURE_SHIFT` = 0: it widened the band more than it covered,
-    docs/validation/stack-bands-family-c.md, *Feature position*), and by the benches that measure the sensitivity.
-
-    Parameters
-    ----------
-    planes
-        Joint receptance samples ``(n, n_freq, 2, 2)``.
-    freq
-        ``(n_freq,)`` increasing lines [Hz].
-    eps
-        ``(n,)`` relative shift of each sample (0: the line itself); lines read beyond the grid take its end value.
-
-    Returns
-    -------
-    ndarray ``(n, n_freq, 2, 2)``
-        Linear interpolation between the two neighbouring lines.
-    """
-    f = np.asarray(freq, float)
-    g = np.clip(f[None, :] * (1.0 + np.asarray(eps, float))[:, None], f[0], f[-1])
-    hi = np.clip(np.searchsorted(f, g), 1, f.size - 1)
-    w = ((g - f[hi - 1]) / (f[hi] - f[hi - 1]))[:, :, None, None]
-    lo_vals = np.take_along_axis(planes, (hi - 1)[:, :, None, None], axis=1)
-    hi_vals = np.take_along_axis(planes, hi[:, :, None, None], axis=1)
-    return (1.0 - w) * lo_vals + w * hi_vals
-
-
 def _expm(a: np.ndarray) -> np.ndarray:
     """Matrix exponential of each matrix of ``a`` (``(..., n, n)``): in closed form for 2×2 blocks, batched;
     otherwise :func:`scipy.linalg.expm` (which loops over the batch in Python).
@@ -340,16 +312,7 @@ def _law_applied(planes: dict, law, f, n, seed, name) -> dict:
     return _both_planes(planes, lambda p: damping_law(p, f, f_ref, beta, share))
 
 
-def _shift_applied(planes: dict, sigma, f, n, seed, name) -> dict:
-    """The planes of one interface with a relative frequency shift ``eps ~ N(0, sigma²)`` drawn (its own stream) and
-    applied, the same in both planes (one joint); unchanged for ``sigma`` None or 0."""
-    if not sigma:
-        return planes
-    eps = sigma * np.random.default_rng([seed, 5381, INTERFACE_NAMES.index(name)]).standard_normal(n)
-    return _both_planes(planes, lambda p: frequency_shifted(p, f, eps))
-
-
-def _interface_samples(name, spec, resolved, f, n, seed, uncertainties, choice, rng, law=None, shift=None):
+def _interface_samples(name, spec, resolved, f, n, seed, uncertainties, choice, rng, law=None):
     """``None`` (rigid) or per plane ``(n, n_freq, 2, 2)`` samples of one interface's joint."""
     if name in uncertainties:
         s = _sampled_planes(uncertainties[name], f, n, seed + 7919 * INTERFACE_NAMES.index(name),
@@ -363,20 +326,20 @@ def _interface_samples(name, spec, resolved, f, n, seed, uncertainties, choice, 
     planes = _law_applied(planes, law, f, n, seed, name)
     choice = (choice or {}).get(name)
     if choice is None:
-        return _shift_applied(planes, shift, f, n, seed, name)
+        return planes
     state = rng.bit_generator.state
 
     def perturbed(p):
         rng.bit_generator.state = state  # the same draws in both planes: one joint
         return choice_perturbed(p, *choice[:2], rng, *choice[2:])
 
-    return _shift_applied(_both_planes(planes, perturbed), shift, f, n, seed, name)
+    return _both_planes(planes, perturbed)
 
 
 def tip_band(spec: StackSpec, resolved_joints: Mapping[str, FRF], uncertainties: Mapping[str, Mapping] | None = None,
              freq=None, n: int = 200, seed: int = 0, choice: Mapping[str, tuple] | None = None,
              tip_sigma: float = 0.0, spindle_estimate=None, model_sigma: float = 0.0,
-             damping: Mapping[str, tuple] | None = None, feature_shift: Mapping[str, float] | None = None) -> TipBand:
+             damping: Mapping[str, tuple] | None = None, feature_sigma: float = 0.0) -> TipBand:
     """5/50/95 % band of the tool-tip receptance from sampled joints.
 
     Parameters
@@ -403,10 +366,10 @@ def tip_band(spec: StackSpec, resolved_joints: Mapping[str, FRF], uncertainties:
     damping
         Interface name → ``(f_ref, share)`` of a constant spring–damper joint whose damping law is unknown
         (:func:`damping_law`): each sample draws β uniform on [0, 1] and applies it before the joint-choice error.
-    feature_shift
-        Interface name → standard deviation of a relative shift of its joint's frequency axis
-        (:func:`frequency_shifted`), drawn per sample and applied last, to the joint with its joint-choice error
-        (the error's features move with the joint's).
+    feature_sigma
+        Relative standard error (log units) from where the chosen joints' features sit
+        (:func:`jointdb.stack._feature.peak_shift_sensitivity` times a factor): combined with ``model_sigma`` in
+        quadrature, one draw ``exp(sqrt(model_sigma² + feature_sigma²) ξ)`` per sample.
     n, seed
         Ensemble size and random seed.
 
@@ -426,10 +389,9 @@ def tip_band(spec: StackSpec, resolved_joints: Mapping[str, FRF], uncertainties:
     uncertainties = dict(uncertainties or {})
     choice = {k: v for k, v in (choice or {}).items() if v is not None}
     damping = {k: v for k, v in (damping or {}).items() if v is not None}
-    feature_shift = {k: float(v) for k, v in (feature_shift or {}).items() if v}
-    active = set(uncertainties) | set(choice) | set(feature_shift) | {term for term, on in (
+    active = set(uncertainties) | set(choice) | {term for term, on in (
         ("damping law", bool(damping)), ("prediction path", tip_sigma > 0), ("spindle", spindle_estimate is not None),
-        ("substructure model", model_sigma > 0)) if on}
+        ("substructure model", model_sigma > 0), ("feature position", feature_sigma > 0)) if on}
     if not active:
         raise InputError("no interface joint carries an uncertainty record, a joint-choice error or an unknown "
                          "damping law; nothing to sample")
@@ -444,8 +406,8 @@ def tip_band(spec: StackSpec, resolved_joints: Mapping[str, FRF], uncertainties:
         a = np.broadcast_to(a, (n,) + a.shape[-3:]) if a.ndim == 3 else a
         return np.ascontiguousarray(a).reshape((n * f.size,) + a.shape[2:])
 
-    joints = {name: _interface_samples(name, spec, resolved, f, n, seed, uncertainties, choice, rng, damping.get(name),
-                                       feature_shift.get(name)) for name in INTERFACE_NAMES}
+    joints = {name: _interface_samples(name, spec, resolved, f, n, seed, uncertainties, choice, rng, damping.get(name))
+              for name in INTERFACE_NAMES}
     joints = {k: None if v is None else {p: flat(v[p]) for p in ("x", "y")} for k, v in joints.items()}
     tool, holder = flat(parts["tool"].values), flat(parts["holder"].values)
     spindle4 = spindle_four(parts["spindle"], node) if has_y else None
@@ -465,7 +427,7 @@ def tip_band(spec: StackSpec, resolved_joints: Mapping[str, FRF], uncertainties:
         for k, plane in enumerate(("x", "y")):
             jt, jh = (None if j is None else j[plane] for j in (joints["tool-holder"], joints["holder-spindle"]))
             full[:, :, k, k] = tool_tip_chain(tool, holder, flat(spindle[plane]), jt, jh)[:, 0, 0].reshape(n, f.size)
-    for sigma in (tip_sigma, model_sigma):
+    for sigma in (tip_sigma, float(np.hypot(model_sigma, feature_sigma))):
         if sigma > 0:
             full *= np.exp(sigma * rng.standard_normal(n))[:, None, None, None]
     return _band_of(f, full, active, full if spindle4 is not None else None)

@@ -1,5 +1,6 @@
 """The main job's bands: tool-tip and lobe percentiles from the chosen joints' covariance, the joint-choice
-error estimated from the catalogue by leave-one-out, the damping law of constant k, c joints away from their
+error estimated from the catalogue by leave-one-out, the peak's sensitivity to where the chosen tool–holder joint's
+features sit, the damping law of constant k, c joints away from their
 campaigns' modes, the spindle's estimate and the substructure model's error shown by the campaigns' assemblies,
 when there are any, and the prediction path (issues 13 and 22)."""
 
@@ -19,12 +20,16 @@ def journey_bands(spec, resolutions, grid, say: Callable[[str], None], lobe_grid
     tips (ZOA per sample) on ``lobe_grid`` (default ``grid``): give it the lines and speeds the
     nominal lobes use, so that band and nominal limit are computed alike.
     """
+    from types import SimpleNamespace
+
     from jointdb.stability._band import milling_lobes_band
+    from jointdb.stack import predict_tool_tip
     from jointdb.stack._band import sampleable_uncertainties, tip_band
     from jointdb.usecases._stack_band import (
         MODEL_FORM_SIGMA,
         choice_perturbation,
         damping_laws,
+        feature_position,
         model_error,
         spindle_estimate,
     )
@@ -50,9 +55,14 @@ def journey_bands(spec, resolutions, grid, say: Callable[[str], None], lobe_grid
     if not unc and not choice(grid) and est is None and m_sigma == 0 and not laws:
         say("      no band: the chosen joints carry no parameter covariance and no joint-choice error")
         return None, None, {}
-    b = tip_band(spec, {n: r.frf for n, r in resolutions.items() if r.frf is not None}, unc, grid,
-                 n=N_TIP_SAMPLES, choice=choice(grid), tip_sigma=MODEL_FORM_SIGMA, spindle_estimate=est,
-                 model_sigma=m_sigma, damping=laws)
+    resolved = {n: r.frf for n, r in resolutions.items() if r.frf is not None}
+    nominal = SimpleNamespace(spec=spec, joints=resolutions,
+                              prediction=SimpleNamespace(tip=predict_tool_tip(spec, resolved, grid).tip))
+    f_sigma, f_notes = feature_position(nominal)
+    say("      feature position: " + ("; ".join(f_notes) or "0 — no per-line tool–holder joint is chosen for "
+                                                                  "conditions it was not identified at"))
+    b = tip_band(spec, resolved, unc, grid, n=N_TIP_SAMPLES, choice=choice(grid), tip_sigma=MODEL_FORM_SIGMA,
+                 spindle_estimate=est, model_sigma=m_sigma, damping=laws, feature_sigma=f_sigma)
     for row in b.summary():
         say(f"      5–95 % band ({b.samples} samples of {b.sources}): "
             "tip peak "
@@ -62,9 +72,8 @@ def journey_bands(spec, resolutions, grid, say: Callable[[str], None], lobe_grid
 
     def make(cut, speeds):
         lb = b if lobe_grid is None else tip_band(
-            spec, {n: r.frf for n, r in resolutions.items() if r.frf is not None}, unc, lobe_grid, n=N_LOBE_SAMPLES,
-            choice=choice(lobe_grid), tip_sigma=MODEL_FORM_SIGMA, spindle_estimate=est, model_sigma=m_sigma,
-            damping=laws)
+            spec, resolved, unc, lobe_grid, n=N_LOBE_SAMPLES, choice=choice(lobe_grid), tip_sigma=MODEL_FORM_SIGMA,
+            spindle_estimate=est, model_sigma=m_sigma, damping=laws, feature_sigma=f_sigma)
         xs, ys = lb.tip_frfs("x")[:N_LOBE_SAMPLES], lb.tip_frfs("y")[:N_LOBE_SAMPLES]
         return milling_lobes_band(xs, ys, cut, speeds)
 

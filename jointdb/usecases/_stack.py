@@ -26,8 +26,10 @@ INTERPOLATION_POOL = 64
 #: is fitted through the origin.
 CHOICE_CALIBRATION = 0.08
 #: Whole condition lines left out, scaled by the request's gap product over theirs (an interpolated request): this
-#: one. The model is second order, so 1 is the uncalibrated estimate; set on the tuning seeds only.
-LINE_CALIBRATION = 0.5
+#: one. The model is second order, so 1 is the uncalibrated estimate; 0.5 was set on family B's tuning seeds, halved
+#: to 0.25 when the band's feature-position term took over the stacks that err most (round 3 session 12,
+#: jointdb.usecases._stack_band.FEATURE_POSITION_FACTOR; docs/validation/stack-bands-family-c.md).
+LINE_CALIBRATION = 0.25
 
 #: How a queried joint was chosen (the wording of docs/stacks.md): the nearest catalogued joint, an
 #: interpolation between the joints whose conditions bracket the request (a simplex of the catalogued grid),

@@ -1,5 +1,5 @@
-"""The predictive band of a stack prediction, term by term (issue 22): measurement noise, joint choice, the damping
-law of constant joints, the spindle's estimate, the substructure model and the prediction path.
+"""The predictive band of a stack prediction, term by term (issue 22): measurement noise, joint choice, the position
+of the chosen tool–holder joint's features, the damping law of constant joints, the spindle's estimate, the substructure model and the prediction path.
 
 :func:`prediction_band` samples every interface whose joint carries an error estimate — its fit's
 covariance (measurement noise) and, for a queried joint, the leave-one-out joint-choice error
@@ -10,7 +10,8 @@ lean the way its signed error points (:data:`LINE_BIAS`)
 (:func:`jointdb.stack._band.tip_band`). A spindle estimated from extension-bar taps carries its estimate's
 noise (:mod:`jointdb.stack._spindle_band`); joints whose campaigns recorded a validation assembly (or, for tool–holder
 joints, whose own identification assembly the catalogued joint does not give back) carry the substructure model's
-error it showed (:func:`model_error`); joints kept as constant k, c carry the unknown law of their loss away from
+error it showed (:func:`model_error`); a tool–holder joint chosen for conditions it was not identified at carries
+the dominant peak's sensitivity to where its features sit (:func:`feature_position`); joints kept as constant k, c carry the unknown law of their loss away from
 the frequency they were identified at (:func:`damping_laws`). :func:`band_terms` also samples each term alone,
 to say which one dominates, and says why a term is 0.
 """
@@ -27,31 +28,38 @@ from jointdb.errors import InputError
 from jointdb.usecases._stack_edge import band_edge_notes
 
 __all__ = ["BandTerms", "prediction_band", "band_terms", "choice_perturbation", "model_error", "spindle_estimate",
-           "absent_terms", "damping_laws", "TERMS", "LINE_BIAS"]
+           "absent_terms", "damping_laws", "feature_position", "TERMS", "LINE_BIAS"]
 
 #: The error terms a band can carry, in the order they are reported.
-TERMS = ("measurement noise", "joint choice", "damping law", "spindle estimate", "substructure model",
-         "prediction path")
+TERMS = ("measurement noise", "joint choice", "feature position", "damping law", "spindle estimate",
+         "substructure model", "prediction path")
 #: Relative standard error of the prediction path's own tip receptance (model form: three beams joined at two
 #: points where a real stack has distributed contact, a holder model, a spindle receptance). Not estimable from
 #: the catalogue (each per-line joint reproduces its own campaign): calibrated on the tuning seeds of
-#: bench/_stack_truth_b.py, with LINE_CALIBRATION (docs/validation/stack-prediction.md, *Bands*).
-MODEL_FORM_SIGMA = 0.02
+#: bench/_stack_truth_b.py, with LINE_CALIBRATION (docs/validation/stack-prediction.md, *Bands*), as 0.02; halved
+#: with it when the feature-position term was introduced (:data:`FEATURE_POSITION_FACTOR`).
+MODEL_FORM_SIGMA = 0.01
 #: Mean of the joint-choice amplitude of a line left out along an axis, in units of the request's gap ratio (0: a band
 #: centred on the interpolated joint; 1: centred on the joint the leave-one-out error extrapolates to, the second-order
 #: correction of the interpolation). The catalogue's own line errors have a sign (an axis that bends one way, e.g. a
 #: contact stiffness linear in the shank diameter interpolated in ln d, is interpolated too stiff everywhere on it), so
 #: the band leans that way. Calibrated with LINE_CALIBRATION on the tuning seeds (docs/validation/stack-prediction.md).
 LINE_BIAS = 0.5
-#: Standard deviation of the relative frequency shift of a chosen (interpolated or nearest) joint's features, drawn
-#: within the joint-choice term (:func:`jointdb.stack._band.frequency_shifted`). A per-line joint identified by IRC
-#: is not smooth in frequency where it absorbs its identification assembly's dynamics (family C's tool–holder joints
-#: jump, Re Z even turning negative, over 0.9–1.3 kHz at positions that move with bore and drawbar force), and a joint
-#: interpolated between catalogued conditions cannot place those features: a stack whose mode sits on one errs by
-#: its sensitivity to where they are. **0: off.** Two grids on family C's seen seeds (s 0.01–0.02 with ι and λ
-#: lowered) widened the median peak band to 18–40 % against the product's 15.3 %, so it is not used
-#: (docs/validation/stack-bands-family-c.md, *Feature position*); bench/stack_model_calibration.py sets it.
-FEATURE_SHIFT = 0.0
+#: The feature-position term (:func:`feature_position`): the tool–holder joint, when it is chosen for conditions it
+#: was not identified at (it carries a joint-choice error), is read at ``f (1 ± FEATURE_POSITION_SHIFT)``, and the RMS
+#: change ``s`` of the tip's dominant peak (log units) gives a log-normal tip term of σ = ``FEATURE_POSITION_FACTOR``
+#: · s. Only the tool–holder interface: on truth family C, ``s`` from that joint correlates with the |peak error|
+#: (ln–ln 0.44 over 288 stacks), from both interfaces' joints only 0.19, and the band built on the latter was wider
+#: than without it (docs/validation/stack-bands-family-c.md, *Feature position*).
+FEATURE_POSITION_INTERFACES = ("tool-holder",)
+#: Relative frequency shift of the joint's features for ``s`` (±3 %: the spread of where family C's catalogued
+#: tool–holder joints put their 0.9–1.3 kHz features from one bore or drawbar force to the next is larger; 3 % keeps
+#: the two readings local).
+FEATURE_POSITION_SHIFT = 0.03
+#: Factor ``k`` on ``s`` (with ι, λ and :data:`MODEL_FORM_SIGMA` halved when the term was introduced, round 3 session
+#: 12): chosen on family C's 288 seen stacks by the narrowest band keeping ≥ 90 % of peaks and floors inside, then
+#: checked on family B's tuning seeds and on fresh seeds (docs/validation/stack-bands-family-c.md).
+FEATURE_POSITION_FACTOR = 0.5
 
 
 def _with_bias(resolution, perturbation):
@@ -102,8 +110,10 @@ IDENTIFICATION_TERM_INTERFACES = ("tool-holder",)
 #: seen stacks of bench/_stack_truth_c.py (bench/stack_model_calibration.py, factors 1 / 0.75 / 0.5 / 0.25: peaks
 #: inside 93 / 90 / 85 / 77 % with the linear interpolation, 92 / 88 / 84 / 75 % with the power-law one): the rule
 #: written before each run (the smallest factor keeping both peaks and floors ≥ 90 %) kept 1
-#: (docs/validation/stack-bands-family-c.md, *The identification term, checked*).
-IDENTIFICATION_CALIBRATION = 1.0
+#: (docs/validation/stack-bands-family-c.md, *The identification term, checked*). Halved to 0.5 with LINE_CALIBRATION
+#: and MODEL_FORM_SIGMA when the feature-position term was introduced (:data:`FEATURE_POSITION_FACTOR`): alone it had
+#: to cover the stacks whose mode sits on a joint feature, and now that term does.
+IDENTIFICATION_CALIBRATION = 0.5
 
 #: The largest peak error the substructure-model term takes from a catalogued record (σ ≤ ln 11): a record's quality
 #: can come from an uploaded file, and a value outside [0, MAX_PEAK_ERROR] is no error estimate (left out, said so).
@@ -266,13 +276,16 @@ def spindle_estimate(spec):
     return est, ""
 
 
-def absent_terms(result) -> dict[str, str]:
+def absent_terms(result, feature_sigma: float | None = None) -> dict[str, str]:
     """The terms that are 0 for a prediction, and why.
 
     Parameters
     ----------
     result
         A :class:`jointdb.usecases.StackPrediction`.
+    feature_sigma
+        The feature-position term's σ if already computed (:func:`feature_position`); None: only whether a joint
+        it would shift is used is checked.
 
     Returns
     -------
@@ -286,6 +299,13 @@ def absent_terms(result) -> dict[str, str]:
         out["measurement noise"] = "no joint used carries a sampleable fit covariance"
     if not any(choice_perturbation(r, result.prediction.tip.freq) is not None for r in result.joints.values()):
         out["joint choice"] = "every joint is pinned, rigid, explicit or on a catalogued condition"
+    if not _feature_interfaces(result.joints, result.prediction.tip.freq):
+        out["feature position"] = ("no per-line " + " or ".join(FEATURE_POSITION_INTERFACES) + " joint is chosen for "
+                                   "conditions it was not identified at (a catalogued condition's joint has its "
+                                   "features where its own campaign put them; a constant k, c joint has none)")
+    elif feature_sigma == 0:
+        out["feature position"] = ("the tip's dominant peak does not move when the chosen joint's features are "
+                                   f"shifted by ±{FEATURE_POSITION_SHIFT:.0%}")
     laws, why_not = damping_laws(result.joints)
     if not laws:
         out["damping law"] = ("; ".join(f"{k}: {v}" for k, v in why_not.items())
@@ -301,9 +321,57 @@ def absent_terms(result) -> dict[str, str]:
     return out
 
 
-def feature_shifts(sigma: Mapping) -> dict[str, float]:
-    """Interface → :data:`FEATURE_SHIFT` for the interfaces whose joint carries a joint-choice error (``sigma``)."""
-    return {name: FEATURE_SHIFT for name in sigma} if FEATURE_SHIFT > 0 else {}
+def _has_features(r) -> bool:
+    """Whether a resolved joint is (or interpolates) a per-line catalogued joint: a constant k, c joint has no
+    features to misplace (read at ``f (1 ± δ)`` it would only change its viscous loss by ±δ), nor has a joint the
+    passivity guard replaced by its constant fit."""
+    if getattr(r, "constant_fallback", False):
+        return False
+    return any(not const for _, w, _, const in getattr(r, "damping_references", ()) if w > 0)
+
+
+def _feature_interfaces(joints, freq) -> list[str]:
+    """The interfaces of :data:`FEATURE_POSITION_INTERFACES` whose joint carries a joint-choice error on ``freq`` and
+    uses a per-line catalogued joint (:func:`_has_features`)."""
+    return [k for k in FEATURE_POSITION_INTERFACES if k in joints and _has_features(joints[k])
+            and choice_perturbation(joints[k], freq) is not None]
+
+
+def feature_position(result) -> tuple[float, list[str]]:
+    """The feature-position term's σ (log units) for a prediction, and what it is made of.
+
+    The tool–holder joint chosen for conditions it was not identified at (:data:`FEATURE_POSITION_INTERFACES`,
+    those with a joint-choice error), when it is or interpolates a per-line catalogued joint, is read at
+    ``f (1 ± FEATURE_POSITION_SHIFT)``; ``s``, the RMS change of the tip's dominant peak in log units
+    (:func:`jointdb.stack._feature.peak_shift_sensitivity`, the larger of the two bending planes), gives
+    σ = :data:`FEATURE_POSITION_FACTOR` · s. A per-line joint interpolated between catalogued conditions cannot place
+    the features the real joint has where it absorbs its campaign's dynamics; a stack whose mode sits on one errs by
+    its sensitivity to where they are, one that does not barely moves (docs/stacks.md, *Bands*, term 3).
+
+    Parameters
+    ----------
+    result
+        A :class:`jointdb.usecases.StackPrediction` (or anything with its ``spec``, ``joints`` and
+        ``prediction.tip``).
+
+    Returns
+    -------
+    (float, list[str])
+        σ (0 when no such joint is used) and one line saying how far the peak moved.
+    """
+    from jointdb.stack._feature import peak_shift_sensitivity
+
+    tip = result.prediction.tip
+    names = _feature_interfaces(result.joints, tip.freq)
+    if not names:
+        return 0.0, []
+    resolved = {k: r.frf for k, r in result.joints.items() if r.frf is not None}
+    s = peak_shift_sensitivity(result.spec, resolved, tip, names, FEATURE_POSITION_SHIFT)
+    worst = max(s, key=s.get)
+    sigma = FEATURE_POSITION_FACTOR * s[worst]
+    return sigma, [f"{', '.join(names)}: the joint read at f (1 ± {FEATURE_POSITION_SHIFT:.0%}) moves the tip's "
+                   f"dominant peak by {np.expm1(s[worst]):.1%} RMS ({worst}); feature-position σ "
+                   f"{FEATURE_POSITION_FACTOR:g} × that"]
 
 
 def _inputs(result, terms=TERMS) -> tuple[dict, dict, list[str]]:
@@ -322,7 +390,7 @@ def _inputs(result, terms=TERMS) -> tuple[dict, dict, list[str]]:
     return unc, sigma, notes
 
 
-def prediction_band(result, n: int = 200, seed: int = 0, terms=TERMS):
+def prediction_band(result, n: int = 200, seed: int = 0, terms=TERMS, feature_sigma: float | None = None):
     """``(TipBand or None, notes)`` for a :class:`jointdb.usecases.StackPrediction`.
 
     Parameters
@@ -333,6 +401,9 @@ def prediction_band(result, n: int = 200, seed: int = 0, terms=TERMS):
         Ensemble size and seed.
     terms
         Which error terms to sample (:data:`TERMS`).
+    feature_sigma
+        The feature-position term's σ if already computed (:func:`feature_position`: two more predictions);
+        None: computed here when ``terms`` holds it.
 
     Returns
     -------
@@ -345,9 +416,13 @@ def prediction_band(result, n: int = 200, seed: int = 0, terms=TERMS):
     tip_sigma = MODEL_FORM_SIGMA if "prediction path" in terms else 0.0
     est = spindle_estimate(result.spec)[0] if "spindle estimate" in terms else None
     m_sigma = model_error(result.joints)[0] if "substructure model" in terms else 0.0
+    if "feature position" not in terms:
+        feature_sigma = 0.0
+    elif feature_sigma is None:
+        feature_sigma = feature_position(result)[0]
     laws = damping_laws(result.joints)[0] if "damping law" in terms else {}
     queried = any(r.kind in ("query", "interpolated") for r in result.joints.values())
-    if (not unc and not sigma and not queried and est is None and m_sigma == 0 and not laws
+    if (not unc and not sigma and not queried and est is None and m_sigma == 0 and feature_sigma == 0 and not laws
             and tuple(terms) != ("prediction path",)):
         notes.append("no band: no interface joint carries a covariance or a joint-choice error "
                      "(rigid, explicit or pinned joints without an uncertainty record)")
@@ -356,7 +431,7 @@ def prediction_band(result, n: int = 200, seed: int = 0, terms=TERMS):
     try:
         b = tip_band(result.spec, resolved, unc, result.prediction.tip.freq, n=n, seed=seed, choice=sigma,
                      tip_sigma=tip_sigma, spindle_estimate=est, model_sigma=m_sigma, damping=laws,
-                     feature_shift=feature_shifts(sigma))
+                     feature_sigma=feature_sigma)
     except InputError as exc:
         notes.append(f"no band: {exc}")
         return None, notes
@@ -399,16 +474,17 @@ def _half_widths(b) -> dict[str, float]:
 
 def band_terms(result, n: int = 200, seed: int = 0) -> BandTerms:
     """The full band and each term's own (:class:`BandTerms`)."""
-    full, notes = prediction_band(result, n, seed)
+    feature_sigma, feature_notes = feature_position(result)
+    full, notes = prediction_band(result, n, seed, feature_sigma=feature_sigma)
     widths = {"all": _half_widths(full)}
-    zero = absent_terms(result)
+    zero = absent_terms(result, feature_sigma)
     for term in TERMS:
         if term in zero or full is None:
             widths[term] = {}
             continue
-        alone, _ = prediction_band(result, n, seed, terms=(term,))
+        alone, _ = prediction_band(result, n, seed, terms=(term,), feature_sigma=feature_sigma)
         widths[term] = _half_widths(alone)
-    notes += model_error(result.joints)[1]
+    notes += feature_notes + model_error(result.joints)[1]
     laws, why_not = damping_laws(result.joints)
     notes += [f"{k}: damping law sampled between viscous and hysteretic about f_ref {f:.4g} Hz"
               + (f" (constant joints' interpolation weight {w:.2f})" if w < 1 else "") for k, (f, w) in laws.items()]
