@@ -2,8 +2,8 @@
 a chosen joint's features sit.
 
 Known answers: linear interpolation is exact on a receptance linear in frequency; a joint with a resonance read at
-``f (1 + ε)`` has it at ``f₀ / (1 + ε)``; a joint whose stiffness dips around ``f_c`` read at ``f (1 + ε)`` is the same
-analytic joint with its dip at ``f_c / (1 + ε)`` (built here in closed form, no interpolation), so the sensitivity
+``f (1 + ε)`` has it at ``f₀ / (1 + ε)``; a joint whose stiffness dips around ``f_c`` read at ``f (1 + ε)`` is the
+same analytic joint with its dip at ``f_c / (1 + ε)`` (built here in closed form, no interpolation), so the sensitivity
 the product computes must match the one computed from those closed-form joints; a joint constant in frequency has
 sensitivity 0; the term combines with the substructure model's σ in quadrature.
 """
@@ -89,7 +89,7 @@ def test_the_sensitivity_matches_closed_form_joints_with_their_features_moved():
                           .tip.values[:, 0, 0]).max() / peak0) for e in (0.03, -0.03)]
     want = float(np.sqrt(np.mean(np.square(logs))))
     assert want > 0.01  # the dip under the mode matters
-    # linear interpolation of a dip ~ 0.04 f_mode wide on 1 Hz lines: relative error ≲ (1 / 0.04 f_mode)² / 8 ≈ 1e-5
+    # linear interpolation of a dip ~ 0.04 f_mode wide on 1 Hz lines: relative error ≲ (1 / 0.04 f_mode)² / 8, 1e-5
     assert got["x"] == pytest.approx(want, rel=1e-3)
     assert got["y"] == pytest.approx(got["x"], rel=1e-12)  # one joint for both planes
 
