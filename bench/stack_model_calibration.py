@@ -47,6 +47,8 @@ GRIDS = {
     "session10": ((0.0, 1.0, 0.5), (0.0, 0.75, 0.5), (0.0, 0.5, 0.5), (0.0, 0.75, 0.35), (0.0, 0.5, 0.35)),
     "sensitivity4": tuple((0.5, a, 0.5 * a, 0.02 * a, k) for a, k in ((0.35, 1.0), (0.25, 1.0), (0.5, 0.5))),
     "sensitivity5": tuple((0.5, a, 0.5 * a, 0.02 * a, k) for a, k in ((0.35, 0.5), (0.25, 0.5), (0.5, 0.35))),
+    # session 12, after its fresh seeds: the product with the prediction path's σ back at 2 %
+    "session12b": ((0.5, 0.5, 0.25, 0.02, 0.5),),
 }
 #: The coverage the rule asks of the seen seeds, for peaks and floors each (the band's nominal level).
 NOMINAL = 0.90
