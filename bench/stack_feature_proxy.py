@@ -60,14 +60,6 @@ def smoothed(frf, lo=500.0, hi=1500.0, tol=0.2):
     return replace(frf, values=np.linalg.inv(np.where(bad[:, None, None], trend, z)))
 
 
-def shifted(frf, eps: float):
-    """``frf`` (a joint receptance) read at ``f (1 + eps)`` on its own lines
-    (:func:`jointdb.stack._feature.read_shifted`)."""
-    from jointdb.stack._feature import read_shifted
-
-    return read_shifted(frf, eps)
-
-
 def peak_sensitivity(base, plus, minus) -> tuple[np.ndarray, np.ndarray]:
     """``(error, s)`` per stack: the peak error as predicted, and the RMS of its change under the two shifts."""
     e = np.array([r["peak_err"] for r in base])
@@ -77,7 +69,10 @@ def peak_sensitivity(base, plus, minus) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _patched(repo, mode: str, eps: float):
-    """``repo.load_frf`` wrapped so tool–holder joints come back shifted or smoothed."""
+    """``repo.load_frf`` wrapped so tool–holder joints come back shifted
+    (:func:`jointdb.stack._feature.read_shifted`) or smoothed."""
+    from jointdb.stack._feature import read_shifted
+
     load = repo.load_frf
 
     def load_frf(version, number=None):
@@ -87,7 +82,7 @@ def _patched(repo, mode: str, eps: float):
             return frf
         if mode == "smooth":
             return smoothed(frf)
-        return shifted(frf, eps)
+        return read_shifted(frf, eps)
 
     repo.load_frf = load_frf
 

@@ -102,8 +102,8 @@ def stack_rows(family, case, repo, grid, n: int = bsb.N_SAMPLES) -> dict[str, di
     h = result.prediction.tip.values[:, 0, 0]
     base = {"case": case.name, "truth_peak": sv._dominant(truth, f)[1], "truth_floor": sv._floor(truth, f),
             "pred_peak": sv._dominant(h, f)[1], "pred_floor": sv._floor(h, f)}
-    with _constants((0.5, 1.0, 0.5, 0.02, 1.0)):
-        s = stack_band.feature_position(result)[0]  # k = 1: s itself
+    with swapped(stack_band, "FEATURE_POSITION_FACTOR", 1.0):  # k = 1: s itself
+        s = stack_band.feature_position(result.spec, result.joints, result.prediction.tip)[0]
     out = {}
     for config in grid:
         with _constants(config):

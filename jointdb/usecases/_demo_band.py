@@ -20,8 +20,6 @@ def journey_bands(spec, resolutions, grid, say: Callable[[str], None], lobe_grid
     tips (ZOA per sample) on ``lobe_grid`` (default ``grid``): give it the lines and speeds the
     nominal lobes use, so that band and nominal limit are computed alike.
     """
-    from types import SimpleNamespace
-
     from jointdb.stability._band import milling_lobes_band
     from jointdb.stack import predict_tool_tip
     from jointdb.stack._band import sampleable_uncertainties, tip_band
@@ -56,9 +54,7 @@ def journey_bands(spec, resolutions, grid, say: Callable[[str], None], lobe_grid
         say("      no band: the chosen joints carry no parameter covariance and no joint-choice error")
         return None, None, {}
     resolved = {n: r.frf for n, r in resolutions.items() if r.frf is not None}
-    nominal = SimpleNamespace(spec=spec, joints=resolutions,
-                              prediction=SimpleNamespace(tip=predict_tool_tip(spec, resolved, grid).tip))
-    f_sigma, f_notes = feature_position(nominal)
+    f_sigma, f_notes = feature_position(spec, resolutions, predict_tool_tip(spec, resolved, grid).tip)
     say("      feature position: " + ("; ".join(f_notes) or "0 — no per-line tool–holder joint is chosen for "
                                                                   "conditions it was not identified at"))
     b = tip_band(spec, resolved, unc, grid, n=N_TIP_SAMPLES, choice=choice(grid), tip_sigma=MODEL_FORM_SIGMA,

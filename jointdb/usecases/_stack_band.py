@@ -342,7 +342,7 @@ def _feature_interfaces(joints, freq) -> list[str]:
             and choice_perturbation(joints[k], freq) is not None]
 
 
-def feature_position(result) -> tuple[float, list[str]]:
+def feature_position(spec, joints, tip) -> tuple[float, list[str]]:
     """The feature-position term's σ (log units) for a prediction, and what it is made of.
 
     The tool–holder joint chosen for conditions it was not identified at (:data:`FEATURE_POSITION_INTERFACES`,
@@ -355,9 +355,12 @@ def feature_position(result) -> tuple[float, list[str]]:
 
     Parameters
     ----------
-    result
-        A :class:`jointdb.usecases.StackPrediction` (or anything with its ``spec``, ``joints`` and
-        ``prediction.tip``).
+    spec
+        The stack (:class:`jointdb.stack.StackSpec`).
+    joints
+        Interface → :class:`jointdb.usecases.JointResolution` of the prediction.
+    tip
+        The prediction's tip receptance over (1x, 1y) (its lines are the prediction's).
 
     Returns
     -------
@@ -366,12 +369,11 @@ def feature_position(result) -> tuple[float, list[str]]:
     """
     from jointdb.stack._feature import peak_shift_sensitivity
 
-    tip = result.prediction.tip
-    names = _feature_interfaces(result.joints, tip.freq)
+    names = _feature_interfaces(joints, tip.freq)
     if not names:
         return 0.0, []
-    resolved = {k: r.frf for k, r in result.joints.items() if r.frf is not None}
-    s = peak_shift_sensitivity(result.spec, resolved, tip, names, FEATURE_POSITION_SHIFT)
+    resolved = {k: r.frf for k, r in joints.items() if r.frf is not None}
+    s = peak_shift_sensitivity(spec, resolved, tip, names, FEATURE_POSITION_SHIFT)
     worst = max(s, key=s.get)
     sigma = FEATURE_POSITION_FACTOR * s[worst]
     return sigma, [f"{', '.join(names)}: the joint read at f (1 ± {FEATURE_POSITION_SHIFT:.0%}) moves the tip's "
@@ -424,7 +426,7 @@ def prediction_band(result, n: int = 200, seed: int = 0, terms=TERMS, feature_si
     if "feature position" not in terms:
         feature_sigma = 0.0
     elif feature_sigma is None:
-        feature_sigma = feature_position(result)[0]
+        feature_sigma = feature_position(result.spec, result.joints, result.prediction.tip)[0]
     laws = damping_laws(result.joints)[0] if "damping law" in terms else {}
     queried = any(r.kind in ("query", "interpolated") for r in result.joints.values())
     if (not unc and not sigma and not queried and est is None and m_sigma == 0 and feature_sigma == 0 and not laws
@@ -479,7 +481,7 @@ def _half_widths(b) -> dict[str, float]:
 
 def band_terms(result, n: int = 200, seed: int = 0) -> BandTerms:
     """The full band and each term's own (:class:`BandTerms`)."""
-    feature_sigma, feature_notes = feature_position(result)
+    feature_sigma, feature_notes = feature_position(result.spec, result.joints, result.prediction.tip)
     full, notes = prediction_band(result, n, seed, feature_sigma=feature_sigma)
     widths = {"all": _half_widths(full)}
     zero = absent_terms(result, feature_sigma)

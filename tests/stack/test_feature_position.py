@@ -120,10 +120,6 @@ def test_only_a_chosen_per_line_tool_holder_joint_is_shifted(monkeypatch):
 
     monkeypatch.setattr(sb, "choice_perturbation", lambda r, f: r.choice)
     tip = SimpleNamespace(freq=F)
-
-    def result(**joints):
-        return SimpleNamespace(joints=joints, prediction=SimpleNamespace(tip=tip))
-
     per_line = SimpleNamespace(choice=(1,), damping_references=(("th@1", 0.6, None, False), ("th@2", 0.4, None, True)))
     constant = SimpleNamespace(choice=(1,), damping_references=(("th@1", 1.0, None, True),))
     guarded = SimpleNamespace(choice=(1,), damping_references=per_line.damping_references, constant_fallback=True)
@@ -132,4 +128,4 @@ def test_only_a_chosen_per_line_tool_holder_joint_is_shifted(monkeypatch):
     assert sb._feature_interfaces({"holder-spindle": per_line}, F) == []  # FEATURE_POSITION_INTERFACES
     for r in (constant, guarded, pinned):
         assert sb._feature_interfaces({"tool-holder": r}, F) == []
-        assert sb.feature_position(result(**{"tool-holder": r})) == (0.0, [])
+        assert sb.feature_position(None, {"tool-holder": r}, tip) == (0.0, [])
